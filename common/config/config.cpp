@@ -1,0 +1,310 @@
+#include "cell/config/config.h"
+
+#include <fmt/format.h>
+#include <pwd.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstdlib>
+#include <cstring>
+#include <map>
+#include <set>
+#include <system_error>
+#include <toml++/toml.h>
+
+#include "cell/error/error.h"
+
+#ifndef CELL_CONFIG_SOURCE_DIR
+#error "CELL_CONFIG_SOURCE_DIR must name the source tree (set by common/config/CMakeLists.txt)"
+#endif
+
+namespace fs = std::filesystem;
+
+namespace cell::config {
+namespace {
+
+std::string Env(const char* name) {
+  const char* v = std::getenv(name);
+  return v == nullptr ? std::string() : std::string(v);
+}
+
+bool IsUnder(const fs::path& p, const fs::path& root) {
+  auto [r, q] = std::mismatch(root.begin(), root.end(), p.begin(), p.end());
+  return r == root.end() && q != p.end();
+}
+
+std::string DialectList() {
+  std::string out;
+  for (auto d : kDialects) {
+    if (!out.empty()) out += ", ";
+    out += d;
+  }
+  return out;
+}
+
+// A located error: "<file>:<line>: <text>".
+[[noreturn]] void Fail(const fs::path& file, const toml::node* where, const std::string& text) {
+  if (where != nullptr && where->source().begin.line > 0) {
+    throw Error(Errc::kInvalidArgument, fmt::format("{}:{}: {}", file.string(), where->source().begin.line, text));
+  }
+  throw Error(Errc::kInvalidArgument, fmt::format("{}: {}", file.string(), text));
+}
+
+std::string_view TypeName(const toml::node& n) {
+  switch (n.type()) {
+    case toml::node_type::string:
+      return "a string";
+    case toml::node_type::integer:
+      return "an integer";
+    case toml::node_type::floating_point:
+      return "a float";
+    case toml::node_type::boolean:
+      return "a boolean";
+    case toml::node_type::table:
+      return "a table";
+    case toml::node_type::array:
+      return "an array";
+    default:
+      return "a date/time";
+  }
+}
+
+std::string GetString(const fs::path& file, const toml::node& n, std::string_view key) {
+  if (!n.is_string()) Fail(file, &n, fmt::format("{} must be a string, not {}", key, TypeName(n)));
+  return std::string(*n.value<std::string_view>());
+}
+
+double GetNumber(const fs::path& file, const toml::node& n, std::string_view key) {
+  if (n.is_integer()) return static_cast<double>(*n.value<int64_t>());
+  if (n.is_floating_point()) return *n.value<double>();
+  Fail(file, &n, fmt::format("{} must be a number, not {}", key, TypeName(n)));
+}
+
+ToolConfig ParseTool(const fs::path& file, const toml::node& entry, size_t index) {
+  const std::string where = fmt::format("[[tools]] entry {}", index + 1);
+  const toml::table* t = entry.as_table();
+  if (t == nullptr) Fail(file, &entry, fmt::format("{} must be a table", where));
+  static const std::set<std::string, std::less<>> kKeys = {"tool", "socket", "length", "diameter",
+                                                           "life_left_min"};
+  for (auto&& [k, v] : *t) {
+    if (!kKeys.contains(k.str())) {
+      Fail(file, &v,
+           fmt::format("{}: unknown key '{}' (allowed: tool, socket, length, diameter, life_left_min)", where,
+                       k.str()));
+    }
+  }
+  auto require = [&](std::string_view key) -> const toml::node& {
+    const toml::node* n = t->get(key);
+    if (n == nullptr) Fail(file, &entry, fmt::format("{}: missing key '{}'", where, key));
+    return *n;
+  };
+  ToolConfig tool;
+  const toml::node& tn = require("tool");
+  if (tn.is_integer()) {
+    tool.tool = fmt::format("{}", *tn.value<int64_t>());
+  } else if (tn.is_string()) {
+    tool.tool = std::string(*tn.value<std::string_view>());
+  } else {
+    Fail(file, &tn,
+         fmt::format("{}: tool must be a string such as \"1001\" or \"33412.5\" (or an integer), not {}", where,
+                     TypeName(tn)));
+  }
+  if (!IsValidToolNumber(tool.tool)) {
+    Fail(file, &tn,
+         fmt::format("{}: tool = '{}': must be 1-7 digits with an optional suffix .1-.7, e.g. \"33412.5\"",
+                     where, tool.tool));
+  }
+  const toml::node& sn = require("socket");
+  if (!sn.is_integer() || *sn.value<int64_t>() < 1 || *sn.value<int64_t>() > 9999) {
+    Fail(file, &sn, fmt::format("{} (tool {}): socket must be an integer in 1..9999", where, tool.tool));
+  }
+  tool.socket = static_cast<int>(*sn.value<int64_t>());
+  auto non_negative = [&](std::string_view key, double& out) {
+    const toml::node& n = require(key);
+    out = GetNumber(file, n, fmt::format("{} (tool {}): {}", where, tool.tool, key));
+    if (!(out >= 0)) {
+      Fail(file, &n, fmt::format("{} (tool {}): {} = {}: must be >= 0", where, tool.tool, key, out));
+    }
+  };
+  non_negative("length", tool.length);
+  non_negative("diameter", tool.diameter);
+  non_negative("life_left_min", tool.life_left_min);
+  return tool;
+}
+
+std::string BaseTool(const std::string& tool) { return tool.substr(0, tool.find('.')); }
+
+}  // namespace
+
+bool IsValidStationId(std::string_view id) {
+  if (id.empty() || id.size() > 16) return false;
+  return std::all_of(id.begin(), id.end(), [](char c) {
+    return (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '_' || c == '-';
+  });
+}
+
+bool IsValidToolNumber(std::string_view tool) {
+  size_t dot = tool.find('.');
+  std::string_view base = tool.substr(0, dot);
+  if (base.empty() || base.size() > 7) return false;
+  if (!std::all_of(base.begin(), base.end(), [](char c) { return c >= '0' && c <= '9'; })) return false;
+  if (dot == std::string_view::npos) return true;
+  std::string_view suffix = tool.substr(dot + 1);
+  return suffix.size() == 1 && suffix[0] >= '1' && suffix[0] <= '7';
+}
+
+fs::path DefaultConfigDir(const fs::path& exe) {
+  if (IsUnder(exe, "/usr") || IsUnder(exe, "/opt")) return "/etc/cell";
+  return fs::path(CELL_CONFIG_SOURCE_DIR) / "deploy";
+}
+
+fs::path ConfigDir() {
+  if (std::string dir = Env("CELL_CONFIG_DIR"); !dir.empty()) return dir;
+  std::error_code ec;
+  fs::path exe = fs::read_symlink("/proc/self/exe", ec);
+  return DefaultConfigDir(ec ? fs::path() : exe);
+}
+
+fs::path DataDir() {
+  fs::path dir;
+  if (std::string d = Env("CELL_DATA_DIR"); !d.empty()) {
+    dir = d;
+  } else if (std::string x = Env("XDG_STATE_HOME"); !x.empty() && x.front() == '/') {
+    dir = fs::path(x) / "cell";
+  } else {
+    std::string home = Env("HOME");
+    if (home.empty()) {
+      if (const passwd* pw = getpwuid(getuid()); pw != nullptr && pw->pw_dir != nullptr) home = pw->pw_dir;
+    }
+    if (home.empty()) {
+      throw Error(Errc::kIo, "cannot find a data directory: set CELL_DATA_DIR (HOME and XDG_STATE_HOME are unset)");
+    }
+    dir = fs::path(home) / ".local" / "state" / "cell";
+  }
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec || !fs::is_directory(dir)) {
+    throw Error(Errc::kIo, fmt::format("cannot create data directory {}: {}", dir.string(),
+                                       ec ? ec.message() : "not a directory"));
+  }
+  return dir;
+}
+
+int Domain() {
+  std::string v = Env("CELL_DOMAIN");
+  if (v.empty()) return kDefaultDomain;
+  bool digits = v.size() <= 3 && std::all_of(v.begin(), v.end(), [](char c) { return c >= '0' && c <= '9'; });
+  int d = digits ? std::stoi(v) : -1;
+  if (d < 0 || d > kMaxDomain) {
+    throw Error(Errc::kInvalidArgument,
+                fmt::format("CELL_DOMAIN='{}': must be a DDS domain id, an integer in 0..{} (default {})", v,
+                            kMaxDomain, kDefaultDomain));
+  }
+  return d;
+}
+
+std::vector<std::string> ListStations() {
+  fs::path dir = ConfigDir() / "stations";
+  std::error_code ec;
+  if (!fs::is_directory(dir, ec)) {
+    throw Error(Errc::kNotFound,
+                fmt::format("no station directory {} (set CELL_CONFIG_DIR to the cell's configuration)", dir.string()));
+  }
+  std::vector<std::string> ids;
+  for (const auto& e : fs::directory_iterator(dir)) {
+    if (e.path().extension() != ".toml" || !e.is_regular_file()) continue;
+    std::string id = e.path().stem().string();
+    if (IsValidStationId(id)) ids.push_back(id);
+  }
+  std::sort(ids.begin(), ids.end());
+  return ids;
+}
+
+StationConfig LoadStation(std::string_view id) {
+  if (!IsValidStationId(id)) {
+    throw Error(Errc::kInvalidArgument,
+                fmt::format("station id '{}': must be 1-16 characters of A-Z, a-z, 0-9, '_' or '-'", id));
+  }
+  fs::path file = ConfigDir() / "stations" / (std::string(id) + ".toml");
+  std::error_code ec;
+  if (!fs::exists(file, ec)) {
+    std::string known;
+    try {
+      for (const auto& s : ListStations()) known += (known.empty() ? "" : ", ") + s;
+    } catch (const Error&) {
+    }
+    throw Error(Errc::kNotFound, fmt::format("station '{}' is not configured: no file {} (configured: {})", id,
+                                             file.string(), known.empty() ? "none" : known));
+  }
+  return LoadStationFile(file);
+}
+
+StationConfig LoadStationFile(const fs::path& file) {
+  toml::table root;
+  try {
+    root = toml::parse_file(file.string());
+  } catch (const toml::parse_error& e) {
+    const auto& b = e.source().begin;
+    if (b.line == 0) throw Error(Errc::kIo, fmt::format("{}: {}", file.string(), e.description()));
+    throw Error(Errc::kInvalidArgument,
+                fmt::format("{}:{}:{}: {}", file.string(), b.line, b.column, e.description()));
+  }
+  StationConfig cfg;
+  cfg.file = file;
+  const toml::node* sn = root.get("station");
+  if (sn == nullptr) Fail(file, nullptr, "missing table [station] (with id and dialect)");
+  const toml::table* st = sn->as_table();
+  if (st == nullptr) Fail(file, sn, "station must be a table [station]");
+  for (auto&& [k, v] : *st) {
+    if (k.str() != "id" && k.str() != "dialect" && k.str() != "description" && k.str() != "coded_pallets") {
+      Fail(file, &v,
+           fmt::format("[station]: unknown key '{}' (allowed: id, dialect, description, coded_pallets)", k.str()));
+    }
+  }
+  const toml::node* id = st->get("id");
+  if (id == nullptr) Fail(file, sn, "[station]: missing key 'id'");
+  cfg.id = GetString(file, *id, "[station] id");
+  if (cfg.id != file.stem().string()) {
+    Fail(file, id, fmt::format("[station] id = '{}': must equal the file name's stem '{}'", cfg.id,
+                               file.stem().string()));
+  }
+  if (!IsValidStationId(cfg.id)) {
+    Fail(file, id, fmt::format("[station] id = '{}': must be 1-16 characters of A-Z, a-z, 0-9, '_' or '-'", cfg.id));
+  }
+  const toml::node* dialect = st->get("dialect");
+  if (dialect == nullptr) Fail(file, sn, fmt::format("[station]: missing key 'dialect' (one of {})", DialectList()));
+  cfg.dialect = GetString(file, *dialect, "[station] dialect");
+  if (std::find(std::begin(kDialects), std::end(kDialects), cfg.dialect) == std::end(kDialects)) {
+    Fail(file, dialect, fmt::format("[station] dialect = '{}': must be one of {}", cfg.dialect, DialectList()));
+  }
+  if (const toml::node* d = st->get("description")) cfg.description = GetString(file, *d, "[station] description");
+  if (const toml::node* c = st->get("coded_pallets")) {
+    if (!c->is_boolean()) Fail(file, c, fmt::format("[station] coded_pallets must be true or false, not {}", TypeName(*c)));
+    cfg.coded_pallets = *c->value<bool>();
+  }
+  if (const toml::node* tn = root.get("tools")) {
+    const toml::array* arr = tn->as_array();
+    if (arr == nullptr) Fail(file, tn, "tools must be an array of tables [[tools]]");
+    std::map<std::string, size_t> by_tool;
+    std::map<int, std::string> by_socket;  // socket -> base tool number
+    for (size_t i = 0; i < arr->size(); ++i) {
+      const toml::node& entry = *arr->get(i);
+      ToolConfig tool = ParseTool(file, entry, i);
+      if (auto [it, fresh] = by_tool.emplace(tool.tool, i); !fresh) {
+        Fail(file, &entry, fmt::format("[[tools]] entry {}: tool {} is already listed in entry {}", i + 1,
+                                       tool.tool, it->second + 1));
+      }
+      std::string base = BaseTool(tool.tool);
+      if (auto [it, fresh] = by_socket.emplace(tool.socket, base); !fresh && it->second != base) {
+        Fail(file, &entry, fmt::format("[[tools]] entry {}: socket {} already holds tool {} (only suffix data "
+                                       "sets of one tool may share a socket)",
+                                       i + 1, tool.socket, it->second));
+      }
+      cfg.tools.push_back(std::move(tool));
+    }
+  }
+  return cfg;
+}
+
+}  // namespace cell::config

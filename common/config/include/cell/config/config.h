@@ -1,0 +1,88 @@
+// Where the cell's configuration and state live, which DDS domain it uses, and the station configs
+// (DESIGN.md §7). Every function reads the environment at call time; nothing is cached.
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace cell::config {
+
+// CELL_CONFIG_DIR if set; else /etc/cell when the running binary is installed (its path is under /usr or
+// /opt); else the source tree's deploy/ directory (the tree this library was built from).
+std::filesystem::path ConfigDir();
+
+// The rule above without the environment variable, for a binary at `exe` (exposed for tests).
+std::filesystem::path DefaultConfigDir(const std::filesystem::path& exe);
+
+// CELL_DATA_DIR if set; else $XDG_STATE_HOME/cell (XDG_STATE_HOME must be absolute); else
+// $HOME/.local/state/cell (the passwd home when HOME is unset). Creates the directory (and parents).
+// Throws cell::Error(kIo) naming the directory when it cannot be created.
+std::filesystem::path DataDir();
+
+// CELL_DOMAIN (decimal, 0..232), default 101. Throws cell::Error(kInvalidArgument) with a message naming
+// the variable, the value and the allowed range.
+int Domain();
+inline constexpr int kDefaultDomain = 101;
+inline constexpr int kMaxDomain = 232;
+
+// Dialects a station may be programmed in.
+inline constexpr std::string_view kDialects[] = {"ktapl", "okuma", "emco", "balt"};
+
+// One entry of a station's initial tool table (`[[tools]]` in the station file).
+struct ToolConfig {
+  std::string tool;      // tool number, 1-7 digits with an optional suffix .1-.7, e.g. "1001", "33412.5"
+  int socket = 0;        // magazine socket / turret station, >= 1
+  double length = 0;     // length compensation, mm, >= 0
+  double diameter = 0;   // diameter compensation, mm, >= 0
+  double life_left_min = 0;  // remaining tool life, minutes, >= 0
+
+  bool operator==(const ToolConfig&) const = default;
+};
+
+// A station file `<ConfigDir()>/stations/<ID>.toml`:
+//
+//   [station]
+//   id = "KT01"              # must equal the file name's stem
+//   dialect = "ktapl"        # ktapl | okuma | emco | balt
+//   description = "..."      # optional, default ""
+//   coded_pallets = false    # optional, default false (KT-APL coded-pallet FMS module: pallets 1-127)
+//
+//   [[tools]]                # optional, any number
+//   tool = "1001"            # string (or integer); suffix tools as strings: "33412.5"
+//   socket = 1
+//   length = 152.4           # mm
+//   diameter = 25.0          # mm
+//   life_left_min = 120      # minutes
+//
+// Unknown keys inside [station] and [[tools]] are errors (typos must not pass silently); other tables
+// ([machine], [axes.x], [magazine], ...) belong to other readers and are ignored here.
+struct StationConfig {
+  std::string id;
+  std::string dialect;
+  std::string description;
+  bool coded_pallets = false;
+  std::vector<ToolConfig> tools;
+  std::filesystem::path file;  // the file it was read from
+};
+
+// Station ids (file stems of <ConfigDir()>/stations/*.toml), sorted. Throws cell::Error(kNotFound) when
+// the stations directory does not exist.
+std::vector<std::string> ListStations();
+
+// Reads and validates <ConfigDir()>/stations/<id>.toml. Throws cell::Error: kInvalidArgument for a
+// malformed id or file (the message names the file, line, key and allowed values), kNotFound when there
+// is no such station (the message lists the configured ones).
+StationConfig LoadStation(std::string_view id);
+
+// Same for an explicit file; the [station] id must equal the file's stem.
+StationConfig LoadStationFile(const std::filesystem::path& file);
+
+// True for a well-formed station id: 1-16 characters of A-Z, a-z, 0-9, '_' or '-'.
+bool IsValidStationId(std::string_view id);
+
+// True for a well-formed tool number: 1-7 digits, optionally ".1" to ".7".
+bool IsValidToolNumber(std::string_view tool);
+
+}  // namespace cell::config

@@ -1,0 +1,91 @@
+#include "cell/log/log.h"
+
+#include <gtest/gtest.h>
+#include <stdlib.h>
+
+#include <cstdio>
+#include <regex>
+#include <string>
+
+#include "cell/error/error.h"
+
+namespace {
+
+// Everything written to a temporary FILE* so far.
+std::string ReadAll(std::FILE* f) {
+  std::fflush(f);
+  std::rewind(f);
+  std::string out;
+  char buf[512];
+  size_t n;
+  while ((n = std::fread(buf, 1, sizeof buf, f)) > 0) out.append(buf, n);
+  return out;
+}
+
+class LogTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    out_ = std::tmpfile();
+    ASSERT_NE(out_, nullptr);
+    unsetenv("CELL_LOG_LEVEL");
+  }
+  void TearDown() override {
+    spdlog::set_default_logger(nullptr);
+    std::fclose(out_);
+    unsetenv("CELL_LOG_LEVEL");
+  }
+  std::FILE* out_ = nullptr;
+};
+
+TEST_F(LogTest, OneLinePerEventNamingServiceAndStation) {
+  cell::log::Init("cell-interpreter", "KT01", {.out = out_, .journal = false});
+  spdlog::info("program {} started", "O1234");
+  spdlog::error("two\nlines");
+  std::string text = ReadAll(out_);
+  std::regex line(
+      R"(\d{4}-\d\d-\d\dT\d\d:\d\d:\d\d\.\d{3}Z cell-interpreter\[KT01\] info: program O1234 started
+\d{4}-\d\d-\d\dT\d\d:\d\d:\d\d\.\d{3}Z cell-interpreter\[KT01\] error: two\\nlines
+)");
+  EXPECT_TRUE(std::regex_match(text, line)) << text;
+}
+
+TEST_F(LogTest, HostServicesHaveNoStation) {
+  cell::log::Init("cell-scheduler", "", {.out = out_, .journal = true});
+  spdlog::warn("backlog {}", 3);
+  EXPECT_EQ(ReadAll(out_), "<4>cell-scheduler warning: backlog 3\n");
+}
+
+TEST_F(LogTest, LevelComesFromEnvironmentDefaultInfo) {
+  cell::log::Init("svc", "", {.out = out_, .journal = true});
+  spdlog::debug("hidden");
+  spdlog::info("shown");
+  EXPECT_EQ(ReadAll(out_), "<6>svc info: shown\n");
+
+  std::FILE* second = std::tmpfile();
+  setenv("CELL_LOG_LEVEL", "DEBUG", 1);
+  cell::log::Init("svc", "", {.out = second, .journal = true});
+  spdlog::debug("now shown");
+  EXPECT_EQ(ReadAll(second), "<7>svc debug: now shown\n");
+  spdlog::set_default_logger(nullptr);
+  std::fclose(second);
+}
+
+TEST_F(LogTest, BadLevelWarnsAndUsesInfo) {
+  setenv("CELL_LOG_LEVEL", "loud", 1);
+  cell::log::Init("svc", "OK01", {.out = out_, .journal = true});
+  spdlog::debug("hidden");
+  std::string text = ReadAll(out_);
+  EXPECT_NE(text.find("<4>svc[OK01] warning: CELL_LOG_LEVEL: log level 'loud' is not one of trace"),
+            std::string::npos)
+      << text;
+  EXPECT_EQ(text.find("hidden"), std::string::npos);
+}
+
+TEST(ParseLevel, AcceptsNamesRejectsOthers) {
+  EXPECT_EQ(cell::log::ParseLevel("warn"), spdlog::level::warn);
+  EXPECT_EQ(cell::log::ParseLevel("Warning"), spdlog::level::warn);
+  EXPECT_EQ(cell::log::ParseLevel("off"), spdlog::level::off);
+  EXPECT_THROW(cell::log::ParseLevel("verbose"), cell::Error);
+}
+
+}  // namespace
