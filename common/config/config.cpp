@@ -4,6 +4,7 @@
 #include <pwd.h>
 #include <unistd.h>
 
+#include <toml++/toml.h>
 #include <algorithm>
 #include <cerrno>
 #include <cstdlib>
@@ -11,7 +12,6 @@
 #include <map>
 #include <set>
 #include <system_error>
-#include <toml++/toml.h>
 
 #include "cell/error/error.h"
 
@@ -46,7 +46,8 @@ std::string DialectList() {
 // A located error: "<file>:<line>: <text>".
 [[noreturn]] void Fail(const fs::path& file, const toml::node* where, const std::string& text) {
   if (where != nullptr && where->source().begin.line > 0) {
-    throw Error(Errc::kInvalidArgument, fmt::format("{}:{}: {}", file.string(), where->source().begin.line, text));
+    throw Error(Errc::kInvalidArgument,
+                fmt::format("{}:{}: {}", file.string(), where->source().begin.line, text));
   }
   throw Error(Errc::kInvalidArgument, fmt::format("{}: {}", file.string(), text));
 }
@@ -107,8 +108,8 @@ ToolConfig ParseTool(const fs::path& file, const toml::node& entry, size_t index
     tool.tool = std::string(*tn.value<std::string_view>());
   } else {
     Fail(file, &tn,
-         fmt::format("{}: tool must be a string such as \"1001\" or \"33412.5\" (or an integer), not {}", where,
-                     TypeName(tn)));
+         fmt::format("{}: tool must be a string such as \"1001\" or \"33412.5\" (or an integer), not {}",
+                     where, TypeName(tn)));
   }
   if (!IsValidToolNumber(tool.tool)) {
     Fail(file, &tn,
@@ -133,7 +134,9 @@ ToolConfig ParseTool(const fs::path& file, const toml::node& entry, size_t index
   return tool;
 }
 
-std::string BaseTool(const std::string& tool) { return tool.substr(0, tool.find('.')); }
+std::string BaseTool(const std::string& tool) {
+  return tool.substr(0, tool.find('.'));
+}
 
 }  // namespace
 
@@ -178,7 +181,8 @@ fs::path DataDir() {
       if (const passwd* pw = getpwuid(getuid()); pw != nullptr && pw->pw_dir != nullptr) home = pw->pw_dir;
     }
     if (home.empty()) {
-      throw Error(Errc::kIo, "cannot find a data directory: set CELL_DATA_DIR (HOME and XDG_STATE_HOME are unset)");
+      throw Error(Errc::kIo,
+                  "cannot find a data directory: set CELL_DATA_DIR (HOME and XDG_STATE_HOME are unset)");
     }
     dir = fs::path(home) / ".local" / "state" / "cell";
   }
@@ -209,7 +213,8 @@ std::vector<std::string> ListStations() {
   std::error_code ec;
   if (!fs::is_directory(dir, ec)) {
     throw Error(Errc::kNotFound,
-                fmt::format("no station directory {} (set CELL_CONFIG_DIR to the cell's configuration)", dir.string()));
+                fmt::format("no station directory {} (set CELL_CONFIG_DIR to the cell's configuration)",
+                            dir.string()));
   }
   std::vector<std::string> ids;
   for (const auto& e : fs::directory_iterator(dir)) {
@@ -234,8 +239,8 @@ StationConfig LoadStation(std::string_view id) {
       for (const auto& s : ListStations()) known += (known.empty() ? "" : ", ") + s;
     } catch (const Error&) {
     }
-    throw Error(Errc::kNotFound, fmt::format("station '{}' is not configured: no file {} (configured: {})", id,
-                                             file.string(), known.empty() ? "none" : known));
+    throw Error(Errc::kNotFound, fmt::format("station '{}' is not configured: no file {} (configured: {})",
+                                             id, file.string(), known.empty() ? "none" : known));
   }
   return LoadStationFile(file);
 }
@@ -259,28 +264,35 @@ StationConfig LoadStationFile(const fs::path& file) {
   for (auto&& [k, v] : *st) {
     if (k.str() != "id" && k.str() != "dialect" && k.str() != "description" && k.str() != "coded_pallets") {
       Fail(file, &v,
-           fmt::format("[station]: unknown key '{}' (allowed: id, dialect, description, coded_pallets)", k.str()));
+           fmt::format("[station]: unknown key '{}' (allowed: id, dialect, description, coded_pallets)",
+                       k.str()));
     }
   }
   const toml::node* id = st->get("id");
   if (id == nullptr) Fail(file, sn, "[station]: missing key 'id'");
   cfg.id = GetString(file, *id, "[station] id");
   if (cfg.id != file.stem().string()) {
-    Fail(file, id, fmt::format("[station] id = '{}': must equal the file name's stem '{}'", cfg.id,
-                               file.stem().string()));
+    Fail(file, id,
+         fmt::format("[station] id = '{}': must equal the file name's stem '{}'", cfg.id,
+                     file.stem().string()));
   }
   if (!IsValidStationId(cfg.id)) {
-    Fail(file, id, fmt::format("[station] id = '{}': must be 1-16 characters of A-Z, a-z, 0-9, '_' or '-'", cfg.id));
+    Fail(file, id,
+         fmt::format("[station] id = '{}': must be 1-16 characters of A-Z, a-z, 0-9, '_' or '-'", cfg.id));
   }
   const toml::node* dialect = st->get("dialect");
-  if (dialect == nullptr) Fail(file, sn, fmt::format("[station]: missing key 'dialect' (one of {})", DialectList()));
+  if (dialect == nullptr)
+    Fail(file, sn, fmt::format("[station]: missing key 'dialect' (one of {})", DialectList()));
   cfg.dialect = GetString(file, *dialect, "[station] dialect");
   if (std::find(std::begin(kDialects), std::end(kDialects), cfg.dialect) == std::end(kDialects)) {
-    Fail(file, dialect, fmt::format("[station] dialect = '{}': must be one of {}", cfg.dialect, DialectList()));
+    Fail(file, dialect,
+         fmt::format("[station] dialect = '{}': must be one of {}", cfg.dialect, DialectList()));
   }
-  if (const toml::node* d = st->get("description")) cfg.description = GetString(file, *d, "[station] description");
+  if (const toml::node* d = st->get("description"))
+    cfg.description = GetString(file, *d, "[station] description");
   if (const toml::node* c = st->get("coded_pallets")) {
-    if (!c->is_boolean()) Fail(file, c, fmt::format("[station] coded_pallets must be true or false, not {}", TypeName(*c)));
+    if (!c->is_boolean())
+      Fail(file, c, fmt::format("[station] coded_pallets must be true or false, not {}", TypeName(*c)));
     cfg.coded_pallets = *c->value<bool>();
   }
   if (const toml::node* tn = root.get("tools")) {
@@ -292,14 +304,16 @@ StationConfig LoadStationFile(const fs::path& file) {
       const toml::node& entry = *arr->get(i);
       ToolConfig tool = ParseTool(file, entry, i);
       if (auto [it, fresh] = by_tool.emplace(tool.tool, i); !fresh) {
-        Fail(file, &entry, fmt::format("[[tools]] entry {}: tool {} is already listed in entry {}", i + 1,
-                                       tool.tool, it->second + 1));
+        Fail(file, &entry,
+             fmt::format("[[tools]] entry {}: tool {} is already listed in entry {}", i + 1, tool.tool,
+                         it->second + 1));
       }
       std::string base = BaseTool(tool.tool);
       if (auto [it, fresh] = by_socket.emplace(tool.socket, base); !fresh && it->second != base) {
-        Fail(file, &entry, fmt::format("[[tools]] entry {}: socket {} already holds tool {} (only suffix data "
-                                       "sets of one tool may share a socket)",
-                                       i + 1, tool.socket, it->second));
+        Fail(file, &entry,
+             fmt::format("[[tools]] entry {}: socket {} already holds tool {} (only suffix data "
+                         "sets of one tool may share a socket)",
+                         i + 1, tool.socket, it->second));
       }
       cfg.tools.push_back(std::move(tool));
     }

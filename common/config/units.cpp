@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <fstream>
 #include <map>
 
@@ -19,7 +20,9 @@ std::string_view Trim(std::string_view s) {
   return s.substr(b, e - b + 1);
 }
 
-bool IsSpace(char c) { return c == ' ' || c == '\t' || c == '\n' || c == '\r'; }
+bool IsSpace(char c) {
+  return c == ' ' || c == '\t' || c == '\n' || c == '\r';
+}
 
 int HexDigit(char c) {
   if (c >= '0' && c <= '9') return c - '0';
@@ -32,7 +35,9 @@ int HexDigit(char c) {
 // the value split into words (systemd.service(5) "Command lines").
 void SubstituteVariables(const std::string& word, const std::map<std::string, std::string>& env,
                          std::vector<std::string>& out) {
-  auto is_name = [](char c) { return (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '_'; };
+  auto is_name = [](char c) {
+    return (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '_';
+  };
   if (word.size() > 1 && word[0] == '$' && word[1] != '{') {
     std::string name = word.substr(1);
     if (std::all_of(name.begin(), name.end(), is_name)) {
@@ -95,7 +100,8 @@ UnitFile ParseUnitFile(const fs::path& file) {
     if (line.empty() || line[0] == '#' || line[0] == ';') continue;
     if (line.front() == '[') {
       if (line.back() != ']' || line.size() < 3) {
-        throw Error(Errc::kInvalidArgument, fmt::format("{}:{}: malformed section header", file.string(), lineno));
+        throw Error(Errc::kInvalidArgument,
+                    fmt::format("{}:{}: malformed section header", file.string(), lineno));
       }
       section = std::string(line.substr(1, line.size() - 2));
       continue;
@@ -106,9 +112,11 @@ UnitFile ParseUnitFile(const fs::path& file) {
                   fmt::format("{}:{}: expected key=value, got '{}'", file.string(), lineno, line));
     }
     if (section.empty()) {
-      throw Error(Errc::kInvalidArgument, fmt::format("{}:{}: assignment outside of a section", file.string(), lineno));
+      throw Error(Errc::kInvalidArgument,
+                  fmt::format("{}:{}: assignment outside of a section", file.string(), lineno));
     }
-    UnitFile::Entry e{section, std::string(Trim(line.substr(0, eq))), std::string(Trim(line.substr(eq + 1))), lineno};
+    UnitFile::Entry e{section, std::string(Trim(line.substr(0, eq))), std::string(Trim(line.substr(eq + 1))),
+                      lineno};
     // A trailing backslash continues the value on the next line (comment lines in between are skipped).
     while (!e.value.empty() && e.value.back() == '\\') {
       e.value.back() = ' ';
@@ -157,17 +165,32 @@ std::vector<std::string> SplitWords(std::string_view text) {
         char e = text[i + 1];
         i += 2;
         switch (e) {
-          case '\\': word += '\\'; break;
-          case '"': word += '"'; break;
-          case '\'': word += '\''; break;
-          case 'n': word += '\n'; break;
-          case 't': word += '\t'; break;
-          case 'r': word += '\r'; break;
-          case 's': word += ' '; break;
+          case '\\':
+            word += '\\';
+            break;
+          case '"':
+            word += '"';
+            break;
+          case '\'':
+            word += '\'';
+            break;
+          case 'n':
+            word += '\n';
+            break;
+          case 't':
+            word += '\t';
+            break;
+          case 'r':
+            word += '\r';
+            break;
+          case 's':
+            word += ' ';
+            break;
           case 'x': {
             int hi = i < n ? HexDigit(text[i]) : -1;
             int lo = i + 1 < n ? HexDigit(text[i + 1]) : -1;
-            if (hi < 0 || lo < 0) throw Error(Errc::kInvalidArgument, fmt::format("'{}': bad \\x escape", text));
+            if (hi < 0 || lo < 0)
+              throw Error(Errc::kInvalidArgument, fmt::format("'{}': bad \\x escape", text));
             word += static_cast<char>(hi * 16 + lo);
             i += 2;
             break;
@@ -193,7 +216,8 @@ std::string UnitName(const fs::path& unit_file, std::string_view instance) {
   bool is_template = at != std::string::npos && dot == at + 1;
   if (!is_template) return name;
   if (instance.empty()) {
-    throw Error(Errc::kInvalidArgument, fmt::format("{} is a template unit: it needs an instance (a station id)", name));
+    throw Error(Errc::kInvalidArgument,
+                fmt::format("{} is a template unit: it needs an instance (a station id)", name));
   }
   return fmt::format("{}@{}{}", name.substr(0, at), instance, name.substr(dot));
 }
@@ -209,16 +233,27 @@ std::string ExpandSpecifiers(std::string_view word, std::string_view unit_name) 
       out += word[i];
       continue;
     }
-    if (i + 1 >= word.size()) throw Error(Errc::kInvalidArgument, fmt::format("'{}': lone '%' at the end", word));
+    if (i + 1 >= word.size())
+      throw Error(Errc::kInvalidArgument, fmt::format("'{}': lone '%' at the end", word));
     char s = word[++i];
     switch (s) {
-      case '%': out += '%'; break;
+      case '%':
+        out += '%';
+        break;
       case 'i':
-      case 'I': out += instance; break;
-      case 'n': out += unit_name; break;
-      case 'N': out += base; break;
+      case 'I':
+        out += instance;
+        break;
+      case 'n':
+        out += unit_name;
+        break;
+      case 'N':
+        out += base;
+        break;
       case 'p':
-      case 'P': out += prefix; break;
+      case 'P':
+        out += prefix;
+        break;
       default:
         throw Error(Errc::kUnimplemented,
                     fmt::format("'{}': specifier %{} is not supported (only %i %I %n %N %p %P %%)", word, s));
@@ -227,7 +262,8 @@ std::string ExpandSpecifiers(std::string_view word, std::string_view unit_name) 
   return out;
 }
 
-std::vector<std::pair<std::string, std::string>> EnvironmentFor(const fs::path& unit_file, std::string_view instance) {
+std::vector<std::pair<std::string, std::string>> EnvironmentFor(const fs::path& unit_file,
+                                                                std::string_view instance) {
   UnitFile unit = ParseUnitFile(unit_file);
   std::string name = UnitName(unit_file, instance);
   std::vector<std::pair<std::string, std::string>> env;
@@ -245,7 +281,8 @@ std::vector<std::pair<std::string, std::string>> EnvironmentFor(const fs::path& 
   return env;
 }
 
-std::vector<std::string> ExecStartFor(const fs::path& unit_file, std::string_view instance, const fs::path& bin_dir) {
+std::vector<std::string> ExecStartFor(const fs::path& unit_file, std::string_view instance,
+                                      const fs::path& bin_dir) {
   UnitFile unit = ParseUnitFile(unit_file);
   std::string name = UnitName(unit_file, instance);
   std::vector<std::string> lines = unit.Values("Service", "ExecStart");
@@ -256,7 +293,8 @@ std::vector<std::string> ExecStartFor(const fs::path& unit_file, std::string_vie
   std::string_view cmd = lines[0];
   // Prefixes: @ (argv[0] given separately), - (ignore failure), : (no substitution), + ! (privileges).
   bool at_prefix = false, substitute = true;
-  while (!cmd.empty() && (cmd[0] == '@' || cmd[0] == '-' || cmd[0] == ':' || cmd[0] == '+' || cmd[0] == '!')) {
+  while (!cmd.empty() &&
+         (cmd[0] == '@' || cmd[0] == '-' || cmd[0] == ':' || cmd[0] == '+' || cmd[0] == '!')) {
     if (cmd[0] == '@') at_prefix = true;
     if (cmd[0] == ':') substitute = false;
     cmd.remove_prefix(1);
@@ -275,7 +313,8 @@ std::vector<std::string> ExecStartFor(const fs::path& unit_file, std::string_vie
     }
   }
   if (at_prefix && argv.size() >= 2) argv.erase(argv.begin() + 1);  // drop the given argv[0]; exec the path
-  if (argv.empty()) throw Error(Errc::kInvalidArgument, fmt::format("{}: ExecStart= is empty", unit_file.string()));
+  if (argv.empty())
+    throw Error(Errc::kInvalidArgument, fmt::format("{}: ExecStart= is empty", unit_file.string()));
   if (!bin_dir.empty()) argv[0] = (bin_dir / fs::path(argv[0]).filename()).string();
   return argv;
 }

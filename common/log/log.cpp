@@ -63,12 +63,14 @@ bool StderrIsJournal(std::FILE* out) {
   if (fstat(fileno(out), &st) != 0) return false;
   unsigned long long dev = 0, ino = 0;
   if (std::sscanf(js, "%llu:%llu", &dev, &ino) != 2) return false;
-  return static_cast<unsigned long long>(st.st_dev) == dev && static_cast<unsigned long long>(st.st_ino) == ino;
+  return static_cast<unsigned long long>(st.st_dev) == dev &&
+         static_cast<unsigned long long>(st.st_ino) == ino;
 }
 
 class LineSink final : public spdlog::sinks::base_sink<std::mutex> {
  public:
-  LineSink(std::FILE* out, std::string tag, bool journal) : out_(out), tag_(std::move(tag)), journal_(journal) {}
+  LineSink(std::FILE* out, std::string tag, bool journal)
+      : out_(out), tag_(std::move(tag)), journal_(journal) {}
 
  protected:
   void sink_it_(const spdlog::details::log_msg& msg) override {
@@ -127,8 +129,9 @@ spdlog::level::level_enum ParseLevel(std::string_view name) {
   if (n == "error" || n == "err") return spdlog::level::err;
   if (n == "critical") return spdlog::level::critical;
   if (n == "off") return spdlog::level::off;
-  throw Error(Errc::kInvalidArgument,
-              fmt::format("log level '{}' is not one of trace, debug, info, warn, error, critical, off", name));
+  throw Error(
+      Errc::kInvalidArgument,
+      fmt::format("log level '{}' is not one of trace, debug, info, warn, error, critical, off", name));
 }
 
 void Init(std::string_view service, std::string_view station, const Options& options) {

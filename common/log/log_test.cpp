@@ -22,6 +22,13 @@ std::string ReadAll(std::FILE* f) {
   return out;
 }
 
+cell::log::Options Opts(std::FILE* out, bool journal) {
+  cell::log::Options o;
+  o.out = out;
+  o.journal = journal;
+  return o;
+}
+
 class LogTest : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -38,7 +45,7 @@ class LogTest : public ::testing::Test {
 };
 
 TEST_F(LogTest, OneLinePerEventNamingServiceAndStation) {
-  cell::log::Init("cell-interpreter", "KT01", {.out = out_, .journal = false});
+  cell::log::Init("cell-interpreter", "KT01", Opts(out_, false));
   spdlog::info("program {} started", "O1234");
   spdlog::error("two\nlines");
   std::string text = ReadAll(out_);
@@ -50,20 +57,20 @@ TEST_F(LogTest, OneLinePerEventNamingServiceAndStation) {
 }
 
 TEST_F(LogTest, HostServicesHaveNoStation) {
-  cell::log::Init("cell-scheduler", "", {.out = out_, .journal = true});
+  cell::log::Init("cell-scheduler", "", Opts(out_, true));
   spdlog::warn("backlog {}", 3);
   EXPECT_EQ(ReadAll(out_), "<4>cell-scheduler warning: backlog 3\n");
 }
 
 TEST_F(LogTest, LevelComesFromEnvironmentDefaultInfo) {
-  cell::log::Init("svc", "", {.out = out_, .journal = true});
+  cell::log::Init("svc", "", Opts(out_, true));
   spdlog::debug("hidden");
   spdlog::info("shown");
   EXPECT_EQ(ReadAll(out_), "<6>svc info: shown\n");
 
   std::FILE* second = std::tmpfile();
   setenv("CELL_LOG_LEVEL", "DEBUG", 1);
-  cell::log::Init("svc", "", {.out = second, .journal = true});
+  cell::log::Init("svc", "", Opts(second, true));
   spdlog::debug("now shown");
   EXPECT_EQ(ReadAll(second), "<7>svc debug: now shown\n");
   spdlog::set_default_logger(nullptr);
@@ -72,7 +79,7 @@ TEST_F(LogTest, LevelComesFromEnvironmentDefaultInfo) {
 
 TEST_F(LogTest, BadLevelWarnsAndUsesInfo) {
   setenv("CELL_LOG_LEVEL", "loud", 1);
-  cell::log::Init("svc", "OK01", {.out = out_, .journal = true});
+  cell::log::Init("svc", "OK01", Opts(out_, true));
   spdlog::debug("hidden");
   std::string text = ReadAll(out_);
   EXPECT_NE(text.find("<4>svc[OK01] warning: CELL_LOG_LEVEL: log level 'loud' is not one of trace"),

@@ -32,10 +32,10 @@ inline constexpr std::string_view kDialects[] = {"ktapl", "okuma", "emco", "balt
 
 // One entry of a station's initial tool table (`[[tools]]` in the station file).
 struct ToolConfig {
-  std::string tool;      // tool number, 1-7 digits with an optional suffix .1-.7, e.g. "1001", "33412.5"
-  int socket = 0;        // magazine socket / turret station, >= 1
-  double length = 0;     // length compensation, mm, >= 0
-  double diameter = 0;   // diameter compensation, mm, >= 0
+  std::string tool;          // tool number, 1-7 digits with an optional suffix .1-.7, e.g. "1001", "33412.5"
+  int socket = 0;            // magazine socket / turret station, >= 1
+  double length = 0;         // length compensation, mm, >= 0
+  double diameter = 0;       // diameter compensation, mm, >= 0
   double life_left_min = 0;  // remaining tool life, minutes, >= 0
 
   bool operator==(const ToolConfig&) const = default;

@@ -1,0 +1,290 @@
+#include "cell/config/config.h"
+
+#include <gtest/gtest.h>
+#include <stdlib.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "cell/error/error.h"
+
+namespace fs = std::filesystem;
+using cell::config::LoadStation;
+
+namespace {
+
+// A private config dir and data dir per test; the environment is restored afterwards.
+class ConfigTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    char tmpl[] = "/tmp/cell-config-test-XXXXXX";
+    ASSERT_NE(mkdtemp(tmpl), nullptr);
+    root_ = tmpl;
+    fs::create_directories(root_ / "etc" / "stations");
+    for (const char* v : {"CELL_CONFIG_DIR", "CELL_DATA_DIR", "CELL_DOMAIN", "XDG_STATE_HOME", "HOME"}) {
+      const char* old = getenv(v);
+      saved_.emplace_back(v, old ? std::optional<std::string>(old) : std::nullopt);
+    }
+    setenv("CELL_CONFIG_DIR", (root_ / "etc").c_str(), 1);
+  }
+  void TearDown() override {
+    for (auto& [k, v] : saved_) {
+      if (v)
+        setenv(k.c_str(), v->c_str(), 1);
+      else
+        unsetenv(k.c_str());
+    }
+    fs::remove_all(root_);
+  }
+  void Write(const std::string& id, const std::string& text) {
+    std::ofstream(root_ / "etc" / "stations" / (id + ".toml")) << text;
+  }
+  // The cell::Error message LoadStation(id) throws, or "" when it does not throw.
+  std::string LoadError(const std::string& id) {
+    try {
+      LoadStation(id);
+    } catch (const cell::Error& e) {
+      return e.what();
+    }
+    return "";
+  }
+  fs::path root_;
+  std::vector<std::pair<std::string, std::optional<std::string>>> saved_;
+};
+
+const char* kGood = R"(
+[station]
+id = "KT09"
+dialect = "ktapl"
+description = "test machine"
+coded_pallets = true
+
+[machine]          # another reader's table: ignored here
+rapid_mm_min = 10000
+[axes.x]
+min = -500.0
+
+[[tools]]
+tool = "1001"
+socket = 1
+length = 150.5
+diameter = 25
+life_left_min = 120
+
+[[tools]]
+tool = 33412
+socket = 2
+length = 0
+diameter = 0
+life_left_min = 0
+
+[[tools]]
+tool = "33412.5"
+socket = 2
+length = 10
+diameter = 12.5
+life_left_min = 30.5
+)";
+
+TEST_F(ConfigTest, LoadsStationAndTools) {
+  Write("KT09", kGood);
+  auto s = LoadStation("KT09");
+  EXPECT_EQ(s.id, "KT09");
+  EXPECT_EQ(s.dialect, "ktapl");
+  EXPECT_EQ(s.description, "test machine");
+  EXPECT_TRUE(s.coded_pallets);
+  EXPECT_EQ(s.file, root_ / "etc" / "stations" / "KT09.toml");
+  ASSERT_EQ(s.tools.size(), 3u);
+  EXPECT_EQ(s.tools[0], (cell::config::ToolConfig{"1001", 1, 150.5, 25, 120}));
+  EXPECT_EQ(s.tools[1], (cell::config::ToolConfig{"33412", 2, 0, 0, 0}));
+  EXPECT_EQ(s.tools[2], (cell::config::ToolConfig{"33412.5", 2, 10, 12.5, 30.5}));
+}
+
+TEST_F(ConfigTest, OptionalFieldsDefault) {
+  Write("OK05", "[station]\nid = \"OK05\"\ndialect = \"okuma\"\n");
+  auto s = LoadStation("OK05");
+  EXPECT_EQ(s.description, "");
+  EXPECT_FALSE(s.coded_pallets);
+  EXPECT_TRUE(s.tools.empty());
+}
+
+TEST_F(ConfigTest, ListStationsSortedTomlOnly) {
+  Write("KT02", kGood);
+  Write("KT01", kGood);
+  std::ofstream(root_ / "etc" / "stations" / "README") << "x";
+  std::ofstream(root_ / "etc" / "stations" / "KT03.toml.dist") << "x";
+  EXPECT_EQ(cell::config::ListStations(), (std::vector<std::string>{"KT01", "KT02"}));
+  setenv("CELL_CONFIG_DIR", (root_ / "nowhere").c_str(), 1);
+  EXPECT_THROW(cell::config::ListStations(), cell::Error);
+}
+
+TEST_F(ConfigTest, ErrorsNameFileKeyAndAllowedValues) {
+  const std::string file = (root_ / "etc" / "stations").string();
+  Write("KT01", "[station]\nid = \"KT01\"\ndialect = \"fanuc\"\n");
+  EXPECT_EQ(LoadError("KT01"),
+            file + "/KT01.toml:3: [station] dialect = 'fanuc': must be one of ktapl, okuma, emco, balt");
+
+  Write("KT01", "[station]\nid = \"KT02\"\ndialect = \"ktapl\"\n");
+  EXPECT_EQ(LoadError("KT01"),
+            file + "/KT01.toml:2: [station] id = 'KT02': must equal the file name's stem 'KT01'");
+
+  Write("KT01", "[station]\nid = \"KT01\"\n");
+  EXPECT_NE(LoadError("KT01").find("KT01.toml:1: [station]: missing key 'dialect' (one of ktapl"),
+            std::string::npos);
+
+  Write("KT01", "[machine]\nx = 1\n");
+  EXPECT_NE(LoadError("KT01").find("KT01.toml: missing table [station]"), std::string::npos);
+
+  Write("KT01", "[station]\nid = \"KT01\"\ndialect = \"ktapl\"\ncoded_pallet = true\n");
+  EXPECT_NE(LoadError("KT01").find("KT01.toml:4: [station]: unknown key 'coded_pallet'"), std::string::npos);
+
+  Write("KT01", "[station]\nid = \"KT01\"\ndialect = \"ktapl\"\ncoded_pallets = 1\n");
+  EXPECT_NE(LoadError("KT01").find("coded_pallets must be true or false, not an integer"), std::string::npos);
+
+  Write("KT01", "[station]\nid = \"KT01\"\ndialect = [\n");
+  EXPECT_NE(LoadError("KT01").find("KT01.toml:3:"), std::string::npos) << LoadError("KT01");
+}
+
+TEST_F(ConfigTest, ToolErrors) {
+  const std::string head = "[station]\nid = \"KT01\"\ndialect = \"ktapl\"\n[[tools]]\n";
+  auto err = [&](const std::string& tool) {
+    Write("KT01", head + tool);
+    return LoadError("KT01");
+  };
+  EXPECT_NE(err("tool = \"1001.8\"\nsocket = 1\nlength = 1\ndiameter = 1\nlife_left_min = 1\n")
+                .find("KT01.toml:5: [[tools]] entry 1: tool = '1001.8': must be 1-7 digits with an optional "
+                      "suffix .1-.7"),
+            std::string::npos);
+  EXPECT_NE(err("tool = 12345678\nsocket = 1\nlength = 1\ndiameter = 1\nlife_left_min = 1\n")
+                .find("tool = '12345678'"),
+            std::string::npos);
+  EXPECT_NE(err("tool = 1.5\nsocket = 1\nlength = 1\ndiameter = 1\nlife_left_min = 1\n")
+                .find("tool must be a string such as \"1001\" or \"33412.5\" (or an integer), not a float"),
+            std::string::npos);
+  EXPECT_NE(err("tool = \"1\"\nsocket = 0\nlength = 1\ndiameter = 1\nlife_left_min = 1\n")
+                .find("KT01.toml:6: [[tools]] entry 1 (tool 1): socket must be an integer in 1..9999"),
+            std::string::npos);
+  EXPECT_NE(err("tool = \"1\"\nsocket = 1\nlength = -1\ndiameter = 1\nlife_left_min = 1\n")
+                .find("length = -1: must be >= 0"),
+            std::string::npos);
+  EXPECT_NE(err("tool = \"1\"\nsocket = 1\nlength = 1\nlife_left_min = 1\n")
+                .find("[[tools]] entry 1: missing key 'diameter'"),
+            std::string::npos);
+  EXPECT_NE(err("tool = \"1\"\nsocket = 1\nlength = 1\ndiameter = \"big\"\nlife_left_min = 1\n")
+                .find("diameter must be a number, not a string"),
+            std::string::npos);
+  EXPECT_NE(err("tool = \"1\"\nsocket = 1\nlength = 1\ndiameter = 1\nlife_left_min = 1\nwear = 2\n")
+                .find("unknown key 'wear' (allowed: tool, socket, length, diameter, life_left_min)"),
+            std::string::npos);
+  const std::string one = "tool = \"7\"\nsocket = 3\nlength = 1\ndiameter = 1\nlife_left_min = 1\n";
+  EXPECT_NE(err(one + "[[tools]]\n" + one).find("[[tools]] entry 2: tool 7 is already listed in entry 1"),
+            std::string::npos);
+  EXPECT_NE(
+      err(one + "[[tools]]\n" + "tool = \"8\"\nsocket = 3\nlength = 1\ndiameter = 1\nlife_left_min = 1\n")
+          .find("[[tools]] entry 2: socket 3 already holds tool 7"),
+      std::string::npos);
+}
+
+TEST_F(ConfigTest, UnknownStationListsConfiguredOnes) {
+  Write("KT01", kGood);
+  Write("KT02", kGood);
+  try {
+    LoadStation("XX99");
+    FAIL() << "no throw";
+  } catch (const cell::Error& e) {
+    EXPECT_EQ(e.code(), cell::Errc::kNotFound);
+    EXPECT_NE(std::string(e.what()).find("station 'XX99' is not configured"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("(configured: KT01, KT02)"), std::string::npos) << e.what();
+  }
+  try {
+    LoadStation("../passwd");
+    FAIL() << "no throw";
+  } catch (const cell::Error& e) {
+    EXPECT_EQ(e.code(), cell::Errc::kInvalidArgument);
+  }
+}
+
+TEST_F(ConfigTest, Domain) {
+  unsetenv("CELL_DOMAIN");
+  EXPECT_EQ(cell::config::Domain(), 101);
+  setenv("CELL_DOMAIN", "0", 1);
+  EXPECT_EQ(cell::config::Domain(), 0);
+  setenv("CELL_DOMAIN", "232", 1);
+  EXPECT_EQ(cell::config::Domain(), 232);
+  for (const char* bad : {"233", "-1", "abc", "12x", "1000", " 5"}) {
+    setenv("CELL_DOMAIN", bad, 1);
+    try {
+      cell::config::Domain();
+      ADD_FAILURE() << bad << " accepted";
+    } catch (const cell::Error& e) {
+      EXPECT_EQ(std::string(e.what()), std::string("CELL_DOMAIN='") + bad +
+                                           "': must be a DDS domain id, an integer in 0..232 (default 101)");
+    }
+  }
+}
+
+TEST_F(ConfigTest, DataDirPrecedenceAndCreation) {
+  setenv("CELL_DATA_DIR", (root_ / "data" / "deep").c_str(), 1);
+  EXPECT_EQ(cell::config::DataDir(), root_ / "data" / "deep");
+  EXPECT_TRUE(fs::is_directory(root_ / "data" / "deep"));
+
+  unsetenv("CELL_DATA_DIR");
+  setenv("XDG_STATE_HOME", (root_ / "xdg").c_str(), 1);
+  EXPECT_EQ(cell::config::DataDir(), root_ / "xdg" / "cell");
+  EXPECT_TRUE(fs::is_directory(root_ / "xdg" / "cell"));
+
+  setenv("XDG_STATE_HOME", "relative/ignored", 1);
+  setenv("HOME", (root_ / "home").c_str(), 1);
+  EXPECT_EQ(cell::config::DataDir(), root_ / "home" / ".local" / "state" / "cell");
+  EXPECT_TRUE(fs::is_directory(root_ / "home" / ".local" / "state" / "cell"));
+
+  std::ofstream(root_ / "file") << "x";
+  setenv("CELL_DATA_DIR", (root_ / "file" / "sub").c_str(), 1);
+  EXPECT_THROW(cell::config::DataDir(), cell::Error);
+}
+
+TEST_F(ConfigTest, ConfigDirPrecedence) {
+  EXPECT_EQ(cell::config::ConfigDir(), root_ / "etc");
+  unsetenv("CELL_CONFIG_DIR");
+  // This test binary lives in the build tree: the source tree's deploy/.
+  const char* src = getenv("CELL_SOURCE_DIR");
+  ASSERT_NE(src, nullptr) << "run under ctest (CELL_SOURCE_DIR)";
+  EXPECT_EQ(fs::weakly_canonical(cell::config::ConfigDir()), fs::weakly_canonical(fs::path(src) / "deploy"));
+  EXPECT_EQ(cell::config::DefaultConfigDir("/usr/local/bin/cell-scheduler"), "/etc/cell");
+  EXPECT_EQ(cell::config::DefaultConfigDir("/opt/cell/bin/cell-scheduler"), "/etc/cell");
+  EXPECT_EQ(cell::config::DefaultConfigDir("/usrlocal/bin/x").filename(), "deploy");
+  EXPECT_EQ(cell::config::DefaultConfigDir("/home/me/cell/build/bin/x").filename(), "deploy");
+}
+
+// The shipped station files are valid and give the route tests overlapping tool sets.
+TEST(ShippedStations, LoadAndOverlap) {
+  const char* src = getenv("CELL_SOURCE_DIR");
+  ASSERT_NE(src, nullptr) << "run under ctest (CELL_SOURCE_DIR)";
+  setenv("CELL_CONFIG_DIR", (fs::path(src) / "deploy").c_str(), 1);
+  auto ids = cell::config::ListStations();
+  for (const char* want : {"KT01", "KT02", "KT03", "KT04", "OK01"}) {
+    EXPECT_NE(std::find(ids.begin(), ids.end(), want), ids.end()) << want;
+  }
+  auto has = [](const cell::config::StationConfig& s, const std::string& tool) {
+    return std::any_of(s.tools.begin(), s.tools.end(), [&](auto& t) { return t.tool == tool; });
+  };
+  for (const auto& id : ids) {
+    auto s = LoadStation(id);
+    EXPECT_EQ(s.id, id);
+    EXPECT_FALSE(s.tools.empty()) << id;
+    EXPECT_FALSE(s.description.empty()) << id;
+  }
+  auto kt01 = LoadStation("KT01"), kt02 = LoadStation("KT02");
+  EXPECT_EQ(kt01.dialect, "ktapl");
+  EXPECT_EQ(LoadStation("OK01").dialect, "okuma");
+  for (const char* t : {"1001", "1002", "1003"}) {
+    EXPECT_TRUE(has(kt01, t) && has(kt02, t)) << t;
+  }
+  EXPECT_TRUE(has(kt02, "2001"));
+  EXPECT_FALSE(has(kt01, "2001"));
+  unsetenv("CELL_CONFIG_DIR");
+}
+
+}  // namespace
