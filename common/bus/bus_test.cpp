@@ -1,0 +1,224 @@
+// Bus unit tests: two participants in one process on the test's private domain (CELL_DOMAIN,
+// set by CTest). Every wait is for a condition (matched, a sample), never a fixed sleep.
+#include "cell/bus/bus.h"
+
+#include <cstdlib>
+
+#include <gtest/gtest.h>
+
+#include "cell/idl/health.h"
+#include "cell/idl/run.h"
+#include "cell/idl/station.h"
+
+namespace cell::bus {
+namespace {
+
+constexpr Millis kMatch(5000);
+
+cell::StationStatus Status(const std::string& id, int line) {
+  cell::StationStatus s;
+  s.station(id);
+  s.line(line);
+  s.execution(cell::EXECUTION_ACTIVE);
+  return s;
+}
+
+TEST(Bus, PublishSubscribeAcrossParticipants) {
+  Participant a("bus-test-a"), b("bus-test-b");
+  Writer<cell::StationStatus> w(a, "test/pubsub", QosKind::kCommand);
+  Reader<cell::StationStatus> r(b, "test/pubsub", QosKind::kCommand);
+  ASSERT_TRUE(w.WaitForMatched(1, kMatch));
+  ASSERT_TRUE(r.WaitForMatched(1, kMatch));
+  w.Write(Status("KT01", 7));
+  auto got = r.Take(kMatch);
+  ASSERT_TRUE(got);
+  EXPECT_EQ(got->station(), "KT01");
+  EXPECT_EQ(got->line(), 7);
+  EXPECT_EQ(got->execution(), cell::EXECUTION_ACTIVE);
+}
+
+TEST(Bus, LateJoinerGetsLastSampleOfEveryKey) {
+  Participant a("bus-test-a"), b("bus-test-b");
+  Writer<cell::StationStatus> w(a, "test/state", QosKind::kState);
+  for (int i = 1; i <= 3; ++i)
+    for (const char* id : {"KT01", "KT02", "KT03"}) w.Write(Status(id, i));
+  Reader<cell::StationStatus> r(b, "test/state", QosKind::kState);
+  ASSERT_TRUE(r.WaitForMatched(1, kMatch));
+  std::map<std::string, int> last;
+  while (last.size() < 3) {
+    auto s = r.Take(kMatch);
+    ASSERT_TRUE(s) << "late joiner got only " << last.size() << " keys";
+    last[s->station().to_string()] = s->line();
+  }
+  EXPECT_EQ(last, (std::map<std::string, int>{{"KT01", 3}, {"KT02", 3}, {"KT03", 3}}));
+  EXPECT_FALSE(r.Take(Millis(200))) << "keep-last 1 per key: no older samples";
+}
+
+TEST(Bus, CallbackRunsOnTheDispatchThread) {
+  Participant a("bus-test-a"), b("bus-test-b");
+  std::mutex mu;
+  std::condition_variable cv;
+  std::vector<int> seen;
+  std::thread::id cb_thread;
+  Reader<cell::RunStatus> r(b, "test/runs", QosKind::kState, [&](const cell::RunStatus& s, const SampleInfo&) {
+    std::lock_guard lk(mu);
+    cb_thread = std::this_thread::get_id();
+    seen.push_back(s.dispatch_id());
+    cv.notify_all();
+  });
+  Writer<cell::RunStatus> w(a, "test/runs", QosKind::kState);
+  ASSERT_TRUE(w.WaitForMatched(1, kMatch));
+  ASSERT_TRUE(r.WaitForMatched(1, kMatch));
+  for (int id : {17, 18}) {
+    cell::RunStatus s;
+    s.dispatch_id(id);
+    w.Write(s);
+  }
+  std::unique_lock lk(mu);
+  ASSERT_TRUE(cv.wait_for(lk, kMatch, [&] { return seen.size() >= 2; }));
+  EXPECT_EQ(seen, (std::vector<int>{17, 18}));  // in arrival order
+  EXPECT_NE(cb_thread, std::this_thread::get_id());
+}
+
+TEST(Bus, WriteRejectsSequenceOverItsBound) {
+  Participant a("bus-test-a");
+  Writer<cell::ToolTable> w(a, "test/tools", QosKind::kState);
+  cell::ToolTable t;
+  t.station("KT01");
+  t.tools().resize(513);
+  try {
+    w.Write(t);
+    FAIL() << "no error for 513 tools in sequence<ToolEntry, 512>";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), Errc::kInvalidArgument);
+    EXPECT_NE(std::string(e.what()).find("ToolTable.tools: 513 elements, bound 512"), std::string::npos) << e.what();
+  }
+}
+
+using Req = cell::StationRequest;
+using Rep = cell::StationReply;
+
+TEST(Bus, RequestReplyCarriesResultAndErrors) {
+  Participant a("bus-test-server"), b("bus-test-client");
+  int calls = 0;
+  Server<Req, Rep> server(a, "test/svc", [&](const Req& r) {
+    ++calls;
+    if (r.station() == "NOPE") throw Error(Errc::kNotFound, "unknown station NOPE");
+    Rep rep;
+    rep.station(r.station());
+    rep.revision(42);
+    return rep;
+  });
+  Client<Req, Rep> client(b, "test/svc");
+  Req req;
+  req.station("KT01");
+  Rep rep = client.Call(req, kMatch);
+  EXPECT_EQ(rep.hdr().code(), 0);
+  EXPECT_EQ(rep.station(), "KT01");
+  EXPECT_EQ(rep.revision(), 42u);
+  EXPECT_EQ(rep.hdr().client(), b.id());
+
+  req.station("NOPE");
+  Rep bad = client.Call(req, kMatch);
+  try {
+    ThrowIfError(bad);
+    FAIL() << "error reply not raised";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), Errc::kNotFound);
+    EXPECT_STREQ(e.what(), "unknown station NOPE");
+  }
+  EXPECT_EQ(calls, 2);
+}
+
+TEST(Bus, CallWithoutServerIsUnavailable) {
+  Participant b("bus-test-client");
+  Client<Req, Rep> client(b, "test/nobody");
+  auto t0 = std::chrono::steady_clock::now();
+  try {
+    client.Call(Req(), Millis(300));
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), Errc::kUnavailable);
+  }
+  EXPECT_GE(std::chrono::steady_clock::now() - t0, Millis(300));
+}
+
+TEST(Bus, SlowServerTimesOutAndResendIsNotRunTwice) {
+  Participant a("bus-test-server"), b("bus-test-client");
+  std::atomic<int> calls{0};
+  std::mutex mu;
+  std::condition_variable cv;
+  bool release = false;
+  Server<Req, Rep> server(a, "test/slow", [&](const Req&) {
+    ++calls;
+    std::unique_lock lk(mu);
+    cv.wait(lk, [&] { return release; });
+    return Rep();
+  });
+  Client<Req, Rep> client(b, "test/slow");
+  try {
+    // Resends every 50 ms while the handler blocks; the server must run it once.
+    client.Call(Req(), Millis(600), Millis(50));
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), Errc::kTimeout);
+  }
+  {
+    std::lock_guard lk(mu);
+    release = true;
+  }
+  cv.notify_all();
+  Rep rep = client.Call(Req(), kMatch);  // the server is healthy afterwards
+  EXPECT_EQ(rep.hdr().code(), 0);
+  EXPECT_EQ(calls.load(), 2);
+}
+
+TEST(Bus, ReplyToVanishedRequesterIsHarmless) {
+  Participant a("bus-test-server");
+  std::atomic<int> calls{0};
+  Server<Req, Rep> server(a, "test/vanish", [&](const Req& r) {
+    ++calls;
+    Rep rep;
+    rep.station(r.station());
+    return rep;
+  });
+  {
+    Participant gone("bus-test-gone");
+    Writer<Req> w(gone, RequestTopic("test/vanish"), QosKind::kCommand);
+    ASSERT_TRUE(w.WaitForMatched(1, kMatch));
+    Req r;
+    r.hdr().client("ghost");
+    r.hdr().request_id(1);
+    r.station("GHOST");
+    w.Write(r);
+    ASSERT_TRUE(WaitUntil([&] { return calls.load() == 1; }, kMatch));
+  }  // the requester is gone before, or while, the reply is written
+  Participant b("bus-test-client");
+  Client<Req, Rep> client(b, "test/vanish");
+  Req r;
+  r.station("KT02");
+  Rep rep = client.Call(r, kMatch);
+  EXPECT_EQ(rep.station(), "KT02");
+  EXPECT_EQ(calls.load(), 2);
+}
+
+TEST(Bus, EnvironmentIsValidated) {
+  const char* old = std::getenv("CELL_DOMAIN");
+  std::string keep = old ? old : "";
+  setenv("CELL_DOMAIN", "233", 1);
+  EXPECT_THROW(DomainFromEnv(), Error);
+  setenv("CELL_DOMAIN", "7x", 1);
+  EXPECT_THROW(DomainFromEnv(), Error);
+  unsetenv("CELL_DOMAIN");
+  EXPECT_EQ(DomainFromEnv(), 101);
+  setenv("CELL_DOMAIN", keep.c_str(), 1);
+  try {
+    Participant p(ParticipantOptions{"x", {}, "cyclonedds", {}});
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), Errc::kUnimplemented);
+  }
+}
+
+}  // namespace
+}  // namespace cell::bus

@@ -1,0 +1,78 @@
+// The byte-level seam between the typed bus and a DDS implementation. A backend moves
+// XCDR1 samples (4-byte encapsulation header included) of a named type; it never sees C++
+// topic types, so adding a DDS vendor is one file of glue, not a second set of types.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace cell::bus {
+
+// QoS presets (DESIGN.md §3); docs/architecture.md has the table.
+enum class QosKind {
+  kState,      // reliable, transient-local, keep-last 1 per key
+  kCommand,    // reliable, volatile, keep-all
+  kStream,     // reliable, volatile, keep-all; flow-controlled above the bus (credits)
+  kTelemetry,  // best-effort, volatile, keep-last 1
+  kEvent,      // reliable, transient-local, keep-last 256: late joiners get recent events
+};
+
+struct TypeSupport {
+  std::string name;      // registered type name, "cell::StationStatus"
+  bool keyed = false;
+  size_t max_size = 0;   // bound of a serialized sample, header included
+  size_t key_max_size = 0;
+  // Big-endian key CDR (what serializeKey writes) from a serialized sample; false if undecodable.
+  std::function<bool(const uint8_t* cdr, size_t n, std::vector<uint8_t>& key)> key_from_cdr;
+};
+
+struct RawSample {
+  std::vector<uint8_t> cdr;  // encapsulation header + payload
+  std::vector<uint8_t> key;  // big-endian key CDR; empty for unkeyed types
+};
+
+// Instances are never disposed through the bus: Fast DDS 2.9 mis-attributes disposes of
+// string-keyed instances from other vendors, and liveness is a heartbeat on a state topic.
+struct RawInfo {
+  bool valid = true;  // false: an instance state change only, cdr empty (ignored above)
+};
+
+class RawWriter {
+ public:
+  virtual ~RawWriter() = default;
+  virtual void Write(const RawSample& s) = 0;
+  virtual int Matched() const = 0;
+};
+
+class RawReader {
+ public:
+  virtual ~RawReader() = default;
+  virtual int Matched() const = 0;
+};
+
+// Called on a backend thread; must return quickly.
+using RawCallback = std::function<void(const RawSample&, const RawInfo&)>;
+
+class Backend {
+ public:
+  virtual ~Backend() = default;
+  virtual std::string Name() const = 0;
+  virtual std::unique_ptr<RawWriter> CreateWriter(const std::string& topic, const TypeSupport& type,
+                                                  QosKind qos) = 0;
+  virtual std::unique_ptr<RawReader> CreateReader(const std::string& topic, const TypeSupport& type,
+                                                  QosKind qos, RawCallback cb) = 0;
+};
+
+struct BackendOptions {
+  int domain = 101;
+  std::string profile_path;  // empty: the built-in loopback-only profile
+  std::string participant_name;
+};
+
+std::unique_ptr<Backend> MakeFastDdsBackend(const BackendOptions& opts);
+
+}  // namespace cell::bus

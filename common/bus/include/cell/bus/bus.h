@@ -1,0 +1,335 @@
+// The cell's bus: typed publish/subscribe, request/reply with request ids and timeouts, and
+// "wait until matched", over a DDS backend chosen per process (CELL_DDS). Services include
+// this header only; no DDS header or type reaches them.
+#pragma once
+
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <deque>
+#include <functional>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <thread>
+#include <utility>
+
+#include "cell/bus/backend.h"
+#include "cell/bus/cdr.h"
+#include "cell/error/error.h"
+
+namespace cell::bus {
+
+using Millis = std::chrono::milliseconds;
+
+struct ParticipantOptions {
+  std::string name;          // shown in logs and discovery, e.g. "cell-interpreter/KT01"
+  std::optional<int> domain; // default: CELL_DOMAIN, else 101
+  std::string backend;       // default: CELL_DDS, else "fastdds"
+  std::string profile_path;  // default: CELL_DDS_PROFILE, else the built-in loopback profile
+};
+
+// Resolves CELL_DOMAIN (0..232, default 101); throws cell::Error on a bad value.
+int DomainFromEnv();
+
+// One DDS participant per process plus one dispatch thread that runs every user callback in
+// arrival order, so callbacks never run on (or block) the DDS receive threads.
+class Participant {
+ public:
+  explicit Participant(const ParticipantOptions& opts);
+  explicit Participant(const std::string& name) : Participant(ParticipantOptions{name, {}, {}, {}}) {}
+  ~Participant();
+  Participant(const Participant&) = delete;
+  Participant& operator=(const Participant&) = delete;
+
+  const std::string& id() const { return id_; }  // unique on the domain: name/host/pid/n
+  int domain() const { return domain_; }
+  Backend& backend() { return *backend_; }
+  void Post(std::function<void()> fn);
+
+ private:
+  void Run();
+  std::string id_;
+  int domain_;
+  std::unique_ptr<Backend> backend_;
+  std::mutex mu_;
+  std::condition_variable cv_;
+  std::deque<std::function<void()>> queue_;
+  bool stop_ = false;
+  std::thread thread_;
+};
+
+// Polls a condition until it holds or the deadline passes (matching is asynchronous in DDS).
+bool WaitUntil(const std::function<bool()>& cond, Millis timeout);
+
+struct SampleInfo {
+  int64_t received_ns = 0;  // steady clock, when the bus got it
+};
+
+template <class T>
+class Writer {
+ public:
+  Writer(Participant& p, const std::string& topic, QosKind qos)
+      : w_(p.backend().CreateWriter(topic, TypeSupportFor<T>(), qos)), topic_(topic) {}
+
+  // Throws cell::Error(kInvalidArgument) when a sequence exceeds its IDL bound: Fast CDR would
+  // send it and a Cyclone reader would drop it.
+  void Write(const T& v) {
+    std::string why;
+    if (!cell::idl::CheckBounds(v, why)) throw Error(Errc::kInvalidArgument, topic_ + ": " + why);
+    w_->Write(RawSample{ToCdr(v), KeyCdr(v)});
+  }
+  int Matched() const { return w_->Matched(); }
+  bool WaitForMatched(int n, Millis timeout) const {
+    return WaitUntil([&] { return w_->Matched() >= n; }, timeout);
+  }
+
+ private:
+  std::unique_ptr<RawWriter> w_;
+  std::string topic_;
+};
+
+// With a callback, samples are delivered on the participant's dispatch thread. Without one,
+// they queue for Take().
+template <class T>
+class Reader {
+ public:
+  using Callback = std::function<void(const T&, const SampleInfo&)>;
+
+  Reader(Participant& p, const std::string& topic, QosKind qos, Callback cb = nullptr)
+      : state_(std::make_shared<State>()) {
+    state_->cb = std::move(cb);
+    std::weak_ptr<State> weak = state_;
+    Participant* part = &p;
+    r_ = p.backend().CreateReader(topic, TypeSupportFor<T>(), qos,
+                                  [weak, part](const RawSample& s, const RawInfo& info) {
+                                    auto st = weak.lock();
+                                    if (st) st->Deliver(*part, weak, s, info);
+                                  });
+  }
+  ~Reader() {
+    r_.reset();  // no more backend callbacks after this
+    std::lock_guard lk(state_->mu);
+    state_->cb = nullptr;
+  }
+
+  int Matched() const { return r_->Matched(); }
+  bool WaitForMatched(int n, Millis timeout) const {
+    return WaitUntil([&] { return r_->Matched() >= n; }, timeout);
+  }
+
+  std::optional<T> Take(Millis timeout) {
+    std::unique_lock lk(state_->mu);
+    if (!state_->cv.wait_for(lk, timeout, [&] { return !state_->queue.empty(); })) return std::nullopt;
+    T v = std::move(state_->queue.front().first);
+    state_->queue.pop_front();
+    return v;
+  }
+
+  // Takes samples until one satisfies pred; drops the others.
+  std::optional<T> WaitFor(const std::function<bool(const T&)>& pred, Millis timeout) {
+    auto deadline = std::chrono::steady_clock::now() + timeout;
+    while (true) {
+      auto left = std::chrono::duration_cast<Millis>(deadline - std::chrono::steady_clock::now());
+      if (left.count() <= 0) return std::nullopt;
+      auto v = Take(left);
+      if (!v) return std::nullopt;
+      if (pred(*v)) return v;
+    }
+  }
+
+ private:
+  struct State {
+    std::mutex mu;
+    std::condition_variable cv;
+    Callback cb;
+    std::deque<std::pair<T, SampleInfo>> queue;
+
+    void Deliver(Participant& p, const std::weak_ptr<State>& weak, const RawSample& s, const RawInfo& info) {
+      if (!info.valid) return;
+      T v;
+      if (!FromCdr(s.cdr.data(), s.cdr.size(), v)) return;  // undecodable: never crash a service
+      SampleInfo si{std::chrono::duration_cast<std::chrono::nanoseconds>(
+                        std::chrono::steady_clock::now().time_since_epoch())
+                        .count()};
+      {
+        std::lock_guard lk(mu);
+        if (!cb) {
+          queue.emplace_back(std::move(v), si);
+          cv.notify_all();
+          return;
+        }
+      }
+      p.Post([weak, v = std::move(v), si] {
+        auto st = weak.lock();
+        if (!st) return;
+        Callback fn;
+        {
+          std::lock_guard lk(st->mu);
+          fn = st->cb;
+        }
+        if (fn) fn(v, si);
+      });
+    }
+  };
+  std::shared_ptr<State> state_;
+  std::unique_ptr<RawReader> r_;
+};
+
+// Topic names of a request/reply service.
+inline std::string RequestTopic(const std::string& service) { return service + "/request"; }
+inline std::string ReplyTopic(const std::string& service) { return service + "/reply"; }
+
+// Throws the cell::Error a reply carries (code != 0).
+template <class Rep>
+void ThrowIfError(const Rep& rep) {
+  if (rep.hdr().code() != 0)
+    throw Error(static_cast<Errc>(rep.hdr().code() - 1), rep.hdr().error().to_string());
+}
+
+// Request/reply over two command topics. Requests carry (client id, request id); the client
+// re-sends until answered, the server answers a duplicate from its reply cache, so a request
+// written before discovery completed is not lost and never runs twice.
+template <class Req, class Rep>
+class Client {
+ public:
+  Client(Participant& p, const std::string& service)
+      : p_(p),
+        service_(service),
+        state_(std::make_shared<State>()),
+        req_(p, RequestTopic(service), QosKind::kCommand) {
+    std::weak_ptr<State> weak = state_;
+    std::string me = p.id();
+    // Replies are matched on the receive path, not the dispatch thread, so a caller blocked in
+    // Call() from a dispatch-thread callback cannot deadlock.
+    rep_raw_ = p.backend().CreateReader(
+        ReplyTopic(service), TypeSupportFor<Rep>(), QosKind::kCommand,
+        [weak, me](const RawSample& s, const RawInfo& info) {
+          auto st = weak.lock();
+          if (!st || !info.valid) return;
+          Rep r;
+          if (!FromCdr(s.cdr.data(), s.cdr.size(), r)) return;
+          if (r.hdr().client() != me) return;
+          std::lock_guard lk(st->mu);
+          auto it = st->pending.find(r.hdr().request_id());
+          if (it == st->pending.end() || it->second) return;
+          it->second = std::move(r);
+          st->cv.notify_all();
+        });
+  }
+
+  bool WaitForServer(Millis timeout) const {
+    return WaitUntil([&] { return req_.Matched() > 0 && rep_raw_->Matched() > 0; }, timeout);
+  }
+
+  // Sends req and waits for its reply. Throws cell::Error: kUnavailable when no server was
+  // matched within the timeout, kTimeout when it never answered. A reply with an error code is
+  // returned as is (see ThrowIfError).
+  Rep Call(Req req, Millis timeout, Millis resend = Millis(250)) {
+    auto deadline = std::chrono::steady_clock::now() + timeout;
+    if (!WaitForServer(timeout))
+      throw Error(Errc::kUnavailable, "no " + service_ + " service on DDS domain " + std::to_string(p_.domain()));
+    uint64_t id = ++state_->next_id;
+    req.hdr().client(p_.id());
+    req.hdr().request_id(id);
+    {
+      std::lock_guard lk(state_->mu);
+      state_->pending[id] = std::nullopt;
+    }
+    std::unique_lock lk(state_->mu);
+    while (true) {
+      lk.unlock();
+      req_.Write(req);
+      lk.lock();
+      auto next = std::min(deadline, std::chrono::steady_clock::now() + resend);
+      if (state_->cv.wait_until(lk, next, [&] { return state_->pending[id].has_value(); })) {
+        Rep r = std::move(*state_->pending[id]);
+        state_->pending.erase(id);
+        return r;
+      }
+      if (std::chrono::steady_clock::now() >= deadline) {
+        state_->pending.erase(id);
+        throw Error(Errc::kTimeout, service_ + " did not answer within " +
+                                        std::to_string(timeout.count()) + " ms");
+      }
+    }
+  }
+
+ private:
+  struct State {
+    std::mutex mu;
+    std::condition_variable cv;
+    std::map<uint64_t, std::optional<Rep>> pending;
+    std::atomic<uint64_t> next_id{0};
+  };
+  Participant& p_;
+  std::string service_;
+  std::shared_ptr<State> state_;
+  Writer<Req> req_;
+  std::unique_ptr<RawReader> rep_raw_;
+};
+
+template <class Req, class Rep>
+class Server {
+ public:
+  using Handler = std::function<Rep(const Req&)>;
+
+  Server(Participant& p, const std::string& service, Handler h)
+      : handler_(std::move(h)),
+        rep_(p, ReplyTopic(service), QosKind::kCommand),
+        req_(p, RequestTopic(service), QosKind::kCommand,
+             [this](const Req& r, const SampleInfo&) { Handle(r); }) {}
+
+  int Matched() const { return req_.Matched(); }
+
+ private:
+  void Handle(const Req& r) {
+    auto key = std::make_pair(std::string(r.hdr().client()), r.hdr().request_id());
+    auto it = cache_.find(key);
+    if (it != cache_.end()) {  // a re-sent request: answer again, do not run again
+      rep_.Write(it->second);
+      return;
+    }
+    Rep rep;
+    try {
+      rep = handler_(r);
+    } catch (const Error& e) {
+      rep = Rep();
+      rep.hdr().code(static_cast<int32_t>(e.code()) + 1);
+      rep.hdr().error(std::string(e.what()).substr(0, 511));
+    } catch (const std::exception& e) {
+      rep = Rep();
+      rep.hdr().code(static_cast<int32_t>(Errc::kInternal) + 1);
+      rep.hdr().error(std::string(e.what()).substr(0, 511));
+    }
+    rep.hdr().client(r.hdr().client());
+    rep.hdr().request_id(r.hdr().request_id());
+    cache_[key] = rep;
+    order_.push_back(key);
+    if (order_.size() > kCacheSize) {
+      cache_.erase(order_.front());
+      order_.pop_front();
+    }
+    try {
+      rep_.Write(rep);  // to a vanished requester this goes nowhere, which is fine
+    } catch (const Error& e) {
+      Rep err;
+      err.hdr() = rep.hdr();
+      err.hdr().code(static_cast<int32_t>(e.code()) + 1);
+      err.hdr().error(std::string(e.what()).substr(0, 511));
+      cache_[key] = err;
+      rep_.Write(err);
+    }
+  }
+
+  static constexpr size_t kCacheSize = 4096;
+  Handler handler_;
+  std::map<std::pair<std::string, uint64_t>, Rep> cache_;
+  std::deque<std::pair<std::string, uint64_t>> order_;
+  Writer<Rep> rep_;
+  Reader<Req> req_;
+};
+
+}  // namespace cell::bus

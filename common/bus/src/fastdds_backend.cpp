@@ -1,0 +1,277 @@
+// Fast DDS 2.9 glue: one generic TopicDataType that carries XCDR1 bytes under the real type
+// name, so Fast DDS matches, keys and hashes exactly as its generated PubSubTypes would.
+#include <cstring>
+#include <map>
+#include <mutex>
+#include <set>
+
+#include <fastdds/dds/core/policy/QosPolicies.hpp>
+#include <fastdds/dds/domain/DomainParticipant.hpp>
+#include <fastdds/dds/domain/DomainParticipantFactory.hpp>
+#include <fastdds/dds/publisher/DataWriter.hpp>
+#include <fastdds/dds/publisher/DataWriterListener.hpp>
+#include <fastdds/dds/publisher/Publisher.hpp>
+#include <fastdds/dds/subscriber/DataReader.hpp>
+#include <fastdds/dds/subscriber/DataReaderListener.hpp>
+#include <fastdds/dds/subscriber/SampleInfo.hpp>
+#include <fastdds/dds/subscriber/Subscriber.hpp>
+#include <fastdds/dds/topic/Topic.hpp>
+#include <fastdds/dds/topic/TopicDataType.hpp>
+#include <fastdds/dds/topic/TypeSupport.hpp>
+#include <fastdds/rtps/common/Locator.h>
+#include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
+#include <fastrtps/utils/IPLocator.h>
+#include <fastrtps/utils/md5.h>
+
+#include "cell/bus/backend.h"
+#include "cell/error/error.h"
+
+namespace cell::bus {
+namespace {
+
+namespace dds = eprosima::fastdds::dds;
+namespace rtps = eprosima::fastrtps::rtps;
+
+class CdrType : public dds::TopicDataType {
+ public:
+  explicit CdrType(const TypeSupport& ts) : ts_(ts) {
+    setName(ts.name.c_str());
+    m_typeSize = static_cast<uint32_t>(ts.max_size + 4);
+    m_isGetKeyDefined = ts.keyed;
+  }
+
+  bool serialize(void* data, rtps::SerializedPayload_t* payload) override {
+    auto* s = static_cast<RawSample*>(data);
+    if (s->cdr.size() < 4) return false;
+    if (payload->max_size < s->cdr.size()) payload->reserve(static_cast<uint32_t>(s->cdr.size()));
+    std::memcpy(payload->data, s->cdr.data(), s->cdr.size());
+    payload->length = static_cast<uint32_t>(s->cdr.size());
+    payload->encapsulation = s->cdr[1] == 1 ? CDR_LE : CDR_BE;
+    return true;
+  }
+
+  bool deserialize(rtps::SerializedPayload_t* payload, void* data) override {
+    auto* s = static_cast<RawSample*>(data);
+    s->cdr.assign(payload->data, payload->data + payload->length);
+    s->key.clear();
+    return true;
+  }
+
+  std::function<uint32_t()> getSerializedSizeProvider(void* data) override {
+    return [data] { return static_cast<uint32_t>(static_cast<RawSample*>(data)->cdr.size()); };
+  }
+
+  void* createData() override { return new RawSample(); }
+  void deleteData(void* data) override { delete static_cast<RawSample*>(data); }
+
+  // Same rule as fastddsgen's getKey: big-endian key CDR, MD5 when it can exceed 16 bytes.
+  bool getKey(void* data, rtps::InstanceHandle_t* handle, bool force_md5) override {
+    if (!ts_.keyed) return false;
+    auto* s = static_cast<RawSample*>(data);
+    std::vector<uint8_t> key = s->key;
+    if (key.empty() && !ts_.key_from_cdr(s->cdr.data(), s->cdr.size(), key)) return false;
+    if (force_md5 || ts_.key_max_size > 16) {
+      ::MD5 md5;
+      md5.init();
+      md5.update(key.data(), static_cast<unsigned int>(key.size()));
+      md5.finalize();
+      for (int i = 0; i < 16; ++i) handle->value[i] = md5.digest[i];
+    } else {
+      for (size_t i = 0; i < 16; ++i) handle->value[i] = i < key.size() ? key[i] : 0;
+    }
+    return true;
+  }
+
+ private:
+  TypeSupport ts_;
+};
+
+void ApplyQos(QosKind q, dds::ReliabilityQosPolicy& rel, dds::DurabilityQosPolicy& dur,
+              dds::HistoryQosPolicy& hist) {
+  rel.kind = q == QosKind::kTelemetry ? dds::BEST_EFFORT_RELIABILITY_QOS : dds::RELIABLE_RELIABILITY_QOS;
+  dur.kind = (q == QosKind::kState || q == QosKind::kEvent) ? dds::TRANSIENT_LOCAL_DURABILITY_QOS
+                                                             : dds::VOLATILE_DURABILITY_QOS;
+  switch (q) {
+    case QosKind::kState:
+    case QosKind::kTelemetry:
+      hist.kind = dds::KEEP_LAST_HISTORY_QOS;
+      hist.depth = 1;
+      break;
+    case QosKind::kEvent:
+      hist.kind = dds::KEEP_LAST_HISTORY_QOS;
+      hist.depth = 256;
+      break;
+    case QosKind::kCommand:
+    case QosKind::kStream:
+      hist.kind = dds::KEEP_ALL_HISTORY_QOS;
+      break;
+  }
+}
+
+class FastWriter : public RawWriter {
+ public:
+  FastWriter(dds::Publisher* pub, dds::DataWriter* w) : pub_(pub), w_(w) {}
+  ~FastWriter() override { pub_->delete_datawriter(w_); }
+  void Write(const RawSample& s) override {
+    if (!w_->write(const_cast<RawSample*>(&s)))
+      throw Error(Errc::kUnavailable, "DDS write failed on " + std::string(w_->get_topic()->get_name()));
+  }
+  int Matched() const override {
+    dds::PublicationMatchedStatus st;
+    w_->get_publication_matched_status(st);
+    return st.current_count;
+  }
+
+ private:
+  dds::Publisher* pub_;
+  dds::DataWriter* w_;
+};
+
+class FastReader : public RawReader, public dds::DataReaderListener {
+ public:
+  FastReader(dds::Subscriber* sub, RawCallback cb) : sub_(sub), cb_(std::move(cb)) {}
+  void Attach(dds::DataReader* r) { r_ = r; }
+  ~FastReader() override {
+    r_->set_listener(nullptr);
+    std::lock_guard lk(mu_);  // wait out a callback in flight
+    sub_->delete_datareader(r_);
+  }
+  int Matched() const override {
+    dds::SubscriptionMatchedStatus st;
+    r_->get_subscription_matched_status(st);
+    return st.current_count;
+  }
+  void on_data_available(dds::DataReader* reader) override {
+    std::lock_guard lk(mu_);
+    RawSample s;
+    dds::SampleInfo info;
+    while (reader->take_next_sample(&s, &info) == eprosima::fastrtps::types::ReturnCode_t::RETCODE_OK) {
+      RawInfo ri;
+      ri.valid = info.valid_data;
+      cb_(s, ri);
+    }
+  }
+
+ private:
+  dds::Subscriber* sub_;
+  dds::DataReader* r_ = nullptr;
+  RawCallback cb_;
+  std::mutex mu_;
+};
+
+class FastBackend : public Backend {
+ public:
+  explicit FastBackend(const BackendOptions& o) {
+    auto* factory = dds::DomainParticipantFactory::get_instance();
+    dds::DomainParticipantQos qos;  // built from scratch: no XML file in the CWD or env can widen it
+    if (!o.profile_path.empty()) {
+      if (factory->load_XML_profiles_file(o.profile_path) != eprosima::fastrtps::types::ReturnCode_t::RETCODE_OK)
+        throw Error(Errc::kInvalidArgument, "CELL_DDS_PROFILE=" + o.profile_path + ": not a loadable Fast DDS profile");
+      factory->get_default_participant_qos(qos);
+    } else {
+      LoopbackOnly(qos);
+    }
+    qos.name(o.participant_name.empty() ? "cell" : o.participant_name);
+    // A vanished process is noticed in ~3 s, not the 20 s default (station health, DESIGN §5).
+    qos.wire_protocol().builtin.discovery_config.leaseDuration = eprosima::fastrtps::Duration_t(3, 0);
+    qos.wire_protocol().builtin.discovery_config.leaseDuration_announcementperiod =
+        eprosima::fastrtps::Duration_t(1, 0);
+    p_ = factory->create_participant(o.domain, qos);
+    if (!p_) throw Error(Errc::kUnavailable, "cannot create a DDS participant on domain " + std::to_string(o.domain));
+    pub_ = p_->create_publisher(dds::PUBLISHER_QOS_DEFAULT);
+    sub_ = p_->create_subscriber(dds::SUBSCRIBER_QOS_DEFAULT);
+  }
+
+  ~FastBackend() override {
+    p_->delete_contained_entities();
+    dds::DomainParticipantFactory::get_instance()->delete_participant(p_);
+  }
+
+  std::string Name() const override { return "fastdds"; }
+
+  std::unique_ptr<RawWriter> CreateWriter(const std::string& topic, const TypeSupport& type, QosKind q) override {
+    std::lock_guard lk(mu_);
+    dds::Topic* t = TopicFor(topic, type);
+    dds::DataWriterQos wq = dds::DATAWRITER_QOS_DEFAULT;
+    ApplyQos(q, wq.reliability(), wq.durability(), wq.history());
+    wq.endpoint().history_memory_policy = rtps::DYNAMIC_REUSABLE_MEMORY_MODE;
+    // Large samples (program chunks) are fragmented; asynchronous publishing keeps write() short.
+    wq.publish_mode().kind = dds::ASYNCHRONOUS_PUBLISH_MODE;
+    wq.reliable_writer_qos().times.heartbeatPeriod = eprosima::fastrtps::Duration_t(0, 100000000);
+    if (q == QosKind::kState || q == QosKind::kEvent) {
+      wq.resource_limits().max_instances = 4096;
+      wq.resource_limits().max_samples_per_instance = wq.history().depth;
+      wq.resource_limits().max_samples = 4096 * wq.history().depth;
+    }
+    auto* w = pub_->create_datawriter(t, wq);
+    if (!w) throw Error(Errc::kInternal, "cannot create a DDS writer for " + topic);
+    return std::make_unique<FastWriter>(pub_, w);
+  }
+
+  std::unique_ptr<RawReader> CreateReader(const std::string& topic, const TypeSupport& type, QosKind q,
+                                          RawCallback cb) override {
+    std::lock_guard lk(mu_);
+    dds::Topic* t = TopicFor(topic, type);
+    dds::DataReaderQos rq = dds::DATAREADER_QOS_DEFAULT;
+    ApplyQos(q, rq.reliability(), rq.durability(), rq.history());
+    rq.endpoint().history_memory_policy = rtps::DYNAMIC_REUSABLE_MEMORY_MODE;
+    if (q == QosKind::kState || q == QosKind::kEvent) {
+      rq.resource_limits().max_instances = 4096;
+      rq.resource_limits().max_samples_per_instance = rq.history().depth;
+      rq.resource_limits().max_samples = 4096 * rq.history().depth;
+    }
+    auto reader = std::make_unique<FastReader>(sub_, std::move(cb));
+    auto* r = sub_->create_datareader(t, rq, reader.get(), dds::StatusMask::data_available());
+    if (!r) throw Error(Errc::kInternal, "cannot create a DDS reader for " + topic);
+    reader->Attach(r);
+    return reader;
+  }
+
+ private:
+  static void LoopbackOnly(dds::DomainParticipantQos& qos) {
+    // DESIGN §3: loopback, unicast discovery, no multicast, no shared memory, 32 peers.
+    auto udp = std::make_shared<eprosima::fastdds::rtps::UDPv4TransportDescriptor>();
+    udp->interfaceWhiteList.emplace_back("127.0.0.1");
+    udp->maxInitialPeersRange = 32;
+    qos.transport().use_builtin_transports = false;
+    qos.transport().user_transports.push_back(udp);
+    rtps::Locator_t lo;
+    lo.kind = LOCATOR_KIND_UDPv4;
+    eprosima::fastrtps::rtps::IPLocator::setIPv4(lo, 127, 0, 0, 1);
+    qos.wire_protocol().builtin.metatrafficUnicastLocatorList.push_back(lo);
+    qos.wire_protocol().builtin.initialPeersList.push_back(lo);
+    qos.wire_protocol().default_unicast_locator_list.push_back(lo);
+  }
+
+  dds::Topic* TopicFor(const std::string& name, const TypeSupport& type) {
+    auto it = topics_.find(name);
+    if (it != topics_.end()) {
+      if (it->second->get_type_name() != type.name)
+        throw Error(Errc::kInvalidArgument, "topic " + name + " already used with type " + it->second->get_type_name());
+      return it->second;
+    }
+    if (!types_.count(type.name)) {
+      dds::TypeSupport ts(new CdrType(type));
+      if (ts.register_type(p_) != eprosima::fastrtps::types::ReturnCode_t::RETCODE_OK)
+        throw Error(Errc::kInternal, "cannot register DDS type " + type.name);
+      types_.insert(type.name);
+    }
+    dds::Topic* t = p_->create_topic(name, type.name, dds::TOPIC_QOS_DEFAULT);
+    if (!t) throw Error(Errc::kInternal, "cannot create DDS topic " + name);
+    topics_[name] = t;
+    return t;
+  }
+
+  std::mutex mu_;
+  dds::DomainParticipant* p_ = nullptr;
+  dds::Publisher* pub_ = nullptr;
+  dds::Subscriber* sub_ = nullptr;
+  std::map<std::string, dds::Topic*> topics_;
+  std::set<std::string> types_;
+};
+
+}  // namespace
+
+std::unique_ptr<Backend> MakeFastDdsBackend(const BackendOptions& opts) { return std::make_unique<FastBackend>(opts); }
+
+}  // namespace cell::bus
