@@ -1,0 +1,94 @@
+// The life cycle every cell service shares under systemd (Type=notify, WatchdogSec=) and under
+// `cellctl up`: stop on SIGTERM/SIGINT, report readiness, prove liveness from the main loop, report
+// stopping.
+//
+//   int main(int argc, char** argv) {
+//     cell::log::Init("cell-scheduler");
+//     cell::daemon::Daemon daemon;           // first, before any thread exists
+//     Scheduler s(...);                       // open the database, join the bus, wait for matches
+//     daemon.NotifyReady("scheduling; 4 stations");
+//     daemon.RunUntilStop([&] { return s.Healthy(); });   // or your own loop, see below
+//     daemon.NotifyStopping();
+//     s.Shutdown();
+//     return 0;
+//   }
+//
+// Own loop: `while (!daemon.WaitForStop(daemon.TickInterval())) { if (healthy) daemon.Tick(); }`.
+// Threads that block elsewhere can watch `daemon.StopToken()` (std::stop_callback) instead of polling.
+//
+// Watchdog: when systemd sets WATCHDOG_USEC (and WATCHDOG_PID, if set, is this process), Tick() sends
+// WATCHDOG=1 at most every half interval. Nothing sends it behind the main loop's back: a wedged or
+// unhealthy main loop stops ticking and systemd restarts the service (Restart=on-failure).
+// Without NOTIFY_SOCKET (a shell, a test) every Notify* call is a no-op.
+#pragma once
+
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <functional>
+#include <mutex>
+#include <stop_token>
+#include <string_view>
+#include <thread>
+
+namespace cell::daemon {
+
+class Daemon {
+ public:
+  // Installs SIGTERM and SIGINT handlers (a second signal while stopping exits at once with 128+signal)
+  // and reads the watchdog settings. One Daemon per process: a second live instance throws
+  // cell::Error(kFailedPrecondition).
+  Daemon();
+  // Restores the default signal dispositions.
+  ~Daemon();
+  Daemon(const Daemon&) = delete;
+  Daemon& operator=(const Daemon&) = delete;
+
+  // --- stop ---
+  bool StopRequested() const noexcept { return stop_.stop_requested(); }
+  std::stop_token StopToken() const noexcept { return stop_.get_token(); }
+  // Blocks until a stop is requested or `timeout` passes; returns StopRequested().
+  bool WaitForStop(std::chrono::milliseconds timeout);
+  // Blocks until a stop is requested.
+  void WaitForStop();
+  // Requests a stop from code (e.g. a fatal error in a worker thread).
+  void RequestStop();
+  // The signal that requested the stop (SIGTERM, SIGINT), 0 if none.
+  int StopSignal() const noexcept { return stop_signal_.load(); }
+
+  // --- sd_notify ---
+  // READY=1 and STATUS=<status>. Returns false when there is no NOTIFY_SOCKET or sending failed.
+  bool NotifyReady(std::string_view status);
+  // STATUS=<status> (shown by systemctl status).
+  bool NotifyStatus(std::string_view status);
+  // STOPPING=1 and STATUS=<status>.
+  bool NotifyStopping(std::string_view status = "stopping");
+
+  // --- watchdog ---
+  bool WatchdogEnabled() const noexcept { return watchdog_.count() > 0; }
+  // The interval systemd expects (WATCHDOG_USEC), zero when disabled.
+  std::chrono::microseconds WatchdogInterval() const noexcept { return watchdog_; }
+  // How long the main loop may sleep between Tick() calls: a quarter of the watchdog interval (so a
+  // tick goes out every half to three quarters of it), 1 s without a watchdog.
+  std::chrono::milliseconds TickInterval() const noexcept;
+  // The main loop is alive and healthy: sends WATCHDOG=1 if half the interval has passed since the last
+  // one. Cheap; call it every loop iteration. Returns true when a message was sent.
+  bool Tick();
+
+  // Loop until stopped: every TickInterval() calls `healthy` and Tick()s only when it returns true. A
+  // health check that fails is logged (once per change) at error level, and the watchdog lapses.
+  void RunUntilStop(const std::function<bool()>& healthy);
+
+ private:
+  void Watch();  // signal watcher thread body
+
+  std::stop_source stop_;
+  std::atomic<int> stop_signal_{0};
+  std::mutex mu_;
+  std::condition_variable cv_;
+  std::chrono::microseconds watchdog_{0};
+  std::chrono::steady_clock::time_point last_tick_{};
+  std::thread watcher_;
+};
+
+}  // namespace cell::daemon
