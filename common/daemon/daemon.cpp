@@ -30,9 +30,19 @@ extern "C" void OnSignal(int sig) {
   errno = saved;
 }
 
+// A supervisor that went away (e.g. a NOTIFY_SOCKET nobody listens on any more) must not flood the log:
+// the first failure is a warning, later ones are debug lines.
+std::atomic<bool> g_notify_warned{false};
+
 bool Notify(const std::string& msg) {
   int r = sd_notify(0, msg.c_str());
-  if (r < 0) spdlog::warn("sd_notify failed: {}", std::strerror(-r));
+  if (r < 0) {
+    if (!g_notify_warned.exchange(true)) {
+      spdlog::warn("sd_notify failed: {} (further failures are logged at debug level)", std::strerror(-r));
+    } else {
+      spdlog::debug("sd_notify failed: {}", std::strerror(-r));
+    }
+  }
   return r > 0;
 }
 

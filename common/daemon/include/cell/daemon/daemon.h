@@ -4,7 +4,7 @@
 //
 //   int main(int argc, char** argv) {
 //     cell::log::Init("cell-scheduler");
-//     cell::daemon::Daemon daemon;           // first, before any thread exists
+//     cell::daemon::Daemon daemon;           // early: SIGTERM from now on requests a stop
 //     Scheduler s(...);                       // open the database, join the bus, wait for matches
 //     daemon.NotifyReady("scheduling; 4 stations");
 //     daemon.RunUntilStop([&] { return s.Healthy(); });   // or your own loop, see below
@@ -72,7 +72,8 @@ class Daemon {
   // tick goes out every half to three quarters of it), 1 s without a watchdog.
   std::chrono::milliseconds TickInterval() const noexcept;
   // The main loop is alive and healthy: sends WATCHDOG=1 if half the interval has passed since the last
-  // one. Cheap; call it every loop iteration. Returns true when a message was sent.
+  // one. Cheap; call it every loop iteration, from one thread (the main loop). Returns true when a
+  // message was sent.
   bool Tick();
 
   // Loop until stopped: every TickInterval() calls `healthy` and Tick()s only when it returns true. A
