@@ -116,6 +116,11 @@ class FastWriter : public RawWriter {
     if (!w_->write(const_cast<RawSample*>(&s)))
       throw Error(Errc::kUnavailable, "DDS write failed on " + std::string(w_->get_topic()->get_name()));
   }
+  bool WaitForAcked(int timeout_ms) override {
+    return w_->wait_for_acknowledgments(eprosima::fastrtps::Duration_t(timeout_ms / 1000,
+                                                                      (timeout_ms % 1000) * 1000000u)) ==
+           eprosima::fastrtps::types::ReturnCode_t::RETCODE_OK;
+  }
   int Matched() const override {
     dds::PublicationMatchedStatus st;
     w_->get_publication_matched_status(st);

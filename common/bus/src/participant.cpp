@@ -56,6 +56,16 @@ Participant::Participant(const ParticipantOptions& opts) {
   thread_ = std::thread([this] { Run(); });
 }
 
+Participant::Participant(const std::string& name, int domain, std::unique_ptr<Backend> backend)
+    : domain_(domain), backend_(std::move(backend)) {
+  char host[64] = {0};
+  gethostname(host, sizeof host - 1);
+  std::random_device rd;
+  id_ = fmt::format("{}@{}/{}/{:x}", name, host, getpid(), rd() & 0xffffff);
+  if (id_.size() > 63) id_ = id_.substr(id_.size() - 63);
+  thread_ = std::thread([this] { Run(); });
+}
+
 Participant::~Participant() {
   {
     std::lock_guard lk(mu_);

@@ -46,6 +46,8 @@ class RawWriter {
   virtual ~RawWriter() = default;
   virtual void Write(const RawSample& s) = 0;
   virtual int Matched() const = 0;
+  // True once every matched reliable reader acknowledged everything written so far.
+  virtual bool WaitForAcked(int timeout_ms) = 0;
 };
 
 class RawReader {
@@ -74,5 +76,8 @@ struct BackendOptions {
 };
 
 std::unique_ptr<Backend> MakeFastDdsBackend(const BackendOptions& opts);
+// Cyclone DDS 0.10 (approach A of reference/cyclone-rawcdr.md). Used by the interop peer; not
+// yet selectable with CELL_DDS (its own issue makes every service pass on it).
+std::unique_ptr<Backend> MakeCycloneBackend(const BackendOptions& opts);
 
 }  // namespace cell::bus

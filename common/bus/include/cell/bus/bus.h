@@ -40,6 +40,8 @@ class Participant {
  public:
   explicit Participant(const ParticipantOptions& opts);
   explicit Participant(const std::string& name) : Participant(ParticipantOptions{name, {}, {}, {}}) {}
+  // With an explicit backend (the interop peer runs the typed bus over Cyclone this way).
+  Participant(const std::string& name, int domain, std::unique_ptr<Backend> backend);
   ~Participant();
   Participant(const Participant&) = delete;
   Participant& operator=(const Participant&) = delete;
@@ -85,6 +87,8 @@ class Writer {
   bool WaitForMatched(int n, Millis timeout) const {
     return WaitUntil([&] { return w_->Matched() >= n; }, timeout);
   }
+  // Before a process exits: everything written reached every matched reader.
+  bool WaitForAcked(Millis timeout) { return w_->WaitForAcked(static_cast<int>(timeout.count())); }
 
  private:
   std::unique_ptr<RawWriter> w_;

@@ -1,0 +1,228 @@
+// Cyclone DDS 0.10 glue (reference/cyclone-rawcdr.md, approach A): topics come from the idlc
+// descriptors of the same IDL, samples travel as the Fast CDR bytes of the generated C++
+// types. Writes hand Cyclone a "carrier" serdata that it converts to the writer's own type,
+// which checks the bytes against the idlc type and bounds; reads take Cyclone's checked copy.
+#include <cstdlib>
+#include <cstring>
+#include <mutex>
+
+#include <dds/dds.h>
+#include <dds/ddsi/ddsi_serdata.h>
+#include <dds/ddsi/ddsi_sertype.h>
+
+#include "cell/bus/backend.h"
+#include "cell/error/error.h"
+#include "cell_cyclone_registry.h"
+
+namespace cell::bus {
+namespace {
+
+struct Carrier {
+  ddsi_serdata c;
+  uint32_t size;
+  unsigned char* buf;  // follows the struct in the same allocation
+};
+
+uint32_t CarrierSize(const ddsi_serdata* d) { return reinterpret_cast<const Carrier*>(d)->size; }
+void CarrierToSer(const ddsi_serdata* d, size_t off, size_t sz, void* b) {
+  std::memcpy(b, reinterpret_cast<const Carrier*>(d)->buf + off, sz);
+}
+ddsi_serdata* CarrierToSerRef(const ddsi_serdata* d, size_t off, size_t sz, ddsrt_iovec_t* r) {
+  r->iov_base = reinterpret_cast<const Carrier*>(d)->buf + off;
+  r->iov_len = static_cast<decltype(r->iov_len)>(sz);
+  return ddsi_serdata_ref(d);
+}
+void CarrierToSerUnref(ddsi_serdata* d, const ddsrt_iovec_t*) { ddsi_serdata_unref(d); }
+void CarrierFree(ddsi_serdata* d) { std::free(d); }
+size_t CarrierPrint(const ddsi_sertype*, const ddsi_serdata*, char* buf, size_t size) {
+  return static_cast<size_t>(std::snprintf(buf, size, "cell carrier"));
+}
+void CarrierTypeFree(ddsi_sertype*) {}
+
+struct CarrierType {
+  ddsi_serdata_ops sdops{};
+  ddsi_sertype_ops stops{};
+  ddsi_sertype st{};
+  CarrierType() {
+    sdops.get_size = CarrierSize;
+    sdops.to_ser = CarrierToSer;
+    sdops.to_ser_ref = CarrierToSerRef;
+    sdops.to_ser_unref = CarrierToSerUnref;
+    sdops.free = CarrierFree;
+    sdops.print = CarrierPrint;
+    stops.version = ddsi_sertype_v0;  // dds_writecdr converts only "v0" sertypes
+    stops.free = CarrierTypeFree;
+    ddsi_sertype_init(&st, "cell::carrier", &stops, &sdops, false);
+  }
+};
+
+CarrierType& Carriers() {
+  static CarrierType* t = new CarrierType();  // lives for the process: serdata may outlive callers
+  return *t;
+}
+
+constexpr const char* kLoopbackXml =
+    "<CycloneDDS><Domain Id=\"any\"><General><Interfaces><NetworkInterface address=\"127.0.0.1\"/>"
+    "</Interfaces><AllowMulticast>false</AllowMulticast></General><Discovery>"
+    "<ParticipantIndex>auto</ParticipantIndex><MaxAutoParticipantIndex>32</MaxAutoParticipantIndex>"
+    "<Peers><Peer address=\"127.0.0.1\"/></Peers></Discovery></Domain></CycloneDDS>";
+
+dds_qos_t* MakeQos(QosKind q) {
+  dds_qos_t* qos = dds_create_qos();
+  dds_qset_reliability(qos, q == QosKind::kTelemetry ? DDS_RELIABILITY_BEST_EFFORT : DDS_RELIABILITY_RELIABLE,
+                       DDS_SECS(1));
+  dds_qset_durability(qos, (q == QosKind::kState || q == QosKind::kEvent) ? DDS_DURABILITY_TRANSIENT_LOCAL
+                                                                          : DDS_DURABILITY_VOLATILE);
+  switch (q) {
+    case QosKind::kState:
+    case QosKind::kTelemetry: dds_qset_history(qos, DDS_HISTORY_KEEP_LAST, 1); break;
+    case QosKind::kEvent: dds_qset_history(qos, DDS_HISTORY_KEEP_LAST, 256); break;
+    default: dds_qset_history(qos, DDS_HISTORY_KEEP_ALL, 0); break;
+  }
+  dds_data_representation_id_t xcdr1 = DDS_DATA_REPRESENTATION_XCDR1;  // Fast CDR 1.0 reads XCDR1 only
+  dds_qset_data_representation(qos, 1, &xcdr1);
+  return qos;
+}
+
+void Check(dds_return_t rc, const std::string& what) {
+  if (rc < 0) throw Error(Errc::kInternal, what + ": " + dds_strretcode(rc));
+}
+
+class CycWriter : public RawWriter {
+ public:
+  explicit CycWriter(dds_entity_t w) : w_(w) {}
+  ~CycWriter() override { dds_delete(w_); }
+  void Write(const RawSample& s) override {
+    size_t n = s.cdr.size(), padded = (n + 3) & ~size_t{3};
+    auto* d = static_cast<Carrier*>(std::malloc(sizeof(Carrier) + padded));
+    ddsi_serdata_init(&d->c, &Carriers().st, SDK_DATA);
+    d->buf = reinterpret_cast<unsigned char*>(d + 1);
+    std::memset(d->buf, 0, padded);
+    std::memcpy(d->buf, s.cdr.data(), n);
+    d->buf[3] = static_cast<unsigned char>(d->buf[3] | (padded - n));  // XTypes: padding count in options
+    d->size = static_cast<uint32_t>(padded);
+    d->c.timestamp.v = dds_time();
+    dds_return_t rc = dds_writecdr(w_, &d->c);  // takes the reference
+    if (rc < 0) throw Error(Errc::kInvalidArgument, std::string("Cyclone rejected the sample: ") + dds_strretcode(rc));
+  }
+  bool WaitForAcked(int timeout_ms) override { return dds_wait_for_acks(w_, DDS_MSECS(timeout_ms)) == DDS_RETCODE_OK; }
+  int Matched() const override {
+    dds_publication_matched_status_t st;
+    dds_get_publication_matched_status(w_, &st);
+    return static_cast<int>(st.current_count);
+  }
+
+ private:
+  dds_entity_t w_;
+};
+
+class CycReader : public RawReader {
+ public:
+  explicit CycReader(RawCallback cb) : cb_(std::move(cb)) {}
+  ~CycReader() override {
+    dds_set_listener(r_, nullptr);
+    std::lock_guard lk(mu_);
+    dds_delete(r_);
+  }
+  void Attach(dds_entity_t r) { r_ = r; }
+  int Matched() const override {
+    dds_subscription_matched_status_t st;
+    dds_get_subscription_matched_status(r_, &st);
+    return static_cast<int>(st.current_count);
+  }
+  static void OnData(dds_entity_t reader, void* arg) { static_cast<CycReader*>(arg)->Drain(reader); }
+
+ private:
+  void Drain(dds_entity_t reader) {
+    std::lock_guard lk(mu_);
+    ddsi_serdata* sd[16];
+    dds_sample_info_t si[16];
+    int n;
+    while ((n = dds_takecdr(reader, sd, 16, si, DDS_ANY_STATE)) > 0) {
+      for (int i = 0; i < n; ++i) {
+        if (si[i].valid_data) {
+          RawSample s;
+          ddsrt_iovec_t ref;
+          uint32_t sz = ddsi_serdata_size(sd[i]);
+          ddsi_serdata* r = ddsi_serdata_to_ser_ref(sd[i], 0, sz, &ref);
+          auto* p = static_cast<const uint8_t*>(ref.iov_base);
+          if (sz >= 4 && p[0] == 0 && p[1] <= 1) {  // XCDR1 only
+            s.cdr.assign(p, p + sz);
+            s.cdr[2] = s.cdr[3] = 0;  // options (padding count) mean nothing to Fast CDR
+            cb_(s, RawInfo{true});
+          }
+          ddsi_serdata_to_ser_unref(r, &ref);
+        }
+        ddsi_serdata_unref(sd[i]);
+      }
+    }
+  }
+  RawCallback cb_;
+  dds_entity_t r_ = 0;
+  std::mutex mu_;
+};
+
+class CycloneBackend : public Backend {
+ public:
+  explicit CycloneBackend(const BackendOptions& o) {
+    const char* uri = std::getenv("CYCLONEDDS_URI");
+    if (!o.profile_path.empty()) {
+      dom_ = dds_create_domain(static_cast<dds_domainid_t>(o.domain), ("file://" + o.profile_path).c_str());
+    } else if (!uri || !*uri) {
+      dom_ = dds_create_domain(static_cast<dds_domainid_t>(o.domain), kLoopbackXml);
+    }
+    if (dom_ < 0) throw Error(Errc::kInvalidArgument, std::string("Cyclone domain: ") + dds_strretcode(dom_));
+    pp_ = dds_create_participant(static_cast<dds_domainid_t>(o.domain), nullptr, nullptr);
+    if (pp_ < 0) throw Error(Errc::kUnavailable, std::string("Cyclone participant: ") + dds_strretcode(pp_));
+  }
+  ~CycloneBackend() override {
+    dds_delete(pp_);
+    if (dom_ > 0) dds_delete(dom_);
+  }
+  std::string Name() const override { return "cyclonedds"; }
+
+  std::unique_ptr<RawWriter> CreateWriter(const std::string& topic, const TypeSupport& type, QosKind q) override {
+    dds_entity_t t = TopicFor(topic, type);
+    dds_qos_t* qos = MakeQos(q);
+    dds_entity_t w = dds_create_writer(pp_, t, qos, nullptr);
+    dds_delete_qos(qos);
+    Check(w, "Cyclone writer for " + topic);
+    return std::make_unique<CycWriter>(w);
+  }
+
+  std::unique_ptr<RawReader> CreateReader(const std::string& topic, const TypeSupport& type, QosKind q,
+                                          RawCallback cb) override {
+    dds_entity_t t = TopicFor(topic, type);
+    dds_qos_t* qos = MakeQos(q);
+    auto reader = std::make_unique<CycReader>(std::move(cb));
+    dds_listener_t* l = dds_create_listener(reader.get());
+    dds_lset_data_available(l, &CycReader::OnData);
+    dds_entity_t r = dds_create_reader(pp_, t, qos, l);
+    dds_delete_listener(l);
+    dds_delete_qos(qos);
+    Check(r, "Cyclone reader for " + topic);
+    reader->Attach(r);
+    return reader;
+  }
+
+ private:
+  dds_entity_t TopicFor(const std::string& name, const TypeSupport& type) {
+    std::lock_guard lk(mu_);
+    const dds_topic_descriptor_t* desc = cell_cyclone_descriptor(type.name.c_str());
+    if (!desc) throw Error(Errc::kInvalidArgument, "no idlc descriptor for " + type.name);
+    dds_entity_t t = dds_create_topic(pp_, desc, name.c_str(), nullptr, nullptr);
+    Check(t, "Cyclone topic " + name);
+    return t;
+  }
+  std::mutex mu_;
+  dds_entity_t dom_ = 0;
+  dds_entity_t pp_ = 0;
+};
+
+}  // namespace
+
+std::unique_ptr<Backend> MakeCycloneBackend(const BackendOptions& opts) {
+  return std::make_unique<CycloneBackend>(opts);
+}
+
+}  // namespace cell::bus
