@@ -1,0 +1,204 @@
+// The scheduler's decision core (DESIGN §5): pallet maps, routes, OPERATE allocation by tool table and
+// backlog, the job lifecycle, station health, and durable state in SQLite. No DDS: the service feeds commands
+// and observations in and sends the returned actions out.
+//
+// Durability: every call that changes state commits one SQLite transaction before it returns, so every action
+// it returns is already recorded (write-ahead). After a crash, construct a new Scheduler on the same database
+// and call Recover(): it returns again every dispatch that was handed out but not acknowledged by its
+// station, with the same dispatch id, so the station can de-duplicate.
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "cell/scheduler/program_source.h"
+#include "cell/scheduler/route.h"
+#include "cell/tooltable/tooltable.h"
+
+namespace cell::scheduler {
+
+enum class JobState { kQueued, kWaiting, kDispatched, kRunning, kCompleted, kFailed, kCancelled };
+std::string_view JobStateName(JobState s);  // "QUEUED", "WAITING", ...
+bool IsTerminal(JobState s);
+
+// A pallet visit handed to a station: run `programs` in order on pallet `pallet`.
+struct DispatchAction {
+  std::int64_t dispatch_id = 0;  // unique, never reused; the station de-duplicates on it
+  std::string station;
+  int pallet = 0;
+  std::vector<std::string> programs;
+  std::int64_t job_id = 0;
+  int op_index = 0;     // 0-based operation of the route
+  bool resent = false;  // true when Recover() offers it again
+};
+
+// Tells a station to drop a dispatch (job cancelled).
+struct CancelAction {
+  std::int64_t dispatch_id = 0;
+  std::string station;
+  std::int64_t job_id = 0;
+};
+
+struct JobChange {
+  std::int64_t job_id = 0;
+  JobState state = JobState::kQueued;
+  std::string reason;
+};
+
+// What one call produced; everything in it is already committed.
+struct Effects {
+  std::vector<DispatchAction> dispatches;
+  std::vector<CancelAction> cancels;
+  std::vector<JobChange> job_changes;
+  std::vector<std::string> notes;  // ignored or late reports etc., for the service's log
+};
+
+// One station as the decision log saw it.
+struct Candidate {
+  std::string station;
+  bool online = false;
+  bool fault = false;
+  std::int64_t backlog_s = 0;
+  std::vector<std::string> missing_tools;
+  bool eligible = false;
+};
+
+struct Decision {
+  std::int64_t seq = 0;  // global order of decisions
+  std::int64_t time_ms = 0;
+  int op_index = 0;
+  std::string trigger;  // "operate", "station KT01 online", "tools KT02", "op 1 completed", ...
+  std::vector<Candidate> considered;
+  std::string winner;  // empty when the pallet waits
+  std::string why;     // "shortest backlog 120 s", "tie at 0 s: listed first", or the waiting reason
+  std::int64_t added_backlog_s = 0;
+};
+
+struct JobView {
+  std::int64_t id = 0;
+  JobState state = JobState::kQueued;
+  std::string kind;   // "route" or "pallet"
+  std::string route;  // empty for a pallet run
+  int pallet = 0;
+  std::string station;            // the station of the current or last visit; empty if none
+  std::string reason;             // set while WAITING and when FAILED or CANCELLED
+  std::int64_t started_ms = 0;    // first run start reported by a station; 0 = not yet
+  std::int64_t finished_ms = 0;   // terminal time; 0 = not yet
+  std::optional<double> cycle_s;  // sum of the stations' reported machine seconds
+  int op_index = 0;
+  int op_count = 0;
+  std::vector<Decision> decisions;
+};
+
+struct StationView {
+  std::string id;
+  std::string dialect;
+  bool online = false;
+  bool fault = false;
+  std::string alarm_code;
+  std::string alarm_text;
+  std::int64_t backlog_s = 0;
+  std::vector<std::int64_t> queue;  // dispatch ids allocated to it, in run order (the first may be in hand)
+  std::int64_t in_hand = 0;  // the dispatch handed out to the station (sent, accepted or running), 0 = none
+  int pallet = 0;            // pallet of the running or handed-out dispatch, 0 = none
+  std::string program;       // its current program, if reported
+};
+
+// A route as defined: each operation with the UTL/UCY data DEFINE extracted.
+struct OpView {
+  std::vector<std::string> stations;
+  std::vector<std::string> programs;
+  std::vector<std::int64_t> ucy_s;  // per program
+  std::vector<std::string> tools;   // union of the programs' UTL lists
+};
+struct RouteView {
+  std::string name;
+  std::vector<OpView> ops;
+  bool valid = true;
+  std::string invalid_reason;  // when a program it uses changed and no longer qualifies
+};
+
+struct Options {
+  std::string db_path;  // SQLite file; empty = in memory only (tests, benchmarks)
+  // Pallet numbers 1-255, or 1-127 on coded-pallet FMS modules (KT-APL seed lines 852, 4081-4083).
+  bool coded_pallets = false;
+  std::function<std::chrono::system_clock::time_point()> clock;  // default: system_clock::now
+};
+
+// The outcome of a job-creating command.
+struct JobResult {
+  std::int64_t job_id = 0;
+  bool replayed = false;  // the idempotency key was seen before: nothing new happened
+  Effects effects;
+};
+
+class Scheduler {
+ public:
+  // Opens (or creates) the database and loads its state. `programs` must outlive the Scheduler.
+  Scheduler(Options options, ProgramSource& programs);
+  ~Scheduler();
+  Scheduler(const Scheduler&) = delete;
+  Scheduler& operator=(const Scheduler&) = delete;
+
+  // After a restart: every dispatch handed out and not yet acknowledged, again with the same id
+  // (resent = true), plus anything the loaded state can now send.
+  Effects Recover();
+
+  // ---- commands (each carries an idempotency key; a repeated key returns the first outcome) ----
+  // Station registration from configuration (offline until announced).
+  void ConfigureStation(std::string_view id, std::string_view dialect);
+  void SetPalletMap(std::string_view key, int pallet, const std::vector<std::string>& programs);
+  // DEFINE ROUTE: opens each program, extracts UTL and UCY. Throws cell::Error: kNotFound for a missing
+  // program, kFailedPrecondition for a program without UCY, kInvalidArgument for a malformed spec.
+  RouteView DefineRoute(std::string_view key, const RouteSpec& spec);
+  // OPERATE: a new job for the pallet on the route; allocates its first operation at once.
+  JobResult Operate(std::string_view key, std::string_view route, int pallet);
+  // `pallet run P --station ID`: the pallet's map on one station.
+  JobResult RunPallet(std::string_view key, int pallet, std::string_view station);
+  Effects Cancel(std::string_view key, std::int64_t job_id,
+                 std::string_view reason = "cancelled by operator");
+
+  // ---- observations ----
+  Effects StationOnline(std::string_view id, std::string_view dialect);
+  Effects StationOffline(std::string_view id);  // liveliness lost
+  // condition FAULT (fault = true) or back to NORMAL/WARNING (fault = false).
+  Effects StationCondition(std::string_view id, bool fault, std::string_view alarm_code = {},
+                           std::string_view alarm_text = {});
+  // The station's published tool table (the whole table).
+  Effects StationTools(std::string_view id, const tooltable::ToolTable& table);
+  // The station accepted dispatch `dispatch_id` (reply to the run request).
+  Effects DispatchAcknowledged(std::int64_t dispatch_id);
+  Effects RunStarted(std::int64_t dispatch_id);
+  // Program `program_index` (0-based in the dispatch's list) reached its end: its UCY leaves the backlog.
+  Effects ProgramFinished(std::int64_t dispatch_id, int program_index, std::string_view next_program = {});
+  // The whole visit ended (last M30). cycle_s: the machine seconds the station measured, if any.
+  Effects RunFinished(std::int64_t dispatch_id, std::optional<double> cycle_s = std::nullopt);
+  Effects RunFailed(std::int64_t dispatch_id, std::string_view reason);
+  // A program changed (or vanished) in the store: routes using it are re-validated.
+  Effects ProgramChanged(std::string_view name);
+
+  // ---- queries ----
+  std::optional<JobView> Job(std::int64_t id) const;
+  std::vector<JobView> Jobs(bool with_decisions = false) const;
+  std::vector<StationView> Stations() const;
+  std::optional<StationView> Station(std::string_view id) const;
+  std::optional<tooltable::ToolTable> StationToolTable(std::string_view id) const;
+  std::optional<RouteView> Route(std::string_view name) const;
+  std::vector<RouteView> Routes() const;
+  std::optional<std::vector<std::string>> PalletMap(int pallet) const;
+
+  struct Impl;
+
+ private:
+  std::unique_ptr<Impl> impl_;
+};
+
+std::string IsoTime(std::int64_t ms);  // "2026-11-22T02:40:00Z"; "" for 0
+
+}  // namespace cell::scheduler

@@ -1,0 +1,427 @@
+// Dispatch rules of DESIGN §5 on a scripted fake cell. Manual references are to the KT-APL seed
+// (/work/shared/seeds/kearney-trecker-kt-apl.txt): UCY at lines 4126-4154, UTL at 4286-4312, pallet maps at
+// 838-854.
+#include "cell/scheduler/scheduler.h"
+
+#include <gtest/gtest.h>
+
+#include "cell/error/error.h"
+#include "cell/scheduler/json.h"
+#include "fake_cell.h"
+
+namespace cell::scheduler {
+namespace {
+
+using testing::FakeCell;
+
+Errc CodeOf(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const Error& e) {
+    return e.code();
+  }
+  ADD_FAILURE() << "no error";
+  return Errc::kInternal;
+}
+
+// "When a Define Route command is executed, the Host computer will in succession open each named part program
+// (USING) ... and extract the tool numbers listed in the UTL Statement" (seed line 4292).
+TEST(DefineRoute, ExtractsUtlAndUcyPerOperation) {
+  FakeCell c;
+  c.Program("P1", {"T12", "7"}, 300);
+  c.Program("P2", {"12", "99"}, 200);
+  c.Program("P3", {}, 50);
+  RouteView r = c.Route("R", {"KT01,KT02:P1,P2", "KT03:P3"});
+  ASSERT_EQ(r.ops.size(), 2u);
+  EXPECT_EQ(r.ops[0].stations, (std::vector<std::string>{"KT01", "KT02"}));
+  EXPECT_EQ(r.ops[0].tools, (std::vector<std::string>{"12", "7", "99"}));
+  EXPECT_EQ(r.ops[0].ucy_s, (std::vector<std::int64_t>{300, 200}));
+  EXPECT_TRUE(r.ops[1].tools.empty());
+  EXPECT_TRUE(r.valid);
+  EXPECT_EQ(c.sched->Route("R")->ops[1].programs, std::vector<std::string>{"P3"});
+}
+
+// UCY is "REQUIRED" in the KT/FMS heading (seed lines 4146-4150); a missing program is not found.
+TEST(DefineRoute, MissingProgramOrUcyIsAClearError) {
+  FakeCell c;
+  c.Program("NOUCY", {"1"}, -1);
+  EXPECT_EQ(CodeOf([&] { c.Route("R", {"KT01:GHOST"}); }), Errc::kNotFound);
+  EXPECT_EQ(CodeOf([&] { c.Route("R", {"KT01:NOUCY"}); }), Errc::kFailedPrecondition);
+  try {
+    c.Route("R", {"KT01:NOUCY"});
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("program 'NOUCY' has no (UCY,seconds)"), std::string::npos)
+        << e.what();
+    EXPECT_NE(std::string(e.what()).find("route R op 1"), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(c.sched->Route("R"));
+}
+
+// "If two or more stations are eligible ... the station with the shortest backlog is allocated" (seed
+// 4132-4134) and "the UCY is extracted from each part program to be executed, summed and added to the
+// backlog" (4130).
+TEST(Operate, ShortestBacklogWinsAndUcySumJoinsIt) {
+  FakeCell c;
+  c.Program("LONG", {}, 500);
+  c.Program("A", {}, 100);
+  c.Program("B", {}, 40);
+  c.Online("KT01");
+  c.Online("KT02");
+  c.Route("PRELOAD", {"KT01:LONG"});
+  c.Route("R", {"KT01,KT02:A,B"});
+  c.Operate("PRELOAD", 1);
+  EXPECT_EQ(c.Backlog("KT01"), 500);
+  const auto job = c.Operate("R", 2);
+  EXPECT_EQ(c.StationOf(job), "KT02");
+  EXPECT_EQ(c.State(job), JobState::kDispatched);
+  EXPECT_EQ(c.Backlog("KT02"), 140);
+  ASSERT_EQ(c.received["KT02"].size(), 1u);
+  EXPECT_EQ(c.received["KT02"][0].programs, (std::vector<std::string>{"A", "B"}));
+  EXPECT_EQ(c.received["KT02"][0].pallet, 2);
+  // Each program's UCY leaves the backlog when that program completes.
+  const auto id = c.received["KT02"][0].dispatch_id;
+  c.Take(c.sched->RunStarted(id));
+  EXPECT_EQ(c.State(job), JobState::kRunning);
+  c.Take(c.sched->ProgramFinished(id, 0));
+  EXPECT_EQ(c.Backlog("KT02"), 40);
+  c.Take(c.sched->ProgramFinished(id, 0));  // a repeated report changes nothing
+  EXPECT_EQ(c.Backlog("KT02"), 40);
+  c.Take(c.sched->RunFinished(id, 123.5));
+  EXPECT_EQ(c.Backlog("KT02"), 0);
+  auto v = c.sched->Job(job).value();
+  EXPECT_EQ(v.state, JobState::kCompleted);
+  EXPECT_EQ(v.cycle_s.value_or(0), 123.5);
+  EXPECT_NE(v.started_ms, 0);
+  EXPECT_NE(v.finished_ms, 0);
+}
+
+TEST(Operate, TiesGoToTheStationListedFirst) {
+  FakeCell c;
+  c.Program("A", {}, 100);
+  c.Online("KT01");
+  c.Online("KT02");
+  c.Route("R12", {"KT01,KT02:A"});
+  c.Route("R21", {"KT02,KT01:A"});
+  const auto j1 = c.Operate("R21", 1);
+  EXPECT_EQ(c.StationOf(j1), "KT02");  // 0 s each: KT02 is listed first
+  const auto j2 = c.Operate("R12", 2);
+  EXPECT_EQ(c.StationOf(j2), "KT01");  // KT01 has 0 s, KT02 100 s
+  const auto j3 = c.Operate("R12", 3);
+  EXPECT_EQ(c.StationOf(j3), "KT01");  // 100 s each: KT01 is listed first
+  auto d = c.sched->Job(j3)->decisions.back();
+  EXPECT_EQ(d.winner, "KT01");
+  EXPECT_NE(d.why.find("tie at backlog 100 s"), std::string::npos) << d.why;
+  ASSERT_EQ(d.considered.size(), 2u);
+  EXPECT_EQ(d.considered[1].station, "KT02");
+  EXPECT_EQ(d.considered[1].backlog_s, 100);
+}
+
+// "All tools which are listed in the UTL statement must be at the named machine in order for the machine to
+// be allocated" (seed lines 4294-4296).
+TEST(Operate, MissingToolsMakeThePalletWaitUntilAToolLoadReleasesIt) {
+  FakeCell c;
+  c.Program("A", {"1001", "T2002"}, 60);
+  c.Online("KT01", {"1001"});
+  c.Online("KT02", {"2002", "5"});
+  c.Route("R", {"KT01,KT02:A"});
+  const auto job = c.Operate("R", 7);
+  EXPECT_EQ(c.State(job), JobState::kWaiting);
+  EXPECT_EQ(c.Reason(job), "no eligible station: KT01 missing tools 2002; KT02 missing tools 1001");
+  EXPECT_TRUE(c.all.empty());
+  // Host tool data: a TLD file merged into KT02's table and republished.
+  auto table = c.sched->StationToolTable("KT02").value();
+  table.Merge(tooltable::ParseTld("(TLD,S9T1001P120.D12.)"));
+  c.Take(c.sched->StationTools("KT02", table));
+  EXPECT_EQ(c.State(job), JobState::kDispatched);
+  EXPECT_EQ(c.StationOf(job), "KT02");
+  EXPECT_EQ(c.Reason(job), "");
+  auto v = c.sched->Job(job).value();
+  ASSERT_EQ(v.decisions.size(), 2u);
+  EXPECT_EQ(v.decisions[0].winner, "");
+  EXPECT_EQ(v.decisions[0].considered[0].missing_tools, std::vector<std::string>{"2002"});
+  EXPECT_EQ(v.decisions[1].trigger, "tool table of KT02 changed");
+  EXPECT_EQ(v.decisions[1].winner, "KT02");
+}
+
+TEST(Operate, BrokenToolDoesNotCount) {
+  FakeCell c;
+  c.Program("A", {"9"}, 60);
+  c.Online("KT01");
+  tooltable::ToolTable t;
+  t.Merge(tooltable::ParseTld("(TLD,S1T9B)"));
+  c.Take(c.sched->StationTools("KT01", t));
+  c.Route("R", {"KT01:A"});
+  const auto job = c.Operate("R", 1);
+  EXPECT_EQ(c.Reason(job), "no eligible station: KT01 missing tools 9");
+}
+
+TEST(Operate, OfflineStationsAreNamedAndOnlineReleases) {
+  FakeCell c;
+  c.Program("A", {}, 60);
+  c.sched->ConfigureStation("KT01", "ktapl");
+  c.Route("R", {"KT01,KT02:A"});
+  const auto job = c.Operate("R", 3);
+  EXPECT_EQ(c.Reason(job), "no eligible station: KT01 offline; KT02 offline");
+  c.Online("KT02");
+  EXPECT_EQ(c.StationOf(job), "KT02");
+  EXPECT_EQ(c.received["KT02"].size(), 1u);
+}
+
+// "A station accepts several pallets and runs them in order": one in hand, the rest queued behind it.
+TEST(Operate, AStationRunsItsPalletsInOrder) {
+  FakeCell c;
+  c.Program("A", {}, 10);
+  c.Online("KT01");
+  c.Route("R", {"KT01:A"});
+  const auto j1 = c.Operate("R", 1);
+  const auto j2 = c.Operate("R", 2);
+  const auto j3 = c.Operate("R", 3);
+  EXPECT_EQ(c.Backlog("KT01"), 30);
+  ASSERT_EQ(c.received["KT01"].size(), 1u);
+  EXPECT_EQ(c.received["KT01"][0].pallet, 1);
+  EXPECT_EQ(c.sched->Station("KT01")->queue.size(), 3u);
+  c.Complete(c.received["KT01"][0].dispatch_id);
+  ASSERT_EQ(c.received["KT01"].size(), 2u);
+  EXPECT_EQ(c.received["KT01"][1].pallet, 2);
+  c.Complete(c.received["KT01"][1].dispatch_id);
+  c.Complete(c.received["KT01"][2].dispatch_id);
+  EXPECT_EQ(c.received["KT01"][2].pallet, 3);
+  for (auto j : {j1, j2, j3}) EXPECT_EQ(c.State(j), JobState::kCompleted);
+  EXPECT_EQ(c.Backlog("KT01"), 0);
+}
+
+TEST(Operate, MultiOperationRouteMovesThePalletOn) {
+  FakeCell c;
+  c.Program("ROUGH", {"1"}, 100);
+  c.Program("FINISH", {"2"}, 50);
+  c.Online("KT01", {"1"});
+  c.Online("KT02", {"1"});
+  c.Route("R", {"KT01:ROUGH", "KT02:FINISH"});
+  const auto job = c.Operate("R", 5);
+  c.Complete(c.InHand("KT01").dispatch_id, 90);
+  // The second operation needs tool 2, which KT02 lacks: the pallet waits there.
+  EXPECT_EQ(c.State(job), JobState::kWaiting);
+  EXPECT_EQ(c.Reason(job), "no eligible station: KT02 missing tools 2");
+  EXPECT_EQ(c.sched->Job(job)->op_index, 1);
+  c.Take(c.sched->StationTools("KT02", testing::Tools({"1", "2"})));
+  const auto d = c.InHand("KT02");
+  EXPECT_EQ(d.op_index, 1);
+  EXPECT_EQ(d.programs, std::vector<std::string>{"FINISH"});
+  EXPECT_EQ(c.Backlog("KT02"), 50);
+  c.Complete(d.dispatch_id, 40);
+  auto v = c.sched->Job(job).value();
+  EXPECT_EQ(v.state, JobState::kCompleted);
+  EXPECT_EQ(v.cycle_s.value_or(0), 130);
+  EXPECT_EQ(v.station, "KT02");
+}
+
+// Health policy (docs/scheduler.md): pallets queued at or handed to a station that vanishes are re-queued; a
+// pallet whose run had started fails; the station's backlog is released.
+TEST(Health, VanishedStationRequeuesQueuedAndFailsRunning) {
+  FakeCell c;
+  c.Program("A", {}, 100);
+  c.Online("KT01");
+  c.Online("KT02");
+  c.Route("ONLY1", {"KT01:A"});
+  c.Route("BOTH", {"KT01,KT02:A"});
+  const auto running = c.Operate("ONLY1", 1);
+  const auto queued = c.Operate("ONLY1", 2);
+  c.Take(c.sched->RunStarted(c.InHand("KT01").dispatch_id));
+  const auto b1 = c.Operate("BOTH", 3);  // KT02 (0 s)
+  const auto b2 = c.Operate("BOTH", 4);  // KT02 (100 s) vs KT01 (200 s)
+  const auto b3 = c.Operate("BOTH", 5);  // KT02 (200 s) vs KT01 (200 s): tie, KT01 listed first
+  EXPECT_EQ(c.StationOf(b3), "KT01");
+  EXPECT_EQ(c.Backlog("KT01"), 300);
+  c.Take(c.sched->StationOffline("KT01"));
+  EXPECT_EQ(c.State(running), JobState::kFailed);
+  EXPECT_NE(c.Reason(running).find("station KT01 went offline while running pallet 1"), std::string::npos)
+      << c.Reason(running);
+  EXPECT_EQ(c.State(queued), JobState::kWaiting);
+  EXPECT_EQ(c.Reason(queued), "no eligible station: KT01 offline");
+  EXPECT_EQ(c.StationOf(b3), "KT02");  // re-queued onto the other listed station
+  EXPECT_EQ(c.Backlog("KT01"), 0);
+  EXPECT_EQ(c.Backlog("KT02"), 300);
+  EXPECT_EQ(c.sched->Job(b3)->decisions.back().trigger, "re-queued: station KT01 went offline");
+  // Late reports of the vanished station are ignored.
+  const auto stale = c.received["KT01"][0].dispatch_id;
+  c.Take(c.sched->RunFinished(stale));
+  EXPECT_EQ(c.State(running), JobState::kFailed);
+  EXPECT_FALSE(c.notes.empty());
+  // KT01 comes back: the waiting pallet goes to it.
+  c.Online("KT01");
+  EXPECT_EQ(c.State(queued), JobState::kDispatched);
+  EXPECT_EQ(c.InHand("KT01").pallet, 2);
+  (void)b1;
+  (void)b2;
+}
+
+TEST(Health, FaultInterruptsAndClearingReleases) {
+  FakeCell c;
+  c.Program("A", {}, 100);
+  c.Online("KT01");
+  c.Route("R", {"KT01:A"});
+  const auto j = c.Operate("R", 1);
+  EXPECT_EQ(c.received["KT01"].size(), 1u);  // handed out, not started
+  c.Take(c.sched->StationCondition("KT01", true, "1234", "SPINDLE OVERLOAD"));
+  EXPECT_EQ(c.State(j), JobState::kWaiting);
+  EXPECT_EQ(c.Reason(j), "no eligible station: KT01 in fault (alarm 1234)");
+  EXPECT_EQ(c.Backlog("KT01"), 0);
+  c.Take(c.sched->StationCondition("KT01", false));
+  EXPECT_EQ(c.State(j), JobState::kDispatched);
+  ASSERT_EQ(c.received["KT01"].size(), 2u);
+  EXPECT_NE(c.received["KT01"][1].dispatch_id, c.received["KT01"][0].dispatch_id);
+}
+
+TEST(Jobs, CancelReleasesBacklogAndTellsTheStation) {
+  FakeCell c;
+  c.Program("A", {}, 100);
+  c.Online("KT01");
+  c.Route("R", {"KT01:A"});
+  const auto j1 = c.Operate("R", 1);
+  const auto j2 = c.Operate("R", 2);
+  c.Take(c.sched->Cancel("cancel-2", j2));
+  EXPECT_EQ(c.State(j2), JobState::kCancelled);
+  EXPECT_TRUE(c.cancels.empty());  // it was only queued
+  EXPECT_EQ(c.Backlog("KT01"), 100);
+  c.Take(c.sched->Cancel("cancel-1", j1, "wrong fixture"));
+  EXPECT_EQ(c.Reason(j1), "wrong fixture");
+  ASSERT_EQ(c.cancels.size(), 1u);
+  EXPECT_EQ(c.cancels[0].dispatch_id, c.received["KT01"][0].dispatch_id);
+  EXPECT_EQ(c.Backlog("KT01"), 0);
+  c.Take(c.sched->Cancel("cancel-1", j1));  // same key: nothing new
+  EXPECT_EQ(CodeOf([&] { c.sched->Cancel("cancel-1b", j1); }), Errc::kFailedPrecondition);
+  EXPECT_EQ(CodeOf([&] { c.sched->Cancel("cancel-x", 999); }), Errc::kNotFound);
+  // The pallet is free again.
+  EXPECT_NO_THROW(c.Operate("R", 1));
+}
+
+TEST(Jobs, IdempotencyKeysAndPalletRules) {
+  FakeCell c;
+  c.Program("A", {}, 100);
+  c.Online("KT01");
+  c.Route("R", {"KT01:A"});
+  const auto j = c.Operate("R", 1, "k1");
+  JobResult again = c.sched->Operate("k1", "R", 1);
+  EXPECT_TRUE(again.replayed);
+  EXPECT_EQ(again.job_id, j);
+  EXPECT_TRUE(again.effects.dispatches.empty());
+  EXPECT_EQ(c.sched->Jobs().size(), 1u);
+  EXPECT_EQ(CodeOf([&] { c.Operate("R", 1); }), Errc::kFailedPrecondition);  // pallet busy
+  EXPECT_EQ(CodeOf([&] { c.Operate("R", 0); }), Errc::kInvalidArgument);
+  EXPECT_EQ(CodeOf([&] { c.Operate("R", 256); }), Errc::kInvalidArgument);
+  EXPECT_EQ(CodeOf([&] { c.Operate("NOPE", 2); }), Errc::kNotFound);
+  EXPECT_NO_THROW(c.Operate("R", 255));
+  FakeCell coded({}, true);  // coded pallets: 1-127 (seed line 852)
+  coded.Program("A", {}, 1);
+  coded.Route("R", {"KT01:A"});
+  EXPECT_EQ(CodeOf([&] { coded.Operate("R", 128); }), Errc::kInvalidArgument);
+  EXPECT_NO_THROW(coded.Operate("R", 127));
+}
+
+// "A Pallet Map consists of from 1 to 75 standard part programs" (seed line 842).
+TEST(PalletMaps, OneToSeventyFivePrograms) {
+  FakeCell c;
+  std::vector<std::string> progs;
+  for (int i = 0; i < 75; ++i) progs.push_back("P" + std::to_string(i));
+  c.sched->SetPalletMap("m1", 12, progs);
+  EXPECT_EQ(c.sched->PalletMap(12)->size(), 75u);
+  progs.push_back("P75");
+  EXPECT_EQ(CodeOf([&] { c.sched->SetPalletMap("m2", 12, progs); }), Errc::kInvalidArgument);
+  EXPECT_EQ(CodeOf([&] { c.sched->SetPalletMap("m3", 12, {}); }), Errc::kInvalidArgument);
+  EXPECT_EQ(CodeOf([&] { c.sched->SetPalletMap("m4", 256, {"A"}); }), Errc::kInvalidArgument);
+  EXPECT_EQ(c.sched->PalletMap(12)->size(), 75u);
+  EXPECT_FALSE(c.sched->PalletMap(13));
+}
+
+TEST(PalletMaps, RunPalletOnAStation) {
+  FakeCell c;
+  c.Program("A", {"5"}, 30);
+  c.programs.Put("NOFMS", "%\nN10M30\n");  // a non-FMS program: no UCY, 0 s of backlog
+  c.Online("KT01", {"5"});
+  c.sched->SetPalletMap("m", 9, {"A", "NOFMS"});
+  JobResult r = c.sched->RunPallet("run9", 9, "KT01");
+  c.Take(r.effects);
+  EXPECT_EQ(c.State(r.job_id), JobState::kDispatched);
+  EXPECT_EQ(c.InHand("KT01").programs, (std::vector<std::string>{"A", "NOFMS"}));
+  EXPECT_EQ(c.Backlog("KT01"), 30);
+  EXPECT_EQ(c.sched->Job(r.job_id)->kind, "pallet");
+  EXPECT_EQ(CodeOf([&] { c.sched->RunPallet("x", 10, "KT01"); }), Errc::kNotFound);
+  EXPECT_EQ(CodeOf([&] { c.sched->RunPallet("y", 9, "KT09"); }), Errc::kNotFound);
+}
+
+TEST(Routes, RevalidatedWhenAProgramChanges) {
+  FakeCell c;
+  c.Program("A", {"1"}, 100);
+  c.Online("KT01", {"1", "2"});
+  c.Online("KT02", {"1"});
+  c.Route("R", {"KT02,KT01:A"});
+  // A new revision needs tool 2 and takes longer.
+  c.Program("A", {"1", "2"}, 150);
+  c.Take(c.sched->ProgramChanged("A"));
+  auto r = c.sched->Route("R").value();
+  EXPECT_TRUE(r.valid);
+  EXPECT_EQ(r.ops[0].tools, (std::vector<std::string>{"1", "2"}));
+  const auto j = c.Operate("R", 1);
+  EXPECT_EQ(c.StationOf(j), "KT01");
+  EXPECT_EQ(c.Backlog("KT01"), 150);
+  // The program loses its UCY: the route is invalid and OPERATE refuses it; a waiting pallet waits for it.
+  c.Program("A", {"1"}, -1);
+  c.Take(c.sched->ProgramChanged("A"));
+  r = c.sched->Route("R").value();
+  EXPECT_FALSE(r.valid);
+  EXPECT_NE(r.invalid_reason.find("no (UCY,seconds)"), std::string::npos);
+  EXPECT_EQ(CodeOf([&] { c.Operate("R", 2); }), Errc::kFailedPrecondition);
+  // Fixed again: valid.
+  c.Program("A", {"1"}, 80);
+  c.Take(c.sched->ProgramChanged("A"));
+  EXPECT_TRUE(c.sched->Route("R")->valid);
+  EXPECT_EQ(c.StationOf(c.Operate("R", 2)), "KT02");
+}
+
+TEST(Routes, WaitingPalletFollowsProgramChanges) {
+  FakeCell c;
+  c.Program("A", {"1"}, 100);
+  c.Online("KT01");
+  c.Route("R", {"KT01:A"});
+  const auto j = c.Operate("R", 1);
+  EXPECT_EQ(c.Reason(j), "no eligible station: KT01 missing tools 1");
+  c.programs.Remove("A");
+  c.Take(c.sched->ProgramChanged("A"));
+  EXPECT_EQ(c.Reason(j), "route R op 1: program 'A' not found");
+  c.Program("A", {}, 100);  // the new revision needs no tool
+  c.Take(c.sched->ProgramChanged("A"));
+  EXPECT_EQ(c.State(j), JobState::kDispatched);
+}
+
+TEST(Views, JsonShapesOfDesignSection6) {
+  FakeCell c;
+  c.Program("A", {"3"}, 100);
+  c.Online("KT01", {"3"});
+  c.Route("R", {"KT01:A"});
+  const auto j = c.Operate("R", 4);
+  auto job = nlohmann::json(ToJson(c.sched->Job(j).value(), true));
+  for (const char* k : {"id", "state", "route", "pallet", "station", "reason", "started", "finished",
+                        "cycle_s", "decisions"}) {
+    EXPECT_TRUE(job.contains(k)) << k;
+  }
+  EXPECT_EQ(job["state"], "DISPATCHED");
+  EXPECT_TRUE(job["reason"].is_null());
+  EXPECT_TRUE(job["started"].is_null());
+  EXPECT_EQ(job["decisions"][0]["winner"], "KT01");
+  EXPECT_EQ(job["decisions"][0]["considered"][0]["backlog_s"], 0);
+  c.Complete(c.InHand("KT01").dispatch_id, 95.5);
+  job = ToJson(c.sched->Job(j).value(), false);
+  EXPECT_EQ(job["started"], "2026-11-18T11:06:40Z");
+  EXPECT_EQ(job["cycle_s"], 95.5);
+  EXPECT_FALSE(job.contains("decisions"));
+  auto st = ToJson(c.sched->Station("KT01").value());
+  EXPECT_EQ(st["backlog_s"], 0);
+  EXPECT_EQ(st["online"], true);
+  auto tools = ToJson(c.sched->StationToolTable("KT01").value());
+  EXPECT_EQ(tools[0]["tool"], "3");
+  EXPECT_EQ(tools[0]["socket"], 1);
+  EXPECT_EQ(tools[0]["length"], 100.0);
+}
+
+}  // namespace
+}  // namespace cell::scheduler
