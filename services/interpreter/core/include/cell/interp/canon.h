@@ -17,31 +17,31 @@ const char* AxisName(int axis);
 bool IsRotaryAxis(int axis);
 
 enum class Op {
-  kUnits,        // first op of every run, and again whenever the unit mode changes
-  kRapid,        // move at rapid rate
-  kLinear,       // straight feed move
-  kArc,          // circular or helical feed move
-  kDwell,        // G04
-  kSpindle,      // spindle on cw/ccw, stop, orient, speed change
-  kCoolant,      // coolant mode change
-  kToolSelect,   // T word: magazine pre-selection
-  kToolChange,   // M06
-  kStop,         // M00 / M01
-  kEnd,          // M02 / M30
-  kPallet,       // M60 mid-program pallet shuttle (M30's shuttle is a field of kEnd)
-  kMessage,      // (MSG,...) operator message
-  kAlarm,        // M99 audible alarm
-  kAux,          // any other M function (clamps, overrides, probe select, ...)
-  kRegrid,       // G92: the absolute position registers are reloaded, no motion
-  kProbe,        // G22/G23 probe move; the result is reported by the Environment
-  kOutput,       // (SET,...) discrete outputs
-  kWaitInput,    // (WAI,...) wait for discrete inputs
-  kFileOpen,     // OIF / OPF / (MSG,NAM,...)
-  kFileWrite,    // FWR / MSG into an open file
-  kFileClose,    // CLF / G37
-  kFileOp,       // CPY, DLF, PRT, RCP, USF, ULF
-  kEvent,        // (EVT,...)
-  kToolData,     // TLD / ZTB,T changes to the tool table
+  kUnits,       // first op of every run, and again whenever the unit mode changes
+  kRapid,       // move at rapid rate
+  kLinear,      // straight feed move
+  kArc,         // circular or helical feed move
+  kDwell,       // G04
+  kSpindle,     // spindle on cw/ccw, stop, orient, speed change
+  kCoolant,     // coolant mode change
+  kToolSelect,  // T word: magazine pre-selection
+  kToolChange,  // M06
+  kStop,        // M00 / M01
+  kEnd,         // M02 / M30
+  kPallet,      // M60 mid-program pallet shuttle (M30's shuttle is a field of kEnd)
+  kMessage,     // (MSG,...) operator message
+  kAlarm,       // M99 audible alarm
+  kAux,         // any other M function (clamps, overrides, probe select, ...)
+  kRegrid,      // G92: the absolute position registers are reloaded, no motion
+  kProbe,       // G22/G23 probe move; the result is reported by the Environment
+  kOutput,      // (SET,...) discrete outputs
+  kWaitInput,   // (WAI,...) wait for discrete inputs
+  kFileOpen,    // OIF / OPF / (MSG,NAM,...)
+  kFileWrite,   // FWR / MSG into an open file
+  kFileClose,   // CLF / G37
+  kFileOp,      // CPY, DLF, PRT, RCP, USF, ULF
+  kEvent,       // (EVT,...)
+  kToolData,    // TLD / ZTB,T changes to the tool table
 };
 
 const char* OpName(Op op);
@@ -76,12 +76,12 @@ struct Canon {
   bool metric = false;
 
   // Generic fields used by the other ops (see docs/canonical-commands.md).
-  double value = 0;     // dwell seconds, spindle speed, M number, ...
-  double value2 = 0;    // spindle orientation angle, ...
-  std::string text;     // message / alarm / file name / tool / mode word
-  std::string text2;    // file type / second name / ...
-  int code = 0;         // M code, probe G code, ...
-  bool flag = false;    // optional stop, shuttle at M30, append, ...
+  double value = 0;   // dwell seconds, spindle speed, M number, ...
+  double value2 = 0;  // spindle orientation angle, ...
+  std::string text;   // message / alarm / file name / tool / mode word
+  std::string text2;  // file type / second name / ...
+  int code = 0;       // M code, probe G code, ...
+  bool flag = false;  // optional stop, shuttle at M30, append, ...
 };
 
 // One JSON object on a single line, without the trailing newline (DESIGN §4).

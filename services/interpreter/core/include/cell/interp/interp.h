@@ -4,8 +4,8 @@
 //   opt.dialect = "ktapl";
 //   opt.program_name = "PUMP341";
 //   opt.program_text = text;
-//   auto run = cell::interp::StartRun(opt);          // throws cell::Error(kUnimplemented) for unknown dialects
-//   for (;;) {
+//   auto run = cell::interp::StartRun(opt);          // throws cell::Error(kUnimplemented) for unknown
+//   dialects for (;;) {
 //     cell::interp::Step s = run->Next();            // blocks only inside Environment callbacks
 //     if (s.kind == cell::interp::Step::kCanon) publish(s.canon);
 //     else if (s.kind == cell::interp::Step::kEnd) break;   // ran to its end
@@ -50,8 +50,8 @@ struct ToolEntry {
 
 // Result of a probe move (G22 contact / G23 break).
 struct ProbeResult {
-  bool already = false;  // already in the requested state at the start: no motion
-  bool event = false;    // the contact (break) happened
+  bool already = false;                 // already in the requested state at the start: no motion
+  bool event = false;                   // the contact (break) happened
   std::array<double, kAxisCount> at{};  // machine position where the event happened (mm / deg)
 };
 
@@ -66,11 +66,17 @@ class Environment {
   // (WAI,...): returns when the inputs match. Offline: at once.
   virtual void WaitInputs(const std::string& spec) { (void)spec; }
   // Machine state fed into the read-only system parameters (L3000-L3999); nullopt = not known (0).
-  virtual std::optional<double> SystemParameter(int number) { (void)number; return std::nullopt; }
+  virtual std::optional<double> SystemParameter(int number) {
+    (void)number;
+    return std::nullopt;
+  }
   // Wall clock for (DAT): year, month, day, hour, minute, second.
   virtual std::array<int, 6> Now();
   // Completion of file operations (CLF, DLF, PRT, CPY, RCP): true = finished.
-  virtual bool FileOperation(const Canon& op) { (void)op; return true; }
+  virtual bool FileOperation(const Canon& op) {
+    (void)op;
+    return true;
+  }
 };
 
 struct RunOptions {

@@ -1,0 +1,148 @@
+// cell-interp: the offline front door of the interpreter (DESIGN §4 "Offline CLI contract").
+//   cell-interp --dialect D [--tools FILE] [--params FILE] [--lib DIR] [--probe-model FILE] PROGRAM
+// Exit 0: ran to its end; 1: program error (diagnostic on stderr); 2: usage error or unimplemented dialect.
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+#include <string>
+
+#include "cell/error/error.h"
+#include "cell/interp/interp.h"
+#include "cell/interp/ktapl.h"
+#include "probe_model.h"
+
+namespace {
+
+constexpr const char* kUsage =
+    "usage: cell-interp --dialect ktapl|okuma|emco|balt [--tools FILE] [--params FILE] [--lib DIR] "
+    "[--probe-model FILE] PROGRAM";
+
+int Usage(const std::string& why) {
+  std::cerr << "cell-interp: " << why << "\n" << kUsage << "\n";
+  return 2;
+}
+
+bool ReadFile(const std::string& path, std::string& out) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return false;
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  out = ss.str();
+  return true;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::string dialect, tools, params, lib, probe_model, program;
+  for (int i = 1; i < argc; ++i) {
+    std::string a = argv[i];
+    auto value = [&](std::string& dst) -> bool {
+      if (i + 1 >= argc) return false;
+      dst = argv[++i];
+      return true;
+    };
+    if (a == "--help" || a == "-h") {
+      std::cout << kUsage << "\n";
+      return 0;
+    } else if (a == "--dialect") {
+      if (!value(dialect)) return Usage("--dialect needs a value");
+    } else if (a == "--tools") {
+      if (!value(tools)) return Usage("--tools needs a file");
+    } else if (a == "--params") {
+      if (!value(params)) return Usage("--params needs a file");
+    } else if (a == "--lib") {
+      if (!value(lib)) return Usage("--lib needs a directory");
+    } else if (a == "--probe-model") {
+      if (!value(probe_model)) return Usage("--probe-model needs a file");
+    } else if (a.size() > 1 && a[0] == '-') {
+      return Usage("unknown option " + a);
+    } else if (program.empty()) {
+      program = a;
+    } else {
+      return Usage("only one PROGRAM may be given");
+    }
+  }
+  if (dialect.empty()) return Usage("--dialect is required");
+  const cell::interp::DialectInfo* d = cell::interp::FindDialect(dialect);
+  if (!d) return Usage("unknown dialect '" + dialect + "'");
+  if (!d->implemented) {
+    std::cerr << "cell-interp: dialect '" << dialect << "' is not implemented yet\n";
+    return 2;
+  }
+  if (program.empty()) return Usage("PROGRAM is required");
+
+  cell::interp::RunOptions opt;
+  opt.dialect = dialect;
+  opt.program_name = program;
+  if (!ReadFile(program, opt.program_text)) return Usage("cannot read " + program);
+  if (!tools.empty()) {
+    std::string text;
+    if (!ReadFile(tools, text)) return Usage("cannot read " + tools);
+    try {
+      opt.tools = cell::interp::ParseKtaplToolTable(text);
+    } catch (const cell::Error& e) {
+      return Usage("bad tool table " + tools + ": " + e.what());
+    }
+  }
+  if (!params.empty()) {
+    std::string text;
+    if (!ReadFile(params, text)) return Usage("cannot read " + params);
+    std::istringstream in(text);
+    std::string line;
+    int n = 0;
+    while (std::getline(in, line)) {
+      ++n;
+      auto hash = line.find('#');
+      if (hash != std::string::npos) line.resize(hash);
+      while (!line.empty() && (line.back() == '\r' || line.back() == ' ')) line.pop_back();
+      size_t b = line.find_first_not_of(" \t");
+      if (b == std::string::npos) continue;
+      auto eq = line.find('=');
+      if (eq == std::string::npos) return Usage(params + ":" + std::to_string(n) + ": expected NAME=VALUE");
+      opt.params[line.substr(b, eq - b)] = line.substr(eq + 1);
+    }
+  }
+  if (!lib.empty()) {
+    if (!std::filesystem::is_directory(lib)) return Usage("--lib " + lib + " is not a directory");
+    opt.library = [lib](const std::string& name) -> std::optional<std::string> {
+      for (const char* ext : {"", ".ktapl", ".apl", ".nc", ".txt"}) {
+        std::string text;
+        if (ReadFile(lib + "/" + name + ext, text)) return text;
+      }
+      return std::nullopt;
+    };
+  }
+  cell::interp::ProbeModelEnvironment env;
+  if (!probe_model.empty()) {
+    std::string text, err;
+    if (!ReadFile(probe_model, text)) return Usage("cannot read " + probe_model);
+    if (!env.Load(text, &err)) return Usage("bad probe model " + probe_model + ": " + err);
+  }
+  opt.env = &env;
+
+  std::unique_ptr<cell::interp::Run> run;
+  try {
+    run = cell::interp::StartRun(opt);
+  } catch (const cell::Error& e) {
+    std::cerr << "cell-interp: " << e.what() << "\n";
+    return 2;
+  }
+  for (;;) {
+    cell::interp::Step s = run->Next();
+    if (s.kind == cell::interp::Step::kCanon) {
+      std::string line = cell::interp::ToJsonLine(s.canon);
+      line += '\n';
+      std::fwrite(line.data(), 1, line.size(), stdout);
+    } else if (s.kind == cell::interp::Step::kEnd) {
+      std::fflush(stdout);
+      return 0;
+    } else {
+      std::fflush(stdout);
+      std::cerr << s.diag.Format() << "\n";
+      return 1;
+    }
+  }
+}

@@ -1,0 +1,284 @@
+#include "cell/interp/canon.h"
+
+#include <fmt/format.h>
+
+#include <cmath>
+
+namespace cell::interp {
+
+const char* AxisName(int axis) {
+  static const char* const kNames[kAxisCount] = {"x", "y", "z", "a", "b", "c", "u", "v", "w"};
+  return (axis >= 0 && axis < kAxisCount) ? kNames[axis] : "?";
+}
+
+bool IsRotaryAxis(int axis) {
+  return axis == kA || axis == kB || axis == kC;
+}
+
+const char* OpName(Op op) {
+  switch (op) {
+    case Op::kUnits:
+      return "units";
+    case Op::kRapid:
+      return "rapid";
+    case Op::kLinear:
+      return "linear";
+    case Op::kArc:
+      return "arc";
+    case Op::kDwell:
+      return "dwell";
+    case Op::kSpindle:
+      return "spindle";
+    case Op::kCoolant:
+      return "coolant";
+    case Op::kToolSelect:
+      return "tool_select";
+    case Op::kToolChange:
+      return "tool_change";
+    case Op::kStop:
+      return "stop";
+    case Op::kEnd:
+      return "end";
+    case Op::kPallet:
+      return "pallet";
+    case Op::kMessage:
+      return "message";
+    case Op::kAlarm:
+      return "alarm";
+    case Op::kAux:
+      return "aux";
+    case Op::kRegrid:
+      return "regrid";
+    case Op::kProbe:
+      return "probe";
+    case Op::kOutput:
+      return "output";
+    case Op::kWaitInput:
+      return "wait_input";
+    case Op::kFileOpen:
+      return "file_open";
+    case Op::kFileWrite:
+      return "file_write";
+    case Op::kFileClose:
+      return "file_close";
+    case Op::kFileOp:
+      return "file_op";
+    case Op::kEvent:
+      return "event";
+    case Op::kToolData:
+      return "tool_data";
+  }
+  return "unknown";
+}
+
+namespace {
+
+std::string Num(double v) {
+  if (!std::isfinite(v)) return "0";
+  if (std::fabs(v) < 5e-7) v = 0;  // no "-0.000000"
+  std::string s = fmt::format("{:.6f}", v);
+  // Trim trailing zeros but keep at least 4 decimals.
+  auto dot = s.find('.');
+  while (s.size() > dot + 5 && s.back() == '0') s.pop_back();
+  return s;
+}
+
+void Str(std::string& out, const std::string& s) {
+  out += '"';
+  for (unsigned char ch : s) {
+    switch (ch) {
+      case '"':
+        out += "\\\"";
+        break;
+      case '\\':
+        out += "\\\\";
+        break;
+      case '\n':
+        out += "\\n";
+        break;
+      case '\r':
+        out += "\\r";
+        break;
+      case '\t':
+        out += "\\t";
+        break;
+      default:
+        if (ch < 0x20 || ch >= 0x7f) {
+          out += fmt::format("\\u{:04x}", ch);
+        } else {
+          out += static_cast<char>(ch);
+        }
+    }
+  }
+  out += '"';
+}
+
+void Key(std::string& out, const char* k) {
+  out += ",\"";
+  out += k;
+  out += "\":";
+}
+
+void Axes(std::string& out, const Canon& c) {
+  for (int i = 0; i < kAxisCount; ++i) {
+    if (c.used & (1u << i)) {
+      Key(out, AxisName(i));
+      out += Num(c.pos[i]);
+    }
+  }
+  for (int i = 0; i < kAxisCount; ++i) {
+    if (c.travel_mask & (1u << i)) {
+      out += fmt::format(",\"{}_travel\":", AxisName(i));
+      out += Num(c.travel[i]);
+    }
+  }
+}
+
+void Feed(std::string& out, const Canon& c) {
+  Key(out, "f");
+  out += Num(c.feed);
+  switch (c.f_mode) {
+    case FeedMode::kPerMinute:
+      break;
+    case FeedMode::kInverseTime:
+      out += ",\"f_mode\":\"inverse_time\"";
+      break;
+    case FeedMode::kPerRev:
+      out += ",\"f_mode\":\"per_rev\"";
+      break;
+    case FeedMode::kDegPerMinute:
+      out += ",\"f_mode\":\"deg_per_min\"";
+      break;
+  }
+}
+
+}  // namespace
+
+std::string ToJsonLine(const Canon& c) {
+  std::string out = "{\"op\":\"";
+  out += OpName(c.op);
+  out += "\",\"line\":";
+  out += std::to_string(c.line);
+  switch (c.op) {
+    case Op::kUnits:
+      out += c.metric ? ",\"length\":\"mm\"" : ",\"length\":\"inch\"";
+      out += ",\"x_mode\":\"radius\"";
+      break;
+    case Op::kRapid:
+      Axes(out, c);
+      break;
+    case Op::kLinear:
+      Axes(out, c);
+      Feed(out, c);
+      if (c.exact_stop) out += ",\"exact_stop\":true";
+      break;
+    case Op::kArc:
+      Axes(out, c);
+      Feed(out, c);
+      if (c.exact_stop) out += ",\"exact_stop\":true";
+      out += fmt::format(",\"center\":[{},{},{}]", Num(c.center[0]), Num(c.center[1]), Num(c.center[2]));
+      out += c.cw ? ",\"dir\":\"cw\"" : ",\"dir\":\"ccw\"";
+      Key(out, "plane");
+      Str(out, c.plane);
+      Key(out, "angle");
+      out += Num(c.turns);
+      break;
+    case Op::kDwell:
+      Key(out, "seconds");
+      out += Num(c.value);
+      break;
+    case Op::kSpindle:
+      Key(out, "dir");
+      Str(out, c.text);
+      Key(out, "s");
+      out += Num(c.value);
+      if (c.text == "orient") {
+        Key(out, "angle");
+        out += Num(c.value2);
+      }
+      break;
+    case Op::kCoolant:
+      Key(out, "m");
+      out += std::to_string(c.code);
+      Key(out, "mode");
+      Str(out, c.text);
+      break;
+    case Op::kToolSelect:
+    case Op::kToolChange:
+      Key(out, "tool");
+      Str(out, c.text);
+      break;
+    case Op::kStop:
+      Key(out, "m");
+      out += std::to_string(c.code);
+      out += c.flag ? ",\"optional\":true" : ",\"optional\":false";
+      break;
+    case Op::kEnd:
+      Key(out, "m");
+      out += std::to_string(c.code);
+      out += c.flag ? ",\"shuttle\":true" : ",\"shuttle\":false";
+      break;
+    case Op::kPallet:
+      Key(out, "m");
+      out += std::to_string(c.code);
+      break;
+    case Op::kMessage:
+    case Op::kAlarm:
+    case Op::kEvent:
+      Key(out, "text");
+      Str(out, c.text);
+      break;
+    case Op::kAux:
+      Key(out, "m");
+      out += std::to_string(c.code);
+      break;
+    case Op::kRegrid:
+      Axes(out, c);
+      break;
+    case Op::kProbe:
+      Key(out, "g");
+      out += std::to_string(c.code);
+      Axes(out, c);
+      Feed(out, c);
+      Key(out, "result");
+      Str(out, c.text);
+      break;
+    case Op::kOutput:
+    case Op::kWaitInput:
+      Key(out, "spec");
+      Str(out, c.text);
+      break;
+    case Op::kFileOpen:
+      Key(out, "name");
+      Str(out, c.text);
+      Key(out, "type");
+      Str(out, c.text2);
+      out += c.flag ? ",\"append\":true" : ",\"append\":false";
+      if (c.code) out += ",\"inspection\":true";
+      break;
+    case Op::kFileWrite:
+      Key(out, "text");
+      Str(out, c.text);
+      break;
+    case Op::kFileClose:
+      break;
+    case Op::kFileOp:
+      Key(out, "what");
+      Str(out, c.text2);
+      Key(out, "args");
+      Str(out, c.text);
+      break;
+    case Op::kToolData:
+      Key(out, "tool");
+      Str(out, c.text);
+      Key(out, "length");
+      out += Num(c.value);
+      Key(out, "diameter");
+      out += Num(c.value2);
+      break;
+  }
+  out += '}';
+  return out;
+}
+
+}  // namespace cell::interp

@@ -1,0 +1,118 @@
+// Library-level tests of the run API and the metadata helper.
+#include <gtest/gtest.h>
+
+#include "cell/error/error.h"
+#include "cell/interp/interp.h"
+#include "cell/interp/ktapl.h"
+
+namespace cell::interp {
+namespace {
+
+std::vector<std::string> RunAll(const std::string& text, Diagnostic* diag = nullptr) {
+  RunOptions o;
+  o.program_name = "T";
+  o.program_text = text;
+  auto run = StartRun(o);
+  std::vector<std::string> out;
+  for (;;) {
+    Step s = run->Next();
+    if (s.kind == Step::kCanon) {
+      out.push_back(ToJsonLine(s.canon));
+      continue;
+    }
+    if (s.kind == Step::kError && diag) *diag = s.diag;
+    if (s.kind == Step::kError && !diag) ADD_FAILURE() << s.diag.Format();
+    return out;
+  }
+}
+
+TEST(Run, FirstOpIsUnitsAndMotionCarriesUsedAxes) {
+  auto out = RunAll("%\n(NAM,TEST)\nN10 G71 G0 X10. F0\nN20 Y5. Z2.\nM30\n");
+  ASSERT_EQ(out.size(), 4u);
+  EXPECT_EQ(out[0], R"({"op":"units","line":3,"length":"mm","x_mode":"radius"})");
+  EXPECT_EQ(out[1], R"({"op":"rapid","line":3,"x":10.0000})");
+  EXPECT_EQ(out[2], R"({"op":"rapid","line":4,"x":10.0000,"y":5.0000,"z":2.0000})");
+  EXPECT_EQ(out[3], R"({"op":"end","line":5,"m":30,"shuttle":true})");
+}
+
+TEST(Run, UnknownAndUnimplementedDialects) {
+  RunOptions o;
+  o.dialect = "okuma";
+  try {
+    StartRun(o);
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), Errc::kUnimplemented);
+  }
+  o.dialect = "fanuc";
+  try {
+    StartRun(o);
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), Errc::kInvalidArgument);
+  }
+}
+
+TEST(Run, ErrorStopsTheRunAndKeepsEarlierOutput) {
+  Diagnostic d;
+  auto out = RunAll("G71G0X1.F0\nG04 X1. F2.\n", &d);
+  EXPECT_EQ(out.size(), 2u);
+  EXPECT_EQ(d.line, 2);
+  EXPECT_EQ(d.text, "NO AXIS WORDS ALLOWED IN A G04 BLOCK");
+  EXPECT_EQ(d.Format().rfind("T:2:", 0), 0u);
+}
+
+TEST(Run, LibrarySubroutineReportsTheCallingLine) {
+  RunOptions o;
+  o.program_name = "T";
+  o.program_text = "G71G0F0\n(CLS,SUB1,2)\nM30\n";
+  o.library = [](const std::string& name) -> std::optional<std::string> {
+    if (name == "SUB1") return std::string("(DFS,SUB1,SAVE)\nG91X1.\n(END)\n");
+    return std::nullopt;
+  };
+  auto run = StartRun(o);
+  std::vector<Canon> moves;
+  for (;;) {
+    Step s = run->Next();
+    if (s.kind != Step::kCanon) break;
+    if (s.canon.op == Op::kRapid) moves.push_back(s.canon);
+  }
+  ASSERT_EQ(moves.size(), 2u);
+  EXPECT_EQ(moves[0].line, 2);
+  EXPECT_DOUBLE_EQ(moves[1].pos[kX], 2.0);
+}
+
+TEST(Metadata, HeadingAndWarnings) {
+  auto md = ExtractKtaplMetadata("%\n(NAM, GEAR HOUSING)\n(UTL,T33412,202,1234567)\n(UCY,345)\nN10G0X1.F0\n");
+  ASSERT_TRUE(md.name);
+  EXPECT_EQ(*md.name, "GEAR HOUSING");
+  EXPECT_EQ(md.tools, (std::vector<std::string>{"33412", "202", "1234567"}));
+  ASSERT_TRUE(md.cycle_s);
+  EXPECT_EQ(*md.cycle_s, 345);
+  EXPECT_TRUE(md.warnings.empty());
+  auto bad = ExtractKtaplMetadata("%\n(UCY,10)\n(UTL,12345678)\n");
+  EXPECT_FALSE(bad.warnings.empty());
+  EXPECT_TRUE(bad.tools.empty());
+}
+
+TEST(ToolTable, TldExamples) {
+  // Manual ln 4063-4097: primary, suffix 5, and the process compensation for pallet 12.
+  auto t = ParseKtaplToolTable(
+      "G70\n(TLD,S12T33412CP.02D-.25L345H5.9)\n(TLD,S12T33412.5CP.02D-.25L345H5.9)\n"
+      "(TLD,T33412.5W12P.0003D-.0004)\n");
+  ASSERT_EQ(t.size(), 3u);
+  EXPECT_EQ(t[2].tool, "33412.5");
+  EXPECT_EQ(t[2].pallet, 12);
+  EXPECT_NEAR(t[2].length, 0.0003 * 25.4, 1e-9);
+  EXPECT_EQ(t[0].tool, "33412");
+  EXPECT_EQ(t[0].socket, 12);
+  EXPECT_TRUE(t[0].check);
+  EXPECT_NEAR(t[0].length, 0.02 * 25.4, 1e-9);
+  EXPECT_NEAR(t[0].diameter, -0.25 * 25.4, 1e-9);
+  EXPECT_EQ(t[0].life_min, 3 * 60 + 45);
+  EXPECT_DOUBLE_EQ(t[0].max_hp, 5.9);
+  EXPECT_THROW(ParseKtaplToolTable("(TLD,T99W12P.0003)\n"), Error);
+}
+
+}  // namespace
+}  // namespace cell::interp
