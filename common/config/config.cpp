@@ -157,9 +157,13 @@ bool IsValidToolNumber(std::string_view tool) {
   return suffix.size() == 1 && suffix[0] >= '1' && suffix[0] <= '7';
 }
 
+fs::path SourceTreeDir() {
+  return CELL_CONFIG_SOURCE_DIR;
+}
+
 fs::path DefaultConfigDir(const fs::path& exe) {
   if (IsUnder(exe, "/usr") || IsUnder(exe, "/opt")) return "/etc/cell";
-  return fs::path(CELL_CONFIG_SOURCE_DIR) / "deploy";
+  return SourceTreeDir() / "deploy";
 }
 
 fs::path ConfigDir() {

@@ -252,6 +252,7 @@ TEST_F(ConfigTest, ConfigDirPrecedence) {
   const char* src = getenv("CELL_SOURCE_DIR");
   ASSERT_NE(src, nullptr) << "run under ctest (CELL_SOURCE_DIR)";
   EXPECT_EQ(fs::weakly_canonical(cell::config::ConfigDir()), fs::weakly_canonical(fs::path(src) / "deploy"));
+  EXPECT_EQ(fs::weakly_canonical(cell::config::SourceTreeDir()), fs::weakly_canonical(src));
   EXPECT_EQ(cell::config::DefaultConfigDir("/usr/local/bin/cell-scheduler"), "/etc/cell");
   EXPECT_EQ(cell::config::DefaultConfigDir("/opt/cell/bin/cell-scheduler"), "/etc/cell");
   EXPECT_EQ(cell::config::DefaultConfigDir("/usrlocal/bin/x").filename(), "deploy");

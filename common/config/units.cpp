@@ -319,4 +319,26 @@ std::vector<std::string> ExecStartFor(const fs::path& unit_file, std::string_vie
   return argv;
 }
 
+std::vector<UnitCommand> CellCommands(const fs::path& unit_dir, const std::vector<std::string>& stations,
+                                      const fs::path& bin_dir) {
+  std::vector<fs::path> plain, templates;
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(unit_dir, ec)) {
+    std::string name = e.path().filename().string();
+    if (e.path().extension() != ".service") continue;
+    (name.find("@.") != std::string::npos ? templates : plain).push_back(e.path());
+  }
+  if (plain.empty() && templates.empty()) {
+    throw Error(Errc::kNotFound, fmt::format("no *.service units in {}", unit_dir.string()));
+  }
+  std::sort(plain.begin(), plain.end());
+  std::sort(templates.begin(), templates.end());
+  std::vector<UnitCommand> out;
+  for (const auto& f : plain) out.push_back({UnitName(f, ""), ExecStartFor(f, "", bin_dir)});
+  for (const auto& station : stations) {
+    for (const auto& f : templates) out.push_back({UnitName(f, station), ExecStartFor(f, station, bin_dir)});
+  }
+  return out;
+}
+
 }  // namespace cell::config

@@ -63,6 +63,19 @@ TEST(RealUnits, Environment) {
   EXPECT_EQ(unit.Value("Install", "WantedBy"), "cell.target");
 }
 
+TEST(RealUnits, CellCommandsForTwoStations) {
+  auto cmds = cell::config::CellCommands(UnitDir(), {"KT01", "KT02"}, "/b");
+  std::vector<std::string> units;
+  for (const auto& c : cmds) units.push_back(c.unit);
+  EXPECT_EQ(units,
+            (Argv{"cell-inspection-writer.service", "cell-program-store.service", "cell-scheduler.service",
+                  "cell-axis-servo@KT01.service", "cell-interpreter@KT01.service",
+                  "cell-axis-servo@KT02.service", "cell-interpreter@KT02.service"}));
+  EXPECT_EQ(cmds[6].argv, (Argv{"/b/cell-interpreter", "--station", "KT02"}));
+  EXPECT_EQ(cmds[1].argv, (Argv{"/b/cell-program-store"}));
+  EXPECT_THROW(cell::config::CellCommands("/nonexistent", {}, "/b"), cell::Error);
+}
+
 TEST_F(TempUnit, QuotingSpecifiersVariablesAndContinuation) {
   auto unit = Write("x-demo@.service", R"(# comment
 [Unit]

@@ -16,6 +16,10 @@ std::filesystem::path ConfigDir();
 // The rule above without the environment variable, for a binary at `exe` (exposed for tests).
 std::filesystem::path DefaultConfigDir(const std::filesystem::path& exe);
 
+// The source tree this library was built from (its deploy/ holds the shipped units and stations; `cellctl
+// up` reads <SourceTreeDir()>/deploy/systemd).
+std::filesystem::path SourceTreeDir();
+
 // CELL_DATA_DIR if set; else $XDG_STATE_HOME/cell (XDG_STATE_HOME must be absolute); else
 // $HOME/.local/state/cell (the passwd home when HOME is unset). Creates the directory (and parents).
 // Throws cell::Error(kIo) naming the directory when it cannot be created.

@@ -67,4 +67,17 @@ std::vector<std::string> ExecStartFor(const std::filesystem::path& unit_file, st
 std::vector<std::pair<std::string, std::string>> EnvironmentFor(const std::filesystem::path& unit_file,
                                                                 std::string_view instance);
 
+// One process of a cell, as `cellctl up` starts it.
+struct UnitCommand {
+  std::string unit;               // "cell-scheduler.service", "cell-interpreter@KT01.service"
+  std::vector<std::string> argv;  // ExecStartFor(...)
+};
+
+// Every service of a cell from the units in `unit_dir` (e.g. <source>/deploy/systemd): each plain
+// *.service once, then for each station in order each template *@.service; files in name order.
+// Throws like ExecStartFor, and cell::Error(kNotFound) when unit_dir has no *.service.
+std::vector<UnitCommand> CellCommands(const std::filesystem::path& unit_dir,
+                                      const std::vector<std::string>& stations,
+                                      const std::filesystem::path& bin_dir);
+
 }  // namespace cell::config
