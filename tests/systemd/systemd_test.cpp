@@ -219,6 +219,7 @@ TEST(Install, DestdirPrefixIdempotentAndVerified) {
     fs::create_directories(build / "bin");
     fs::copy_file(BinaryFor(u.service), build / "bin" / u.service);
   }
+  fs::copy_file(CELL_DAEMON_PROBE, build / "bin" / "scheduler_bench");  // not a cell executable
   const std::string cmd = Quote((SourceDir() / "deploy" / "install").string()) +
                           " --prefix /opt/cell --destdir " + Quote(dest.string()) + " --build-dir " +
                           Quote(build.string());
@@ -231,6 +232,7 @@ TEST(Install, DestdirPrefixIdempotentAndVerified) {
     EXPECT_NE(unit.find("ExecStart=/opt/cell/bin/" + u.service), std::string::npos);
     EXPECT_EQ(unit.find("/usr/local"), std::string::npos);
   }
+  EXPECT_FALSE(fs::exists(dest / "opt/cell/bin/scheduler_bench"));
   EXPECT_TRUE(fs::exists(dest / "etc/systemd/system/cell.target"));
   for (const char* id : {"KT01", "KT02", "KT03", "KT04", "OK01"}) {
     EXPECT_EQ(ReadFile(dest / "etc/cell/stations" / (std::string(id) + ".toml")),
