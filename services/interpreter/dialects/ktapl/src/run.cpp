@@ -1834,6 +1834,13 @@ void KtRun::ExecTypeI(BlockCtx& bc, const ParsedBlock* pb) {
   if (has70 && has71) Fail(gs.front().second, "G70 AND G71 CANNOT BE IN THE SAME BLOCK");
   if (has70) SetUnits(false);
   if (has71) SetUnits(true);
+  if (!units_emitted_) {
+    // The run's unit mode at start: the basic state, or the G70/G71 of the first Type I block.
+    Canon u = Base(Op::kUnits);
+    u.metric = metric_;
+    units_emitted_ = true;
+    out_.push_back(u);
+  }
 
   bool running_cycle = std::any_of(levels_.begin(), levels_.end(), [](const Level& l) { return l.is_cycle; });
   // Does this block run in G800-series passing mode?
@@ -2152,7 +2159,7 @@ void KtRun::ExecTypeI(BlockCtx& bc, const ParsedBlock* pb) {
         spindle_ = 19;
         c = Base(Op::kSpindle);
         c.text = "orient";
-        c.value = 0;
+        c.value = speed_;
         c.value2 = s ? s->v : 0;
         Emit(c);
         break;

@@ -117,7 +117,7 @@ std::vector<Statement> FindStatements(std::string_view line, std::string* error)
       size_t k = 0;
       while (k < inner.size() && inner[k] == ' ') ++k;
       size_t m = k;
-      while (m < inner.size() && std::isalpha(static_cast<unsigned char>(inner[m]))) ++m;
+      while (m < inner.size() && m - k < 3 && std::isalnum(static_cast<unsigned char>(inner[m]))) ++m;
       st.mnemonic = Upper(inner.substr(k, m - k));
       size_t rest = m;
       while (rest < inner.size() && inner[rest] == ' ') ++rest;

@@ -1,0 +1,176 @@
+// Runs every case of tests/conformance/ktapl through the real cell-interp binary.
+//
+// A case is NAME.ktapl plus NAME.expected (the canonical JSON lines, derived by hand from the manual) and,
+// for the negative corpus, NAME.diag (the exact diagnostic line; exit status 1). Optional inputs:
+// NAME.params (--params), NAME.tools (--tools), NAME.lib/ (--lib), NAME.probe (--probe-model).
+// JSON objects must have the same keys; numbers compare to 1e-3, everything else exactly.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string Env(const char* name) {
+  const char* v = std::getenv(name);
+  return v ? v : "";
+}
+
+fs::path CorpusDir() {
+  return fs::path(Env("CELL_SOURCE_DIR")) / "tests" / "conformance" / "ktapl";
+}
+
+std::string Slurp(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+std::vector<std::string> Lines(const std::string& text) {
+  std::vector<std::string> out;
+  std::istringstream in(text);
+  std::string l;
+  while (std::getline(in, l)) {
+    if (!l.empty() && l.back() == '\r') l.pop_back();
+    if (!l.empty()) out.push_back(l);
+  }
+  return out;
+}
+
+bool Same(const nlohmann::json& a, const nlohmann::json& b, std::string& why, const std::string& path) {
+  if (a.is_number() && b.is_number()) {
+    if (std::fabs(a.get<double>() - b.get<double>()) <= 1e-3) return true;
+    why = path + ": " + a.dump() + " != " + b.dump();
+    return false;
+  }
+  if (a.type() != b.type()) {
+    why = path + ": " + a.dump() + " != " + b.dump();
+    return false;
+  }
+  if (a.is_object()) {
+    for (auto it = a.begin(); it != a.end(); ++it) {
+      if (!b.contains(it.key())) {
+        why = path + "." + it.key() + " missing in actual";
+        return false;
+      }
+      if (!Same(it.value(), b[it.key()], why, path + "." + it.key())) return false;
+    }
+    for (auto it = b.begin(); it != b.end(); ++it) {
+      if (!a.contains(it.key())) {
+        why = path + "." + it.key() + " not expected";
+        return false;
+      }
+    }
+    return true;
+  }
+  if (a.is_array()) {
+    if (a.size() != b.size()) {
+      why = path + ": array size";
+      return false;
+    }
+    for (size_t i = 0; i < a.size(); ++i) {
+      if (!Same(a[i], b[i], why, path + "[" + std::to_string(i) + "]")) return false;
+    }
+    return true;
+  }
+  if (a != b) {
+    why = path + ": " + a.dump() + " != " + b.dump();
+    return false;
+  }
+  return true;
+}
+
+std::vector<std::string> Cases() {
+  std::vector<std::string> out;
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(CorpusDir(), ec)) {
+    if (e.path().extension() == ".ktapl") out.push_back(e.path().stem().string());
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+class KtaplCorpus : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(KtaplCorpus, MatchesHandDerivedExpectation) {
+  const std::string name = GetParam();
+  const fs::path dir = CorpusDir();
+  ASSERT_TRUE(fs::exists(dir / (name + ".expected"))) << name << ": no .expected file";
+  std::string cmd = "cd '" + dir.string() + "' && '" + Env("CELL_BIN_DIR") + "/cell-interp' --dialect ktapl";
+  if (fs::exists(dir / (name + ".params"))) cmd += " --params " + name + ".params";
+  if (fs::exists(dir / (name + ".tools"))) cmd += " --tools " + name + ".tools";
+  if (fs::exists(dir / (name + ".lib"))) cmd += " --lib " + name + ".lib";
+  if (fs::exists(dir / (name + ".probe"))) cmd += " --probe-model " + name + ".probe";
+  fs::path err =
+      fs::temp_directory_path() / ("ktapl_conf_" + name + "_" + std::to_string(::getpid()) + ".err");
+  cmd += " " + name + ".ktapl 2>'" + err.string() + "'";
+  FILE* p = ::popen(cmd.c_str(), "r");
+  ASSERT_NE(p, nullptr);
+  std::string out;
+  char buf[4096];
+  size_t n;
+  while ((n = std::fread(buf, 1, sizeof buf, p)) > 0) out.append(buf, n);
+  int status = ::pclose(p);
+  int code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  std::string stderr_text = Slurp(err);
+  fs::remove(err);
+
+  bool negative = fs::exists(dir / (name + ".diag"));
+  EXPECT_EQ(code, negative ? 1 : 0) << name << " stderr: " << stderr_text;
+  if (negative) {
+    auto want = Lines(Slurp(dir / (name + ".diag")));
+    auto got = Lines(stderr_text);
+    EXPECT_EQ(got, want) << name;
+  } else {
+    EXPECT_EQ(stderr_text, "") << name;
+  }
+  auto want = Lines(Slurp(dir / (name + ".expected")));
+  auto got = Lines(out);
+  for (size_t i = 0; i < std::max(want.size(), got.size()); ++i) {
+    if (i >= want.size()) {
+      ADD_FAILURE() << name << ": unexpected extra op " << got[i];
+      break;
+    }
+    if (i >= got.size()) {
+      ADD_FAILURE() << name << ": missing op " << want[i];
+      break;
+    }
+    nlohmann::json w = nlohmann::json::parse(want[i], nullptr, false);
+    nlohmann::json g = nlohmann::json::parse(got[i], nullptr, false);
+    ASSERT_FALSE(w.is_discarded()) << name << ".expected line " << i + 1 << " is not JSON";
+    ASSERT_FALSE(g.is_discarded()) << name << ": output line " << i + 1 << " is not JSON: " << got[i];
+    std::string why;
+    if (!Same(w, g, why, "")) {
+      ADD_FAILURE() << name << " op " << i + 1 << ": " << why << "\n  expected " << want[i] << "\n  actual   "
+                    << got[i];
+      break;
+    }
+  }
+}
+
+TEST(KtaplCorpusSize, HasCases) {
+  EXPECT_GE(Cases().size(), 10u);
+}
+
+INSTANTIATE_TEST_SUITE_P(Ktapl, KtaplCorpus, ::testing::ValuesIn(Cases()),
+                         [](const ::testing::TestParamInfo<std::string>& info) {
+                           std::string s = info.param;
+                           for (char& c : s) {
+                             if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
+                           }
+                           return s;
+                         });
+
+}  // namespace
