@@ -1,0 +1,187 @@
+// The program store's storage side (Issue 5): programs and other cell files, per namespace (HOST and one
+// per configured station), with revisions, SHA-256 content hashes, metadata, protection, idempotent
+// operations, atomic chunked puts and change events. No DDS here: the `cell-program-store` service binds
+// this library to the bus.
+//
+// Durability: one SQLite database (via cell_store, WAL + synchronous=FULL) under the data directory; every
+// operation is one transaction, so when a call returns its effect is on disk, and a crash at any moment
+// leaves either all of it or none of it. All calls are thread-safe (one internal mutex).
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "cell/program_store/metadata.h"
+#include "cell/store/sqlite.h"
+
+namespace cell::program_store {
+
+inline constexpr std::string_view kHostNamespace = "HOST";
+
+struct StoreOptions {
+  std::filesystem::path data_dir;  // the database is data_dir / database_file
+  std::string database_file = "program-store.db";
+  std::vector<std::string> namespaces;  // configured station ids; HOST is always there
+  std::uint64_t max_file_size = 256ull << 20;
+  std::uint64_t max_chunk_size = 16ull << 20;
+  // Idempotency keys older than this are forgotten (at open).
+  std::chrono::seconds idempotency_retention = std::chrono::hours(24 * 7);
+};
+
+struct ChangeEvent {
+  enum class Kind { kCreated, kUpdated, kDeleted };
+  std::uint64_t seq = 0;  // store-wide, increasing, durable
+  Kind kind = Kind::kCreated;
+  std::string node;
+  std::string name;
+  std::uint32_t revision = 0;  // the new head; for kDeleted the last revision the file had
+};
+std::string_view ChangeKindName(ChangeEvent::Kind kind);  // "created", "updated", "deleted"
+
+// One file as `program ls` / `program show` report it, at one revision.
+struct FileInfo {
+  std::string node;
+  std::string name;
+  std::uint32_t revision = 0;       // the revision described here
+  std::uint32_t head_revision = 0;  // the file's latest revision
+  std::string sha256;               // of this revision's content
+  bool is_protected = false;
+  std::string created_at;  // this revision's time, ISO-8601 UTC
+  Metadata metadata;       // type, dialect, NAM/UTL/UCY, program names, size, lines, warnings
+};
+
+struct RevisionInfo {
+  std::uint32_t revision = 0;
+  std::string sha256;
+  std::uint64_t size = 0;
+  std::string created_at;
+};
+
+struct PutRequest {
+  std::string node = std::string(kHostNamespace);
+  std::string name;
+  std::string content;             // for BeginPut: empty (the content comes in chunks)
+  std::optional<Dialect> dialect;  // declared; detected when absent
+  std::optional<FileType> type;    // declared; from name/content when absent
+  bool force = false;              // allow a new revision of an existing name
+  std::string idempotency_key;     // optional: a retry with the same key returns the first result
+};
+
+struct PutResult {
+  FileInfo file;
+  bool created = false;   // a new name (otherwise a new revision of an existing one)
+  bool replayed = false;  // this is the stored result of an earlier call with the same idempotency key
+  std::vector<ChangeEvent> events;
+  const std::vector<std::string>& warnings() const { return file.metadata.warnings; }
+};
+
+struct GetResult {
+  FileInfo file;
+  std::string content;
+};
+
+struct ShowResult {
+  FileInfo file;
+  std::vector<RevisionInfo> revisions;  // oldest first
+};
+
+struct CopyRequest {
+  std::string from_node = std::string(kHostNamespace);
+  std::string from_name;
+  std::uint32_t from_revision = 0;  // 0: latest
+  std::string to_node = std::string(kHostNamespace);
+  std::string to_name;  // empty: same name
+  bool force = false;
+  std::string idempotency_key;
+};
+
+struct RenameRequest {
+  std::string node = std::string(kHostNamespace);
+  std::string name;
+  std::string to_node;  // empty: same namespace
+  std::string to_name;  // empty: same name (a move between namespaces)
+  std::string idempotency_key;
+};
+
+struct OpResult {
+  FileInfo file;  // the file after the operation (for delete: as it was)
+  bool replayed = false;
+  std::vector<ChangeEvent> events;
+};
+
+class ProgramStore {
+ public:
+  // Opens (creating) the database, migrates its schema, drops staged chunk streams left by a previous
+  // process (they can never complete) and expired idempotency keys.
+  explicit ProgramStore(StoreOptions options);
+  ~ProgramStore();
+  ProgramStore(const ProgramStore&) = delete;
+  ProgramStore& operator=(const ProgramStore&) = delete;
+
+  // Stores a new file or (with force) a new revision. Errors (cell::Error): kNotFound unknown namespace;
+  // kInvalidArgument bad name / non-text / undetectable dialect / too large; kAlreadyExists exists without
+  // force; kPermissionDenied protected; kFailedPrecondition idempotency key reused for another request.
+  PutResult Put(const PutRequest& request);
+
+  // revision 0: latest. kNotFound when the file or revision does not exist.
+  GetResult Get(std::string_view node, std::string_view name, std::uint32_t revision = 0);
+  ShowResult Show(std::string_view node, std::string_view name, std::uint32_t revision = 0);
+  // Files whose name matches `pattern` (`*` any run, `?` one character; "" matches all), by name.
+  std::vector<FileInfo> List(std::string_view node, std::string_view pattern = "*");
+
+  PutResult Copy(const CopyRequest& request);
+  OpResult Rename(const RenameRequest& request);
+  OpResult Delete(std::string_view node, std::string_view name, std::string_view idempotency_key = {});
+  OpResult SetProtected(std::string_view node, std::string_view name, bool is_protected,
+                        std::string_view idempotency_key = {});
+
+  // Chunked put for large files. BeginPut checks what it can early (namespace, name, protection, force)
+  // and stages nothing visible; PutChunk appends chunk `index` (0, 1, 2, ... in order; re-sending the last
+  // accepted index with the same bytes is a no-op, for retries); CommitPut stores the whole content
+  // atomically exactly like Put and forgets the stream (a retried CommitPut returns the same result);
+  // AbortPut forgets it. A failed CommitPut also forgets the stream. Streams do not survive a restart.
+  void BeginPut(const std::string& stream_id, const PutRequest& header);
+  void PutChunk(const std::string& stream_id, std::uint32_t index, std::string_view data);
+  PutResult CommitPut(const std::string& stream_id);
+  void AbortPut(const std::string& stream_id);
+  // Drops streams with no activity for `max_idle`; returns how many.
+  std::size_t ExpireStreams(std::chrono::seconds max_idle);
+  std::size_t OpenStreams();
+
+  // Durable change log, for (re)publishing after a restart.
+  std::vector<ChangeEvent> EventsSince(std::uint64_t after_seq, std::size_t limit = 1000);
+  // Called after each committed change (outside the store's lock is NOT guaranteed: keep it short and do not
+  // call back into the store).
+  void SetChangeListener(std::function<void(const ChangeEvent&)> listener);
+
+  bool HasNamespace(std::string_view node) const;
+  const std::vector<std::string>& namespaces() const { return namespaces_; }
+  const std::filesystem::path& database_path() const { return db_path_; }
+
+  // The schema history (v1 ...), for tests and docs.
+  static std::vector<store::Migration> Migrations();
+
+ private:
+  struct Impl;
+  void Publish(const std::vector<ChangeEvent>& events);
+
+  StoreOptions options_;
+  std::vector<std::string> namespaces_;
+  std::filesystem::path db_path_;
+  std::mutex mutex_;
+  std::unique_ptr<store::Database> db_;
+  std::function<void(const ChangeEvent&)> listener_;
+};
+
+// True when `name` matches `pattern` with `*` (any run, also empty) and `?` (exactly one character).
+bool WildcardMatch(std::string_view pattern, std::string_view name);
+
+}  // namespace cell::program_store
