@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 #include <stdlib.h>
+#include <sys/stat.h>
 
 #include <cstdio>
 #include <regex>
@@ -86,6 +87,28 @@ TEST_F(LogTest, BadLevelWarnsAndUsesInfo) {
             std::string::npos)
       << text;
   EXPECT_EQ(text.find("hidden"), std::string::npos);
+}
+
+// systemd hands a service its journal stream and names it in JOURNAL_STREAM=<dev>:<inode>; only a
+// matching stream gets the journal format (a child that inherited the variable keeps timestamps).
+TEST_F(LogTest, JournalFormatWhenStreamMatchesJournalStream) {
+  struct stat st {};
+  ASSERT_EQ(fstat(fileno(out_), &st), 0);
+  setenv("JOURNAL_STREAM", (std::to_string(st.st_dev) + ":" + std::to_string(st.st_ino)).c_str(), 1);
+  cell::log::Options o;
+  o.out = out_;
+  cell::log::Init("cell-scheduler", "", o);
+  spdlog::error("disk full");
+  EXPECT_EQ(ReadAll(out_), "<3>cell-scheduler error: disk full\n");
+
+  std::FILE* other = std::tmpfile();
+  o.out = other;
+  cell::log::Init("cell-scheduler", "", o);
+  spdlog::error("disk full");
+  EXPECT_TRUE(std::regex_match(ReadAll(other), std::regex(R"(\d{4}-.*Z cell-scheduler error: disk full\n)")));
+  spdlog::set_default_logger(nullptr);
+  std::fclose(other);
+  unsetenv("JOURNAL_STREAM");
 }
 
 TEST(ParseLevel, AcceptsNamesRejectsOthers) {
