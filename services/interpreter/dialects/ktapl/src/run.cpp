@@ -1016,7 +1016,7 @@ void KtRun::DoCall(const Def& d, std::map<int, double> locals, bool is_cycle) {
   nl.begin_line = d.begin_line;
   nl.pos = d.begin;
   nl.line = d.begin_line;
-  nl.report_own = d.report_own && cur_own_;
+  nl.report_own = d.report_own && cur_own_ && !is_cycle;  // cycles report the calling block's line
   nl.call_line = cur_line_;
   nl.is_cycle = is_cycle;
   nl.name = d.name;
