@@ -26,6 +26,7 @@ void Allocate(const std::vector<int>& listed, const std::vector<int>& tools,
   out.winner = -1;
   out.tied = 0;
   out.candidates.resize(listed.size());
+  out.missing.clear();
   std::int64_t best = 0;
   for (std::size_t i = 0; i < listed.size(); ++i) {
     const int s = listed[i];
@@ -35,10 +36,11 @@ void Allocate(const std::vector<int>& listed, const std::vector<int>& tools,
     c.backlog_s = st.backlog_s;
     c.online = st.online;
     c.fault = st.fault;
-    c.missing.clear();
+    c.missing_begin = static_cast<std::uint32_t>(out.missing.size());
     for (int t : tools) {
-      if (!st.Holds(t)) c.missing.push_back(t);
+      if (!st.Holds(t)) out.missing.push_back(t);
     }
+    c.missing_count = static_cast<std::uint32_t>(out.missing.size()) - c.missing_begin;
     if (!c.eligible()) continue;
     if (out.winner < 0 || st.backlog_s < best) {
       out.winner = s;

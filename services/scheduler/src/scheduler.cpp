@@ -276,23 +276,33 @@ struct Scheduler::Impl {
 
   // ---- decisions ----
   std::string Describe(const AllocationRec& a) const {
-    std::vector<std::string> parts;
+    std::string out = "no eligible station: ";
+    out.reserve(32 + a.candidates.size() * 24);
+    bool first = true;
+    const auto part = [&](const std::string& id, std::string_view what) {
+      if (!first) out += "; ";
+      first = false;
+      out += id;
+      out += what;
+    };
     for (const auto& c : a.candidates) {
-      const std::string& id = stations[static_cast<std::size_t>(c.station)].id;
+      const StationRec& st = stations[static_cast<std::size_t>(c.station)];
       if (!c.online) {
-        parts.push_back(id + " offline");
+        part(st.id, " offline");
       } else if (c.fault) {
-        const auto& st = stations[static_cast<std::size_t>(c.station)];
-        parts.push_back(id + " in fault" + (st.alarm_code.empty() ? "" : " (alarm " + st.alarm_code + ")"));
+        part(st.id, " in fault");
+        if (!st.alarm_code.empty()) out += " (alarm " + st.alarm_code + ")";
       }
-      if (!c.missing.empty()) {
-        std::string tools;
-        for (int t : c.missing) tools += (tools.empty() ? "" : ",") + tool_index.Name(t);
-        parts.push_back(id + " missing tools " + tools);
+      if (c.missing_count != 0) {
+        part(st.id, " missing tools ");
+        bool first_tool = true;
+        a.ForMissing(c, [&](int t) {
+          if (!first_tool) out += ',';
+          first_tool = false;
+          out += tool_index.Name(t);
+        });
       }
     }
-    std::string out = "no eligible station: ";
-    for (std::size_t i = 0; i < parts.size(); ++i) out += (i ? "; " : "") + parts[i];
     return out;
   }
 
@@ -314,8 +324,11 @@ struct Scheduler::Impl {
   void SetWaiting(JobRec& j, std::string reason, std::string_view trigger, const AllocationRec* alloc) {
     if (j.state == JobState::kWaiting && j.reason == reason) return;  // nothing new to log
     DecisionRec& d = AddDecision(j, std::string(trigger));
-    if (alloc) d.alloc = *alloc;
-    d.why = reason;
+    if (alloc) {
+      d.alloc = *alloc;  // the reason is rendered again from the candidates when the log is read
+    } else {
+      d.why = reason;
+    }
     j.state = JobState::kWaiting;
     j.reason = std::move(reason);
     j.station = -1;
@@ -331,6 +344,8 @@ struct Scheduler::Impl {
       return;
     }
     AllocationRec alloc;
+    alloc.candidates.reserve(op.stations.size());
+    alloc.missing.reserve(op.stations.size() * 2);
     Allocate(op.stations, op.tool_ids, states, alloc);
     if (alloc.winner < 0) {
       SetWaiting(j, Describe(alloc), trigger, &alloc);
@@ -768,7 +783,10 @@ void Scheduler::Impl::Load() {
         cr.backlog_s = c.at("backlog_s");
         cr.online = c.at("online");
         cr.fault = c.at("fault");
-        for (const auto& t : c.at("missing")) cr.missing.push_back(tool_index.Intern(t.get<std::string>()));
+        cr.missing_begin = static_cast<std::uint32_t>(r.alloc.missing.size());
+        for (const auto& t : c.at("missing"))
+          r.alloc.missing.push_back(tool_index.Intern(t.get<std::string>()));
+        cr.missing_count = static_cast<std::uint32_t>(r.alloc.missing.size()) - cr.missing_begin;
         r.alloc.candidates.push_back(std::move(cr));
       }
       it->second.decisions.push_back(std::move(r));
@@ -901,7 +919,7 @@ void Scheduler::Impl::Flush() {
       json considered = json::array();
       for (const auto& c : r.alloc.candidates) {
         std::vector<std::string> missing;
-        for (int t : c.missing) missing.push_back(tool_index.Name(t));
+        r.alloc.ForMissing(c, [&](int t) { missing.push_back(tool_index.Name(t)); });
         considered.push_back({{"station", stations[static_cast<std::size_t>(c.station)].id},
                               {"backlog_s", c.backlog_s},
                               {"online", c.online},
@@ -912,7 +930,7 @@ void Scheduler::Impl::Flush() {
           {"time_ms", r.time_ms},
           {"op", r.op},
           {"trigger", r.trigger},
-          {"why", r.why},
+          {"why", r.why.empty() && r.alloc.winner < 0 ? Describe(r.alloc) : r.why},
           {"added", r.added},
           {"winner", r.alloc.winner < 0 ? "" : stations[static_cast<std::size_t>(r.alloc.winner)].id},
           {"tied", r.alloc.tied},
@@ -948,7 +966,7 @@ JobView Scheduler::Impl::View(const JobRec& j, bool with_decisions) const {
       d.time_ms = r.time_ms;
       d.op_index = r.op;
       d.trigger = r.trigger;
-      d.why = r.why;
+      d.why = r.why.empty() && r.alloc.winner < 0 ? Describe(r.alloc) : r.why;
       d.added_backlog_s = r.added;
       d.winner = r.alloc.winner < 0 ? std::string() : stations[static_cast<std::size_t>(r.alloc.winner)].id;
       for (const auto& c : r.alloc.candidates) {
@@ -957,7 +975,7 @@ JobView Scheduler::Impl::View(const JobRec& j, bool with_decisions) const {
         cv.online = c.online;
         cv.fault = c.fault;
         cv.backlog_s = c.backlog_s;
-        for (int t : c.missing) cv.missing_tools.push_back(tool_index.Name(t));
+        r.alloc.ForMissing(c, [&](int t) { cv.missing_tools.push_back(tool_index.Name(t)); });
         cv.eligible = c.eligible();
         d.considered.push_back(std::move(cv));
       }
@@ -1411,10 +1429,10 @@ Effects Scheduler::ProgramChanged(std::string_view name) {
   return m.TakeEffects();
 }
 
-std::optional<JobView> Scheduler::Job(std::int64_t id) const {
+std::optional<JobView> Scheduler::Job(std::int64_t id, bool with_decisions) const {
   auto it = impl_->jobs.find(id);
   if (it == impl_->jobs.end()) return std::nullopt;
-  return impl_->View(it->second, true);
+  return impl_->View(it->second, with_decisions);
 }
 
 std::vector<JobView> Scheduler::Jobs(bool with_decisions) const {

@@ -45,14 +45,21 @@ struct CandidateRec {
   std::int64_t backlog_s = 0;
   bool online = false;
   bool fault = false;
-  std::vector<int> missing;  // tool ids not held
-  bool eligible() const { return online && !fault && missing.empty(); }
+  std::uint32_t missing_begin = 0;  // this candidate's tools not held: AllocationRec::missing[begin, begin+count)
+  std::uint32_t missing_count = 0;
+  bool eligible() const { return online && !fault && missing_count == 0; }
 };
 
 struct AllocationRec {
   int winner = -1;                       // station index, -1: nobody is eligible
   int tied = 0;                          // how many eligible stations shared the winner's backlog
   std::vector<CandidateRec> candidates;  // in listed order
+  std::vector<int> missing;              // tool ids not held, all candidates one after another
+
+  template <typename F>
+  void ForMissing(const CandidateRec& c, F&& f) const {
+    for (std::uint32_t i = 0; i < c.missing_count; ++i) f(missing[c.missing_begin + i]);
+  }
 };
 
 // Decides one operation. `listed`: station indexes in the operation's order; `tools`: interned UTL ids.

@@ -184,7 +184,7 @@ class Scheduler {
   Effects ProgramChanged(std::string_view name);
 
   // ---- queries ----
-  std::optional<JobView> Job(std::int64_t id) const;
+  std::optional<JobView> Job(std::int64_t id, bool with_decisions = true) const;
   std::vector<JobView> Jobs(bool with_decisions = false) const;
   std::vector<StationView> Stations() const;
   std::optional<StationView> Station(std::string_view id) const;
