@@ -1,0 +1,54 @@
+// The program store's public client: what the scheduler, the stations and cellctl call.
+// Every call is a bus request/reply; errors come back as cell::Error with the store's reason.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "cell/bus/bus.h"
+#include "cell/idl/program_store.h"
+
+namespace cell::program_store {
+
+inline constexpr size_t kChunkBytes = 61440;  // sequence<octet, 61440> in ProgramRequest/Reply
+
+class Client {
+ public:
+  explicit Client(bus::Participant& p, bus::Millis timeout = bus::Millis(30000));
+
+  struct PutOptions {
+    std::string node = "HOST";
+    bool force = false;
+    std::string dialect;    // empty: detected
+    std::string file_type;  // empty: from name and content
+    std::string idempotency_key;
+  };
+  // Stores a new file or (force) a new revision; returns the stored file's JSON (with warnings).
+  nlohmann::json Put(const std::string& name, const std::string& content, const PutOptions& o);
+  // The content, or nullopt when there is no such file in that namespace.
+  std::optional<std::string> Get(const std::string& node, const std::string& name, uint32_t revision = 0);
+  // Looks in `node` first, then HOST (DESIGN §6 schedule lookup, KT-APL library search).
+  std::optional<std::string> GetWithFallback(const std::string& node, const std::string& name);
+  nlohmann::json Show(const std::string& node, const std::string& name);
+  nlohmann::json List(const std::string& node, const std::string& pattern);
+  nlohmann::json Copy(const std::string& from_node, const std::string& from, const std::string& to_node,
+                      const std::string& to, bool force, const std::string& key = "");
+  nlohmann::json Rename(const std::string& from_node, const std::string& from, const std::string& to_node,
+                        const std::string& to, const std::string& key = "");
+  nlohmann::json Delete(const std::string& node, const std::string& name, const std::string& key = "");
+  nlohmann::json Protect(const std::string& node, const std::string& name, bool on);
+  bool WaitForServer(bus::Millis timeout) const { return client_.WaitForServer(timeout); }
+
+ private:
+  cell::ProgramReply Call(cell::ProgramRequest req);
+  bus::Client<cell::ProgramRequest, cell::ProgramReply> client_;
+  bus::Millis timeout_;
+};
+
+// Checks a name and namespace against the wire bounds before they are silently truncated.
+void CheckWireName(const std::string& node, const std::string& name);
+
+}  // namespace cell::program_store

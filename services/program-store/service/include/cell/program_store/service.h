@@ -1,0 +1,39 @@
+// Binds the program store library to the bus: the request/reply service and change events.
+#pragma once
+
+#include <map>
+#include <memory>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "cell/bus/bus.h"
+#include "cell/idl/program_store.h"
+#include "cell/program_store/program_store.h"
+
+namespace cell::program_store {
+
+// The JSON shape of one file (DESIGN §6 `program ls`: name, node, type, dialect, revision, size,
+// protected; plus the metadata `program show` prints).
+nlohmann::json FileJson(const FileInfo& f);
+
+class Service {
+ public:
+  Service(bus::Participant& p, ProgramStore& store);
+  // Called from the main loop: forgets chunk streams abandoned by a dead client.
+  void Housekeeping();
+
+ private:
+  cell::ProgramReply Handle(const cell::ProgramRequest& r);
+  ProgramStore& store_;
+  bus::Writer<cell::ProgramChange> changes_;
+  std::mutex mu_;  // Handle runs on the dispatch thread, Housekeeping on main
+  struct CachedGet {
+    std::string node, name;
+    uint32_t revision = 0;
+    std::string content;
+  } cache_;
+  bus::Server<cell::ProgramRequest, cell::ProgramReply> server_;
+};
+
+}  // namespace cell::program_store
