@@ -172,22 +172,26 @@ struct ContentFacts {
 
 ContentFacts Facts(const std::vector<std::string_view>& lines) {
   ContentFacts f;
+  std::string upper;
   for (std::string_view raw : lines) {
-    std::string upper = Upper(Trim(raw));
+    std::string_view trimmed = Trim(raw);
+    upper.assign(trimmed);
+    for (char& c : upper) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
     if (upper.empty() || upper == "%" || upper[0] == '!') continue;
     if (HasMCode(upper, 30) || HasMCode(upper, 2)) f.has_m30_or_m02 = true;
     if (HasMCode(upper, 17)) f.has_m17 = true;
     std::string_view body = SkipSequence(upper);
     if (body.substr(0, 3) == "RTS" && (body.size() == 3 || body[3] == ' ')) f.has_rts = true;
     if (body.substr(0, 7) == "PSELECT") f.has_pselect = true;
-    std::vector<std::string> m = Mnemonics(upper);
+    std::vector<std::string> m;
+    if (upper.find('(') != std::string::npos || upper[0] == '%') m = Mnemonics(upper);
     if (std::find(m.begin(), m.end(), "DFS") != m.end() || std::find(m.begin(), m.end(), "DFC") != m.end()) {
       f.defines_cycles = true;
     }
     bool tld = std::find(m.begin(), m.end(), "TLD") != m.end();
     if (tld) {
       ++f.tld_blocks;
-    } else if (!body.empty() && !(body[0] == '(' && Mnemonics(body).empty())) {
+    } else if (!body.empty() && !(body[0] == '(' && m.empty())) {
       f.only_tld = false;  // anything but TLD statements and comments
     }
   }
@@ -459,6 +463,13 @@ std::string Detection::Explain() const {
 }
 
 Detection DetectDialect(std::string_view content) {
+  // Dialect evidence is in the heading and the first blocks; reading the first 1 MiB keeps detection of a
+  // 20 MB program cheap. Cut at a line boundary.
+  constexpr std::size_t kWindow = 1u << 20;
+  if (content.size() > kWindow) {
+    std::size_t cut = content.rfind('\n', kWindow);
+    content = content.substr(0, cut == std::string_view::npos ? kWindow : cut + 1);
+  }
   Detection det;
   std::map<std::pair<Dialect, std::string>, int> seen;  // keep the first line of each kind of evidence
   auto add = [&](Dialect d, int line, std::string what, bool strong) {
@@ -614,6 +625,7 @@ struct KtStatement {
 
 // The first NAM/UTL/UCY statement of a raw block, if any.
 std::optional<KtStatement> HeadingStatement(std::string_view raw) {
+  if (raw.find('(') == std::string_view::npos && (raw.empty() || raw[0] != '%')) return std::nullopt;
   std::string upper = Upper(raw);
   for (std::string_view m : {"NAM", "UTL", "UCY"}) {
     for (std::size_t pos = 0; (pos = upper.find(m, pos)) != std::string::npos; ++pos) {
@@ -647,9 +659,8 @@ void KtaplHeading(const std::vector<std::string_view>& lines, FileType type, Met
       if (first) has_percent_first = true;
     }
     first = false;
-    bool numbered = false;
-    std::string upper = Upper(raw);
-    SkipSequence(upper, &numbered);
+    bool numbered = raw.size() >= 2 && (raw[0] == 'N' || raw[0] == 'n') && IsDigit(raw[1]);
+    if (!numbered && raw[0] == '/') SkipSequence(Upper(raw), &numbered);
     std::optional<KtStatement> st = kind == Kind::kPercent ? std::nullopt : HeadingStatement(raw);
     if (st && st->mnemonic == "NAM") {
       kind = Kind::kNam;

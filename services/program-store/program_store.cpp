@@ -2,7 +2,12 @@
 
 #include <fmt/format.h>
 
+#include <fcntl.h>
+#include <unistd.h>
+
 #include <algorithm>
+#include <cerrno>
+#include <cstring>
 #include <nlohmann/json.hpp>
 
 #include "cell/error/error.h"
@@ -10,6 +15,7 @@
 
 namespace cell::program_store {
 
+namespace fs = std::filesystem;
 using nlohmann::json;
 using store::Database;
 using store::Statement;
@@ -63,17 +69,6 @@ CREATE TABLE idempotency(
   fingerprint TEXT NOT NULL,
   result TEXT NOT NULL,
   created_unix INTEGER NOT NULL);
-CREATE TABLE streams(
-  id TEXT PRIMARY KEY,
-  header TEXT NOT NULL,
-  next_index INTEGER NOT NULL,
-  bytes INTEGER NOT NULL,
-  last_activity_unix INTEGER NOT NULL);
-CREATE TABLE stream_chunks(
-  stream_id TEXT NOT NULL REFERENCES streams(id) ON DELETE CASCADE,
-  idx INTEGER NOT NULL,
-  data BLOB NOT NULL,
-  PRIMARY KEY(stream_id, idx));
 )sql";
 
 constexpr const char* kSchemaV2 = R"sql(
@@ -175,17 +170,6 @@ json HeaderToJson(const PutRequest& r) {
   j["dialect"] = r.dialect ? json(DialectName(*r.dialect)) : json(nullptr);
   j["type"] = r.type ? json(FileTypeName(*r.type)) : json(nullptr);
   return j;
-}
-
-PutRequest HeaderFromJson(const json& j) {
-  PutRequest r;
-  r.node = j.at("node").get<std::string>();
-  r.name = j.at("name").get<std::string>();
-  r.force = j.at("force").get<bool>();
-  r.idempotency_key = j.at("idempotency_key").get<std::string>();
-  if (!j.at("dialect").is_null()) r.dialect = ParseDialect(j.at("dialect").get<std::string>());
-  if (!j.at("type").is_null()) r.type = ParseFileType(j.at("type").get<std::string>());
-  return r;
 }
 
 std::int64_t UnixNow() {
@@ -399,9 +383,8 @@ bool WildcardMatch(std::string_view pattern, std::string_view name) {
 }
 
 std::vector<store::Migration> ProgramStore::Migrations() {
-  return {
-      store::Migration::Sql(1, "files, revisions, blobs, events, idempotency keys, chunk streams", kSchemaV1),
-      store::Migration::Sql(2, "indexes for blob collection and key expiry", kSchemaV2)};
+  return {store::Migration::Sql(1, "files, revisions, blobs, events, idempotency keys", kSchemaV1),
+          store::Migration::Sql(2, "indexes for blob collection and key expiry", kSchemaV2)};
 }
 
 // ---------------------------------------------------------------------------------------------------------
@@ -421,9 +404,13 @@ ProgramStore::ProgramStore(StoreOptions options) : options_(std::move(options)) 
   db_path_ = options_.data_dir / options_.database_file;
   db_ = std::make_unique<Database>(Database::Open(db_path_));
   store::Migrate(*db_, Migrations());
-  Transaction tx(*db_);
   // Streams belong to the process that received them; they cannot complete after a restart.
-  db_->Exec("DELETE FROM stream_chunks; DELETE FROM streams;");
+  streams_dir_ = options_.data_dir / "program-store-streams";
+  std::error_code ec;
+  fs::remove_all(streams_dir_, ec);
+  fs::create_directories(streams_dir_, ec);
+  if (ec) Fail(Errc::kIo, fmt::format("cannot create {}: {}", streams_dir_.string(), ec.message()));
+  Transaction tx(*db_);
   Statement old = db_->Prepare("DELETE FROM idempotency WHERE created_unix < ?");
   old.BindInt64(1, UnixNow() - options_.idempotency_retention.count()).Run();
   db_->Exec("DELETE FROM events WHERE seq <= (SELECT max(seq) FROM events) - 100000");
@@ -492,13 +479,6 @@ struct ProgramStore::Impl {
     json stored = ToJson(result);
     for (const std::string& key : keys) Remember(db, key, fp, stored);
     return result;
-  }
-
-  static void DropStream(Database& db, const std::string& id) {
-    Statement chunks = db.Prepare("DELETE FROM stream_chunks WHERE stream_id = ?");
-    chunks.BindText(1, id).Run();
-    Statement stream = db.Prepare("DELETE FROM streams WHERE id = ?");
-    stream.BindText(1, id).Run();
   }
 };
 
@@ -723,6 +703,23 @@ OpResult ProgramStore::SetProtected(std::string_view node, std::string_view name
 // ---------------------------------------------------------------------------------------------------------
 // Chunked puts
 
+struct ProgramStore::Stream {
+  PutRequest header;
+  std::string header_json;
+  std::uint32_t next_index = 0;
+  std::uint64_t bytes = 0;
+  std::string last_chunk_sha256;
+  std::chrono::steady_clock::time_point last_activity;
+  fs::path file;
+  int fd = -1;
+
+  ~Stream() {
+    if (fd >= 0) ::close(fd);
+    std::error_code ec;
+    fs::remove(file, ec);
+  }
+};
+
 void ProgramStore::BeginPut(const std::string& stream_id, const PutRequest& header) {
   std::lock_guard lock(mutex_);
   Database& db = *db_;
@@ -731,6 +728,11 @@ void ProgramStore::BeginPut(const std::string& stream_id, const PutRequest& head
   }
   if (!header.content.empty())
     Fail(Errc::kInvalidArgument, "BeginPut takes the content in chunks, not inline");
+  std::string header_json = HeaderToJson(header).dump();
+  if (auto it = streams_.find(stream_id); it != streams_.end()) {
+    if (it->second->header_json == header_json) return;  // a retried BeginPut
+    Fail(Errc::kAlreadyExists, fmt::format("stream '{}' is already open for another put", stream_id));
+  }
   RequireNamespace(*this, header.node);
   if (header.name.empty()) Fail(Errc::kInvalidArgument, "empty file name");
   // Check the name now when its rules are already known (declared or implied by the extension).
@@ -739,72 +741,73 @@ void ProgramStore::BeginPut(const std::string& stream_id, const PutRequest& head
     ValidateName(header.name, type.value_or(FileType::kPartProgram),
                  header.dialect.value_or(Dialect::kKtapl));
   }
-  Transaction tx(db);
-  std::string header_json = HeaderToJson(header).dump();
-  Statement existing_stream = db.Prepare("SELECT header FROM streams WHERE id = ?");
-  existing_stream.BindText(1, stream_id);
-  if (existing_stream.Step()) {
-    if (existing_stream.ColumnText(0) == header_json) return;  // a retried BeginPut
-    Fail(Errc::kAlreadyExists, fmt::format("stream '{}' is already open for another put", stream_id));
+  {
+    Transaction tx(db, Transaction::Mode::kDeferred);
+    std::optional<Located> existing = Find(db, header.node, header.name, 0);
+    if (existing && existing->info.is_protected) {
+      Fail(Errc::kPermissionDenied,
+           fmt::format("{} is protected; unprotect it first", Quote(header.node, header.name)));
+    }
+    if (existing && !header.force) {
+      Fail(Errc::kAlreadyExists,
+           fmt::format("{} already exists (revision {}); use --force to store a new revision",
+                       Quote(header.node, header.name), existing->info.head_revision));
+    }
+    tx.Commit();
   }
-  std::optional<Located> existing = Find(db, header.node, header.name, 0);
-  if (existing && existing->info.is_protected) {
-    Fail(Errc::kPermissionDenied,
-         fmt::format("{} is protected; unprotect it first", Quote(header.node, header.name)));
+  if (streams_.size() >= options_.max_open_streams) {
+    Fail(Errc::kUnavailable, fmt::format("too many open chunk streams ({})", streams_.size()));
   }
-  if (existing && !header.force) {
-    Fail(Errc::kAlreadyExists,
-         fmt::format("{} already exists (revision {}); use --force to store a new revision",
-                     Quote(header.node, header.name), existing->info.head_revision));
+  auto stream = std::make_unique<Stream>();
+  stream->header = header;
+  stream->header_json = std::move(header_json);
+  stream->last_activity = std::chrono::steady_clock::now();
+  stream->file = streams_dir_ / (Sha256Hex(stream_id) + ".part");
+  stream->fd = ::open(stream->file.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0600);
+  if (stream->fd < 0) {
+    Fail(Errc::kIo, fmt::format("cannot create {}: {}", stream->file.string(), std::strerror(errno)));
   }
-  Statement st = db.Prepare(
-      "INSERT INTO streams(id, header, next_index, bytes, last_activity_unix) VALUES (?, ?, 0, 0, ?)");
-  st.BindText(1, stream_id).BindText(2, header_json).BindInt64(3, UnixNow()).Run();
-  tx.Commit();
+  streams_.emplace(stream_id, std::move(stream));
 }
 
 void ProgramStore::PutChunk(const std::string& stream_id, std::uint32_t index, std::string_view data) {
   std::lock_guard lock(mutex_);
-  Database& db = *db_;
-  Transaction tx(db);
-  Statement st = db.Prepare("SELECT next_index, bytes FROM streams WHERE id = ?");
-  st.BindText(1, stream_id);
-  if (!st.Step())
-    Fail(Errc::kNotFound, fmt::format("no open stream '{}' (never begun, finished or expired)", stream_id));
-  auto next = static_cast<std::uint32_t>(st.ColumnInt64(0));
-  auto bytes = static_cast<std::uint64_t>(st.ColumnInt64(1));
-  st.Reset();
+  auto it = streams_.find(stream_id);
+  if (it == streams_.end()) {
+    Fail(Errc::kNotFound,
+         fmt::format("no open stream '{}' (never begun, finished, abandoned or expired)", stream_id));
+  }
+  Stream& s = *it->second;
   auto abandon = [&](Errc code, const std::string& why) {
-    Impl::DropStream(db, stream_id);
-    tx.Commit();
+    streams_.erase(it);
     Fail(code, fmt::format("stream '{}' abandoned: {}", stream_id, why));
   };
-  if (next > 0 && index == next - 1) {
-    Statement prev = db.Prepare("SELECT data FROM stream_chunks WHERE stream_id = ? AND idx = ?");
-    prev.BindText(1, stream_id).BindInt64(2, index);
-    if (prev.Step() && prev.ColumnBlobView(0) == data) return;  // a retried chunk
+  if (s.next_index > 0 && index == s.next_index - 1) {
+    if (Sha256Hex(data) == s.last_chunk_sha256) return;  // a retried chunk
     abandon(Errc::kFailedPrecondition, fmt::format("chunk {} sent again with different bytes", index));
   }
-  if (index != next)
-    abandon(Errc::kFailedPrecondition, fmt::format("chunk {} out of order, expected {}", index, next));
+  if (index != s.next_index) {
+    abandon(Errc::kFailedPrecondition,
+            fmt::format("chunk {} out of order, expected {}", index, s.next_index));
+  }
   if (data.size() > options_.max_chunk_size) {
     abandon(Errc::kInvalidArgument,
             fmt::format("chunk {} is {} bytes, at most {}", index, data.size(), options_.max_chunk_size));
   }
-  if (bytes + data.size() > options_.max_file_size) {
+  if (s.bytes + data.size() > options_.max_file_size) {
     abandon(Errc::kInvalidArgument,
             fmt::format("file is too large: more than {} bytes", options_.max_file_size));
   }
-  Statement ins = db.Prepare("INSERT INTO stream_chunks(stream_id, idx, data) VALUES (?, ?, ?)");
-  ins.BindText(1, stream_id).BindInt64(2, index).BindBlob(3, data).Run();
-  Statement up =
-      db.Prepare("UPDATE streams SET next_index = ?, bytes = ?, last_activity_unix = ? WHERE id = ?");
-  up.BindInt64(1, index + 1)
-      .BindInt64(2, static_cast<std::int64_t>(bytes + data.size()))
-      .BindInt64(3, UnixNow())
-      .BindText(4, stream_id)
-      .Run();
-  tx.Commit();
+  for (std::size_t done = 0; done < data.size();) {
+    ssize_t n = ::write(s.fd, data.data() + done, data.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) abandon(Errc::kIo, fmt::format("cannot write {}: {}", s.file.string(), std::strerror(errno)));
+    done += static_cast<std::size_t>(n);
+  }
+  s.bytes += data.size();
+  s.last_chunk_sha256 = Sha256Hex(data);
+  s.next_index = index + 1;
+  s.last_activity = std::chrono::steady_clock::now();
 }
 
 PutResult ProgramStore::CommitPut(const std::string& stream_id) {
@@ -813,37 +816,39 @@ PutResult ProgramStore::CommitPut(const std::string& stream_id) {
     std::lock_guard lock(mutex_);
     Database& db = *db_;
     const std::string stream_key = "stream:" + stream_id;
-    try {
-      Transaction tx(db);
-      Statement st = db.Prepare("SELECT header, bytes FROM streams WHERE id = ?");
-      st.BindText(1, stream_id);
-      if (!st.Step()) {
-        // A retried commit of a stream that already committed returns the first result.
-        Statement done = db.Prepare("SELECT result FROM idempotency WHERE key = ?");
-        done.BindText(1, stream_key);
-        if (done.Step()) return PutResultFromJson(json::parse(done.ColumnText(0)));
-        Fail(Errc::kNotFound,
-             fmt::format("no open stream '{}' (never begun, abandoned or expired)", stream_id));
-      }
-      PutRequest header = HeaderFromJson(json::parse(st.ColumnText(0)));
-      std::string content;
-      content.reserve(static_cast<std::size_t>(st.ColumnInt64(1)));
-      st.Reset();
-      Statement chunks = db.Prepare("SELECT data FROM stream_chunks WHERE stream_id = ? ORDER BY idx");
-      chunks.BindText(1, stream_id);
-      while (chunks.Step()) content.append(chunks.ColumnBlobView(0));
-      Impl::DropStream(db, stream_id);
-      std::vector<std::string> keys = {stream_key};
-      if (!header.idempotency_key.empty()) keys.push_back(header.idempotency_key);
-      result = Impl::DoPut(*this, header, content, keys);
-      tx.Commit();
-    } catch (const cell::Error&) {
-      // The put failed as a whole (nothing of it is stored); the stream cannot succeed later either.
-      Transaction cleanup(db);
-      Impl::DropStream(db, stream_id);
-      cleanup.Commit();
-      throw;
+    auto it = streams_.find(stream_id);
+    if (it == streams_.end()) {
+      // A retried commit of a stream that already committed returns the first result.
+      Statement done = db.Prepare("SELECT result FROM idempotency WHERE key = ?");
+      done.BindText(1, stream_key);
+      if (done.Step()) return PutResultFromJson(json::parse(done.ColumnText(0)));
+      Fail(Errc::kNotFound,
+           fmt::format("no open stream '{}' (never begun, abandoned or expired)", stream_id));
     }
+    // Whatever happens now, the stream is finished: on failure nothing of it is stored.
+    std::unique_ptr<Stream> stream = std::move(it->second);
+    streams_.erase(it);
+    std::string content(stream->bytes, '\0');
+    int fd = ::open(stream->file.c_str(), O_RDONLY | O_CLOEXEC);
+    if (fd < 0)
+      Fail(Errc::kIo, fmt::format("cannot read {}: {}", stream->file.string(), std::strerror(errno)));
+    std::size_t got = 0;
+    while (got < content.size()) {
+      ssize_t n = ::read(fd, content.data() + got, content.size() - got);
+      if (n < 0 && errno == EINTR) continue;
+      if (n <= 0) break;
+      got += static_cast<std::size_t>(n);
+    }
+    ::close(fd);
+    if (got != content.size()) {
+      Fail(Errc::kIo,
+           fmt::format("stream '{}' staging file is short: {} of {} bytes", stream_id, got, content.size()));
+    }
+    std::vector<std::string> keys = {stream_key};
+    if (!stream->header.idempotency_key.empty()) keys.push_back(stream->header.idempotency_key);
+    Transaction tx(db);
+    result = Impl::DoPut(*this, stream->header, content, keys);
+    tx.Commit();
   }
   if (!result.replayed) Publish(result.events);
   return result;
@@ -851,27 +856,27 @@ PutResult ProgramStore::CommitPut(const std::string& stream_id) {
 
 void ProgramStore::AbortPut(const std::string& stream_id) {
   std::lock_guard lock(mutex_);
-  Transaction tx(*db_);
-  Impl::DropStream(*db_, stream_id);
-  tx.Commit();
+  streams_.erase(stream_id);
 }
 
 std::size_t ProgramStore::ExpireStreams(std::chrono::seconds max_idle) {
   std::lock_guard lock(mutex_);
-  Database& db = *db_;
-  Transaction tx(db);
-  Statement st = db.Prepare("SELECT id FROM streams WHERE last_activity_unix <= ?");
-  st.BindInt64(1, UnixNow() - max_idle.count());
-  std::vector<std::string> ids;
-  while (st.Step()) ids.push_back(st.ColumnText(0));
-  for (const std::string& id : ids) Impl::DropStream(db, id);
-  tx.Commit();
-  return ids.size();
+  auto deadline = std::chrono::steady_clock::now() - max_idle;
+  std::size_t dropped = 0;
+  for (auto it = streams_.begin(); it != streams_.end();) {
+    if (it->second->last_activity <= deadline) {
+      it = streams_.erase(it);
+      ++dropped;
+    } else {
+      ++it;
+    }
+  }
+  return dropped;
 }
 
 std::size_t ProgramStore::OpenStreams() {
   std::lock_guard lock(mutex_);
-  return static_cast<std::size_t>(db_->QueryInt64("SELECT count(*) FROM streams"));
+  return streams_.size();
 }
 
 std::vector<ChangeEvent> ProgramStore::EventsSince(std::uint64_t after_seq, std::size_t limit) {

@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -32,6 +33,7 @@ struct StoreOptions {
   std::vector<std::string> namespaces;  // configured station ids; HOST is always there
   std::uint64_t max_file_size = 256ull << 20;
   std::uint64_t max_chunk_size = 16ull << 20;
+  std::size_t max_open_streams = 64;
   // Idempotency keys older than this are forgotten (at open).
   std::chrono::seconds idempotency_retention = std::chrono::hours(24 * 7);
 };
@@ -121,6 +123,8 @@ class ProgramStore {
  public:
   // Opens (creating) the database, migrates its schema, drops staged chunk streams left by a previous
   // process (they can never complete) and expired idempotency keys.
+  // Chunk streams are staged in data_dir/program-store-streams/ (unsynced scratch files: a stream is not
+  // durable until CommitPut, which is one SQLite transaction).
   explicit ProgramStore(StoreOptions options);
   ~ProgramStore();
   ProgramStore(const ProgramStore&) = delete;
@@ -152,7 +156,7 @@ class ProgramStore {
   void PutChunk(const std::string& stream_id, std::uint32_t index, std::string_view data);
   PutResult CommitPut(const std::string& stream_id);
   void AbortPut(const std::string& stream_id);
-  // Drops streams with no activity for `max_idle`; returns how many.
+  // Drops streams with no activity for `max_idle` (steady clock); returns how many.
   std::size_t ExpireStreams(std::chrono::seconds max_idle);
   std::size_t OpenStreams();
 
@@ -171,6 +175,7 @@ class ProgramStore {
 
  private:
   struct Impl;
+  struct Stream;
   void Publish(const std::vector<ChangeEvent>& events);
 
   StoreOptions options_;
@@ -179,6 +184,8 @@ class ProgramStore {
   std::mutex mutex_;
   std::unique_ptr<store::Database> db_;
   std::function<void(const ChangeEvent&)> listener_;
+  std::filesystem::path streams_dir_;
+  std::map<std::string, std::unique_ptr<Stream>> streams_;
 };
 
 // True when `name` matches `pattern` with `*` (any run, also empty) and `?` (exactly one character).
