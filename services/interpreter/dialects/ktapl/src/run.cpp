@@ -101,6 +101,7 @@ struct Word {
 struct ParsedBlock {
   bool deleted = false;
   bool has_n = false;
+  RawNum n;  // the sequence number as written (passed to G800-series cycles as L814)
   std::vector<RawWord> words;
   std::vector<Statement> stmts;
   std::string comment;
@@ -163,7 +164,21 @@ ParsedBlock ParseBlock(std::string_view s, bool fragment) {
       (IsDigit(s[i + 1]) || s[i + 1] == '.')) {
     pb.has_n = true;
     ++i;
-    while (i < s.size() && (IsDigit(s[i]) || s[i] == '.')) ++i;
+    double v = 0, scale = 0;
+    while (i < s.size() && (IsDigit(s[i]) || s[i] == '.')) {
+      if (s[i] == '.') {
+        if (pb.n.point) Fail(static_cast<int>(i) + 1, "ILLEGAL SEQUENCE NUMBER");
+        pb.n.point = true;
+        scale = 0.1;
+      } else if (pb.n.point) {
+        v += (s[i] - '0') * scale;
+        scale /= 10;
+      } else {
+        v = v * 10 + (s[i] - '0');
+      }
+      ++i;
+    }
+    pb.n.as_written = v;
   }
   while (true) {
     skip();
@@ -1775,7 +1790,6 @@ void KtRun::EmitMove(const std::array<double, kAxisCount>& target, uint32_t move
 }
 
 void KtRun::ExecTypeI(BlockCtx& bc, const ParsedBlock* pb) {
-  (void)pb;
   const auto& raw = bc.words;
   if (raw.empty()) return;
   bool g78 = false;
@@ -2059,6 +2073,7 @@ void KtRun::ExecTypeI(BlockCtx& bc, const ParsedBlock* pb) {
       SetParam(800 + (l - 'A') + 1, w.v, rw.col);
     }
     if (series800 && !passed_g.empty()) SetParam(807, passed_g.back().first, passed_g.back().second);
+    if (series800 && pb && pb->has_n) SetParam(814, ScaleLiteral('N', pb->n, metric_, false, true), 1);
     trigger = (axis_mask & cycle_axes) != 0;
     if (series800) {
       if (trigger) {
