@@ -1877,7 +1877,7 @@ void KtRun::ExecTypeI(BlockCtx& bc, const ParsedBlock* pb) {
   }
 
   // Apply G codes.
-  int arc = 0;
+  int arc = 0, arc_col = 1;
   bool g92 = false, g98 = false, g99 = false, probe = false;
   int probe_g = 0, probe_cycle = 0;
   bool plane_set = false, b20 = false, b21 = false;
@@ -1898,6 +1898,7 @@ void KtRun::ExecTypeI(BlockCtx& bc, const ParsedBlock* pb) {
       case 2:
       case 3:
         arc = g;
+        arc_col = col;
         break;
       case 4:
         break;
@@ -2051,6 +2052,13 @@ void KtRun::ExecTypeI(BlockCtx& bc, const ParsedBlock* pb) {
     if (w.letter == 'E' || w.letter == 'I' || w.letter == 'J' || w.letter == 'K' || w.letter == 'P' ||
         w.letter == 'Q' || w.letter == 'R' || w.letter == 'H' || w.letter == 'D') {
       letters_[w.letter - 'A'] = w.v;
+    }
+  }
+  int motion_col = 1;
+  for (const auto& w : words) {
+    if (AxisOfLetter(w.letter) >= 0) {
+      motion_col = w.col;
+      break;
     }
   }
   const uint32_t cycle_axes = (1u << kX) | (1u << kY) | (1u << kZ) | (1u << kA) | (1u << kB) | (1u << kC);
@@ -2282,7 +2290,7 @@ void KtRun::ExecTypeI(BlockCtx& bc, const ParsedBlock* pb) {
 
   uint32_t rotary_mask = (1u << kA) | (1u << kB) | (1u << kC);
   if (dwell) {
-    if (axis_mask) Fail(find('X') ? find('X')->col : 1, "NO AXIS WORDS ALLOWED IN A G04 BLOCK");
+    if (axis_mask) Fail(motion_col, "NO AXIS WORDS ALLOWED IN A G04 BLOCK");
     if (!f) Fail(1, "G04 NEEDS F (DWELL SECONDS)");
     double secs = std::floor(f->v * 10 + 1e-6) / 10;  // F format 5.1
     if (secs < 0.1 || secs > 99999.9) Fail(f->col, "G04 DWELL MUST BE F.1-F99999.9 SECONDS");
@@ -2319,16 +2327,17 @@ void KtRun::ExecTypeI(BlockCtx& bc, const ParsedBlock* pb) {
     // Axis words of the M06 block are ignored (the slides go to the tool change position).
   } else if (axis_mask || arc) {
     std::optional<double> eff = inverse_time_ ? block_feed : feed_;
-    if (inverse_time_ && !block_feed && !m25) Fail(1, "F MUST BE PROGRAMMED IN EVERY G93 MOTION BLOCK");
+    if (inverse_time_ && !block_feed && !m25)
+      Fail(arc ? arc_col : motion_col, "F MUST BE PROGRAMMED IN EVERY G93 MOTION BLOCK");
     if (arc) {
-      if (axis_mask & rotary_mask) Fail(1, "ROTARY AXIS WORDS ARE NOT ALLOWED IN A CIRCULAR BLOCK");
-      if (m25) Fail(1, "M25 IS NOT ALLOWED IN A CIRCULAR BLOCK");
-      if (!eff) Fail(1, "NO FEEDRATE PROGRAMMED");
-      if (*eff == 0) Fail(f ? f->col : 1, "F0 IS NOT ALLOWED IN A CIRCULAR BLOCK");
+      if (axis_mask & rotary_mask) Fail(arc_col, "ROTARY AXIS WORDS ARE NOT ALLOWED IN A CIRCULAR BLOCK");
+      if (m25) Fail(arc_col, "M25 IS NOT ALLOWED IN A CIRCULAR BLOCK");
+      if (!eff) Fail(arc_col, "NO FEEDRATE PROGRAMMED");
+      if (*eff == 0) Fail(f ? f->col : arc_col, "F0 IS NOT ALLOWED IN A CIRCULAR BLOCK");
       bool cw = arc == 2;
       if (mir_x_ != mir_y_) cw = !cw;
       double feed = inverse_time_ ? *eff : ToMm(*eff);
-      Arc(words, cw, 1, feed, inverse_time_ ? FeedMode::kInverseTime : FeedMode::kPerMinute);
+      Arc(words, cw, arc_col, feed, inverse_time_ ? FeedMode::kInverseTime : FeedMode::kPerMinute);
     } else {
       std::array<double, kAxisCount> target = pos_;
       std::array<double, kAxisCount> travel{};
@@ -2400,7 +2409,7 @@ void KtRun::ExecTypeI(BlockCtx& bc, const ParsedBlock* pb) {
         }
         rapid = true;  // an index-only block is forced to F0 for the block
       }
-      if (!rapid && !eff) Fail(1, "NO FEEDRATE PROGRAMMED");
+      if (!rapid && !eff) Fail(motion_col, "NO FEEDRATE PROGRAMMED");
       double feed = 0;
       FeedMode fm = FeedMode::kPerMinute;
       if (!rapid) {

@@ -60,7 +60,6 @@ class Station {
   void RunProgram(const Dispatch& d, const std::string& name, std::stop_token st);
   void Send(cell::MotionSegment seg, std::stop_token st);
   void WaitDrained(std::stop_token st);
-  void Fail(const std::string& alarm, const std::string& why);
   void PublishStatus();
   void PublishTools();
   void PublishVariables();
@@ -96,6 +95,7 @@ class Station {
   int32_t programs_done_ = 0;
   std::string program_;
   std::atomic<int32_t> cancel_id_{0};
+  double probe_feed_ = 500.0;  // mm/min for probe moves the program does not feed itself
 
   std::mutex queue_mu_;
   std::condition_variable queue_cv_;

@@ -1,0 +1,35 @@
+// cell-interpreter --station ID: the CNC of one station (language, tool table, variables, runs).
+#include <CLI/CLI.hpp>
+#include <spdlog/spdlog.h>
+
+#include "cell/config/config.h"
+#include "cell/daemon/daemon.h"
+#include "cell/health/health.h"
+#include "cell/log/log.h"
+#include "cell/station/station.h"
+
+int main(int argc, char** argv) {
+  CLI::App app{"cell-interpreter: the CNC of one station"};
+  std::string station;
+  app.add_option("--station", station, "station id (deploy/stations/<ID>.toml)")->required();
+  CLI11_PARSE(app, argc, argv);
+  cell::log::Init("cell-interpreter", station);
+  try {
+    cell::daemon::Daemon daemon;
+    auto cfg = cell::config::LoadStation(station);
+    cell::bus::Participant bus("cell-interpreter/" + station);
+    cell::health::Announcer health(bus, "cell-interpreter", station);
+    cell::station::Station st(bus, cfg, cell::config::DataDir());
+    st.Start();
+    health.Set(cell::SERVICE_READY, cfg.dialect);
+    daemon.NotifyReady("station " + station + " ready");
+    spdlog::info("ready on domain {} ({} station)", bus.domain(), cfg.dialect);
+    daemon.RunUntilStop([&] { return st.Healthy(); });
+    daemon.NotifyStopping();
+    st.Stop();
+    return 0;
+  } catch (const std::exception& e) {
+    spdlog::critical("{}", e.what());
+    return 1;
+  }
+}

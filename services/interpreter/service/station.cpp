@@ -1,0 +1,675 @@
+#include "cell/station/station.h"
+
+#include <cmath>
+
+#include <nlohmann/json.hpp>
+#include <spdlog/spdlog.h>
+
+#include "cell/bus/topics.h"
+#include "cell/health/health.h"
+
+namespace cell::station {
+
+namespace {
+
+constexpr uint64_t kInitialCredit = 4;  // segments sent before the servo has spoken for a run
+constexpr auto kServoWait = std::chrono::seconds(10);
+
+std::vector<store::Migration> Migrations() {
+  return {store::Migration::Sql(1, "station state",
+                                "CREATE TABLE tools(tool TEXT PRIMARY KEY, socket INTEGER, length REAL, diameter REAL,"
+                                " life_left_min INTEGER, worn INTEGER, broken INTEGER, ord INTEGER);"
+                                "CREATE TABLE variables(name TEXT PRIMARY KEY, value REAL);"
+                                "CREATE TABLE runs(dispatch_id INTEGER PRIMARY KEY, job_id INTEGER, pallet INTEGER,"
+                                " node TEXT, programs TEXT, repeat INTEGER, state TEXT, reason TEXT,"
+                                " machine_s REAL, started_ns INTEGER, finished_ns INTEGER, received_ns INTEGER);"
+                                "CREATE TABLE outbox(dispatch_id INTEGER PRIMARY KEY, record TEXT);")};
+}
+
+cell::RunState StateFromText(const std::string& s) {
+  if (s == "ACTIVE") return cell::RUN_ACTIVE;
+  if (s == "COMPLETED") return cell::RUN_COMPLETED;
+  if (s == "FAILED") return cell::RUN_FAILED;
+  if (s == "CANCELLED") return cell::RUN_CANCELLED;
+  return cell::RUN_QUEUED;
+}
+
+void SetTarget(cell::MotionSegment& s, const interp::Canon& c) {
+  uint16_t mask = 0;
+  for (int i = 0; i < interp::kAxisCount; ++i) {
+    s.target()[static_cast<size_t>(i)] = c.pos[static_cast<size_t>(i)];
+    if (c.used & (1u << i)) mask = static_cast<uint16_t>(mask | (1u << i));
+  }
+  s.axis_mask(mask);
+}
+
+void SetFeed(cell::MotionSegment& s, const interp::Canon& c) {
+  s.feed(c.feed);
+  s.feed_mode(c.f_mode == interp::FeedMode::kPerRev ? 1 : c.f_mode == interp::FeedMode::kInverseTime ? 2 : 0);
+}
+
+}  // namespace
+
+std::optional<cell::MotionSegment> ToSegment(const interp::Canon& c) {
+  cell::MotionSegment s;
+  s.line(c.line);
+  switch (c.op) {
+    case interp::Op::kRapid:
+      s.kind(cell::SEGMENT_RAPID);
+      SetTarget(s, c);
+      s.exact_stop(true);
+      return s;
+    case interp::Op::kLinear:
+      s.kind(cell::SEGMENT_LINEAR);
+      SetTarget(s, c);
+      SetFeed(s, c);
+      s.exact_stop(c.exact_stop);
+      return s;
+    case interp::Op::kArc: {
+      s.kind(cell::SEGMENT_ARC);
+      SetTarget(s, c);
+      SetFeed(s, c);
+      s.exact_stop(c.exact_stop);
+      s.center({c.center[0], c.center[1], c.center[2]});
+      s.plane(c.plane == "zx" ? cell::PLANE_ZX : c.plane == "yz" ? cell::PLANE_YZ : cell::PLANE_XY);
+      s.ccw(!c.cw);
+      // A one-block full circle sweeps 360 degrees with end == start: no extra turn.
+      s.turns(c.turns > 360.0 + 1e-6 ? static_cast<int32_t>(std::floor((c.turns - 1e-6) / 360.0)) : 0);
+      return s;
+    }
+    case interp::Op::kDwell:
+      s.kind(cell::SEGMENT_DWELL);
+      s.dwell_s(c.value);
+      return s;
+    case interp::Op::kSpindle:
+      s.kind(cell::SEGMENT_SPINDLE);
+      s.spindle_rpm(c.value);
+      s.spindle_mode(c.text == "cw" ? 1 : c.text == "ccw" ? 2 : c.text == "orient" ? 3 : 0);
+      return s;
+    case interp::Op::kCoolant:
+      s.kind(cell::SEGMENT_COOLANT);
+      s.coolant(c.text == "off" ? 0 : c.text == "mist" ? 2 : 1);
+      return s;
+    case interp::Op::kToolChange:
+      s.kind(cell::SEGMENT_TOOL_CHANGE);
+      s.tool(c.text);
+      return s;
+    case interp::Op::kPallet:
+      s.kind(cell::SEGMENT_PALLET);
+      return s;
+    case interp::Op::kEnd:
+      s.kind(cell::SEGMENT_END);
+      return s;
+    default:
+      return std::nullopt;
+  }
+}
+
+// Queue busters answered by the machine: the run's Next() blocks here until the servo reports.
+class Station::Env : public interp::Environment {
+ public:
+  Env(Station& s, std::stop_token st) : s_(s), st_(std::move(st)) {}
+  interp::ProbeResult Probe(bool contact, const std::array<double, interp::kAxisCount>& from,
+                            const std::array<double, interp::kAxisCount>& to) override {
+    (void)from;
+    cell::MotionSegment seg;
+    seg.kind(cell::SEGMENT_PROBE);
+    for (size_t i = 0; i < to.size(); ++i) seg.target()[i] = to[i];
+    seg.axis_mask(0x3f);
+    seg.exact_stop(true);
+    seg.feed(s_.probe_feed_);
+    s_.Send(seg, st_);
+    uint64_t want = s_.sent_seq_;
+    int32_t run = s_.run_id_;
+    interp::ProbeResult r;
+    auto got = s_.probe_r_.WaitFor([&](const cell::ProbeResult& p) { return p.run_id() == run && p.seq() == want; },
+                                   std::chrono::seconds(120));
+    if (!got) throw Error(Errc::kTimeout, "no probe result from the axis servo");
+    r.event = got->contact() == contact;
+    for (size_t i = 0; i < r.at.size(); ++i) r.at[i] = got->position()[i];
+    return r;
+  }
+
+ private:
+  Station& s_;
+  std::stop_token st_;
+};
+
+Station::Station(bus::Participant& p, config::StationConfig cfg, const std::filesystem::path& data_dir)
+    : bus_(p),
+      cfg_(std::move(cfg)),
+      db_(store::Database::Open(data_dir / ("interpreter-" + cfg_.id + ".db"))),
+      tools_({}),
+      status_w_(p, bus::topics::kStationStatus, bus::QosKind::kState),
+      tools_w_(p, bus::topics::kToolTable, bus::QosKind::kState),
+      vars_w_(p, bus::topics::kVariables, bus::QosKind::kState),
+      run_w_(p, bus::topics::kRunStatus, bus::QosKind::kEvent),
+      seg_w_(p, bus::topics::Segments(cfg_.id), bus::QosKind::kStream),
+      progress_r_(p, bus::topics::kProgress, bus::QosKind::kState,
+                  [this](const cell::SegmentProgress& s, const bus::SampleInfo&) { OnProgress(s); }),
+      probe_r_(p, bus::topics::Probe(cfg_.id), bus::QosKind::kCommand),
+      programs_(p),
+      inspection_(p, bus::topics::kInspection) {
+  store::Migrate(db_, Migrations());
+  // Tool table: persisted; seeded once from the station config's initial tools.
+  std::vector<tooltable::ToolEntry> entries;
+  auto q = db_.Prepare("SELECT tool, socket, length, diameter, life_left_min, worn, broken FROM tools ORDER BY ord");
+  while (q.Step()) {
+    tooltable::ToolEntry e;
+    e.tool = q.ColumnText(0);
+    e.socket = static_cast<int>(q.ColumnInt64(1));
+    e.length = q.ColumnDouble(2);
+    e.diameter = q.ColumnDouble(3);
+    e.life_left_min = static_cast<int>(q.ColumnInt64(4));
+    e.worn = q.ColumnInt64(5) != 0;
+    e.broken = q.ColumnInt64(6) != 0;
+    entries.push_back(e);
+  }
+  if (entries.empty() && db_.QueryInt64("SELECT COUNT(*) FROM runs") == 0) {
+    for (auto& t : cfg_.tools) {
+      tooltable::ToolEntry e;
+      e.tool = t.tool;
+      e.socket = t.socket;
+      e.length = t.length;
+      e.diameter = t.diameter;
+      e.life_left_min = static_cast<int>(t.life_left_min);
+      entries.push_back(e);
+    }
+  }
+  tools_ = tooltable::ToolTable(entries);
+  auto v = db_.Prepare("SELECT name, value FROM variables");
+  while (v.Step()) vars_[v.ColumnText(0)] = v.ColumnDouble(1);
+
+  status_.station(cfg_.id);
+  status_.dialect(cfg_.dialect);
+  status_.execution(cell::EXECUTION_READY);
+  status_.condition(cell::CONDITION_NORMAL);
+  status_.queued(static_cast<int32_t>(db_.QueryInt64("SELECT COUNT(*) FROM runs WHERE state='QUEUED'")));
+}
+
+Station::~Station() { Stop(); }
+
+void Station::Start() {
+  {
+    std::lock_guard lk(db_mu_);
+    store::Transaction tx(db_);
+    auto save = db_.Prepare(
+        "INSERT OR REPLACE INTO tools(tool, socket, length, diameter, life_left_min, worn, broken, ord) "
+        "VALUES(?,?,?,?,?,?,?,?)");
+    int ord = 0;
+    for (auto& e : tools_.entries()) {
+      save.BindText(1, e.tool).BindInt64(2, e.socket).BindDouble(3, e.length).BindDouble(4, e.diameter);
+      save.BindInt64(5, e.life_left_min).BindInt64(6, e.worn).BindInt64(7, e.broken).BindInt64(8, ord++);
+      save.Run();
+      save.Reset();
+    }
+    tx.Commit();
+  }
+  PublishTools();
+  PublishVariables();
+  PublishStatus();
+  run_srv_ = std::make_unique<bus::Server<cell::RunRequest, cell::RunReply>>(
+      bus_, bus::topics::StationRun(cfg_.id), [this](const cell::RunRequest& r) { return OnRun(r); });
+  cmd_srv_ = std::make_unique<bus::Server<cell::StationRequest, cell::StationReply>>(
+      bus_, bus::topics::StationCommand(cfg_.id), [this](const cell::StationRequest& r) { return OnCommand(r); });
+  worker_ = std::jthread([this](std::stop_token st) { Worker(st); });
+}
+
+void Station::Stop() {
+  if (worker_.joinable()) {
+    worker_.request_stop();
+    queue_cv_.notify_all();
+    motion_cv_.notify_all();
+    worker_.join();
+  }
+  run_srv_.reset();
+  cmd_srv_.reset();
+}
+
+cell::RunReply Station::OnRun(const cell::RunRequest& r) {
+  cell::RunReply rep;
+  rep.station(cfg_.id);
+  rep.dispatch_id(r.dispatch_id());
+  if (r.station() != cfg_.id)
+    throw Error(Errc::kInvalidArgument, "run request for " + r.station().to_string() + " reached " + cfg_.id);
+  if (r.dispatch_id() <= 0) throw Error(Errc::kInvalidArgument, "dispatch id must be positive");
+  std::lock_guard lk(db_mu_);
+  auto find = db_.Prepare("SELECT state FROM runs WHERE dispatch_id=?");
+  find.BindInt64(1, r.dispatch_id());
+  bool known = find.Step();
+  std::string state = known ? find.ColumnText(0) : "";
+  if (r.cancel()) {
+    if (state == "QUEUED") SaveRun(r.dispatch_id(), "CANCELLED", "cancelled by the scheduler");
+    if (state == "ACTIVE") cancel_id_ = r.dispatch_id();
+    rep.state(known ? StateFromText(state) : cell::RUN_CANCELLED);
+    return rep;
+  }
+  if (known) {  // a re-sent dispatch (scheduler restart): the station de-duplicates on the id
+    rep.state(StateFromText(state));
+    return rep;
+  }
+  if (r.programs().empty() || r.programs().size() > 75)
+    throw Error(Errc::kInvalidArgument, "a pallet map names 1 to 75 programs");
+  if (r.repeat() < 0 || r.repeat() > 9999) throw Error(Errc::kInvalidArgument, "repeat count must be 1..9999");
+  nlohmann::json progs = nlohmann::json::array();
+  for (auto& p : r.programs()) progs.push_back(p.to_string());
+  auto ins = db_.Prepare(
+      "INSERT INTO runs(dispatch_id, job_id, pallet, node, programs, repeat, state, received_ns) "
+      "VALUES(?,?,?,?,?,?,'QUEUED',?)");
+  ins.BindInt64(1, r.dispatch_id()).BindInt64(2, r.job_id()).BindInt64(3, r.pallet());
+  ins.BindText(4, r.node().to_string().empty() ? cfg_.id : r.node().to_string()).BindText(5, progs.dump());
+  ins.BindInt64(6, r.repeat() == 0 ? 1 : r.repeat()).BindInt64(7, health::WallNs());
+  ins.Run();
+  spdlog::info("accepted dispatch {} (job {}, pallet {}, {} program(s))", r.dispatch_id(), r.job_id(), r.pallet(),
+               r.programs().size());
+  {
+    std::lock_guard s(status_mu_);
+    status_.queued(static_cast<int32_t>(db_.QueryInt64("SELECT COUNT(*) FROM runs WHERE state='QUEUED'")));
+  }
+  PublishStatus();
+  queue_cv_.notify_all();
+  rep.state(cell::RUN_QUEUED);
+  return rep;
+}
+
+cell::StationReply Station::OnCommand(const cell::StationRequest& r) {
+  cell::StationReply rep;
+  rep.station(cfg_.id);
+  switch (r.op()) {
+    case cell::STATION_LOAD_TOOLS: {
+      auto statements = tooltable::ParseTld(r.text().to_string(), "tools");
+      std::lock_guard lk(db_mu_);
+      tools_.Merge(statements);
+      store::Transaction tx(db_);
+      db_.Exec("DELETE FROM tools");
+      auto save = db_.Prepare(
+          "INSERT INTO tools(tool, socket, length, diameter, life_left_min, worn, broken, ord) VALUES(?,?,?,?,?,?,?,?)");
+      int ord = 0;
+      for (auto& e : tools_.entries()) {
+        save.BindText(1, e.tool).BindInt64(2, e.socket).BindDouble(3, e.length).BindDouble(4, e.diameter);
+        save.BindInt64(5, e.life_left_min).BindInt64(6, e.worn).BindInt64(7, e.broken).BindInt64(8, ord++);
+        save.Run();
+        save.Reset();
+      }
+      tx.Commit();
+      spdlog::info("tool table loaded: {} statement(s), {} tools", statements.size(), tools_.entries().size());
+      PublishTools();
+      rep.revision(tools_rev_);
+      return rep;
+    }
+    case cell::STATION_SET_VARIABLES:
+    case cell::STATION_SET_INPUT: {
+      std::lock_guard lk(db_mu_);
+      store::Transaction tx(db_);
+      auto save = db_.Prepare("INSERT OR REPLACE INTO variables(name, value) VALUES(?,?)");
+      for (auto& v : r.variables()) {
+        std::string n = v.name().to_string();
+        if (n.empty()) throw Error(Errc::kInvalidArgument, "variable without a name");
+        vars_[n] = v.value();
+        save.BindText(1, n).BindDouble(2, v.value());
+        save.Run();
+        save.Reset();
+      }
+      tx.Commit();
+      PublishVariables();
+      rep.revision(vars_rev_);
+      return rep;
+    }
+    case cell::STATION_RESET: {
+      std::lock_guard s(status_mu_);
+      status_.condition(cell::CONDITION_NORMAL);
+      status_.alarm_code("");
+      status_.alarm_text("");
+    }
+      PublishStatus();
+      return rep;
+  }
+  throw Error(Errc::kInvalidArgument, "unknown station command");
+}
+
+void Station::OnProgress(const cell::SegmentProgress& p) {
+  if (p.station() != cfg_.id) return;
+  std::lock_guard lk(motion_mu_);
+  if (p.run_id() != run_id_) return;
+  completed_seq_ = std::max(completed_seq_, p.completed_seq());
+  credit_seq_ = std::max(credit_seq_, p.credit_seq());
+  run_machine_s_ = p.run_machine_s();
+  last_progress_ = std::chrono::steady_clock::now();
+  if (p.alarm()) {
+    servo_alarm_ = true;
+    servo_alarm_code_ = p.alarm_code().to_string();
+    servo_alarm_text_ = p.alarm_text().to_string();
+  }
+  motion_cv_.notify_all();
+}
+
+void Station::Worker(std::stop_token st) {
+  worker_alive_ = true;
+  {
+    // A run that was ACTIVE when the process died did not finish: report it failed, never silently.
+    std::lock_guard lk(db_mu_);
+    auto q = db_.Prepare("SELECT dispatch_id, job_id, pallet FROM runs WHERE state='ACTIVE'");
+    std::vector<Dispatch> lost;
+    while (q.Step()) {
+      Dispatch d;
+      d.dispatch_id = static_cast<int32_t>(q.ColumnInt64(0));
+      d.job_id = static_cast<int32_t>(q.ColumnInt64(1));
+      d.pallet = static_cast<int32_t>(q.ColumnInt64(2));
+      lost.push_back(d);
+    }
+    for (auto& d : lost) {
+      SaveRun(d.dispatch_id, "FAILED", "station restarted during the run");
+      PublishRun(d, cell::RUN_FAILED, "station restarted during the run");
+    }
+  }
+  while (!st.stop_requested()) {
+    std::optional<Dispatch> next;
+    {
+      std::lock_guard lk(db_mu_);
+      auto q = db_.Prepare(
+          "SELECT dispatch_id, job_id, pallet, node, programs, repeat FROM runs WHERE state='QUEUED' "
+          "ORDER BY received_ns, dispatch_id LIMIT 1");
+      if (q.Step()) {
+        Dispatch d;
+        d.dispatch_id = static_cast<int32_t>(q.ColumnInt64(0));
+        d.job_id = static_cast<int32_t>(q.ColumnInt64(1));
+        d.pallet = static_cast<int32_t>(q.ColumnInt64(2));
+        d.node = q.ColumnText(3);
+        for (auto& p : nlohmann::json::parse(q.ColumnText(4))) d.programs.push_back(p.get<std::string>());
+        d.repeat = static_cast<int>(q.ColumnInt64(5));
+        next = d;
+      }
+    }
+    if (next) {
+      Execute(*next, st);
+      continue;
+    }
+    FlushOutbox();
+    std::unique_lock lk(queue_mu_);
+    queue_cv_.wait_for(lk, st, std::chrono::milliseconds(500), [] { return false; });
+  }
+  worker_alive_ = false;
+}
+
+void Station::Execute(const Dispatch& d, std::stop_token st) {
+  run_started_ns_ = health::WallNs();
+  programs_done_ = 0;
+  {
+    std::lock_guard lk(db_mu_);
+    auto u = db_.Prepare("UPDATE runs SET state='ACTIVE', started_ns=? WHERE dispatch_id=?");
+    u.BindInt64(1, run_started_ns_).BindInt64(2, d.dispatch_id);
+    u.Run();
+  }
+  {
+    std::lock_guard lk(motion_mu_);
+    run_id_ = d.dispatch_id;
+    sent_seq_ = completed_seq_ = run_machine_s_ = 0;
+    credit_seq_ = kInitialCredit;
+    servo_alarm_ = false;
+  }
+  {
+    std::lock_guard s(status_mu_);
+    status_.execution(cell::EXECUTION_ACTIVE);
+    status_.pallet(d.pallet);
+    status_.dispatch_id(d.dispatch_id);
+  }
+  spdlog::info("dispatch {}: pallet {} running {} program(s)", d.dispatch_id, d.pallet, d.programs.size());
+  std::string reason;
+  bool ok = true;
+  try {
+    if (!seg_w_.WaitForMatched(1, kServoWait) || !progress_r_.WaitForMatched(1, kServoWait))
+      throw Error(Errc::kUnavailable, "no axis servo for station " + cfg_.id + " on the bus");
+    for (int rep = 0; rep < d.repeat; ++rep) {
+      for (size_t i = 0; i < d.programs.size(); ++i) {
+        program_ = d.programs[i];
+        PublishRun(d, cell::RUN_ACTIVE);
+        RunProgram(d, d.programs[i], st);
+        WaitDrained(st);
+        ++programs_done_;
+        PublishRun(d, cell::RUN_ACTIVE);  // a program finished: its UCY leaves the backlog
+      }
+    }
+  } catch (const Error& e) {
+    ok = false;
+    reason = e.what();
+  }
+  double machine_s;
+  {
+    std::lock_guard lk(motion_mu_);
+    machine_s = run_machine_s_;
+  }
+  const std::string state = ok ? "COMPLETED" : (cancel_id_ == d.dispatch_id ? "CANCELLED" : "FAILED");
+  int64_t finished = health::WallNs();
+  {
+    std::lock_guard lk(db_mu_);
+    store::Transaction tx(db_);
+    auto u = db_.Prepare("UPDATE runs SET state=?, reason=?, machine_s=?, finished_ns=? WHERE dispatch_id=?");
+    u.BindText(1, state).BindText(2, reason).BindDouble(3, machine_s).BindInt64(4, finished);
+    u.BindInt64(5, d.dispatch_id);
+    u.Run();
+    nlohmann::json rec = {{"dispatch_id", d.dispatch_id}, {"station", cfg_.id},         {"job_id", d.job_id},
+                          {"pallet", d.pallet},           {"programs", d.programs},     {"completed", ok},
+                          {"reason", reason},             {"started_ns", run_started_ns_}, {"finished_ns", finished},
+                          {"machine_s", machine_s}};
+    auto o = db_.Prepare("INSERT OR REPLACE INTO outbox(dispatch_id, record) VALUES(?,?)");
+    o.BindInt64(1, d.dispatch_id).BindText(2, rec.dump());
+    o.Run();
+    tx.Commit();
+  }
+  if (ok) {
+    spdlog::info("dispatch {} completed: {:.3f} machine seconds", d.dispatch_id, machine_s);
+  } else {
+    spdlog::error("dispatch {} {}: {}", d.dispatch_id, state, reason);
+  }
+  int32_t queued;
+  {
+    std::lock_guard lk(db_mu_);  // lock order everywhere: db_mu_ before status_mu_
+    queued = static_cast<int32_t>(db_.QueryInt64("SELECT COUNT(*) FROM runs WHERE state='QUEUED'"));
+  }
+  {
+    std::lock_guard s(status_mu_);
+    status_.execution(ok ? cell::EXECUTION_PROGRAM_COMPLETED : cell::EXECUTION_STOPPED);
+    status_.part_count(status_.part_count() + (ok ? 1 : 0));
+    status_.dispatch_id(0);
+    status_.queued(queued);
+  }
+  PublishRun(d, ok ? cell::RUN_COMPLETED : state == "CANCELLED" ? cell::RUN_CANCELLED : cell::RUN_FAILED, reason);
+  PublishStatus();
+  FlushOutbox();
+}
+
+void Station::RunProgram(const Dispatch& d, const std::string& name, std::stop_token st) {
+  auto text = programs_.GetWithFallback(d.node, name);
+  if (!text) throw Error(Errc::kNotFound, "program '" + name + "' is not in " + d.node + " or HOST");
+  interp::RunOptions opt;
+  opt.dialect = cfg_.dialect;
+  opt.program_name = name;
+  opt.program_text = std::move(*text);
+  opt.library = [this, node = d.node](const std::string& lib) { return programs_.GetWithFallback(node, lib); };
+  opt.tools = InterpTools();
+  opt.params["PALLET"] = std::to_string(d.pallet);
+  {
+    std::lock_guard lk(db_mu_);
+    for (auto& [k, v] : vars_) opt.params[k] = fmt::format("{}", v);
+  }
+  Env env(*this, st);
+  opt.env = &env;
+  auto run = interp::StartRun(opt);
+  auto last_status = std::chrono::steady_clock::now();
+  while (true) {
+    if (st.stop_requested()) throw Error(Errc::kUnavailable, "station stopping");
+    if (cancel_id_ == d.dispatch_id) throw Error(Errc::kFailedPrecondition, "cancelled");
+    interp::Step s = run->Next();
+    if (s.kind == interp::Step::kEnd) break;
+    if (s.kind == interp::Step::kError) {
+      std::lock_guard lk(status_mu_);
+      status_.condition(cell::CONDITION_WARNING);
+      status_.alarm_code(s.diag.alarm.substr(0, 16));
+      status_.alarm_text(s.diag.Format().substr(0, 255));
+      throw Error(Errc::kInvalidArgument, s.diag.Format());
+    }
+    const interp::Canon& c = s.canon;
+    {
+      std::lock_guard lk(status_mu_);
+      status_.program(name.substr(0, 64));
+      status_.line(c.line);
+      if (c.op == interp::Op::kToolChange) status_.tool(c.text.substr(0, 16));
+    }
+    if (auto seg = ToSegment(c)) Send(*seg, st);
+    if (c.op == interp::Op::kMessage) spdlog::info("{} line {}: {}", name, c.line, c.text);
+    if (std::chrono::steady_clock::now() - last_status > std::chrono::milliseconds(100)) {
+      PublishStatus();
+      last_status = std::chrono::steady_clock::now();
+    }
+  }
+  PublishStatus();
+}
+
+void Station::Send(cell::MotionSegment seg, std::stop_token st) {
+  std::unique_lock lk(motion_mu_);
+  seg.station(cfg_.id);
+  seg.run_id(run_id_);
+  seg.seq(++sent_seq_);
+  last_progress_ = std::chrono::steady_clock::now();
+  // Credit-based flow control: never more segments in flight than the servo granted.
+  while (seg.seq() > credit_seq_) {
+    if (servo_alarm_) throw Error(Errc::kFailedPrecondition, "[" + servo_alarm_code_ + "] " + servo_alarm_text_);
+    if (st.stop_requested()) throw Error(Errc::kUnavailable, "station stopping");
+    if (seg_w_.Matched() == 0 && std::chrono::steady_clock::now() - last_progress_ > std::chrono::seconds(5))
+      throw Error(Errc::kUnavailable, "axis servo of " + cfg_.id + " vanished during the run");
+    motion_cv_.wait_for(lk, std::chrono::milliseconds(200));
+  }
+  lk.unlock();
+  seg_w_.Write(seg);
+}
+
+void Station::WaitDrained(std::stop_token st) {
+  std::unique_lock lk(motion_mu_);
+  while (completed_seq_ < sent_seq_) {
+    if (servo_alarm_) throw Error(Errc::kFailedPrecondition, "[" + servo_alarm_code_ + "] " + servo_alarm_text_);
+    if (st.stop_requested()) throw Error(Errc::kUnavailable, "station stopping");
+    if (seg_w_.Matched() == 0 && std::chrono::steady_clock::now() - last_progress_ > std::chrono::seconds(5))
+      throw Error(Errc::kUnavailable, "axis servo of " + cfg_.id + " vanished during the run");
+    motion_cv_.wait_for(lk, std::chrono::milliseconds(200));
+  }
+}
+
+void Station::SaveRun(int32_t id, const std::string& state, const std::string& reason) {
+  auto u = db_.Prepare("UPDATE runs SET state=?, reason=?, finished_ns=? WHERE dispatch_id=?");
+  u.BindText(1, state).BindText(2, reason).BindInt64(3, health::WallNs()).BindInt64(4, id);
+  u.Run();
+}
+
+void Station::FlushOutbox() {
+  std::vector<std::pair<int64_t, std::string>> rows;
+  {
+    std::lock_guard lk(db_mu_);
+    auto q = db_.Prepare("SELECT dispatch_id, record FROM outbox ORDER BY dispatch_id LIMIT 16");
+    while (q.Step()) rows.emplace_back(q.ColumnInt64(0), q.ColumnText(1));
+  }
+  for (auto& [id, text] : rows) {
+    if (!inspection_.WaitForServer(std::chrono::milliseconds(0))) return;  // writer down: keep, retry later
+    auto j = nlohmann::json::parse(text);
+    cell::InspectionRequest req;
+    req.op(cell::INSPECTION_STORE_RUN);
+    req.hdr().idempotency_key("run-" + cfg_.id + "-" + std::to_string(id));
+    auto& r = req.run();
+    r.dispatch_id(j["dispatch_id"].get<int32_t>());
+    r.station(cfg_.id);
+    r.job_id(j["job_id"].get<int32_t>());
+    r.pallet(j["pallet"].get<int32_t>());
+    for (auto& p : j["programs"]) r.programs().push_back(p.get<std::string>());
+    r.completed(j["completed"].get<bool>());
+    r.reason(j["reason"].get<std::string>().substr(0, 255));
+    r.started_ns(j["started_ns"].get<int64_t>());
+    r.finished_ns(j["finished_ns"].get<int64_t>());
+    r.machine_s(j["machine_s"].get<double>());
+    try {
+      bus::ThrowIfError(inspection_.Call(req, std::chrono::seconds(5)));
+    } catch (const Error& e) {
+      spdlog::warn("run record {} not yet stored: {}", id, e.what());
+      return;
+    }
+    std::lock_guard lk(db_mu_);
+    auto del = db_.Prepare("DELETE FROM outbox WHERE dispatch_id=?");
+    del.BindInt64(1, id);
+    del.Run();
+  }
+}
+
+void Station::PublishStatus() {
+  std::lock_guard lk(status_mu_);
+  status_.updated_ns(health::WallNs());
+  status_w_.Write(status_);
+}
+
+void Station::PublishTools() {
+  cell::ToolTable t;
+  t.station(cfg_.id);
+  t.revision(++tools_rev_);
+  for (auto& e : tools_.entries()) {
+    cell::ToolEntry w;
+    w.tool(e.tool);
+    w.socket(e.socket);
+    w.length(e.length);
+    w.diameter(e.diameter);
+    w.life_left_min(e.life_left_min);
+    w.worn(e.worn);
+    w.broken(e.broken);
+    t.tools().push_back(w);
+  }
+  tools_w_.Write(t);
+}
+
+void Station::PublishVariables() {
+  cell::StationVariables v;
+  v.station(cfg_.id);
+  v.revision(++vars_rev_);
+  for (auto& [k, val] : vars_) {
+    cell::Variable x;
+    x.name(k);
+    x.value(val);
+    v.variables().push_back(x);
+  }
+  vars_w_.Write(v);
+}
+
+void Station::PublishRun(const Dispatch& d, cell::RunState state, const std::string& reason) {
+  cell::RunStatus s;
+  s.dispatch_id(d.dispatch_id);
+  s.station(cfg_.id);
+  s.job_id(d.job_id);
+  s.pallet(d.pallet);
+  s.state(state);
+  s.program(program_.substr(0, 64));
+  s.programs_done(programs_done_);
+  s.program_index(static_cast<int32_t>(d.programs.empty() ? 0 : programs_done_ % static_cast<int>(d.programs.size())));
+  {
+    std::lock_guard lk(motion_mu_);
+    s.machine_s(run_machine_s_);
+  }
+  s.started_ns(run_started_ns_);
+  if (state == cell::RUN_COMPLETED || state == cell::RUN_FAILED || state == cell::RUN_CANCELLED)
+    s.finished_ns(health::WallNs());
+  s.reason(reason.substr(0, 255));
+  run_w_.Write(s);
+}
+
+std::vector<interp::ToolEntry> Station::InterpTools() const {
+  std::lock_guard lk(db_mu_);
+  std::vector<interp::ToolEntry> out;
+  for (auto& e : tools_.entries()) {
+    interp::ToolEntry t;
+    t.tool = e.tool;
+    t.socket = e.socket;
+    t.length = e.length;
+    t.diameter = e.diameter;
+    t.life_min = e.life_left_min;
+    t.worn = e.worn;
+    t.broken = e.broken;
+    out.push_back(t);
+  }
+  return out;
+}
+
+}  // namespace cell::station
