@@ -1,0 +1,96 @@
+// Station machine configuration: the machine tables of deploy/stations/<ID>.toml.
+// Tables owned by others ([station] apart from id/dialect, anything unknown) are ignored; [[tools]] is read
+// only for its `tool` and `socket` keys (initial magazine contents).
+#pragma once
+
+#include <array>
+#include <filesystem>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "cell/servo/segment.h"
+
+namespace cell::servo {
+
+enum class AxisType { kLinear, kRotary, kIndex };
+
+// Drive and plant of one axis, on the motor side: rad, N·m, kg·m².
+struct DriveConfig {
+  double motor_inertia = 0.002;      // kg·m²
+  double load_inertia = 0.001;       // kg·m², load reflected to the motor shaft
+  double viscous_friction = 0.002;   // N·m·s/rad at the motor
+  double max_torque = 20.0;          // N·m (drive current limit)
+  double units_per_rev = 10.0;       // mm (linear) or degrees (rotary) of axis travel per motor revolution
+  // PID on motor angle; when not given they follow from bandwidth_hz and damping and the nominal inertia.
+  double kp = 0.0;                   // N·m/rad
+  double ki = 0.0;                   // N·m/(rad·s)
+  double kd = 0.0;                   // N·m·s/rad
+  double bandwidth_hz = 40.0;
+  double damping = 1.0;
+  double kvff = 1.0;                 // velocity feed-forward, fraction of the nominal viscous friction
+  double kaff = 0.95;                // acceleration feed-forward, fraction of the nominal inertia
+};
+
+struct AxisConfig {
+  bool present = false;
+  AxisType type = AxisType::kLinear;
+  double min = 0.0, max = 0.0;             // soft limits, axis units (mm / deg; lathe X as a radius)
+  double max_velocity = 0.0;               // units/min, programmed feed clamp
+  double rapid = 0.0;                      // units/min
+  double max_acceleration = 0.0;           // units/s²
+  double max_jerk = 0.0;                   // units/s³
+  double following_error_limit = 0.0;      // units
+  bool diameter = false;                   // lathe X: programs give diameters
+  double index_increment = 0.0;            // kIndex: positions are multiples of this (deg)
+  double clamp_time = 0.0, unclamp_time = 0.0;  // kIndex, s
+  DriveConfig drive;
+};
+
+struct ToolSlot {
+  std::string tool;
+  int socket = 0;
+};
+
+struct PartModelRef {
+  int pallet = 0;
+  std::filesystem::path file;  // absolute, or relative to the station file's directory when loaded
+};
+
+struct MachineConfig {
+  std::string station_id;
+  std::string dialect;
+  std::string source;                // file the config came from (for messages)
+  std::string kind = "hmc";          // "hmc" or "lathe"
+  double servo_period_s = 0.001;
+  double path_tolerance = 0.02;      // mm, blending tolerance for continuous blocks
+  double in_position = 0.025;        // mm, exact-stop window (KT-APL G00: 0.025 mm / 0.001 in)
+  int queue_capacity = 64;           // segments (credits)
+  std::array<AxisConfig, kNumAxes> axes{};
+  // Spindle
+  double spindle_max_rpm = 4000.0;
+  double spindle_accel_rpm_s = 2000.0;
+  double spindle_orient_time = 1.5;
+  // Devices
+  int magazine_sockets = 60;
+  double magazine_index_time = 0.1;  // s per socket step
+  double tool_change_time = 6.0;     // s, chip to chip without magazine travel
+  double pallet_change_time = 25.0;  // s
+  double coolant_time = 0.3;         // s
+  std::vector<ToolSlot> tools;       // initial magazine contents
+  // Probe
+  double probe_ball_diameter = 6.0;  // mm
+  double probe_max_feed = 2000.0;    // mm/min
+  std::vector<PartModelRef> part_models;
+};
+
+// Parses a station file. Throws cell::Error(kInvalidArgument) naming file, key and allowed range, or
+// cell::Error(kNotFound / kIo) when the file is missing or unreadable.
+MachineConfig LoadMachineConfig(const std::filesystem::path& file);
+// Same from text; `source` names the text in messages and resolves relative part-model paths.
+MachineConfig ParseMachineConfig(std::string_view toml_text, const std::string& source);
+
+// A built-in machine for tests and benchmarks: "ktapl" (X Y Z + B index) or "okuma" (X diameter, Z).
+MachineConfig DefaultMachineConfig(std::string_view dialect);
+
+}  // namespace cell::servo

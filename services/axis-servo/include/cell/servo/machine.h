@@ -1,0 +1,184 @@
+// The simulated machine: segment queue with credits, planner, jerk filter, servo loop and plant, devices
+// (tool changer, pallet shuttle, spindle, coolant, B index table) and probe, on a real or virtual clock.
+//
+// Threading: a Machine is used from one thread at a time (the service serialises access, e.g. one loop
+// thread that drains its DDS inputs between Step() calls).
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <deque>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "cell/servo/config.h"
+#include "cell/servo/part_model.h"
+#include "cell/servo/planner.h"
+#include "cell/servo/segment.h"
+#include "cell/servo/servo.h"
+
+namespace cell::servo {
+
+enum class ClockKind {
+  kReal,     // one servo period per wall-clock period; machine time runs with the wall clock
+  kVirtual,  // as fast as the CPU allows; machine time advances only while the machine is active
+};
+
+// Station execution state in the MTConnect vocabulary used by the cell.
+enum class Execution { kReady, kActive, kFeedHold, kStopped };
+
+struct AxisState {
+  double machine_time = 0;                           // s
+  AxisVector commanded = AxisVector::Zero();         // after the jerk filter (segment convention)
+  AxisVector actual = AxisVector::Zero();            // plant position (segment convention)
+  AxisVector velocity = AxisVector::Zero();          // actual, units/min
+  AxisVector following_error = AxisVector::Zero();   // commanded - actual, axis units (radius on X)
+  double path_feed = 0;                              // interpolator speed, units/min
+  Execution execution = Execution::kReady;
+  Alarm alarm;
+  std::uint64_t segment_id = 0;                      // segment being interpolated (0: none)
+  double fraction = 0;                               // of that segment, 0..1
+  double spindle_rpm = 0;                            // signed: + cw, - ccw
+  bool spindle_oriented = false;
+  CoolantMode coolant = CoolantMode::kOff;
+  std::string tool;                                  // in the spindle ("" none)
+  int pallet_on_table = 0, pallet_on_shuttle = 0;
+  bool b_clamped = true;
+};
+
+class Machine {
+ public:
+  Machine(MachineConfig config, ClockKind clock);
+
+  const MachineConfig& config() const { return cfg_; }
+  ClockKind clock() const { return clock_kind_; }
+  double period() const { return cfg_.servo_period_s; }
+
+  // ---- Flow control: one credit per free queue slot. A slot frees when its segment completes.
+  std::size_t capacity() const { return static_cast<std::size_t>(cfg_.queue_capacity); }
+  std::size_t credits() const { return capacity() - queue_.size(); }
+  // Queues a segment. Throws cell::Error(kFailedPrecondition) when no credit is left, or while an alarm is
+  // active (Reset first).
+  void Push(const Segment& segment);
+
+  // ---- Running. Step() runs one servo period and returns true, or returns false without advancing time
+  // when the virtual clock has nothing to do (idle). On the real clock it first sleeps until the period's
+  // wall-clock deadline and always advances.
+  bool Step();
+  // Steps until idle (queue empty, everything settled), an alarm, or `max_machine_s` more machine time.
+  // Returns the number of periods run.
+  std::uint64_t RunUntilIdle(double max_machine_s = 1e9);
+  bool Idle() const;  // nothing queued, executing or settling
+  double machine_time() const { return static_cast<double>(ticks_) * cfg_.servo_period_s; }
+  std::uint64_t ticks() const { return ticks_; }
+  std::uint64_t overruns() const { return overruns_; }  // real clock: periods that started late
+
+  // ---- Operator controls.
+  void FeedHold();   // decelerate along the path and stop on it
+  void Resume();     // continue along the path
+  void Abort();      // flush the queue and stop (motion decelerates along the path first)
+  void Reset();      // clear alarms, flush, command := actual
+  void SetFeedOverride(double fraction);   // 0..2 (0%..200%)
+  void SetRapidOverride(double fraction);  // 0..1
+
+  // ---- Devices and probing.
+  void SetToolTable(const std::vector<ToolSlot>& sockets);  // magazine contents from the station table
+  void SetPartModel(int pallet, PartModel model);
+  void SetPallets(int on_table, int on_shuttle);
+
+  // ---- Observation.
+  // Events since the last call (started, completed with probe results, flushed, alarms), in order.
+  std::vector<Event> TakeEvents();
+  bool HasEvents() const { return !events_.empty(); }
+  AxisState State() const;
+  Execution execution() const;
+  const Alarm& alarm() const { return alarm_; }
+  const AxisVector& commanded() const { return filter_.Output(); }  // machine units (X radius)
+  const AxisVector& interpolated() const { return planner_.Position(); }
+  AxisVector actual() const;
+  AxisVector following_error() const;
+  const Planner& planner() const { return planner_; }
+  int filter_length() const { return filter_.length(); }
+
+ private:
+  struct Entry {
+    Segment seg;          // in machine units (lathe X as a radius)
+    bool planned = false; // handed to the planner or to the device sequencer
+  };
+  enum class OpPhase { kNone, kTimer, kMotion, kIndexUnclamp, kIndexMove, kIndexClamp, kIndexRest };
+  struct Op {
+    OpPhase phase = OpPhase::kNone;
+    std::uint64_t seg = 0;
+    double until = 0;      // machine time when the timer phase ends
+    Segment s;
+    // spindle ramp
+    double rpm_from = 0, rpm_to = 0, t0 = 0;
+  };
+  struct PendingCompletion {
+    std::uint64_t seg;
+    std::uint64_t release_tick;
+    bool wait_in_position;
+  };
+
+  void FeedPlanner();
+  bool StartBarrier(Entry& e);
+  void StepOp();
+  void Complete(std::uint64_t seg, const ProbeResult* probe = nullptr);
+  void RaiseAlarm(AlarmCode code, const std::string& text, std::uint64_t seg);
+  void FlushAll();
+  bool InPosition(const AxisVector& target, double tol = 0) const;
+  bool SoftLimitCheck(const Segment& s, const AxisVector& start, std::string& why) const;
+  AxisVector EndOf(const Segment& s, const AxisVector& start) const;
+  double FeedOf(const Segment& s, double length) const;
+  void Emit(EventKind kind, std::uint64_t seg, const Alarm* alarm = nullptr, const ProbeResult* probe = nullptr);
+  AxisVector ToSegmentUnits(AxisVector v) const;
+  void ProbeCheck();
+
+  MachineConfig cfg_;
+  ClockKind clock_kind_;
+  PlannerLimits limits_;
+  Planner planner_;
+  JerkFilter filter_;
+  std::array<AxisServo, kNumAxes> servos_{};
+  std::array<bool, kNumAxes> present_{};
+
+  std::deque<Entry> queue_;
+  std::size_t next_ = 0;  // first queue entry not yet planned
+  std::deque<PendingCompletion> pending_;
+  Op op_;
+  std::vector<Event> events_;
+
+  std::uint64_t ticks_ = 0, overruns_ = 0;
+  std::chrono::steady_clock::time_point wall_start_{};
+  bool wall_started_ = false;
+  AxisVector prev_cmd_ = AxisVector::Zero(), prev_vel_ = AxisVector::Zero();
+  bool alarm_pending_ = false;
+  Alarm pending_alarm_;
+  Alarm alarm_;
+  std::uint64_t alarm_seg_ = 0;
+  bool aborting_ = false;
+  double feed_ovr_ = 1.0, rapid_ovr_ = 1.0;
+
+  // Devices
+  double spindle_rpm_ = 0;
+  bool spindle_oriented_ = false;
+  CoolantMode coolant_ = CoolantMode::kOff;
+  std::map<int, std::string> magazine_;  // socket -> tool
+  std::string spindle_tool_;
+  int spindle_tool_socket_ = 0;
+  int magazine_at_ = 1;
+  int pallet_table_ = 0, pallet_shuttle_ = 0;
+  bool b_clamped_ = true;
+  std::map<int, PartModel> parts_;
+
+  // Probe
+  bool probing_ = false, probe_tripped_ = false;
+  std::uint64_t probe_seg_ = 0;
+  AxisVector probe_prev_ = AxisVector::Zero(), probe_trip_ = AxisVector::Zero();
+};
+
+const char* ExecutionName(Execution e);
+const char* SegmentKindName(SegmentKind k);
+
+}  // namespace cell::servo

@@ -1,0 +1,98 @@
+// Motion segments and machine events: the plain C++ seam between the axis-servo library and its callers.
+// The DDS service maps its IDL types onto these structs; nothing here knows about DDS.
+#pragma once
+
+#include <Eigen/Core>
+#include <array>
+#include <cstdint>
+#include <string>
+
+namespace cell::servo {
+
+inline constexpr int kNumAxes = 6;
+enum Axis : int { kX = 0, kY = 1, kZ = 2, kA = 3, kB = 4, kC = 5 };
+inline constexpr std::array<char, kNumAxes> kAxisNames = {'x', 'y', 'z', 'a', 'b', 'c'};
+
+// Positions of the six axes: mm for X Y Z, degrees for A B C.
+using AxisVector = Eigen::Matrix<double, kNumAxes, 1>;
+
+enum class SegmentKind : std::uint8_t {
+  kRapid,         // straight line at the machine's rapid rates, exact stop at its end
+  kLinear,        // straight line at `feed`; `exact_stop` demands deceleration (KT-APL G00 with a feed)
+  kArc,           // circle or helix around `center` in `plane`, `turns` extra full revolutions
+  kDwell,         // wait `dwell_s` machine seconds
+  kToolChange,    // put `tool` in the spindle (must be in the magazine)
+  kSpindle,       // `spindle_rpm` and `spindle_dir` (stop, cw, ccw, orient)
+  kCoolant,       // `coolant` on/off
+  kPalletChange,  // shuttle `pallet` onto the table (0: swap table and shuttle)
+  kProbe,         // straight move towards `end` at `feed`, stops at first contact with the part model
+  kEnd,           // program end: completes once all motion is in position
+};
+
+enum class ArcPlane : std::uint8_t { kXY, kZX, kYZ };
+enum class ArcDirection : std::uint8_t { kCW, kCCW };  // looking from the positive end of the plane normal
+enum class FeedMode : std::uint8_t { kPerMinute, kPerRevolution, kInverseTime };
+enum class SpindleDirection : std::uint8_t { kStop, kCW, kCCW, kOrient };
+enum class CoolantMode : std::uint8_t { kOff, kFlood, kMist, kThroughSpindle };
+
+struct Segment {
+  std::uint64_t id = 0;
+  SegmentKind kind = SegmentKind::kLinear;
+  // Absolute end position, after all offsets (mm / degrees). Lathes (x_diameter) give X as a DIAMETER;
+  // the servo halves it. Axes whose bit is clear in `axes` keep their current position; axes the machine
+  // does not have are ignored.
+  std::array<double, kNumAxes> end{};
+  std::uint8_t axes = 0x3f;
+  // kLinear / kArc / kProbe: mm/min (per_rev: mm/rev of the spindle; inverse_time: 1/min).
+  // kRapid ignores it and uses the machine's rapid rates.
+  double feed = 0.0;
+  FeedMode feed_mode = FeedMode::kPerMinute;
+  bool exact_stop = false;
+  // kArc: centre (x y z; lathe x as a diameter), plane, direction, extra full turns for helices.
+  std::array<double, 3> center{};
+  ArcPlane plane = ArcPlane::kXY;
+  ArcDirection direction = ArcDirection::kCCW;
+  std::uint32_t turns = 0;
+  double dwell_s = 0.0;                   // kDwell
+  std::string tool;                       // kToolChange, e.g. "1001" or "33412.5"
+  double spindle_rpm = 0.0;               // kSpindle
+  SpindleDirection spindle_dir = SpindleDirection::kStop;
+  CoolantMode coolant = CoolantMode::kOff;  // kCoolant
+  int pallet = 0;                         // kPalletChange
+};
+
+// A probe move's result: the latched axis positions at the trip, or the end of travel without contact.
+struct ProbeResult {
+  bool contact = false;
+  AxisVector position = AxisVector::Zero();  // segment convention (lathe X as a diameter)
+};
+
+enum class AlarmCode : std::uint16_t {
+  kNone = 0,
+  kSoftLimit = 500,         // a segment would leave the travel limits: no motion
+  kFollowingError = 410,    // "DIFF over": following error above the axis limit
+  kToolNotInMagazine = 600,
+  kInvalidSegment = 601,    // arc radii disagree, index position off the increment, bad feed, ...
+};
+
+struct Alarm {
+  AlarmCode code = AlarmCode::kNone;
+  std::string text;
+};
+
+enum class EventKind : std::uint8_t {
+  kStarted,    // the machine began executing the segment
+  kCompleted,  // the machine finished the segment (probe segments carry `probe`)
+  kFlushed,    // dropped by abort, reset or an alarm without being executed to its end
+  kAlarm,      // `alarm` raised (segment_id: the segment that caused it, 0 if none)
+};
+
+struct Event {
+  EventKind kind = EventKind::kStarted;
+  std::uint64_t segment_id = 0;
+  double machine_time = 0.0;  // seconds of machine time
+  ProbeResult probe;          // kCompleted of a kProbe segment
+  Alarm alarm;                // kAlarm
+};
+
+}  // namespace cell::servo

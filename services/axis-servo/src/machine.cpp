@@ -1,0 +1,784 @@
+#include "cell/servo/machine.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <thread>
+
+#include "cell/error/error.h"
+
+namespace cell::servo {
+namespace {
+
+bool IsPathMotion(SegmentKind k) {
+  return k == SegmentKind::kRapid || k == SegmentKind::kLinear || k == SegmentKind::kArc;
+}
+
+}  // namespace
+
+const char* SegmentKindName(SegmentKind k) {
+  switch (k) {
+    case SegmentKind::kRapid: return "rapid";
+    case SegmentKind::kLinear: return "linear";
+    case SegmentKind::kArc: return "arc";
+    case SegmentKind::kDwell: return "dwell";
+    case SegmentKind::kToolChange: return "tool_change";
+    case SegmentKind::kSpindle: return "spindle";
+    case SegmentKind::kCoolant: return "coolant";
+    case SegmentKind::kPalletChange: return "pallet_change";
+    case SegmentKind::kProbe: return "probe";
+    case SegmentKind::kEnd: return "end";
+  }
+  return "?";
+}
+
+namespace {
+
+// Tool numbers may carry a data-set suffix ("33412.5"): the physical tool is the part before the dot.
+std::string BaseTool(const std::string& t) { return t.substr(0, t.find('.')); }
+
+}  // namespace
+
+const char* ExecutionName(Execution e) {
+  switch (e) {
+    case Execution::kReady: return "READY";
+    case Execution::kActive: return "ACTIVE";
+    case Execution::kFeedHold: return "FEED_HOLD";
+    case Execution::kStopped: return "STOPPED";
+  }
+  return "?";
+}
+
+static PlannerLimits MakeLimits(const MachineConfig& c, int* filter_n) {
+  PlannerLimits l;
+  double n = 1;
+  for (int i = 0; i < kNumAxes; ++i) {
+    const AxisConfig& a = c.axes[i];
+    l.present[i] = a.present;
+    if (!a.present) continue;
+    l.max_velocity[i] = a.max_velocity / 60.0;
+    l.rapid[i] = a.rapid / 60.0;
+    l.max_acceleration[i] = a.max_acceleration;
+    n = std::max(n, std::ceil(2 * a.max_acceleration / (a.max_jerk * c.servo_period_s) - 1e-9));
+  }
+  l.period = c.servo_period_s;
+  l.path_tolerance = c.path_tolerance;
+  l.filter_time = n * c.servo_period_s;
+  *filter_n = static_cast<int>(n);
+  return l;
+}
+
+Machine::Machine(MachineConfig config, ClockKind clock)
+    : cfg_(std::move(config)),
+      clock_kind_(clock),
+      limits_([&] {
+        int n;
+        return MakeLimits(cfg_, &n);
+      }()),
+      planner_(limits_, 2 * static_cast<std::size_t>(cfg_.queue_capacity) + 8) {
+  int n = 1;
+  MakeLimits(cfg_, &n);
+  filter_.Configure(n);
+  AxisVector home = AxisVector::Zero();
+  for (int i = 0; i < kNumAxes; ++i) {
+    present_[i] = cfg_.axes[i].present;
+    if (!present_[i]) continue;
+    home[i] = std::clamp(0.0, cfg_.axes[i].min, cfg_.axes[i].max);
+    servos_[i].Configure(cfg_.axes[i], cfg_.servo_period_s);
+    servos_[i].Reset(home[i]);
+  }
+  planner_.Flush(home);
+  filter_.Reset(home);
+  prev_cmd_ = home;
+  SetToolTable(cfg_.tools);
+  for (const auto& ref : cfg_.part_models) parts_[ref.pallet] = LoadPartModel(ref.file);
+  events_.reserve(64);
+}
+
+void Machine::SetToolTable(const std::vector<ToolSlot>& sockets) {
+  magazine_.clear();
+  for (const auto& s : sockets)
+    if (s.tool != spindle_tool_ || spindle_tool_.empty()) magazine_[s.socket] = s.tool;
+}
+
+void Machine::SetPartModel(int pallet, PartModel model) { parts_[pallet] = std::move(model); }
+void Machine::SetPallets(int on_table, int on_shuttle) {
+  pallet_table_ = on_table;
+  pallet_shuttle_ = on_shuttle;
+}
+
+void Machine::Push(const Segment& segment) {
+  if (alarm_.code != AlarmCode::kNone)
+    throw Error(Errc::kFailedPrecondition,
+                fmt::format("segment {} refused: alarm {} active, reset first", segment.id,
+                            static_cast<int>(alarm_.code)));
+  if (queue_.size() >= capacity())
+    throw Error(Errc::kFailedPrecondition,
+                fmt::format("segment {} refused: no credit (queue of {} full)", segment.id, capacity()));
+  Entry e;
+  e.seg = segment;
+  if (cfg_.axes[kX].diameter) {
+    e.seg.end[kX] *= 0.5;
+    e.seg.center[kX] *= 0.5;
+  }
+  queue_.push_back(std::move(e));
+}
+
+AxisVector Machine::EndOf(const Segment& s, const AxisVector& start) const {
+  AxisVector p = start;
+  for (int i = 0; i < kNumAxes; ++i)
+    if (present_[i] && (s.axes >> i & 1)) p[i] = s.end[i];
+  return p;
+}
+
+double Machine::FeedOf(const Segment& s, double length) const {
+  switch (s.feed_mode) {
+    case FeedMode::kPerMinute: return s.feed / 60.0;
+    case FeedMode::kPerRevolution: return s.feed * std::abs(spindle_rpm_) / 60.0;
+    case FeedMode::kInverseTime: return s.feed * length / 60.0;
+  }
+  return 0;
+}
+
+bool Machine::SoftLimitCheck(const Segment& s, const AxisVector& start, std::string& why) const {
+  const AxisVector end = EndOf(s, start);
+  AxisVector lo = start.cwiseMin(end), hi = start.cwiseMax(end);
+  if (s.kind == SegmentKind::kArc) {
+    PathElement e;
+    std::string ignored;
+    if (planner_.MakeArc(start, end, s.center, s.plane, s.direction, s.turns, e, ignored)) {
+      const double rmax = std::max(e.r0, e.r0 + e.dr * e.sweep);
+      for (int i = 0; i < kNumAxes; ++i) {
+        const double amp = std::hypot(e.e1[i], e.e2[i]);
+        if (amp < 1e-12) continue;
+        double ph = std::atan2(e.e2[i], e.e1[i]);  // angle of the maximum
+        for (int side = 0; side < 2; ++side) {
+          double p = std::fmod(ph + side * M_PI + 4 * M_PI, 2 * M_PI);
+          if (p <= e.sweep) {
+            const double v = e.c[i] + (side ? -1 : 1) * rmax * amp;
+            lo[i] = std::min(lo[i], v);
+            hi[i] = std::max(hi[i], v);
+          }
+        }
+      }
+    }
+  }
+  for (int i = 0; i < kNumAxes; ++i) {
+    if (!present_[i]) continue;
+    const AxisConfig& a = cfg_.axes[i];
+    const double f = a.diameter ? 2.0 : 1.0;
+    if (hi[i] > a.max + 1e-9) {
+      why = fmt::format("{}+ soft limit: {:.4f} > {:.4f}", static_cast<char>(std::toupper(kAxisNames[i])),
+                        hi[i] * f, a.max * f);
+      return false;
+    }
+    if (lo[i] < a.min - 1e-9) {
+      why = fmt::format("{}- soft limit: {:.4f} < {:.4f}", static_cast<char>(std::toupper(kAxisNames[i])),
+                        lo[i] * f, a.min * f);
+      return false;
+    }
+  }
+  return true;
+}
+
+void Machine::Emit(EventKind kind, std::uint64_t seg, const Alarm* alarm, const ProbeResult* probe) {
+  Event ev;
+  ev.kind = kind;
+  ev.segment_id = seg;
+  ev.machine_time = machine_time();
+  if (alarm) ev.alarm = *alarm;
+  if (probe) ev.probe = *probe;
+  events_.push_back(std::move(ev));
+}
+
+std::vector<Event> Machine::TakeEvents() {
+  std::vector<Event> out;
+  out.swap(events_);
+  events_.reserve(64);
+  return out;
+}
+
+void Machine::RaiseAlarm(AlarmCode code, const std::string& text, std::uint64_t seg) {
+  alarm_ = {code, text};
+  alarm_seg_ = seg;
+  alarm_pending_ = false;
+  Emit(EventKind::kAlarm, seg, &alarm_);
+  FlushAll();
+  // Alarms found before a segment starts leave the machine where it is (no motion, the servo keeps
+  // settling on its last command). A following-error alarm or one raised while moving stops the axes
+  // where they are.
+  if (code != AlarmCode::kFollowingError && planner_.Speed() == 0) {
+    planner_.Flush(planner_.Position());
+    return;
+  }
+  const AxisVector act = actual();
+  // Motion stops: the command holds where the axes are.
+  planner_.Flush(act);
+  filter_.Reset(act);
+  prev_cmd_ = act;
+  prev_vel_.setZero();
+}
+
+void Machine::FlushAll() {
+  for (const auto& e : queue_) Emit(EventKind::kFlushed, e.seg.id);
+  queue_.clear();
+  next_ = 0;
+  pending_.clear();
+  op_ = Op{};
+  probing_ = false;
+  aborting_ = false;
+  planner_.SetHold(false);
+}
+
+void Machine::Complete(std::uint64_t seg, const ProbeResult* probe) {
+  // Segments complete in queue order; the head is the one.
+  if (!queue_.empty() && queue_.front().seg.id == seg) {
+    queue_.pop_front();
+    if (next_ > 0) --next_;
+  }
+  Emit(EventKind::kCompleted, seg, nullptr, probe);
+}
+
+bool Machine::InPosition(const AxisVector& target, double tol) const {
+  if (tol <= 0) tol = cfg_.in_position;
+  for (int i = 0; i < kNumAxes; ++i) {
+    if (!present_[i]) continue;
+    if (std::abs(filter_.Output()[i] - target[i]) > tol) return false;
+    if (std::abs(servos_[i].position() - target[i]) > tol) return false;
+  }
+  return true;
+}
+
+AxisVector Machine::actual() const {
+  AxisVector a = AxisVector::Zero();
+  for (int i = 0; i < kNumAxes; ++i)
+    if (present_[i]) a[i] = servos_[i].position();
+  return a;
+}
+
+AxisVector Machine::following_error() const {
+  AxisVector a = AxisVector::Zero();
+  for (int i = 0; i < kNumAxes; ++i)
+    if (present_[i]) a[i] = servos_[i].following_error();
+  return a;
+}
+
+void Machine::FeedPlanner() {
+  if (alarm_.code != AlarmCode::kNone || aborting_ || alarm_pending_) return;
+  while (next_ < queue_.size() && op_.phase == OpPhase::kNone) {
+    Entry& e = queue_[next_];
+    const Segment& s = e.seg;
+    const AxisVector start = planner_.EndOfPath();
+    const bool index_move = IsPathMotion(s.kind) && present_[kB] &&
+                            cfg_.axes[kB].type == AxisType::kIndex && (s.axes >> kB & 1) &&
+                            std::abs(s.end[kB] - start[kB]) > 1e-9;
+    if (IsPathMotion(s.kind) && !index_move) {
+      if (planner_.Full()) break;
+      std::string why;
+      if (!SoftLimitCheck(s, start, why)) {
+        alarm_pending_ = true;
+        alarm_ = {};
+        pending_alarm_ = {AlarmCode::kSoftLimit, fmt::format("segment {}: {}", s.id, why)};
+        alarm_seg_ = s.id;
+        break;
+      }
+      const AxisVector end = EndOf(s, start);
+      if (s.kind == SegmentKind::kRapid) {
+        planner_.AddLine(end, 0, true, true, s.id);
+      } else if (s.kind == SegmentKind::kLinear) {
+        AxisVector d = end - start;
+        double len = d.head<3>().norm();
+        if (len < 1e-9) len = d.tail<3>().norm();
+        const double f = FeedOf(s, len);
+        if (!(f > 0) && len > 1e-9) {
+          alarm_pending_ = true;
+          pending_alarm_ = {AlarmCode::kInvalidSegment, fmt::format("segment {}: feed is zero", s.id)};
+          alarm_seg_ = s.id;
+          break;
+        }
+        planner_.AddLine(end, f, false, s.exact_stop, s.id);
+      } else {
+        PathElement arc;
+        std::string err;
+        if (!planner_.MakeArc(start, end, s.center, s.plane, s.direction, s.turns, arc, err)) {
+          alarm_pending_ = true;
+          pending_alarm_ = {AlarmCode::kInvalidSegment, fmt::format("segment {}: {}", s.id, err)};
+          alarm_seg_ = s.id;
+          break;
+        }
+        const double f = FeedOf(s, arc.len);
+        if (!(f > 0)) {
+          alarm_pending_ = true;
+          pending_alarm_ = {AlarmCode::kInvalidSegment, fmt::format("segment {}: feed is zero", s.id)};
+          alarm_seg_ = s.id;
+          break;
+        }
+        planner_.AddArc(arc, f, s.exact_stop, s.id);
+      }
+      e.planned = true;
+      ++next_;
+      continue;
+    }
+    // A barrier: everything before it must be complete and the machine in position.
+    if (next_ != 0 || !planner_.Idle() || op_.phase != OpPhase::kNone || !pending_.empty()) break;
+    if (!InPosition(planner_.Position())) break;
+    e.planned = true;
+    ++next_;
+    StartBarrier(e);
+    break;
+  }
+}
+
+bool Machine::StartBarrier(Entry& e) {
+  const Segment& s = e.seg;
+  Emit(EventKind::kStarted, s.id);
+  op_ = Op{};
+  op_.seg = s.id;
+  op_.s = s;
+  const double now = machine_time();
+  auto timer = [&](double d) {
+    op_.phase = OpPhase::kTimer;
+    op_.until = now + d;
+    op_.t0 = now;
+  };
+  switch (s.kind) {
+    case SegmentKind::kDwell:
+      if (!(s.dwell_s >= 0)) {
+        RaiseAlarm(AlarmCode::kInvalidSegment, fmt::format("segment {}: negative dwell", s.id), s.id);
+        return false;
+      }
+      timer(s.dwell_s);
+      break;
+    case SegmentKind::kSpindle: {
+      double to = 0;
+      if (s.spindle_dir == SpindleDirection::kCW) to = std::abs(s.spindle_rpm);
+      if (s.spindle_dir == SpindleDirection::kCCW) to = -std::abs(s.spindle_rpm);
+      if (std::abs(to) > cfg_.spindle_max_rpm) {
+        RaiseAlarm(AlarmCode::kInvalidSegment,
+                   fmt::format("segment {}: spindle {:.0f} rpm above max_rpm {:.0f}", s.id, std::abs(to),
+                               cfg_.spindle_max_rpm),
+                   s.id);
+        return false;
+      }
+      op_.rpm_from = spindle_rpm_;
+      op_.rpm_to = to;
+      double t = std::abs(to - spindle_rpm_) / cfg_.spindle_accel_rpm_s;
+      if (s.spindle_dir == SpindleDirection::kOrient) t += cfg_.spindle_orient_time;
+      spindle_oriented_ = false;
+      timer(t);
+      break;
+    }
+    case SegmentKind::kCoolant:
+      timer(cfg_.coolant_time);
+      break;
+    case SegmentKind::kToolChange: {
+      if (s.tool.empty() || s.tool == "0") {  // empty the spindle
+        double t = spindle_tool_.empty() ? 0.0 : cfg_.tool_change_time;
+        timer(t);
+        break;
+      }
+      if (!spindle_tool_.empty() && BaseTool(spindle_tool_) == BaseTool(s.tool)) {
+        timer(0);
+        break;
+      }
+      int socket = 0;
+      for (const auto& [sock, tool] : magazine_)
+        if (tool == s.tool || BaseTool(tool) == BaseTool(s.tool)) socket = sock;
+      if (socket == 0) {
+        RaiseAlarm(AlarmCode::kToolNotInMagazine,
+                   fmt::format("segment {}: tool {} is not in the magazine", s.id, s.tool), s.id);
+        return false;
+      }
+      const int n = cfg_.magazine_sockets;
+      int steps = std::abs(socket - magazine_at_) % n;
+      steps = std::min(steps, n - steps);
+      double t = cfg_.tool_change_time + steps * cfg_.magazine_index_time +
+                 std::abs(spindle_rpm_) / cfg_.spindle_accel_rpm_s;
+      op_.rpm_from = spindle_rpm_;
+      op_.rpm_to = 0;
+      timer(t);
+      break;
+    }
+    case SegmentKind::kPalletChange:
+      timer(cfg_.pallet_change_time);
+      break;
+    case SegmentKind::kEnd:
+      timer(0);
+      break;
+    case SegmentKind::kProbe: {
+      const AxisVector start = planner_.EndOfPath();
+      std::string why;
+      if (!SoftLimitCheck(s, start, why)) {
+        RaiseAlarm(AlarmCode::kSoftLimit, fmt::format("segment {}: {}", s.id, why), s.id);
+        return false;
+      }
+      const AxisVector end = EndOf(s, start);
+      double f = std::min(FeedOf(s, (end - start).head<3>().norm()), cfg_.probe_max_feed / 60.0);
+      if (!(f > 0)) {
+        RaiseAlarm(AlarmCode::kInvalidSegment, fmt::format("segment {}: probe feed is zero", s.id), s.id);
+        return false;
+      }
+      planner_.AddLine(end, f, false, true, s.id, true);
+      op_.phase = OpPhase::kMotion;
+      probing_ = true;
+      probe_tripped_ = false;
+      probe_prev_ = actual();
+      break;
+    }
+    default: {  // path motion with a B index move
+      const AxisConfig& b = cfg_.axes[kB];
+      const double q = s.end[kB] / b.index_increment;
+      std::string why;
+      if (std::abs(q - std::round(q)) > 1e-6) {
+        RaiseAlarm(AlarmCode::kInvalidSegment,
+                   fmt::format("segment {}: B {:.4f} is not a multiple of the index increment {:g}", s.id,
+                               s.end[kB], b.index_increment),
+                   s.id);
+        return false;
+      }
+      if (!SoftLimitCheck(s, planner_.EndOfPath(), why)) {
+        RaiseAlarm(AlarmCode::kSoftLimit, fmt::format("segment {}: {}", s.id, why), s.id);
+        return false;
+      }
+      op_.phase = OpPhase::kIndexUnclamp;
+      op_.until = now + b.unclamp_time;
+      b_clamped_ = false;
+      break;
+    }
+  }
+  return true;
+}
+
+void Machine::StepOp() {
+  const double now = machine_time() + 1e-12;
+  switch (op_.phase) {
+    case OpPhase::kNone: return;
+    case OpPhase::kTimer: {
+      const Segment& s = op_.s;
+      if (s.kind == SegmentKind::kSpindle || s.kind == SegmentKind::kToolChange) {
+        const double ramp = std::abs(op_.rpm_to - op_.rpm_from) / cfg_.spindle_accel_rpm_s;
+        const double f = ramp > 0 ? std::clamp((now - op_.t0) / ramp, 0.0, 1.0) : 1.0;
+        spindle_rpm_ = op_.rpm_from + f * (op_.rpm_to - op_.rpm_from);
+      }
+      if (now < op_.until) return;
+      switch (s.kind) {
+        case SegmentKind::kSpindle:
+          spindle_rpm_ = op_.rpm_to;
+          spindle_oriented_ = s.spindle_dir == SpindleDirection::kOrient;
+          break;
+        case SegmentKind::kCoolant: coolant_ = s.coolant; break;
+        case SegmentKind::kToolChange:
+          spindle_rpm_ = 0;
+          if (!spindle_tool_.empty()) magazine_[spindle_tool_socket_] = spindle_tool_;
+          spindle_tool_.clear();
+          spindle_tool_socket_ = 0;
+          if (!s.tool.empty() && s.tool != "0") {
+            for (auto it = magazine_.begin(); it != magazine_.end(); ++it)
+              if (it->second == s.tool || BaseTool(it->second) == BaseTool(s.tool)) {
+                spindle_tool_ = it->second;
+                spindle_tool_socket_ = magazine_at_ = it->first;
+                magazine_.erase(it);
+                break;
+              }
+          }
+          break;
+        case SegmentKind::kPalletChange: {
+          const int old = pallet_table_;
+          if (s.pallet == 0 || s.pallet == pallet_shuttle_) {
+            pallet_table_ = pallet_shuttle_;
+          } else {
+            pallet_table_ = s.pallet;
+          }
+          pallet_shuttle_ = old;
+          break;
+        }
+        default: break;
+      }
+      const std::uint64_t seg = op_.seg;
+      op_ = Op{};
+      Complete(seg);
+      return;
+    }
+    case OpPhase::kMotion:
+      if (!planner_.Idle()) return;
+      {
+        ProbeResult r;
+        r.contact = probe_tripped_;
+        r.position = probe_tripped_ ? probe_trip_ : planner_.Position();
+        r.position = ToSegmentUnits(r.position);
+        probing_ = false;
+        const std::uint64_t seg = op_.seg;
+        op_ = Op{};
+        Complete(seg, &r);
+      }
+      return;
+    case OpPhase::kIndexUnclamp:
+      if (now < op_.until) return;
+      {
+        AxisVector p = planner_.EndOfPath();
+        p[kB] = op_.s.end[kB];
+        planner_.AddLine(p, 0, true, true, op_.seg);
+        op_.phase = OpPhase::kIndexMove;
+      }
+      return;
+    case OpPhase::kIndexMove:
+      if (!planner_.Idle()) return;
+      op_.phase = OpPhase::kIndexClamp;
+      op_.until = machine_time() + cfg_.axes[kB].clamp_time;
+      return;
+    case OpPhase::kIndexClamp: {
+      if (now < op_.until) return;
+      b_clamped_ = true;
+      Segment rest = op_.s;
+      const AxisVector start = planner_.EndOfPath();
+      const AxisVector end = EndOf(rest, start);
+      if ((end - start).norm() < 1e-9) {
+        const std::uint64_t seg = op_.seg;
+        op_ = Op{};
+        Complete(seg);
+        return;
+      }
+      if (rest.kind == SegmentKind::kRapid) {
+        planner_.AddLine(end, 0, true, true, op_.seg);
+      } else if (rest.kind == SegmentKind::kLinear) {
+        planner_.AddLine(end, std::max(FeedOf(rest, (end - start).head<3>().norm()), 1e-3), false, true,
+                         op_.seg);
+      } else {
+        PathElement arc;
+        std::string err;
+        if (!planner_.MakeArc(start, end, rest.center, rest.plane, rest.direction, rest.turns, arc, err)) {
+          RaiseAlarm(AlarmCode::kInvalidSegment, fmt::format("segment {}: {}", rest.id, err), rest.id);
+          return;
+        }
+        planner_.AddArc(arc, std::max(FeedOf(rest, arc.len), 1e-3), true, op_.seg);
+      }
+      op_.phase = OpPhase::kIndexRest;
+      return;
+    }
+    case OpPhase::kIndexRest:
+      if (!planner_.Idle()) return;
+      {
+        const std::uint64_t seg = op_.seg;
+        op_ = Op{};
+        Complete(seg);
+      }
+      return;
+  }
+}
+
+void Machine::ProbeCheck() {
+  if (!probing_ || probe_tripped_) return;
+  const AxisVector now = actual();
+  auto it = parts_.find(pallet_table_);
+  if (it != parts_.end()) {
+    const double t = it->second.FirstContact(probe_prev_.head<3>(), now.head<3>(), 0.5 * cfg_.probe_ball_diameter);
+    if (t >= 0) {
+      probe_trip_ = probe_prev_ + t * (now - probe_prev_);
+      probe_tripped_ = true;
+      planner_.StopOnCurrent();
+    }
+  }
+  probe_prev_ = now;
+}
+
+bool Machine::Idle() const {
+  if (op_.phase != OpPhase::kNone || !pending_.empty()) return false;
+  const bool nothing_to_do = (queue_.empty() && planner_.Idle()) || alarm_.code != AlarmCode::kNone ||
+                             (planner_.Holding() && planner_.Speed() == 0 && !aborting_);
+  if (!nothing_to_do || alarm_pending_) return false;
+  if (!filter_.Settled()) return false;
+  for (int i = 0; i < kNumAxes; ++i) {
+    if (!present_[i]) continue;
+    if (std::abs(servos_[i].following_error()) > 1e-5 || std::abs(servos_[i].velocity()) > 1e-3) return false;
+  }
+  return true;
+}
+
+bool Machine::Step() {
+  if (clock_kind_ == ClockKind::kReal) {
+    const auto now = std::chrono::steady_clock::now();
+    if (!wall_started_) {
+      wall_started_ = true;
+      wall_start_ = now - std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                              std::chrono::duration<double>(machine_time()));
+    }
+    const auto deadline = wall_start_ + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                            std::chrono::duration<double>((ticks_ + 1) * cfg_.servo_period_s));
+    if (now > deadline + std::chrono::duration<double>(cfg_.servo_period_s)) ++overruns_;
+    std::this_thread::sleep_until(deadline);
+  } else if (Idle()) {
+    return false;
+  }
+  ++ticks_;
+
+  if (alarm_pending_ && next_ == 0 && planner_.Idle() && pending_.empty() && op_.phase == OpPhase::kNone) {
+    const std::uint64_t seg = alarm_seg_;
+    alarm_pending_ = false;
+    RaiseAlarm(pending_alarm_.code, pending_alarm_.text, seg);
+  }
+  FeedPlanner();
+  StepOp();
+
+  const AxisVector& pre = planner_.Tick();
+  const bool op_motion = op_.phase == OpPhase::kMotion || op_.phase == OpPhase::kIndexMove ||
+                         op_.phase == OpPhase::kIndexRest;
+  for (const auto& m : planner_.Marks()) {
+    if (op_motion && m.seg == op_.seg) continue;
+    if (!m.finished) {
+      Emit(EventKind::kStarted, m.seg);
+    } else {
+      pending_.push_back({m.seg, ticks_ + static_cast<std::uint64_t>(filter_.length()), m.wait_in_position});
+    }
+  }
+
+  const AxisVector& cmd = filter_.Push(pre);
+  const double ts = cfg_.servo_period_s;
+  const AxisVector vel = (cmd - prev_cmd_) / ts;
+  const AxisVector acc = (vel - prev_vel_) / ts;
+  prev_cmd_ = cmd;
+  prev_vel_ = vel;
+  for (int i = 0; i < kNumAxes; ++i)
+    if (present_[i]) servos_[i].Step(cmd[i], vel[i], acc[i]);
+
+  // Following-error supervision ("DIFF over").
+  if (alarm_.code == AlarmCode::kNone) {
+    for (int i = 0; i < kNumAxes; ++i) {
+      if (!present_[i]) continue;
+      const double fe = servos_[i].following_error();
+      if (std::abs(fe) > cfg_.axes[i].following_error_limit) {
+        std::uint64_t seg = 0;
+        double frac;
+        planner_.Current(seg, frac);
+        RaiseAlarm(AlarmCode::kFollowingError,
+                   fmt::format("DIFF over {}: following error {:.4f} > limit {:.4f}",
+                               static_cast<char>(std::toupper(kAxisNames[i])), std::abs(fe),
+                               cfg_.axes[i].following_error_limit),
+                   seg);
+        return true;
+      }
+    }
+  }
+
+  ProbeCheck();
+
+  if (planner_.Waiting() && InPosition(planner_.Position(), planner_.WaitTolerance())) {
+    planner_.Release();
+    if (!pending_.empty() && pending_.front().wait_in_position) {
+      const std::uint64_t seg = pending_.front().seg;
+      pending_.pop_front();
+      Complete(seg);
+    }
+  }
+  while (!pending_.empty() && !pending_.front().wait_in_position && pending_.front().release_tick <= ticks_) {
+    const std::uint64_t seg = pending_.front().seg;
+    pending_.pop_front();
+    Complete(seg);
+  }
+
+  if (aborting_ && planner_.Speed() == 0) {
+    planner_.Flush(planner_.Position());
+    FlushAll();
+  }
+  return true;
+}
+
+std::uint64_t Machine::RunUntilIdle(double max_machine_s) {
+  const std::uint64_t limit = ticks_ + static_cast<std::uint64_t>(max_machine_s / cfg_.servo_period_s);
+  std::uint64_t n = 0;
+  while (ticks_ < limit && !Idle()) {
+    Step();
+    ++n;
+  }
+  return n;
+}
+
+void Machine::FeedHold() { planner_.SetHold(true); }
+void Machine::Resume() {
+  if (!aborting_) planner_.SetHold(false);
+}
+
+void Machine::Abort() {
+  // Unstarted segments go at once; the motion in progress decelerates along the path, then the rest goes.
+  while (queue_.size() > next_) {
+    Emit(EventKind::kFlushed, queue_.back().seg.id);
+    queue_.pop_back();
+  }
+  alarm_pending_ = false;
+  if (op_.phase == OpPhase::kTimer) op_ = Op{};
+  aborting_ = true;
+  planner_.SetHold(true);
+}
+
+void Machine::Reset() {
+  const bool resync = alarm_.code == AlarmCode::kFollowingError || planner_.Speed() > 0;
+  alarm_ = {};
+  alarm_pending_ = false;
+  FlushAll();
+  b_clamped_ = true;
+  if (!resync) {  // at rest on a valid command: keep it
+    planner_.Flush(planner_.Position());
+    return;
+  }
+  const AxisVector act = actual();
+  planner_.Flush(act);
+  filter_.Reset(act);
+  for (int i = 0; i < kNumAxes; ++i)
+    if (present_[i]) servos_[i].Reset(act[i]);
+  prev_cmd_ = act;
+  prev_vel_.setZero();
+  b_clamped_ = true;
+}
+
+void Machine::SetFeedOverride(double fraction) {
+  feed_ovr_ = std::clamp(fraction, 0.0, 2.0);
+  planner_.SetOverrides(feed_ovr_, rapid_ovr_);
+}
+void Machine::SetRapidOverride(double fraction) {
+  rapid_ovr_ = std::clamp(fraction, 0.0, 1.0);
+  planner_.SetOverrides(feed_ovr_, rapid_ovr_);
+}
+
+AxisVector Machine::ToSegmentUnits(AxisVector v) const {
+  if (cfg_.axes[kX].diameter) v[kX] *= 2;
+  return v;
+}
+
+Execution Machine::execution() const {
+  if (alarm_.code != AlarmCode::kNone) return Execution::kStopped;
+  if (planner_.Holding() && !aborting_) return Execution::kFeedHold;
+  if (queue_.empty() && planner_.Idle() && op_.phase == OpPhase::kNone) return Execution::kReady;
+  return Execution::kActive;
+}
+
+AxisState Machine::State() const {
+  AxisState s;
+  s.machine_time = machine_time();
+  s.commanded = ToSegmentUnits(filter_.Output());
+  s.actual = ToSegmentUnits(actual());
+  for (int i = 0; i < kNumAxes; ++i)
+    if (present_[i]) s.velocity[i] = servos_[i].velocity() * 60.0 * (cfg_.axes[i].diameter ? 2 : 1);
+  s.following_error = following_error();
+  s.path_feed = planner_.Speed() * 60.0;
+  s.execution = execution();
+  s.alarm = alarm_;
+  double frac = 0;
+  if (op_.phase != OpPhase::kNone) {
+    s.segment_id = op_.seg;
+    s.fraction = op_.phase == OpPhase::kTimer && op_.until > op_.t0
+                     ? std::clamp((machine_time() - op_.t0) / (op_.until - op_.t0), 0.0, 1.0)
+                     : 0.0;
+  } else if (planner_.Current(s.segment_id, frac)) {
+    s.fraction = frac;
+  }
+  s.spindle_rpm = spindle_rpm_;
+  s.spindle_oriented = spindle_oriented_;
+  s.coolant = coolant_;
+  s.tool = spindle_tool_;
+  s.pallet_on_table = pallet_table_;
+  s.pallet_on_shuttle = pallet_shuttle_;
+  s.b_clamped = b_clamped_;
+  return s;
+}
+
+}  // namespace cell::servo

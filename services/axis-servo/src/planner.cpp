@@ -1,0 +1,405 @@
+#include "cell/servo/planner.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace cell::servo {
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+// Fraction of an axis's acceleration left for tangential acceleration on elements that may end in a
+// kink; the rest is the budget for the one-tick direction change at the kink.
+constexpr double kKinkShare = 0.2;
+constexpr double kAccelMargin = 0.98;  // discretisation margin (chords, ticks straddling two elements)
+// Split of the path tolerance: fillet deviation from the corner, jerk-filter rounding; the rest is left
+// for the servo's contour error.
+constexpr double kFilletShare = 0.4;
+constexpr double kFilterShare = 0.4;
+
+bool LinearOnly(const AxisVector& v) { return v.tail<3>().squaredNorm() == 0.0; }
+
+}  // namespace
+
+AxisVector PathElement::Position(double s) const {
+  if (!arc) return p0 + u * s;
+  const double phi = k * s;
+  return c + (r0 + dr * phi) * (std::cos(phi) * e1 + std::sin(phi) * e2) + w * phi;
+}
+
+AxisVector PathElement::Tangent(double s) const {
+  if (!arc) return u;
+  const double phi = k * s;
+  const double cs = std::cos(phi), sn = std::sin(phi);
+  return k * (dr * (cs * e1 + sn * e2) + (r0 + dr * phi) * (-sn * e1 + cs * e2) + w);
+}
+
+Planner::Planner(const PlannerLimits& limits, std::size_t capacity)
+    : lim_(limits), elems_(std::max<std::size_t>(capacity, 8)) {
+  marks_.reserve(elems_.size() + 4);
+}
+
+void Planner::SetOverrides(double feed, double rapid) {
+  feed_ovr_ = std::clamp(feed, 0.0, 2.0);
+  rapid_ovr_ = std::clamp(rapid, 0.0, 1.0);
+  BackwardPass();
+}
+
+double Planner::Cap(const PathElement& e) const {
+  if (e.rapid) return e.vgeom * rapid_ovr_;
+  return std::min(e.vgeom, e.vfeed * feed_ovr_);
+}
+
+void Planner::AddLine(const AxisVector& end, double feed, bool rapid, bool exact_stop, std::uint64_t seg,
+                      bool probe) {
+  PathElement e;
+  e.p0 = tail_;
+  e.p1 = end;
+  AxisVector d = end - tail_;
+  for (int i = 0; i < kNumAxes; ++i)
+    if (!lim_.present[i]) d[i] = 0;
+  e.p1 = tail_ + d;
+  double len = d.head<3>().norm();
+  if (len < 1e-9) len = d.tail<3>().norm();
+  e.len = e.orig_len = len;
+  e.rapid = rapid;
+  e.vfeed = rapid ? kInf : feed;
+  e.stop_end = exact_stop || rapid || probe;
+  e.wait_in_position = e.stop_end;
+  e.probe = probe;
+  e.seg = seg;
+  e.seg_total = len;
+  if (len < 1e-9) {
+    e.len = 0;
+    e.vgeom = 0;
+    e.at = 1;
+    Append(e);
+    return;
+  }
+  e.u = d / len;
+  e.vgeom = kInf;
+  e.at = kInf;
+  const AxisVector& vlim = rapid ? lim_.rapid : lim_.max_velocity;
+  for (int i = 0; i < kNumAxes; ++i) {
+    const double ui = std::abs(e.u[i]);
+    if (ui < 1e-12) continue;
+    e.vgeom = std::min(e.vgeom, vlim[i] / ui);
+    e.at = std::min(e.at, lim_.max_acceleration[i] / ui);
+  }
+  e.at *= kAccelMargin * (e.stop_end ? 1.0 : 1.0 - kKinkShare);
+  Append(e);
+}
+
+bool Planner::MakeArc(const AxisVector& start, const AxisVector& end, const std::array<double, 3>& center,
+                      ArcPlane plane, ArcDirection dir, std::uint32_t turns, PathElement& e,
+                      std::string& why) const {
+  int i = kX, j = kY;
+  if (plane == ArcPlane::kZX) i = kZ, j = kX;
+  if (plane == ArcPlane::kYZ) i = kY, j = kZ;
+  const double ci = center[i], cj = center[j];
+  const double x0 = start[i] - ci, y0 = start[j] - cj, x1 = end[i] - ci, y1 = end[j] - cj;
+  const double r0 = std::hypot(x0, y0), r1 = std::hypot(x1, y1);
+  if (r0 < 1e-6 || r1 < 1e-6) {
+    why = "arc radius is zero";
+    return false;
+  }
+  if (std::abs(r1 - r0) > 0.01 + 1e-4 * r0) {
+    why = fmt::format("arc start radius {:.4f} and end radius {:.4f} differ", r0, r1);
+    return false;
+  }
+  const double a0 = std::atan2(y0, x0), a1 = std::atan2(y1, x1);
+  const bool ccw = dir == ArcDirection::kCCW;
+  double sweep = ccw ? a1 - a0 : a0 - a1;
+  while (sweep <= 1e-9) sweep += 2 * M_PI;
+  while (sweep > 2 * M_PI + 1e-9) sweep -= 2 * M_PI;
+  sweep += 2 * M_PI * turns;
+  e = PathElement{};
+  e.arc = true;
+  e.p0 = start;
+  e.p1 = end;
+  e.e1.setZero();
+  e.e2.setZero();
+  e.e1[i] = x0 / r0;
+  e.e1[j] = y0 / r0;
+  e.e2[i] = ccw ? -e.e1[j] : e.e1[j];
+  e.e2[j] = ccw ? e.e1[i] : -e.e1[i];
+  e.c = start;
+  e.c[i] = ci;
+  e.c[j] = cj;
+  e.w = end - start;
+  e.w[i] = 0;
+  e.w[j] = 0;
+  for (int a = 0; a < kNumAxes; ++a)
+    if (!lim_.present[a]) e.w[a] = 0;
+  e.w /= sweep;
+  e.r0 = r0;
+  e.dr = (r1 - r0) / sweep;
+  e.sweep = sweep;
+  const double rm = 0.5 * (r0 + r1);
+  e.len = e.orig_len = sweep * std::sqrt(rm * rm + e.dr * e.dr + e.w.squaredNorm());
+  e.k = sweep / e.len;
+  return true;
+}
+
+void Planner::AddArc(PathElement e, double feed, bool exact_stop, std::uint64_t seg) {
+  e.p0 = tail_;
+  e.vfeed = feed;
+  e.stop_end = exact_stop;
+  e.wait_in_position = exact_stop;
+  e.seg = seg;
+  e.seg_total = e.len;
+  // Geometric limits: per-axis speed, centripetal acceleration, jerk-filter contour error.
+  const double r = e.r0 + 0.5 * e.dr * e.sweep;
+  const double rk = std::max(e.r0, e.r0 + e.dr * e.sweep) * e.k;  // |dp_plane/ds| upper bound
+  double v = kInf, aplane = kInf;
+  for (int a = 0; a < kNumAxes; ++a) {
+    if (!lim_.present[a]) continue;
+    const bool in_plane = e.e1[a] != 0.0 || e.e2[a] != 0.0;
+    const double rate = in_plane ? rk : std::abs(e.w[a]) * e.k;
+    if (rate > 1e-12) v = std::min(v, lim_.max_velocity[a] / rate);
+    if (in_plane) aplane = std::min(aplane, lim_.max_acceleration[a]);
+  }
+  // Centripetal acceleration (v r k)^2 / r = v^2 r k^2 <= 0.8 aplane.
+  v = std::min(v, std::sqrt(0.8 * aplane / (r * e.k * e.k)));
+  // A moving average of length L over a circle pulls it in by v_p^2 L^2 / (24 r); allow half the tolerance.
+  const double L = lim_.filter_time;
+  if (L > 0) v = std::min(v, std::sqrt(24.0 * r * kFilterShare * lim_.path_tolerance) / L / (r * e.k));
+  e.vgeom = v;
+  const double acent = v * v * r * e.k * e.k;
+  double at = kInf;
+  for (int a = 0; a < kNumAxes; ++a) {
+    if (!lim_.present[a]) continue;
+    const bool in_plane = e.e1[a] != 0.0 || e.e2[a] != 0.0;
+    if (in_plane) at = std::min(at, (lim_.max_acceleration[a] - acent) / rk);
+    else if (std::abs(e.w[a]) * e.k > 1e-12) at = std::min(at, lim_.max_acceleration[a] / (std::abs(e.w[a]) * e.k));
+  }
+  e.at = at * kAccelMargin * (e.stop_end ? 1.0 : 1.0 - kKinkShare);
+  Append(e);
+}
+
+void Planner::Link(PathElement& a, PathElement& b, bool a_is_current) {
+  if (a.stop_end || a.len == 0 || b.len == 0) {
+    a.v_junction = 0;
+    return;
+  }
+  const AxisVector ta = a.Tangent(a.len), tb = b.Tangent(0);
+  // The jerk filter averages the path over L seconds. Near a corner of deflection theta passed at speed v
+  // with tangential acceleration a around it, the average leaves the path by about
+  //   sin(theta/2) * (v L / 4 + a L^2 / 24).
+  // When the acceleration term alone uses up half the filter's share of the tolerance, blending cannot
+  // stay within it: the corner becomes a stop that waits until the filter has flushed (as controls with
+  // post-interpolation filters do). Otherwise v_corner bounds the speed through the corner.
+  const double L = lim_.filter_time, eps = kFilterShare * lim_.path_tolerance;
+  double v_corner = kInf, s2 = 0;
+  const Eigen::Vector3d la = ta.head<3>(), lb = tb.head<3>();
+  if (L > 0 && la.norm() > 1e-9 && lb.norm() > 1e-9) {
+    const double c = std::clamp(la.normalized().dot(lb.normalized()), -1.0, 1.0);
+    s2 = std::sin(0.5 * std::acos(c));
+    if (s2 > 1e-9) {
+      const double acc_err = std::max(a.at, b.at) * L * L / 24;
+      if (acc_err * s2 > 0.5 * eps) {
+        a.stop_end = true;
+        a.wait_in_position = true;
+        a.settle = eps;
+        a.v_junction = 0;
+        return;
+      }
+      v_corner = (eps / s2 - acc_err) * 4 / L;
+    }
+  }
+  // Blend two linear-axis lines with a circular fillet within half the path tolerance.
+  if (!a.arc && !b.arc && LinearOnly(a.u) && LinearOnly(b.u) && !a.probe && !b.probe) {
+    const double cos_t = std::clamp(a.u.dot(b.u), -1.0, 1.0);
+    const double theta = std::acos(cos_t);
+    if (theta > 1e-4 && theta < M_PI * 0.97) {
+      const double half = 0.5 * theta;
+      const double d = kFilletShare * lim_.path_tolerance;
+      double R = d * std::cos(half) / (1 - std::cos(half));
+      double T = R * std::tan(half);
+      double tmax = 0.5 * std::min(a.orig_len, b.orig_len);
+      if (a_is_current) {
+        // The interpolator must not have passed the fillet's start yet (plus its braking distance).
+        const double room = a.len - s_ - v_ * v_ / (2 * a.at) - 2 * v_ * lim_.period;
+        tmax = std::min(tmax, room);
+      }
+      if (T > tmax) {
+        T = tmax;
+        R = T / std::tan(half);
+      }
+      if (T > 1e-6 && R > 1e-6) {
+        const AxisVector corner = a.p1;
+        PathElement f;
+        f.arc = true;
+        AxisVector n = b.u - cos_t * a.u;
+        n.normalize();
+        f.p0 = corner - a.u * T;
+        f.p1 = corner + b.u * T;
+        f.c = f.p0 + n * R;
+        f.e1 = -n;
+        f.e2 = a.u;
+        f.w.setZero();
+        f.r0 = R;
+        f.dr = 0;
+        f.sweep = theta;
+        f.len = f.orig_len = R * theta;
+        f.k = 1.0 / R;
+        f.rapid = a.rapid;
+        f.vfeed = std::min(a.vfeed, b.vfeed);
+        f.seg = a.seg;
+        f.probe = false;
+        f.stop_end = false;
+        double v = kInf, am = kInf;
+        for (int i = 0; i < 3; ++i) {
+          if (std::abs(f.e1[i]) + std::abs(f.e2[i]) < 1e-12) continue;
+          v = std::min(v, lim_.max_velocity[i]);
+          am = std::min(am, lim_.max_acceleration[i]);
+        }
+        v = std::min(v, std::sqrt(0.8 * am * R));
+        // Jerk-filter rounding: the circle estimate v^2 L^2 / (24 R) while the filter window lies on the
+        // fillet, the corner estimate once it spans the corner; both must hold.
+        if (L > 0) v = std::min({v, std::sqrt(24.0 * R * eps) / L, v_corner});
+        f.vgeom = v;
+        f.at = (am - v * v / R) * kAccelMargin * (1.0 - kKinkShare);
+        // Trim the lines.
+        a.len -= T;
+        a.p1 = f.p0;
+        a.last_of_segment = false;
+        f.seg_offset = a.seg_offset + a.len;
+        a.seg_total = f.seg_total = a.seg_offset + a.len + f.len;
+        b.p0 = f.p1;
+        b.len -= T;
+        b.seg_total = b.len;
+        a.v_junction = std::min({a.vgeom, f.vgeom});
+        f.v_junction = std::min({f.vgeom, b.vgeom});
+        pending_fillet_ = f;
+        has_pending_fillet_ = true;
+        return;
+      }
+    }
+  }
+  // A kink: the direction changes within one tick. Keep v*|dt_i| within the axis's kink budget and the
+  // jerk filter's corner rounding (about v L sin(theta/2) / 4) within half the tolerance.
+  const AxisVector dt = tb - ta;
+  double v = std::min(a.vgeom, b.vgeom);
+  for (int i = 0; i < kNumAxes; ++i)
+    if (lim_.present[i] && std::abs(dt[i]) > 1e-12)
+      v = std::min(v, kKinkShare * lim_.max_acceleration[i] * lim_.period / std::abs(dt[i]));
+  a.v_junction = std::min(v, v_corner);
+}
+
+void Planner::Append(PathElement e) {
+  e.p0 = tail_;
+  if (count_ > 0) {
+    PathElement& prev = At(count_ - 1);
+    Link(prev, e, count_ == 1 && started_);
+    if (has_pending_fillet_) {
+      has_pending_fillet_ = false;
+      elems_[(head_ + count_) % elems_.size()] = pending_fillet_;
+      ++count_;
+    }
+  }
+  elems_[(head_ + count_) % elems_.size()] = e;
+  ++count_;
+  tail_ = e.p1;
+  BackwardPass();
+}
+
+void Planner::BackwardPass() {
+  double v_next_entry = 0;  // entry speed allowed by the element after i
+  for (std::size_t n = count_; n-- > 0;) {
+    PathElement& e = At(n);
+    const bool last = n + 1 == count_;
+    e.v_exit = (last || e.stop_end) ? 0.0 : std::min({e.v_junction, v_next_entry, Cap(e)});
+    v_next_entry = std::min(std::max(Cap(e), 0.0), std::sqrt(e.v_exit * e.v_exit + 2 * e.at * e.len));
+    if (e.rapid && rapid_ovr_ == 0) v_next_entry = 0;
+  }
+}
+
+void Planner::StopOnCurrent() {
+  if (count_ == 0) return;
+  PathElement& e = At(0);
+  const double brake = v_ * v_ / (2 * e.at) + v_ * lim_.period;
+  e.len = std::min(e.len, s_ + brake);
+  e.p1 = e.Position(e.len);
+  e.stop_end = true;
+  e.wait_in_position = true;
+  e.last_of_segment = true;
+  count_ = 1;
+  tail_ = e.p1;
+  BackwardPass();
+}
+
+void Planner::Flush(const AxisVector& pos) {
+  count_ = 0;
+  head_ = 0;
+  s_ = v_ = 0;
+  started_ = false;
+  waiting_ = false;
+  has_pending_fillet_ = false;
+  pos_ = tail_ = pos;
+}
+
+void Planner::FinishCurrent() {
+  const PathElement& e = At(0);
+  if (e.last_of_segment) marks_.push_back({e.seg, true, e.wait_in_position});
+  if (e.wait_in_position) {
+    waiting_ = true;
+    wait_tol_ = e.settle;
+  }
+  head_ = (head_ + 1) % elems_.size();
+  --count_;
+  started_ = false;
+}
+
+bool Planner::Current(std::uint64_t& seg, double& fraction) const {
+  if (count_ == 0) return false;
+  const PathElement& e = At(0);
+  seg = e.seg;
+  fraction = e.seg_total > 0 ? std::clamp((e.seg_offset + s_) / e.seg_total, 0.0, 1.0) : 1.0;
+  return true;
+}
+
+const AxisVector& Planner::Tick() {
+  marks_.clear();
+  if (waiting_ || count_ == 0) return pos_;
+  const double ts = lim_.period;
+  PathElement* e = &At(0);
+  if (!started_) {
+    started_ = true;
+    if (e->seg_offset == 0) marks_.push_back({e->seg, false, false});
+  }
+  // Speed for this tick from the current element's brake curve, acceleration limit and cap.
+  const double a = e->at;
+  const double d = std::max(e->len - s_, 0.0);
+  const double vb = -a * ts + std::sqrt(a * a * ts * ts + e->v_exit * e->v_exit + 2 * a * d);
+  const double cap = hold_ ? 0.0 : Cap(*e);
+  double vn = std::min(vb, std::max(v_ - a * ts, std::min(v_ + a * ts, cap)));
+  vn = std::max(vn, 0.0);
+  double dist = vn * ts;
+  // Distribute the tick's distance over the elements it reaches.
+  while (true) {
+    if (s_ + dist < e->len - 1e-9) {
+      s_ += dist;
+      pos_ = e->Position(s_);
+      break;
+    }
+    dist -= std::max(e->len - s_, 0.0);
+    const bool stop_here = e->stop_end || count_ == 1;
+    pos_ = e->p1;
+    s_ = 0;
+    FinishCurrent();
+    if (stop_here || waiting_) {
+      vn = 0;
+      break;
+    }
+    e = &At(0);
+    started_ = true;
+    if (e->seg_offset == 0) marks_.push_back({e->seg, false, false});
+  }
+  v_ = vn;
+  return pos_;
+}
+
+}  // namespace cell::servo

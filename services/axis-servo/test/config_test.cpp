@@ -1,0 +1,141 @@
+// Station machine configuration: the shipped station files load; bad or missing values name file, key
+// and allowed range; tables owned by others are ignored.
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "cell/error/error.h"
+#include "cell/servo/config.h"
+
+namespace cell::servo {
+namespace {
+
+const std::string kStations = std::string(CELL_SOURCE_DIR) + "/deploy/stations/";
+
+TEST(Config, ShippedStationsLoad) {
+  for (const char* id : {"KT01", "KT02", "KT03", "KT04"}) {
+    MachineConfig c = LoadMachineConfig(kStations + id + ".toml");
+    EXPECT_EQ(c.station_id, id);
+    EXPECT_EQ(c.dialect, "ktapl");
+    EXPECT_TRUE(c.axes[kX].present && c.axes[kY].present && c.axes[kZ].present);
+    EXPECT_EQ(c.axes[kB].type, AxisType::kIndex);
+    EXPECT_GT(c.axes[kB].index_increment, 0);
+    EXPECT_DOUBLE_EQ(c.in_position, 0.025);
+    EXPECT_DOUBLE_EQ(c.servo_period_s, 0.001);
+    EXPECT_FALSE(c.tools.empty());  // from the station's [[tools]]
+  }
+  MachineConfig ok = LoadMachineConfig(kStations + "OK01.toml");
+  EXPECT_EQ(ok.kind, "lathe");
+  EXPECT_TRUE(ok.axes[kX].diameter);
+  EXPECT_FALSE(ok.axes[kY].present);
+}
+
+const char* kMinimal = R"(
+[station]
+id = "T1"
+dialect = "ktapl"
+owner_specific = "ignored"
+[scheduler]
+anything = [1, 2, 3]
+[machine]
+kind = "hmc"
+[axes.x]
+min = 0
+max = 500
+max_velocity = 10000
+rapid = 20000
+max_acceleration = 2000
+max_jerk = 50000
+following_error_limit = 0.5
+drive = { motor_inertia = 0.002, load_inertia = 0.001, viscous_friction = 0.002, max_torque = 20, units_per_rev = 10 }
+[axes.z]
+min = 0
+max = 500
+max_velocity = 10000
+rapid = 20000
+max_acceleration = 2000
+max_jerk = 50000
+following_error_limit = 0.5
+drive = { motor_inertia = 0.002, load_inertia = 0.001, viscous_friction = 0.002, max_torque = 20, units_per_rev = 10 }
+[spindle]
+max_rpm = 4000
+acceleration = 2000
+[magazine]
+sockets = 30
+[times]
+tool_change = 5
+pallet_change = 20
+)";
+
+std::string Replace(std::string s, const std::string& from, const std::string& to) {
+  auto p = s.find(from);
+  EXPECT_NE(p, std::string::npos) << from;
+  return s.replace(p, from.size(), to);
+}
+
+std::string ErrorOf(const std::string& text) {
+  try {
+    ParseMachineConfig(text, "stations/T1.toml");
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), Errc::kInvalidArgument);
+    return e.what();
+  }
+  return "";
+}
+
+TEST(Config, MinimalParsesAndIgnoresForeignTables) {
+  MachineConfig c = ParseMachineConfig(kMinimal, "stations/T1.toml");
+  EXPECT_EQ(c.station_id, "T1");
+  EXPECT_DOUBLE_EQ(c.axes[kX].max_acceleration, 2000);
+  EXPECT_DOUBLE_EQ(c.path_tolerance, 0.02);  // default
+  EXPECT_GT(c.axes[kX].drive.bandwidth_hz, 0);
+}
+
+TEST(Config, BadValueNamesFileKeyAndRange) {
+  std::string e = ErrorOf(Replace(kMinimal, "max_jerk = 50000\nfollowing", "max_jerk = -3\nfollowing"));
+  EXPECT_NE(e.find("stations/T1.toml"), std::string::npos) << e;
+  EXPECT_NE(e.find("axes.x.max_jerk"), std::string::npos) << e;
+  EXPECT_NE(e.find("(0, 1e+09]"), std::string::npos) << e;
+  EXPECT_NE(e.find("-3"), std::string::npos) << e;
+
+  e = ErrorOf(Replace(kMinimal, "[machine]\nkind = \"hmc\"", "[machine]\nkind = \"hmc\"\nservo_period_ms = 50"));
+  EXPECT_NE(e.find("machine.servo_period_ms"), std::string::npos) << e;
+  EXPECT_NE(e.find("[0.1, 10]"), std::string::npos) << e;
+
+  e = ErrorOf(Replace(kMinimal, "sockets = 30", "sockets = \"many\""));
+  EXPECT_NE(e.find("magazine.sockets"), std::string::npos) << e;
+
+  e = ErrorOf(Replace(kMinimal, "max = 500\nmax_velocity", "max = -1\nmax_velocity"));
+  EXPECT_NE(e.find("axes.x.max"), std::string::npos) << e;
+
+  e = ErrorOf(Replace(kMinimal, "max_torque = 20, units_per_rev = 10 }\n[axes.z]",
+                      "max_torque = 0.5, units_per_rev = 10 }\n[axes.z]"));
+  EXPECT_NE(e.find("axes.x.drive.max_torque"), std::string::npos) << e;
+}
+
+TEST(Config, MissingValuesAreNamed) {
+  std::string e = ErrorOf(Replace(kMinimal, "following_error_limit = 0.5\ndrive", "drive"));
+  EXPECT_NE(e.find("axes.x.following_error_limit: missing"), std::string::npos) << e;
+  e = ErrorOf(Replace(kMinimal, "[times]\ntool_change = 5\n", "[times]\n"));
+  EXPECT_NE(e.find("times.tool_change: missing"), std::string::npos) << e;
+  e = ErrorOf(Replace(kMinimal, "[machine]\nkind = \"hmc\"", "[machinex]\nkind = \"hmc\""));
+  EXPECT_NE(e.find("missing table [machine]"), std::string::npos) << e;
+  try {
+    LoadMachineConfig("/nonexistent/ZZ99.toml");
+    FAIL();
+  } catch (const Error& err) {
+    EXPECT_EQ(err.code(), Errc::kNotFound);
+    EXPECT_NE(std::string(err.what()).find("ZZ99.toml"), std::string::npos);
+  }
+}
+
+TEST(Config, LatheNeedsDiameterX) {
+  std::string lathe = Replace(kMinimal, "kind = \"hmc\"", "kind = \"lathe\"");
+  std::string e = ErrorOf(lathe);
+  EXPECT_NE(e.find("axes.x.diameter"), std::string::npos) << e;
+  MachineConfig c = ParseMachineConfig(Replace(lathe, "[axes.x]\n", "[axes.x]\ndiameter = true\n"), "x");
+  EXPECT_TRUE(c.axes[kX].diameter);
+}
+
+}  // namespace
+}  // namespace cell::servo

@@ -1,0 +1,314 @@
+// Machine-level behaviour: servo and plant, alarms, flow control, clocks, devices, lathe and index axes.
+#include <gtest/gtest.h>
+
+#include <chrono>
+
+#include "cell/error/error.h"
+#include "cell/servo/machine.h"
+#include "test_util.h"
+
+namespace cell::servo {
+namespace {
+
+using testing::Find;
+using testing::Line;
+using testing::LimitChecker;
+using testing::Rapid;
+using testing::RunChecked;
+
+Machine Kt(ClockKind clock = ClockKind::kVirtual) { return Machine(DefaultMachineConfig("ktapl"), clock); }
+
+TEST(Servo, FollowingErrorNonZeroWhileAcceleratingAndBounded) {
+  Machine m = Kt();
+  m.Push(Line(1, 300, 0, 0, 9000, true));
+  double max_accel_fe = 0, max_fe = 0, cruise_fe = 1e9;
+  double prev_v = 0;
+  while (m.Step()) {
+    const double v = (m.commanded()[kX]);
+    (void)v;
+    const AxisState s = m.State();
+    const double fe = std::abs(s.following_error[kX]);
+    max_fe = std::max(max_fe, fe);
+    const double vel = s.velocity[kX] / 60.0;
+    const double acc = (vel - prev_v) / m.period();
+    prev_v = vel;
+    if (std::abs(acc) > 0.5 * m.config().axes[kX].max_acceleration) max_accel_fe = std::max(max_accel_fe, fe);
+  }
+  EXPECT_GT(max_accel_fe, 1e-4);                                      // physically non-zero
+  EXPECT_LT(max_fe, 0.2 * m.config().axes[kX].following_error_limit);  // and bounded
+  EXPECT_LT(std::abs(m.following_error()[kX]), 1e-4);                 // settles at rest
+  (void)cruise_fe;
+}
+
+TEST(Servo, DiffOverAlarmWhenTheDriveCannotFollow) {
+  MachineConfig c = DefaultMachineConfig("ktapl");
+  c.axes[kX].drive.max_torque = 1.0;  // far too weak for the configured acceleration
+  Machine m(c, ClockKind::kVirtual);
+  m.Push(Line(1, 300, 0, 0, 9000, true));
+  m.Push(Line(2, 0, 0, 0, 9000, true));
+  auto ev = m.RunUntilIdle(30);
+  (void)ev;
+  auto events = m.TakeEvents();
+  EXPECT_EQ(m.alarm().code, AlarmCode::kFollowingError);
+  EXPECT_NE(m.alarm().text.find("DIFF over X"), std::string::npos) << m.alarm().text;
+  EXPECT_EQ(m.execution(), Execution::kStopped);
+  EXPECT_NE(Find(events, EventKind::kAlarm, 1), nullptr);
+  EXPECT_NE(Find(events, EventKind::kFlushed, 2), nullptr);
+  EXPECT_THROW(m.Push(Line(3, 0, 0, 0, 100)), Error);
+  m.Reset();
+  EXPECT_EQ(m.alarm().code, AlarmCode::kNone);
+  EXPECT_NO_THROW(m.Push(Line(3, 0, 0, 0, 100)));
+}
+
+TEST(Machine, SoftLimitAlarmBeforeMotion) {
+  Machine m = Kt();
+  m.Push(Rapid(1, 100, 100, 100));
+  m.Push(Line(2, 900, 100, 100, 3000));  // X max is 800
+  m.Push(Line(3, 100, 200, 100, 3000));
+  m.RunUntilIdle(30);
+  auto ev = m.TakeEvents();
+  EXPECT_EQ(m.alarm().code, AlarmCode::kSoftLimit);
+  EXPECT_NE(m.alarm().text.find("X+"), std::string::npos) << m.alarm().text;
+  EXPECT_NE(Find(ev, EventKind::kCompleted, 1), nullptr);
+  EXPECT_EQ(Find(ev, EventKind::kStarted, 2), nullptr);  // no motion of the bad segment
+  EXPECT_NE(Find(ev, EventKind::kFlushed, 3), nullptr);
+  EXPECT_NEAR(m.actual()[kX], 100, 1e-3);
+  // An arc whose bulge leaves the travel: the check covers the arc's extent, not only its end point.
+  m.Reset();
+  m.Push(testing::Arc(4, 100, 300, 100, 100, 200, true, 2000));  // bulges to x = 200
+  m.Push(testing::Arc(5, 100, 100, 100, 100, 200, true, 2000));  // bulges to x = 0, inside -5
+  m.RunUntilIdle(60);
+  EXPECT_EQ(m.alarm().code, AlarmCode::kNone) << m.alarm().text;
+  m.Push(testing::Arc(6, 100, 500, 100, 100, 300, false, 2000));  // r 200 cw from (100,100): x to -100
+  m.RunUntilIdle(60);
+  EXPECT_EQ(m.alarm().code, AlarmCode::kSoftLimit);
+  EXPECT_NE(m.alarm().text.find("X-"), std::string::npos) << m.alarm().text;
+}
+
+TEST(Machine, FlowControlUnderSlowConsumer) {
+  MachineConfig c = DefaultMachineConfig("ktapl");
+  c.queue_capacity = 4;
+  Machine m(c, ClockKind::kVirtual);
+  LimitChecker check(m);
+  EXPECT_EQ(m.credits(), 4u);
+  std::uint64_t next = 1, completed = 0;
+  const std::uint64_t total = 40;
+  std::size_t max_queued = 0;
+  // The producer is fast but only sends on credit; every segment is long compared with the queue.
+  auto produce = [&] {
+    while (m.credits() > 0 && next <= total) {
+      const double x = (next % 2) ? 200 : 100;
+      m.Push(Line(next, x, 10.0 * next, 50, 6000));
+      ++next;
+    }
+    max_queued = std::max(max_queued, m.capacity() - m.credits());
+  };
+  produce();
+  EXPECT_THROW(m.Push(Line(99, 0, 0, 0, 100)), Error);  // no credit left
+  std::uint64_t expect_id = 1;
+  std::vector<Event> ev = RunChecked(m, check, 600, [&] {
+    produce();
+    for (const auto& e : m.TakeEvents()) {
+      if (e.kind == EventKind::kCompleted) {
+        EXPECT_EQ(e.segment_id, expect_id) << "completions in order";
+        ++expect_id;
+        ++completed;
+      }
+    }
+  });
+  EXPECT_EQ(completed, total);
+  EXPECT_LE(max_queued, 4u);
+  EXPECT_EQ(m.credits(), 4u);
+  check.ExpectWithinLimits();
+
+  // A starved consumer: segments arrive slower than the machine runs them; it slows down safely.
+  Machine s(c, ClockKind::kVirtual);
+  LimitChecker check2(s);
+  int sent = 0;
+  for (int tick = 0; tick < 20000; ++tick) {
+    if (tick % 150 == 0 && sent < 30 && s.credits() > 0) {
+      ++sent;
+      s.Push(Line(sent, 100 + 10 * sent, 100 + ((sent % 2) ? 5 : 0), 50, 9000));
+    }
+    if (s.Step()) check2.Sample();
+  }
+  check2.ExpectWithinLimits();
+  EXPECT_EQ(s.credits(), 4u);
+  EXPECT_NEAR(s.actual()[kX], 400, 1e-3);
+}
+
+TEST(Machine, AbortFlushesAndStops) {
+  Machine m = Kt();
+  LimitChecker check(m);
+  m.Push(Line(1, 500, 0, 0, 9000));
+  m.Push(Line(2, 500, 500, 0, 9000));
+  for (int i = 0; i < 500; ++i) {
+    m.Step();
+    check.Sample();
+  }
+  m.Abort();
+  auto ev = RunChecked(m, check, 30);
+  EXPECT_NE(Find(ev, EventKind::kFlushed, 1), nullptr);
+  EXPECT_NE(Find(ev, EventKind::kFlushed, 2), nullptr);
+  EXPECT_EQ(m.credits(), m.capacity());
+  EXPECT_EQ(m.execution(), Execution::kReady);
+  EXPECT_LT(m.actual()[kX], 499);
+  check.ExpectWithinLimits();
+}
+
+TEST(Clock, VirtualAndRealAgreeOnCycleTime) {
+  auto program = [](Machine& m) {
+    m.Push(Rapid(1, 20, 10, 0));
+    m.Push(Line(2, 40, 30, 0, 3000));
+    m.Push(Line(3, 60, 10, 0, 3000));
+    Segment d;
+    d.id = 4;
+    d.kind = SegmentKind::kDwell;
+    d.dwell_s = 0.1;
+    m.Push(d);
+    m.Push(Line(5, 20, 10, 0, 4000, true));
+  };
+  double cycle[2];
+  double wall = 0;
+  for (int k = 0; k < 2; ++k) {
+    Machine m = Kt(k == 0 ? ClockKind::kVirtual : ClockKind::kReal);
+    program(m);
+    const auto w0 = std::chrono::steady_clock::now();
+    double first = -1, last = -1;
+    for (int i = 0; i < 5000 && last < 0; ++i) {
+      m.Step();
+      for (const auto& e : m.TakeEvents()) {
+        if (e.kind == EventKind::kStarted && first < 0) first = e.machine_time;
+        if (e.kind == EventKind::kCompleted && e.segment_id == 5) last = e.machine_time;
+      }
+    }
+    ASSERT_GE(last, 0);
+    cycle[k] = last - first + m.period();
+    if (k == 1) wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - w0).count();
+  }
+  EXPECT_NEAR(cycle[1], cycle[0], 0.01 * cycle[0]);
+  EXPECT_NEAR(wall, cycle[1], 0.05 * cycle[1] + 0.02);  // the real clock really paces
+  EXPECT_GT(cycle[0], 0.5);
+}
+
+TEST(Devices, ToolChangeFromMagazine) {
+  Machine m = Kt();
+  m.SetToolTable({{"1001", 1}, {"1002", 5}});
+  Segment t;
+  t.id = 1;
+  t.kind = SegmentKind::kToolChange;
+  t.tool = "1002";
+  m.Push(t);
+  m.RunUntilIdle();
+  auto ev = m.TakeEvents();
+  const Event* done = Find(ev, EventKind::kCompleted, 1);
+  ASSERT_NE(done, nullptr);
+  const double expect = m.config().tool_change_time + 4 * m.config().magazine_index_time;
+  EXPECT_NEAR(done->machine_time, expect, 2 * m.period());
+  EXPECT_EQ(m.State().tool, "1002");
+  // A tool that is not in the magazine is an alarm.
+  t.id = 2;
+  t.tool = "4711";
+  m.Push(t);
+  m.RunUntilIdle();
+  EXPECT_EQ(m.alarm().code, AlarmCode::kToolNotInMagazine);
+  EXPECT_NE(m.alarm().text.find("4711"), std::string::npos);
+  EXPECT_EQ(m.State().tool, "1002");
+}
+
+TEST(Devices, SpindleCoolantPalletTimes) {
+  Machine m = Kt();
+  m.SetPallets(3, 7);
+  Segment s;
+  s.id = 1;
+  s.kind = SegmentKind::kSpindle;
+  s.spindle_rpm = 2000;
+  s.spindle_dir = SpindleDirection::kCW;
+  m.Push(s);
+  Segment c;
+  c.id = 2;
+  c.kind = SegmentKind::kCoolant;
+  c.coolant = CoolantMode::kFlood;
+  m.Push(c);
+  Segment p;
+  p.id = 3;
+  p.kind = SegmentKind::kPalletChange;
+  p.pallet = 7;
+  m.Push(p);
+  double mid_rpm = -1;
+  std::vector<Event> ev;
+  while (m.Step()) {
+    if (mid_rpm < 0 && m.machine_time() >= 0.5) mid_rpm = m.State().spindle_rpm;
+    for (auto& e : m.TakeEvents()) ev.push_back(e);
+  }
+  const double ramp = 2000 / m.config().spindle_accel_rpm_s;
+  EXPECT_NEAR(Find(ev, EventKind::kCompleted, 1)->machine_time, ramp, 2 * m.period());
+  EXPECT_NEAR(mid_rpm, 0.5 * m.config().spindle_accel_rpm_s, 5);
+  EXPECT_NEAR(Find(ev, EventKind::kCompleted, 2)->machine_time, ramp + m.config().coolant_time, 3 * m.period());
+  EXPECT_NEAR(Find(ev, EventKind::kCompleted, 3)->machine_time,
+              ramp + m.config().coolant_time + m.config().pallet_change_time, 4 * m.period());
+  const AxisState st = m.State();
+  EXPECT_EQ(st.spindle_rpm, 2000);
+  EXPECT_EQ(st.coolant, CoolantMode::kFlood);
+  EXPECT_EQ(st.pallet_on_table, 7);
+  EXPECT_EQ(st.pallet_on_shuttle, 3);
+}
+
+TEST(Devices, BIndexTableUnclampsMovesClamps) {
+  Machine m = Kt();
+  const AxisConfig& b = m.config().axes[kB];
+  Segment s = Rapid(1, 0, 0, 0);
+  s.end[kB] = 90;
+  s.axes = 0x17;
+  m.Push(s);
+  LimitChecker check(m);
+  auto ev = RunChecked(m, check, 60);
+  const Event* done = Find(ev, EventKind::kCompleted, 1);
+  ASSERT_NE(done, nullptr);
+  EXPECT_NEAR(m.actual()[kB], 90, 1e-3);
+  const double V = b.rapid / 60, A = b.max_acceleration;
+  const double move = 90 / V + V / A;  // lower bound of the rotation itself
+  EXPECT_GT(done->machine_time, b.unclamp_time + b.clamp_time + move);
+  EXPECT_LT(done->machine_time, b.unclamp_time + b.clamp_time + move * 1.3);
+  check.ExpectWithinLimits();
+  s.id = 2;
+  s.end[kB] = 90.5;  // not on the 1-degree index
+  m.Push(s);
+  m.RunUntilIdle();
+  EXPECT_EQ(m.alarm().code, AlarmCode::kInvalidSegment);
+}
+
+TEST(Lathe, XIsProgrammedInDiameter) {
+  Machine m(DefaultMachineConfig("okuma"), ClockKind::kVirtual);
+  Segment s;
+  s.id = 1;
+  s.kind = SegmentKind::kLinear;
+  s.end = {100, 0, -50, 0, 0, 0};
+  s.axes = 0x05;
+  s.feed = 2000;
+  m.Push(s);
+  // A per-revolution feed needs the spindle: 0.2 mm/rev at 1000 rpm = 200 mm/min.
+  Segment sp;
+  sp.id = 2;
+  sp.kind = SegmentKind::kSpindle;
+  sp.spindle_rpm = 1000;
+  sp.spindle_dir = SpindleDirection::kCW;
+  m.Push(sp);
+  Segment f = s;
+  f.id = 3;
+  f.end = {100, 0, -60, 0, 0, 0};
+  f.feed = 0.2;
+  f.feed_mode = FeedMode::kPerRevolution;
+  f.exact_stop = true;
+  m.Push(f);
+  std::vector<Event> ev;
+  while (m.Step())
+    for (auto& e : m.TakeEvents()) ev.push_back(e);
+  EXPECT_NEAR(m.actual()[kX], 50, 1e-3);           // radius inside the machine
+  EXPECT_NEAR(m.State().actual[kX], 100, 2e-3);    // diameter outside
+  const double t = Find(ev, EventKind::kCompleted, 3)->machine_time - Find(ev, EventKind::kStarted, 3)->machine_time;
+  EXPECT_NEAR(t, 10.0 / (200.0 / 60), 0.2);
+}
+
+}  // namespace
+}  // namespace cell::servo
