@@ -45,7 +45,8 @@ struct CandidateRec {
   std::int64_t backlog_s = 0;
   bool online = false;
   bool fault = false;
-  std::uint32_t missing_begin = 0;  // this candidate's tools not held: AllocationRec::missing[begin, begin+count)
+  std::uint32_t missing_begin =
+      0;  // this candidate's tools not held: AllocationRec::missing[begin, begin+count)
   std::uint32_t missing_count = 0;
   bool eligible() const { return online && !fault && missing_count == 0; }
 };
