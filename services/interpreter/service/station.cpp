@@ -139,7 +139,7 @@ Station::Station(bus::Participant& p, config::StationConfig cfg, const std::file
     : bus_(p),
       cfg_(std::move(cfg)),
       db_(store::Database::Open(data_dir / ("interpreter-" + cfg_.id + ".db"))),
-      tools_({}),
+      tools_(std::vector<tooltable::ToolEntry>{}),
       status_w_(p, bus::topics::kStationStatus, bus::QosKind::kState),
       tools_w_(p, bus::topics::kToolTable, bus::QosKind::kState),
       vars_w_(p, bus::topics::kVariables, bus::QosKind::kState),
@@ -386,7 +386,7 @@ void Station::Worker(std::stop_token st) {
     }
     FlushOutbox();
     std::unique_lock lk(queue_mu_);
-    queue_cv_.wait_for(lk, st, std::chrono::milliseconds(500), [] { return false; });
+    queue_cv_.wait_for(lk, std::chrono::milliseconds(500));
   }
   worker_alive_ = false;
 }

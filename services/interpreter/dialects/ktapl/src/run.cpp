@@ -433,7 +433,6 @@ class KtRun final : public Run, public ExprContext {
   bool block_delete_ = false, optional_stop_ = false, b_index_ = true;
   bool file_open_ = false, cer_mas_ = false;
   std::string fwr_pending_;
-  bool fwr_continue_ = false;
   std::array<double, 8> probe_latch_{};
   std::array<double, 6> dat_{};
 

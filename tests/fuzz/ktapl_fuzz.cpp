@@ -1,0 +1,33 @@
+// libFuzzer target: any bytes as a KT-APL program (and as a tool table / heading) must never crash the
+// interpreter; runs are bounded so that endless programs terminate.
+#include <cstddef>
+#include <cstdint>
+#include <string>
+
+#include "cell/error/error.h"
+#include "cell/interp/interp.h"
+#include "cell/interp/ktapl.h"
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  std::string text(reinterpret_cast<const char*>(data), size);
+  (void)cell::interp::ExtractKtaplMetadata(text);
+  try {
+    (void)cell::interp::ParseKtaplToolTable(text);
+  } catch (const cell::Error&) {
+  }
+  cell::interp::RunOptions opt;
+  opt.program_name = "fuzz";
+  opt.program_text = text;
+  opt.params["MAX_IDLE_BLOCKS"] = "2000";
+  opt.library = [](const std::string& name) -> std::optional<std::string> {
+    if (name == "LIBSUB") return std::string("(DFS,LIBSUB)\nG91X1.F0\n(END)\n");
+    return std::nullopt;
+  };
+  auto run = cell::interp::StartRun(opt);
+  for (int i = 0; i < 20000; ++i) {
+    cell::interp::Step s = run->Next();
+    if (s.kind != cell::interp::Step::kCanon) break;
+    (void)cell::interp::ToJsonLine(s.canon);
+  }
+  return 0;
+}
