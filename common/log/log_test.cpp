@@ -5,7 +5,6 @@
 #include <sys/stat.h>
 
 #include <cstdio>
-#include <regex>
 #include <string>
 
 #include "cell/error/error.h"
@@ -20,6 +19,28 @@ std::string ReadAll(std::FILE* f) {
   char buf[512];
   size_t n;
   while ((n = std::fread(buf, 1, sizeof buf, f)) > 0) out.append(buf, n);
+  return out;
+}
+
+// Checks that every line starts with an ISO-8601 UTC timestamp "YYYY-MM-DDTHH:MM:SS.mmmZ " and returns the
+// text with those timestamps removed ("" if a line lacks one). (No std::regex: GCC 12 warns inside it
+// under the sanitizer build.)
+std::string StripTimestamps(const std::string& text) {
+  const std::string shape = "dddd-dd-ddTdd:dd:dd.dddZ ";
+  std::string out;
+  size_t pos = 0;
+  while (pos < text.size()) {
+    size_t end = text.find('\n', pos);
+    end = end == std::string::npos ? text.size() : end + 1;
+    std::string line = text.substr(pos, end - pos);
+    if (line.size() < shape.size()) return "";
+    for (size_t i = 0; i < shape.size(); ++i) {
+      bool ok = shape[i] == 'd' ? (line[i] >= '0' && line[i] <= '9') : line[i] == shape[i];
+      if (!ok) return "";
+    }
+    out += line.substr(shape.size());
+    pos = end;
+  }
   return out;
 }
 
@@ -50,11 +71,10 @@ TEST_F(LogTest, OneLinePerEventNamingServiceAndStation) {
   spdlog::info("program {} started", "O1234");
   spdlog::error("two\nlines");
   std::string text = ReadAll(out_);
-  std::regex line(
-      R"(\d{4}-\d\d-\d\dT\d\d:\d\d:\d\d\.\d{3}Z cell-interpreter\[KT01\] info: program O1234 started
-\d{4}-\d\d-\d\dT\d\d:\d\d:\d\d\.\d{3}Z cell-interpreter\[KT01\] error: two\\nlines
-)");
-  EXPECT_TRUE(std::regex_match(text, line)) << text;
+  EXPECT_EQ(StripTimestamps(text),
+            "cell-interpreter[KT01] info: program O1234 started\n"
+            "cell-interpreter[KT01] error: two\\nlines\n")
+      << text;
 }
 
 TEST_F(LogTest, HostServicesHaveNoStation) {
@@ -105,7 +125,7 @@ TEST_F(LogTest, JournalFormatWhenStreamMatchesJournalStream) {
   o.out = other;
   cell::log::Init("cell-scheduler", "", o);
   spdlog::error("disk full");
-  EXPECT_TRUE(std::regex_match(ReadAll(other), std::regex(R"(\d{4}-.*Z cell-scheduler error: disk full\n)")));
+  EXPECT_EQ(StripTimestamps(ReadAll(other)), "cell-scheduler error: disk full\n");
   spdlog::set_default_logger(nullptr);
   std::fclose(other);
   unsetenv("JOURNAL_STREAM");
