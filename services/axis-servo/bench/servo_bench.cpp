@@ -8,8 +8,8 @@
 #include <fmt/format.h>
 
 #include <chrono>
-#include <ctime>
 #include <cmath>
+#include <ctime>
 #include <vector>
 
 #include "cell/servo/machine.h"
@@ -75,7 +75,8 @@ Result Run(Machine& m, const Program& p, bool contour) {
       const Eigen::Vector3d a = m.actual().head<3>();
       double best = 1e18;
       std::size_t best_i = seg_index;
-      const std::size_t lo = seg_index > 20 ? seg_index - 20 : 0, hi = std::min(p.pts.size() - 1, seg_index + 40);
+      const std::size_t lo = seg_index > 20 ? seg_index - 20 : 0,
+                        hi = std::min(p.pts.size() - 1, seg_index + 40);
       for (std::size_t i = lo; i < hi; ++i) {
         const Eigen::Vector3d d = p.pts[i + 1] - p.pts[i];
         const double l2 = d.squaredNorm();
@@ -124,7 +125,7 @@ Program Drilling(const MachineConfig& c, int nx, int ny) {
   for (int j = 0; j < ny; ++j) {
     for (int i = 0; i < nx; ++i) {
       const double x = 100 + 25 * ((j % 2) ? nx - 1 - i : i), y = 100 + 25 * j;
-      p.segs.push_back(Move(id++, SegmentKind::kRapid, x, y, 105, 0));   // over the hole, R plane
+      p.segs.push_back(Move(id++, SegmentKind::kRapid, x, y, 105, 0));  // over the hole, R plane
       p.lower_bound += (Eigen::Vector3d(x, y, 105) - cur).cwiseAbs().maxCoeff() / std::min(rapid, rz);
       Segment drill = Move(id++, SegmentKind::kLinear, x, y, 80, 250);  // drill 25 mm at 250 mm/min
       drill.exact_stop = true;
@@ -149,10 +150,11 @@ void Report() {
     Machine m2(kt, ClockKind::kVirtual);
     r.max_contour = Run(m2, p, true).max_contour;  // second run: the error check is not timed
     fmt::print("10,000-segment contour (three laps of a five-lobed flower, 0.3 mm blocks) at 6000 mm/min:\n");
-    fmt::print("  (a) {:.1f} machine s in {:.3f} wall s / {:.3f} CPU s = {:.0f}x real time by wall clock, "
-               "{:.0f}x by CPU time ({:.0f} ns CPU per tick)\n",
-               r.machine_s, r.wall_s, r.cpu_s, r.machine_s / r.wall_s, r.machine_s / r.cpu_s,
-               r.cpu_s / r.ticks * 1e9);
+    fmt::print(
+        "  (a) {:.1f} machine s in {:.3f} wall s / {:.3f} CPU s = {:.0f}x real time by wall clock, "
+        "{:.0f}x by CPU time ({:.0f} ns CPU per tick)\n",
+        r.machine_s, r.wall_s, r.cpu_s, r.machine_s / r.wall_s, r.machine_s / r.cpu_s,
+        r.cpu_s / r.ticks * 1e9);
     fmt::print("  (b) cycle {:.3f} s vs feed-limited lower bound {:.3f} s: ratio {:.3f}\n", r.cycle_s,
                p.lower_bound, r.cycle_s / p.lower_bound);
     fmt::print("  (c) max contour error {:.4f} mm vs path tolerance {} mm: ratio {:.2f}\n", r.max_contour,
@@ -163,9 +165,10 @@ void Report() {
     Program p = Drilling(kt, 10, 10);
     Result r = Run(m, p, false);
     fmt::print("drilling pattern, 100 holes (rapid, drill 25 mm at 250 mm/min with exact stop, retract):\n");
-    fmt::print("  (a) {:.1f} machine s in {:.3f} wall s / {:.3f} CPU s = {:.0f}x real time by wall clock, "
-               "{:.0f}x by CPU time\n",
-               r.machine_s, r.wall_s, r.cpu_s, r.machine_s / r.wall_s, r.machine_s / r.cpu_s);
+    fmt::print(
+        "  (a) {:.1f} machine s in {:.3f} wall s / {:.3f} CPU s = {:.0f}x real time by wall clock, "
+        "{:.0f}x by CPU time\n",
+        r.machine_s, r.wall_s, r.cpu_s, r.machine_s / r.wall_s, r.machine_s / r.cpu_s);
     fmt::print("  (b) cycle {:.3f} s vs feed-limited lower bound {:.3f} s: ratio {:.3f}\n", r.cycle_s,
                p.lower_bound, r.cycle_s / p.lower_bound);
   }
@@ -181,8 +184,9 @@ void Report() {
     Result r = Run(m, p, false);
     const double opt = L / V + V / A + A / J;
     fmt::print("long line {} mm at {} mm/min, full stops:\n", L, F);
-    fmt::print("  (b) cycle {:.4f} s vs closed-form optimum {:.4f} s: ratio {:.4f} (lower bound L/F {:.4f} s)\n",
-               r.cycle_s, opt, r.cycle_s / opt, L / V);
+    fmt::print(
+        "  (b) cycle {:.4f} s vs closed-form optimum {:.4f} s: ratio {:.4f} (lower bound L/F {:.4f} s)\n",
+        r.cycle_s, opt, r.cycle_s / opt, L / V);
   }
   {
     // Circle at constant speed: R 100 at 3000 mm/min, 3 turns; the optimum is the rest-to-rest time at

@@ -2,12 +2,12 @@
 
 #include <fmt/format.h>
 
+#include <toml++/toml.h>
 #include <cmath>
 #include <fstream>
 #include <limits>
 #include <optional>
 #include <sstream>
-#include <toml++/toml.h>
 
 #include "cell/error/error.h"
 
@@ -32,16 +32,18 @@ class TableReader {
   // A number in [lo, hi] (open at lo when lo_open). Missing: `fallback`, or an error when none.
   double Number(std::string_view key, double lo, double hi, std::optional<double> fallback,
                 std::string_view unit = "", bool lo_open = false) const {
-    std::string range = fmt::format("{}{}, {}]{}{}", lo_open ? "(" : "[", Fmt(lo), Fmt(hi),
-                                    unit.empty() ? "" : " ", unit);
+    std::string range =
+        fmt::format("{}{}, {}]{}{}", lo_open ? "(" : "[", Fmt(lo), Fmt(hi), unit.empty() ? "" : " ", unit);
     const toml::node* n = table_ ? table_->get(key) : nullptr;
     if (!n) {
       if (fallback) return *fallback;
       Fail(key, fmt::format("missing; allowed range {}", range));
     }
     std::optional<double> v;
-    if (auto f = n->value_exact<double>()) v = *f;
-    else if (auto i = n->value_exact<int64_t>()) v = static_cast<double>(*i);
+    if (auto f = n->value_exact<double>())
+      v = *f;
+    else if (auto i = n->value_exact<int64_t>())
+      v = static_cast<double>(*i);
     if (!v) Fail(key, fmt::format("must be a number in {}", range));
     if (!std::isfinite(*v) || *v < lo || *v > hi || (lo_open && *v == lo))
       Fail(key, fmt::format("{} is outside the allowed range {}", Fmt(*v), range));
@@ -122,8 +124,8 @@ void ReadDrive(const std::string& src, const std::string& prefix, const toml::ta
   d.load_inertia = r.Number("load_inertia", 0, 100, std::nullopt, "kg·m²");
   d.viscous_friction = r.Number("viscous_friction", 0, 100, std::nullopt, "N·m·s/rad");
   d.max_torque = r.Number("max_torque", 0, 10000, std::nullopt, "N·m", true);
-  d.units_per_rev = r.Number("units_per_rev", 0, rotary ? 360.0 : 100.0, std::nullopt,
-                             rotary ? "deg/rev" : "mm/rev", true);
+  d.units_per_rev =
+      r.Number("units_per_rev", 0, rotary ? 360.0 : 100.0, std::nullopt, rotary ? "deg/rev" : "mm/rev", true);
   d.bandwidth_hz = r.Number("bandwidth_hz", 0, 200, 40.0, "Hz", true);
   d.damping = r.Number("damping", 0.3, 3, 1.0);
   d.kp = r.Number("kp", 0, 1e9, 0.0, "N·m/rad");
@@ -133,7 +135,8 @@ void ReadDrive(const std::string& src, const std::string& prefix, const toml::ta
   d.kaff = r.Number("kaff", 0, 1.5, 0.95);
 }
 
-void ReadAxis(const std::string& src, int index, const toml::table* t, const MachineConfig& m, AxisConfig& a) {
+void ReadAxis(const std::string& src, int index, const toml::table* t, const MachineConfig& m,
+              AxisConfig& a) {
   const char name = kAxisNames[index];
   const bool rotary_name = index >= kA;
   TableReader r(src, fmt::format("axes.{}.", name), t);
@@ -167,8 +170,9 @@ void ReadAxis(const std::string& src, int index, const toml::table* t, const Mac
   const double need = (a.drive.motor_inertia + a.drive.load_inertia) * a.max_acceleration * to_rad +
                       a.drive.viscous_friction * a.rapid / 60.0 * to_rad;
   if (need > a.drive.max_torque)
-    r.Fail("drive.max_torque", fmt::format("{:g} N·m cannot give max_acceleration at rapid (needs {:.3g} N·m)",
-                                          a.drive.max_torque, need));
+    r.Fail("drive.max_torque",
+           fmt::format("{:g} N·m cannot give max_acceleration at rapid (needs {:.3g} N·m)",
+                       a.drive.max_torque, need));
 }
 
 }  // namespace
@@ -178,9 +182,8 @@ MachineConfig ParseMachineConfig(std::string_view text, const std::string& sourc
   try {
     root = toml::parse(text, source);
   } catch (const toml::parse_error& e) {
-    throw Error(Errc::kInvalidArgument,
-                fmt::format("{}:{}:{}: {}", source, e.source().begin.line, e.source().begin.column,
-                            e.description()));
+    throw Error(Errc::kInvalidArgument, fmt::format("{}:{}:{}: {}", source, e.source().begin.line,
+                                                    e.source().begin.column, e.description()));
   }
   MachineConfig m;
   m.source = source;
@@ -211,8 +214,7 @@ MachineConfig ParseMachineConfig(std::string_view text, const std::string& sourc
       throw Error(Errc::kInvalidArgument, fmt::format("{}: axes.{}: must be a table", source, k));
     ReadAxis(source, idx, node.as_table(), m, m.axes[idx]);
   }
-  if (!m.axes[kX].present || !m.axes[kZ].present)
-    mach.Fail("", "axes.x and axes.z are required");
+  if (!m.axes[kX].present || !m.axes[kZ].present) mach.Fail("", "axes.x and axes.z are required");
   if (m.kind == "lathe" && !m.axes[kX].diameter)
     throw Error(Errc::kInvalidArgument,
                 fmt::format("{}: axes.x.diameter: a lathe's X is programmed in diameter; set true", source));
@@ -255,15 +257,18 @@ MachineConfig ParseMachineConfig(std::string_view text, const std::string& sourc
       const toml::table* t = (*tools)[i].as_table();
       if (!t) continue;
       ToolSlot slot;
-      if (auto s = (*t)["tool"].value_exact<std::string>()) slot.tool = *s;
-      else if (auto n = (*t)["tool"].value_exact<int64_t>()) slot.tool = std::to_string(*n);
-      else continue;
+      if (auto s = (*t)["tool"].value_exact<std::string>())
+        slot.tool = *s;
+      else if (auto n = (*t)["tool"].value_exact<int64_t>())
+        slot.tool = std::to_string(*n);
+      else
+        continue;
       auto sock = (*t)["socket"].value_exact<int64_t>();
       if (!sock) continue;
       if (*sock < 1 || *sock > m.magazine_sockets)
         throw Error(Errc::kInvalidArgument,
-                    fmt::format("{}: tools[{}].socket: {} is outside the magazine's sockets [1, {}]", source, i,
-                                *sock, m.magazine_sockets));
+                    fmt::format("{}: tools[{}].socket: {} is outside the magazine's sockets [1, {}]", source,
+                                i, *sock, m.magazine_sockets));
       slot.socket = static_cast<int>(*sock);
       m.tools.push_back(slot);
     }

@@ -19,16 +19,26 @@ bool IsPathMotion(SegmentKind k) {
 
 const char* SegmentKindName(SegmentKind k) {
   switch (k) {
-    case SegmentKind::kRapid: return "rapid";
-    case SegmentKind::kLinear: return "linear";
-    case SegmentKind::kArc: return "arc";
-    case SegmentKind::kDwell: return "dwell";
-    case SegmentKind::kToolChange: return "tool_change";
-    case SegmentKind::kSpindle: return "spindle";
-    case SegmentKind::kCoolant: return "coolant";
-    case SegmentKind::kPalletChange: return "pallet_change";
-    case SegmentKind::kProbe: return "probe";
-    case SegmentKind::kEnd: return "end";
+    case SegmentKind::kRapid:
+      return "rapid";
+    case SegmentKind::kLinear:
+      return "linear";
+    case SegmentKind::kArc:
+      return "arc";
+    case SegmentKind::kDwell:
+      return "dwell";
+    case SegmentKind::kToolChange:
+      return "tool_change";
+    case SegmentKind::kSpindle:
+      return "spindle";
+    case SegmentKind::kCoolant:
+      return "coolant";
+    case SegmentKind::kPalletChange:
+      return "pallet_change";
+    case SegmentKind::kProbe:
+      return "probe";
+    case SegmentKind::kEnd:
+      return "end";
   }
   return "?";
 }
@@ -36,16 +46,22 @@ const char* SegmentKindName(SegmentKind k) {
 namespace {
 
 // Tool numbers may carry a data-set suffix ("33412.5"): the physical tool is the part before the dot.
-std::string BaseTool(const std::string& t) { return t.substr(0, t.find('.')); }
+std::string BaseTool(const std::string& t) {
+  return t.substr(0, t.find('.'));
+}
 
 }  // namespace
 
 const char* ExecutionName(Execution e) {
   switch (e) {
-    case Execution::kReady: return "READY";
-    case Execution::kActive: return "ACTIVE";
-    case Execution::kFeedHold: return "FEED_HOLD";
-    case Execution::kStopped: return "STOPPED";
+    case Execution::kReady:
+      return "READY";
+    case Execution::kActive:
+      return "ACTIVE";
+    case Execution::kFeedHold:
+      return "FEED_HOLD";
+    case Execution::kStopped:
+      return "STOPPED";
   }
   return "?";
 }
@@ -102,7 +118,9 @@ void Machine::SetToolTable(const std::vector<ToolSlot>& sockets) {
     if (s.tool != spindle_tool_ || spindle_tool_.empty()) magazine_[s.socket] = s.tool;
 }
 
-void Machine::SetPartModel(int pallet, PartModel model) { parts_[pallet] = std::move(model); }
+void Machine::SetPartModel(int pallet, PartModel model) {
+  parts_[pallet] = std::move(model);
+}
 void Machine::SetPallets(int on_table, int on_shuttle) {
   pallet_table_ = on_table;
   pallet_shuttle_ = on_shuttle;
@@ -110,9 +128,8 @@ void Machine::SetPallets(int on_table, int on_shuttle) {
 
 void Machine::Push(const Segment& segment) {
   if (alarm_.code != AlarmCode::kNone)
-    throw Error(Errc::kFailedPrecondition,
-                fmt::format("segment {} refused: alarm {} active, reset first", segment.id,
-                            static_cast<int>(alarm_.code)));
+    throw Error(Errc::kFailedPrecondition, fmt::format("segment {} refused: alarm {} active, reset first",
+                                                       segment.id, static_cast<int>(alarm_.code)));
   if (queue_.size() >= capacity())
     throw Error(Errc::kFailedPrecondition,
                 fmt::format("segment {} refused: no credit (queue of {} full)", segment.id, capacity()));
@@ -134,9 +151,12 @@ AxisVector Machine::EndOf(const Segment& s, const AxisVector& start) const {
 
 double Machine::FeedOf(const Segment& s, double length) const {
   switch (s.feed_mode) {
-    case FeedMode::kPerMinute: return s.feed / 60.0;
-    case FeedMode::kPerRevolution: return s.feed * std::abs(spindle_rpm_) / 60.0;
-    case FeedMode::kInverseTime: return s.feed * length / 60.0;
+    case FeedMode::kPerMinute:
+      return s.feed / 60.0;
+    case FeedMode::kPerRevolution:
+      return s.feed * std::abs(spindle_rpm_) / 60.0;
+    case FeedMode::kInverseTime:
+      return s.feed * length / 60.0;
   }
   return 0;
 }
@@ -270,9 +290,8 @@ void Machine::FeedPlanner() {
     Entry& e = queue_[next_];
     const Segment& s = e.seg;
     const AxisVector start = planner_.EndOfPath();
-    const bool index_move = IsPathMotion(s.kind) && present_[kB] &&
-                            cfg_.axes[kB].type == AxisType::kIndex && (s.axes >> kB & 1) &&
-                            std::abs(s.end[kB] - start[kB]) > 1e-9;
+    const bool index_move = IsPathMotion(s.kind) && present_[kB] && cfg_.axes[kB].type == AxisType::kIndex &&
+                            (s.axes >> kB & 1) && std::abs(s.end[kB] - start[kB]) > 1e-9;
     if (IsPathMotion(s.kind) && !index_move) {
       if (planner_.Full()) break;
       std::string why;
@@ -453,7 +472,8 @@ bool Machine::StartBarrier(Entry& e) {
 void Machine::StepOp() {
   const double now = machine_time() + 1e-12;
   switch (op_.phase) {
-    case OpPhase::kNone: return;
+    case OpPhase::kNone:
+      return;
     case OpPhase::kTimer: {
       const Segment& s = op_.s;
       if (s.kind == SegmentKind::kSpindle || s.kind == SegmentKind::kToolChange) {
@@ -467,7 +487,9 @@ void Machine::StepOp() {
           spindle_rpm_ = op_.rpm_to;
           spindle_oriented_ = s.spindle_dir == SpindleDirection::kOrient;
           break;
-        case SegmentKind::kCoolant: coolant_ = s.coolant; break;
+        case SegmentKind::kCoolant:
+          coolant_ = s.coolant;
+          break;
         case SegmentKind::kToolChange:
           spindle_rpm_ = 0;
           if (!spindle_tool_.empty()) magazine_[spindle_tool_socket_] = spindle_tool_;
@@ -493,7 +515,8 @@ void Machine::StepOp() {
           pallet_shuttle_ = old;
           break;
         }
-        default: break;
+        default:
+          break;
       }
       const std::uint64_t seg = op_.seg;
       op_ = Op{};
@@ -572,7 +595,8 @@ void Machine::ProbeCheck() {
   const AxisVector now = actual();
   auto it = parts_.find(pallet_table_);
   if (it != parts_.end()) {
-    const double t = it->second.FirstContact(probe_prev_.head<3>(), now.head<3>(), 0.5 * cfg_.probe_ball_diameter);
+    const double t =
+        it->second.FirstContact(probe_prev_.head<3>(), now.head<3>(), 0.5 * cfg_.probe_ball_diameter);
     if (t >= 0) {
       probe_trip_ = probe_prev_ + t * (now - probe_prev_);
       probe_tripped_ = true;
@@ -603,8 +627,9 @@ bool Machine::Step() {
       wall_start_ = now - std::chrono::duration_cast<std::chrono::steady_clock::duration>(
                               std::chrono::duration<double>(machine_time()));
     }
-    const auto deadline = wall_start_ + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-                                            std::chrono::duration<double>((ticks_ + 1) * cfg_.servo_period_s));
+    const auto deadline =
+        wall_start_ + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                          std::chrono::duration<double>((ticks_ + 1) * cfg_.servo_period_s));
     if (now > deadline + std::chrono::duration<double>(cfg_.servo_period_s)) ++overruns_;
     std::this_thread::sleep_until(deadline);
   } else if (Idle()) {
@@ -621,8 +646,8 @@ bool Machine::Step() {
   StepOp();
 
   const AxisVector& pre = planner_.Tick();
-  const bool op_motion = op_.phase == OpPhase::kMotion || op_.phase == OpPhase::kIndexMove ||
-                         op_.phase == OpPhase::kIndexRest;
+  const bool op_motion =
+      op_.phase == OpPhase::kMotion || op_.phase == OpPhase::kIndexMove || op_.phase == OpPhase::kIndexRest;
   for (const auto& m : planner_.Marks()) {
     if (op_motion && m.seg == op_.seg) continue;
     if (!m.finished) {
@@ -693,7 +718,9 @@ std::uint64_t Machine::RunUntilIdle(double max_machine_s) {
   return n;
 }
 
-void Machine::FeedHold() { planner_.SetHold(true); }
+void Machine::FeedHold() {
+  planner_.SetHold(true);
+}
 void Machine::Resume() {
   if (!aborting_) planner_.SetHold(false);
 }

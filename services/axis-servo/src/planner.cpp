@@ -19,7 +19,9 @@ constexpr double kAccelMargin = 0.98;  // discretisation margin (chords, ticks s
 constexpr double kFilletShare = 0.4;
 constexpr double kFilterShare = 0.4;
 
-bool LinearOnly(const AxisVector& v) { return v.tail<3>().squaredNorm() == 0.0; }
+bool LinearOnly(const AxisVector& v) {
+  return v.tail<3>().squaredNorm() == 0.0;
+}
 
 }  // namespace
 
@@ -172,8 +174,10 @@ void Planner::AddArc(PathElement e, double feed, bool exact_stop, std::uint64_t 
   for (int a = 0; a < kNumAxes; ++a) {
     if (!lim_.present[a]) continue;
     const bool in_plane = e.e1[a] != 0.0 || e.e2[a] != 0.0;
-    if (in_plane) at = std::min(at, (lim_.max_acceleration[a] - acent) / rk);
-    else if (std::abs(e.w[a]) * e.k > 1e-12) at = std::min(at, lim_.max_acceleration[a] / (std::abs(e.w[a]) * e.k));
+    if (in_plane)
+      at = std::min(at, (lim_.max_acceleration[a] - acent) / rk);
+    else if (std::abs(e.w[a]) * e.k > 1e-12)
+      at = std::min(at, lim_.max_acceleration[a] / (std::abs(e.w[a]) * e.k));
   }
   e.at = at * kAccelMargin * (e.stop_end ? 1.0 : 1.0 - kKinkShare);
   Append(e);

@@ -98,7 +98,8 @@ TEST(Config, BadValueNamesFileKeyAndRange) {
   EXPECT_NE(e.find("(0, 1e+09]"), std::string::npos) << e;
   EXPECT_NE(e.find("-3"), std::string::npos) << e;
 
-  e = ErrorOf(Replace(kMinimal, "[machine]\nkind = \"hmc\"", "[machine]\nkind = \"hmc\"\nservo_period_ms = 50"));
+  e = ErrorOf(
+      Replace(kMinimal, "[machine]\nkind = \"hmc\"", "[machine]\nkind = \"hmc\"\nservo_period_ms = 50"));
   EXPECT_NE(e.find("machine.servo_period_ms"), std::string::npos) << e;
   EXPECT_NE(e.find("[0.1, 10]"), std::string::npos) << e;
 

@@ -11,12 +11,14 @@ namespace cell::servo {
 namespace {
 
 using testing::Find;
-using testing::Line;
 using testing::LimitChecker;
+using testing::Line;
 using testing::Rapid;
 using testing::RunChecked;
 
-Machine Kt(ClockKind clock = ClockKind::kVirtual) { return Machine(DefaultMachineConfig("ktapl"), clock); }
+Machine Kt(ClockKind clock = ClockKind::kVirtual) {
+  return Machine(DefaultMachineConfig("ktapl"), clock);
+}
 
 TEST(Servo, FollowingErrorNonZeroWhileAcceleratingAndBounded) {
   Machine m = Kt();
@@ -34,9 +36,9 @@ TEST(Servo, FollowingErrorNonZeroWhileAcceleratingAndBounded) {
     prev_v = vel;
     if (std::abs(acc) > 0.5 * m.config().axes[kX].max_acceleration) max_accel_fe = std::max(max_accel_fe, fe);
   }
-  EXPECT_GT(max_accel_fe, 1e-4);                                      // physically non-zero
+  EXPECT_GT(max_accel_fe, 1e-4);                                       // physically non-zero
   EXPECT_LT(max_fe, 0.2 * m.config().axes[kX].following_error_limit);  // and bounded
-  EXPECT_LT(std::abs(m.following_error()[kX]), 1e-4);                 // settles at rest
+  EXPECT_LT(std::abs(m.following_error()[kX]), 1e-4);                  // settles at rest
   (void)cruise_fe;
 }
 
@@ -244,7 +246,8 @@ TEST(Devices, SpindleCoolantPalletTimes) {
   const double ramp = 2000 / m.config().spindle_accel_rpm_s;
   EXPECT_NEAR(Find(ev, EventKind::kCompleted, 1)->machine_time, ramp, 2 * m.period());
   EXPECT_NEAR(mid_rpm, 0.5 * m.config().spindle_accel_rpm_s, 5);
-  EXPECT_NEAR(Find(ev, EventKind::kCompleted, 2)->machine_time, ramp + m.config().coolant_time, 3 * m.period());
+  EXPECT_NEAR(Find(ev, EventKind::kCompleted, 2)->machine_time, ramp + m.config().coolant_time,
+              3 * m.period());
   EXPECT_NEAR(Find(ev, EventKind::kCompleted, 3)->machine_time,
               ramp + m.config().coolant_time + m.config().pallet_change_time, 4 * m.period());
   const AxisState st = m.State();
@@ -304,9 +307,10 @@ TEST(Lathe, XIsProgrammedInDiameter) {
   std::vector<Event> ev;
   while (m.Step())
     for (auto& e : m.TakeEvents()) ev.push_back(e);
-  EXPECT_NEAR(m.actual()[kX], 50, 1e-3);           // radius inside the machine
-  EXPECT_NEAR(m.State().actual[kX], 100, 2e-3);    // diameter outside
-  const double t = Find(ev, EventKind::kCompleted, 3)->machine_time - Find(ev, EventKind::kStarted, 3)->machine_time;
+  EXPECT_NEAR(m.actual()[kX], 50, 1e-3);         // radius inside the machine
+  EXPECT_NEAR(m.State().actual[kX], 100, 2e-3);  // diameter outside
+  const double t =
+      Find(ev, EventKind::kCompleted, 3)->machine_time - Find(ev, EventKind::kStarted, 3)->machine_time;
   EXPECT_NEAR(t, 10.0 / (200.0 / 60), 0.2);
 }
 

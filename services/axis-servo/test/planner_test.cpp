@@ -13,12 +13,14 @@ namespace {
 
 using testing::Arc;
 using testing::Find;
-using testing::Line;
 using testing::LimitChecker;
+using testing::Line;
 using testing::Rapid;
 using testing::RunChecked;
 
-Machine Kt() { return Machine(DefaultMachineConfig("ktapl"), ClockKind::kVirtual); }
+Machine Kt() {
+  return Machine(DefaultMachineConfig("ktapl"), ClockKind::kVirtual);
+}
 
 TEST(Planner, RandomContourRespectsAxisLimitsEveryTick) {
   Machine m = Kt();
@@ -70,7 +72,8 @@ TEST(Planner, RandomContourRespectsAxisLimitsEveryTick) {
 // Max distance of the actual XY(Z) position from a polyline.
 double PolylineDistance(const Eigen::Vector3d& p, const std::vector<Eigen::Vector3d>& pts) {
   double best = 1e18;
-  for (std::size_t i = 0; i + 1 < pts.size(); ++i) best = std::min(best, testing::DistToSegment(p, pts[i], pts[i + 1]));
+  for (std::size_t i = 0; i + 1 < pts.size(); ++i)
+    best = std::min(best, testing::DistToSegment(p, pts[i], pts[i + 1]));
   return best;
 }
 
@@ -98,7 +101,8 @@ TEST(Planner, ExactStopVersusBlendOnSegmentedCurve) {
     auto ev = RunChecked(m, check, 60, [&] {
       const Eigen::Vector3d c = m.commanded().head<3>();
       for (std::size_t i = 5; i + 5 < pts.size(); ++i)
-        if ((c - pts[i]).norm() < 0.05) min_vertex_speed[exact] = std::min(min_vertex_speed[exact], m.planner().Speed());
+        if ((c - pts[i]).norm() < 0.05)
+          min_vertex_speed[exact] = std::min(min_vertex_speed[exact], m.planner().Speed());
       max_dev[exact] = std::max(max_dev[exact], PolylineDistance(m.actual().head<3>(), pts));
     });
     const Event* done = Find(ev, EventKind::kCompleted, 41);
@@ -106,8 +110,8 @@ TEST(Planner, ExactStopVersusBlendOnSegmentedCurve) {
     times[exact] = done->machine_time - t0;
     check.ExpectWithinLimits();
   }
-  EXPECT_LT(min_vertex_speed[1], 1e-9);    // exact stop: the interpolator halts at each vertex
-  EXPECT_GT(min_vertex_speed[0], 10.0);    // blended: passes the vertices above 10 mm/s (600 mm/min)
+  EXPECT_LT(min_vertex_speed[1], 1e-9);  // exact stop: the interpolator halts at each vertex
+  EXPECT_GT(min_vertex_speed[0], 10.0);  // blended: passes the vertices above 10 mm/s (600 mm/min)
   EXPECT_LT(max_dev[0], Kt().config().path_tolerance);
   EXPECT_LT(max_dev[1], Kt().config().in_position);
   EXPECT_LT(times[0], 0.5 * times[1]);
@@ -132,7 +136,8 @@ TEST(Planner, SharpCorner) {
       check.Sample();
       max_dev = std::max(max_dev, PolylineDistance(m.actual().head<3>(), pts));
       for (auto& e : m.TakeEvents())
-        if (e.kind == EventKind::kStarted && e.segment_id == 3) dist_at_start3 = (m.actual().head<3>() - corner).norm();
+        if (e.kind == EventKind::kStarted && e.segment_id == 3)
+          dist_at_start3 = (m.actual().head<3>() - corner).norm();
     }
     check.ExpectWithinLimits();
     ASSERT_GE(dist_at_start3, 0);

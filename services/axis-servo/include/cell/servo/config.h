@@ -17,32 +17,32 @@ enum class AxisType { kLinear, kRotary, kIndex };
 
 // Drive and plant of one axis, on the motor side: rad, N·m, kg·m².
 struct DriveConfig {
-  double motor_inertia = 0.002;      // kg·m²
-  double load_inertia = 0.001;       // kg·m², load reflected to the motor shaft
-  double viscous_friction = 0.002;   // N·m·s/rad at the motor
-  double max_torque = 20.0;          // N·m (drive current limit)
-  double units_per_rev = 10.0;       // mm (linear) or degrees (rotary) of axis travel per motor revolution
+  double motor_inertia = 0.002;     // kg·m²
+  double load_inertia = 0.001;      // kg·m², load reflected to the motor shaft
+  double viscous_friction = 0.002;  // N·m·s/rad at the motor
+  double max_torque = 20.0;         // N·m (drive current limit)
+  double units_per_rev = 10.0;      // mm (linear) or degrees (rotary) of axis travel per motor revolution
   // PID on motor angle; when not given they follow from bandwidth_hz and damping and the nominal inertia.
-  double kp = 0.0;                   // N·m/rad
-  double ki = 0.0;                   // N·m/(rad·s)
-  double kd = 0.0;                   // N·m·s/rad
+  double kp = 0.0;  // N·m/rad
+  double ki = 0.0;  // N·m/(rad·s)
+  double kd = 0.0;  // N·m·s/rad
   double bandwidth_hz = 40.0;
   double damping = 1.0;
-  double kvff = 1.0;                 // velocity feed-forward, fraction of the nominal viscous friction
-  double kaff = 0.95;                // acceleration feed-forward, fraction of the nominal inertia
+  double kvff = 1.0;   // velocity feed-forward, fraction of the nominal viscous friction
+  double kaff = 0.95;  // acceleration feed-forward, fraction of the nominal inertia
 };
 
 struct AxisConfig {
   bool present = false;
   AxisType type = AxisType::kLinear;
-  double min = 0.0, max = 0.0;             // soft limits, axis units (mm / deg; lathe X as a radius)
-  double max_velocity = 0.0;               // units/min, programmed feed clamp
-  double rapid = 0.0;                      // units/min
-  double max_acceleration = 0.0;           // units/s²
-  double max_jerk = 0.0;                   // units/s³
-  double following_error_limit = 0.0;      // units
-  bool diameter = false;                   // lathe X: programs give diameters
-  double index_increment = 0.0;            // kIndex: positions are multiples of this (deg)
+  double min = 0.0, max = 0.0;                  // soft limits, axis units (mm / deg; lathe X as a radius)
+  double max_velocity = 0.0;                    // units/min, programmed feed clamp
+  double rapid = 0.0;                           // units/min
+  double max_acceleration = 0.0;                // units/s²
+  double max_jerk = 0.0;                        // units/s³
+  double following_error_limit = 0.0;           // units
+  bool diameter = false;                        // lathe X: programs give diameters
+  double index_increment = 0.0;                 // kIndex: positions are multiples of this (deg)
   double clamp_time = 0.0, unclamp_time = 0.0;  // kIndex, s
   DriveConfig drive;
 };
@@ -60,12 +60,12 @@ struct PartModelRef {
 struct MachineConfig {
   std::string station_id;
   std::string dialect;
-  std::string source;                // file the config came from (for messages)
-  std::string kind = "hmc";          // "hmc" or "lathe"
+  std::string source;        // file the config came from (for messages)
+  std::string kind = "hmc";  // "hmc" or "lathe"
   double servo_period_s = 0.001;
-  double path_tolerance = 0.02;      // mm, blending tolerance for continuous blocks
-  double in_position = 0.025;        // mm, exact-stop window (KT-APL G00: 0.025 mm / 0.001 in)
-  int queue_capacity = 64;           // segments (credits)
+  double path_tolerance = 0.02;  // mm, blending tolerance for continuous blocks
+  double in_position = 0.025;    // mm, exact-stop window (KT-APL G00: 0.025 mm / 0.001 in)
+  int queue_capacity = 64;       // segments (credits)
   std::array<AxisConfig, kNumAxes> axes{};
   // Spindle
   double spindle_max_rpm = 4000.0;

@@ -29,20 +29,20 @@ enum class ClockKind {
 enum class Execution { kReady, kActive, kFeedHold, kStopped };
 
 struct AxisState {
-  double machine_time = 0;                           // s
-  AxisVector commanded = AxisVector::Zero();         // after the jerk filter (segment convention)
-  AxisVector actual = AxisVector::Zero();            // plant position (segment convention)
-  AxisVector velocity = AxisVector::Zero();          // actual, units/min
-  AxisVector following_error = AxisVector::Zero();   // commanded - actual, axis units (radius on X)
-  double path_feed = 0;                              // interpolator speed, units/min
+  double machine_time = 0;                          // s
+  AxisVector commanded = AxisVector::Zero();        // after the jerk filter (segment convention)
+  AxisVector actual = AxisVector::Zero();           // plant position (segment convention)
+  AxisVector velocity = AxisVector::Zero();         // actual, units/min
+  AxisVector following_error = AxisVector::Zero();  // commanded - actual, axis units (radius on X)
+  double path_feed = 0;                             // interpolator speed, units/min
   Execution execution = Execution::kReady;
   Alarm alarm;
-  std::uint64_t segment_id = 0;                      // segment being interpolated (0: none)
-  double fraction = 0;                               // of that segment, 0..1
-  double spindle_rpm = 0;                            // signed: + cw, - ccw
+  std::uint64_t segment_id = 0;  // segment being interpolated (0: none)
+  double fraction = 0;           // of that segment, 0..1
+  double spindle_rpm = 0;        // signed: + cw, - ccw
   bool spindle_oriented = false;
   CoolantMode coolant = CoolantMode::kOff;
-  std::string tool;                                  // in the spindle ("" none)
+  std::string tool;  // in the spindle ("" none)
   int pallet_on_table = 0, pallet_on_shuttle = 0;
   bool b_clamped = true;
 };
@@ -75,10 +75,10 @@ class Machine {
   std::uint64_t overruns() const { return overruns_; }  // real clock: periods that started late
 
   // ---- Operator controls.
-  void FeedHold();   // decelerate along the path and stop on it
-  void Resume();     // continue along the path
-  void Abort();      // flush the queue and stop (motion decelerates along the path first)
-  void Reset();      // clear alarms, flush, command := actual
+  void FeedHold();  // decelerate along the path and stop on it
+  void Resume();    // continue along the path
+  void Abort();     // flush the queue and stop (motion decelerates along the path first)
+  void Reset();     // clear alarms, flush, command := actual
   void SetFeedOverride(double fraction);   // 0..2 (0%..200%)
   void SetRapidOverride(double fraction);  // 0..1
 
@@ -103,14 +103,14 @@ class Machine {
 
  private:
   struct Entry {
-    Segment seg;          // in machine units (lathe X as a radius)
-    bool planned = false; // handed to the planner or to the device sequencer
+    Segment seg;           // in machine units (lathe X as a radius)
+    bool planned = false;  // handed to the planner or to the device sequencer
   };
   enum class OpPhase { kNone, kTimer, kMotion, kIndexUnclamp, kIndexMove, kIndexClamp, kIndexRest };
   struct Op {
     OpPhase phase = OpPhase::kNone;
     std::uint64_t seg = 0;
-    double until = 0;      // machine time when the timer phase ends
+    double until = 0;  // machine time when the timer phase ends
     Segment s;
     // spindle ramp
     double rpm_from = 0, rpm_to = 0, t0 = 0;
@@ -131,7 +131,8 @@ class Machine {
   bool SoftLimitCheck(const Segment& s, const AxisVector& start, std::string& why) const;
   AxisVector EndOf(const Segment& s, const AxisVector& start) const;
   double FeedOf(const Segment& s, double length) const;
-  void Emit(EventKind kind, std::uint64_t seg, const Alarm* alarm = nullptr, const ProbeResult* probe = nullptr);
+  void Emit(EventKind kind, std::uint64_t seg, const Alarm* alarm = nullptr,
+            const ProbeResult* probe = nullptr);
   AxisVector ToSegmentUnits(AxisVector v) const;
   void ProbeCheck();
 

@@ -17,9 +17,17 @@ namespace cell::servo {
 
 class PartModel {
  public:
-  struct Plane { Eigen::Vector3d point, normal; };
-  struct Cylinder { Eigen::Vector3d base, axis; double radius, height; };
-  struct Sphere { Eigen::Vector3d center; double radius; };
+  struct Plane {
+    Eigen::Vector3d point, normal;
+  };
+  struct Cylinder {
+    Eigen::Vector3d base, axis;
+    double radius, height;
+  };
+  struct Sphere {
+    Eigen::Vector3d center;
+    double radius;
+  };
 
   void AddPlane(const Eigen::Vector3d& point, const Eigen::Vector3d& normal);
   void AddBoss(const Eigen::Vector3d& base, const Eigen::Vector3d& axis, double diameter, double height);

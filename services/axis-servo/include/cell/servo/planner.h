@@ -24,12 +24,12 @@ namespace cell::servo {
 
 struct PlannerLimits {
   std::array<bool, kNumAxes> present{};
-  AxisVector max_velocity = AxisVector::Zero();  // units/s (programmed feed clamp)
-  AxisVector rapid = AxisVector::Zero();         // units/s
+  AxisVector max_velocity = AxisVector::Zero();      // units/s (programmed feed clamp)
+  AxisVector rapid = AxisVector::Zero();             // units/s
   AxisVector max_acceleration = AxisVector::Zero();  // units/s²
-  double period = 0.001;                         // s
-  double path_tolerance = 0.02;                  // mm
-  double filter_time = 0.05;                     // s, length of the jerk filter (contour error on curves)
+  double period = 0.001;                             // s
+  double path_tolerance = 0.02;                      // mm
+  double filter_time = 0.05;                         // s, length of the jerk filter (contour error on curves)
 };
 
 struct PathElement {
@@ -40,13 +40,13 @@ struct PathElement {
   AxisVector c = AxisVector::Zero(), e1 = AxisVector::Zero(), e2 = AxisVector::Zero(), w = AxisVector::Zero();
   double r0 = 0, dr = 0, sweep = 0, k = 0;
   double len = 0, orig_len = 0;
-  double vgeom = 0;    // geometric speed cap, units/s
-  double vfeed = 0;    // programmed speed, units/s, before override
+  double vgeom = 0;  // geometric speed cap, units/s
+  double vfeed = 0;  // programmed speed, units/s, before override
   bool rapid = false;
-  double at = 0;       // tangential acceleration limit
-  double v_junction = 0;  // geometric limit at the end (into the next element)
-  double v_exit = 0;      // planned exit speed (backward pass)
-  bool stop_end = false;  // exact stop at the end
+  double at = 0;                  // tangential acceleration limit
+  double v_junction = 0;          // geometric limit at the end (into the next element)
+  double v_exit = 0;              // planned exit speed (backward pass)
+  bool stop_end = false;          // exact stop at the end
   bool wait_in_position = false;  // the next element waits until the machine is in position
   double settle = 0;              // in-position window for that wait (0: the machine's in_position)
   bool last_of_segment = true;
@@ -69,11 +69,12 @@ class Planner {
   void AddArc(PathElement e, double feed, bool exact_stop, std::uint64_t seg);
   // Builds an arc element from programme data; returns false (and leaves `why`) when radii disagree.
   bool MakeArc(const AxisVector& start, const AxisVector& end, const std::array<double, 3>& center,
-               ArcPlane plane, ArcDirection dir, std::uint32_t turns, PathElement& out, std::string& why) const;
+               ArcPlane plane, ArcDirection dir, std::uint32_t turns, PathElement& out,
+               std::string& why) const;
 
   bool Full() const { return count_ + 2 >= elems_.size(); }
   bool Idle() const { return count_ == 0 && !waiting_; }
-  bool Waiting() const { return waiting_; }      // stopped at an exact-stop end, waiting for in-position
+  bool Waiting() const { return waiting_; }  // stopped at an exact-stop end, waiting for in-position
   void Release() { waiting_ = false; }
   double WaitTolerance() const { return wait_tol_; }  // 0: the machine's in-position window
   const AxisVector& EndOfPath() const { return tail_; }
@@ -92,7 +93,11 @@ class Planner {
   void Flush(const AxisVector& pos);
 
   // Segment ids whose first element started / last element finished during the last Tick().
-  struct Mark { std::uint64_t seg; bool finished; bool wait_in_position; };
+  struct Mark {
+    std::uint64_t seg;
+    bool finished;
+    bool wait_in_position;
+  };
   const std::vector<Mark>& Marks() const { return marks_; }
   // Segment currently interpolated and its fraction, if any.
   bool Current(std::uint64_t& seg, double& fraction) const;

@@ -53,12 +53,12 @@ struct Segment {
   ArcPlane plane = ArcPlane::kXY;
   ArcDirection direction = ArcDirection::kCCW;
   std::uint32_t turns = 0;
-  double dwell_s = 0.0;                   // kDwell
-  std::string tool;                       // kToolChange, e.g. "1001" or "33412.5"
-  double spindle_rpm = 0.0;               // kSpindle
+  double dwell_s = 0.0;      // kDwell
+  std::string tool;          // kToolChange, e.g. "1001" or "33412.5"
+  double spindle_rpm = 0.0;  // kSpindle
   SpindleDirection spindle_dir = SpindleDirection::kStop;
   CoolantMode coolant = CoolantMode::kOff;  // kCoolant
-  int pallet = 0;                         // kPalletChange
+  int pallet = 0;                           // kPalletChange
 };
 
 // A probe move's result: the latched axis positions at the trip, or the end of travel without contact.
@@ -69,10 +69,10 @@ struct ProbeResult {
 
 enum class AlarmCode : std::uint16_t {
   kNone = 0,
-  kSoftLimit = 500,         // a segment would leave the travel limits: no motion
-  kFollowingError = 410,    // "DIFF over": following error above the axis limit
+  kSoftLimit = 500,       // a segment would leave the travel limits: no motion
+  kFollowingError = 410,  // "DIFF over": following error above the axis limit
   kToolNotInMagazine = 600,
-  kInvalidSegment = 601,    // arc radii disagree, index position off the increment, bad feed, ...
+  kInvalidSegment = 601,  // arc radii disagree, index position off the increment, bad feed, ...
 };
 
 struct Alarm {

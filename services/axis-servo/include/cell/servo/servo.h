@@ -21,10 +21,10 @@ class AxisServo {
   // One period: command position, velocity and acceleration in axis units (mm or deg, /s, /s²).
   void Step(double x_cmd, double v_cmd, double a_cmd);
 
-  double position() const { return state_[0] / gain_; }        // axis units
-  double velocity() const { return state_[1] / gain_; }        // units/s
-  double following_error() const { return error_ / gain_; }    // command - actual, units
-  double torque() const { return torque_; }                    // N·m
+  double position() const { return state_[0] / gain_; }      // axis units
+  double velocity() const { return state_[1] / gain_; }      // units/s
+  double following_error() const { return error_ / gain_; }  // command - actual, units
+  double torque() const { return torque_; }                  // N·m
   bool saturated() const { return saturated_; }
 
   double kp() const { return kp_; }

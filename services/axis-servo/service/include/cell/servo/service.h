@@ -1,0 +1,62 @@
+// Binds the simulated machine to the bus: segments in (credit flow control), progress, probe
+// results and axis state out. One loop thread owns the Machine (it is single-threaded).
+#pragma once
+
+#include <atomic>
+#include <map>
+#include <mutex>
+#include <optional>
+#include <thread>
+#include <vector>
+
+#include "cell/bus/bus.h"
+#include "cell/idl/motion.h"
+#include "cell/idl/station.h"
+#include "cell/servo/machine.h"
+
+namespace cell::servo {
+
+// IDL segment -> library segment (exposed for tests).
+Segment FromWire(const cell::MotionSegment& m, uint64_t id);
+
+class Service {
+ public:
+  Service(bus::Participant& p, MachineConfig cfg, ClockKind clock);
+  ~Service();
+  void Start();
+  void Stop();
+  bool Healthy() const { return alive_.load(); }
+
+ private:
+  void Loop(std::stop_token st);
+  void HandleEvents();
+  void PublishProgress();
+  void PublishAxes();
+
+  std::string station_;
+  Machine machine_;
+  std::atomic<bool> alive_{false};
+  // Run bookkeeping (loop thread only).
+  int32_t run_id_ = 0;
+  uint64_t next_id_ = 0;
+  std::map<uint64_t, uint64_t> seq_of_;  // machine segment id -> run seq
+  std::map<uint64_t, bool> probe_;       // machine ids of probe segments
+  uint64_t completed_seq_ = 0;
+  std::optional<double> run_start_s_;
+  double run_end_s_ = 0;
+  Alarm alarm_;
+  bool dirty_ = true;
+  std::chrono::steady_clock::time_point last_axes_{};
+
+  std::mutex tools_mu_;
+  std::optional<std::vector<ToolSlot>> pending_tools_;
+
+  bus::Reader<cell::MotionSegment> segments_;
+  bus::Writer<cell::SegmentProgress> progress_;
+  bus::Writer<cell::AxisState> axes_;
+  bus::Writer<cell::ProbeResult> probe_w_;
+  bus::Reader<cell::ToolTable> tools_r_;
+  std::jthread loop_;
+};
+
+}  // namespace cell::servo
