@@ -334,6 +334,25 @@ class KtRun final : public Run, public ExprContext {
   std::map<int, double> MachineParameters() const override { return machine_; }
   std::vector<ToolEntry> Tools() const override { return tools_; }
 
+  // Tool-table files: applies G70/G71 and (TLD,...) of one line.
+  void LoadToolLine(std::string_view line) {
+    if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+    std::string t = Trim(line);
+    if (t.empty() || t == "%") return;
+    ParsedBlock pb = ParseBlock(line, false);
+    for (const auto& w : pb.words) {
+      if (w.letter == 'G' && w.kind == WordKind::kNumber && !w.num.point) {
+        if (w.num.as_written == 70) metric_ = false;
+        if (w.num.as_written == 71) metric_ = true;
+      }
+    }
+    for (const auto& st : pb.stmts) {
+      if (st.mnemonic == "TLD") Tld(st);
+      if (st.mnemonic == "PAR") Par(st);
+    }
+    out_.clear();
+  }
+
   // ExprContext
   double Param(int n) override;
   bool ParamDefined(int n) override;
@@ -2088,8 +2107,18 @@ void KtRun::ExecTypeI(BlockCtx& bc, const ParsedBlock* pb) {
         if (!d) Fail(1, fmt::format("Error - Subroutine or Defined Cycle Not Found (G{})", cycle_));
         DoCall(*d, {}, true);
         levels_.back().name = fmt::format("G{}", cycle_);
+        return;  // nothing of a triggering G800-series block is executed by the control
       }
-      return;  // nothing of a G800-series block is executed by the control
+      // A block without X Y Z A B C only passes its letters; its M, S, T and F still act (so that, for
+      // example, M30 ends the program while a G800-series cycle is pending). Axis words do not move.
+      words.erase(std::remove_if(words.begin(), words.end(),
+                                 [](const Word& w) { return AxisOfLetter(w.letter) >= 0; }),
+                  words.end());
+      ms.clear();
+      for (const auto& w : words) {
+        if (w.letter == 'M') ms.push_back(&w);
+      }
+      axis_mask = 0;
     }
   }
 
@@ -2679,15 +2708,24 @@ void KtRun::Arc(const std::vector<Word>& words, bool cw, int col, double feed, F
 }  // namespace ktapl
 
 std::vector<ToolEntry> ParseKtaplToolTable(std::string_view text) {
+  // Only G70/G71 and (TLD,...) matter; the text is not run (it could loop or move).
   RunOptions o;
   o.program_name = "tools";
-  o.program_text = std::string(text);
   ktapl::KtRun run(o);
-  for (;;) {
-    Step s = run.Next();
-    if (s.kind == Step::kEnd) break;
-    if (s.kind == Step::kError) {
-      throw Error(Errc::kInvalidArgument, fmt::format("{}: {}", s.diag.line, s.diag.text));
+  int line = 0;
+  size_t p = 0;
+  while (p < text.size()) {
+    size_t nl = text.find('\n', p);
+    if (nl == std::string_view::npos) nl = text.size();
+    std::string_view b = text.substr(p, nl - p);
+    p = nl + 1;
+    ++line;
+    try {
+      run.LoadToolLine(b);
+    } catch (const ktapl::RunError& e) {
+      throw Error(Errc::kInvalidArgument, fmt::format("{}: {}", line, e.text));
+    } catch (const ktapl::ExprError& e) {
+      throw Error(Errc::kInvalidArgument, fmt::format("{}: {}", line, e.text));
     }
   }
   return run.Tools();
