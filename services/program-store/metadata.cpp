@@ -824,15 +824,30 @@ Metadata ExtractMetadata(std::string_view content, const ExtractOptions& options
     }
   } else if (!type || NeedsDialect(*type) || *type == FileType::kToolTable) {
     Detection det = DetectDialect(content);
+    const Dialect station = options.namespace_dialect;
+    bool station_has_evidence = std::any_of(det.evidence.begin(), det.evidence.end(),
+                                            [&](const Evidence& e) { return e.dialect == station; });
+    bool wants_dialect =
+        det.looks_like_nc || (type && (NeedsDialect(*type) || *type == FileType::kToolTable));
     if (det.dialect != Dialect::kNone) {
       md.dialect = det.dialect;
       md.dialect_detected = true;
+    } else if (det.ambiguous && station != Dialect::kNone && station_has_evidence) {
+      md.dialect = station;
+      md.dialect_detected = true;
+      md.warnings.push_back(
+          fmt::format("the content fits more than one dialect ({}); took {}, the dialect of the "
+                      "station namespace",
+                      det.Explain(), DialectName(station)));
     } else if (det.ambiguous) {
       Invalid(
           fmt::format("cannot tell the dialect: the content fits more than one: {}; declare it (--dialect "
                       "ktapl|okuma|emco|balt)",
                       det.Explain()));
-    } else if ((type && NeedsDialect(*type)) || det.looks_like_nc) {
+    } else if (wants_dialect && station != Dialect::kNone) {
+      md.dialect = station;  // nothing dialect-specific: the station's own dialect
+      md.dialect_detected = true;
+    } else if (wants_dialect) {
       Invalid(
           fmt::format("cannot tell the dialect: {} (the content looks like an NC program but has no "
                       "dialect-specific statement); declare it (--dialect ktapl|okuma|emco|balt)",

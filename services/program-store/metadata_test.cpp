@@ -195,6 +195,32 @@ TEST(Detection, DeclaredDialectWinsButMismatchWarns) {
   EXPECT_THAT(plain.warnings, IsEmpty());
 }
 
+TEST(Detection, StationDialectIsTheFallback) {
+  ExtractOptions kt;
+  kt.namespace_dialect = Dialect::kKtapl;
+  // Nothing dialect-specific: the station's dialect.
+  Metadata plain = ExtractMetadata("N10 G0 X1. F0\nN20 M30\n", kt);
+  EXPECT_EQ(plain.dialect, Dialect::kKtapl);
+  EXPECT_EQ(plain.type, FileType::kPartProgram);
+  EXPECT_THAT(plain.warnings, IsEmpty());
+  // A clear detection wins over the station.
+  Metadata okuma = ExtractMetadata("O100\nVSET V1=1\nM02\n", kt);
+  EXPECT_EQ(okuma.dialect, Dialect::kOkuma);
+  // Ambiguous, and the station's dialect is one of the candidates: taken, with a warning.
+  Metadata mixed = ExtractMetadata("%\n(NAM,MIXED)\nN10 VSET V1=2\nN20 M30\n", kt);
+  EXPECT_EQ(mixed.dialect, Dialect::kKtapl);
+  EXPECT_THAT(Joined(mixed.warnings), HasSubstr("took ktapl, the dialect of the station namespace"));
+  // Ambiguous between two others: still an error.
+  ExtractOptions emco;
+  emco.namespace_dialect = Dialect::kEmco;
+  ExpectError([&] { ExtractMetadata("%\n(NAM,MIXED)\nN10 VSET V1=2\nN20 M30\n", emco); },
+              Errc::kInvalidArgument, "cannot tell the dialect");
+  // Plain text stays data.
+  Metadata data = ExtractMetadata("just some notes\n", kt);
+  EXPECT_EQ(data.type, FileType::kData);
+  EXPECT_EQ(data.dialect, Dialect::kNone);
+}
+
 TEST(Detection, PlainTextIsData) {
   Metadata md = ExtractMetadata("part,feature,nominal,actual\n1,BORE A,25.000,25.004\n", {});
   EXPECT_EQ(md.type, FileType::kData);

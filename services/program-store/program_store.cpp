@@ -401,6 +401,14 @@ ProgramStore::ProgramStore(StoreOptions options) : options_(std::move(options)) 
     }
     if (std::find(namespaces_.begin(), namespaces_.end(), ns) == namespaces_.end()) namespaces_.push_back(ns);
   }
+  for (const auto& [ns, dialect] : options_.namespace_dialects) {
+    if (ns == kHostNamespace || !HasNamespace(ns)) {
+      Fail(Errc::kInvalidArgument,
+           fmt::format("program store: dialect given for '{}', which is not a configured "
+                       "station namespace",
+                       ns));
+    }
+  }
   db_path_ = options_.data_dir / options_.database_file;
   db_ = std::make_unique<Database>(Database::Open(db_path_));
   store::Migrate(*db_, Migrations());
@@ -418,6 +426,11 @@ ProgramStore::ProgramStore(StoreOptions options) : options_(std::move(options)) 
 }
 
 ProgramStore::~ProgramStore() = default;
+
+Dialect ProgramStore::NamespaceDialect(std::string_view node) const {
+  auto it = options_.namespace_dialects.find(std::string(node));
+  return it == options_.namespace_dialects.end() ? Dialect::kNone : it->second;
+}
 
 bool ProgramStore::HasNamespace(std::string_view node) const {
   return std::find(namespaces_.begin(), namespaces_.end(), node) != namespaces_.end();
@@ -454,7 +467,12 @@ struct ProgramStore::Impl {
     for (const std::string& key : keys) {
       if (std::optional<json> previous = Replay(db, key, fp)) return PutResultFromJson(*previous);
     }
-    Metadata md = ExtractMetadata(content, {req.dialect, req.type, req.name});
+    ExtractOptions extract;
+    extract.dialect = req.dialect;
+    extract.type = req.type;
+    extract.name = req.name;
+    extract.namespace_dialect = self.NamespaceDialect(req.node);
+    Metadata md = ExtractMetadata(content, extract);
     ValidateName(req.name, md.type, md.dialect);
     std::optional<Located> existing = Find(db, req.node, req.name, 0);
     if (existing) {

@@ -189,7 +189,37 @@ TEST(ProgramStore, NamespacesAndDialectNames) {
   ExpectError([&] { ps.List("KT09"); }, Errc::kNotFound, "unknown namespace");
   ExpectError([&] { ps.Put(Req("", "X", kGear)); }, Errc::kInvalidArgument, "no namespace");
   EXPECT_EQ(Snapshot(ps.database_path()), before);
-  EXPECT_THROW(ProgramStore({.data_dir = tmp.path(), .namespaces = {"KT 01"}}), cell::Error);
+  StoreOptions spaced = Options(tmp.path());
+  spaced.namespaces = {"KT 01"};
+  ExpectError([&] { ProgramStore x(spaced); }, Errc::kInvalidArgument, "bad namespace 'KT 01'");
+}
+
+TEST(ProgramStore, StationNamespacesLendTheirDialect) {
+  TempDir tmp;
+  StoreOptions opts = Options(tmp.path());
+  opts.namespace_dialects = {{"KT01", Dialect::kKtapl}, {"OK01", Dialect::kOkuma}};
+  ProgramStore ps(opts);
+  EXPECT_EQ(ps.NamespaceDialect("KT01"), Dialect::kKtapl);
+  EXPECT_EQ(ps.NamespaceDialect("HOST"), Dialect::kNone);
+  const std::string plain = "N10 G0 X1. F0\nN20 M30\n";
+  PutResult kt = ps.Put(Req("KT01", "PLAIN", plain));
+  EXPECT_EQ(kt.file.metadata.dialect, Dialect::kKtapl);
+  EXPECT_EQ(ps.Put(Req("OK01", "PLAIN", plain)).file.metadata.dialect, Dialect::kOkuma);
+  ExpectError([&] { ps.Put(Req("HOST", "PLAIN", plain)); }, Errc::kInvalidArgument,
+              "cannot tell the dialect");
+  // Copying to HOST keeps the dialect the file was stored with.
+  EXPECT_EQ(ps.Copy({.from_node = "KT01",
+                     .from_name = "PLAIN",
+                     .from_revision = 0,
+                     .to_node = "HOST",
+                     .to_name = "",
+                     .force = false,
+                     .idempotency_key = ""})
+                .file.metadata.dialect,
+            Dialect::kKtapl);
+  StoreOptions bad = Options(tmp.path());
+  bad.namespace_dialects = {{"KT07", Dialect::kKtapl}};
+  ExpectError([&] { ProgramStore x(bad); }, Errc::kInvalidArgument, "not a configured station namespace");
 }
 
 TEST(ProgramStore, BadInputGetsAClearErrorAndChangesNothing) {
@@ -790,13 +820,19 @@ void RunCrashRound(const fs::path& dir, int round, std::chrono::milliseconds kil
     }
   }
   close(fds[1]);
+  // Let the child get going (first acknowledgement), then kill it after `kill_after`, whatever it is doing.
+  std::string acks;
+  char buf[4096];
+  while (acks.find('\n') == std::string::npos) {
+    ssize_t n = read(fds[0], buf, sizeof buf);
+    if (n <= 0) break;
+    acks.append(buf, static_cast<std::size_t>(n));
+  }
   std::this_thread::sleep_for(kill_after);
   ASSERT_EQ(kill(pid, SIGKILL), 0);
   int status = 0;
   ASSERT_EQ(waitpid(pid, &status, 0), pid);
   ASSERT_TRUE(WIFSIGNALED(status)) << "child exited early with " << WEXITSTATUS(status);
-  std::string acks;
-  char buf[4096];
   for (ssize_t n; (n = read(fds[0], buf, sizeof buf)) > 0;) acks.append(buf, static_cast<std::size_t>(n));
   close(fds[0]);
 
@@ -856,7 +892,7 @@ void RunCrashRound(const fs::path& dir, int round, std::chrono::milliseconds kil
 TEST(CrashSafety, KilledClientLosesNoAcknowledgedPut) {
   TempDir tmp;
   int round = 0;
-  for (int ms : {150, 400, 900, 1300}) {
+  for (int ms : {0, 7, 150, 400, 900}) {
     SCOPED_TRACE(fmt::format("killed after {} ms", ms));
     RunCrashRound(tmp.path(), round++, std::chrono::milliseconds(ms));
     if (HasFatalFailure()) return;

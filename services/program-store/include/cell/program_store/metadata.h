@@ -84,6 +84,10 @@ struct ExtractOptions {
   std::optional<Dialect> dialect;  // declared; detected when absent
   std::optional<FileType> type;    // declared; from name and content when absent
   std::string name;                // the name it is stored under (for TypeFromName)
+  // The dialect of the station whose namespace the file goes to (kNone for HOST). Used when detection finds
+  // nothing dialect-specific in an NC program, or when the content fits several dialects and this is one of
+  // them (with a warning). Never overrides a clear detection or a declaration.
+  Dialect namespace_dialect = Dialect::kNone;
 };
 
 // Checks the text, decides the type and dialect and extracts the metadata. Throws cell::Error

@@ -31,6 +31,9 @@ struct StoreOptions {
   std::filesystem::path data_dir;  // the database is data_dir / database_file
   std::string database_file = "program-store.db";
   std::vector<std::string> namespaces;  // configured station ids; HOST is always there
+  // Optional: each station's dialect (from its config), the fallback when a file's dialect is not declared
+  // and cannot be detected (see ExtractOptions::namespace_dialect). Keys must be in `namespaces`.
+  std::map<std::string, Dialect> namespace_dialects;
   std::uint64_t max_file_size = 256ull << 20;
   std::uint64_t max_chunk_size = 16ull << 20;
   std::size_t max_open_streams = 64;
@@ -167,6 +170,7 @@ class ProgramStore {
   void SetChangeListener(std::function<void(const ChangeEvent&)> listener);
 
   bool HasNamespace(std::string_view node) const;
+  Dialect NamespaceDialect(std::string_view node) const;  // kNone for HOST or when not configured
   const std::vector<std::string>& namespaces() const { return namespaces_; }
   const std::filesystem::path& database_path() const { return db_path_; }
 
