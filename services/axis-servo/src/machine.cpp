@@ -619,19 +619,27 @@ bool Machine::Idle() const {
   return true;
 }
 
+std::chrono::steady_clock::time_point Machine::NextDeadline() {
+  const auto now = std::chrono::steady_clock::now();
+  if (!wall_started_) {
+    wall_started_ = true;
+    wall_start_ = now - std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                            std::chrono::duration<double>(machine_time()));
+  }
+  return wall_start_ + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                           std::chrono::duration<double>((ticks_ + 1) * cfg_.servo_period_s));
+}
+
 bool Machine::Step() {
+  if (clock_kind_ == ClockKind::kReal) std::this_thread::sleep_until(NextDeadline());
+  return StepNow();
+}
+
+bool Machine::StepNow() {
   if (clock_kind_ == ClockKind::kReal) {
-    const auto now = std::chrono::steady_clock::now();
-    if (!wall_started_) {
-      wall_started_ = true;
-      wall_start_ = now - std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-                              std::chrono::duration<double>(machine_time()));
-    }
-    const auto deadline =
-        wall_start_ + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-                          std::chrono::duration<double>((ticks_ + 1) * cfg_.servo_period_s));
-    if (now > deadline + std::chrono::duration<double>(cfg_.servo_period_s)) ++overruns_;
-    std::this_thread::sleep_until(deadline);
+    const auto deadline = NextDeadline();
+    if (std::chrono::steady_clock::now() > deadline + std::chrono::duration<double>(cfg_.servo_period_s))
+      ++overruns_;
   } else if (Idle()) {
     return false;
   }

@@ -66,6 +66,11 @@ class Machine {
   // when the virtual clock has nothing to do (idle). On the real clock it first sleeps until the period's
   // wall-clock deadline and always advances.
   bool Step();
+  // Step() without the real clock's sleep: for callers that wait for NextDeadline() themselves (outside a
+  // lock, as Runner does). On the virtual clock the same as Step().
+  bool StepNow();
+  // Real clock: wall-clock time at which the next period is due.
+  std::chrono::steady_clock::time_point NextDeadline();
   // Steps until idle (queue empty, everything settled), an alarm, or `max_machine_s` more machine time.
   // Returns the number of periods run.
   std::uint64_t RunUntilIdle(double max_machine_s = 1e9);
