@@ -44,6 +44,7 @@ json ToJson(const JobView& j, bool with_decisions) {
               {"finished", TimeOrNull(j.finished_ms)},
               {"cycle_s", j.cycle_s ? json(*j.cycle_s) : json(nullptr)},
               {"kind", j.kind},
+              {"schedule", OrNull(j.schedule)},
               {"op_index", j.op_index + 1},
               {"op_count", j.op_count}};
   if (with_decisions) {

@@ -121,6 +121,11 @@ struct Scheduler::Impl {
     std::optional<double> cycle;
     std::int64_t dispatch = 0;  // live dispatch id, 0 = none
     std::vector<DecisionRec> decisions;
+    // Schedule jobs: the program, where its runner stands, and the run in progress.
+    std::string sched_name, sched_text;
+    std::shared_ptr<const schedule::Program> sched;
+    schedule::RunnerPosition sched_pos;
+    std::optional<schedule::Run> sched_run;
   };
 
   struct DispatchRec {
@@ -146,6 +151,7 @@ struct Scheduler::Impl {
     std::deque<std::int64_t> queue;  // allocated, not yet handed out
     std::int64_t inflight = 0;       // handed out (sent/acked/running)
     std::string program;
+    std::map<int, double> vars;  // common variables V1-V200 (published by the station, plus VSET writes)
   };
 
   Options opt;
@@ -397,7 +403,67 @@ struct Scheduler::Impl {
     d.state = DState::kSent;
     dirty_dispatches.insert(d.id);
     dirty_stations.insert(s);
-    fx.dispatches.push_back(DispatchAction{d.id, st.id, d.pallet, d.programs, d.job, d.op, false});
+    fx.dispatches.push_back(Action(d, false));
+  }
+
+  DispatchAction Action(const DispatchRec& d, bool resent) const {
+    DispatchAction a{d.id,     stations[static_cast<std::size_t>(d.station)].id,
+                     d.pallet, d.programs,
+                     d.job,    d.op,
+                     resent,   std::nullopt};
+    const JobRec& j = jobs.at(d.job);
+    if (j.kind == "schedule") a.schedule_run = j.sched_run;
+    return a;
+  }
+
+  // Schedule jobs: steps the runner to the next PSELECT run, the END, or an alarm.
+  struct StationVars : schedule::Variables {
+    StationVars(Impl& m, int s) : m(m), s(s) {}
+    double Get(int n) override {
+      const auto& v = m.stations[static_cast<std::size_t>(s)].vars;
+      auto it = v.find(n);
+      return it == v.end() ? 0.0 : it->second;
+    }
+    void Set(int n, double value) override {
+      m.stations[static_cast<std::size_t>(s)].vars[n] = value;
+      m.dirty_stations.insert(s);
+      m.fx.variables.push_back(VariableAction{m.stations[static_cast<std::size_t>(s)].id, n, value});
+    }
+    Impl& m;
+    int s;
+  };
+
+  void StepSchedule(JobRec& j, int station, std::string_view trigger) {
+    StationVars vars(*this, station);
+    schedule::Runner runner(j.sched, j.sched_pos);
+    const schedule::Step step = runner.Next(vars);
+    j.sched_pos = runner.position();
+    dirty_jobs.insert(j.id);
+    switch (step.kind) {
+      case schedule::Step::Kind::kRun: {
+        j.sched_run = step.run;
+        std::string file = step.run.main_file.substr(step.run.main_file.find(':') + 1);
+        auto ops = std::make_shared<std::vector<Op>>(1);
+        Op& op = (*ops)[0];
+        op.stations = {station};
+        op.programs = {file};
+        op.ucy = {0};
+        j.ops = ops;
+        j.op = 0;
+        j.state = JobState::kQueued;
+        Evaluate(j, fmt::format("{}: PSELECT run {} of {} (line {})", trigger, step.run.index, step.run.count,
+                                step.run.line));
+        break;
+      }
+      case schedule::Step::Kind::kEnd:
+        j.sched_run.reset();
+        FinishJob(j, JobState::kCompleted, "");
+        break;
+      case schedule::Step::Kind::kAlarm:
+        j.sched_run.reset();
+        FinishJob(j, JobState::kFailed, step.alarm);
+        break;
+    }
   }
 
   // Removes a live dispatch from its station (queue or hand) and releases its backlog.
@@ -422,7 +488,7 @@ struct Scheduler::Impl {
     j.finished = NowMs();
     j.dispatch = 0;
     waiting.erase(j.id);
-    busy_pallets.erase(j.pallet);
+    if (j.pallet != 0) busy_pallets.erase(j.pallet);
     JobChanged(j);
   }
 
@@ -566,6 +632,10 @@ CREATE INDEX dispatches_live ON dispatches(state);
 CREATE TABLE decisions (seq INTEGER PRIMARY KEY, job INTEGER NOT NULL, body TEXT NOT NULL);
 CREATE INDEX decisions_job ON decisions(job);
 )sql"),
+      store::Migration::Sql(2, "scheduler: station common variables and schedule jobs", R"sql(
+ALTER TABLE stations ADD COLUMN vars TEXT NOT NULL DEFAULT '{}';
+ALTER TABLE jobs ADD COLUMN schedule TEXT NOT NULL DEFAULT '';
+)sql"),
   };
   return m;
 }
@@ -671,8 +741,8 @@ void Scheduler::Impl::Load() {
   }
   {
     auto q = d.Prepare(
-        "SELECT id, dialect, online, fault, alarm_code, alarm_text, tools, program FROM stations ORDER BY "
-        "rowid");
+        "SELECT id, dialect, online, fault, alarm_code, alarm_text, tools, program, vars FROM stations "
+        "ORDER BY rowid");
     while (q.Step()) {
       const int s = StationIndex(q.ColumnText(0), true);
       StationRec& st = stations[static_cast<std::size_t>(s)];
@@ -683,6 +753,9 @@ void Scheduler::Impl::Load() {
       st.alarm_text = q.ColumnText(5);
       st.tools = ToolsFromJson(json::parse(q.ColumnText(6)));
       st.program = q.ColumnText(7);
+      const json vars = json::parse(q.ColumnText(8));
+      for (auto it = vars.begin(); it != vars.end(); ++it)
+        st.vars[std::stoi(it.key())] = it.value().get<double>();
       states[static_cast<std::size_t>(s)].SetTools(st.tools, tool_index);
     }
   }
@@ -707,8 +780,7 @@ void Scheduler::Impl::Load() {
   {
     auto q = d.Prepare(
         "SELECT id, state, kind, route, pallet, op, station, reason, started_ms, finished_ms, cycle_s, "
-        "dispatch, ops "
-        "FROM jobs");
+        "dispatch, ops, schedule FROM jobs");
     while (q.Step()) {
       JobRec j;
       j.id = q.ColumnInt64(0);
@@ -730,8 +802,22 @@ void Scheduler::Impl::Load() {
           r != routes.end() && OpsToJson(*r->second.ops, stations) == OpsToJson(*j.ops, stations)) {
         j.ops = r->second.ops;
       }
+      if (const std::string sched = q.ColumnText(13); !sched.empty()) {
+        const json js = json::parse(sched);
+        j.sched_name = js.at("name");
+        j.sched_text = js.at("text");
+        j.sched = std::make_shared<schedule::Program>(schedule::Parse(j.sched_text, j.sched_name));
+        j.sched_pos.pc = js.at("pc");
+        j.sched_pos.done = js.at("done");
+        j.sched_pos.count = js.at("count");
+        j.sched_pos.finished = js.at("finished");
+        if (const auto& r = js.at("run"); !r.is_null()) {
+          j.sched_run = schedule::Run{r.at("main_file"), r.at("program"), r.at("sub_file"),
+                                      r.at("index"),     r.at("count"),   r.at("line")};
+        }
+      }
       if (j.state == JobState::kWaiting) waiting.insert(j.id);
-      if (!IsTerminal(j.state)) busy_pallets[j.pallet] = j.id;
+      if (!IsTerminal(j.state) && j.pallet != 0) busy_pallets[j.pallet] = j.id;
       jobs.emplace(j.id, std::move(j));
     }
   }
@@ -840,17 +926,19 @@ void Scheduler::Impl::Flush() {
   }
   if (!dirty_stations.empty()) {
     auto q = db->Prepare(
-        "INSERT INTO stations(id, dialect, online, fault, alarm_code, alarm_text, backlog_s, tools, program) "
-        "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9) ON CONFLICT(id) DO UPDATE SET dialect = "
-        "excluded.dialect, "
-        "online = excluded.online, fault = excluded.fault, alarm_code = excluded.alarm_code, "
-        "alarm_text = excluded.alarm_text, backlog_s = excluded.backlog_s, tools = excluded.tools, "
-        "program = excluded.program");
+        "INSERT INTO stations(id, dialect, online, fault, alarm_code, alarm_text, backlog_s, tools, program, "
+        "vars) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10) ON CONFLICT(id) DO UPDATE SET "
+        "dialect = excluded.dialect, online = excluded.online, fault = excluded.fault, "
+        "alarm_code = excluded.alarm_code, alarm_text = excluded.alarm_text, backlog_s = excluded.backlog_s, "
+        "tools = excluded.tools, program = excluded.program, vars = excluded.vars");
     for (int s : dirty_stations) {
       const StationRec& st = stations[static_cast<std::size_t>(s)];
       const StationState& ss = states[static_cast<std::size_t>(s)];
+      json vars = json::object();
+      for (const auto& [n, v] : st.vars) vars[std::to_string(n)] = v;
       q.BindText(1, st.id).BindText(2, st.dialect).BindInt64(3, ss.online).BindInt64(4, ss.fault);
       q.BindText(5, st.alarm_code).BindText(6, st.alarm_text).BindInt64(7, ss.backlog_s);
+      q.BindText(10, vars.dump());
       q.BindText(8, ToolsToJson(st.tools).dump()).BindText(9, st.program).Run();
       q.Reset();
     }
@@ -880,11 +968,11 @@ void Scheduler::Impl::Flush() {
     auto q = db->Prepare(
         "INSERT INTO jobs(id, state, kind, route, pallet, op, station, reason, started_ms, finished_ms, "
         "cycle_s, "
-        "dispatch, ops) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13) ON CONFLICT(id) DO "
-        "UPDATE "
-        "SET state = excluded.state, op = excluded.op, station = excluded.station, reason = excluded.reason, "
-        "started_ms = excluded.started_ms, finished_ms = excluded.finished_ms, cycle_s = excluded.cycle_s, "
-        "dispatch = excluded.dispatch, ops = excluded.ops");
+        "dispatch, ops, schedule) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14) "
+        "ON CONFLICT(id) DO UPDATE SET state = excluded.state, op = excluded.op, station = excluded.station, "
+        "reason = excluded.reason, started_ms = excluded.started_ms, finished_ms = excluded.finished_ms, "
+        "cycle_s = excluded.cycle_s, dispatch = excluded.dispatch, ops = excluded.ops, "
+        "schedule = excluded.schedule");
     for (std::int64_t id : dirty_jobs) {
       const JobRec& j = jobs.at(id);
       q.BindInt64(1, j.id).BindText(2, JobStateName(j.state)).BindText(3, j.kind).BindText(4, j.route);
@@ -895,6 +983,23 @@ void Scheduler::Impl::Flush() {
         q.BindDouble(11, *j.cycle);
       else
         q.BindNull(11);
+      std::string sched;
+      if (j.kind == "schedule") {
+        json js = {{"name", j.sched_name},
+                   {"text", j.sched_text},
+                   {"pc", j.sched_pos.pc},
+                   {"done", j.sched_pos.done},
+                   {"count", j.sched_pos.count},
+                   {"finished", j.sched_pos.finished},
+                   {"run", nullptr}};
+        if (j.sched_run) {
+          const auto& r = *j.sched_run;
+          js["run"] = {{"main_file", r.main_file}, {"program", r.program}, {"sub_file", r.sub_file},
+                       {"index", r.index},         {"count", r.count},     {"line", r.line}};
+        }
+        sched = js.dump();
+      }
+      q.BindText(14, sched);
       q.BindInt64(12, j.dispatch).BindText(13, OpsToJson(*j.ops, stations).dump()).Run();
       q.Reset();
     }
@@ -951,6 +1056,7 @@ JobView Scheduler::Impl::View(const JobRec& j, bool with_decisions) const {
   v.state = j.state;
   v.kind = j.kind;
   v.route = j.route;
+  v.schedule = j.sched_name;
   v.pallet = j.pallet;
   v.station = j.station < 0 ? std::string() : stations[static_cast<std::size_t>(j.station)].id;
   v.reason = j.reason;
@@ -1036,7 +1142,7 @@ Effects Scheduler::Recover() {
       if (st.inflight == 0) continue;
       const auto& d = m.dispatches.at(st.inflight);
       if (d.state == DState::kSent) {
-        m.fx.dispatches.push_back(DispatchAction{d.id, st.id, d.pallet, d.programs, d.job, d.op, true});
+        m.fx.dispatches.push_back(m.Action(d, true));
       }
     }
     for (std::size_t s = 0; s < m.stations.size(); ++s) m.TrySend(static_cast<int>(s));
@@ -1165,6 +1271,56 @@ JobResult Scheduler::RunPallet(std::string_view key, int pallet, std::string_vie
   });
   res.effects = m.TakeEffects();
   return res;
+}
+
+JobResult Scheduler::RunSchedule(std::string_view key, std::string_view name, std::string_view text,
+                                 std::string_view station) {
+  Impl& m = *impl_;
+  JobResult res;
+  res.job_id = m.Call([&]() -> std::int64_t {
+    if (auto seen = m.Seen(key)) {
+      res.replayed = true;
+      return *seen;
+    }
+    const int s = m.FindStation(station);
+    if (s < 0) throw Error(Errc::kNotFound, fmt::format("unknown station {}", station));
+    auto program = std::make_shared<schedule::Program>(schedule::Parse(text, name));
+    Impl::JobRec j;
+    j.id = m.next_job++;
+    j.kind = "schedule";
+    j.sched_name = std::string(name);
+    j.sched_text = std::string(text);
+    j.sched = program;
+    j.ops = std::make_shared<std::vector<Impl::Op>>();
+    auto& ref = m.jobs.emplace(j.id, std::move(j)).first->second;
+    m.JobChanged(ref);
+    m.StepSchedule(ref, s, fmt::format("schedule {} on {}", name, station));
+    m.Remember(key, ref.id);
+    return ref.id;
+  });
+  res.effects = m.TakeEffects();
+  return res;
+}
+
+Effects Scheduler::StationVariables(std::string_view id, const std::map<int, double>& common) {
+  Impl& m = *impl_;
+  m.Call([&] {
+    const int s = m.StationIndex(id, true);
+    auto& vars = m.stations[static_cast<std::size_t>(s)].vars;
+    for (const auto& [n, v] : common) {
+      if (n < 1 || n > 200)
+        throw Error(Errc::kInvalidArgument, fmt::format("V{} is not a common variable", n));
+      vars[n] = v;
+    }
+    m.dirty_stations.insert(s);
+  });
+  return m.TakeEffects();
+}
+
+std::map<int, double> Scheduler::StationCommonVariables(std::string_view id) const {
+  const int s = impl_->FindStation(id);
+  if (s < 0) return {};
+  return impl_->stations[static_cast<std::size_t>(s)].vars;
 }
 
 Effects Scheduler::Cancel(std::string_view key, std::int64_t job_id, std::string_view reason) {
@@ -1356,7 +1512,10 @@ Effects Scheduler::RunFinished(std::int64_t dispatch_id, std::optional<double> c
     if (cycle_s) j.cycle = j.cycle.value_or(0) + *cycle_s;
     j.dispatch = 0;
     ++j.op;
-    if (j.op < static_cast<int>(j.ops->size())) {
+    if (j.kind == "schedule") {
+      const auto& run = *j.sched_run;
+      m.StepSchedule(j, s, fmt::format("run {} of {} finished", run.index, run.count));
+    } else if (j.op < static_cast<int>(j.ops->size())) {
       // The pallet moves on to its next operation.
       j.state = JobState::kQueued;
       j.dispatch = 0;

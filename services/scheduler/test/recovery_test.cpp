@@ -125,6 +125,31 @@ TEST(Recovery, UnacknowledgedDispatchIsOfferedAgainWithTheSameId) {
   EXPECT_EQ(c.sched->Station("KT02")->in_hand, d2);
 }
 
+TEST(Recovery, ScheduleResumesWhereItStopped) {
+  TempDir tmp;
+  FakeCell c(tmp.db());
+  c.Take(c.sched->StationOnline("OK01", "okuma"));
+  JobResult r =
+      c.sched->RunSchedule("s", "S.SDF", "VSET V1=5\nPSELECT A.MIN,O1,,Q=3\nVSET V1=V1+1\nEND", "OK01");
+  c.Take(r.effects);
+  c.Complete(c.InHand("OK01").dispatch_id);
+  const auto second = c.InHand("OK01");
+  EXPECT_EQ(second.schedule_run->index, 2);
+  c.Restart();
+  Effects fx = c.sched->Recover();
+  ASSERT_EQ(fx.dispatches.size(), 1u);
+  EXPECT_EQ(fx.dispatches[0].dispatch_id, second.dispatch_id);
+  ASSERT_TRUE(fx.dispatches[0].schedule_run);
+  EXPECT_EQ(fx.dispatches[0].schedule_run->index, 2);
+  EXPECT_EQ(c.sched->StationCommonVariables("OK01").at(1), 5);
+  c.Take(fx);
+  c.Complete(second.dispatch_id);
+  EXPECT_EQ(c.InHand("OK01").schedule_run->index, 3);
+  c.Complete(c.InHand("OK01").dispatch_id);
+  EXPECT_EQ(c.State(r.job_id), JobState::kCompleted);
+  EXPECT_EQ(c.sched->StationCommonVariables("OK01").at(1), 6);
+}
+
 TEST(Recovery, AFailedCommitLeavesNoTrace) {
   TempDir tmp;
   FakeCell c(tmp.db());

@@ -393,6 +393,60 @@ TEST(Routes, WaitingPalletFollowsProgramChanges) {
   EXPECT_EQ(c.State(j), JobState::kDispatched);
 }
 
+// DESIGN §5: "a PSELECT with Q=n dispatches n runs of the main program to the station, one after another; IF
+// and VSET read and write the station's common variables V1-V200". Okuma seed lines 8791-8924.
+TEST(Schedules, PselectRunsOneAfterAnotherWithStationVariables) {
+  FakeCell c;
+  c.Take(c.sched->StationOnline("OK01", "okuma"));
+  c.Take(c.sched->StationVariables("OK01", {{1, 7}}));
+  const char* text =
+      "N001 VSET V2=0\n"
+      "N010 IF [V1 LT 7] N900\n"
+      "N020 PSELECT A.MIN,O100,,Q=2\n"
+      "N030 VSET V2=V2+1\n"
+      "N040 IF [V2 LT 2] N020\n"
+      "N050 PSELECT MD1:B.MIN,O200\n"
+      "END\n"
+      "N900 PSELECT C.MIN\n";
+  JobResult r = c.sched->RunSchedule("sched-1", "SHAFT-1.SDF", text, "OK01");
+  c.Take(r.effects);
+  ASSERT_EQ(r.effects.variables.size(), 1u);  // VSET V2=0 goes to the station
+  EXPECT_EQ(r.effects.variables[0].station, "OK01");
+  EXPECT_EQ(r.effects.variables[0].number, 2);
+  EXPECT_EQ(r.effects.variables[0].value, 0);
+  std::vector<std::string> order;
+  for (int guard = 0; guard < 10 && c.State(r.job_id) != JobState::kCompleted; ++guard) {
+    const DispatchAction d = c.InHand("OK01");
+    ASSERT_TRUE(d.schedule_run);
+    EXPECT_EQ(d.pallet, 0);
+    order.push_back(d.programs.at(0) + "/" + d.schedule_run->program + "#" +
+                    std::to_string(d.schedule_run->index));
+    c.Complete(d.dispatch_id);
+  }
+  EXPECT_EQ(order, (std::vector<std::string>{"A.MIN/O100#1", "A.MIN/O100#2", "A.MIN/O100#1", "A.MIN/O100#2",
+                                             "B.MIN/O200#1"}));
+  EXPECT_EQ(c.State(r.job_id), JobState::kCompleted);
+  EXPECT_EQ(c.sched->StationCommonVariables("OK01").at(2), 2);
+  auto v = c.sched->Job(r.job_id).value();
+  EXPECT_EQ(v.kind, "schedule");
+  EXPECT_EQ(v.schedule, "SHAFT-1.SDF");
+}
+
+TEST(Schedules, AlarmsFailTheJobAndBadProgramsAreRefused) {
+  FakeCell c;
+  c.Take(c.sched->StationOnline("OK01", "okuma"));
+  EXPECT_EQ(CodeOf([&] { c.sched->RunSchedule("k0", "BAD.SDF", "G00 X1\nEND", "OK01"); }),
+            Errc::kInvalidArgument);
+  EXPECT_EQ(CodeOf([&] { c.sched->RunSchedule("k1", "S.SDF", "END", "OK09"); }), Errc::kNotFound);
+  JobResult r = c.sched->RunSchedule("k2", "S.SDF", "PSELECT A.MIN,O1\nPSELECT A.MIN,O2,,Q=V9\nEND", "OK01");
+  c.Take(r.effects);
+  c.Complete(c.InHand("OK01").dispatch_id);
+  EXPECT_EQ(c.State(r.job_id), JobState::kFailed);
+  EXPECT_EQ(c.Reason(r.job_id), "S.SDF:2:21: error: repeat count Q=0 outside 1-9999");
+  JobResult e = c.sched->RunSchedule("k3", "E.SDF", "END", "OK01");
+  EXPECT_EQ(c.State(e.job_id), JobState::kCompleted);
+}
+
 TEST(Views, JsonShapesOfDesignSection6) {
   FakeCell c;
   c.Program("A", {"3"}, 100);

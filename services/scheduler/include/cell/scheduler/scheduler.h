@@ -11,6 +11,7 @@
 #include <chrono>
 #include <cstdint>
 #include <functional>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -19,6 +20,7 @@
 
 #include "cell/scheduler/program_source.h"
 #include "cell/scheduler/route.h"
+#include "cell/scheduler/schedule_program.h"
 #include "cell/tooltable/tooltable.h"
 
 namespace cell::scheduler {
@@ -36,6 +38,17 @@ struct DispatchAction {
   std::int64_t job_id = 0;
   int op_index = 0;     // 0-based operation of the route
   bool resent = false;  // true when Recover() offers it again
+  // Set for one run of an Okuma schedule program's PSELECT: programs is then {"A.MIN"} (the main program
+  // file, looked up in the station's namespace) and pallet 0.
+  std::optional<schedule::Run> schedule_run;
+};
+
+// VSET of a schedule program: set common variable V<number> on the station. Send these before the
+// dispatches of the same Effects.
+struct VariableAction {
+  std::string station;
+  int number = 0;
+  double value = 0;
 };
 
 // Tells a station to drop a dispatch (job cancelled).
@@ -55,6 +68,7 @@ struct JobChange {
 struct Effects {
   std::vector<DispatchAction> dispatches;
   std::vector<CancelAction> cancels;
+  std::vector<VariableAction> variables;
   std::vector<JobChange> job_changes;
   std::vector<std::string> notes;  // ignored or late reports etc., for the service's log
 };
@@ -83,8 +97,9 @@ struct Decision {
 struct JobView {
   std::int64_t id = 0;
   JobState state = JobState::kQueued;
-  std::string kind;   // "route" or "pallet"
-  std::string route;  // empty for a pallet run
+  std::string kind;      // "route", "pallet" or "schedule"
+  std::string route;     // empty unless a route job
+  std::string schedule;  // the schedule program's name for a schedule job
   int pallet = 0;
   std::string station;            // the station of the current or last visit; empty if none
   std::string reason;             // set while WAITING and when FAILED or CANCELLED
@@ -161,6 +176,12 @@ class Scheduler {
   JobResult Operate(std::string_view key, std::string_view route, int pallet);
   // `pallet run P --station ID`: the pallet's map on one station.
   JobResult RunPallet(std::string_view key, int pallet, std::string_view station);
+  // `schedule run FILE --station ID`: runs Okuma schedule program `text` (named `name`) on a station. Each
+  // PSELECT run becomes a dispatch (one after another); IF and VSET use the station's common variables.
+  // Throws cell::Error kInvalidArgument with the schedule's alarm when it does not parse, kNotFound for an
+  // unknown station. An alarm while running fails the job with the alarm as its reason.
+  JobResult RunSchedule(std::string_view key, std::string_view name, std::string_view text,
+                        std::string_view station);
   Effects Cancel(std::string_view key, std::int64_t job_id,
                  std::string_view reason = "cancelled by operator");
 
@@ -170,6 +191,8 @@ class Scheduler {
   // condition FAULT (fault = true) or back to NORMAL/WARNING (fault = false).
   Effects StationCondition(std::string_view id, bool fault, std::string_view alarm_code = {},
                            std::string_view alarm_text = {});
+  // The station's common variables V1-V200 as it publishes them (all of them, or those that changed).
+  Effects StationVariables(std::string_view id, const std::map<int, double>& common);
   // The station's published tool table (the whole table).
   Effects StationTools(std::string_view id, const tooltable::ToolTable& table);
   // The station accepted dispatch `dispatch_id` (reply to the run request).
@@ -189,6 +212,8 @@ class Scheduler {
   std::vector<StationView> Stations() const;
   std::optional<StationView> Station(std::string_view id) const;
   std::optional<tooltable::ToolTable> StationToolTable(std::string_view id) const;
+  // The scheduler's view of a station's common variables (published values plus VSET writes).
+  std::map<int, double> StationCommonVariables(std::string_view id) const;
   std::optional<RouteView> Route(std::string_view name) const;
   std::vector<RouteView> Routes() const;
   std::optional<std::vector<std::string>> PalletMap(int pallet) const;
