@@ -248,3 +248,46 @@ TEST(Planner, LongLineWithinTwoPercentOfOptimum) {
 
 }  // namespace
 }  // namespace cell::servo
+
+namespace cell::servo {
+namespace {
+
+TEST(Planner, ArcInYzPlaneAndRapidOverride) {
+  Machine m(DefaultMachineConfig("ktapl"), ClockKind::kVirtual);
+  m.Push(testing::Rapid(1, 300, 240, 300));
+  m.RunUntilIdle();
+  testing::LimitChecker check(m);
+  Segment s = testing::Line(2, 300, 240, 300, 3000);
+  s.kind = SegmentKind::kArc;
+  s.plane = ArcPlane::kYZ;  // full circle around (y 200, z 300), radius 40
+  s.center = {0, 200, 300};
+  s.direction = ArcDirection::kCCW;
+  m.Push(s);
+  double max_err = 0, min_z = 1e9;
+  auto ev = testing::RunChecked(m, check, 60, [&] {
+    const AxisVector a = m.actual();
+    max_err = std::max(max_err, std::abs(std::hypot(a[kY] - 200, a[kZ] - 300) - 40));
+    min_z = std::min(min_z, a[kZ]);
+    EXPECT_NEAR(a[kX], 300, 1e-3);
+  });
+  ASSERT_NE(testing::Find(ev, EventKind::kCompleted, 2), nullptr);
+  check.ExpectWithinLimits();
+  EXPECT_LT(max_err, m.config().path_tolerance);
+  EXPECT_NEAR(min_z, 260, 0.05);  // really went round
+
+  double t[2];
+  for (int k = 0; k < 2; ++k) {
+    Machine r(DefaultMachineConfig("ktapl"), ClockKind::kVirtual);
+    r.SetRapidOverride(k == 0 ? 1.0 : 0.25);
+    testing::LimitChecker c2(r);
+    r.Push(testing::Rapid(1, 600, 0, 0));
+    auto e2 = testing::RunChecked(r, c2, 60);
+    t[k] = testing::Find(e2, EventKind::kCompleted, 1)->machine_time;
+    c2.ExpectWithinLimits();
+  }
+  EXPECT_GT(t[1] / t[0], 3.0);  // 600 mm at 25 % of 20 m/min
+  EXPECT_LT(t[1] / t[0], 4.2);
+}
+
+}  // namespace
+}  // namespace cell::servo
