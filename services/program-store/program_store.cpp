@@ -781,7 +781,7 @@ void ProgramStore::BeginPut(const std::string& stream_id, const PutRequest& head
   stream->header_json = std::move(header_json);
   stream->last_activity = std::chrono::steady_clock::now();
   stream->file = streams_dir_ / (Sha256Hex(stream_id) + ".part");
-  stream->fd = ::open(stream->file.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0600);
+  stream->fd = ::open(stream->file.c_str(), O_RDWR | O_CREAT | O_TRUNC | O_CLOEXEC, 0600);
   if (stream->fd < 0) {
     Fail(Errc::kIo, fmt::format("cannot create {}: {}", stream->file.string(), std::strerror(errno)));
   }
@@ -846,18 +846,16 @@ PutResult ProgramStore::CommitPut(const std::string& stream_id) {
     // Whatever happens now, the stream is finished: on failure nothing of it is stored.
     std::unique_ptr<Stream> stream = std::move(it->second);
     streams_.erase(it);
+    // Read back through the descriptor kept open since BeginPut (not by path), so the content is exactly what
+    // this process wrote even if the scratch folder was meddled with.
     std::string content(stream->bytes, '\0');
-    int fd = ::open(stream->file.c_str(), O_RDONLY | O_CLOEXEC);
-    if (fd < 0)
-      Fail(Errc::kIo, fmt::format("cannot read {}: {}", stream->file.string(), std::strerror(errno)));
     std::size_t got = 0;
     while (got < content.size()) {
-      ssize_t n = ::read(fd, content.data() + got, content.size() - got);
+      ssize_t n = ::pread(stream->fd, content.data() + got, content.size() - got, static_cast<off_t>(got));
       if (n < 0 && errno == EINTR) continue;
       if (n <= 0) break;
       got += static_cast<std::size_t>(n);
     }
-    ::close(fd);
     if (got != content.size()) {
       Fail(Errc::kIo,
            fmt::format("stream '{}' staging file is short: {} of {} bytes", stream_id, got, content.size()));

@@ -743,6 +743,19 @@ TEST(ProgramStore, BrokenStreamsLeaveTheStoreAsItWas) {
   ExpectError([&] { reopened.CommitPut("s7"); }, Errc::kNotFound, "no open stream");
 }
 
+TEST(ProgramStore, LiveStreamSurvivesASecondOpenerCleaningScratchFiles) {
+  TempDir tmp;
+  ProgramStore ps(Options(tmp.path()));
+  ps.BeginPut("live", Req("HOST", "LIVE", ""));
+  ps.PutChunk("live", 0, "%\n(NAM,LIVE)\n");
+  ProgramStore second(Options(tmp.path()));  // empties the scratch folder
+  EXPECT_EQ(StagedFiles(ps.database_path()), 0);
+  ps.PutChunk("live", 1, "N1 G0 X0 F0\nN2 M30\n");
+  PutResult r = ps.CommitPut("live");
+  EXPECT_EQ(second.Get("HOST", "LIVE").content, "%\n(NAM,LIVE)\nN1 G0 X0 F0\nN2 M30\n");
+  EXPECT_EQ(r.file.metadata.nam, "LIVE");
+}
+
 TEST(ProgramStore, OpensAVersion1DatabaseAndMigratesIt) {
   TempDir tmp;
   StoreOptions opts = Options(tmp.path());
