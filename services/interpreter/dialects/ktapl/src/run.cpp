@@ -2083,7 +2083,10 @@ void KtRun::ExecTypeI(BlockCtx& bc, const ParsedBlock* pb) {
 
   // Cycle parameter passing (manual ch. 8: letters A-Z -> L801-L826).
   bool trigger = false;
-  if (cycle_ != 80 && !running_cycle && !g77) {
+  // M25 / M06 blocks move in machine coordinates and never run a pending cycle.
+  bool machine_block = std::any_of(words.begin(), words.end(),
+                                   [](const Word& w) { return w.letter == 'M' && (w.v == 25 || w.v == 6); });
+  if (cycle_ != 80 && !running_cycle && !g77 && !machine_block) {
     bool series800 = cycle_ >= 801;
     for (const auto& rw : raw) {
       char l = rw.letter;
