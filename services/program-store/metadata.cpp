@@ -168,11 +168,13 @@ struct ContentFacts {
   bool defines_cycles = false;  // KT-APL DFS/DFC
   bool only_tld = true;         // KT-APL: every statement block is TLD
   int tld_blocks = 0;
+  int blocks_outside_definitions = 0;  // KT-APL blocks not inside a DFS/DFC ... (END), heading excluded
 };
 
 ContentFacts Facts(const std::vector<std::string_view>& lines) {
   ContentFacts f;
   std::string upper;
+  bool inside_definition = false;
   for (std::string_view raw : lines) {
     std::string_view trimmed = Trim(raw);
     upper.assign(trimmed);
@@ -185,9 +187,15 @@ ContentFacts Facts(const std::vector<std::string_view>& lines) {
     if (body.substr(0, 7) == "PSELECT") f.has_pselect = true;
     std::vector<std::string> m;
     if (upper.find('(') != std::string::npos || upper[0] == '%') m = Mnemonics(upper);
-    if (std::find(m.begin(), m.end(), "DFS") != m.end() || std::find(m.begin(), m.end(), "DFC") != m.end()) {
-      f.defines_cycles = true;
+    auto has = [&](std::string_view mn) { return std::find(m.begin(), m.end(), mn) != m.end(); };
+    bool opens = has("DFS") || has("DFC");
+    if (opens) f.defines_cycles = true;
+    bool heading = has("NAM") || has("UTL") || has("UCY");
+    if (!inside_definition && !opens && !heading && !body.empty() && !(body[0] == '(' && m.empty())) {
+      ++f.blocks_outside_definitions;
     }
+    if (opens) inside_definition = true;
+    if (has("END")) inside_definition = false;
     bool tld = std::find(m.begin(), m.end(), "TLD") != m.end();
     if (tld) {
       ++f.tld_blocks;
@@ -861,7 +869,7 @@ Metadata ExtractMetadata(std::string_view content, const ExtractOptions& options
       case Dialect::kKtapl:
         if (facts.tld_blocks > 0 && facts.only_tld) {
           type = FileType::kToolTable;
-        } else if (facts.defines_cycles && !facts.has_m30_or_m02) {
+        } else if (facts.defines_cycles && facts.blocks_outside_definitions == 0) {
           type = FileType::kLibrary;
         } else {
           type = FileType::kPartProgram;

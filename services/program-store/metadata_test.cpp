@@ -114,6 +114,12 @@ TEST(Ktapl, ToolTableAndLibraryTypes) {
   EXPECT_EQ(tools.type, FileType::kToolTable);
   Metadata lib = ExtractMetadata("N60 (DFC,G881) !An example\nN70 G1 Z-1. F10.\nN80 (END)\n", {});
   EXPECT_EQ(lib.type, FileType::kLibrary);
+  // Definitions followed by blocks that use them (even without M30) make a part program.
+  Metadata uses =
+      ExtractMetadata("(DFS,B.C.,SAVE)\n(LBL,1)G0 X1.\n(LBL,2)(END)\nN10 G0 X10. F0\nN20 (CLS,B.C.)\n", {});
+  EXPECT_EQ(uses.type, FileType::kPartProgram);
+  Metadata two = ExtractMetadata("(DFS,A)\nG0 X1.\n(END)\n! between\n(DFC,G881)\nG1 Z-1.\n(END)\n", {});
+  EXPECT_EQ(two.type, FileType::kLibrary);
 }
 
 TEST(Okuma, ProgramNamesAndTypes) {
