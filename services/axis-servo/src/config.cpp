@@ -244,7 +244,7 @@ MachineConfig ParseMachineConfig(std::string_view text, const std::string& sourc
       TableReader pr(source, fmt::format("probe.parts[{}].", i), (*arr)[i].as_table());
       if (!pr.exists()) probe.Fail("parts", "must be an array of tables {pallet, file}");
       PartModelRef ref;
-      ref.pallet = pr.Integer("pallet", 1, 255, std::nullopt);
+      ref.pallet = pr.Integer("pallet", 0, 255, std::nullopt);
       std::filesystem::path f = pr.String("file", std::nullopt);
       ref.file = f.is_absolute() ? f : base / f;
       m.part_models.push_back(ref);

@@ -476,6 +476,11 @@ void Machine::StepOp() {
       return;
     case OpPhase::kTimer: {
       const Segment& s = op_.s;
+      if (s.kind == SegmentKind::kDwell && planner_.Holding() && !aborting_) {  // feed hold pauses a dwell
+        op_.until += cfg_.servo_period_s;
+        op_.t0 += cfg_.servo_period_s;
+        return;
+      }
       if (s.kind == SegmentKind::kSpindle || s.kind == SegmentKind::kToolChange) {
         const double ramp = std::abs(op_.rpm_to - op_.rpm_from) / cfg_.spindle_accel_rpm_s;
         const double f = ramp > 0 ? std::clamp((now - op_.t0) / ramp, 0.0, 1.0) : 1.0;
@@ -607,7 +612,9 @@ void Machine::ProbeCheck() {
 }
 
 bool Machine::Idle() const {
-  if (op_.phase != OpPhase::kNone || !pending_.empty()) return false;
+  const bool held_dwell =
+      op_.phase == OpPhase::kTimer && op_.s.kind == SegmentKind::kDwell && planner_.Holding() && !aborting_;
+  if ((op_.phase != OpPhase::kNone && !held_dwell) || !pending_.empty()) return false;
   const bool nothing_to_do = (queue_.empty() && planner_.Idle()) || alarm_.code != AlarmCode::kNone ||
                              (planner_.Holding() && planner_.Speed() == 0 && !aborting_);
   if (!nothing_to_do || alarm_pending_) return false;

@@ -2,6 +2,9 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
 
 #include "cell/error/error.h"
 #include "cell/servo/machine.h"
@@ -312,6 +315,68 @@ TEST(Lathe, XIsProgrammedInDiameter) {
   const double t =
       Find(ev, EventKind::kCompleted, 3)->machine_time - Find(ev, EventKind::kStarted, 3)->machine_time;
   EXPECT_NEAR(t, 10.0 / (200.0 / 60), 0.2);
+}
+
+}  // namespace
+}  // namespace cell::servo
+
+namespace cell::servo {
+namespace {
+
+TEST(Devices, FeedHoldPausesDwell) {
+  Machine m(DefaultMachineConfig("ktapl"), ClockKind::kVirtual);
+  Segment d;
+  d.id = 1;
+  d.kind = SegmentKind::kDwell;
+  d.dwell_s = 1.0;
+  m.Push(d);
+  for (int i = 0; i < 400; ++i) m.Step();
+  m.FeedHold();
+  EXPECT_FALSE(m.Step());  // virtual clock: a held dwell is no activity
+  const double held_at = m.machine_time();
+  m.Resume();
+  std::vector<Event> ev;
+  while (m.Step())
+    for (auto& e : m.TakeEvents()) ev.push_back(e);
+  const Event* done = testing::Find(ev, EventKind::kCompleted, 1);
+  ASSERT_NE(done, nullptr);
+  EXPECT_NEAR(held_at, 0.4, 1e-9);
+  EXPECT_NEAR(done->machine_time, 1.0, 2 * m.period());
+}
+
+TEST(Config, PartModelsFromStationFile) {
+  const auto dir = std::filesystem::temp_directory_path() / "axis_servo_parts_test";
+  std::filesystem::create_directories(dir / "parts");
+  {
+    std::ofstream(dir / "parts" / "p1.toml") << "[[plane]]\npoint = [0, 0, 20]\nnormal = [0, 0, 1]\n";
+    std::ifstream in(std::string(CELL_SOURCE_DIR) + "/deploy/stations/KT01.toml");
+    std::stringstream ss;
+    ss << in.rdbuf();
+    std::string text = ss.str();
+    const auto at = text.find("[probe]\n");
+    ASSERT_NE(at, std::string::npos);
+    text.insert(at + 8, "parts = [ { pallet = 1, file = \"parts/p1.toml\" } ]\n");
+    std::ofstream(dir / "KT99.toml") << text;
+  }
+  MachineConfig c = LoadMachineConfig(dir / "KT99.toml");
+  ASSERT_EQ(c.part_models.size(), 1u);
+  Machine m(c, ClockKind::kVirtual);
+  m.SetPallets(1, 0);
+  Segment p;
+  p.id = 1;
+  p.kind = SegmentKind::kProbe;
+  p.end = {0, 0, 0, 0, 0, 0};
+  p.axes = 0x07;
+  p.feed = 500;
+  m.Push(testing::Rapid(0, 0, 0, 40));
+  m.Push(p);
+  m.RunUntilIdle();
+  auto ev = m.TakeEvents();
+  const Event* done = testing::Find(ev, EventKind::kCompleted, 1);
+  ASSERT_NE(done, nullptr);
+  EXPECT_TRUE(done->probe.contact);
+  EXPECT_NEAR(done->probe.position[kZ], 23.0, 1e-4);
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace
