@@ -228,13 +228,6 @@ struct Scheduler::Impl {
                   fmt::format("{}: 1-75 programs expected, got {}", where, spec.programs.size()));
     }
     Op op;
-    for (const auto& s : spec.stations) {
-      const int idx = StationIndex(s, true);
-      if (std::find(op.stations.begin(), op.stations.end(), idx) != op.stations.end()) {
-        throw Error(Errc::kInvalidArgument, fmt::format("{}: station {} listed twice", where, s));
-      }
-      op.stations.push_back(idx);
-    }
     op.programs = spec.programs;
     for (const auto& name : spec.programs) {
       std::optional<ProgramMeta> meta;
@@ -268,6 +261,14 @@ struct Scheduler::Impl {
         if (std::find(op.tools.begin(), op.tools.end(), t) == op.tools.end()) op.tools.push_back(t);
       }
     }
+    // Stations are registered only once the programs qualify, so a refused route leaves no trace.
+    for (auto it = spec.stations.begin(); it != spec.stations.end(); ++it) {
+      if (it->empty()) throw Error(Errc::kInvalidArgument, fmt::format("{}: empty station id", where));
+      if (std::find(spec.stations.begin(), it, *it) != it) {
+        throw Error(Errc::kInvalidArgument, fmt::format("{}: station {} listed twice", where, *it));
+      }
+    }
+    for (const auto& s : spec.stations) op.stations.push_back(StationIndex(s, true));
     for (const auto& t : op.tools) op.tool_ids.push_back(tool_index.Intern(t));
     return op;
   }
@@ -1513,6 +1514,7 @@ Effects Scheduler::RunFinished(std::int64_t dispatch_id, std::optional<double> c
     j.dispatch = 0;
     ++j.op;
     if (j.kind == "schedule") {
+      j.op = 0;
       const auto& run = *j.sched_run;
       m.StepSchedule(j, s, fmt::format("run {} of {} finished", run.index, run.count));
     } else if (j.op < static_cast<int>(j.ops->size())) {

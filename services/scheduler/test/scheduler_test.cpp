@@ -55,6 +55,9 @@ TEST(DefineRoute, MissingProgramOrUcyIsAClearError) {
     EXPECT_NE(std::string(e.what()).find("route R op 1"), std::string::npos) << e.what();
   }
   EXPECT_FALSE(c.sched->Route("R"));
+  EXPECT_TRUE(c.sched->Stations().empty());  // a refused route registers no station
+  c.Program("OK", {}, 5);
+  EXPECT_EQ(CodeOf([&] { c.Route("R", {"KT01,KT01:OK"}); }), Errc::kInvalidArgument);
 }
 
 // "If two or more stations are eligible ... the station with the shortest backlog is allocated" (seed
