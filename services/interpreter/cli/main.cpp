@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <memory>
 #include <sstream>
 #include <string>
 
@@ -27,10 +28,13 @@ int Usage(const std::string& why) {
 bool ReadFile(const std::string& path, std::string& out) {
   std::ifstream in(path, std::ios::binary);
   if (!in) return false;
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  out = ss.str();
-  return true;
+  in.seekg(0, std::ios::end);
+  std::streamoff size = in.tellg();
+  if (size < 0) return false;
+  in.seekg(0, std::ios::beg);
+  out.resize(static_cast<size_t>(size));
+  in.read(out.data(), size);
+  return static_cast<bool>(in) || in.eof();
 }
 
 }  // namespace
@@ -77,7 +81,11 @@ int main(int argc, char** argv) {
   cell::interp::RunOptions opt;
   opt.dialect = dialect;
   opt.program_name = program;
-  if (!ReadFile(program, opt.program_text)) return Usage("cannot read " + program);
+  {
+    auto text = std::make_shared<std::string>();
+    if (!ReadFile(program, *text)) return Usage("cannot read " + program);
+    opt.program = std::move(text);
+  }
   if (!tools.empty()) {
     std::string text;
     if (!ReadFile(tools, text)) return Usage("cannot read " + tools);

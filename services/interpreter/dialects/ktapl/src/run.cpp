@@ -462,7 +462,14 @@ class KtRun final : public Run, public ExprContext {
   int local_defs_ = 0;
 };
 
-KtRun::KtRun(const RunOptions& o) : opt_(o), env_(o.env ? o.env : &default_env_) {
+KtRun::KtRun(const RunOptions& o) : env_(o.env ? o.env : &default_env_) {
+  // Everything but the program text (which may be large) is kept.
+  opt_.dialect = o.dialect;
+  opt_.program_name = o.program_name;
+  opt_.library = o.library;
+  opt_.save = o.save;
+  opt_.params = o.params;
+  opt_.env = o.env;
   for (const auto& [k, v] : o.params) {
     std::string key = Upper(Trim(k));
     std::string val = Upper(Trim(v));
@@ -496,7 +503,7 @@ KtRun::KtRun(const RunOptions& o) : opt_(o), env_(o.env ? o.env : &default_env_)
   }
   metric_ = basic_metric_;
   tools_ = o.tools;
-  auto text = std::make_shared<const std::string>(o.program_text);
+  auto text = o.program ? o.program : std::make_shared<const std::string>(o.program_text);
   Level main;
   main.text = text;
   main.begin = 0;

@@ -83,6 +83,8 @@ struct RunOptions {
   std::string dialect = "ktapl";  // ktapl, okuma, emco, balt
   std::string program_name;       // PROGRAM as given, used in diagnostics
   std::string program_text;
+  // Alternative to program_text that is shared instead of copied (large programs); used when set.
+  std::shared_ptr<const std::string> program;
   // SAVE-d subroutines and cycles (and, for KT-APL, user overrides of the shipped G81-G89): name -> text.
   // Offline: files in --lib DIR; in the service: the program store. Return nullopt when unknown.
   std::function<std::optional<std::string>(const std::string& name)> library;
