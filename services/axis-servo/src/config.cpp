@@ -7,6 +7,7 @@
 #include <fstream>
 #include <limits>
 #include <optional>
+#include <set>
 #include <sstream>
 
 #include "cell/error/error.h"
@@ -23,6 +24,17 @@ class TableReader {
       : source_(source), prefix_(std::move(prefix)), table_(table) {}
 
   bool exists() const { return table_ != nullptr; }
+  void Mark(std::string_view key) const { seen_.insert(std::string(key)); }
+  // Every key of the table must have been read: a misspelt key is an error, not a silent default.
+  void Done() const {
+    if (!table_) return;
+    for (auto&& [k, v] : *table_) {
+      if (seen_.count(std::string(k.str()))) continue;
+      std::string allowed;
+      for (const auto& a : seen_) allowed += (allowed.empty() ? "" : ", ") + a;
+      Fail(k.str(), fmt::format("unknown key (allowed: {})", allowed));
+    }
+  }
   bool has(std::string_view key) const { return table_ && table_->contains(key); }
 
   [[noreturn]] void Fail(std::string_view key, const std::string& reason) const {
@@ -32,6 +44,7 @@ class TableReader {
   // A number in [lo, hi] (open at lo when lo_open). Missing: `fallback`, or an error when none.
   double Number(std::string_view key, double lo, double hi, std::optional<double> fallback,
                 std::string_view unit = "", bool lo_open = false) const {
+    Mark(key);
     std::string range =
         fmt::format("{}{}, {}]{}{}", lo_open ? "(" : "[", Fmt(lo), Fmt(hi), unit.empty() ? "" : " ", unit);
     const toml::node* n = table_ ? table_->get(key) : nullptr;
@@ -51,6 +64,7 @@ class TableReader {
   }
 
   int Integer(std::string_view key, int lo, int hi, std::optional<int> fallback) const {
+    Mark(key);
     const toml::node* n = table_ ? table_->get(key) : nullptr;
     std::string range = fmt::format("[{}, {}]", lo, hi);
     if (!n) {
@@ -64,6 +78,7 @@ class TableReader {
   }
 
   bool Bool(std::string_view key, bool fallback) const {
+    Mark(key);
     const toml::node* n = table_ ? table_->get(key) : nullptr;
     if (!n) return fallback;
     auto b = n->value_exact<bool>();
@@ -73,6 +88,7 @@ class TableReader {
 
   std::string Choice(std::string_view key, std::initializer_list<std::string_view> allowed,
                      std::optional<std::string> fallback) const {
+    Mark(key);
     std::string list;
     for (auto a : allowed) list += fmt::format("{}\"{}\"", list.empty() ? "" : ", ", a);
     const toml::node* n = table_ ? table_->get(key) : nullptr;
@@ -88,6 +104,7 @@ class TableReader {
   }
 
   std::string String(std::string_view key, std::optional<std::string> fallback) const {
+    Mark(key);
     const toml::node* n = table_ ? table_->get(key) : nullptr;
     if (!n) {
       if (fallback) return *fallback;
@@ -99,6 +116,7 @@ class TableReader {
   }
 
   const toml::table* Sub(std::string_view key) const {
+    Mark(key);
     const toml::node* n = table_ ? table_->get(key) : nullptr;
     if (!n) return nullptr;
     if (!n->is_table()) Fail(key, "must be a table");
@@ -114,6 +132,7 @@ class TableReader {
   const std::string& source_;
   std::string prefix_;
   const toml::table* table_;
+  mutable std::set<std::string> seen_;
 };
 
 void ReadDrive(const std::string& src, const std::string& prefix, const toml::table* t, DriveConfig& d,
@@ -133,6 +152,7 @@ void ReadDrive(const std::string& src, const std::string& prefix, const toml::ta
   d.kd = r.Number("kd", 0, 1e7, 0.0, "N·m·s/rad");
   d.kvff = r.Number("kvff", 0, 1.5, 1.0);
   d.kaff = r.Number("kaff", 0, 1.5, 0.95);
+  r.Done();
 }
 
 void ReadAxis(const std::string& src, int index, const toml::table* t, const MachineConfig& m,
@@ -165,6 +185,7 @@ void ReadAxis(const std::string& src, int index, const toml::table* t, const Mac
     a.unclamp_time = r.Number("unclamp_time", 0, 60, 0.5, "s");
   }
   ReadDrive(src, fmt::format("axes.{}.drive.", name), r.Sub("drive"), a.drive, rot);
+  r.Done();
   // The drive must be able to produce the configured acceleration; otherwise every rapid is a DIFF over.
   const double to_rad = 2 * M_PI / a.drive.units_per_rev;
   const double need = (a.drive.motor_inertia + a.drive.load_inertia) * a.max_acceleration * to_rad +
@@ -199,6 +220,7 @@ MachineConfig ParseMachineConfig(std::string_view text, const std::string& sourc
   m.path_tolerance = mach.Number("path_tolerance", 0.001, 1, 0.02, "mm");
   m.in_position = mach.Number("in_position", 0.001, 1, 0.025, "mm");
   m.queue_capacity = mach.Integer("queue_capacity", 2, 4096, 64);
+  mach.Done();
 
   const toml::table* axes = root["axes"].as_table();
   if (!axes) mach.Fail("", "missing table [axes] (one sub-table per axis: [axes.x], ...)");
@@ -223,19 +245,24 @@ MachineConfig ParseMachineConfig(std::string_view text, const std::string& sourc
   m.spindle_max_rpm = sp.Number("max_rpm", 0, 100000, std::nullopt, "rpm", true);
   m.spindle_accel_rpm_s = sp.Number("acceleration", 0, 1e6, std::nullopt, "rpm/s", true);
   m.spindle_orient_time = sp.Number("orient_time", 0, 60, 1.5, "s");
+  sp.Done();
 
   TableReader mag(source, "magazine.", root["magazine"].as_table());
   m.magazine_sockets = mag.Integer("sockets", 1, 1000, std::nullopt);
   m.magazine_index_time = mag.Number("index_time", 0, 60, 0.1, "s per socket");
+  mag.Done();
 
   TableReader times(source, "times.", root["times"].as_table());
   m.tool_change_time = times.Number("tool_change", 0, 600, std::nullopt, "s");
   m.pallet_change_time = times.Number("pallet_change", 0, 3600, std::nullopt, "s");
   m.coolant_time = times.Number("coolant", 0, 60, 0.3, "s");
+  times.Done();
 
   TableReader probe(source, "probe.", root["probe"].as_table());
   m.probe_ball_diameter = probe.Number("ball_diameter", 0, 50, 6.0, "mm");
   m.probe_max_feed = probe.Number("max_feed", 0, 1e5, 2000.0, "mm/min", true);
+  probe.Mark("parts");
+  probe.Done();
   if (const toml::node* parts = root["probe"]["parts"].node()) {
     const toml::array* arr = parts->as_array();
     if (!arr) probe.Fail("parts", "must be an array of tables {pallet, file}");
@@ -247,6 +274,7 @@ MachineConfig ParseMachineConfig(std::string_view text, const std::string& sourc
       ref.pallet = pr.Integer("pallet", 0, 255, std::nullopt);
       std::filesystem::path f = pr.String("file", std::nullopt);
       ref.file = f.is_absolute() ? f : base / f;
+      pr.Done();
       m.part_models.push_back(ref);
     }
   }

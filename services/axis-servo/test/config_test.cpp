@@ -106,6 +106,11 @@ TEST(Config, BadValueNamesFileKeyAndRange) {
   e = ErrorOf(Replace(kMinimal, "sockets = 30", "sockets = \"many\""));
   EXPECT_NE(e.find("magazine.sockets"), std::string::npos) << e;
 
+  e = ErrorOf(
+      Replace(kMinimal, "[machine]\nkind = \"hmc\"", "[machine]\nkind = \"hmc\"\npath_tolerence = 0.1"));
+  EXPECT_NE(e.find("machine.path_tolerence: unknown key (allowed: "), std::string::npos) << e;
+  EXPECT_NE(e.find("path_tolerance"), std::string::npos) << e;
+
   e = ErrorOf(Replace(kMinimal, "max = 500\nmax_velocity", "max = -1\nmax_velocity"));
   EXPECT_NE(e.find("axes.x.max"), std::string::npos) << e;
 
