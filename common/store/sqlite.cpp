@@ -198,7 +198,9 @@ Database Database::Open(const std::filesystem::path& file, const OpenOptions& op
     }
   }
   int flags = options.read_only ? SQLITE_OPEN_READONLY : (SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE);
-  flags |= SQLITE_OPEN_NOMUTEX;  // a connection is used by one thread at a time
+  // Serialized mode: a connection shared between threads (e.g. DDS callbacks) cannot corrupt SQLite's state.
+  // Transactions are per connection, so threads sharing one must still take turns around a Transaction.
+  flags |= SQLITE_OPEN_FULLMUTEX;
   sqlite3* raw = nullptr;
   int rc = sqlite3_open_v2(file.c_str(), &raw, flags, nullptr);
   if (rc != SQLITE_OK) {

@@ -95,7 +95,10 @@ class Statement {
   std::string sql_;
 };
 
-// One connection to one database file. Move-only; closed on destruction.
+// One connection to one database file. Move-only; closed on destruction. Opened in SQLite's serialized
+// mode, so calls from several threads are safe, but a transaction belongs to the connection: threads that
+// share one must serialize their transactions (or open a connection each; WAL lets readers and one writer
+// work at once, and the busy timeout makes writers wait for each other).
 class Database {
  public:
   // Opens (creating it and its parent directories) the database at `file`, switches it to WAL mode with
