@@ -633,8 +633,18 @@ std::chrono::steady_clock::time_point Machine::NextDeadline() {
     wall_start_ = now - std::chrono::duration_cast<std::chrono::steady_clock::duration>(
                             std::chrono::duration<double>(machine_time()));
   }
-  return wall_start_ + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-                           std::chrono::duration<double>((ticks_ + 1) * cfg_.servo_period_s));
+  auto at = [&] {
+    return wall_start_ + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                             std::chrono::duration<double>((ticks_ + 1) * cfg_.servo_period_s));
+  };
+  // More than 100 ms behind (the caller stopped stepping, or the host stalled): re-anchor instead of
+  // running the missed periods in a burst. The machine does not move while it is not stepped.
+  if (now - at() > std::chrono::milliseconds(100)) {
+    wall_start_ = now - std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                            std::chrono::duration<double>(ticks_ * cfg_.servo_period_s));
+    ++overruns_;
+  }
+  return at();
 }
 
 bool Machine::Step() {
