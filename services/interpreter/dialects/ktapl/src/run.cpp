@@ -475,7 +475,8 @@ KtRun::KtRun(const RunOptions& o) : env_(o.env ? o.env : &default_env_) {
     std::string val = Upper(Trim(v));
     auto num = [&](double def) {
       try {
-        return std::stod(val);
+        double d = std::stod(val);
+        return std::isfinite(d) ? std::clamp(d, -1e12, 1e12) : def;
       } catch (...) {
         return def;
       }
@@ -487,12 +488,13 @@ KtRun::KtRun(const RunOptions& o) : env_(o.env ? o.env : &default_env_) {
     } else if (key == "OPTIONAL_STOP") {
       optional_stop_ = num(0) != 0;
     } else if (key == "PALLET") {
-      pallet_ = static_cast<int>(num(0));
+      pallet_ = static_cast<int>(std::clamp(num(0), 0.0, 999.0));
     } else if (key == "B_AXIS") {
       b_index_ = val != "ROTARY";
     } else if (key == "MAX_IDLE_BLOCKS") {
       max_idle_ = std::max(1L, static_cast<long>(num(1000000)));
-    } else if (key.size() > 1 && key[0] == 'L' && std::all_of(key.begin() + 1, key.end(), IsDigit)) {
+    } else if (key.size() > 1 && key.size() <= 5 && key[0] == 'L' &&
+               std::all_of(key.begin() + 1, key.end(), IsDigit)) {
       int n = std::stoi(key.substr(1));
       double d = num(0);
       if (n >= 1000 && n <= 2999)
@@ -948,7 +950,7 @@ void KtRun::Define(const Statement& st, size_t li) {
   if (li > 0) Fail(st.col, "DEFINITIONS ARE NOT ALLOWED INSIDE A SUBROUTINE OR CYCLE");
   bool is_cycle = st.mnemonic == "DFC";
   auto gnum = [&]() -> int {
-    if (name.size() < 2 || name[0] != 'G') return -1;
+    if (name.size() < 2 || name.size() > 5 || name[0] != 'G') return -1;
     for (size_t k = 1; k < name.size(); ++k) {
       if (!IsDigit(name[k])) return -1;
     }
@@ -1608,6 +1610,7 @@ void KtRun::Tld(const Statement& st) {
       }
     }
     if (digits == 0) Fail(st.col, fmt::format("TLD: NUMBER EXPECTED AFTER {}", letter));
+    if (digits > 9) Fail(st.col, fmt::format("TLD: TOO MANY DIGITS AFTER {}", letter));
     r.as_written = v;
     if (letter == 'P' || letter == 'D') return ScaleLiteral('X', r, metric_, false, false);
     return neg ? -v : v;
