@@ -46,7 +46,7 @@ Planner::Planner(const PlannerLimits& limits, std::size_t capacity)
 void Planner::SetOverrides(double feed, double rapid) {
   feed_ovr_ = std::clamp(feed, 0.0, 2.0);
   rapid_ovr_ = std::clamp(rapid, 0.0, 1.0);
-  BackwardPass();
+  BackwardPass(0);
 }
 
 double Planner::Cap(const PathElement& e) const {
@@ -295,6 +295,7 @@ void Planner::Link(PathElement& a, PathElement& b, bool a_is_current) {
 
 void Planner::Append(PathElement e) {
   e.p0 = tail_;
+  const std::size_t changed_from = count_ > 0 ? count_ - 1 : 0;
   if (count_ > 0) {
     PathElement& prev = At(count_ - 1);
     Link(prev, e, count_ == 1 && started_);
@@ -307,17 +308,24 @@ void Planner::Append(PathElement e) {
   elems_[(head_ + count_) % elems_.size()] = e;
   ++count_;
   tail_ = e.p1;
-  BackwardPass();
+  BackwardPass(changed_from);
 }
 
-void Planner::BackwardPass() {
-  double v_next_entry = 0;  // entry speed allowed by the element after i
+void Planner::BackwardPass(std::size_t changed_from) {
+  double v_next_entry = 0;  // entry speed allowed by the element after n
   for (std::size_t n = count_; n-- > 0;) {
     PathElement& e = At(n);
     const bool last = n + 1 == count_;
-    e.v_exit = (last || e.stop_end) ? 0.0 : std::min({e.v_junction, v_next_entry, Cap(e)});
-    v_next_entry = std::min(std::max(Cap(e), 0.0), std::sqrt(e.v_exit * e.v_exit + 2 * e.at * e.len));
-    if (e.rapid && rapid_ovr_ == 0) v_next_entry = 0;
+    const double exit = (last || e.stop_end) ? 0.0 : std::min({e.v_junction, v_next_entry, Cap(e)});
+    double entry = std::min(std::max(Cap(e), 0.0), std::sqrt(exit * exit + 2 * e.at * e.len));
+    if (e.rapid && rapid_ovr_ == 0) entry = 0;
+    // Elements before `changed_from` only depend on their successor's entry speed: once an element's
+    // plan is unchanged, everything before it is too.
+    const bool same = exit == e.v_exit && entry == e.v_entry;
+    e.v_exit = exit;
+    e.v_entry = entry;
+    if (same && n < changed_from) break;
+    v_next_entry = entry;
   }
 }
 
@@ -332,7 +340,7 @@ void Planner::StopOnCurrent() {
   e.last_of_segment = true;
   count_ = 1;
   tail_ = e.p1;
-  BackwardPass();
+  BackwardPass(0);
 }
 
 void Planner::Flush(const AxisVector& pos) {

@@ -46,6 +46,7 @@ struct PathElement {
   double at = 0;                  // tangential acceleration limit
   double v_junction = 0;          // geometric limit at the end (into the next element)
   double v_exit = 0;              // planned exit speed (backward pass)
+  double v_entry = -1;            // planned entry limit (backward pass); -1 before the first pass
   bool stop_end = false;          // exact stop at the end
   bool wait_in_position = false;  // the next element waits until the machine is in position
   double settle = 0;              // in-position window for that wait (0: the machine's in_position)
@@ -109,7 +110,7 @@ class Planner {
   double Cap(const PathElement& e) const;
   void Append(PathElement e);
   void Link(PathElement& a, PathElement& b, bool a_is_current);
-  void BackwardPass();
+  void BackwardPass(std::size_t changed_from);  // elements from this index on may have changed (0: all)
   void FinishCurrent();
 
   PlannerLimits lim_;
