@@ -192,7 +192,9 @@ TEST(Clock, VirtualAndRealAgreeOnCycleTime) {
     if (k == 1) wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - w0).count();
   }
   EXPECT_NEAR(cycle[1], cycle[0], 0.01 * cycle[0]);
-  EXPECT_NEAR(wall, cycle[1], 0.05 * cycle[1] + 0.02);  // the real clock really paces
+  // The real clock really paces: never faster than machine time (slower only if the host stalls).
+  EXPECT_GE(wall, 0.97 * cycle[1]);
+  EXPECT_LE(wall, cycle[1] + 1.0);
   EXPECT_GT(cycle[0], 0.5);
 }
 
