@@ -116,3 +116,80 @@ TEST(ToolTable, TldExamples) {
 
 }  // namespace
 }  // namespace cell::interp
+
+namespace cell::interp {
+namespace {
+
+class FakeEnv : public Environment {
+ public:
+  int probes = 0;
+  std::string waited;
+  ProbeResult Probe(bool contact, const std::array<double, kAxisCount>& from,
+                    const std::array<double, kAxisCount>& to) override {
+    ++probes;
+    ProbeResult r;
+    r.event = contact;
+    r.at = from;
+    r.at[kX] = (from[kX] + to[kX]) / 2;  // contact half way
+    return r;
+  }
+  void WaitInputs(const std::string& spec) override { waited = spec; }
+  std::optional<double> SystemParameter(int n) override {
+    if (n == 3500) return 42.0;
+    return std::nullopt;
+  }
+};
+
+TEST(Service, EnvironmentAnswersQueueBusters) {
+  FakeEnv env;
+  RunOptions o;
+  o.program_name = "S";
+  o.program_text =
+      "G71 G0 X0 F0\nG22 X10. F100.\n(PAR,L1000=L3042+L3500)\n(WAI,I04D,1=1, I03D,3=0)\nXL1000\nM30\n";
+  o.env = &env;
+  auto run = StartRun(o);
+  std::vector<Canon> ops;
+  for (Step s = run->Next(); s.kind == Step::kCanon; s = run->Next()) ops.push_back(s.canon);
+  EXPECT_EQ(env.probes, 1);
+  EXPECT_EQ(env.waited, "I04D,1=1,I03D,3=0");
+  auto mp = run->MachineParameters();
+  ASSERT_TRUE(mp.count(1000));
+  EXPECT_DOUBLE_EQ(mp[1000], 5.0 + 42.0);  // contact at X5 (mm, G71) + L3500 from the environment
+  EXPECT_DOUBLE_EQ(mp[1021], 8.0);         // event happened
+  bool moved = false;
+  for (const auto& c : ops) moved |= c.op == Op::kLinear && c.pos[kX] == 47.0;  // F100 is modal after G22
+  EXPECT_TRUE(moved);
+}
+
+TEST(Service, SaveCallbackGetsTheDefinitionText) {
+  RunOptions o;
+  o.program_name = "S";
+  o.program_text = "(DFS,DRILL25,SAVE)\nG91X1.F0\n(END)\n(DFC,G881)\nZ1.\n(END)\n";
+  std::map<std::string, std::string> saved;
+  o.save = [&](const std::string& name, const std::string& text) { saved[name] = text; };
+  auto run = StartRun(o);
+  while (run->Next().kind == Step::kCanon) {
+  }
+  ASSERT_EQ(saved.size(), 1u);  // G881 has no SAVE
+  EXPECT_EQ(saved["DRILL25"], "G91X1.F0\n(END)\n");
+}
+
+TEST(Service, ParamsSetUnitsPalletAndParameters) {
+  RunOptions o;
+  o.program_name = "S";
+  o.program_text = "G0 F0 XL1000 YL3020\n";
+  o.params = {{"UNITS", "mm"}, {"PALLET", "38"}, {"L1000", "12.5"}};
+  auto run = StartRun(o);
+  Step u = run->Next();
+  ASSERT_EQ(u.kind, Step::kCanon);
+  EXPECT_TRUE(u.canon.metric);
+  Step m = run->Next();
+  ASSERT_EQ(m.kind, Step::kCanon);
+  EXPECT_DOUBLE_EQ(m.canon.pos[kX], 12.5);
+  EXPECT_DOUBLE_EQ(m.canon.pos[kY], 38.0);
+  EXPECT_EQ(run->Next().kind, Step::kEnd);
+  EXPECT_EQ(run->Next().kind, Step::kEnd);  // stays at the end
+}
+
+}  // namespace
+}  // namespace cell::interp
