@@ -457,6 +457,17 @@ class KtRun final : public Run, public ExprContext {
 
   std::map<int, double> program_;  // L100-L999
   std::map<int, double> machine_;  // L1000-L2999
+  // Files written by this run (OPF/OIF + FWR/MSG): an NC file written and closed can be called with CLS
+  // (manual Fig 7.28). The program store keeps the real files; this is the run's own view of them.
+  struct MemFile {
+    std::string type;
+    std::string text;
+  };
+  std::map<std::string, MemFile> files_;
+  std::string open_file_;
+  void OpenFile(const std::string& name, const std::string& type, bool append, int col);
+  void WriteFile(const std::string& line);
+  void CloseFile();
   std::map<std::string, Def> defs_;
   std::map<std::string, Def> lib_cache_;
   int local_defs_ = 0;
@@ -1036,6 +1047,8 @@ std::optional<Def> KtRun::LoadLibrary(const std::string& name, const std::string
 std::optional<Def> KtRun::FindDef(const std::string& name) {
   auto it = defs_.find(name);
   if (it != defs_.end()) return it->second;
+  auto fi = files_.find(name);
+  if (fi != files_.end() && open_file_ != name) return LoadLibrary(name, fi->second.text);
   auto ci = lib_cache_.find(name);
   if (ci != lib_cache_.end()) return ci->second;
   std::optional<std::string> text;
@@ -1207,6 +1220,7 @@ void KtRun::ExecStatement(const Statement& st, BlockCtx& bc, bool in_ift) {
       c.text = ExpandName(Trim(body.substr(parts[0].size() + 1)), st.col);
       c.text2 = "AS";
       c.code = 1;
+      OpenFile(c.text, "AS", false, st.col);
       file_open_ = true;
       Emit(c);
       return;
@@ -1217,8 +1231,10 @@ void KtRun::ExecStatement(const Statement& st, BlockCtx& bc, bool in_ift) {
     if (file_open_) {
       Canon w = Base(Op::kFileWrite);
       w.text = c.text.substr(0, 80);
+      WriteFile(w.text);
       Emit(w);
       w.text = "";
+      WriteFile(w.text);
       Emit(w);
     }
   } else if (m == "OIF") {
@@ -1228,6 +1244,7 @@ void KtRun::ExecStatement(const Statement& st, BlockCtx& bc, bool in_ift) {
     if (c.text.empty() || c.text.size() > 32) Fail(st.col, "FILE NAME MUST HAVE 1-32 CHARACTERS");
     c.text2 = "AS";
     c.code = 1;
+    OpenFile(c.text, "AS", false, st.col);
     file_open_ = true;
     Emit(c);
   } else if (m == "OPF") {
@@ -1235,6 +1252,7 @@ void KtRun::ExecStatement(const Statement& st, BlockCtx& bc, bool in_ift) {
   } else if (m == "CLF") {
     if (file_open_) Emit(Base(Op::kFileClose));
     file_open_ = false;
+    CloseFile();
     SetFlag(1050);
   } else if (m == "FWR") {
     Fwr(st);
@@ -1262,7 +1280,10 @@ void KtRun::ExecStatement(const Statement& st, BlockCtx& bc, bool in_ift) {
     Emit(c);
     bool done = env_->FileOperation(c);
     if (done) {
-      if (m == "DLF") SetFlag(1051);
+      if (m == "DLF") {
+        files_.erase(Upper(Trim(SplitTopLevel(args, '/')[0])));
+        SetFlag(1051);
+      }
       if (m == "PRT") SetFlag(1052);
       if (m == "CPY") SetFlag(1053);
       if (m == "RCP") SetFlag(1054);
@@ -1350,6 +1371,26 @@ void KtRun::ExecStatement(const Statement& st, BlockCtx& bc, bool in_ift) {
   } else {
     Fail(st.col, "TYPE II COMMAND SYNTAX ERROR");
   }
+}
+
+void KtRun::OpenFile(const std::string& name, const std::string& type, bool append, int col) {
+  std::string key = Upper(name);
+  CloseFile();
+  auto it = files_.find(key);
+  if (it != files_.end() && it->second.type != type) Fail(col, "FILE ALREADY EXISTS");
+  MemFile& f = files_[key];
+  f.type = type;
+  if (!append) f.text.clear();
+  open_file_ = key;
+}
+
+void KtRun::WriteFile(const std::string& line) {
+  if (open_file_.empty()) return;
+  files_[open_file_].text += line + "\n";
+}
+
+void KtRun::CloseFile() {
+  open_file_.clear();
 }
 
 void KtRun::Par(const Statement& st) {
@@ -1467,6 +1508,7 @@ void KtRun::Opf(const Statement& st) {
   if (c.text.empty() || c.text.size() > 32) Fail(st.col, "FILE NAME MUST HAVE 1-32 CHARACTERS");
   c.text2 = type;
   c.flag = append;
+  OpenFile(c.text, type, append, st.col);
   file_open_ = true;
   Emit(c);
 }
@@ -1558,6 +1600,7 @@ void KtRun::Fwr(const Statement& st) {
   fwr_pending_.clear();
   Canon w = Base(Op::kFileWrite);
   w.text = line.substr(0, 80);
+  WriteFile(w.text);
   Emit(w);
 }
 
@@ -1965,6 +2008,7 @@ void KtRun::ExecTypeI(BlockCtx& bc, const ParsedBlock* pb) {
       case 37:
         if (file_open_) Emit(Base(Op::kFileClose));
         file_open_ = false;
+        CloseFile();
         g36_ = false;
         break;
       case 38: {
