@@ -460,6 +460,13 @@ bool Machine::StartBarrier(Entry& e) {
         RaiseAlarm(AlarmCode::kSoftLimit, fmt::format("segment {}: {}", s.id, why), s.id);
         return false;
       }
+      // A full-circle index table turns the shortest way (positions stay in [min, max] between moves).
+      op_.index_target = s.end[kB];
+      if (b.max - b.min >= 360.0 - b.index_increment - 1e-9) {
+        const double direct = s.end[kB] - planner_.EndOfPath()[kB];
+        const double d = std::remainder(direct, 360.0);
+        if (std::abs(d - direct) > 1e-6) op_.index_target = planner_.EndOfPath()[kB] + d;
+      }
       op_.phase = OpPhase::kIndexUnclamp;
       op_.until = now + b.unclamp_time;
       b_clamped_ = false;
@@ -545,7 +552,7 @@ void Machine::StepOp() {
       if (now < op_.until) return;
       {
         AxisVector p = planner_.EndOfPath();
-        p[kB] = op_.s.end[kB];
+        p[kB] = op_.index_target;
         planner_.AddLine(p, 0, true, true, op_.seg);
         op_.phase = OpPhase::kIndexMove;
       }
@@ -558,6 +565,16 @@ void Machine::StepOp() {
     case OpPhase::kIndexClamp: {
       if (now < op_.until) return;
       b_clamped_ = true;
+      const double wrap = 360.0 * std::round((op_.s.end[kB] - op_.index_target) / 360.0);
+      if (wrap != 0 && filter_.Settled()) {
+        // Renumber the table position into [min, max]: the same physical angle.
+        AxisVector p = planner_.Position();
+        p[kB] += wrap;
+        planner_.Flush(p);
+        filter_.Reset(p);
+        prev_cmd_[kB] += wrap;
+        servos_[kB].Shift(wrap);
+      }
       Segment rest = op_.s;
       const AxisVector start = planner_.EndOfPath();
       const AxisVector end = EndOf(rest, start);

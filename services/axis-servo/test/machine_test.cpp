@@ -279,6 +279,21 @@ TEST(Devices, BIndexTableUnclampsMovesClamps) {
   EXPECT_GT(done->machine_time, b.unclamp_time + b.clamp_time + move);
   EXPECT_LT(done->machine_time, b.unclamp_time + b.clamp_time + move * 1.3);
   check.ExpectWithinLimits();
+  // From 90 to 270 is 180 either way; 270 -> 0 turns +90 through 360 (shortest way), not -270.
+  s.id = 3;
+  s.end[kB] = 270;
+  m.Push(s);
+  m.RunUntilIdle();
+  s.id = 4;
+  s.end[kB] = 0;
+  m.Push(s);
+  double max_b = 0;
+  const double t0 = m.machine_time();
+  while (m.Step()) max_b = std::max(max_b, m.actual()[kB]);
+  EXPECT_GT(max_b, 359.0);
+  EXPECT_NEAR(m.actual()[kB], 0, 1e-3);
+  EXPECT_NEAR(m.State().actual[kB], 0, 1e-3);
+  EXPECT_LT(m.machine_time() - t0, b.unclamp_time + b.clamp_time + 1.3 * move + 1.0);
   s.id = 2;
   s.end[kB] = 90.5;  // not on the 1-degree index
   m.Push(s);

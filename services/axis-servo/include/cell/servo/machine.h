@@ -119,6 +119,7 @@ class Machine {
     Segment s;
     // spindle ramp
     double rpm_from = 0, rpm_to = 0, t0 = 0;
+    double index_target = 0;  // B index move, shortest way (may lie outside [min, max] until clamped)
   };
   struct PendingCompletion {
     std::uint64_t seg;

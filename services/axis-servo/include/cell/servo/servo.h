@@ -16,7 +16,8 @@ class AxisServo {
  public:
   AxisServo() = default;
   void Configure(const AxisConfig& axis, double period);
-  void Reset(double position);  // axis units; at rest, integrator cleared
+  void Reset(double position);                              // axis units; at rest, integrator cleared
+  void Shift(double units) { state_[0] += units * gain_; }  // renumber the position (modular axes)
 
   // One period: command position, velocity and acceleration in axis units (mm or deg, /s, /s²).
   void Step(double x_cmd, double v_cmd, double a_cmd);
