@@ -133,6 +133,16 @@ void Machine::Push(const Segment& segment) {
   if (queue_.size() >= capacity())
     throw Error(Errc::kFailedPrecondition,
                 fmt::format("segment {} refused: no credit (queue of {} full)", segment.id, capacity()));
+  bool finite =
+      std::isfinite(segment.feed) && std::isfinite(segment.dwell_s) && std::isfinite(segment.spindle_rpm);
+  for (double v : segment.end) finite = finite && std::isfinite(v);
+  for (double v : segment.center) finite = finite && std::isfinite(v);
+  if (!finite)
+    throw Error(Errc::kInvalidArgument,
+                fmt::format("segment {} refused: a value is not a finite number", segment.id));
+  if (segment.feed < 0 || segment.dwell_s < 0)
+    throw Error(Errc::kInvalidArgument,
+                fmt::format("segment {} refused: negative feed or dwell", segment.id));
   Entry e;
   e.seg = segment;
   if (cfg_.axes[kX].diameter) {

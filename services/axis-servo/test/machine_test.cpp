@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -110,6 +111,12 @@ TEST(Machine, FlowControlUnderSlowConsumer) {
   };
   produce();
   EXPECT_THROW(m.Push(Line(99, 0, 0, 0, 100)), Error);  // no credit left
+  {
+    Machine v(c, ClockKind::kVirtual);
+    EXPECT_THROW(v.Push(Line(1, std::nan(""), 0, 0, 100)), Error);
+    EXPECT_THROW(v.Push(Line(1, 0, 0, 0, -5)), Error);
+    EXPECT_EQ(v.credits(), 4u);
+  }
   std::uint64_t expect_id = 1;
   std::vector<Event> ev = RunChecked(m, check, 600, [&] {
     produce();

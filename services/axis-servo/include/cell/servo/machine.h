@@ -59,7 +59,7 @@ class Machine {
   std::size_t capacity() const { return static_cast<std::size_t>(cfg_.queue_capacity); }
   std::size_t credits() const { return capacity() - queue_.size(); }
   // Queues a segment. Throws cell::Error(kFailedPrecondition) when no credit is left, or while an alarm is
-  // active (Reset first).
+  // active (Reset first); kInvalidArgument for non-finite numbers or a negative feed or dwell.
   void Push(const Segment& segment);
 
   // ---- Running. Step() runs one servo period and returns true, or returns false without advancing time
@@ -83,7 +83,7 @@ class Machine {
   void FeedHold();  // decelerate along the path and stop on it
   void Resume();    // continue along the path
   void Abort();     // flush the queue and stop (motion decelerates along the path first)
-  void Reset();     // clear alarms, flush, command := actual
+  void Reset();     // clear alarms, flush; after DIFF over (or if moving) the command re-syncs to actual
   void SetFeedOverride(double fraction);   // 0..2 (0%..200%)
   void SetRapidOverride(double fraction);  // 0..1
 
