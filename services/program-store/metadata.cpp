@@ -496,7 +496,9 @@ Detection DetectDialect(std::string_view content) {
     if (upper.empty()) continue;
     if (first_significant == 0) {
       first_significant = ln;
-      starts_percent = upper[0] == '%';
+      // EMCO: "A program may begin with % or with the letter O" (a program number O0000-O9999).
+      starts_percent = upper[0] == '%' || (upper.size() >= 2 && upper.size() <= 5 && upper[0] == 'O' &&
+                                           AllDigits(std::string_view(upper).substr(1)));
     }
     for (const std::string& m : Mnemonics(upper)) {
       if (In(m, kKtaplOnly)) add(Dialect::kKtapl, ln, fmt::format("({},...) statement", m), true);
@@ -591,9 +593,9 @@ Detection DetectDialect(std::string_view content) {
       det.looks_like_nc = true;
     }
   }
-  // EMCO TM02: "%" then 4-digit block numbers throughout, with lathe cycles.
+  // EMCO TM02: "%" (or an O number) first, then 4-digit block numbers throughout, with lathe cycles.
   if (starts_percent && n4_blocks >= 3 && other_numbered == 0) {
-    add(Dialect::kEmco, first_significant, "% header with 4-digit N blocks", false);
+    add(Dialect::kEmco, first_significant, "%/O header with 4-digit N blocks", false);
     if (emco_cycle) add(Dialect::kEmco, emco_cycle_line, "4-digit N blocks with G84-G88/G33 cycles", true);
   }
   if (n4_blocks + other_numbered > 0) det.looks_like_nc = true;

@@ -161,6 +161,14 @@ TEST(Emco, PercentAndFourDigitBlocksWithCycles) {
   Metadata plain =
       ExtractMetadata("%\nN0000 G00 X32 Z2\nN0010 G84 X20 Z-30 F0.2\nN0020 G00 X40\nN0030 M30\n", {});
   EXPECT_EQ(plain.dialect, Dialect::kEmco);
+  // A program may also begin with its O number instead of %.
+  Metadata o_first = ExtractMetadata("O0020\nN0000 G00 X32 Z2\nN0010 G86 X20 Z-30 F0.2\nN0020 M30\n", {});
+  EXPECT_EQ(o_first.dialect, Dialect::kEmco);
+  EXPECT_THAT(o_first.program_names, ElementsAre("O0020"));
+  // Mixed block-number widths are not EMCO's N4 format.
+  ExpectError(
+      [] { ExtractMetadata("%\nN0000 G00 X32 Z2\nN10 G84 X20 Z-30 F0.2\nN0020 G0 X1\nN30 M30\n", {}); },
+      Errc::kInvalidArgument, "cannot tell the dialect");
   Metadata sub = ExtractMetadata("%\nN0000 G01 X10 Z-2 P0 = 10.000\nN0010 M17\n", {});
   EXPECT_EQ(sub.type, FileType::kLibrary);
 }
