@@ -60,6 +60,7 @@ const Cell& TheCell() {
 
 void Counters(benchmark::State& state, std::int64_t decisions) {
   state.SetItemsProcessed(decisions);
+  state.counters["decisions"] = static_cast<double>(decisions);
   state.counters["decisions_per_s"] =
       benchmark::Counter(static_cast<double>(decisions), benchmark::Counter::kIsRate);
   state.counters["ratio_vs_floor"] =
@@ -177,7 +178,42 @@ BENCHMARK(BM_Allocate)->Unit(benchmark::kMillisecond)->MinTime(1.0);
 BENCHMARK(BM_SchedulerOperate)->Unit(benchmark::kMillisecond)->Iterations(2);
 BENCHMARK(BM_SchedulerOperateDurable)->Unit(benchmark::kMillisecond)->Iterations(1);
 
+// After the table: one line per benchmark with decisions per second of CPU time and of wall time (the machine
+// is shared, so wall time includes waiting for a core) and the ratio against the floor.
+class Summary : public benchmark::ConsoleReporter {
+ public:
+  Summary() : ConsoleReporter(OO_Tabular) {}
+  void ReportRuns(const std::vector<Run>& runs) override {
+    ConsoleReporter::ReportRuns(runs);
+    for (const auto& r : runs) {
+      auto it = r.counters.find("decisions");
+      if (it == r.counters.end() || r.cpu_accumulated_time <= 0) continue;
+      const double cpu = it->second.value / r.cpu_accumulated_time;
+      const double wall = it->second.value / r.real_accumulated_time;
+      lines_.push_back(fmt::format(
+          "{:<28} {:>12.0f} decisions/s CPU ({:.2f}x the {:.0f}/s floor), {:>12.0f}/s wall ({:.2f}x)",
+          r.run_name.function_name, cpu, cpu / kFloor, kFloor, wall, wall / kFloor));
+    }
+  }
+  void Finalize() override {
+    ConsoleReporter::Finalize();
+    std::printf("\n%d stations, %d tools per station, %d pallet operations per run\n", kStations,
+                kToolsPerStation, kPallets);
+    for (const auto& l : lines_) std::printf("%s\n", l.c_str());
+  }
+
+ private:
+  std::vector<std::string> lines_;
+};
+
 }  // namespace
 }  // namespace cell::scheduler
 
-BENCHMARK_MAIN();
+int main(int argc, char** argv) {
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+  cell::scheduler::Summary summary;
+  benchmark::RunSpecifiedBenchmarks(&summary);
+  benchmark::Shutdown();
+  return 0;
+}

@@ -1,0 +1,73 @@
+// Binds the scheduler's decision core to the bus: cellctl commands in, station observations in,
+// dispatches out (retried until each station acknowledges), job events and backlog out.
+#pragma once
+
+#include <condition_variable>
+#include <deque>
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <set>
+#include <thread>
+
+#include "cell/bus/bus.h"
+#include "cell/health/health.h"
+#include "cell/idl/program_store.h"
+#include "cell/idl/run.h"
+#include "cell/idl/scheduler.h"
+#include "cell/idl/station.h"
+#include "cell/program_store/client.h"
+#include "cell/scheduler/scheduler.h"
+
+namespace cell::scheduler {
+
+class Service {
+ public:
+  Service(bus::Participant& p, const std::filesystem::path& data_dir);
+  ~Service();
+  // Registers the configured stations and re-sends unacknowledged dispatches (after a restart).
+  void Start();
+  void Stop();
+  // Main loop: station liveness (heartbeats) and the backlog state topic.
+  void Tick();
+  bool Healthy() const { return sender_alive_.load(); }
+
+ private:
+  cell::SchedulerReply Handle(const cell::SchedulerRequest& r);
+  void Apply(const Effects& e);
+  void OnRun(const cell::RunStatus& s);
+  void Sender(std::stop_token st);
+  void PublishBacklog();
+
+  bus::Participant& bus_;
+  program_store::Client programs_;
+  TextProgramSource source_;
+  std::mutex mu_;  // guards sched_ and the bookkeeping below
+  Scheduler sched_;
+  std::map<std::string, std::string> dialect_;  // configured stations
+  std::map<std::string, bool> online_;
+  std::map<int64_t, std::pair<int, int>> seen_runs_;  // dispatch -> (state, programs_done) already applied
+
+  struct Outgoing {
+    bool cancel = false;
+    DispatchAction d;
+  };
+  std::mutex out_mu_;
+  std::condition_variable out_cv_;
+  std::deque<Outgoing> outgoing_;
+  std::map<std::string, std::unique_ptr<bus::Client<cell::RunRequest, cell::RunReply>>> station_clients_;
+  std::atomic<bool> sender_alive_{false};
+
+  health::Liveness live_;
+  bus::Writer<cell::JobStatus> jobs_w_;
+  bus::Writer<cell::SchedulerState> state_w_;
+  bus::Reader<cell::StationStatus> status_r_;
+  bus::Reader<cell::ToolTable> tools_r_;
+  bus::Reader<cell::RunStatus> runs_r_;
+  bus::Reader<cell::ProgramChange> changes_r_;
+  std::unique_ptr<bus::Server<cell::SchedulerRequest, cell::SchedulerReply>> server_;
+  std::jthread sender_;
+};
+
+}  // namespace cell::scheduler

@@ -1,0 +1,324 @@
+#include "cell/scheduler/service.h"
+
+#include <spdlog/spdlog.h>
+
+#include "cell/bus/topics.h"
+#include "cell/config/config.h"
+#include "cell/scheduler/json.h"
+#include "cell/scheduler/route.h"
+
+namespace cell::scheduler {
+
+namespace {
+
+cell::JobState Wire(JobState s) {
+  switch (s) {
+    case JobState::kQueued: return cell::JOB_QUEUED;
+    case JobState::kWaiting: return cell::JOB_WAITING;
+    case JobState::kDispatched: return cell::JOB_DISPATCHED;
+    case JobState::kRunning: return cell::JOB_RUNNING;
+    case JobState::kCompleted: return cell::JOB_COMPLETED;
+    case JobState::kFailed: return cell::JOB_FAILED;
+    case JobState::kCancelled: return cell::JOB_CANCELLED;
+  }
+  return cell::JOB_QUEUED;
+}
+
+tooltable::ToolTable FromWire(const cell::ToolTable& t) {
+  std::vector<tooltable::ToolEntry> entries;
+  for (auto& w : t.tools()) {
+    tooltable::ToolEntry e;
+    e.tool = w.tool().to_string();
+    e.socket = w.socket();
+    e.length = w.length();
+    e.diameter = w.diameter();
+    e.life_left_min = static_cast<int>(w.life_left_min());
+    e.worn = w.worn();
+    e.broken = w.broken();
+    entries.push_back(e);
+  }
+  return tooltable::ToolTable(entries);
+}
+
+std::string Key(const cell::SchedulerRequest& r) {
+  std::string k = r.hdr().idempotency_key().to_string();
+  // Without a key a command is still made unique per request, so it never replays by accident.
+  return k.empty() ? r.hdr().client().to_string() + "#" + std::to_string(r.hdr().request_id()) : k;
+}
+
+}  // namespace
+
+Service::Service(bus::Participant& p, const std::filesystem::path& data_dir)
+    : bus_(p),
+      programs_(p),
+      source_([this](std::string_view name) { return programs_.Get("HOST", std::string(name)); }),
+      sched_(Options{(data_dir / "scheduler.db").string(), false, {}}, source_),
+      live_(p),
+      jobs_w_(p, bus::topics::kJobStatus, bus::QosKind::kEvent),
+      state_w_(p, bus::topics::kSchedulerState, bus::QosKind::kState),
+      status_r_(p, bus::topics::kStationStatus, bus::QosKind::kState,
+                [this](const cell::StationStatus& s, const bus::SampleInfo&) {
+                  std::lock_guard lk(mu_);
+                  if (!dialect_.count(s.station().to_string())) return;
+                  Apply(sched_.StationCondition(s.station().to_string(), s.condition() == cell::CONDITION_FAULT,
+                                                s.alarm_code().to_string(), s.alarm_text().to_string()));
+                }),
+      tools_r_(p, bus::topics::kToolTable, bus::QosKind::kState,
+               [this](const cell::ToolTable& t, const bus::SampleInfo&) {
+                 std::lock_guard lk(mu_);
+                 if (!dialect_.count(t.station().to_string())) return;
+                 Apply(sched_.StationTools(t.station().to_string(), FromWire(t)));
+               }),
+      runs_r_(p, bus::topics::kRunStatus, bus::QosKind::kEvent,
+              [this](const cell::RunStatus& s, const bus::SampleInfo&) { OnRun(s); }),
+      changes_r_(p, bus::topics::kProgramChange, bus::QosKind::kEvent,
+                 [this](const cell::ProgramChange& c, const bus::SampleInfo&) {
+                   if (c.node() != "HOST") return;
+                   std::lock_guard lk(mu_);
+                   Apply(sched_.ProgramChanged(c.name().to_string()));
+                 }) {}
+
+Service::~Service() { Stop(); }
+
+void Service::Start() {
+  {
+    std::lock_guard lk(mu_);
+    for (auto& id : config::ListStations()) {
+      auto cfg = config::LoadStation(id);
+      dialect_[id] = cfg.dialect;
+      online_[id] = false;
+      sched_.ConfigureStation(id, cfg.dialect);
+    }
+    Effects e = sched_.Recover();
+    if (!e.dispatches.empty()) spdlog::info("recovery: re-sending {} unacknowledged dispatch(es)", e.dispatches.size());
+    Apply(e);
+  }
+  sender_ = std::jthread([this](std::stop_token st) { Sender(st); });
+  server_ = std::make_unique<bus::Server<cell::SchedulerRequest, cell::SchedulerReply>>(
+      bus_, bus::topics::kScheduler, [this](const cell::SchedulerRequest& r) { return Handle(r); });
+}
+
+void Service::Stop() {
+  server_.reset();
+  if (sender_.joinable()) {
+    sender_.request_stop();
+    out_cv_.notify_all();
+    sender_.join();
+  }
+}
+
+void Service::Tick() {
+  {
+    std::lock_guard lk(mu_);
+    for (auto& [id, was] : online_) {
+      bool now = live_.StationOnline(id);
+      if (now == was) continue;
+      was = now;
+      spdlog::info("station {} {}", id, now ? "online" : "offline");
+      Apply(now ? sched_.StationOnline(id, dialect_[id]) : sched_.StationOffline(id));
+    }
+  }
+  PublishBacklog();
+}
+
+void Service::PublishBacklog() {
+  cell::SchedulerState s;
+  s.scheduler("HOST");
+  {
+    std::lock_guard lk(mu_);
+    for (auto& v : sched_.Stations()) {
+      cell::StationBacklog b;
+      b.station(v.id);
+      b.backlog_s(static_cast<double>(v.backlog_s));
+      s.backlog().push_back(b);
+    }
+  }
+  s.updated_ns(health::WallNs());
+  state_w_.Write(s);
+}
+
+cell::SchedulerReply Service::Handle(const cell::SchedulerRequest& r) {
+  std::lock_guard lk(mu_);
+  cell::SchedulerReply rep;
+  const std::string key = Key(r), name = r.name().to_string();
+  auto info = [&](const nlohmann::json& j) {
+    std::string s = j.dump();
+    if (s.size() > 65536) throw Error(Errc::kFailedPrecondition, "reply too large; narrow the query");
+    rep.info(s);
+  };
+  switch (r.op()) {
+    case cell::SCHED_PALLET_SET: {
+      std::vector<std::string> progs;
+      for (auto& a : r.args()) progs.push_back(a.to_string());
+      sched_.SetPalletMap(key, r.pallet(), progs);
+      break;
+    }
+    case cell::SCHED_PALLET_SHOW: {
+      auto m = sched_.PalletMap(r.pallet());
+      if (!m) throw Error(Errc::kNotFound, "pallet " + std::to_string(r.pallet()) + " has no map");
+      info({{"pallet", r.pallet()}, {"programs", *m}});
+      break;
+    }
+    case cell::SCHED_PALLET_RUN: {
+      JobResult j = sched_.RunPallet(key, r.pallet(), r.station().to_string());
+      Apply(j.effects);
+      rep.job_id(static_cast<int32_t>(j.job_id));
+      break;
+    }
+    case cell::SCHED_ROUTE_DEFINE: {
+      RouteSpec spec;
+      spec.name = name;
+      if (!r.text().to_string().empty()) {
+        auto routes = ParseRouteFile(r.text().to_string(), name);
+        auto it = std::find_if(routes.begin(), routes.end(), [&](const RouteSpec& s) { return s.name == name; });
+        if (it == routes.end()) throw Error(Errc::kNotFound, "the route file defines no route " + name);
+        spec = *it;
+      }
+      for (auto& a : r.args()) spec.ops.push_back(ParseOpSpec(a.to_string()));
+      info(ToJson(sched_.DefineRoute(key, spec)));
+      break;
+    }
+    case cell::SCHED_ROUTE_SHOW: {
+      auto v = sched_.Route(name);
+      if (!v) throw Error(Errc::kNotFound, "no route " + name);
+      info(ToJson(*v));
+      break;
+    }
+    case cell::SCHED_ROUTE_OPERATE: {
+      JobResult j = sched_.Operate(key, name, r.pallet());
+      Apply(j.effects);
+      rep.job_id(static_cast<int32_t>(j.job_id));
+      break;
+    }
+    case cell::SCHED_SCHEDULE_RUN:
+      throw Error(Errc::kUnimplemented, "schedule programs (Okuma OSP) are not supported by this scheduler yet");
+    case cell::SCHED_JOB_LIST: {
+      nlohmann::json arr = nlohmann::json::array();
+      for (auto& j : sched_.Jobs(false)) arr.push_back(ToJson(j, false));
+      info(arr);
+      break;
+    }
+    case cell::SCHED_JOB_SHOW: {
+      auto j = sched_.Job(r.job_id(), true);
+      if (!j) throw Error(Errc::kNotFound, "unknown job " + std::to_string(r.job_id()));
+      info(ToJson(*j, true));
+      break;
+    }
+    case cell::SCHED_JOB_CANCEL:
+      if (!sched_.Job(r.job_id(), false)) throw Error(Errc::kNotFound, "unknown job " + std::to_string(r.job_id()));
+      Apply(sched_.Cancel(key, r.job_id()));
+      break;
+  }
+  return rep;
+}
+
+// Called with mu_ held.
+void Service::Apply(const Effects& e) {
+  for (auto& n : e.notes) spdlog::info("{}", n);
+  {
+    std::lock_guard lk(out_mu_);
+    for (auto& d : e.dispatches) outgoing_.push_back({false, d});
+    for (auto& c : e.cancels) {
+      DispatchAction d;
+      d.dispatch_id = c.dispatch_id;
+      d.station = c.station;
+      d.job_id = c.job_id;
+      outgoing_.push_back({true, d});
+    }
+  }
+  out_cv_.notify_all();
+  for (auto& c : e.job_changes) {
+    auto v = sched_.Job(c.job_id, false);
+    cell::JobStatus s;
+    s.job_id(static_cast<int32_t>(c.job_id));
+    s.state(Wire(c.state));
+    s.reason(c.reason.substr(0, 511));
+    if (v) {
+      s.route(v->route.substr(0, 64));
+      s.pallet(v->pallet);
+      s.station(v->station);
+      s.started_ns(v->started_ms * 1000000);
+      s.finished_ns(v->finished_ms * 1000000);
+      s.cycle_s(v->cycle_s.value_or(0));
+    }
+    spdlog::info("job {} {}{}", c.job_id, JobStateName(c.state), c.reason.empty() ? "" : ": " + c.reason);
+    jobs_w_.Write(s);
+  }
+}
+
+void Service::OnRun(const cell::RunStatus& s) {
+  std::lock_guard lk(mu_);
+  const int64_t id = s.dispatch_id();
+  auto& seen = seen_runs_.try_emplace(id, -1, 0).first->second;
+  int state = static_cast<int>(s.state());
+  if (seen.first == state && seen.second == s.programs_done()) return;  // replayed event
+  bool first = seen.first < 0;
+  switch (s.state()) {
+    case cell::RUN_QUEUED: break;
+    case cell::RUN_ACTIVE:
+      if (first) Apply(sched_.RunStarted(id));
+      for (int i = seen.second; i < s.programs_done(); ++i) Apply(sched_.ProgramFinished(id, i, s.program().to_string()));
+      break;
+    case cell::RUN_COMPLETED:
+      if (first) Apply(sched_.RunStarted(id));
+      for (int i = seen.second; i < s.programs_done(); ++i) Apply(sched_.ProgramFinished(id, i));
+      Apply(sched_.RunFinished(id, s.machine_s()));
+      break;
+    case cell::RUN_FAILED:
+    case cell::RUN_CANCELLED:
+      Apply(sched_.RunFailed(id, s.reason().to_string().empty() ? "run failed" : s.reason().to_string()));
+      break;
+  }
+  seen = {state, std::max(seen.second, s.programs_done())};
+}
+
+void Service::Sender(std::stop_token st) {
+  sender_alive_ = true;
+  while (!st.stop_requested()) {
+    Outgoing o;
+    {
+      std::unique_lock lk(out_mu_);
+      out_cv_.wait_for(lk, std::chrono::milliseconds(500), [&] { return !outgoing_.empty() || st.stop_requested(); });
+      if (outgoing_.empty()) continue;
+      o = outgoing_.front();
+      outgoing_.pop_front();
+    }
+    auto& client = station_clients_[o.d.station];
+    if (!client)
+      client = std::make_unique<bus::Client<cell::RunRequest, cell::RunReply>>(bus_, bus::topics::StationRun(o.d.station));
+    cell::RunRequest req;
+    req.station(o.d.station);
+    req.dispatch_id(static_cast<int32_t>(o.d.dispatch_id));
+    req.job_id(static_cast<int32_t>(o.d.job_id));
+    req.pallet(o.d.pallet);
+    req.node(o.d.station);
+    req.repeat(1);
+    req.cancel(o.cancel);
+    for (auto& p : o.d.programs) req.programs().push_back(p.substr(0, 64));
+    req.hdr().idempotency_key("dispatch-" + std::to_string(o.d.dispatch_id) + (o.cancel ? "-cancel" : ""));
+    try {
+      auto rep = client->Call(req, std::chrono::seconds(5));
+      bus::ThrowIfError(rep);
+      if (!o.cancel) {
+        std::lock_guard lk(mu_);
+        Apply(sched_.DispatchAcknowledged(o.d.dispatch_id));
+      }
+      spdlog::info("{} {} to {} acknowledged", o.cancel ? "cancel of dispatch" : "dispatch", o.d.dispatch_id,
+                   o.d.station);
+    } catch (const Error& e) {
+      if (e.code() == Errc::kInvalidArgument) {
+        std::lock_guard lk(mu_);
+        Apply(sched_.RunFailed(o.d.dispatch_id, std::string("station rejected the dispatch: ") + e.what()));
+        continue;
+      }
+      // Station not reachable yet: keep it, try again (a dispatch is never dropped silently).
+      spdlog::warn("dispatch {} to {} not delivered yet: {}", o.d.dispatch_id, o.d.station, e.what());
+      std::unique_lock lk(out_mu_);
+      outgoing_.push_back(o);
+      out_cv_.wait_for(lk, std::chrono::seconds(1));
+    }
+  }
+  sender_alive_ = false;
+}
+
+}  // namespace cell::scheduler
