@@ -233,7 +233,8 @@ class Client {
   // returned as is (see ThrowIfError).
   Rep Call(Req req, Millis timeout, Millis resend = Millis(250)) {
     auto deadline = std::chrono::steady_clock::now() + timeout;
-    if (!WaitForServer(timeout))
+    // Discovery takes milliseconds (1 s across vendors); a server missing after 5 s is down.
+    if (!WaitForServer(std::min(timeout, Millis(5000))))
       throw Error(Errc::kUnavailable, "no " + service_ + " service on DDS domain " + std::to_string(p_.domain()));
     uint64_t id = ++state_->next_id;
     req.hdr().client(p_.id());

@@ -1,0 +1,125 @@
+// cellctl job ls|show|cancel|wait, inspect ls|cat
+#include <chrono>
+
+#include "cell/bus/topics.h"
+#include "cell/idl/inspection.h"
+#include "context.h"
+
+namespace cellctl {
+
+namespace {
+
+nlohmann::json JobInfo(Context& ctx, int id) {
+  cell::SchedulerRequest r;
+  r.op(cell::SCHED_JOB_SHOW);
+  r.job_id(id);
+  try {
+    return nlohmann::json::parse(ctx.Scheduler(r).info().to_string());
+  } catch (const cell::Error& e) {
+    if (e.code() == cell::Errc::kNotFound) throw Exit{2, e.what()};
+    throw;
+  }
+}
+
+bool Terminal(const std::string& s) { return s == "COMPLETED" || s == "FAILED" || s == "CANCELLED"; }
+
+}  // namespace
+
+void AddJobVerbs(CLI::App& app, Context& ctx) {
+  struct Opts {
+    int id = 0;
+    double timeout = -1;
+    std::string name, pattern = "*";
+  };
+  auto o = std::make_shared<Opts>();
+  auto* job = app.add_subcommand("job", "jobs: pallets on routes, pallet runs, schedule runs")->require_subcommand(1);
+
+  auto* ls = job->add_subcommand("ls", "every job");
+  ls->add_flag("--json", ctx.json);
+  ls->callback([&ctx] {
+    cell::SchedulerRequest r;
+    r.op(cell::SCHED_JOB_LIST);
+    Print(ctx, nlohmann::json::parse(ctx.Scheduler(r).info().to_string()),
+          {"id", "state", "route", "pallet", "station", "reason", "started", "finished", "cycle_s"});
+  });
+
+  auto* show = job->add_subcommand("show", "one job with its decision log");
+  show->add_option("ID", o->id)->required();
+  show->add_flag("--json", ctx.json);
+  show->callback([o, &ctx] {
+    auto j = JobInfo(ctx, o->id);
+    if (ctx.json) return Print(ctx, j, {});
+    nlohmann::json flat = j;
+    flat.erase("decisions");
+    Print(ctx, flat, {});
+    std::cout << "decisions:\n";
+    for (auto& d : j.value("decisions", nlohmann::json::array())) std::cout << "  " << d.dump() << "\n";
+  });
+
+  auto* cancel = job->add_subcommand("cancel", "cancel a job");
+  cancel->add_option("ID", o->id)->required();
+  cancel->callback([o, &ctx] {
+    JobInfo(ctx, o->id);  // unknown id: exit 2
+    cell::SchedulerRequest r;
+    r.op(cell::SCHED_JOB_CANCEL);
+    r.job_id(o->id);
+    r.hdr().idempotency_key(ctx.IdempotencyKey("cancel"));
+    ctx.Scheduler(r);
+  });
+
+  auto* wait = job->add_subcommand("wait", "block until COMPLETED (exit 0), FAILED or CANCELLED (exit 1)");
+  wait->add_option("ID", o->id)->required();
+  wait->add_option("--timeout", o->timeout, "wall seconds (exit 3 when reached)");
+  wait->callback([o, &ctx] {
+    auto start = std::chrono::steady_clock::now();
+    auto left = [&]() -> bus::Millis {
+      if (o->timeout < 0) return bus::Millis(1000);
+      auto used = std::chrono::steady_clock::now() - start;
+      return std::max(bus::Millis(0), std::chrono::duration_cast<bus::Millis>(
+                                          std::chrono::duration<double>(o->timeout) - used));
+    };
+    // Follow the job's events; re-read `job show` now and then, so a missed event cannot hang us.
+    bus::Reader<cell::JobStatus> events(ctx.Bus(), bus::topics::kJobStatus, bus::QosKind::kEvent);
+    auto j = JobInfo(ctx, o->id);
+    while (true) {
+      std::string state = j["state"].get<std::string>();
+      if (Terminal(state)) {
+        std::cout << state << "\n";
+        if (state == "COMPLETED") return;
+        throw Exit{1, "job " + std::to_string(o->id) + " " + state + ": " + j.value("reason", nlohmann::json()).dump()};
+      }
+      if (o->timeout >= 0 && left().count() == 0) {
+        std::cout << state << "\n";
+        throw Exit{3, "job " + std::to_string(o->id) + " still " + state + " after " + std::to_string(o->timeout) + " s"};
+      }
+      events.WaitFor([&](const cell::JobStatus& s) { return s.job_id() == o->id; },
+                     std::min(left(), bus::Millis(1000)));
+      j = JobInfo(ctx, o->id);
+    }
+  });
+}
+
+void AddInspectVerbs(CLI::App& app, Context& ctx) {
+  auto name = std::make_shared<std::string>("*");
+  auto* ins = app.add_subcommand("inspect", "run records and inspection files")->require_subcommand(1);
+  auto call = [&ctx](cell::InspectionOp op, const std::string& n) {
+    bus::Client<cell::InspectionRequest, cell::InspectionReply> c(ctx.Bus(), bus::topics::kInspection);
+    cell::InspectionRequest r;
+    r.op(op);
+    r.name(n);
+    auto rep = c.Call(r, bus::Millis(10000));
+    bus::ThrowIfError(rep);
+    return rep.info().to_string();
+  };
+  auto* ls = ins->add_subcommand("ls", "records and files");
+  ls->add_option("PATTERN", *name);
+  ls->add_flag("--json", ctx.json);
+  ls->callback([name, call, &ctx] {
+    Print(ctx, nlohmann::json::parse(call(cell::INSPECTION_LIST, *name)), {"name", "station", "kind", "size"});
+  });
+  auto* cat = ins->add_subcommand("cat", "print one record or file");
+  cat->add_option("NAME", *name)->required();
+  cat->callback([name, call] { std::cout << call(cell::INSPECTION_CAT, *name); });
+}
+
+}  // namespace cellctl

@@ -1,0 +1,189 @@
+// cellctl program put|get|show|rm|ls|cp|mv|protect|unprotect|import|export
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "cell/program_store/metadata.h"
+#include "context.h"
+
+namespace cellctl {
+
+namespace {
+
+std::string ReadLocalFile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw cell::Error(cell::Errc::kNotFound, "cannot read " + path);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+// The stored name: --name, else the KT-APL NAM, else the file's base name (DESIGN §6).
+std::string NameFor(const std::string& path, const std::string& content, const std::string& dialect) {
+  namespace ps = cell::program_store;
+  ps::ExtractOptions o;
+  if (!dialect.empty()) o.dialect = ps::ParseDialect(dialect);
+  o.name = std::filesystem::path(path).filename().string();
+  try {
+    return ps::DefaultName(path, ps::ExtractMetadata(content, o));
+  } catch (const cell::Error&) {
+    return std::filesystem::path(path).filename().string();  // the store reports the real problem
+  }
+}
+
+void PrintWarnings(const nlohmann::json& j) {
+  for (auto& w : j.value("warnings", nlohmann::json::array())) std::cerr << "warning: " << w.get<std::string>() << "\n";
+}
+
+}  // namespace
+
+void AddProgramVerbs(CLI::App& app, Context& ctx) {
+  auto* prog = app.add_subcommand("program", "the program store")->require_subcommand(1);
+
+  struct Opts {
+    std::string file, name, node = "HOST", from = "HOST", to = "HOST", dialect, type, out, pattern = "*", a, b;
+    bool force = false;
+    uint32_t revision = 0;
+  };
+  auto o = std::make_shared<Opts>();
+
+  auto* put = prog->add_subcommand("put", "store FILE (a new name, or --force for a new revision)");
+  put->add_option("FILE", o->file)->required();
+  put->add_option("--name", o->name, "stored name (default: the KT-APL NAM, else the file name)");
+  put->add_option("--node", o->node, "namespace: HOST or a station id");
+  put->add_option("--dialect", o->dialect, "ktapl, okuma, emco or balt (default: detected)");
+  put->add_option("--type", o->type, "part_program, library, schedule, tool_table, fixture_offsets, inspection, data");
+  put->add_flag("--force", o->force, "store a new revision of an existing name");
+  put->add_flag("--json", ctx.json);
+  put->callback([o, &ctx] {
+    std::string content = ReadLocalFile(o->file);
+    std::string name = o->name.empty() ? NameFor(o->file, content, o->dialect) : o->name;
+    cell::program_store::Client::PutOptions po;
+    po.node = o->node;
+    po.force = o->force;
+    po.dialect = o->dialect;
+    po.file_type = o->type;
+    po.idempotency_key = ctx.IdempotencyKey("put:" + o->node + ":" + name);
+    auto j = ctx.Programs().Put(name, content, po);
+    PrintWarnings(j);
+    if (ctx.json) {
+      Print(ctx, j, {});
+    } else {
+      std::cout << "stored " << o->node << ":" << j.value("name", name) << " revision " << j.value("revision", 0)
+                << " (" << j.value("size", 0) << " bytes, " << j.value("dialect", std::string()) << ")\n";
+    }
+  });
+
+  auto* get = prog->add_subcommand("get", "print a program (or -o FILE)");
+  get->add_option("NAME", o->name)->required();
+  get->add_option("--node", o->node);
+  get->add_option("--revision", o->revision, "a past revision (default: latest)");
+  get->add_option("-o,--output", o->out, "write to FILE instead of stdout");
+  get->callback([o, &ctx] {
+    auto text = ctx.Programs().Get(o->node, o->name, o->revision);
+    if (!text) throw Exit{1, "no program '" + o->name + "' in " + o->node};
+    if (o->out.empty()) {
+      std::cout << *text;
+    } else {
+      std::ofstream(o->out, std::ios::binary) << *text;
+    }
+  });
+
+  auto* show = prog->add_subcommand("show", "metadata: type, dialect, NAM, UTL, UCY, revisions");
+  show->add_option("NAME", o->name)->required();
+  show->add_option("--node", o->node);
+  show->add_flag("--json", ctx.json);
+  show->callback([o, &ctx] {
+    auto j = ctx.Programs().Show(o->node, o->name);
+    if (ctx.json) return Print(ctx, j, {});
+    nlohmann::json flat = j;
+    flat.erase("revisions");
+    Print(ctx, flat, {});
+    std::cout << "revisions:\n";
+    for (auto& r : j["revisions"])
+      std::cout << "  " << r["revision"] << "  " << r["created_at"].get<std::string>() << "  " << r["size"] << " bytes  "
+                << r["sha256"].get<std::string>().substr(0, 16) << "\n";
+  });
+
+  auto* rm = prog->add_subcommand("rm", "delete a program (not when protected)");
+  rm->add_option("NAME", o->name)->required();
+  rm->add_option("--node", o->node);
+  rm->callback([o, &ctx] { ctx.Programs().Delete(o->node, o->name, ctx.IdempotencyKey("rm:" + o->name)); });
+
+  auto* ls = prog->add_subcommand("ls", "list programs matching PATTERN (* and ?)");
+  ls->add_option("PATTERN", o->pattern);
+  ls->add_option("--node", o->node);
+  ls->add_flag("--json", ctx.json);
+  ls->callback([o, &ctx] {
+    Print(ctx, ctx.Programs().List(o->node, o->pattern),
+          {"name", "node", "type", "dialect", "revision", "size", "protected"});
+  });
+
+  for (std::string verb : {"cp", "mv"}) {
+    auto* c = prog->add_subcommand(verb, verb == "cp" ? "copy A to B (between namespaces: --from/--to)"
+                                                      : "rename A to B (between namespaces: --from/--to)");
+    c->add_option("A", o->a)->required();
+    c->add_option("B", o->b);
+    c->add_option("--from", o->from, "source namespace (default HOST)");
+    c->add_option("--to", o->to, "target namespace (default HOST)");
+    if (verb == "cp") c->add_flag("--force", o->force);
+    c->callback([o, &ctx, verb] {
+      std::string b = o->b.empty() ? o->a : o->b;
+      if (verb == "cp")
+        ctx.Programs().Copy(o->from, o->a, o->to, b, o->force, ctx.IdempotencyKey("cp:" + o->a));
+      else
+        ctx.Programs().Rename(o->from, o->a, o->to, b, ctx.IdempotencyKey("mv:" + o->a));
+    });
+  }
+
+  for (std::string verb : {"protect", "unprotect"}) {
+    auto* p = prog->add_subcommand(verb, verb == "protect" ? "forbid overwrite and delete" : "allow them again");
+    p->add_option("NAME", o->name)->required();
+    p->add_option("--node", o->node);
+    p->callback([o, &ctx, verb] { ctx.Programs().Protect(o->node, o->name, verb == "protect"); });
+  }
+
+  auto* imp = prog->add_subcommand("import", "store every file of DIR (names: NAM or file name)");
+  imp->add_option("DIR", o->file)->required();
+  imp->add_option("--node", o->node);
+  imp->add_flag("--force", o->force);
+  imp->callback([o, &ctx] {
+    int n = 0;
+    std::vector<std::filesystem::path> files;
+    for (auto& e : std::filesystem::directory_iterator(o->file))
+      if (e.is_regular_file()) files.push_back(e.path());
+    std::sort(files.begin(), files.end());
+    for (auto& f : files) {
+      std::string content = ReadLocalFile(f.string());
+      cell::program_store::Client::PutOptions po;
+      po.node = o->node;
+      po.force = o->force;
+      std::string name = NameFor(f.string(), content, "");
+      po.idempotency_key = ctx.IdempotencyKey("import:" + name);
+      PrintWarnings(ctx.Programs().Put(name, content, po));
+      std::cout << "stored " << o->node << ":" << name << "\n";
+      ++n;
+    }
+    std::cout << n << " file(s) imported\n";
+  });
+
+  auto* exp = prog->add_subcommand("export", "write every program of a namespace into DIR");
+  exp->add_option("DIR", o->file)->required();
+  exp->add_option("--node", o->node);
+  exp->callback([o, &ctx] {
+    std::filesystem::create_directories(o->file);
+    int n = 0;
+    for (auto& f : ctx.Programs().List(o->node, "*")) {
+      std::string name = f["name"].get<std::string>();
+      if (name.find('/') != std::string::npos || name == "." || name == "..")
+        throw Exit{1, "cannot export '" + name + "' as a file name"};
+      auto text = ctx.Programs().Get(o->node, name);
+      if (!text) continue;
+      std::ofstream(std::filesystem::path(o->file) / name, std::ios::binary) << *text;
+      ++n;
+    }
+    std::cout << n << " file(s) exported\n";
+  });
+}
+
+}  // namespace cellctl

@@ -1,0 +1,173 @@
+// cellctl station ls|tools|vars|input|reset
+#include <map>
+
+#include "cell/bus/topics.h"
+#include "cell/config/config.h"
+#include "cell/idl/scheduler.h"
+#include "context.h"
+
+namespace cellctl {
+
+namespace {
+
+const char* ExecutionName(cell::Execution e) {
+  switch (e) {
+    case cell::EXECUTION_READY: return "READY";
+    case cell::EXECUTION_ACTIVE: return "ACTIVE";
+    case cell::EXECUTION_INTERRUPTED: return "INTERRUPTED";
+    case cell::EXECUTION_FEED_HOLD: return "FEED_HOLD";
+    case cell::EXECUTION_STOPPED: return "STOPPED";
+    case cell::EXECUTION_OPTIONAL_STOP: return "OPTIONAL_STOP";
+    case cell::EXECUTION_PROGRAM_STOPPED: return "PROGRAM_STOPPED";
+    case cell::EXECUTION_PROGRAM_COMPLETED: return "PROGRAM_COMPLETED";
+    case cell::EXECUTION_WAIT: return "WAIT";
+    default: return "UNAVAILABLE";
+  }
+}
+
+const char* ConditionName(cell::Condition c) {
+  return c == cell::CONDITION_FAULT ? "FAULT" : c == cell::CONDITION_WARNING ? "WARNING" : "NORMAL";
+}
+
+void RequireConfigured(const std::string& id) {
+  auto ids = cell::config::ListStations();
+  if (std::find(ids.begin(), ids.end(), id) == ids.end()) {
+    std::string list;
+    for (auto& s : ids) list += (list.empty() ? "" : ", ") + s;
+    throw Exit{1, "unknown station '" + id + "' (configured: " + list + ")"};
+  }
+}
+
+// name=value with a number on the right.
+std::pair<std::string, double> Assignment(const std::string& text) {
+  auto eq = text.find('=');
+  if (eq == std::string::npos || eq == 0) throw Exit{2, "expected NAME=VALUE, got '" + text + "'"};
+  std::string v = text.substr(eq + 1);
+  size_t used = 0;
+  double d = 0;
+  try {
+    d = std::stod(v, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used == 0 || used != v.size()) throw Exit{2, "'" + v + "' is not a number in '" + text + "'"};
+  return {text.substr(0, eq), d};
+}
+
+}  // namespace
+
+void AddStationVerbs(CLI::App& app, Context& ctx) {
+  auto* st = app.add_subcommand("station", "stations: state, tools, variables, inputs")->require_subcommand(1);
+  struct Opts {
+    std::string id;
+    std::vector<std::string> sets;
+    std::string input;
+  };
+  auto o = std::make_shared<Opts>();
+
+  auto* ls = st->add_subcommand("ls", "configured and announced stations");
+  ls->add_flag("--json", ctx.json);
+  ls->callback([&ctx] {
+    cell::health::Liveness live(ctx.Bus());
+    bus::Reader<cell::SchedulerState> sched(ctx.Bus(), bus::topics::kSchedulerState, bus::QosKind::kState);
+    auto statuses = ctx.StationStatuses(bus::Millis(1500));
+    std::map<std::string, double> backlog;
+    if (auto s = sched.Take(bus::Millis(sched.Matched() > 0 ? 500 : 0)))
+      for (auto& b : s->backlog()) backlog[b.station().to_string()] = b.backlog_s();
+    std::map<std::string, cell::StationStatus> by_id;
+    for (auto& s : statuses) by_id[s.station().to_string()] = s;
+    nlohmann::json arr = nlohmann::json::array();
+    for (auto& id : cell::config::ListStations()) {
+      auto cfg = cell::config::LoadStation(id);
+      bool online = live.StationOnline(id) || (by_id.count(id) && bus::WaitUntil([&] { return live.StationOnline(id); },
+                                                                                   bus::Millis(1500)));
+      nlohmann::json j = {{"id", id}, {"dialect", cfg.dialect}, {"online", online}, {"execution", "UNAVAILABLE"},
+                          {"condition", "NORMAL"}, {"alarm_code", nullptr}, {"alarm_text", nullptr},
+                          {"backlog_s", backlog.count(id) ? backlog[id] : 0.0}, {"pallet", nullptr},
+                          {"program", nullptr}, {"line", nullptr}};
+      if (online && by_id.count(id)) {
+        auto& s = by_id[id];
+        j["execution"] = ExecutionName(s.execution());
+        j["condition"] = ConditionName(s.condition());
+        if (!s.alarm_code().to_string().empty()) j["alarm_code"] = s.alarm_code().to_string();
+        if (!s.alarm_text().to_string().empty()) j["alarm_text"] = s.alarm_text().to_string();
+        if (s.pallet()) j["pallet"] = s.pallet();
+        if (!s.program().to_string().empty()) j["program"] = s.program().to_string();
+        if (s.line()) j["line"] = s.line();
+      }
+      arr.push_back(j);
+    }
+    Print(ctx, arr, {"id", "dialect", "online", "execution", "condition", "backlog_s", "pallet", "program", "line"});
+  });
+
+  auto* tools = st->add_subcommand("tools", "the station's tool table as it publishes it");
+  tools->add_option("ID", o->id)->required();
+  tools->add_flag("--json", ctx.json);
+  tools->callback([o, &ctx] {
+    RequireConfigured(o->id);
+    auto t = ctx.Tools(o->id, bus::Millis(3000));
+    if (!t) throw Exit{1, "station " + o->id + " has not published a tool table (is it online?)"};
+    nlohmann::json arr = nlohmann::json::array();
+    for (auto& e : t->tools())
+      arr.push_back({{"tool", e.tool().to_string()}, {"socket", e.socket()}, {"length", e.length()},
+                     {"diameter", e.diameter()}, {"life_left_min", e.life_left_min()}, {"worn", e.worn()},
+                     {"broken", e.broken()}});
+    Print(ctx, arr, {"tool", "socket", "length", "diameter", "life_left_min", "worn", "broken"});
+  });
+
+  auto* vars = st->add_subcommand("vars", "station variables (KT-APL parameters, Okuma common variables)");
+  vars->add_option("ID", o->id)->required();
+  vars->add_option("--set", o->sets, "NAME=VALUE (repeatable)");
+  vars->add_flag("--json", ctx.json);
+  vars->callback([o, &ctx] {
+    RequireConfigured(o->id);
+    uint32_t min_rev = 0;
+    if (!o->sets.empty()) {
+      cell::StationRequest req;
+      req.op(cell::STATION_SET_VARIABLES);
+      for (auto& s : o->sets) {
+        auto [n, v] = Assignment(s);
+        cell::Variable var;
+        var.name(n);
+        var.value(v);
+        req.variables().push_back(var);
+      }
+      min_rev = ctx.StationCommand(o->id, req).revision();
+    }
+    bus::Reader<cell::StationVariables> r(ctx.Bus(), bus::topics::kVariables, bus::QosKind::kState);
+    auto v = r.WaitFor([&](const cell::StationVariables& x) { return x.station() == o->id && x.revision() >= min_rev; },
+                       bus::Millis(3000));
+    if (!v) throw Exit{1, "station " + o->id + " has not published its variables (is it online?)"};
+    nlohmann::json j = nlohmann::json::object();
+    for (auto& x : v->variables()) j[x.name().to_string()] = x.value();
+    if (ctx.json) return Print(ctx, j, {});
+    for (auto& [k, val] : j.items()) std::cout << k << " = " << val << "\n";
+  });
+
+  auto* input = st->add_subcommand("input", "set a discrete input (for WAI): BIT=VALUE");
+  input->add_option("ID", o->id)->required();
+  input->add_option("BIT=VALUE", o->input)->required();
+  input->callback([o, &ctx] {
+    RequireConfigured(o->id);
+    auto [bit, v] = Assignment(o->input);
+    if (v != 0 && v != 1) throw Exit{2, "an input is 0 or 1"};
+    cell::StationRequest req;
+    req.op(cell::STATION_SET_INPUT);
+    cell::Variable var;
+    var.name("I" + bit);
+    var.value(v);
+    req.variables().push_back(var);
+    ctx.StationCommand(o->id, req);
+  });
+
+  auto* reset = st->add_subcommand("reset", "clear the station's alarm condition");
+  reset->add_option("ID", o->id)->required();
+  reset->callback([o, &ctx] {
+    RequireConfigured(o->id);
+    cell::StationRequest req;
+    req.op(cell::STATION_RESET);
+    ctx.StationCommand(o->id, req);
+  });
+}
+
+}  // namespace cellctl

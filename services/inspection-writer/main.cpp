@@ -1,0 +1,81 @@
+// cell-inspection-writer: durable run records and inspection files, served over the bus.
+#include <spdlog/spdlog.h>
+
+#include "cell/bus/bus.h"
+#include "cell/bus/topics.h"
+#include "cell/config/config.h"
+#include "cell/daemon/daemon.h"
+#include "cell/health/health.h"
+#include "cell/idl/inspection.h"
+#include "cell/inspection/records.h"
+#include "cell/log/log.h"
+
+namespace {
+
+std::string Iso(int64_t ns) {
+  if (ns <= 0) return "";
+  std::time_t t = static_cast<std::time_t>(ns / 1000000000);
+  char buf[32];
+  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", std::gmtime(&t));
+  return buf;
+}
+
+cell::InspectionReply Handle(cell::inspection::Records& records, const cell::InspectionRequest& r) {
+  cell::InspectionReply rep;
+  switch (r.op()) {
+    case cell::INSPECTION_STORE_RUN: {
+      const auto& x = r.run();
+      nlohmann::json programs = nlohmann::json::array();
+      for (auto& p : x.programs()) programs.push_back(p.to_string());
+      nlohmann::json j = {{"station", x.station().to_string()}, {"dispatch_id", x.dispatch_id()},
+                          {"job_id", x.job_id()},               {"pallet", x.pallet()},
+                          {"programs", programs},               {"completed", x.completed()},
+                          {"reason", x.reason().to_string()},   {"started", Iso(x.started_ns())},
+                          {"finished", Iso(x.finished_ns())},   {"machine_s", x.machine_s()}};
+      std::string name = records.StoreRun(j);
+      spdlog::info("stored {}", name);
+      rep.info(name);
+      break;
+    }
+    case cell::INSPECTION_STORE_FILE:
+      rep.info(records.StoreFile(r.file().station().to_string(), r.file().file().to_string(), r.file().text().to_string()));
+      break;
+    case cell::INSPECTION_LIST: {
+      std::string s = records.List(r.name().to_string().empty() ? "*" : r.name().to_string()).dump();
+      if (s.size() > 65536) throw cell::Error(cell::Errc::kFailedPrecondition, "listing too large; give a pattern");
+      rep.info(s);
+      break;
+    }
+    case cell::INSPECTION_CAT: {
+      auto text = records.Cat(r.name().to_string());
+      if (!text) throw cell::Error(cell::Errc::kNotFound, "no record or file " + r.name().to_string());
+      if (text->size() > 65536) throw cell::Error(cell::Errc::kFailedPrecondition, "file larger than 64 KiB");
+      rep.info(*text);
+      break;
+    }
+  }
+  return rep;
+}
+
+}  // namespace
+
+int main() {
+  cell::log::Init("cell-inspection-writer");
+  try {
+    cell::daemon::Daemon daemon;
+    cell::inspection::Records records(cell::config::DataDir() / "records");
+    cell::bus::Participant bus("cell-inspection-writer");
+    cell::health::Announcer health(bus, "cell-inspection-writer");
+    cell::bus::Server<cell::InspectionRequest, cell::InspectionReply> server(
+        bus, cell::bus::topics::kInspection, [&](const cell::InspectionRequest& r) { return Handle(records, r); });
+    health.Set(cell::SERVICE_READY);
+    daemon.NotifyReady("writing records");
+    spdlog::info("ready on domain {}", bus.domain());
+    daemon.RunUntilStop([] { return true; });
+    daemon.NotifyStopping();
+    return 0;
+  } catch (const std::exception& e) {
+    spdlog::critical("{}", e.what());
+    return 1;
+  }
+}

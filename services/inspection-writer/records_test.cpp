@@ -1,0 +1,64 @@
+#include "cell/inspection/records.h"
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <gtest/gtest.h>
+
+#include "cell/error/error.h"
+
+namespace fs = std::filesystem;
+using cell::inspection::Records;
+
+namespace {
+fs::path TempDir() {
+  std::string t = "/tmp/cell-records-XXXXXX";
+  return mkdtemp(t.data());
+}
+nlohmann::json RunRecord(long id) {
+  return {{"station", "KT01"}, {"dispatch_id", id}, {"pallet", 3},       {"programs", {"PUMP341"}},
+          {"started", "2026-11-22T03:00:00Z"},      {"finished", "2026-11-22T03:01:00Z"}, {"machine_s", 41.5}};
+}
+}  // namespace
+
+TEST(Records, StoresListsAndReadsRunRecords) {
+  Records r(TempDir());
+  EXPECT_EQ(r.StoreRun(RunRecord(7)), "run-KT01-7.json");
+  EXPECT_EQ(r.StoreRun(RunRecord(7)), "run-KT01-7.json");  // a retried store is harmless
+  r.StoreRun(RunRecord(8));
+  auto list = r.List("run-KT01-*");
+  ASSERT_EQ(list.size(), 2u);
+  EXPECT_EQ(list[0]["name"], "run-KT01-7.json");
+  EXPECT_EQ(list[0]["station"], "KT01");
+  auto text = r.Cat("run-KT01-8.json");
+  ASSERT_TRUE(text);
+  EXPECT_EQ(nlohmann::json::parse(*text)["machine_s"], 41.5);
+  EXPECT_FALSE(r.Cat("../etc/passwd"));
+}
+
+TEST(Records, RejectsIncompleteRecordsAndBadNames) {
+  Records r(TempDir());
+  EXPECT_THROW(r.StoreRun({{"station", "KT01"}}), cell::Error);
+  auto bad = RunRecord(1);
+  bad["station"] = "../x";
+  EXPECT_THROW(r.StoreRun(bad), cell::Error);
+  EXPECT_THROW(r.StoreFile("KT01", "a/b", "x"), cell::Error);
+}
+
+TEST(Records, KilledWriterLeavesOldOrNewContentNeverTorn) {
+  fs::path dir = TempDir();
+  Records r(dir);
+  std::string big(4 << 20, 'a');
+  r.StoreFile("KT01", "PART.INS", "old\n");
+  pid_t pid = fork();
+  if (pid == 0) {
+    Records child(dir);
+    for (;;) child.StoreFile("KT01", "PART.INS", big);  // until killed
+  }
+  usleep(50000);
+  kill(pid, SIGKILL);
+  waitpid(pid, nullptr, 0);
+  auto text = Records(dir).Cat("KT01/PART.INS");
+  ASSERT_TRUE(text);
+  EXPECT_TRUE(*text == "old\n" || *text == big) << "torn file of " << text->size() << " bytes";
+}
