@@ -74,9 +74,14 @@ void Planner::AddLine(const AxisVector& end, double feed, bool rapid, bool exact
   e.seg = seg;
   e.seg_total = len;
   if (len < 1e-9) {
+    // A zero-length block (duplicate point): a transparent marker that completes when passed, unless it
+    // demands a stop.
     e.len = 0;
-    e.vgeom = 0;
-    e.at = 1;
+    e.vgeom = kInf;
+    e.vfeed = kInf;
+    e.rapid = false;
+    e.at = 1e9;
+    e.v_junction = kInf;
     Append(e);
     return;
   }
@@ -295,10 +300,22 @@ void Planner::Link(PathElement& a, PathElement& b, bool a_is_current) {
 
 void Planner::Append(PathElement e) {
   e.p0 = tail_;
+  // Link with the last element that has a length, across transparent zero-length markers.
+  std::size_t prev_i = count_;
+  for (std::size_t n = count_; n-- > 0;) {
+    const PathElement& q = At(n);
+    if (q.len > 0) {
+      prev_i = n;
+      break;
+    }
+    if (q.stop_end) break;  // a marker that stops: start from rest
+  }
   const std::size_t changed_from = count_ > 0 ? count_ - 1 : 0;
-  if (count_ > 0) {
-    PathElement& prev = At(count_ - 1);
-    Link(prev, e, count_ == 1 && started_);
+  std::size_t changed = changed_from;
+  if (prev_i < count_ && e.len > 0) {
+    PathElement& prev = At(prev_i);
+    changed = prev_i;
+    Link(prev, e, prev_i == 0 && started_);
     if (has_pending_fillet_) {
       has_pending_fillet_ = false;
       elems_[(head_ + count_) % elems_.size()] = pending_fillet_;
@@ -308,7 +325,7 @@ void Planner::Append(PathElement e) {
   elems_[(head_ + count_) % elems_.size()] = e;
   ++count_;
   tail_ = e.p1;
-  BackwardPass(changed_from);
+  BackwardPass(std::min(changed, changed_from));
 }
 
 void Planner::BackwardPass(std::size_t changed_from) {

@@ -291,3 +291,37 @@ TEST(Planner, ArcInYzPlaneAndRapidOverride) {
 
 }  // namespace
 }  // namespace cell::servo
+
+namespace cell::servo {
+namespace {
+
+// CAM output often repeats a point; a zero-length block must neither stop a blended path nor get lost.
+TEST(Planner, DuplicatePointsDoNotStopBlending) {
+  Machine m(DefaultMachineConfig("ktapl"), ClockKind::kVirtual);
+  m.Push(testing::Rapid(1, 100, 100, 100));
+  m.RunUntilIdle();
+  m.TakeEvents();
+  testing::LimitChecker check(m);
+  Eigen::Vector3d p(100, 100, 100);
+  double heading = 0;
+  std::uint64_t id = 2;
+  for (int i = 0; i < 30; ++i) {
+    heading += 0.5 * M_PI / 180;
+    p += 2.0 * Eigen::Vector3d(std::cos(heading), std::sin(heading), 0);
+    m.Push(testing::Line(id++, p.x(), p.y(), p.z(), 3000));
+    if (i % 5 == 2) m.Push(testing::Line(id++, p.x(), p.y(), p.z(), 3000));  // duplicate
+  }
+  double min_speed = 1e9;
+  int completed = 0;
+  auto ev = testing::RunChecked(m, check, 60, [&] {
+    if (m.planner().Position().x() > 110 && m.planner().Position().x() < 150)
+      min_speed = std::min(min_speed, m.planner().Speed());
+  });
+  for (const auto& e : ev) completed += e.kind == EventKind::kCompleted;
+  EXPECT_EQ(completed, static_cast<int>(id - 2));
+  EXPECT_GT(min_speed, 10.0);
+  check.ExpectWithinLimits();
+}
+
+}  // namespace
+}  // namespace cell::servo
