@@ -325,3 +325,35 @@ TEST(Planner, DuplicatePointsDoNotStopBlending) {
 
 }  // namespace
 }  // namespace cell::servo
+
+namespace cell::servo {
+namespace {
+
+// Line, tangent semicircle, line (a slot): blended without stopping, within the path tolerance.
+TEST(Planner, TangentLineArcLineBlends) {
+  Machine m(DefaultMachineConfig("ktapl"), ClockKind::kVirtual);
+  m.Push(testing::Rapid(1, 100, 100, 100));
+  m.RunUntilIdle();
+  m.TakeEvents();
+  testing::LimitChecker check(m);
+  m.Push(testing::Line(2, 200, 100, 100, 3000));
+  m.Push(testing::Arc(3, 200, 140, 100, 200, 120, true, 3000));
+  m.Push(testing::Line(4, 100, 140, 100, 3000));
+  double min_speed = 1e9, max_dev = 0;
+  auto ev = testing::RunChecked(m, check, 60, [&] {
+    const AxisVector p = m.planner().Position();
+    if (p.x() > 150) min_speed = std::min(min_speed, m.planner().Speed());
+    const Eigen::Vector3d a = m.actual().head<3>();
+    double d = std::min(testing::DistToSegment(a, {100, 100, 100}, {200, 100, 100}),
+                        testing::DistToSegment(a, {200, 140, 100}, {100, 140, 100}));
+    if (a.x() >= 200) d = std::min(d, std::abs(std::hypot(a.x() - 200, a.y() - 120) - 20));
+    max_dev = std::max(max_dev, d);
+  });
+  ASSERT_NE(testing::Find(ev, EventKind::kCompleted, 4), nullptr);
+  check.ExpectWithinLimits();
+  EXPECT_GT(min_speed, 10.0);  // no stop at the tangent junctions
+  EXPECT_LT(max_dev, m.config().path_tolerance);
+}
+
+}  // namespace
+}  // namespace cell::servo
