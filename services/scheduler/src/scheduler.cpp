@@ -1547,6 +1547,38 @@ Effects Scheduler::RunFailed(std::int64_t dispatch_id, std::string_view reason) 
   return m.TakeEffects();
 }
 
+Effects Scheduler::ReportRun(const RunReport& report) {
+  // Each step is its own transaction; every step is idempotent, so a crash between them is repaired by the
+  // station's next (or re-delivered) report.
+  Effects all;
+  const auto add = [&](Effects fx) {
+    for (auto& d : fx.dispatches) all.dispatches.push_back(std::move(d));
+    for (auto& c : fx.cancels) all.cancels.push_back(std::move(c));
+    for (auto& v : fx.variables) all.variables.push_back(std::move(v));
+    for (auto& j : fx.job_changes) all.job_changes.push_back(std::move(j));
+    for (auto& n : fx.notes) all.notes.push_back(std::move(n));
+  };
+  const std::int64_t id = report.dispatch_id;
+  auto live = [&] {
+    auto it = impl_->dispatches.find(id);
+    return it != impl_->dispatches.end() && Live(it->second.state) && it->second.state != DState::kQueued;
+  };
+  if (!live()) {
+    add(DispatchAcknowledged(id));  // records the note about the stale report
+    return all;
+  }
+  add(DispatchAcknowledged(id));
+  if (report.status == RunStatus::kAccepted) return all;
+  if (report.status != RunStatus::kFailed || report.programs_done > 0) add(RunStarted(id));
+  const int programs = static_cast<int>(impl_->dispatches.at(id).programs.size());
+  const int done = std::min(report.programs_done, programs);
+  if (done > 0 && impl_->dispatches.at(id).done < done) add(ProgramFinished(id, done - 1));
+  if (report.status == RunStatus::kCompleted) add(RunFinished(id, report.cycle_s));
+  if (report.status == RunStatus::kFailed)
+    add(RunFailed(id, report.reason.empty() ? "run failed" : report.reason));
+  return all;
+}
+
 Effects Scheduler::ProgramChanged(std::string_view name) {
   Impl& m = *impl_;
   m.Call([&] {

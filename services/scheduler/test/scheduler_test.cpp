@@ -218,6 +218,34 @@ TEST(Operate, MultiOperationRouteMovesThePalletOn) {
   EXPECT_EQ(v.station, "KT02");
 }
 
+TEST(Operate, StationRunReportsApplyOnceAndInOrder) {
+  FakeCell c;
+  c.Program("A", {}, 100);
+  c.Program("B", {}, 40);
+  c.Online("KT01");
+  c.Route("R", {"KT01:A,B"});
+  const auto j = c.Operate("R", 1);
+  const auto id = c.InHand("KT01").dispatch_id;
+  c.Take(c.sched->ReportRun({id, RunStatus::kRunning, 1, std::nullopt, ""}));
+  EXPECT_EQ(c.State(j), JobState::kRunning);
+  EXPECT_EQ(c.Backlog("KT01"), 40);
+  c.Take(c.sched->ReportRun({id, RunStatus::kRunning, 0, std::nullopt, ""}));  // older sample: no change
+  EXPECT_EQ(c.Backlog("KT01"), 40);
+  c.Take(c.sched->ReportRun({id, RunStatus::kCompleted, 2, 77.0, ""}));
+  EXPECT_EQ(c.State(j), JobState::kCompleted);
+  EXPECT_EQ(c.sched->Job(j)->cycle_s.value_or(0), 77.0);
+  EXPECT_EQ(c.Backlog("KT01"), 0);
+  const auto notes = c.notes.size();
+  c.Take(c.sched->ReportRun({id, RunStatus::kCompleted, 2, 77.0, ""}));  // re-delivered: ignored
+  EXPECT_EQ(c.sched->Job(j)->cycle_s.value_or(0), 77.0);
+  EXPECT_GT(c.notes.size(), notes);
+  const auto j2 = c.Operate("R", 2);
+  c.Take(
+      c.sched->ReportRun({c.InHand("KT01").dispatch_id, RunStatus::kFailed, 0, std::nullopt, "M99 alarm"}));
+  EXPECT_EQ(c.State(j2), JobState::kFailed);
+  EXPECT_EQ(c.Reason(j2), "station KT01: M99 alarm");
+}
+
 // Health policy (docs/scheduler.md): pallets queued at or handed to a station that vanishes are re-queued; a
 // pallet whose run had started fails; the station's backlog is released.
 TEST(Health, VanishedStationRequeuesQueuedAndFailsRunning) {

@@ -139,6 +139,17 @@ struct RouteView {
   std::string invalid_reason;  // when a program it uses changed and no longer qualifies
 };
 
+// What a station says it did with a dispatch (its run-status sample). After a restart of either side the
+// latest sample tells the scheduler what actually ran.
+enum class RunStatus { kAccepted, kRunning, kCompleted, kFailed };
+struct RunReport {
+  std::int64_t dispatch_id = 0;
+  RunStatus status = RunStatus::kAccepted;
+  int programs_done = 0;          // programs of the dispatch that reached their end
+  std::optional<double> cycle_s;  // kCompleted: machine seconds of the visit
+  std::string reason;             // kFailed
+};
+
 struct Options {
   std::string db_path;  // SQLite file; empty = in memory only (tests, benchmarks)
   // Pallet numbers 1-255, or 1-127 on coded-pallet FMS modules (KT-APL seed lines 852, 4081-4083).
@@ -203,6 +214,9 @@ class Scheduler {
   // The whole visit ended (last M30). cycle_s: the machine seconds the station measured, if any.
   Effects RunFinished(std::int64_t dispatch_id, std::optional<double> cycle_s = std::nullopt);
   Effects RunFailed(std::int64_t dispatch_id, std::string_view reason);
+  // Applies a station's run report: acknowledgement, start, program ends up to programs_done, then the end or
+  // the failure, each step only if it has not happened yet (a repeated or older report changes nothing).
+  Effects ReportRun(const RunReport& report);
   // A program changed (or vanished) in the store: routes using it are re-validated.
   Effects ProgramChanged(std::string_view name);
 
