@@ -18,13 +18,13 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   cell::interp::RunOptions opt;
   opt.program_name = "fuzz";
   opt.program_text = text;
-  opt.params["MAX_IDLE_BLOCKS"] = "2000";
+  opt.params["MAX_IDLE_BLOCKS"] = "500";
   opt.library = [](const std::string& name) -> std::optional<std::string> {
     if (name == "LIBSUB") return std::string("(DFS,LIBSUB)\nG91X1.F0\n(END)\n");
     return std::nullopt;
   };
   auto run = cell::interp::StartRun(opt);
-  for (int i = 0; i < 20000; ++i) {
+  for (int i = 0; i < 2000; ++i) {
     cell::interp::Step s = run->Next();
     if (s.kind != cell::interp::Step::kCanon) break;
     (void)cell::interp::ToJsonLine(s.canon);
