@@ -516,9 +516,10 @@ struct Scheduler::Impl {
       JobRec& j = jobs.at(d.job);
       if (d.state == DState::kRunning) {
         Detach(d, DState::kFailed);
+        const std::string what = d.pallet != 0 ? fmt::format("pallet {}", d.pallet) : d.programs.at(0);
         FinishJob(j, JobState::kFailed,
-                  fmt::format("{} while running pallet {} (program {} of {}): the pallet needs an operator",
-                              why, d.pallet, d.done + 1, d.programs.size()));
+                  fmt::format("{} while running {} (program {} of {}): the {} needs an operator", why, what,
+                              d.done + 1, d.programs.size(), d.pallet != 0 ? "pallet" : "part"));
       } else {
         Detach(d, DState::kRevoked);
         requeue.push_back(j.id);
@@ -1415,6 +1416,27 @@ Effects Scheduler::StationTools(std::string_view id, const tooltable::ToolTable&
     m.stations[static_cast<std::size_t>(s)].tools = table;
     m.states[static_cast<std::size_t>(s)].SetTools(table, m.tool_index);
     m.dirty_stations.insert(s);
+    // Pallets allocated here but not yet handed out that now lack a tool are allocated again.
+    std::vector<std::int64_t> requeue;
+    for (std::int64_t did : m.stations[static_cast<std::size_t>(s)].queue) {
+      const auto& d = m.dispatches.at(did);
+      const auto& j = m.jobs.at(d.job);
+      for (int t : (*j.ops)[static_cast<std::size_t>(j.op)].tool_ids) {
+        if (!m.states[static_cast<std::size_t>(s)].Holds(t)) {
+          requeue.push_back(did);
+          break;
+        }
+      }
+    }
+    for (std::int64_t did : requeue) {
+      auto& d = m.dispatches.at(did);
+      m.Detach(d, DState::kRevoked);
+      auto& j = m.jobs.at(d.job);
+      j.state = JobState::kQueued;
+      j.dispatch = 0;
+      j.station = -1;
+      m.Evaluate(j, fmt::format("re-queued: tool table of {} changed", id));
+    }
     m.ReevaluateWaiting(s, fmt::format("tool table of {} changed", id));
   });
   return m.TakeEffects();

@@ -146,6 +146,26 @@ TEST(Operate, MissingToolsMakeThePalletWaitUntilAToolLoadReleasesIt) {
   EXPECT_EQ(v.decisions[1].winner, "KT02");
 }
 
+TEST(Operate, QueuedPalletsLeaveAStationThatLosesATool) {
+  FakeCell c;
+  c.Program("A", {"7"}, 100);
+  c.Online("KT01", {"7"});
+  c.Online("KT02");
+  c.Route("R", {"KT01,KT02:A"});
+  const auto j1 = c.Operate("R", 1);
+  const auto j2 = c.Operate("R", 2);
+  EXPECT_EQ(c.StationOf(j2), "KT01");  // queued behind pallet 1
+  EXPECT_EQ(c.Backlog("KT01"), 200);
+  c.Take(c.sched->StationTools("KT01", testing::Tools({"8"})));
+  EXPECT_EQ(c.State(j1), JobState::kDispatched);  // already handed out: the station deals with it
+  EXPECT_EQ(c.State(j2), JobState::kWaiting);
+  EXPECT_EQ(c.Reason(j2), "no eligible station: KT01 missing tools 7; KT02 missing tools 7");
+  EXPECT_EQ(c.Backlog("KT01"), 100);
+  EXPECT_EQ(c.sched->Job(j2)->decisions.back().trigger, "re-queued: tool table of KT01 changed");
+  c.Take(c.sched->StationTools("KT02", testing::Tools({"7"})));
+  EXPECT_EQ(c.StationOf(j2), "KT02");
+}
+
 TEST(Operate, BrokenToolDoesNotCount) {
   FakeCell c;
   c.Program("A", {"9"}, 60);
