@@ -164,6 +164,33 @@ TEST(KtaplCorpusSize, HasCases) {
   EXPECT_GE(Cases().size(), 10u);
 }
 
+// DESIGN §4: exit 2 on a usage error or a dialect that is not implemented yet (one-line message).
+int RunCli(const std::string& args, std::string* err_text) {
+  fs::path err = fs::temp_directory_path() / ("ktapl_cli_" + std::to_string(::getpid()) + ".err");
+  std::string cmd =
+      "'" + Env("CELL_BIN_DIR") + "/cell-interp' " + args + " >/dev/null 2>'" + err.string() + "'";
+  int status = std::system(cmd.c_str());
+  if (err_text) *err_text = Slurp(err);
+  fs::remove(err);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+TEST(CellInterpCli, UnimplementedDialectsExitTwoWithOneLine) {
+  for (const char* d : {"okuma", "emco", "balt"}) {
+    std::string err;
+    EXPECT_EQ(RunCli(std::string("--dialect ") + d + " x.nc", &err), 2) << d;
+    EXPECT_EQ(Lines(err).size(), 1u) << err;
+  }
+}
+
+TEST(CellInterpCli, UsageErrorsExitTwo) {
+  EXPECT_EQ(RunCli("", nullptr), 2);
+  EXPECT_EQ(RunCli("--dialect ktapl", nullptr), 2);
+  EXPECT_EQ(RunCli("--dialect fanuc x.nc", nullptr), 2);
+  EXPECT_EQ(RunCli("--dialect ktapl --bogus x.nc", nullptr), 2);
+  EXPECT_EQ(RunCli("--dialect ktapl /nonexistent/program.nc", nullptr), 2);
+}
+
 INSTANTIATE_TEST_SUITE_P(Ktapl, KtaplCorpus, ::testing::ValuesIn(Cases()),
                          [](const ::testing::TestParamInfo<std::string>& info) {
                            std::string s = info.param;
