@@ -106,6 +106,8 @@ void Service::Loop(std::stop_token st) {
       }
       uint64_t id = ++next_id_;
       seq_of_[id] = m->seq();
+      spdlog::debug("segment run {} seq {} kind {} at machine {:.3f} s", m->run_id(), m->seq(),
+                    static_cast<int>(m->kind()), machine_.machine_time());
       if (m->kind() == cell::SEGMENT_PROBE) probe_[id] = true;
       try {
         machine_.Push(FromWire(*m, id));
@@ -134,6 +136,7 @@ void Service::HandleEvents() {
       case EventKind::kCompleted:
         if (it != seq_of_.end()) {
           completed_seq_ = std::max(completed_seq_, it->second);
+          spdlog::debug("completed seq {} at machine {:.3f} s", it->second, e.machine_time);
           run_end_s_ = e.machine_time;
           if (probe_.count(e.segment_id)) {
             cell::ProbeResult r;

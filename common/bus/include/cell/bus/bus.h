@@ -126,7 +126,10 @@ class Reader {
 
   std::optional<T> Take(Millis timeout) {
     std::unique_lock lk(state_->mu);
-    if (!state_->cv.wait_for(lk, timeout, [&] { return !state_->queue.empty(); })) return std::nullopt;
+    // A zero timeout is a poll (hot loops such as the servo tick): no timed wait, no syscall.
+    if (timeout.count() <= 0 ? state_->queue.empty()
+                             : !state_->cv.wait_for(lk, timeout, [&] { return !state_->queue.empty(); }))
+      return std::nullopt;
     T v = std::move(state_->queue.front().first);
     state_->queue.pop_front();
     return v;
