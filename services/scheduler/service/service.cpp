@@ -247,29 +247,25 @@ void Service::Apply(const Effects& e) {
 }
 
 void Service::OnRun(const cell::RunStatus& s) {
-  std::lock_guard lk(mu_);
-  const int64_t id = s.dispatch_id();
-  auto& seen = seen_runs_.try_emplace(id, -1, 0).first->second;
-  int state = static_cast<int>(s.state());
-  if (seen.first == state && seen.second == s.programs_done()) return;  // replayed event
-  bool first = seen.first < 0;
+  // Every sample, re-delivered ones included: the core applies only the steps not yet taken.
+  RunReport r;
+  r.dispatch_id = s.dispatch_id();
+  r.programs_done = s.programs_done();
   switch (s.state()) {
-    case cell::RUN_QUEUED: break;
-    case cell::RUN_ACTIVE:
-      if (first) Apply(sched_.RunStarted(id));
-      for (int i = seen.second; i < s.programs_done(); ++i) Apply(sched_.ProgramFinished(id, i, s.program().to_string()));
-      break;
+    case cell::RUN_QUEUED: r.status = RunStatus::kAccepted; break;
+    case cell::RUN_ACTIVE: r.status = RunStatus::kRunning; break;
     case cell::RUN_COMPLETED:
-      if (first) Apply(sched_.RunStarted(id));
-      for (int i = seen.second; i < s.programs_done(); ++i) Apply(sched_.ProgramFinished(id, i));
-      Apply(sched_.RunFinished(id, s.machine_s()));
+      r.status = RunStatus::kCompleted;
+      r.cycle_s = s.machine_s();
       break;
     case cell::RUN_FAILED:
     case cell::RUN_CANCELLED:
-      Apply(sched_.RunFailed(id, s.reason().to_string().empty() ? "run failed" : s.reason().to_string()));
+      r.status = RunStatus::kFailed;
+      r.reason = s.reason().to_string().empty() ? "run failed" : s.reason().to_string();
       break;
   }
-  seen = {state, std::max(seen.second, s.programs_done())};
+  std::lock_guard lk(mu_);
+  Apply(sched_.ReportRun(r));
 }
 
 void Service::Sender(std::stop_token st) {

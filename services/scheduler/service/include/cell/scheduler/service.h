@@ -47,7 +47,6 @@ class Service {
   Scheduler sched_;
   std::map<std::string, std::string> dialect_;  // configured stations
   std::map<std::string, bool> online_;
-  std::map<int64_t, std::pair<int, int>> seen_runs_;  // dispatch -> (state, programs_done) already applied
 
   struct Outgoing {
     bool cancel = false;
