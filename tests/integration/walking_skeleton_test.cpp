@@ -35,7 +35,7 @@ class Cell : public ::testing::Test {
   }
   RunResult Ctl(std::vector<std::string> args, std::chrono::seconds timeout = std::chrono::seconds(60)) {
     args.insert(args.begin(), BinDir() + "/cellctl");
-    return Run(args, env_, timeout);
+    return RunCommand(args, env_, timeout);
   }
   json CtlJson(std::vector<std::string> args) {
     auto r = Ctl(args);

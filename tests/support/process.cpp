@@ -90,7 +90,7 @@ std::string MakeTempDir(const std::string& prefix) {
   return tmpl;
 }
 
-RunResult Run(std::vector<std::string> argv, const std::map<std::string, std::string>& env,
+RunResult RunCommand(std::vector<std::string> argv, const std::map<std::string, std::string>& env,
               std::chrono::milliseconds timeout, const std::string& stdin_text) {
   std::string dir = MakeTempDir("cell-run-");
   std::map<std::string, std::string> e = env;

@@ -33,13 +33,14 @@ class Process {
   std::optional<int> status_;
 };
 
-// Runs a command to completion; returns {exit code, stdout, stderr}.
+// Runs a command to completion; returns {exit code, stdout, stderr}. (Not "Run": inside a gtest
+// fixture that name is testing::Test::Run.)
 struct RunResult {
   int code = -1;
   std::string out;
   std::string err;
 };
-RunResult Run(std::vector<std::string> argv, const std::map<std::string, std::string>& env = {},
+RunResult RunCommand(std::vector<std::string> argv, const std::map<std::string, std::string>& env = {},
               std::chrono::milliseconds timeout = std::chrono::seconds(60), const std::string& stdin_text = "");
 
 std::string ReadFile(const std::string& path);
