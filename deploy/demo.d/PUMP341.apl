@@ -1,0 +1,13 @@
+%
+(NAM,PUMP341)
+(UTL,1001,1002)
+(UCY,90)
+! Pump housing, face and bore: the demo's KT-APL part program.
+N10 G71 G90 G01
+N20 T1001 M06
+N30 X0 Y0 Z100. F0
+N40 X100. Y50. Z0 F1000.
+N50 G02 X150. Y100. I100. J100. F500.
+N60 G00 X0 Y0 Z100. F0
+N70 M30
+%

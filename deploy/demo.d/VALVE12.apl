@@ -1,0 +1,14 @@
+%
+(NAM,VALVE12)
+(UTL,2001)
+(UCY,60)
+! Valve body: needs tool 2001, which only KT02 holds.
+N10 G71 G90 G01
+N20 T2001 M06
+N30 X20. Y20. Z50. F0
+N40 Z0 F800.
+N50 X120. F1200.
+N60 Y80.
+N70 G00 Z50. F0
+N80 M30
+%
