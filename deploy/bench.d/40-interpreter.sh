@@ -1,0 +1,133 @@
+#!/usr/bin/env bash
+# Interpreter throughput against LinuxCNC's standalone RS-274/NGC interpreter (rs274), same run, same
+# toolpath: a generated 1,000,000-block KT-APL program (G01/G02/G03, PAR arithmetic, a subroutine called
+# with a run count) and the same toolpath as NGC (#parameters, o-word sub called in an o-word repeat).
+# Both write their canonical output to /dev/null. Figures: blocks/s of each (CPU time), the ratio (target
+# >= 10x), and peak RSS of cell-interp for 100,000 and 1,000,000 blocks (target < 64 MB). Missed targets
+# are printed as TARGET MISSED; the script fails only when a run fails.
+# linuxcnc-uspace is installed here (and only here) when apt has it; nothing of LinuxCNC is kept in the tree.
+set -euo pipefail
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
+BIN="${CELL_BUILD_DIR:-$ROOT/build}/bin"
+INTERP="$BIN/cell-interp"
+BLOCKS="${CELL_INTERP_BENCH_BLOCKS:-1000000}"
+[ -x "$INTERP" ] || { echo "40-interpreter: $INTERP not built" >&2; exit 1; }
+[ -x /usr/bin/time ] || { echo "40-interpreter: /usr/bin/time missing (apt-get install time)" >&2; exit 1; }
+
+work="$(mktemp -d "${TMPDIR:-/tmp}/cell-interp-bench.XXXXXX")"
+trap 'rm -rf "$work"' EXIT
+
+# gen KTAPL|NGC BLOCKS > file: groups of 7 KT-APL blocks (the NGC loop takes 3 lines where KT-APL's
+# CLS run count takes one, so the NGC file has a few more lines for the same toolpath; o-word loop labels
+# must be unique in NGC).
+gen() {
+  awk -v kind="$1" -v blocks="$2" 'BEGIN {
+    groups = int((blocks - 9) / 7); if (groups < 1) groups = 1
+    if (kind == "KTAPL") {
+      print "%"
+      print "(NAM,BENCH)"
+      print "(DFS,SQ)"
+      print "G01 G91 XL5 F800."
+      print "YL5"
+      print "X,-L5"
+      print "Y,-L5"
+      print "(END)"
+      print "G0 G71 G90 G94 X0 Y0 Z5. F0 (PAR,L101=0.)"
+      for (g = 0; g < groups; g++) {
+        print "(PAR,L101=L101+.001,L102=L101*2.+1.)"
+        print "G01 G90 X10. Y5. F800."
+        print "G02 X20. Y5. I15. J5."
+        print "G03 X30. Y5. I25. J5."
+        print "G01 XL102 YL101"
+        print "(CLS,SQ,3,L5=2.)"
+        print "G01 G90 X0 Y0"
+      }
+      print "M30"
+    } else {
+      print "%"
+      print "o100 sub"
+      print "G91 G01 X#1 F800"
+      print "Y#1"
+      print "X[-#1]"
+      print "Y[-#1]"
+      print "o100 endsub"
+      print "G21 G90 G94 G0 X0 Y0 Z5"
+      print "#101=0"
+      for (g = 0; g < groups; g++) {
+        print "#101=[#101+.001]"
+        print "#102=[#101*2+1]"
+        print "G01 G90 X10 Y5 F800"
+        print "G02 X20 Y5 I5 J0"
+        print "G03 X30 Y5 I5 J0"
+        print "G01 X#102 Y#101"
+        print "o" (1000 + g) " repeat [3]"
+        print "o100 call [2]"
+        print "o" (1000 + g) " endrepeat"
+        print "G01 G90 X0 Y0"
+      }
+      print "M2"
+      print "%"
+    }
+  }'
+}
+
+# measure LABEL cmd...: CPU seconds (user+sys), wall seconds and peak RSS (kB) via /usr/bin/time -v.
+# Throughput uses CPU time: the bench machine is shared, and wall time under load says little.
+measure() {
+  local tlog="$work/time.$1"; shift
+  /usr/bin/time -v "$@" >/dev/null 2>"$tlog" || { echo "40-interpreter: failed: $*" >&2; tail -5 "$tlog" >&2; return 1; }
+  local wall cpu rss
+  wall=$(awk -F': ' '/Elapsed \(wall clock\)/ {n=split($2,a,":"); s=0; for(i=1;i<=n;i++) s=s*60+a[i]; print s}' "$tlog")
+  cpu=$(awk -F': ' '/User time|System time/ {s+=$2} END {print s}' "$tlog")
+  rss=$(awk -F': ' '/Maximum resident set size/ {print $2}' "$tlog")
+  echo "$cpu $wall $rss"
+}
+
+small=$((BLOCKS / 10))
+gen KTAPL "$BLOCKS" >"$work/bench.ktapl"
+gen KTAPL "$small" >"$work/small.ktapl"
+gen NGC "$BLOCKS" >"$work/bench.ngc"
+kt_blocks=$(wc -l <"$work/bench.ktapl")
+ngc_blocks=$(wc -l <"$work/bench.ngc")
+moves=$("$INTERP" --dialect ktapl "$work/bench.ktapl" | grep -c '"op":"\(linear\|arc\|rapid\)"')
+
+read -r kt_cpu kt_wall kt_rss < <(measure kt "$INTERP" --dialect ktapl "$work/bench.ktapl")
+read -r _ _ small_rss < <(measure small "$INTERP" --dialect ktapl "$work/small.ktapl")
+kt_bps=$(awk -v b="$kt_blocks" -v s="$kt_cpu" 'BEGIN {printf "%.0f", b / (s > 0 ? s : 0.001)}')
+echo "cell-interp: $kt_blocks KT-APL blocks ($moves moves) in ${kt_cpu} s CPU (${kt_wall} s wall) = $kt_bps blocks/s"
+text_kb=$(($(stat -c %s "$work/bench.ktapl") / 1024))
+small_text_kb=$(($(stat -c %s "$work/small.ktapl") / 1024))
+echo "cell-interp peak RSS: $((kt_rss / 1024)) MB at $kt_blocks blocks, $((small_rss / 1024)) MB at $(wc -l <"$work/small.ktapl") blocks (target < 64 MB)"
+echo "  of which the program text (read whole, shared): $((text_kb / 1024)) MB / $((small_text_kb / 1024)) MB;" \
+  "interpreter state: $(((kt_rss - text_kb) / 1024)) MB / $(((small_rss - small_text_kb) / 1024)) MB"
+# Targets are reported, not enforced (a shared machine's figures are not a gate); errors still fail.
+rc=0
+[ "$kt_rss" -lt $((64 * 1024)) ] || echo "40-interpreter: TARGET MISSED: peak RSS >= 64 MB"
+
+# LinuxCNC rs274 (Debian linuxcnc-uspace).
+if ! command -v rs274 >/dev/null; then
+  cand=$(apt-cache policy linuxcnc-uspace 2>/dev/null | awk '/Candidate:/ {print $2}')
+  if [ -n "$cand" ] && [ "$cand" != "(none)" ]; then
+    echo "installing linuxcnc-uspace $cand for the baseline"
+    SUDO=""; [ "$(id -u)" -ne 0 ] && SUDO="sudo"
+    DEBIAN_FRONTEND=noninteractive $SUDO apt-get -o DPkg::Lock::Timeout=600 -y -q install \
+      --no-install-recommends linuxcnc-uspace >"$work/apt.log" 2>&1 || tail -5 "$work/apt.log"
+  fi
+fi
+if ! command -v rs274 >/dev/null; then
+  echo "LinuxCNC rs274 NOT AVAILABLE (apt has no linuxcnc-uspace here): only our own figures are reported"
+  exit $rc
+fi
+# rs274 reads its tool table and parameter file from the current directory; give it empty ones.
+(
+  cd "$work"
+  : >tool.tbl
+  : >rs274ngc.var
+  read -r ngc_cpu ngc_wall ngc_rss < <(measure ngc rs274 -g -t tool.tbl -v rs274ngc.var bench.ngc /dev/null)
+  ngc_bps=$(awk -v b="$ngc_blocks" -v s="$ngc_cpu" 'BEGIN {printf "%.0f", b / (s > 0 ? s : 0.001)}')
+  echo "rs274 (LinuxCNC $(dpkg-query -W -f='${Version}' linuxcnc-uspace 2>/dev/null)): $ngc_blocks NGC lines, same toolpath, in ${ngc_cpu} s CPU (${ngc_wall} s wall) = $ngc_bps blocks/s, peak RSS $((ngc_rss / 1024)) MB"
+  ratio=$(awk -v a="$ngc_cpu" -v b="$kt_cpu" 'BEGIN {printf "%.1f", a / (b > 0 ? b : 0.001)}')
+  echo "ratio: cell-interp is ${ratio}x rs274 on the same toolpath (target >= 10x)"
+  awk -v r="$ratio" 'BEGIN {exit !(r >= 10)}' || echo "40-interpreter: TARGET MISSED: ratio ${ratio}x < 10x"
+)
+exit $rc
