@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "cell/bus/bus.h"
+#include "cell/config/config.h"
 #include "cell/idl/fill.h"
 
 using namespace cell::bus;
@@ -77,7 +78,7 @@ int main(int argc, char** argv) {
   std::setvbuf(stdout, nullptr, _IOLBF, 0);
   const std::string me = argv[1];
   const bool fast = me == "fastdds";
-  const int domain = DomainFromEnv();
+  const int domain = cell::config::Domain();
   BackendOptions bo{domain, "", "interop-" + me};
   Participant p("interop-" + me, domain, fast ? MakeFastDdsBackend(bo) : MakeCycloneBackend(bo));
   const std::string out = fast ? "f2c" : "c2f", in = fast ? "c2f" : "f2c";

@@ -6,19 +6,9 @@
 #include <fmt/format.h>
 
 #include "cell/bus/bus.h"
+#include "cell/config/config.h"
 
 namespace cell::bus {
-
-int DomainFromEnv() {
-  const char* v = std::getenv("CELL_DOMAIN");
-  if (!v || !*v) return 101;
-  char* end = nullptr;
-  long d = std::strtol(v, &end, 10);
-  // Both stacks reject ids above 232 ("port out of range"); see docs/operations.md.
-  if (*end != '\0' || d < 0 || d > 232)
-    throw Error(Errc::kInvalidArgument, fmt::format("CELL_DOMAIN={}: expected an integer 0..232", v));
-  return static_cast<int>(d);
-}
 
 bool WaitUntil(const std::function<bool()>& cond, Millis timeout) {
   auto deadline = std::chrono::steady_clock::now() + timeout;
@@ -37,7 +27,7 @@ std::string EnvOr(const char* name, const std::string& dflt) {
 }  // namespace
 
 Participant::Participant(const ParticipantOptions& opts) {
-  domain_ = opts.domain ? *opts.domain : DomainFromEnv();
+  domain_ = opts.domain ? *opts.domain : cell::config::Domain();
   std::string backend = opts.backend.empty() ? EnvOr("CELL_DDS", "fastdds") : opts.backend;
   std::string profile = opts.profile_path.empty() ? EnvOr("CELL_DDS_PROFILE", "") : opts.profile_path;
   char host[64] = {0};

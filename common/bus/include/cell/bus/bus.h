@@ -26,13 +26,10 @@ using Millis = std::chrono::milliseconds;
 
 struct ParticipantOptions {
   std::string name;          // shown in logs and discovery, e.g. "cell-interpreter/KT01"
-  std::optional<int> domain; // default: CELL_DOMAIN, else 101
+  std::optional<int> domain; // default: cell::config::Domain() (CELL_DOMAIN, else 101)
   std::string backend;       // default: CELL_DDS, else "fastdds"
   std::string profile_path;  // default: CELL_DDS_PROFILE, else the built-in loopback profile
 };
-
-// Resolves CELL_DOMAIN (0..232, default 101); throws cell::Error on a bad value.
-int DomainFromEnv();
 
 // One DDS participant per process plus one dispatch thread that runs every user callback in
 // arrival order, so callbacks never run on (or block) the DDS receive threads.
