@@ -60,13 +60,13 @@ TEST(Bus, CallbackRunsOnTheDispatchThread) {
   std::condition_variable cv;
   std::vector<int> seen;
   std::thread::id cb_thread;
-  Reader<cell::RunStatus> r(b, "test/runs", QosKind::kState, [&](const cell::RunStatus& s, const SampleInfo&) {
+  Reader<cell::RunStatus> r(b, "test/runs", QosKind::kEvent, [&](const cell::RunStatus& s, const SampleInfo&) {
     std::lock_guard lk(mu);
     cb_thread = std::this_thread::get_id();
     seen.push_back(s.dispatch_id());
     cv.notify_all();
   });
-  Writer<cell::RunStatus> w(a, "test/runs", QosKind::kState);
+  Writer<cell::RunStatus> w(a, "test/runs", QosKind::kEvent);
   ASSERT_TRUE(w.WaitForMatched(1, kMatch));
   ASSERT_TRUE(r.WaitForMatched(1, kMatch));
   for (int id : {17, 18}) {
