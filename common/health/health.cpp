@@ -22,8 +22,10 @@ Announcer::Announcer(bus::Participant& p, const std::string& kind, const std::st
     std::mutex m;
     std::condition_variable_any cv;
     std::unique_lock lk(m);
-    while (!cv.wait_for(lk, st, std::chrono::milliseconds(bus::topics::kHeartbeatMs), [] { return false; })) {
-      Publish();
+    // wait_for returns at once once a stop is requested, so the stop must end the loop itself.
+    while (!st.stop_requested()) {
+      cv.wait_for(lk, st, std::chrono::milliseconds(bus::topics::kHeartbeatMs), [] { return false; });
+      if (!st.stop_requested()) Publish();
     }
   });
 }
