@@ -18,6 +18,13 @@ std::string ReadLocalFile(const std::string& path) {
   return ss.str();
 }
 
+void WriteLocalFile(const std::string& path, const std::string& content) {
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  out << content;
+  out.close();
+  if (!out) throw cell::Error(cell::Errc::kIo, "cannot write " + path);
+}
+
 // The stored name: --name, else the KT-APL NAM, else the file's base name (DESIGN §6).
 std::string NameFor(const std::string& path, const std::string& content, const std::string& dialect) {
   namespace ps = cell::program_store;
@@ -49,13 +56,15 @@ void AddProgramVerbs(CLI::App& app, Context& ctx) {
 
   auto* put = prog->add_subcommand("put", "store FILE (a new name, or --force for a new revision)");
   put->add_option("FILE", o->file)->required();
-  put->add_option("--name", o->name, "stored name (default: the KT-APL NAM, else the file name)");
+  auto* name_opt = put->add_option("--name", o->name, "stored name (default: the KT-APL NAM, else the file name)");
   put->add_option("--node", o->node, "namespace: HOST or a station id");
   put->add_option("--dialect", o->dialect, "ktapl, okuma, emco or balt (default: detected)");
   put->add_option("--type", o->type, "part_program, library, schedule, tool_table, fixture_offsets, inspection, data");
   put->add_flag("--force", o->force, "store a new revision of an existing name");
   put->add_flag("--json", ctx.json);
-  put->callback([o, &ctx] {
+  put->callback([o, &ctx, name_opt] {
+    // An explicit --name "" is a mistake, not a request for the default name.
+    if (name_opt->count() > 0 && o->name.empty()) throw Exit{2, "--name: a program name cannot be empty"};
     std::string content = ReadLocalFile(o->file);
     std::string name = o->name.empty() ? NameFor(o->file, content, o->dialect) : o->name;
     cell::program_store::Client::PutOptions po;
@@ -81,11 +90,15 @@ void AddProgramVerbs(CLI::App& app, Context& ctx) {
   get->add_option("-o,--output", o->out, "write to FILE instead of stdout");
   get->callback([o, &ctx] {
     auto text = ctx.Programs().Get(o->node, o->name, o->revision);
-    if (!text) throw Exit{1, "no program '" + o->name + "' in " + o->node};
+    if (!text) {
+      // The store's own reason (an unknown namespace, a missing revision) says more than "not found".
+      ctx.Programs().Show(o->node, o->name);
+      throw Exit{1, "no program '" + o->name + "' in " + o->node};
+    }
     if (o->out.empty()) {
       std::cout << *text;
     } else {
-      std::ofstream(o->out, std::ios::binary) << *text;
+      WriteLocalFile(o->out, *text);
     }
   });
 
@@ -108,7 +121,7 @@ void AddProgramVerbs(CLI::App& app, Context& ctx) {
   auto* rm = prog->add_subcommand("rm", "delete a program (not when protected)");
   rm->add_option("NAME", o->name)->required();
   rm->add_option("--node", o->node);
-  rm->callback([o, &ctx] { ctx.Programs().Delete(o->node, o->name, ctx.IdempotencyKey("rm:" + o->name)); });
+  rm->callback([o, &ctx] { ctx.Programs().Delete(o->node, o->name, ctx.IdempotencyKey("rm:" + o->node + ":" + o->name)); });
 
   auto* ls = prog->add_subcommand("ls", "list programs matching PATTERN (* and ?)");
   ls->add_option("PATTERN", o->pattern);
@@ -129,10 +142,12 @@ void AddProgramVerbs(CLI::App& app, Context& ctx) {
     if (verb == "cp") c->add_flag("--force", o->force);
     c->callback([o, &ctx, verb] {
       std::string b = o->b.empty() ? o->a : o->b;
+      // The key names the whole request: the same A copied to two places is two commands.
+      std::string what = verb + ":" + o->from + ":" + o->a + ">" + o->to + ":" + b;
       if (verb == "cp")
-        ctx.Programs().Copy(o->from, o->a, o->to, b, o->force, ctx.IdempotencyKey("cp:" + o->a));
+        ctx.Programs().Copy(o->from, o->a, o->to, b, o->force, ctx.IdempotencyKey(what));
       else
-        ctx.Programs().Rename(o->from, o->a, o->to, b, ctx.IdempotencyKey("mv:" + o->a));
+        ctx.Programs().Rename(o->from, o->a, o->to, b, ctx.IdempotencyKey(what));
     });
   }
 
@@ -159,7 +174,7 @@ void AddProgramVerbs(CLI::App& app, Context& ctx) {
       po.node = o->node;
       po.force = o->force;
       std::string name = NameFor(f.string(), content, "");
-      po.idempotency_key = ctx.IdempotencyKey("import:" + name);
+      po.idempotency_key = ctx.IdempotencyKey("import:" + o->node + ":" + name);
       PrintWarnings(ctx.Programs().Put(name, content, po));
       std::cout << "stored " << o->node << ":" << name << "\n";
       ++n;
@@ -179,7 +194,7 @@ void AddProgramVerbs(CLI::App& app, Context& ctx) {
         throw Exit{1, "cannot export '" + name + "' as a file name"};
       auto text = ctx.Programs().Get(o->node, name);
       if (!text) continue;
-      std::ofstream(std::filesystem::path(o->file) / name, std::ios::binary) << *text;
+      WriteLocalFile((std::filesystem::path(o->file) / name).string(), *text);
       ++n;
     }
     std::cout << n << " file(s) exported\n";

@@ -1,5 +1,6 @@
 #include "cell/program_store/client.h"
 
+#include <algorithm>
 #include <random>
 
 #include <fmt/format.h>
@@ -112,7 +113,18 @@ nlohmann::json Client::List(const std::string& node, const std::string& pattern)
   req.op(cell::PROGRAM_LIST);
   req.node(node);
   req.name(pattern);
-  return Info(Call(req));
+  // Paged: the service answers page chunk_index of chunk_count (a reply is bounded to 64 KiB).
+  nlohmann::json all = nlohmann::json::array();
+  uint32_t pages = 1;
+  for (uint32_t i = 0; i < pages; ++i) {
+    req.chunk_index(i);
+    cell::ProgramReply r = Call(req);
+    pages = std::max<uint32_t>(1, r.chunk_count());
+    nlohmann::json page = Info(r);
+    if (!page.is_array()) throw Error(Errc::kInternal, "program store sent a malformed listing");
+    for (auto& e : page) all.push_back(std::move(e));
+  }
+  return all;
 }
 
 nlohmann::json Client::Copy(const std::string& from_node, const std::string& from, const std::string& to_node,

@@ -1,5 +1,10 @@
 // cell-program-store: the cell's durable library of programs and files (SQLite under
 // CELL_DATA_DIR), served over the bus.
+#include <algorithm>
+#include <chrono>
+#include <cstdlib>
+#include <string>
+
 #include <spdlog/spdlog.h>
 
 #include "cell/config/config.h"
@@ -8,6 +13,23 @@
 #include "cell/log/log.h"
 #include "cell/program_store/service.h"
 
+namespace {
+
+// How long a chunked upload may stay silent before it is dropped (its client died): 120 s, or
+// CELL_PROGRAM_STORE_STREAM_IDLE_S (tests shorten it).
+std::chrono::seconds StreamIdle() {
+  if (const char* v = std::getenv("CELL_PROGRAM_STORE_STREAM_IDLE_S"); v && *v) {
+    char* end = nullptr;
+    long s = std::strtol(v, &end, 10);
+    if (*end != '\0' || s < 1 || s > 86400)
+      throw cell::Error(cell::Errc::kInvalidArgument, "CELL_PROGRAM_STORE_STREAM_IDLE_S must be 1..86400 seconds");
+    return std::chrono::seconds(s);
+  }
+  return std::chrono::seconds(120);
+}
+
+}  // namespace
+
 int main() {
   cell::log::Init("cell-program-store");
   try {
@@ -15,16 +37,27 @@ int main() {
     cell::program_store::StoreOptions opts;
     opts.data_dir = cell::config::DataDir();
     opts.namespaces = cell::config::ListStations();
+    // A station namespace falls back to the station's dialect for files that do not show theirs.
+    for (const auto& id : opts.namespaces)
+      opts.namespace_dialects[id] = cell::program_store::ParseDialect(cell::config::LoadStation(id).dialect);
+    const std::chrono::seconds idle = StreamIdle();
     cell::program_store::ProgramStore store(opts);
     cell::bus::Participant bus("cell-program-store");
     cell::health::Announcer health(bus, "cell-program-store");
-    cell::program_store::Service service(bus, store);
+    cell::program_store::Service service(bus, store, idle);
     health.Set(cell::SERVICE_READY, "serving " + (opts.data_dir / opts.database_file).string());
     daemon.NotifyReady("serving programs");
     spdlog::info("ready on domain {}, database {}", bus.domain(), (opts.data_dir / opts.database_file).string());
-    int n = 0;
+    // Abandoned uploads are looked for at a quarter of the idle limit (at least every 30 s), whatever the
+    // main loop's tick (1 s, or a quarter of the systemd watchdog interval).
+    const auto every = std::clamp<std::chrono::steady_clock::duration>(idle / 4, std::chrono::milliseconds(250),
+                                                                       std::chrono::seconds(30));
+    auto next = std::chrono::steady_clock::now() + every;
     daemon.RunUntilStop([&] {
-      if (++n % 30 == 0) service.Housekeeping();
+      if (std::chrono::steady_clock::now() >= next) {
+        service.Housekeeping();
+        next = std::chrono::steady_clock::now() + every;
+      }
       return true;
     });
     daemon.NotifyStopping();

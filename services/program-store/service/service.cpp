@@ -42,6 +42,8 @@ PutRequest PutFrom(const cell::ProgramRequest& r) {
   return p;
 }
 
+constexpr size_t kListPageBytes = 60000;  // below the 65,536 bound of ProgramReply::info
+
 void SetInfo(cell::ProgramReply& rep, const nlohmann::json& j) {
   std::string s = j.dump();
   if (s.size() > 65536)
@@ -51,8 +53,9 @@ void SetInfo(cell::ProgramReply& rep, const nlohmann::json& j) {
 
 }  // namespace
 
-Service::Service(bus::Participant& p, ProgramStore& store)
+Service::Service(bus::Participant& p, ProgramStore& store, std::chrono::seconds stream_idle)
     : store_(store),
+      stream_idle_(stream_idle),
       changes_(p, bus::topics::kProgramChange, bus::QosKind::kEvent),
       server_(p, bus::topics::kProgramStore, [this](const cell::ProgramRequest& r) { return Handle(r); }) {
   store_.SetChangeListener([this](const ChangeEvent& e) {
@@ -64,6 +67,9 @@ Service::Service(bus::Participant& p, ProgramStore& store)
     c.node(e.node);
     c.name(e.name);
     c.revision(e.revision);
+    // A cached GET stream of a file that just changed must not serve stale chunks (a name deleted and
+    // put again restarts at revision 1 with other bytes). The listener runs inside Handle, under mu_.
+    if (e.node == cache_.node && e.name == cache_.name) cache_ = {};
     changes_.Write(c);
     spdlog::info("{} {}:{} revision {}", ChangeKindName(e.kind), e.node, e.name, e.revision);
   });
@@ -71,7 +77,7 @@ Service::Service(bus::Participant& p, ProgramStore& store)
 
 void Service::Housekeeping() {
   std::lock_guard lk(mu_);
-  size_t n = store_.ExpireStreams(std::chrono::seconds(120));
+  size_t n = store_.ExpireStreams(stream_idle_);
   if (n) spdlog::warn("dropped {} abandoned upload stream(s)", n);
 }
 
@@ -116,6 +122,7 @@ cell::ProgramReply Service::Handle(const cell::ProgramRequest& r) {
       rep.revision(cache_.revision);
       rep.chunk_index(r.chunk_index());
       rep.chunk_count(static_cast<uint32_t>(n));
+      if (r.chunk_index() + 1 == n) cache_ = {};  // do not hold up to 256 MiB between gets
       break;
     }
     case cell::PROGRAM_SHOW: {
@@ -130,13 +137,39 @@ cell::ProgramReply Service::Handle(const cell::ProgramRequest& r) {
       break;
     }
     case cell::PROGRAM_LIST: {
-      nlohmann::json arr = nlohmann::json::array();
+      // A listing is paged: page chunk_index of chunk_count, each at most kListPageBytes of JSON, so a
+      // namespace of any size can be listed (one reply's info is bounded to 64 KiB).
+      std::vector<std::string> rows;
       for (auto& f : store_.List(node, name.empty() ? "*" : name)) {
         nlohmann::json j = FileJson(f);
-        arr.push_back({{"name", j["name"]}, {"node", j["node"]}, {"type", j["type"]}, {"dialect", j["dialect"]},
-                       {"revision", j["revision"]}, {"size", j["size"]}, {"protected", j["protected"]}});
+        rows.push_back(nlohmann::json{{"name", j["name"]},
+                                      {"node", j["node"]},
+                                      {"type", j["type"]},
+                                      {"dialect", j["dialect"]},
+                                      {"revision", j["revision"]},
+                                      {"size", j["size"]},
+                                      {"protected", j["protected"]}}
+                           .dump());
       }
-      SetInfo(rep, arr);
+      std::vector<size_t> page_start = {0};
+      size_t bytes = 2;
+      for (size_t i = 0; i < rows.size(); ++i) {
+        if (bytes + rows[i].size() + 1 > kListPageBytes && i > page_start.back()) {
+          page_start.push_back(i);
+          bytes = 2;
+        }
+        bytes += rows[i].size() + 1;
+      }
+      if (r.chunk_index() >= page_start.size())
+        throw Error(Errc::kInvalidArgument, "listing page " + std::to_string(r.chunk_index()) + " past the end");
+      size_t begin = page_start[r.chunk_index()];
+      size_t end = r.chunk_index() + 1 < page_start.size() ? page_start[r.chunk_index() + 1] : rows.size();
+      std::string page = "[";
+      for (size_t i = begin; i < end; ++i) page += (i > begin ? "," : "") + rows[i];
+      page += "]";
+      rep.info(page);
+      rep.chunk_index(r.chunk_index());
+      rep.chunk_count(static_cast<uint32_t>(page_start.size()));
       break;
     }
     case cell::PROGRAM_COPY: {

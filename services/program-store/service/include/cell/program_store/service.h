@@ -1,7 +1,9 @@
 // Binds the program store library to the bus: the request/reply service and change events.
 #pragma once
 
+#include <chrono>
 #include <map>
+#include <mutex>
 #include <memory>
 #include <string>
 
@@ -19,13 +21,15 @@ nlohmann::json FileJson(const FileInfo& f);
 
 class Service {
  public:
-  Service(bus::Participant& p, ProgramStore& store);
+  // Chunked uploads silent for longer than stream_idle are dropped by Housekeeping.
+  Service(bus::Participant& p, ProgramStore& store, std::chrono::seconds stream_idle = std::chrono::seconds(120));
   // Called from the main loop: forgets chunk streams abandoned by a dead client.
   void Housekeeping();
 
  private:
   cell::ProgramReply Handle(const cell::ProgramRequest& r);
   ProgramStore& store_;
+  std::chrono::seconds stream_idle_;
   bus::Writer<cell::ProgramChange> changes_;
   std::mutex mu_;  // Handle runs on the dispatch thread, Housekeeping on main
   struct CachedGet {
