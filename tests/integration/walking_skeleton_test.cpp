@@ -8,7 +8,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "cell/testing/process.h"
+#include "cell/testing/local_cell.h"
 
 using namespace cell::testing;
 using nlohmann::json;
@@ -18,32 +18,26 @@ namespace {
 class Cell : public ::testing::Test {
  protected:
   void SetUp() override {
-    data_ = MakeTempDir("cell-skeleton-");
-    env_ = {{"CELL_DATA_DIR", data_}};
-    auto r = Ctl({"up", "--stations", "KT01,KT02", "--clock", "virtual"});
+    auto r = cell_.Up("KT01,KT02", "virtual");
     ASSERT_EQ(r.code, 0) << r.out << r.err;
     // A KT-APL program with the FMS heading (manual: NAM, UTL right after it, UCY after UTL).
-    prog_ = data_ + "/pump.apl";
+    prog_ = cell_.data_dir() + "/pump.apl";
     std::ofstream(prog_) << "%\n(NAM,PUMP341)\n(UTL,1001,1002)\n(UCY,90)\nN10 G71 G90 G01\nN20 T1001 M06\n"
                             "N30 X0 Y0 Z100. F0\nN40 X100. Y50. Z0 F1000.\nN50 G02 X150. Y100. I100. J100. F500.\n"
                             "N60 G00 X0 Y0 Z100. F0\nN70 M30\n%\n";
   }
   void TearDown() override {
-    auto r = Ctl({"down"});
+    auto r = cell_.Down();
     EXPECT_EQ(r.code, 0) << r.err;
-    std::filesystem::remove_all(data_);
   }
-  RunResult Ctl(std::vector<std::string> args, std::chrono::seconds timeout = std::chrono::seconds(60)) {
-    args.insert(args.begin(), BinDir() + "/cellctl");
-    return RunCommand(args, env_, timeout);
-  }
+  RunResult Ctl(std::vector<std::string> args) { return cell_.Ctl(std::move(args)); }
   json CtlJson(std::vector<std::string> args) {
     auto r = Ctl(args);
     EXPECT_EQ(r.code, 0) << r.err;
     return json::parse(r.out);
   }
-  std::string data_, prog_;
-  std::map<std::string, std::string> env_;
+  LocalCell cell_{"cell-skeleton-"};
+  std::string prog_;
 };
 
 TEST_F(Cell, ProgramPutToCompletedJobThroughAllSixProcesses) {

@@ -1,0 +1,51 @@
+#include "cell/testing/local_cell.h"
+
+#include <signal.h>
+
+#include <filesystem>
+#include <fstream>
+
+namespace cell::testing {
+
+LocalCell::LocalCell(const std::string& prefix) : data_(MakeTempDir(prefix)), env_{{"CELL_DATA_DIR", data_}} {}
+
+LocalCell::~LocalCell() {
+  if (up_) Down();
+  for (auto& [id, pid] : Pids()) kill(pid, SIGKILL);  // whatever `down` could not stop
+  std::error_code ec;
+  std::filesystem::remove_all(data_, ec);
+}
+
+RunResult LocalCell::Up(const std::string& stations, const std::string& clock) {
+  RunResult r = Ctl({"up", "--stations", stations, "--clock", clock});
+  up_ = r.code == 0;
+  return r;
+}
+
+RunResult LocalCell::Down() {
+  up_ = false;
+  return Ctl({"down"});
+}
+
+RunResult LocalCell::Ctl(std::vector<std::string> args, std::chrono::seconds timeout) const {
+  args.insert(args.begin(), BinDir() + "/cellctl");
+  return RunCommand(args, env_, timeout);
+}
+
+nlohmann::json LocalCell::Json(std::vector<std::string> args) const {
+  RunResult r = Ctl(args);
+  if (r.code != 0) return nullptr;
+  return nlohmann::json::parse(r.out, nullptr, false);
+}
+
+std::map<std::string, int> LocalCell::Pids() const {
+  std::map<std::string, int> out;
+  std::ifstream in(data_ + "/cell-up.json");
+  if (!in) return out;
+  auto j = nlohmann::json::parse(in, nullptr, false);
+  if (!j.is_array()) return out;
+  for (auto& p : j) out[p["service"].get<std::string>()] = p["pid"].get<int>();
+  return out;
+}
+
+}  // namespace cell::testing
