@@ -9,6 +9,9 @@ namespace cell::servo {
 
 namespace {
 constexpr auto kAxisPeriod = std::chrono::milliseconds(20);  // 50 Hz in wall time, whatever the clock
+// Virtual clock: how long (wall) the machine waits for the producer to refill a look-ahead queue that is
+// less than half full before it runs on with what it has (see LookAheadStarved()).
+constexpr auto kLookAheadWait = std::chrono::milliseconds(5);
 }
 
 Segment FromWire(const cell::MotionSegment& m, uint64_t id) {
@@ -52,6 +55,7 @@ Segment FromWire(const cell::MotionSegment& m, uint64_t id) {
 
 Service::Service(bus::Participant& p, MachineConfig cfg, ClockKind clock)
     : station_(cfg.station_id),
+      clock_(clock),
       machine_(std::move(cfg), clock),
       segments_(p, bus::topics::Segments(station_), bus::QosKind::kStream),
       progress_(p, bus::topics::kProgress, bus::QosKind::kState),
@@ -93,28 +97,77 @@ void Service::Loop(std::stop_token st) {
     }
     // Segments in: a new run id starts a new run (its first segment is seq 1).
     while (auto m = segments_.Take(std::chrono::milliseconds(0))) {
-      if (m->run_id() != run_id_) {
-        run_id_ = m->run_id();
+      inbox_.push_back(std::move(*m));
+      last_segment_at_ = std::chrono::steady_clock::now();
+    }
+    while (!inbox_.empty()) {
+      if (inbox_.front().run_id() != run_id_) {
+        if (!seq_of_.empty() && machine_.alarm().code == AlarmCode::kNone) {
+          // The previous run was abandoned with segments still queued or running (the producer moved
+          // on without an END): abort them (motion decelerates along the path) and hold the new run's
+          // segments until the abort has flushed the old ones, so they neither run nor take its credits.
+          if (!abandoning_) {
+            spdlog::warn("run {} abandoned with {} segments queued: aborting it for run {}", run_id_,
+                         seq_of_.size(), inbox_.front().run_id());
+            machine_.Abort();
+            abandoning_ = true;
+          }
+          break;
+        }
+        const bool aborted = abandoning_;
+        abandoning_ = false;
+        run_id_ = inbox_.front().run_id();
         completed_seq_ = 0;
         seq_of_.clear();
         probe_.clear();
         run_start_s_.reset();
         run_end_s_ = machine_.machine_time();
-        if (machine_.alarm().code != AlarmCode::kNone) machine_.Reset();  // a new run starts clean
+        end_received_ = false;
+        // A new run starts clean. After an abort too: Machine::Abort() on a machine that is already at rest
+        // (everything flushed at once) stays "aborting" on the virtual clock, where an idle Step() does not
+        // run, and would refuse to move; Reset() at rest ends it without moving the axes.
+        if (aborted || machine_.alarm().code != AlarmCode::kNone || alarm_.code != AlarmCode::kNone)
+          machine_.Reset();
         alarm_ = Alarm{};
         dirty_ = true;
       }
+      cell::MotionSegment m = std::move(inbox_.front());
+      inbox_.pop_front();
+      if (alarm_.code != AlarmCode::kNone || machine_.alarm().code != AlarmCode::kNone) {
+        // The run is stopped by an alarm: later segments of it (sent within their credits before the
+        // producer saw the alarm) are dropped; they must not replace the alarm that stopped the run.
+        spdlog::debug("segment run {} seq {} dropped: alarm active", m.run_id(), m.seq());
+        continue;
+      }
       uint64_t id = ++next_id_;
-      seq_of_[id] = m->seq();
-      spdlog::debug("segment run {} seq {} kind {} at machine {:.3f} s", m->run_id(), m->seq(),
-                    static_cast<int>(m->kind()), machine_.machine_time());
-      if (m->kind() == cell::SEGMENT_PROBE) probe_[id] = true;
+      seq_of_[id] = m.seq();
+      spdlog::debug("segment run {} seq {} kind {} at machine {:.3f} s", m.run_id(), m.seq(),
+                    static_cast<int>(m.kind()), machine_.machine_time());
+      if (m.kind() == cell::SEGMENT_PROBE) probe_[id] = true;
+      if (m.kind() == cell::SEGMENT_END) end_received_ = true;
       try {
-        machine_.Push(FromWire(*m, id));
+        machine_.Push(FromWire(m, id));
       } catch (const Error& e) {
+        seq_of_.erase(id);
+        probe_.erase(id);
+        // A refused segment (no credit, not a finite number) stops the run: running on without it
+        // would join its neighbours with a straight move nobody programmed.
+        machine_.Abort();
         alarm_ = Alarm{AlarmCode::kInvalidSegment, e.what()};
+        spdlog::error("alarm {}: {}", static_cast<int>(alarm_.code), alarm_.text);
         dirty_ = true;
       }
+    }
+    if (LookAheadStarved()) {
+      // Virtual clock only: wait (wall time) for the refill instead of running the machine into a stop
+      // that the segments in flight would have avoided.
+      if (auto m = segments_.Take(std::chrono::milliseconds(1))) {
+        inbox_.push_back(std::move(*m));
+        last_segment_at_ = std::chrono::steady_clock::now();
+      }
+      if (dirty_) PublishProgress();
+      if (std::chrono::steady_clock::now() - last_axes_ >= kAxisPeriod) PublishAxes();
+      continue;
     }
     bool stepped = machine_.Step();
     HandleEvents();
@@ -124,6 +177,19 @@ void Service::Loop(std::stop_token st) {
     if (!stepped) std::this_thread::sleep_for(std::chrono::milliseconds(1));
   }
   alive_ = false;
+}
+
+// On the virtual clock the machine runs ~1000x faster than real time, so a look-ahead queue starved by the
+// credit round trip (the producer refills it only after it has seen the progress) would make the planner
+// brake for a stop that a real-time machine never sees, and the cycle time would depend on DDS latency.
+// While a run is under way (no END yet), the queue is less than half full and the producer sent something
+// within the last kLookAheadWait, the machine waits for it. A producer that stops sending (a slow or
+// finished interpreter) costs at most kLookAheadWait of wall time per refill, no machine time.
+bool Service::LookAheadStarved() const {
+  if (clock_ != ClockKind::kVirtual || end_received_ || abandoning_ || seq_of_.empty()) return false;
+  if (alarm_.code != AlarmCode::kNone || machine_.alarm().code != AlarmCode::kNone) return false;
+  if (machine_.credits() <= machine_.capacity() / 2) return false;
+  return std::chrono::steady_clock::now() - last_segment_at_ < kLookAheadWait;
 }
 
 void Service::HandleEvents() {

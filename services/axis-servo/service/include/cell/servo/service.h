@@ -3,6 +3,7 @@
 #pragma once
 
 #include <atomic>
+#include <deque>
 #include <map>
 #include <mutex>
 #include <optional>
@@ -32,8 +33,10 @@ class Service {
   void HandleEvents();
   void PublishProgress();
   void PublishAxes();
+  bool LookAheadStarved() const;
 
   std::string station_;
+  ClockKind clock_;
   Machine machine_;
   std::atomic<bool> alive_{false};
   // Run bookkeeping (loop thread only).
@@ -41,6 +44,10 @@ class Service {
   uint64_t next_id_ = 0;
   std::map<uint64_t, uint64_t> seq_of_;  // machine segment id -> run seq
   std::map<uint64_t, bool> probe_;       // machine ids of probe segments
+  std::deque<cell::MotionSegment> inbox_;  // received, not yet pushed (held while a run is abandoned)
+  bool abandoning_ = false;                // aborting the previous run's leftovers
+  bool end_received_ = false;              // the run's END segment has arrived
+  std::chrono::steady_clock::time_point last_segment_at_{};
   uint64_t completed_seq_ = 0;
   std::optional<double> run_start_s_;
   double run_end_s_ = 0;
