@@ -413,6 +413,7 @@ void Station::Execute(const Dispatch& d, std::stop_token st) {
     status_.pallet(d.pallet);
     status_.dispatch_id(d.dispatch_id);
   }
+  PublishStatus();  // ACTIVE with its pallet now, not only once the run has made 100 ms of progress
   spdlog::info("dispatch {}: pallet {} running {} program(s)", d.dispatch_id, d.pallet, d.programs.size());
   std::string reason;
   bool ok = true;

@@ -1,6 +1,9 @@
 #include "cell/scheduler/service.h"
 
+#include <fmt/format.h>
 #include <spdlog/spdlog.h>
+
+#include <algorithm>
 
 #include "cell/bus/topics.h"
 #include "cell/config/config.h"
@@ -55,28 +58,7 @@ Service::Service(bus::Participant& p, const std::filesystem::path& data_dir)
       sched_(Options{(data_dir / "scheduler.db").string(), false, {}}, source_),
       live_(p),
       jobs_w_(p, bus::topics::kJobStatus, bus::QosKind::kEvent),
-      state_w_(p, bus::topics::kSchedulerState, bus::QosKind::kState),
-      status_r_(p, bus::topics::kStationStatus, bus::QosKind::kState,
-                [this](const cell::StationStatus& s, const bus::SampleInfo&) {
-                  std::lock_guard lk(mu_);
-                  if (!dialect_.count(s.station().to_string())) return;
-                  Apply(sched_.StationCondition(s.station().to_string(), s.condition() == cell::CONDITION_FAULT,
-                                                s.alarm_code().to_string(), s.alarm_text().to_string()));
-                }),
-      tools_r_(p, bus::topics::kToolTable, bus::QosKind::kState,
-               [this](const cell::ToolTable& t, const bus::SampleInfo&) {
-                 std::lock_guard lk(mu_);
-                 if (!dialect_.count(t.station().to_string())) return;
-                 Apply(sched_.StationTools(t.station().to_string(), FromWire(t)));
-               }),
-      runs_r_(p, bus::topics::kRunStatus, bus::QosKind::kEvent,
-              [this](const cell::RunStatus& s, const bus::SampleInfo&) { OnRun(s); }),
-      changes_r_(p, bus::topics::kProgramChange, bus::QosKind::kEvent,
-                 [this](const cell::ProgramChange& c, const bus::SampleInfo&) {
-                   if (c.node() != "HOST") return;
-                   std::lock_guard lk(mu_);
-                   Apply(sched_.ProgramChanged(c.name().to_string()));
-                 }) {}
+      state_w_(p, bus::topics::kSchedulerState, bus::QosKind::kState) {}
 
 Service::~Service() { Stop(); }
 
@@ -92,7 +74,37 @@ void Service::Start() {
     Effects e = sched_.Recover();
     if (!e.dispatches.empty()) spdlog::info("recovery: re-sending {} unacknowledged dispatch(es)", e.dispatches.size());
     Apply(e);
+    // After a restart a station keeps its last known online state until the discovery window has passed
+    // (Tick), so a station that is still running its pallet is not taken for vanished meanwhile.
+    for (auto& v : sched_.Stations())
+      if (online_.count(v.id)) online_[v.id] = v.online;
+    started_ = std::chrono::steady_clock::now();
   }
+  // Observations are subscribed only now, with the stations configured and recovery done: samples that
+  // arrive at once (state topics are transient-local) are not dropped as coming from unknown stations.
+  status_r_.emplace(bus_, bus::topics::kStationStatus, bus::QosKind::kState,
+                    [this](const cell::StationStatus& s, const bus::SampleInfo&) {
+                      std::lock_guard lk(mu_);
+                      if (!dialect_.count(s.station().to_string())) return;
+                      Apply(sched_.StationCondition(s.station().to_string(), s.condition() == cell::CONDITION_FAULT,
+                                                    s.alarm_code().to_string(), s.alarm_text().to_string()));
+                    });
+  tools_r_.emplace(bus_, bus::topics::kToolTable, bus::QosKind::kState,
+                   [this](const cell::ToolTable& t, const bus::SampleInfo&) {
+                     std::lock_guard lk(mu_);
+                     if (!dialect_.count(t.station().to_string())) return;
+                     Apply(sched_.StationTools(t.station().to_string(), FromWire(t)));
+                   });
+  runs_r_.emplace(bus_, bus::topics::kRunStatus, bus::QosKind::kEvent,
+                  [this](const cell::RunStatus& s, const bus::SampleInfo&) { OnRun(s); });
+  vars_r_.emplace(bus_, bus::topics::kVariables, bus::QosKind::kState,
+                  [this](const cell::StationVariables& v, const bus::SampleInfo&) { OnVariables(v); });
+  changes_r_.emplace(bus_, bus::topics::kProgramChange, bus::QosKind::kEvent,
+                     [this](const cell::ProgramChange& c, const bus::SampleInfo&) {
+                       if (c.node() != "HOST") return;
+                       std::lock_guard lk(mu_);
+                       Apply(sched_.ProgramChanged(c.name().to_string()));
+                     });
   sender_ = std::jthread([this](std::stop_token st) { Sender(st); });
   server_ = std::make_unique<bus::Server<cell::SchedulerRequest, cell::SchedulerReply>>(
       bus_, bus::topics::kScheduler, [this](const cell::SchedulerRequest& r) { return Handle(r); });
@@ -113,6 +125,10 @@ void Service::Tick() {
     for (auto& [id, was] : online_) {
       bool now = live_.StationOnline(id);
       if (now == was) continue;
+      // Heartbeats of stations that survived a restart of the scheduler take up to a heartbeat period to
+      // arrive: only after the discovery window does a missing one mean "offline".
+      if (!now && std::chrono::steady_clock::now() - started_ < std::chrono::milliseconds(bus::topics::kOfflineAfterMs))
+        continue;
       was = now;
       spdlog::info("station {} {}", id, now ? "online" : "offline");
       Apply(now ? sched_.StationOnline(id, dialect_[id]) : sched_.StationOffline(id));
@@ -175,6 +191,11 @@ cell::SchedulerReply Service::Handle(const cell::SchedulerRequest& r) {
         spec = *it;
       }
       for (auto& a : r.args()) spec.ops.push_back(ParseOpSpec(a.to_string()));
+      // A station that is not configured can never qualify: refuse the route rather than let pallets wait.
+      for (size_t i = 0; i < spec.ops.size(); ++i)
+        for (auto& st : spec.ops[i].stations)
+          if (!dialect_.count(st))
+            throw Error(Errc::kNotFound, fmt::format("route {}: operation {} names unknown station '{}'", name, i + 1, st));
       info(ToJson(sched_.DefineRoute(key, spec)));
       break;
     }
@@ -190,8 +211,22 @@ cell::SchedulerReply Service::Handle(const cell::SchedulerRequest& r) {
       rep.job_id(static_cast<int32_t>(j.job_id));
       break;
     }
-    case cell::SCHED_SCHEDULE_RUN:
-      throw Error(Errc::kUnimplemented, "schedule programs (Okuma OSP) are not supported by this scheduler yet");
+    case cell::SCHED_SCHEDULE_RUN: {
+      // FILE's text comes with the request (a local file); otherwise a stored name, looked up in the
+      // station's namespace, then HOST.
+      const std::string station = r.station().to_string();
+      if (!dialect_.count(station)) throw Error(Errc::kNotFound, "unknown station " + station);
+      std::string text = r.text().to_string();
+      if (text.empty()) {
+        auto stored = programs_.GetWithFallback(station, name);
+        if (!stored) throw Error(Errc::kNotFound, "schedule program '" + name + "' is not in " + station + " or HOST");
+        text = std::move(*stored);
+      }
+      JobResult j = sched_.RunSchedule(key, name, text, station);
+      Apply(j.effects);
+      rep.job_id(static_cast<int32_t>(j.job_id));
+      break;
+    }
     case cell::SCHED_JOB_LIST: {
       nlohmann::json arr = nlohmann::json::array();
       for (auto& j : sched_.Jobs(false)) arr.push_back(ToJson(j, false));
@@ -217,13 +252,23 @@ void Service::Apply(const Effects& e) {
   for (auto& n : e.notes) spdlog::info("{}", n);
   {
     std::lock_guard lk(out_mu_);
-    for (auto& d : e.dispatches) outgoing_.push_back({false, d});
+    // VSET writes of a schedule program before the dispatches of the same call (the run reads them).
+    std::map<std::string, std::vector<VariableAction>> vars;
+    for (auto& v : e.variables) vars[v.station].push_back(v);
+    for (auto& [station, list] : vars) {
+      Outgoing o;
+      o.kind = Outgoing::kVariables;
+      o.d.station = station;
+      o.variables = list;
+      outgoing_.push_back(o);
+    }
+    for (auto& d : e.dispatches) outgoing_.push_back({Outgoing::kDispatch, d, {}});
     for (auto& c : e.cancels) {
       DispatchAction d;
       d.dispatch_id = c.dispatch_id;
       d.station = c.station;
       d.job_id = c.job_id;
-      outgoing_.push_back({true, d});
+      outgoing_.push_back({Outgoing::kCancel, d, {}});
     }
   }
   out_cv_.notify_all();
@@ -279,6 +324,11 @@ void Service::Sender(std::stop_token st) {
       o = outgoing_.front();
       outgoing_.pop_front();
     }
+    if (o.kind == Outgoing::kVariables) {
+      SendVariables(o);
+      continue;
+    }
+    const bool cancel = o.kind == Outgoing::kCancel;
     auto& client = station_clients_[o.d.station];
     if (!client)
       client = std::make_unique<bus::Client<cell::RunRequest, cell::RunReply>>(bus_, bus::topics::StationRun(o.d.station));
@@ -289,17 +339,17 @@ void Service::Sender(std::stop_token st) {
     req.pallet(o.d.pallet);
     req.node(o.d.station);
     req.repeat(1);
-    req.cancel(o.cancel);
+    req.cancel(cancel);
     for (auto& p : o.d.programs) req.programs().push_back(p.substr(0, 64));
-    req.hdr().idempotency_key("dispatch-" + std::to_string(o.d.dispatch_id) + (o.cancel ? "-cancel" : ""));
+    req.hdr().idempotency_key("dispatch-" + std::to_string(o.d.dispatch_id) + (cancel ? "-cancel" : ""));
     try {
       auto rep = client->Call(req, std::chrono::seconds(5));
       bus::ThrowIfError(rep);
-      if (!o.cancel) {
+      if (!cancel) {
         std::lock_guard lk(mu_);
         Apply(sched_.DispatchAcknowledged(o.d.dispatch_id));
       }
-      spdlog::info("{} {} to {} acknowledged", o.cancel ? "cancel of dispatch" : "dispatch", o.d.dispatch_id,
+      spdlog::info("{} {} to {} acknowledged", cancel ? "cancel of dispatch" : "dispatch", o.d.dispatch_id,
                    o.d.station);
     } catch (const Error& e) {
       if (e.code() == Errc::kInvalidArgument) {
@@ -309,12 +359,63 @@ void Service::Sender(std::stop_token st) {
       }
       // Station not reachable yet: keep it, try again (a dispatch is never dropped silently).
       spdlog::warn("dispatch {} to {} not delivered yet: {}", o.d.dispatch_id, o.d.station, e.what());
-      std::unique_lock lk(out_mu_);
-      outgoing_.push_back(o);
-      out_cv_.wait_for(lk, std::chrono::seconds(1));
+      Retry(o);
     }
   }
   sender_alive_ = false;
+}
+
+void Service::Retry(const Outgoing& o) {
+  // Back into the queue ahead of anything else for the same station (its order is kept: variable writes
+  // before the dispatch that reads them), behind other stations' work (a dead station blocks no other).
+  std::unique_lock lk(out_mu_);
+  auto it = std::find_if(outgoing_.begin(), outgoing_.end(), [&](const Outgoing& x) { return x.d.station == o.d.station; });
+  outgoing_.insert(it, o);
+  out_cv_.wait_for(lk, std::chrono::seconds(1));
+}
+
+void Service::SendVariables(const Outgoing& o) {
+  auto& client = command_clients_[o.d.station];
+  if (!client)
+    client = std::make_unique<bus::Client<cell::StationRequest, cell::StationReply>>(
+        bus_, bus::topics::StationCommand(o.d.station));
+  cell::StationRequest req;
+  req.op(cell::STATION_SET_VARIABLES);
+  req.station(o.d.station);
+  std::string what;
+  for (auto& v : o.variables) {
+    cell::Variable x;
+    x.name("V" + std::to_string(v.number));
+    x.value(v.value);
+    req.variables().push_back(x);
+    what += fmt::format("{}V{}={}", what.empty() ? "" : " ", v.number, v.value);
+  }
+  try {
+    bus::ThrowIfError(client->Call(req, std::chrono::seconds(5)));
+    spdlog::info("variables set on {}: {}", o.d.station, what);
+  } catch (const Error& e) {
+    if (e.code() == Errc::kInvalidArgument) {
+      spdlog::error("station {} refused variables {}: {}", o.d.station, what, e.what());
+      return;
+    }
+    spdlog::warn("variables {} for {} not delivered yet: {}", what, o.d.station, e.what());
+    Retry(o);
+  }
+}
+
+void Service::OnVariables(const cell::StationVariables& v) {
+  // Okuma common variables V1-V200 as the station publishes them (IF and VSET of schedule programs).
+  std::map<int, double> common;
+  for (auto& x : v.variables()) {
+    std::string n = x.name().to_string();
+    if (n.size() < 2 || (n[0] != 'V' && n[0] != 'v') || n.size() > 4) continue;
+    if (!std::all_of(n.begin() + 1, n.end(), [](char c) { return c >= '0' && c <= '9'; })) continue;
+    int number = std::stoi(n.substr(1));
+    if (number >= 1 && number <= 200) common[number] = x.value();
+  }
+  std::lock_guard lk(mu_);
+  if (!dialect_.count(v.station().to_string())) return;
+  Apply(sched_.StationVariables(v.station().to_string(), common));
 }
 
 }  // namespace cell::scheduler

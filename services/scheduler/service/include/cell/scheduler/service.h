@@ -2,12 +2,14 @@
 // dispatches out (retried until each station acknowledges), job events and backlog out.
 #pragma once
 
+#include <chrono>
 #include <condition_variable>
 #include <deque>
 #include <filesystem>
 #include <map>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <set>
 #include <thread>
 
@@ -49,22 +51,30 @@ class Service {
   std::map<std::string, bool> online_;
 
   struct Outgoing {
-    bool cancel = false;
-    DispatchAction d;
+    enum Kind { kDispatch, kCancel, kVariables } kind = kDispatch;
+    DispatchAction d;                       // kVariables: only d.station
+    std::vector<VariableAction> variables;  // kVariables
   };
+  void Retry(const Outgoing& o);
+  void SendVariables(const Outgoing& o);
+  void OnVariables(const cell::StationVariables& v);
   std::mutex out_mu_;
   std::condition_variable out_cv_;
   std::deque<Outgoing> outgoing_;
   std::map<std::string, std::unique_ptr<bus::Client<cell::RunRequest, cell::RunReply>>> station_clients_;
+  std::map<std::string, std::unique_ptr<bus::Client<cell::StationRequest, cell::StationReply>>> command_clients_;
   std::atomic<bool> sender_alive_{false};
 
   health::Liveness live_;
   bus::Writer<cell::JobStatus> jobs_w_;
   bus::Writer<cell::SchedulerState> state_w_;
-  bus::Reader<cell::StationStatus> status_r_;
-  bus::Reader<cell::ToolTable> tools_r_;
-  bus::Reader<cell::RunStatus> runs_r_;
-  bus::Reader<cell::ProgramChange> changes_r_;
+  std::chrono::steady_clock::time_point started_;
+  // Created by Start(), after the stations are configured and recovery has run.
+  std::optional<bus::Reader<cell::StationStatus>> status_r_;
+  std::optional<bus::Reader<cell::ToolTable>> tools_r_;
+  std::optional<bus::Reader<cell::RunStatus>> runs_r_;
+  std::optional<bus::Reader<cell::ProgramChange>> changes_r_;
+  std::optional<bus::Reader<cell::StationVariables>> vars_r_;
   std::unique_ptr<bus::Server<cell::SchedulerRequest, cell::SchedulerReply>> server_;
   std::jthread sender_;
 };

@@ -1,0 +1,43 @@
+#!/usr/bin/env bash
+# End-to-end dispatch latency on loopback against a bare bus request/reply round trip, same run.
+# Starts a two-station cell (cellctl up, virtual machine clock) on its own DDS domain and data directory,
+# defines a one-operation route of a short KT-APL program, and runs dispatch_latency_bench: per pallet, the
+# time from OPERATE (sent by the bench itself, and `cellctl route operate` started as a process) to the
+# first motion segment of the new run arriving on the station's segment topic (the bench subscribes beside
+# the axis servo), one pallet at a time. Figures: median and p99, and their ratio to the bus round trip.
+# Env: CELL_BUILD_DIR (default build/), CELL_BENCH_DOMAIN (default 97), CELL_BENCH_PALLETS (default 30).
+set -euo pipefail
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
+BIN="${CELL_BUILD_DIR:-$ROOT/build}/bin"
+for exe in cellctl dispatch_latency_bench cell-scheduler cell-program-store cell-interpreter cell-axis-servo \
+           cell-inspection-writer; do
+  [ -x "$BIN/$exe" ] || { echo "70-dispatch-latency: $BIN/$exe not built" >&2; exit 1; }
+done
+PALLETS="${CELL_BENCH_PALLETS:-30}"
+
+work="$(mktemp -d "${TMPDIR:-/tmp}/cell-dispatch-bench.XXXXXX")"
+export CELL_DATA_DIR="$work/data"
+export CELL_DOMAIN="${CELL_BENCH_DOMAIN:-97}"
+mkdir -p "$CELL_DATA_DIR"
+cleanup() {
+  "$BIN/cellctl" down >/dev/null 2>&1 || true
+  rm -rf "$work"
+}
+trap cleanup EXIT
+
+"$BIN/cellctl" up --stations KT01,KT02 --clock virtual
+cat >"$work/lat1.apl" <<'APL'
+%
+(NAM,LAT1)
+(UTL,1001)
+(UCY,30)
+N10 G71 G90 G01
+N20 X0 Y0 Z100. F0
+N30 X50. Y20. Z10. F2000.
+N40 G00 X0 Y0 Z100. F0
+N50 M30
+%
+APL
+"$BIN/cellctl" program put "$work/lat1.apl" >/dev/null
+"$BIN/cellctl" route define BENCH --op KT01,KT02:LAT1
+"$BIN/dispatch_latency_bench" --route BENCH --cellctl "$BIN/cellctl" --stations KT01,KT02 --pallets "$PALLETS"
