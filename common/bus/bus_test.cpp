@@ -60,12 +60,13 @@ TEST(Bus, CallbackRunsOnTheDispatchThread) {
   std::condition_variable cv;
   std::vector<int> seen;
   std::thread::id cb_thread;
-  Reader<cell::RunStatus> r(b, "test/runs", QosKind::kEvent, [&](const cell::RunStatus& s, const SampleInfo&) {
-    std::lock_guard lk(mu);
-    cb_thread = std::this_thread::get_id();
-    seen.push_back(s.dispatch_id());
-    cv.notify_all();
-  });
+  Reader<cell::RunStatus> r(b, "test/runs", QosKind::kEvent,
+                            [&](const cell::RunStatus& s, const SampleInfo&) {
+                              std::lock_guard lk(mu);
+                              cb_thread = std::this_thread::get_id();
+                              seen.push_back(s.dispatch_id());
+                              cv.notify_all();
+                            });
   Writer<cell::RunStatus> w(a, "test/runs", QosKind::kEvent);
   ASSERT_TRUE(w.WaitForMatched(1, kMatch));
   ASSERT_TRUE(r.WaitForMatched(1, kMatch));
@@ -91,7 +92,8 @@ TEST(Bus, WriteRejectsSequenceOverItsBound) {
     FAIL() << "no error for 513 tools in sequence<ToolEntry, 512>";
   } catch (const Error& e) {
     EXPECT_EQ(e.code(), Errc::kInvalidArgument);
-    EXPECT_NE(std::string(e.what()).find("ToolTable.tools: 513 elements, bound 512"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("ToolTable.tools: 513 elements, bound 512"), std::string::npos)
+        << e.what();
   }
 }
 

@@ -5,7 +5,8 @@
 namespace cell::health {
 
 int64_t WallNs() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::system_clock::now().time_since_epoch())
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(
+             std::chrono::system_clock::now().time_since_epoch())
       .count();
 }
 
@@ -56,10 +57,11 @@ void Announcer::Publish() {
 }
 
 Liveness::Liveness(bus::Participant& p)
-    : r_(p, bus::topics::kHealth, bus::QosKind::kState, [this](const cell::ServiceHealth& h, const bus::SampleInfo&) {
-        std::lock_guard lk(mu_);
-        seen_[h.service_id().to_string()] = {h, std::chrono::steady_clock::now()};
-      }) {}
+    : r_(p, bus::topics::kHealth, bus::QosKind::kState,
+         [this](const cell::ServiceHealth& h, const bus::SampleInfo&) {
+           std::lock_guard lk(mu_);
+           seen_[h.service_id().to_string()] = {h, std::chrono::steady_clock::now()};
+         }) {}
 
 bool Liveness::Online(const std::string& service_id) const {
   std::lock_guard lk(mu_);

@@ -20,9 +20,13 @@ namespace fs = std::filesystem;
 
 namespace {
 
-fs::path PidFile() { return cell::config::DataDir() / "cell-up.json"; }
+fs::path PidFile() {
+  return cell::config::DataDir() / "cell-up.json";
+}
 
-bool Alive(pid_t pid) { return pid > 0 && kill(pid, 0) == 0; }
+bool Alive(pid_t pid) {
+  return pid > 0 && kill(pid, 0) == 0;
+}
 
 // The service id a process announces: "<exe>" or "<exe>/<station>".
 std::string ServiceId(const std::vector<std::string>& argv) {
@@ -99,7 +103,8 @@ void AddCellVerbs(CLI::App& app, Context& ctx) {
 
   auto* up = app.add_subcommand("up", "start a local cell from the systemd units' command lines");
   up->add_option("--stations", o->stations, "comma-separated station ids (default KT01,KT02)");
-  up->add_option("--clock", o->clock, "real or virtual machine clock")->check(CLI::IsMember({"real", "virtual"}));
+  up->add_option("--clock", o->clock, "real or virtual machine clock")
+      ->check(CLI::IsMember({"real", "virtual"}));
   up->callback([o, &ctx] {
     auto stations = Split(o->stations);
     if (stations.empty()) throw Exit{2, "--stations names no station"};
@@ -109,10 +114,12 @@ void AddCellVerbs(CLI::App& app, Context& ctx) {
       auto old = nlohmann::json::parse(in, nullptr, false);
       if (old.is_array())
         for (auto& p : old)
-          if (Alive(p["pid"].get<int>())) throw Exit{1, "a local cell is already running (cellctl down first)"};
+          if (Alive(p["pid"].get<int>()))
+            throw Exit{1, "a local cell is already running (cellctl down first)"};
     }
     fs::path bin = fs::read_symlink("/proc/self/exe").parent_path();
-    auto commands = cell::config::CellCommands(cell::config::SourceTreeDir() / "deploy/systemd", stations, bin);
+    auto commands =
+        cell::config::CellCommands(cell::config::SourceTreeDir() / "deploy/systemd", stations, bin);
     fs::path logs = cell::config::DataDir() / "logs";
     fs::create_directories(logs);
     nlohmann::json procs = nlohmann::json::array();
@@ -120,7 +127,8 @@ void AddCellVerbs(CLI::App& app, Context& ctx) {
     for (auto& c : commands) {
       fs::path log = logs / (c.unit + ".log");
       pid_t pid = Launch(c.argv, log, o->clock);
-      procs.push_back({{"unit", c.unit}, {"pid", pid}, {"service", ServiceId(c.argv)}, {"log", log.string()}});
+      procs.push_back(
+          {{"unit", c.unit}, {"pid", pid}, {"service", ServiceId(c.argv)}, {"log", log.string()}});
     }
     std::ofstream(PidFile()) << procs.dump(2);
     // Ready = every process announced itself READY on the bus, within 30 s.
@@ -130,10 +138,12 @@ void AddCellVerbs(CLI::App& app, Context& ctx) {
           missing.clear();
           for (auto& p : procs) {
             if (!Alive(p["pid"].get<int>())) {
-              missing.push_back(p["unit"].get<std::string>() + " exited: " + LastLine(p["log"].get<std::string>()));
+              missing.push_back(p["unit"].get<std::string>() +
+                                " exited: " + LastLine(p["log"].get<std::string>()));
               return true;  // no point waiting
             }
-            if (!live.Online(p["service"].get<std::string>())) missing.push_back(p["unit"].get<std::string>());
+            if (!live.Online(p["service"].get<std::string>()))
+              missing.push_back(p["unit"].get<std::string>());
           }
           return missing.empty();
         },
@@ -174,8 +184,9 @@ void AddCellVerbs(CLI::App& app, Context& ctx) {
                                                           until - std::chrono::steady_clock::now()))))
         last[s->station().to_string()] = *s;
       for (auto& [id, s] : last)
-        std::cout << id << "  exec=" << s.execution() << "  pallet=" << s.pallet() << "  program=" << s.program()
-                  << "  line=" << s.line() << "  parts=" << s.part_count() << "\n";
+        std::cout << id << "  exec=" << s.execution() << "  pallet=" << s.pallet()
+                  << "  program=" << s.program() << "  line=" << s.line() << "  parts=" << s.part_count()
+                  << "\n";
       std::cout << "--\n" << std::flush;
     }
   });

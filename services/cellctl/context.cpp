@@ -24,7 +24,8 @@ cell::program_store::Client& Context::Programs() {
 
 cell::SchedulerReply Context::Scheduler(cell::SchedulerRequest req, bus::Millis timeout) {
   if (!scheduler_)
-    scheduler_ = std::make_unique<bus::Client<cell::SchedulerRequest, cell::SchedulerReply>>(Bus(), bus::topics::kScheduler);
+    scheduler_ = std::make_unique<bus::Client<cell::SchedulerRequest, cell::SchedulerReply>>(
+        Bus(), bus::topics::kScheduler);
   auto rep = scheduler_->Call(std::move(req), timeout);
   bus::ThrowIfError(rep);
   return rep;
@@ -59,7 +60,8 @@ cell::StationReply Context::StationCommand(const std::string& station, cell::Sta
   try {
     rep = c.Call(std::move(req), bus::Millis(5000));
   } catch (const cell::Error& e) {
-    if (e.code() == cell::Errc::kUnavailable) throw cell::Error(cell::Errc::kUnavailable, "station " + station + " is not online");
+    if (e.code() == cell::Errc::kUnavailable)
+      throw cell::Error(cell::Errc::kUnavailable, "station " + station + " is not online");
     throw;
   }
   bus::ThrowIfError(rep);

@@ -58,5 +58,3 @@ void AddInspectVerbs(CLI::App& app, Context& ctx);
 void AddCellVerbs(CLI::App& app, Context& ctx);  // up, down, watch
 
 }  // namespace cellctl
-
-

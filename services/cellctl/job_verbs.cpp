@@ -21,7 +21,9 @@ nlohmann::json JobInfo(Context& ctx, int id) {
   }
 }
 
-bool Terminal(const std::string& s) { return s == "COMPLETED" || s == "FAILED" || s == "CANCELLED"; }
+bool Terminal(const std::string& s) {
+  return s == "COMPLETED" || s == "FAILED" || s == "CANCELLED";
+}
 
 }  // namespace
 
@@ -32,7 +34,8 @@ void AddJobVerbs(CLI::App& app, Context& ctx) {
     std::string name, pattern = "*";
   };
   auto o = std::make_shared<Opts>();
-  auto* job = app.add_subcommand("job", "jobs: pallets on routes, pallet runs, schedule runs")->require_subcommand(1);
+  auto* job =
+      app.add_subcommand("job", "jobs: pallets on routes, pallet runs, schedule runs")->require_subcommand(1);
 
   auto* ls = job->add_subcommand("ls", "every job");
   ls->add_flag("--json", ctx.json);
@@ -86,11 +89,13 @@ void AddJobVerbs(CLI::App& app, Context& ctx) {
       if (Terminal(state)) {
         std::cout << state << "\n";
         if (state == "COMPLETED") return;
-        throw Exit{1, "job " + std::to_string(o->id) + " " + state + ": " + j.value("reason", nlohmann::json()).dump()};
+        throw Exit{1, "job " + std::to_string(o->id) + " " + state + ": " +
+                          j.value("reason", nlohmann::json()).dump()};
       }
       if (o->timeout >= 0 && left().count() == 0) {
         std::cout << state << "\n";
-        throw Exit{3, "job " + std::to_string(o->id) + " still " + state + " after " + std::to_string(o->timeout) + " s"};
+        throw Exit{3, "job " + std::to_string(o->id) + " still " + state + " after " +
+                          std::to_string(o->timeout) + " s"};
       }
       events.WaitFor([&](const cell::JobStatus& s) { return s.job_id() == o->id; },
                      std::min(left(), bus::Millis(1000)));
@@ -115,7 +120,8 @@ void AddInspectVerbs(CLI::App& app, Context& ctx) {
   ls->add_option("PATTERN", *name);
   ls->add_flag("--json", ctx.json);
   ls->callback([name, call, &ctx] {
-    Print(ctx, nlohmann::json::parse(call(cell::INSPECTION_LIST, *name)), {"name", "station", "kind", "size"});
+    Print(ctx, nlohmann::json::parse(call(cell::INSPECTION_LIST, *name)),
+          {"name", "station", "kind", "size"});
   });
   auto* cat = ins->add_subcommand("cat", "print one record or file");
   cat->add_option("NAME", *name)->required();

@@ -39,7 +39,8 @@ std::string NameFor(const std::string& path, const std::string& content, const s
 }
 
 void PrintWarnings(const nlohmann::json& j) {
-  for (auto& w : j.value("warnings", nlohmann::json::array())) std::cerr << "warning: " << w.get<std::string>() << "\n";
+  for (auto& w : j.value("warnings", nlohmann::json::array()))
+    std::cerr << "warning: " << w.get<std::string>() << "\n";
 }
 
 }  // namespace
@@ -48,7 +49,8 @@ void AddProgramVerbs(CLI::App& app, Context& ctx) {
   auto* prog = app.add_subcommand("program", "the program store")->require_subcommand(1);
 
   struct Opts {
-    std::string file, name, node = "HOST", from = "HOST", to = "HOST", dialect, type, out, pattern = "*", a, b;
+    std::string file, name, node = "HOST", from = "HOST", to = "HOST", dialect, type, out, pattern = "*", a,
+                            b;
     bool force = false;
     uint32_t revision = 0;
   };
@@ -56,10 +58,12 @@ void AddProgramVerbs(CLI::App& app, Context& ctx) {
 
   auto* put = prog->add_subcommand("put", "store FILE (a new name, or --force for a new revision)");
   put->add_option("FILE", o->file)->required();
-  auto* name_opt = put->add_option("--name", o->name, "stored name (default: the KT-APL NAM, else the file name)");
+  auto* name_opt =
+      put->add_option("--name", o->name, "stored name (default: the KT-APL NAM, else the file name)");
   put->add_option("--node", o->node, "namespace: HOST or a station id");
   put->add_option("--dialect", o->dialect, "ktapl, okuma, emco or balt (default: detected)");
-  put->add_option("--type", o->type, "part_program, library, schedule, tool_table, fixture_offsets, inspection, data");
+  put->add_option("--type", o->type,
+                  "part_program, library, schedule, tool_table, fixture_offsets, inspection, data");
   put->add_flag("--force", o->force, "store a new revision of an existing name");
   put->add_flag("--json", ctx.json);
   put->callback([o, &ctx, name_opt] {
@@ -78,8 +82,9 @@ void AddProgramVerbs(CLI::App& app, Context& ctx) {
     if (ctx.json) {
       Print(ctx, j, {});
     } else {
-      std::cout << "stored " << o->node << ":" << j.value("name", name) << " revision " << j.value("revision", 0)
-                << " (" << j.value("size", 0) << " bytes, " << j.value("dialect", std::string()) << ")\n";
+      std::cout << "stored " << o->node << ":" << j.value("name", name) << " revision "
+                << j.value("revision", 0) << " (" << j.value("size", 0) << " bytes, "
+                << j.value("dialect", std::string()) << ")\n";
     }
   });
 
@@ -114,14 +119,16 @@ void AddProgramVerbs(CLI::App& app, Context& ctx) {
     Print(ctx, flat, {});
     std::cout << "revisions:\n";
     for (auto& r : j["revisions"])
-      std::cout << "  " << r["revision"] << "  " << r["created_at"].get<std::string>() << "  " << r["size"] << " bytes  "
-                << r["sha256"].get<std::string>().substr(0, 16) << "\n";
+      std::cout << "  " << r["revision"] << "  " << r["created_at"].get<std::string>() << "  " << r["size"]
+                << " bytes  " << r["sha256"].get<std::string>().substr(0, 16) << "\n";
   });
 
   auto* rm = prog->add_subcommand("rm", "delete a program (not when protected)");
   rm->add_option("NAME", o->name)->required();
   rm->add_option("--node", o->node);
-  rm->callback([o, &ctx] { ctx.Programs().Delete(o->node, o->name, ctx.IdempotencyKey("rm:" + o->node + ":" + o->name)); });
+  rm->callback([o, &ctx] {
+    ctx.Programs().Delete(o->node, o->name, ctx.IdempotencyKey("rm:" + o->node + ":" + o->name));
+  });
 
   auto* ls = prog->add_subcommand("ls", "list programs matching PATTERN (* and ?)");
   ls->add_option("PATTERN", o->pattern);
@@ -152,7 +159,8 @@ void AddProgramVerbs(CLI::App& app, Context& ctx) {
   }
 
   for (std::string verb : {"protect", "unprotect"}) {
-    auto* p = prog->add_subcommand(verb, verb == "protect" ? "forbid overwrite and delete" : "allow them again");
+    auto* p =
+        prog->add_subcommand(verb, verb == "protect" ? "forbid overwrite and delete" : "allow them again");
     p->add_option("NAME", o->name)->required();
     p->add_option("--node", o->node);
     p->callback([o, &ctx, verb] { ctx.Programs().Protect(o->node, o->name, verb == "protect"); });

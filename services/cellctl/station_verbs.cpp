@@ -12,16 +12,26 @@ namespace {
 
 const char* ExecutionName(cell::Execution e) {
   switch (e) {
-    case cell::EXECUTION_READY: return "READY";
-    case cell::EXECUTION_ACTIVE: return "ACTIVE";
-    case cell::EXECUTION_INTERRUPTED: return "INTERRUPTED";
-    case cell::EXECUTION_FEED_HOLD: return "FEED_HOLD";
-    case cell::EXECUTION_STOPPED: return "STOPPED";
-    case cell::EXECUTION_OPTIONAL_STOP: return "OPTIONAL_STOP";
-    case cell::EXECUTION_PROGRAM_STOPPED: return "PROGRAM_STOPPED";
-    case cell::EXECUTION_PROGRAM_COMPLETED: return "PROGRAM_COMPLETED";
-    case cell::EXECUTION_WAIT: return "WAIT";
-    default: return "UNAVAILABLE";
+    case cell::EXECUTION_READY:
+      return "READY";
+    case cell::EXECUTION_ACTIVE:
+      return "ACTIVE";
+    case cell::EXECUTION_INTERRUPTED:
+      return "INTERRUPTED";
+    case cell::EXECUTION_FEED_HOLD:
+      return "FEED_HOLD";
+    case cell::EXECUTION_STOPPED:
+      return "STOPPED";
+    case cell::EXECUTION_OPTIONAL_STOP:
+      return "OPTIONAL_STOP";
+    case cell::EXECUTION_PROGRAM_STOPPED:
+      return "PROGRAM_STOPPED";
+    case cell::EXECUTION_PROGRAM_COMPLETED:
+      return "PROGRAM_COMPLETED";
+    case cell::EXECUTION_WAIT:
+      return "WAIT";
+    default:
+      return "UNAVAILABLE";
   }
 }
 
@@ -57,7 +67,8 @@ std::pair<std::string, double> Assignment(const std::string& text) {
 }  // namespace
 
 void AddStationVerbs(CLI::App& app, Context& ctx) {
-  auto* st = app.add_subcommand("station", "stations: state, tools, variables, inputs")->require_subcommand(1);
+  auto* st =
+      app.add_subcommand("station", "stations: state, tools, variables, inputs")->require_subcommand(1);
   struct Opts {
     std::string id;
     std::vector<std::string> sets;
@@ -79,12 +90,20 @@ void AddStationVerbs(CLI::App& app, Context& ctx) {
     nlohmann::json arr = nlohmann::json::array();
     for (auto& id : cell::config::ListStations()) {
       auto cfg = cell::config::LoadStation(id);
-      bool online = live.StationOnline(id) || (by_id.count(id) && bus::WaitUntil([&] { return live.StationOnline(id); },
-                                                                                   bus::Millis(1500)));
-      nlohmann::json j = {{"id", id}, {"dialect", cfg.dialect}, {"online", online}, {"execution", "UNAVAILABLE"},
-                          {"condition", "NORMAL"}, {"alarm_code", nullptr}, {"alarm_text", nullptr},
-                          {"backlog_s", backlog.count(id) ? backlog[id] : 0.0}, {"pallet", nullptr},
-                          {"program", nullptr}, {"line", nullptr}};
+      bool online =
+          live.StationOnline(id) ||
+          (by_id.count(id) && bus::WaitUntil([&] { return live.StationOnline(id); }, bus::Millis(1500)));
+      nlohmann::json j = {{"id", id},
+                          {"dialect", cfg.dialect},
+                          {"online", online},
+                          {"execution", "UNAVAILABLE"},
+                          {"condition", "NORMAL"},
+                          {"alarm_code", nullptr},
+                          {"alarm_text", nullptr},
+                          {"backlog_s", backlog.count(id) ? backlog[id] : 0.0},
+                          {"pallet", nullptr},
+                          {"program", nullptr},
+                          {"line", nullptr}};
       if (online && by_id.count(id)) {
         auto& s = by_id[id];
         j["execution"] = ExecutionName(s.execution());
@@ -97,7 +116,8 @@ void AddStationVerbs(CLI::App& app, Context& ctx) {
       }
       arr.push_back(j);
     }
-    Print(ctx, arr, {"id", "dialect", "online", "execution", "condition", "backlog_s", "pallet", "program", "line"});
+    Print(ctx, arr,
+          {"id", "dialect", "online", "execution", "condition", "backlog_s", "pallet", "program", "line"});
   });
 
   auto* tools = st->add_subcommand("tools", "the station's tool table as it publishes it");
@@ -109,8 +129,12 @@ void AddStationVerbs(CLI::App& app, Context& ctx) {
     if (!t) throw Exit{1, "station " + o->id + " has not published a tool table (is it online?)"};
     nlohmann::json arr = nlohmann::json::array();
     for (auto& e : t->tools())
-      arr.push_back({{"tool", e.tool().to_string()}, {"socket", e.socket()}, {"length", e.length()},
-                     {"diameter", e.diameter()}, {"life_left_min", e.life_left_min()}, {"worn", e.worn()},
+      arr.push_back({{"tool", e.tool().to_string()},
+                     {"socket", e.socket()},
+                     {"length", e.length()},
+                     {"diameter", e.diameter()},
+                     {"life_left_min", e.life_left_min()},
+                     {"worn", e.worn()},
                      {"broken", e.broken()}});
     Print(ctx, arr, {"tool", "socket", "length", "diameter", "life_left_min", "worn", "broken"});
   });
@@ -135,8 +159,9 @@ void AddStationVerbs(CLI::App& app, Context& ctx) {
       min_rev = ctx.StationCommand(o->id, req).revision();
     }
     bus::Reader<cell::StationVariables> r(ctx.Bus(), bus::topics::kVariables, bus::QosKind::kState);
-    auto v = r.WaitFor([&](const cell::StationVariables& x) { return x.station() == o->id && x.revision() >= min_rev; },
-                       bus::Millis(3000));
+    auto v = r.WaitFor(
+        [&](const cell::StationVariables& x) { return x.station() == o->id && x.revision() >= min_rev; },
+        bus::Millis(3000));
     if (!v) throw Exit{1, "station " + o->id + " has not published its variables (is it online?)"};
     nlohmann::json j = nlohmann::json::object();
     for (auto& x : v->variables()) j[x.name().to_string()] = x.value();

@@ -27,22 +27,29 @@ cell::InspectionReply Handle(cell::inspection::Records& records, const cell::Ins
       const auto& x = r.run();
       nlohmann::json programs = nlohmann::json::array();
       for (auto& p : x.programs()) programs.push_back(p.to_string());
-      nlohmann::json j = {{"station", x.station().to_string()}, {"dispatch_id", x.dispatch_id()},
-                          {"job_id", x.job_id()},               {"pallet", x.pallet()},
-                          {"programs", programs},               {"completed", x.completed()},
-                          {"reason", x.reason().to_string()},   {"started", Iso(x.started_ns())},
-                          {"finished", Iso(x.finished_ns())},   {"machine_s", x.machine_s()}};
+      nlohmann::json j = {{"station", x.station().to_string()},
+                          {"dispatch_id", x.dispatch_id()},
+                          {"job_id", x.job_id()},
+                          {"pallet", x.pallet()},
+                          {"programs", programs},
+                          {"completed", x.completed()},
+                          {"reason", x.reason().to_string()},
+                          {"started", Iso(x.started_ns())},
+                          {"finished", Iso(x.finished_ns())},
+                          {"machine_s", x.machine_s()}};
       std::string name = records.StoreRun(j);
       spdlog::info("stored {}", name);
       rep.info(name);
       break;
     }
     case cell::INSPECTION_STORE_FILE:
-      rep.info(records.StoreFile(r.file().station().to_string(), r.file().file().to_string(), r.file().text().to_string()));
+      rep.info(records.StoreFile(r.file().station().to_string(), r.file().file().to_string(),
+                                 r.file().text().to_string()));
       break;
     case cell::INSPECTION_LIST: {
       std::string s = records.List(r.name().to_string().empty() ? "*" : r.name().to_string()).dump();
-      if (s.size() > 65536) throw cell::Error(cell::Errc::kFailedPrecondition, "listing too large; give a pattern");
+      if (s.size() > 65536)
+        throw cell::Error(cell::Errc::kFailedPrecondition, "listing too large; give a pattern");
       rep.info(s);
       break;
     }
@@ -67,7 +74,8 @@ int main() {
     cell::bus::Participant bus("cell-inspection-writer");
     cell::health::Announcer health(bus, "cell-inspection-writer");
     cell::bus::Server<cell::InspectionRequest, cell::InspectionReply> server(
-        bus, cell::bus::topics::kInspection, [&](const cell::InspectionRequest& r) { return Handle(records, r); });
+        bus, cell::bus::topics::kInspection,
+        [&](const cell::InspectionRequest& r) { return Handle(records, r); });
     health.Set(cell::SERVICE_READY);
     daemon.NotifyReady("writing records");
     spdlog::info("ready on domain {}", bus.domain());

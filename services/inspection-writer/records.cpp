@@ -51,7 +51,9 @@ void WriteDurable(const fs::path& path, const std::string& content) {
   FsyncPath(path.parent_path(), O_RDONLY | O_DIRECTORY);
 }
 
-Records::Records(fs::path dir) : dir_(std::move(dir)) { fs::create_directories(dir_); }
+Records::Records(fs::path dir) : dir_(std::move(dir)) {
+  fs::create_directories(dir_);
+}
 
 std::string Records::StoreRun(const nlohmann::json& r) {
   for (const char* k : {"station", "dispatch_id", "pallet", "programs", "started", "finished", "machine_s"})
@@ -77,7 +79,9 @@ nlohmann::json Records::List(const std::string& pattern) const {
     if (!Match(pattern.c_str(), rel.c_str())) continue;
     bool run = rel.rfind("run-", 0) == 0;
     std::string station = run ? rel.substr(4, rel.find('-', 4) - 4) : rel.substr(0, rel.find('/'));
-    rows.push_back({{"name", rel}, {"station", station}, {"kind", run ? "run" : "inspection"},
+    rows.push_back({{"name", rel},
+                    {"station", station},
+                    {"kind", run ? "run" : "inspection"},
                     {"size", static_cast<long>(e.file_size())}});
   }
   std::sort(rows.begin(), rows.end(), [](auto& a, auto& b) { return a["name"] < b["name"]; });

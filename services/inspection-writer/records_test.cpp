@@ -16,8 +16,13 @@ fs::path TempDir() {
   return mkdtemp(t.data());
 }
 nlohmann::json RunRecord(long id) {
-  return {{"station", "KT01"}, {"dispatch_id", id}, {"pallet", 3},       {"programs", {"PUMP341"}},
-          {"started", "2026-11-22T03:00:00Z"},      {"finished", "2026-11-22T03:01:00Z"}, {"machine_s", 41.5}};
+  return {{"station", "KT01"},
+          {"dispatch_id", id},
+          {"pallet", 3},
+          {"programs", {"PUMP341"}},
+          {"started", "2026-11-22T03:00:00Z"},
+          {"finished", "2026-11-22T03:01:00Z"},
+          {"machine_s", 41.5}};
 }
 }  // namespace
 

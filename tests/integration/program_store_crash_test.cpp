@@ -43,7 +43,8 @@ class ProgramStoreCrashTest : public ::testing::Test {
     ++starts_;
     store_ = std::make_unique<Process>(
         std::vector<std::string>{cell::testing::BinDir() + "/cell-program-store"},
-        std::map<std::string, std::string>{{"CELL_DATA_DIR", dir_ + "/data"}, {"CELL_PROGRAM_STORE_STREAM_IDLE_S", "2"}},
+        std::map<std::string, std::string>{{"CELL_DATA_DIR", dir_ + "/data"},
+                                           {"CELL_PROGRAM_STORE_STREAM_IDLE_S", "2"}},
         "", dir_ + "/store" + std::to_string(starts_) + ".err");
     // Ready when a listing is answered (bounded).
     bool ready = cell::bus::WaitUntil(
@@ -58,7 +59,9 @@ class ProgramStoreCrashTest : public ::testing::Test {
         std::chrono::seconds(30));
     ASSERT_TRUE(ready && store_->Running()) << StoreLog();
   }
-  std::string StoreLog() { return cell::testing::ReadFile(dir_ + "/store" + std::to_string(starts_) + ".err"); }
+  std::string StoreLog() {
+    return cell::testing::ReadFile(dir_ + "/store" + std::to_string(starts_) + ".err");
+  }
   std::map<std::string, std::string> Acks(const std::string& out) {
     std::map<std::string, std::string> acks;
     std::istringstream in(cell::testing::ReadFile(out));
@@ -88,7 +91,8 @@ TEST_F(ProgramStoreCrashTest, KilledStoreKeepsEveryAcknowledgedPutAndNoPartialOn
                   std::to_string(kSize)},
                  {}, out, dir_ + "/stream.err");
   auto wait_acks = [&](size_t n) {
-    return cell::bus::WaitUntil([&] { return Acks(out).size() >= n || !writer.Running(); }, std::chrono::seconds(30));
+    return cell::bus::WaitUntil([&] { return Acks(out).size() >= n || !writer.Running(); },
+                                std::chrono::seconds(30));
   };
   for (size_t kill_after : {25u, 60u}) {
     ASSERT_TRUE(wait_acks(kill_after));
@@ -150,7 +154,8 @@ TEST_F(ProgramStoreCrashTest, ClientKilledMidChunkedPutLeavesStoreUnchanged) {
   EXPECT_EQ(client_->List("HOST", "*"), before);
 
   // The abandoned stream expires (idle limit 2 s here) and its scratch file goes.
-  ASSERT_TRUE(cell::bus::WaitUntil([&] { return ScratchFiles() == 0; }, std::chrono::seconds(15))) << StoreLog();
+  ASSERT_TRUE(cell::bus::WaitUntil([&] { return ScratchFiles() == 0; }, std::chrono::seconds(15)))
+      << StoreLog();
   EXPECT_NE(StoreLog().find("abandoned upload stream"), std::string::npos) << StoreLog();
   EXPECT_EQ(client_->List("HOST", "*"), before);
   EXPECT_FALSE(client_->Get("HOST", "HALF DONE").has_value());

@@ -175,8 +175,8 @@ TEST_F(ProgramStoreTest, PutNamesFromNamForceRevisionsGetShowAndEvents) {
 
   // --name overrides NAM; a name with spaces and ';' in a station namespace.
   Write("fixture.txt", "(FXC,H1 I0 X-.0012 Y.0030)\n");
-  json fxt = json::parse(Ok({"program", "put", *dir_ + "/fixture.txt", "--name", "PALLET38;FXT", "--node", "KT01",
-                             "--json"}));
+  json fxt = json::parse(
+      Ok({"program", "put", *dir_ + "/fixture.txt", "--name", "PALLET38;FXT", "--node", "KT01", "--json"}));
   EXPECT_EQ(fxt["name"], "PALLET38;FXT");
   EXPECT_EQ(fxt["type"], "fixture_offsets");
   EXPECT_EQ(Ok({"program", "get", "PALLET38;FXT", "--node", "KT01"}), "(FXC,H1 I0 X-.0012 Y.0030)\n");
@@ -279,9 +279,9 @@ TEST_F(ProgramStoreTest, ImportAndExportDirectories) {
   std::string in = *dir_ + "/import", out = *dir_ + "/export";
   fs::create_directories(in);
   std::map<std::string, std::string> files = {
-      {"a.apl", kGear},                                             // stored as its NAM
-      {"PALLET12;FXT", "(FXC,H2 X0)\n"},                            // ';' in a file name
-      {"O1000.MIN", "O1000\nG0 X10. Z5.\nM02\n"},                   // Okuma by content in an OK01 namespace
+      {"a.apl", kGear},                            // stored as its NAM
+      {"PALLET12;FXT", "(FXC,H2 X0)\n"},           // ';' in a file name
+      {"O1000.MIN", "O1000\nG0 X10. Z5.\nM02\n"},  // Okuma by content in an OK01 namespace
   };
   for (auto& [n, c] : files) std::ofstream(in + "/" + n, std::ios::binary) << c;
   std::string log = Ok({"program", "import", in, "--node", "OK01"});
@@ -297,12 +297,13 @@ TEST_F(ProgramStoreTest, ImportAndExportDirectories) {
 TEST_F(ProgramStoreTest, BadInputIsRefusedWithOneLineAndChangesNothing) {
   std::string f = Write("bad.apl", kGear);
   ExpectRefused({"program", "put", f, "--name", ""}, "empty");
-  ExpectRefused({"program", "put", f, "--name", std::string(33, 'A')}, "32");          // KT-APL limit
-  ExpectRefused({"program", "put", f, "--name", std::string(129, 'A')}, "128");        // the wire bound
+  ExpectRefused({"program", "put", f, "--name", std::string(33, 'A')}, "32");    // KT-APL limit
+  ExpectRefused({"program", "put", f, "--name", std::string(129, 'A')}, "128");  // the wire bound
   ExpectRefused({"program", "put", f, "--name", "A*B"}, "*");
   ExpectRefused({"program", "put", f, "--name", "A/B"}, "/");
   ExpectRefused({"program", "put", f, "--name", "A,B"}, ",");
-  ExpectRefused({"program", "put", Write("bin.dat", std::string("AB\0CD\n", 6)), "--name", "BIN"}, "not text");
+  ExpectRefused({"program", "put", Write("bin.dat", std::string("AB\0CD\n", 6)), "--name", "BIN"},
+                "not text");
   ExpectRefused({"program", "put", f, "--node", "KT99"}, "KT99");
   ExpectRefused({"program", "get", "GEAR HOUSING", "--node", "KT99"}, "KT99");
   ExpectRefused({"program", "ls", "--node", "KT99"}, "KT99");

@@ -27,10 +27,14 @@ int main(int argc, char** argv) {
   std::string big;
   for (int i = 1; i + 1 < argc; i += 2) {
     std::string a = argv[i], v = argv[i + 1];
-    if (a == "--count") count = std::atoi(v.c_str());
-    else if (a == "--size") size = std::strtoull(v.c_str(), nullptr, 10);
-    else if (a == "--big") big = v;
-    else if (a == "--chunk-delay-ms") delay_ms = std::atoi(v.c_str());
+    if (a == "--count")
+      count = std::atoi(v.c_str());
+    else if (a == "--size")
+      size = std::strtoull(v.c_str(), nullptr, 10);
+    else if (a == "--big")
+      big = v;
+    else if (a == "--chunk-delay-ms")
+      delay_ms = std::atoi(v.c_str());
     else {
       std::fprintf(stderr, "unknown option %s\n", a.c_str());
       return 2;
@@ -50,7 +54,8 @@ int main(int argc, char** argv) {
       size_t off = i * ps::kChunkBytes, len = std::min(ps::kChunkBytes, content.size() - off);
       req.chunk_index(static_cast<uint32_t>(i));
       req.last_chunk(i + 1 == n);
-      req.data().assign(content.begin() + static_cast<long>(off), content.begin() + static_cast<long>(off + len));
+      req.data().assign(content.begin() + static_cast<long>(off),
+                        content.begin() + static_cast<long>(off + len));
       auto rep = c.Call(req, cell::bus::Millis(30000));
       cell::bus::ThrowIfError(rep);
       std::printf("CHUNK %zu\n", i);

@@ -8,7 +8,9 @@
 
 namespace cell::testing {
 
-inline std::string StreamName(int i) { return fmt::format("S{:06d}", i); }
+inline std::string StreamName(int i) {
+  return fmt::format("S{:06d}", i);
+}
 
 // Plain text (a data file: no dialect needed in HOST) of about `size` bytes, different per name.
 inline std::string StreamContent(const std::string& name, size_t size) {

@@ -53,7 +53,8 @@ cell::MotionSegment End() {
 }
 
 // A polygon approximating a circle of radius r round (cx, cy) at height z: n blended lines.
-void Polygon(std::vector<cell::MotionSegment>& p, double cx, double cy, double z, double r, int n, double feed) {
+void Polygon(std::vector<cell::MotionSegment>& p, double cx, double cy, double z, double r, int n,
+             double feed) {
   for (int i = 1; i <= n; ++i) {
     double a = 2 * M_PI * i / n;
     p.push_back(Seg(cell::SEGMENT_LINEAR, cx + r * std::cos(a), cy + r * std::sin(a), z, feed));
@@ -66,9 +67,9 @@ struct RunResult {
   uint64_t max_outstanding = 0;  // sent - completed, as the producer saw it
   bool credits_respected = true;
   bool completed_in_order = true;
-  bool held = false;             // the slow-consumer pause happened
-  uint64_t held_completed = 0;   // completed_seq reported while the producer was not reading
-  uint64_t held_credit = 0;      // the credit the producer was held at
+  bool held = false;            // the slow-consumer pause happened
+  uint64_t held_completed = 0;  // completed_seq reported while the producer was not reading
+  uint64_t held_credit = 0;     // the credit the producer was held at
   bool timed_out = false;
 };
 
@@ -114,7 +115,8 @@ class Interpreter {
   std::optional<cell::AxisState> NextAxes(const std::string& station,
                                           const std::function<bool(const cell::AxisState&)>& pred,
                                           std::chrono::milliseconds timeout = 10s) {
-    return axes_.WaitFor([&](const cell::AxisState& a) { return a.station().to_string() == station && pred(a); }, timeout);
+    return axes_.WaitFor(
+        [&](const cell::AxisState& a) { return a.station().to_string() == station && pred(a); }, timeout);
   }
   void DrainAxes() {
     while (axes_.Take(0ms)) {
@@ -130,7 +132,8 @@ class Interpreter {
     int same = 0;
     auto deadline = Clock::now() + 10s;
     while (Clock::now() < deadline) {
-      auto a = NextAxes(station, [](const cell::AxisState&) { return true; }, 1s);
+      auto a = NextAxes(
+          station, [](const cell::AxisState&) { return true; }, 1s);
       if (!a) continue;
       if (t && a->machine_s() == *t) {
         if (++same >= 2) return true;
@@ -307,7 +310,8 @@ int32_t ServoDds::run_id_ = 100;
 void ExpectClean(const RunResult& r, size_t n) {
   ASSERT_FALSE(r.timed_out) << "run did not complete; sent " << r.sent;
   ASSERT_TRUE(r.last.has_value());
-  EXPECT_FALSE(r.last->alarm()) << r.last->alarm_code().to_string() << " " << r.last->alarm_text().to_string();
+  EXPECT_FALSE(r.last->alarm()) << r.last->alarm_code().to_string() << " "
+                                << r.last->alarm_text().to_string();
   EXPECT_EQ(r.last->completed_seq(), n);
   EXPECT_TRUE(r.credits_respected);
   EXPECT_TRUE(r.completed_in_order);
@@ -458,7 +462,8 @@ TEST_F(ServoDds, SoftLimitAlarmOverDdsWithoutMotion) {
   ASSERT_FALSE(r.timed_out);
   ASSERT_TRUE(r.last && r.last->alarm()) << "no alarm";
   EXPECT_EQ(r.last->alarm_code().to_string(), "500") << r.last->alarm_text().to_string();
-  EXPECT_NE(r.last->alarm_text().to_string().find("soft limit"), std::string::npos) << r.last->alarm_text().to_string();
+  EXPECT_NE(r.last->alarm_text().to_string().find("soft limit"), std::string::npos)
+      << r.last->alarm_text().to_string();
   EXPECT_LE(r.last->completed_seq(), 1u);
   // The alarm stays 500 (later segments of the run, refused by the alarmed machine, do not replace it).
   ASSERT_TRUE(bus_->WaitIdle("KT01"));
@@ -498,7 +503,8 @@ TEST_F(ServoDds, ToolChangeUsesTheToolTableTopic) {
   ASSERT_FALSE(r.timed_out);
   ASSERT_TRUE(r.last && r.last->alarm()) << "no alarm";
   EXPECT_EQ(r.last->alarm_code().to_string(), "600") << r.last->alarm_text().to_string();
-  EXPECT_NE(r.last->alarm_text().to_string().find("1002"), std::string::npos) << r.last->alarm_text().to_string();
+  EXPECT_NE(r.last->alarm_text().to_string().find("1002"), std::string::npos)
+      << r.last->alarm_text().to_string();
 }
 
 // (e) A probe move against the part model on the table returns a ProbeResult with contact.

@@ -45,12 +45,13 @@ class StationCorpus : public ::testing::Test {
     return json::parse(r.out, nullptr, false);
   }
   void Put(const std::string& corpus_case, const std::string& name) {
-    auto r = Ctl({"program", "put", SourceDir() + kCorpus + corpus_case + ".ktapl", "--name", name, "--dialect",
-                  "ktapl"});
+    auto r = Ctl({"program", "put", SourceDir() + kCorpus + corpus_case + ".ktapl", "--name", name,
+                  "--dialect", "ktapl"});
     ASSERT_EQ(r.code, 0) << corpus_case << ": " << r.out << r.err;
   }
   // Maps the programs to pallet P, runs it on KT01 and waits for the end; returns the job id.
-  std::string RunPallet(const std::string& pallet, const std::vector<std::string>& names, int expect_wait_code) {
+  std::string RunPallet(const std::string& pallet, const std::vector<std::string>& names,
+                        int expect_wait_code) {
     std::vector<std::string> set = {"pallet", "set", pallet};
     set.insert(set.end(), names.begin(), names.end());
     auto s = Ctl(set);
@@ -71,11 +72,13 @@ TEST_F(StationCorpus, PositiveProgramsWithMotionComplete) {
   // Arcs (absolute, full circle, helix, R with both signs), DFS/CLS with a run count and the App. D G82
   // cycle from the shipped library; all inside KT01's travel (X -5..800, Y -5..700, Z -5..750 mm) and
   // without tools the station does not have (the corpus's 8-9 and 9-4 programs leave that envelope).
-  const std::vector<std::pair<std::string, std::string>> cases = {
-      {"p2_5_25_arc_cw_absolute", "ARC25"}, {"p2_5_27_full_circle", "CIRC27"},
-      {"p2_5_32_helix", "HELIX32"},         {"p2_5_33_r_arc", "RARC33"},
-      {"p2_5_34_r_sign", "RSIGN34"},        {"p1_e23_cls_run_count", "CLSE23"},
-      {"p1_e10_g82", "G82E10"}};
+  const std::vector<std::pair<std::string, std::string>> cases = {{"p2_5_25_arc_cw_absolute", "ARC25"},
+                                                                  {"p2_5_27_full_circle", "CIRC27"},
+                                                                  {"p2_5_32_helix", "HELIX32"},
+                                                                  {"p2_5_33_r_arc", "RARC33"},
+                                                                  {"p2_5_34_r_sign", "RSIGN34"},
+                                                                  {"p1_e23_cls_run_count", "CLSE23"},
+                                                                  {"p1_e10_g82", "G82E10"}};
   std::vector<std::string> names;
   for (auto& [c, n] : cases) {
     Put(c, n);

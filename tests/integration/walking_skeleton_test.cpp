@@ -22,9 +22,10 @@ class Cell : public ::testing::Test {
     ASSERT_EQ(r.code, 0) << r.out << r.err;
     // A KT-APL program with the FMS heading (manual: NAM, UTL right after it, UCY after UTL).
     prog_ = cell_.data_dir() + "/pump.apl";
-    std::ofstream(prog_) << "%\n(NAM,PUMP341)\n(UTL,1001,1002)\n(UCY,90)\nN10 G71 G90 G01\nN20 T1001 M06\n"
-                            "N30 X0 Y0 Z100. F0\nN40 X100. Y50. Z0 F1000.\nN50 G02 X150. Y100. I100. J100. F500.\n"
-                            "N60 G00 X0 Y0 Z100. F0\nN70 M30\n%\n";
+    std::ofstream(prog_)
+        << "%\n(NAM,PUMP341)\n(UTL,1001,1002)\n(UCY,90)\nN10 G71 G90 G01\nN20 T1001 M06\n"
+           "N30 X0 Y0 Z100. F0\nN40 X100. Y50. Z0 F1000.\nN50 G02 X150. Y100. I100. J100. F500.\n"
+           "N60 G00 X0 Y0 Z100. F0\nN70 M30\n%\n";
   }
   void TearDown() override {
     auto r = cell_.Down();
@@ -85,7 +86,8 @@ TEST_F(Cell, ProgramPutToCompletedJobThroughAllSixProcesses) {
   EXPECT_EQ(shown["decisions"][0]["winner"], "KT01");
 
   // The durable run record the inspection writer persisted.
-  auto rec = Ctl({"inspect", "cat", "run-KT01-" + std::to_string(shown["decisions"][0].value("dispatch_id", 1)) + ".json"});
+  auto rec = Ctl({"inspect", "cat",
+                  "run-KT01-" + std::to_string(shown["decisions"][0].value("dispatch_id", 1)) + ".json"});
   if (rec.code != 0) {  // dispatch ids are the scheduler's; find the record by listing
     auto list = CtlJson({"inspect", "ls", "--json"});
     ASSERT_EQ(list.size(), 1u);
@@ -103,9 +105,7 @@ TEST_F(Cell, ProgramPutToCompletedJobThroughAllSixProcesses) {
 }
 
 TEST_F(Cell, BadInputGetsOneLineReasonAndNonZeroExit) {
-  auto one_line = [](const RunResult& r) {
-    return !r.err.empty() && r.err.find('\n') == r.err.size() - 1;
-  };
+  auto one_line = [](const RunResult& r) { return !r.err.empty() && r.err.find('\n') == r.err.size() - 1; };
   // Unknown station.
   auto a = Ctl({"pallet", "run", "3", "--station", "KT99"});
   EXPECT_NE(a.code, 0);

@@ -90,7 +90,7 @@ int main(int argc, char** argv) {
     for (int k = 0; k < 3; ++k) {
       cell::StationStatus s;
       cell::idl::Fill(s, my_seed);
-      s.station(cell::idl::FillString(16, k) .substr(0, 15) + std::to_string(k));
+      s.station(cell::idl::FillString(16, k).substr(0, 15) + std::to_string(k));
       s.line(rev * 100 + k);
       late_w.Write(s);
     }
@@ -100,22 +100,26 @@ int main(int argc, char** argv) {
 #define CELL_INTEROP_ADD(T) ex.push_back(std::make_unique<Exchange<T>>(p, out, in, my_seed, peer_seed));
   CELL_IDL_FOR_EACH_TOPIC_TYPE(CELL_INTEROP_ADD)
 #undef CELL_INTEROP_ADD
-  if (!WaitUntil([&] {
-        for (auto& e : ex)
-          if (!e->Matched()) return false;
-        return true;
-      }, kTimeout)) {
+  if (!WaitUntil(
+          [&] {
+            for (auto& e : ex)
+              if (!e->Matched()) return false;
+            return true;
+          },
+          kTimeout)) {
     for (auto& e : ex)
       if (!e->Matched()) std::printf("NOT MATCHED %s\n", e->Name().c_str());
     return 1;
   }
   std::printf("%s: matched %zu topic types\n", me.c_str(), ex.size());
   for (auto& e : ex) e->Send();
-  bool all = WaitUntil([&] {
-    bool done = true;
-    for (auto& e : ex) done = e->Received() && done;
-    return done;
-  }, kTimeout);
+  bool all = WaitUntil(
+      [&] {
+        bool done = true;
+        for (auto& e : ex) done = e->Received() && done;
+        return done;
+      },
+      kTimeout);
   int failures = 0;
   for (auto& e : ex) {
     bool got = e->Received();
@@ -139,7 +143,8 @@ int main(int argc, char** argv) {
     std::string key = cell::idl::FillString(16, k).substr(0, 15) + std::to_string(k);
     late_ok = late_ok && last.count(key) && last[key] == 200 + k;
   }
-  std::printf("%s %s late-joiner keyed by string (%zu keys)\n", late_ok ? "OK" : "MISMATCH", me.c_str(), last.size());
+  std::printf("%s %s late-joiner keyed by string (%zu keys)\n", late_ok ? "OK" : "MISMATCH", me.c_str(),
+              last.size());
   if (!late_ok) ++failures;
 
   // 4. Done handshake.

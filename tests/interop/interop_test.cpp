@@ -20,11 +20,12 @@ TEST(Interop, FastDdsAndCycloneExchangeEveryTopicType) {
   EXPECT_EQ(*a, 0) << fo << ReadFile(dir + "/fast.err");
   EXPECT_EQ(*b, 0) << co << ReadFile(dir + "/cyc.err");
   // Every topic type must be reported OK by both sides (the list is generated from the IDL).
-#define CELL_EXPECT_OK(T)                                                                  \
-  EXPECT_NE(fo.find(std::string("OK fastdds ") + cell::idl::TypeMeta<T>::kName + "\n"),   \
-            std::string::npos) << "Cyclone -> Fast DDS failed for " << #T;                  \
-  EXPECT_NE(co.find(std::string("OK cyclonedds ") + cell::idl::TypeMeta<T>::kName + "\n"), \
-            std::string::npos) << "Fast DDS -> Cyclone failed for " << #T;
+#define CELL_EXPECT_OK(T)                                                                                  \
+  EXPECT_NE(fo.find(std::string("OK fastdds ") + cell::idl::TypeMeta<T>::kName + "\n"), std::string::npos) \
+      << "Cyclone -> Fast DDS failed for " << #T;                                                          \
+  EXPECT_NE(co.find(std::string("OK cyclonedds ") + cell::idl::TypeMeta<T>::kName + "\n"),                 \
+            std::string::npos)                                                                             \
+      << "Fast DDS -> Cyclone failed for " << #T;
   CELL_IDL_FOR_EACH_TOPIC_TYPE(CELL_EXPECT_OK)
 #undef CELL_EXPECT_OK
   EXPECT_NE(fo.find("OK fastdds late-joiner keyed by string (3 keys)"), std::string::npos) << fo;

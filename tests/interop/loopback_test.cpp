@@ -18,7 +18,9 @@ using namespace cell::testing;
 
 namespace {
 
-int Sh(const std::string& cmd) { return std::system((cmd + " >/dev/null 2>&1").c_str()); }
+int Sh(const std::string& cmd) {
+  return std::system((cmd + " >/dev/null 2>&1").c_str());
+}
 
 class NetNs {
  public:
@@ -66,8 +68,10 @@ TEST(Loopback, NoDdsPacketLeavesLoopbackByDefault) {
   std::string dir = MakeTempDir("cell-lo-");
   long before = ns.TxPackets();
   ASSERT_GE(before, 0);
-  Process fast({"/usr/sbin/ip", "netns", "exec", ns.name(), peer, "fastdds"}, {}, dir + "/f.out", dir + "/f.err");
-  Process cyc({"/usr/sbin/ip", "netns", "exec", ns.name(), peer, "cyclonedds"}, {}, dir + "/c.out", dir + "/c.err");
+  Process fast({"/usr/sbin/ip", "netns", "exec", ns.name(), peer, "fastdds"}, {}, dir + "/f.out",
+               dir + "/f.err");
+  Process cyc({"/usr/sbin/ip", "netns", "exec", ns.name(), peer, "cyclonedds"}, {}, dir + "/c.out",
+              dir + "/c.err");
   auto a = fast.Wait(std::chrono::seconds(60));
   auto b = cyc.Wait(std::chrono::seconds(30));
   ASSERT_TRUE(a && b);
@@ -77,8 +81,8 @@ TEST(Loopback, NoDdsPacketLeavesLoopbackByDefault) {
 
   // Positive control: a Cyclone participant configured for the veth interface is seen.
   long mid = ns.TxPackets();
-  std::string xml = "<CycloneDDS><Domain Id=\"any\"><General><Interfaces><NetworkInterface name=\"" + ns.veth() +
-                    "a\"/></Interfaces></General></Domain></CycloneDDS>";
+  std::string xml = "<CycloneDDS><Domain Id=\"any\"><General><Interfaces><NetworkInterface name=\"" +
+                    ns.veth() + "a\"/></Interfaces></General></Domain></CycloneDDS>";
   Process ctl({"/usr/sbin/ip", "netns", "exec", ns.name(), peer, "cyclonedds"},
               {{"CYCLONEDDS_URI", xml}, {"CELL_DOMAIN", "99"}}, dir + "/ctl.out", dir + "/ctl.err");
   bool seen = false;

@@ -7,7 +7,8 @@
 
 namespace cell::testing {
 
-LocalCell::LocalCell(const std::string& prefix) : data_(MakeTempDir(prefix)), env_{{"CELL_DATA_DIR", data_}} {}
+LocalCell::LocalCell(const std::string& prefix)
+    : data_(MakeTempDir(prefix)), env_{{"CELL_DATA_DIR", data_}} {}
 
 LocalCell::~LocalCell() {
   if (up_) Down();

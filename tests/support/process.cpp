@@ -75,7 +75,9 @@ void Process::Signal(int sig) {
   if (pid_ > 0 && !status_) kill(pid_, sig);
 }
 
-bool Process::Running() { return !Wait(std::chrono::milliseconds(0)).has_value(); }
+bool Process::Running() {
+  return !Wait(std::chrono::milliseconds(0)).has_value();
+}
 
 std::string ReadFile(const std::string& path) {
   std::ifstream in(path);
@@ -85,19 +87,18 @@ std::string ReadFile(const std::string& path) {
 }
 
 std::string MakeTempDir(const std::string& prefix) {
-  std::string tmpl = (std::getenv("TMPDIR") ? std::string(std::getenv("TMPDIR")) : "/tmp") + "/" + prefix + "XXXXXX";
+  std::string tmpl =
+      (std::getenv("TMPDIR") ? std::string(std::getenv("TMPDIR")) : "/tmp") + "/" + prefix + "XXXXXX";
   if (!mkdtemp(tmpl.data())) throw std::runtime_error("mkdtemp failed");
   return tmpl;
 }
 
 RunResult RunCommand(std::vector<std::string> argv, const std::map<std::string, std::string>& env,
-              std::chrono::milliseconds timeout, const std::string& stdin_text) {
+                     std::chrono::milliseconds timeout, const std::string& stdin_text) {
   std::string dir = MakeTempDir("cell-run-");
   std::map<std::string, std::string> e = env;
   std::string in_path = dir + "/stdin";
-  {
-    std::ofstream(in_path) << stdin_text;
-  }
+  { std::ofstream(in_path) << stdin_text; }
   // stdin from a file: commands under test never wait on the terminal.
   std::vector<std::string> sh = {"/bin/sh", "-c", "exec \"$0\" \"$@\" < " + in_path};
   sh.insert(sh.end(), argv.begin(), argv.end());
@@ -108,7 +109,8 @@ RunResult RunCommand(std::vector<std::string> argv, const std::map<std::string, 
   r.out = ReadFile(dir + "/out");
   r.err = ReadFile(dir + "/err");
   std::string rm = "rm -rf '" + dir + "'";
-  if (std::system(rm.c_str()) != 0) { /* best effort */ }
+  if (std::system(rm.c_str()) != 0) { /* best effort */
+  }
   return r;
 }
 

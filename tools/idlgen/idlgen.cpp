@@ -63,8 +63,15 @@ struct Lexer {
     int line = 1;
     for (size_t p = 0; p < text.size();) {
       char c = text[p];
-      if (c == '\n') { ++line; ++p; continue; }
-      if (std::isspace(static_cast<unsigned char>(c))) { ++p; continue; }
+      if (c == '\n') {
+        ++line;
+        ++p;
+        continue;
+      }
+      if (std::isspace(static_cast<unsigned char>(c))) {
+        ++p;
+        continue;
+      }
       if (c == '/' && p + 1 < text.size() && text[p + 1] == '/') {
         while (p < text.size() && text[p] != '\n') ++p;
         continue;
@@ -115,8 +122,16 @@ struct Lexer {
   }
 };
 
-const std::set<std::string> kPrims = {"boolean", "octet", "char", "short", "long", "float", "double",
-                                      "unsigned short", "unsigned long", "long long",
+const std::set<std::string> kPrims = {"boolean",
+                                      "octet",
+                                      "char",
+                                      "short",
+                                      "long",
+                                      "float",
+                                      "double",
+                                      "unsigned short",
+                                      "unsigned long",
+                                      "long long",
                                       "unsigned long long"};
 
 Type ParseType(Lexer& lx) {
@@ -202,8 +217,10 @@ void ParseFile(const std::string& path) {
       lx.expect(";");
       g_enums[e.name] = e;
     } else if (w == "@final" || w == "struct") {
-      if (w == "@final") lx.expect("struct");
-      else Fail(path, l, "struct without @final: every cell type must be @final (DESIGN.md §3)");
+      if (w == "@final")
+        lx.expect("struct");
+      else
+        Fail(path, l, "struct without @final: every cell type must be @final (DESIGN.md §3)");
       Struct s;
       s.name = lx.next();
       s.file = path;
@@ -213,8 +230,10 @@ void ParseFile(const std::string& path) {
         while (lx.peek().size() > 1 && lx.peek()[0] == '@') {
           int al = lx.line();
           std::string a = lx.next();
-          if (a == "@key") m.key = true;
-          else Fail(path, al, "annotation " + a + " is not allowed (only @key)");
+          if (a == "@key")
+            m.key = true;
+          else
+            Fail(path, al, "annotation " + a + " is not allowed (only @key)");
         }
         int ml = lx.line();
         m.type = ParseType(lx);
@@ -243,16 +262,23 @@ void ParseFile(const std::string& path) {
 }
 
 std::string CxxPrim(const std::string& p) {
-  static const std::map<std::string, std::string> m = {
-      {"boolean", "bool"},          {"octet", "uint8_t"},          {"char", "char"},
-      {"short", "int16_t"},         {"long", "int32_t"},           {"float", "float"},
-      {"double", "double"},         {"unsigned short", "uint16_t"}, {"unsigned long", "uint32_t"},
-      {"long long", "int64_t"},     {"unsigned long long", "uint64_t"}};
+  static const std::map<std::string, std::string> m = {{"boolean", "bool"},
+                                                       {"octet", "uint8_t"},
+                                                       {"char", "char"},
+                                                       {"short", "int16_t"},
+                                                       {"long", "int32_t"},
+                                                       {"float", "float"},
+                                                       {"double", "double"},
+                                                       {"unsigned short", "uint16_t"},
+                                                       {"unsigned long", "uint32_t"},
+                                                       {"long long", "int64_t"},
+                                                       {"unsigned long long", "uint64_t"}};
   return m.at(p);
 }
 
 // Emits an expression that produces a non-default value of a scalar kind.
-std::string FillScalar(const std::string& kind, const std::string& name, long bound, const std::string& salt) {
+std::string FillScalar(const std::string& kind, const std::string& name, long bound,
+                       const std::string& salt) {
   if (kind == "prim") {
     if (name == "boolean") return "true";
     if (name == "double" || name == "float")
@@ -330,8 +356,10 @@ int main(int argc, char** argv) {
         if (m.type.elem_kind == "struct")
           meta << "  for (const auto& e : " << acc << ") if (!CheckBounds(e, why)) return false;\n";
       } else if (m.type.kind == "struct") {
-        if (m.array) meta << "  for (const auto& e : " << acc << ") if (!CheckBounds(e, why)) return false;\n";
-        else meta << "  if (!CheckBounds(" << acc << ", why)) return false;\n";
+        if (m.array)
+          meta << "  for (const auto& e : " << acc << ") if (!CheckBounds(e, why)) return false;\n";
+        else
+          meta << "  if (!CheckBounds(" << acc << ", why)) return false;\n";
       }
     }
     meta << "  return true;\n}\n";
@@ -344,14 +372,16 @@ int main(int argc, char** argv) {
          << "::" << s.name << "\";\n  static constexpr bool kKeyed = " << (keyed ? "true" : "false")
          << ";\n};\n";
   }
-  meta << "\n}  // namespace cell::idl\n\n// Every struct that is not only a member of another: the topic types.\n"
+  meta << "\n}  // namespace cell::idl\n\n// Every struct that is not only a member of another: the topic "
+          "types.\n"
           "#define CELL_IDL_FOR_EACH_TOPIC_TYPE(X) \\\n";
   for (auto& s : g_structs)
     if (!nested.count(s.name)) meta << "  X(" << M << "::" << s.name << ") \\\n";
   meta << "\n";
 
   std::ostringstream fill;
-  fill << "// Generated by cell-idlgen. Test helper: every field non-default, strings and sequences at bound.\n"
+  fill << "// Generated by cell-idlgen. Test helper: every field non-default, strings and sequences at "
+          "bound.\n"
           "#pragma once\n#include <string>\n#include \"meta.h\"\n\nnamespace cell::idl {\n\n"
           "inline std::string FillString(long bound, long seed) {\n  std::string s;\n"
           "  for (long i = 0; i < bound; ++i) s.push_back(static_cast<char>('a' + (seed + i) % 26));\n"
@@ -377,10 +407,11 @@ int main(int argc, char** argv) {
         fill << "  }\n";
       } else if (m.array) {
         fill << "  for (size_t i = 0; i < " << m.array << "; ++i) ";
-        if (m.type.kind == "struct") fill << "Fill(" << acc << "[i], seed + " << st << " + static_cast<long>(i));\n";
+        if (m.type.kind == "struct")
+          fill << "Fill(" << acc << "[i], seed + " << st << " + static_cast<long>(i));\n";
         else
-          fill << acc << "[i] = " << FillScalar(m.type.kind, m.type.name, m.type.bound, st + " + static_cast<long>(i)")
-               << ";\n";
+          fill << acc << "[i] = "
+               << FillScalar(m.type.kind, m.type.name, m.type.bound, st + " + static_cast<long>(i)") << ";\n";
       } else if (m.type.kind == "struct") {
         fill << "  Fill(" << acc << ", seed + " << st << ");\n";
       } else {

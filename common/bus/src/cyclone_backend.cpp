@@ -23,7 +23,9 @@ struct Carrier {
   unsigned char* buf;  // follows the struct in the same allocation
 };
 
-uint32_t CarrierSize(const ddsi_serdata* d) { return reinterpret_cast<const Carrier*>(d)->size; }
+uint32_t CarrierSize(const ddsi_serdata* d) {
+  return reinterpret_cast<const Carrier*>(d)->size;
+}
 void CarrierToSer(const ddsi_serdata* d, size_t off, size_t sz, void* b) {
   std::memcpy(b, reinterpret_cast<const Carrier*>(d)->buf + off, sz);
 }
@@ -32,8 +34,12 @@ ddsi_serdata* CarrierToSerRef(const ddsi_serdata* d, size_t off, size_t sz, ddsr
   r->iov_len = static_cast<decltype(r->iov_len)>(sz);
   return ddsi_serdata_ref(d);
 }
-void CarrierToSerUnref(ddsi_serdata* d, const ddsrt_iovec_t*) { ddsi_serdata_unref(d); }
-void CarrierFree(ddsi_serdata* d) { std::free(d); }
+void CarrierToSerUnref(ddsi_serdata* d, const ddsrt_iovec_t*) {
+  ddsi_serdata_unref(d);
+}
+void CarrierFree(ddsi_serdata* d) {
+  std::free(d);
+}
 size_t CarrierPrint(const ddsi_sertype*, const ddsi_serdata*, char* buf, size_t size) {
   return static_cast<size_t>(std::snprintf(buf, size, "cell carrier"));
 }
@@ -75,9 +81,15 @@ dds_qos_t* MakeQos(QosKind q) {
                                                                           : DDS_DURABILITY_VOLATILE);
   switch (q) {
     case QosKind::kState:
-    case QosKind::kTelemetry: dds_qset_history(qos, DDS_HISTORY_KEEP_LAST, 1); break;
-    case QosKind::kEvent: dds_qset_history(qos, DDS_HISTORY_KEEP_LAST, 256); break;
-    default: dds_qset_history(qos, DDS_HISTORY_KEEP_ALL, 0); break;
+    case QosKind::kTelemetry:
+      dds_qset_history(qos, DDS_HISTORY_KEEP_LAST, 1);
+      break;
+    case QosKind::kEvent:
+      dds_qset_history(qos, DDS_HISTORY_KEEP_LAST, 256);
+      break;
+    default:
+      dds_qset_history(qos, DDS_HISTORY_KEEP_ALL, 0);
+      break;
   }
   dds_data_representation_id_t xcdr1 = DDS_DATA_REPRESENTATION_XCDR1;  // Fast CDR 1.0 reads XCDR1 only
   dds_qset_data_representation(qos, 1, &xcdr1);
@@ -103,9 +115,12 @@ class CycWriter : public RawWriter {
     d->size = static_cast<uint32_t>(padded);
     d->c.timestamp.v = dds_time();
     dds_return_t rc = dds_writecdr(w_, &d->c);  // takes the reference
-    if (rc < 0) throw Error(Errc::kInvalidArgument, std::string("Cyclone rejected the sample: ") + dds_strretcode(rc));
+    if (rc < 0)
+      throw Error(Errc::kInvalidArgument, std::string("Cyclone rejected the sample: ") + dds_strretcode(rc));
   }
-  bool WaitForAcked(int timeout_ms) override { return dds_wait_for_acks(w_, DDS_MSECS(timeout_ms)) == DDS_RETCODE_OK; }
+  bool WaitForAcked(int timeout_ms) override {
+    return dds_wait_for_acks(w_, DDS_MSECS(timeout_ms)) == DDS_RETCODE_OK;
+  }
   int Matched() const override {
     dds_publication_matched_status_t st;
     dds_get_publication_matched_status(w_, &st);
@@ -181,7 +196,8 @@ class CycloneBackend : public Backend {
   }
   std::string Name() const override { return "cyclonedds"; }
 
-  std::unique_ptr<RawWriter> CreateWriter(const std::string& topic, const TypeSupport& type, QosKind q) override {
+  std::unique_ptr<RawWriter> CreateWriter(const std::string& topic, const TypeSupport& type,
+                                          QosKind q) override {
     dds_entity_t t = TopicFor(topic, type);
     dds_qos_t* qos = MakeQos(q);
     dds_entity_t w = dds_create_writer(pp_, t, qos, nullptr);

@@ -5,6 +5,10 @@
 #include <mutex>
 #include <set>
 
+#include <fastdds/rtps/common/Locator.h>
+#include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
+#include <fastrtps/utils/IPLocator.h>
+#include <fastrtps/utils/md5.h>
 #include <fastdds/dds/core/policy/QosPolicies.hpp>
 #include <fastdds/dds/domain/DomainParticipant.hpp>
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
@@ -18,10 +22,6 @@
 #include <fastdds/dds/topic/Topic.hpp>
 #include <fastdds/dds/topic/TopicDataType.hpp>
 #include <fastdds/dds/topic/TypeSupport.hpp>
-#include <fastdds/rtps/common/Locator.h>
-#include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
-#include <fastrtps/utils/IPLocator.h>
-#include <fastrtps/utils/md5.h>
 
 #include "cell/bus/backend.h"
 #include "cell/error/error.h"
@@ -90,7 +90,7 @@ void ApplyQos(QosKind q, dds::ReliabilityQosPolicy& rel, dds::DurabilityQosPolic
               dds::HistoryQosPolicy& hist) {
   rel.kind = q == QosKind::kTelemetry ? dds::BEST_EFFORT_RELIABILITY_QOS : dds::RELIABLE_RELIABILITY_QOS;
   dur.kind = (q == QosKind::kState || q == QosKind::kEvent) ? dds::TRANSIENT_LOCAL_DURABILITY_QOS
-                                                             : dds::VOLATILE_DURABILITY_QOS;
+                                                            : dds::VOLATILE_DURABILITY_QOS;
   switch (q) {
     case QosKind::kState:
     case QosKind::kTelemetry:
@@ -117,8 +117,8 @@ class FastWriter : public RawWriter {
       throw Error(Errc::kUnavailable, "DDS write failed on " + std::string(w_->get_topic()->get_name()));
   }
   bool WaitForAcked(int timeout_ms) override {
-    return w_->wait_for_acknowledgments(eprosima::fastrtps::Duration_t(timeout_ms / 1000,
-                                                                      (timeout_ms % 1000) * 1000000u)) ==
+    return w_->wait_for_acknowledgments(
+               eprosima::fastrtps::Duration_t(timeout_ms / 1000, (timeout_ms % 1000) * 1000000u)) ==
            eprosima::fastrtps::types::ReturnCode_t::RETCODE_OK;
   }
   int Matched() const override {
@@ -170,8 +170,10 @@ class FastBackend : public Backend {
     auto* factory = dds::DomainParticipantFactory::get_instance();
     dds::DomainParticipantQos qos;  // built from scratch: no XML file in the CWD or env can widen it
     if (!o.profile_path.empty()) {
-      if (factory->load_XML_profiles_file(o.profile_path) != eprosima::fastrtps::types::ReturnCode_t::RETCODE_OK)
-        throw Error(Errc::kInvalidArgument, "CELL_DDS_PROFILE=" + o.profile_path + ": not a loadable Fast DDS profile");
+      if (factory->load_XML_profiles_file(o.profile_path) !=
+          eprosima::fastrtps::types::ReturnCode_t::RETCODE_OK)
+        throw Error(Errc::kInvalidArgument,
+                    "CELL_DDS_PROFILE=" + o.profile_path + ": not a loadable Fast DDS profile");
       factory->get_default_participant_qos(qos);
     } else {
       LoopbackOnly(qos);
@@ -182,7 +184,9 @@ class FastBackend : public Backend {
     qos.wire_protocol().builtin.discovery_config.leaseDuration_announcementperiod =
         eprosima::fastrtps::Duration_t(1, 0);
     p_ = factory->create_participant(o.domain, qos);
-    if (!p_) throw Error(Errc::kUnavailable, "cannot create a DDS participant on domain " + std::to_string(o.domain));
+    if (!p_)
+      throw Error(Errc::kUnavailable,
+                  "cannot create a DDS participant on domain " + std::to_string(o.domain));
     pub_ = p_->create_publisher(dds::PUBLISHER_QOS_DEFAULT);
     sub_ = p_->create_subscriber(dds::SUBSCRIBER_QOS_DEFAULT);
   }
@@ -194,7 +198,8 @@ class FastBackend : public Backend {
 
   std::string Name() const override { return "fastdds"; }
 
-  std::unique_ptr<RawWriter> CreateWriter(const std::string& topic, const TypeSupport& type, QosKind q) override {
+  std::unique_ptr<RawWriter> CreateWriter(const std::string& topic, const TypeSupport& type,
+                                          QosKind q) override {
     std::lock_guard lk(mu_);
     dds::Topic* t = TopicFor(topic, type);
     dds::DataWriterQos wq = dds::DATAWRITER_QOS_DEFAULT;
@@ -252,7 +257,8 @@ class FastBackend : public Backend {
     auto it = topics_.find(name);
     if (it != topics_.end()) {
       if (it->second->get_type_name() != type.name)
-        throw Error(Errc::kInvalidArgument, "topic " + name + " already used with type " + it->second->get_type_name());
+        throw Error(Errc::kInvalidArgument,
+                    "topic " + name + " already used with type " + it->second->get_type_name());
       return it->second;
     }
     if (!types_.count(type.name)) {
@@ -277,6 +283,8 @@ class FastBackend : public Backend {
 
 }  // namespace
 
-std::unique_ptr<Backend> MakeFastDdsBackend(const BackendOptions& opts) { return std::make_unique<FastBackend>(opts); }
+std::unique_ptr<Backend> MakeFastDdsBackend(const BackendOptions& opts) {
+  return std::make_unique<FastBackend>(opts);
+}
 
 }  // namespace cell::bus

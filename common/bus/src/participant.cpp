@@ -39,7 +39,8 @@ Participant::Participant(const ParticipantOptions& opts) {
   if (backend == "fastdds") {
     backend_ = MakeFastDdsBackend(bo);
   } else if (backend == "cyclonedds") {
-    throw Error(Errc::kUnimplemented, "CELL_DDS=cyclonedds: the Cyclone DDS backend of the bus is not built yet");
+    throw Error(Errc::kUnimplemented,
+                "CELL_DDS=cyclonedds: the Cyclone DDS backend of the bus is not built yet");
   } else {
     throw Error(Errc::kInvalidArgument, "CELL_DDS=" + backend + ": expected fastdds or cyclonedds");
   }

@@ -1,8 +1,8 @@
 // cell-axis-servo --station ID [--clock real|virtual]: the machine behind one station.
 #include <cstdlib>
 
-#include <CLI/CLI.hpp>
 #include <spdlog/spdlog.h>
+#include <CLI/CLI.hpp>
 
 #include "cell/config/config.h"
 #include "cell/daemon/daemon.h"
@@ -16,20 +16,22 @@ int main(int argc, char** argv) {
   const char* env_clock = std::getenv("CELL_CLOCK");
   std::string clock = env_clock && *env_clock ? env_clock : "real";
   app.add_option("--station", station, "station id (deploy/stations/<ID>.toml)")->required();
-  app.add_option("--clock", clock, "real (wall-clock ticks) or virtual (as fast as the CPU allows); "
-                                   "default: CELL_CLOCK, else real")
+  app.add_option("--clock", clock,
+                 "real (wall-clock ticks) or virtual (as fast as the CPU allows); "
+                 "default: CELL_CLOCK, else real")
       ->check(CLI::IsMember({"real", "virtual"}));
   CLI11_PARSE(app, argc, argv);
   cell::log::Init("cell-axis-servo", station);
   try {
-    if (clock != "real" && clock != "virtual") throw cell::Error(cell::Errc::kInvalidArgument, "CELL_CLOCK=" + clock + ": expected real or virtual");
+    if (clock != "real" && clock != "virtual")
+      throw cell::Error(cell::Errc::kInvalidArgument, "CELL_CLOCK=" + clock + ": expected real or virtual");
     cell::daemon::Daemon daemon;
     auto cfg = cell::config::LoadStation(station);  // validates the [station] table
     auto machine = cell::servo::LoadMachineConfig(cfg.file);
     cell::bus::Participant bus("cell-axis-servo/" + station);
     cell::health::Announcer health(bus, "cell-axis-servo", station);
-    cell::servo::Service svc(bus, machine,
-                             clock == "virtual" ? cell::servo::ClockKind::kVirtual : cell::servo::ClockKind::kReal);
+    cell::servo::Service svc(
+        bus, machine, clock == "virtual" ? cell::servo::ClockKind::kVirtual : cell::servo::ClockKind::kReal);
     svc.Start();
     health.Set(cell::SERVICE_READY, clock + " clock");
     daemon.NotifyReady("machine " + station + " ready (" + clock + " clock)");

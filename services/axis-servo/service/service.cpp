@@ -12,33 +12,57 @@ constexpr auto kAxisPeriod = std::chrono::milliseconds(20);  // 50 Hz in wall ti
 // Virtual clock: how long (wall) the machine waits for the producer to refill a look-ahead queue that is
 // less than half full before it runs on with what it has (see LookAheadStarved()).
 constexpr auto kLookAheadWait = std::chrono::milliseconds(5);
-}
+}  // namespace
 
 Segment FromWire(const cell::MotionSegment& m, uint64_t id) {
   Segment s;
   s.id = id;
   switch (m.kind()) {
-    case cell::SEGMENT_RAPID: s.kind = SegmentKind::kRapid; break;
-    case cell::SEGMENT_LINEAR: s.kind = SegmentKind::kLinear; break;
-    case cell::SEGMENT_ARC: s.kind = SegmentKind::kArc; break;
-    case cell::SEGMENT_DWELL: s.kind = SegmentKind::kDwell; break;
-    case cell::SEGMENT_TOOL_CHANGE: s.kind = SegmentKind::kToolChange; break;
-    case cell::SEGMENT_SPINDLE: s.kind = SegmentKind::kSpindle; break;
-    case cell::SEGMENT_COOLANT: s.kind = SegmentKind::kCoolant; break;
-    case cell::SEGMENT_PALLET: s.kind = SegmentKind::kPalletChange; break;
-    case cell::SEGMENT_PROBE: s.kind = SegmentKind::kProbe; break;
-    case cell::SEGMENT_STOP: s.kind = SegmentKind::kDwell; break;  // a program stop holds nothing here
-    case cell::SEGMENT_END: s.kind = SegmentKind::kEnd; break;
+    case cell::SEGMENT_RAPID:
+      s.kind = SegmentKind::kRapid;
+      break;
+    case cell::SEGMENT_LINEAR:
+      s.kind = SegmentKind::kLinear;
+      break;
+    case cell::SEGMENT_ARC:
+      s.kind = SegmentKind::kArc;
+      break;
+    case cell::SEGMENT_DWELL:
+      s.kind = SegmentKind::kDwell;
+      break;
+    case cell::SEGMENT_TOOL_CHANGE:
+      s.kind = SegmentKind::kToolChange;
+      break;
+    case cell::SEGMENT_SPINDLE:
+      s.kind = SegmentKind::kSpindle;
+      break;
+    case cell::SEGMENT_COOLANT:
+      s.kind = SegmentKind::kCoolant;
+      break;
+    case cell::SEGMENT_PALLET:
+      s.kind = SegmentKind::kPalletChange;
+      break;
+    case cell::SEGMENT_PROBE:
+      s.kind = SegmentKind::kProbe;
+      break;
+    case cell::SEGMENT_STOP:
+      s.kind = SegmentKind::kDwell;
+      break;  // a program stop holds nothing here
+    case cell::SEGMENT_END:
+      s.kind = SegmentKind::kEnd;
+      break;
   }
   for (int i = 0; i < kNumAxes; ++i) s.end[static_cast<size_t>(i)] = m.target()[static_cast<size_t>(i)];
   s.axes = static_cast<uint8_t>(m.axis_mask() & 0x3f);
   s.feed = m.feed();
-  s.feed_mode = m.feed_mode() == 1 ? FeedMode::kPerRevolution
+  s.feed_mode = m.feed_mode() == 1   ? FeedMode::kPerRevolution
                 : m.feed_mode() == 2 ? FeedMode::kInverseTime
                                      : FeedMode::kPerMinute;
   s.exact_stop = m.exact_stop();
   s.center = {m.center()[0], m.center()[1], m.center()[2]};
-  s.plane = m.plane() == cell::PLANE_ZX ? ArcPlane::kZX : m.plane() == cell::PLANE_YZ ? ArcPlane::kYZ : ArcPlane::kXY;
+  s.plane = m.plane() == cell::PLANE_ZX   ? ArcPlane::kZX
+            : m.plane() == cell::PLANE_YZ ? ArcPlane::kYZ
+                                          : ArcPlane::kXY;
   s.direction = m.ccw() ? ArcDirection::kCCW : ArcDirection::kCW;
   s.turns = static_cast<uint32_t>(std::max(0, m.turns()));
   s.dwell_s = m.dwell_s();
@@ -48,7 +72,9 @@ Segment FromWire(const cell::MotionSegment& m, uint64_t id) {
                   : m.spindle_mode() == 2 ? SpindleDirection::kCCW
                   : m.spindle_mode() == 3 ? SpindleDirection::kOrient
                                           : SpindleDirection::kStop;
-  s.coolant = m.coolant() == 0 ? CoolantMode::kOff : m.coolant() == 2 ? CoolantMode::kMist : CoolantMode::kFlood;
+  s.coolant = m.coolant() == 0   ? CoolantMode::kOff
+              : m.coolant() == 2 ? CoolantMode::kMist
+                                 : CoolantMode::kFlood;
   s.pallet = m.pallet();
   return s;
 }
@@ -71,7 +97,9 @@ Service::Service(bus::Participant& p, MachineConfig cfg, ClockKind clock)
                  pending_tools_ = std::move(slots);
                }) {}
 
-Service::~Service() { Stop(); }
+Service::~Service() {
+  Stop();
+}
 
 void Service::Start() {
   PublishProgress();

@@ -1,6 +1,6 @@
 // cell-interpreter --station ID: the CNC of one station (language, tool table, variables, runs).
-#include <CLI/CLI.hpp>
 #include <spdlog/spdlog.h>
+#include <CLI/CLI.hpp>
 
 #include "cell/config/config.h"
 #include "cell/daemon/daemon.h"

@@ -2,8 +2,8 @@
 
 #include <cmath>
 
-#include <nlohmann/json.hpp>
 #include <spdlog/spdlog.h>
+#include <nlohmann/json.hpp>
 
 #include "cell/bus/topics.h"
 #include "cell/health/health.h"
@@ -16,14 +16,15 @@ constexpr uint64_t kInitialCredit = 4;  // segments sent before the servo has sp
 constexpr auto kServoWait = std::chrono::seconds(10);
 
 std::vector<store::Migration> Migrations() {
-  return {store::Migration::Sql(1, "station state",
-                                "CREATE TABLE tools(tool TEXT PRIMARY KEY, socket INTEGER, length REAL, diameter REAL,"
-                                " life_left_min INTEGER, worn INTEGER, broken INTEGER, ord INTEGER);"
-                                "CREATE TABLE variables(name TEXT PRIMARY KEY, value REAL);"
-                                "CREATE TABLE runs(dispatch_id INTEGER PRIMARY KEY, job_id INTEGER, pallet INTEGER,"
-                                " node TEXT, programs TEXT, repeat INTEGER, state TEXT, reason TEXT,"
-                                " machine_s REAL, started_ns INTEGER, finished_ns INTEGER, received_ns INTEGER);"
-                                "CREATE TABLE outbox(dispatch_id INTEGER PRIMARY KEY, record TEXT);")};
+  return {store::Migration::Sql(
+      1, "station state",
+      "CREATE TABLE tools(tool TEXT PRIMARY KEY, socket INTEGER, length REAL, diameter REAL,"
+      " life_left_min INTEGER, worn INTEGER, broken INTEGER, ord INTEGER);"
+      "CREATE TABLE variables(name TEXT PRIMARY KEY, value REAL);"
+      "CREATE TABLE runs(dispatch_id INTEGER PRIMARY KEY, job_id INTEGER, pallet INTEGER,"
+      " node TEXT, programs TEXT, repeat INTEGER, state TEXT, reason TEXT,"
+      " machine_s REAL, started_ns INTEGER, finished_ns INTEGER, received_ns INTEGER);"
+      "CREATE TABLE outbox(dispatch_id INTEGER PRIMARY KEY, record TEXT);")};
 }
 
 cell::RunState StateFromText(const std::string& s) {
@@ -122,8 +123,9 @@ class Station::Env : public interp::Environment {
     uint64_t want = s_.sent_seq_;
     int32_t run = s_.run_id_;
     interp::ProbeResult r;
-    auto got = s_.probe_r_.WaitFor([&](const cell::ProbeResult& p) { return p.run_id() == run && p.seq() == want; },
-                                   std::chrono::seconds(120));
+    auto got =
+        s_.probe_r_.WaitFor([&](const cell::ProbeResult& p) { return p.run_id() == run && p.seq() == want; },
+                            std::chrono::seconds(120));
     if (!got) throw Error(Errc::kTimeout, "no probe result from the axis servo");
     r.event = got->contact() == contact;
     for (size_t i = 0; i < r.at.size(); ++i) r.at[i] = got->position()[i];
@@ -153,7 +155,8 @@ Station::Station(bus::Participant& p, config::StationConfig cfg, const std::file
   store::Migrate(db_, Migrations());
   // Tool table: persisted; seeded once from the station config's initial tools.
   std::vector<tooltable::ToolEntry> entries;
-  auto q = db_.Prepare("SELECT tool, socket, length, diameter, life_left_min, worn, broken FROM tools ORDER BY ord");
+  auto q = db_.Prepare(
+      "SELECT tool, socket, length, diameter, life_left_min, worn, broken FROM tools ORDER BY ord");
   while (q.Step()) {
     tooltable::ToolEntry e;
     e.tool = q.ColumnText(0);
@@ -187,7 +190,9 @@ Station::Station(bus::Participant& p, config::StationConfig cfg, const std::file
   status_.queued(static_cast<int32_t>(db_.QueryInt64("SELECT COUNT(*) FROM runs WHERE state='QUEUED'")));
 }
 
-Station::~Station() { Stop(); }
+Station::~Station() {
+  Stop();
+}
 
 void Station::Start() {
   {
@@ -211,7 +216,8 @@ void Station::Start() {
   run_srv_ = std::make_unique<bus::Server<cell::RunRequest, cell::RunReply>>(
       bus_, bus::topics::StationRun(cfg_.id), [this](const cell::RunRequest& r) { return OnRun(r); });
   cmd_srv_ = std::make_unique<bus::Server<cell::StationRequest, cell::StationReply>>(
-      bus_, bus::topics::StationCommand(cfg_.id), [this](const cell::StationRequest& r) { return OnCommand(r); });
+      bus_, bus::topics::StationCommand(cfg_.id),
+      [this](const cell::StationRequest& r) { return OnCommand(r); });
   worker_ = std::jthread([this](std::stop_token st) { Worker(st); });
 }
 
@@ -250,7 +256,8 @@ cell::RunReply Station::OnRun(const cell::RunRequest& r) {
   }
   if (r.programs().empty() || r.programs().size() > 75)
     throw Error(Errc::kInvalidArgument, "a pallet map names 1 to 75 programs");
-  if (r.repeat() < 0 || r.repeat() > 9999) throw Error(Errc::kInvalidArgument, "repeat count must be 1..9999");
+  if (r.repeat() < 0 || r.repeat() > 9999)
+    throw Error(Errc::kInvalidArgument, "repeat count must be 1..9999");
   nlohmann::json progs = nlohmann::json::array();
   for (auto& p : r.programs()) progs.push_back(p.to_string());
   auto ins = db_.Prepare(
@@ -260,8 +267,8 @@ cell::RunReply Station::OnRun(const cell::RunRequest& r) {
   ins.BindText(4, r.node().to_string().empty() ? cfg_.id : r.node().to_string()).BindText(5, progs.dump());
   ins.BindInt64(6, r.repeat() == 0 ? 1 : r.repeat()).BindInt64(7, health::WallNs());
   ins.Run();
-  spdlog::info("accepted dispatch {} (job {}, pallet {}, {} program(s))", r.dispatch_id(), r.job_id(), r.pallet(),
-               r.programs().size());
+  spdlog::info("accepted dispatch {} (job {}, pallet {}, {} program(s))", r.dispatch_id(), r.job_id(),
+               r.pallet(), r.programs().size());
   {
     std::lock_guard s(status_mu_);
     status_.queued(static_cast<int32_t>(db_.QueryInt64("SELECT COUNT(*) FROM runs WHERE state='QUEUED'")));
@@ -283,7 +290,8 @@ cell::StationReply Station::OnCommand(const cell::StationRequest& r) {
       store::Transaction tx(db_);
       db_.Exec("DELETE FROM tools");
       auto save = db_.Prepare(
-          "INSERT INTO tools(tool, socket, length, diameter, life_left_min, worn, broken, ord) VALUES(?,?,?,?,?,?,?,?)");
+          "INSERT INTO tools(tool, socket, length, diameter, life_left_min, worn, broken, ord) "
+          "VALUES(?,?,?,?,?,?,?,?)");
       int ord = 0;
       for (auto& e : tools_.entries()) {
         save.BindText(1, e.tool).BindInt64(2, e.socket).BindDouble(3, e.length).BindDouble(4, e.diameter);
@@ -292,7 +300,8 @@ cell::StationReply Station::OnCommand(const cell::StationRequest& r) {
         save.Reset();
       }
       tx.Commit();
-      spdlog::info("tool table loaded: {} statement(s), {} tools", statements.size(), tools_.entries().size());
+      spdlog::info("tool table loaded: {} statement(s), {} tools", statements.size(),
+                   tools_.entries().size());
       PublishTools();
       rep.revision(tools_rev_);
       return rep;
@@ -448,9 +457,15 @@ void Station::Execute(const Dispatch& d, std::stop_token st) {
     u.BindText(1, state).BindText(2, reason).BindDouble(3, machine_s).BindInt64(4, finished);
     u.BindInt64(5, d.dispatch_id);
     u.Run();
-    nlohmann::json rec = {{"dispatch_id", d.dispatch_id}, {"station", cfg_.id},         {"job_id", d.job_id},
-                          {"pallet", d.pallet},           {"programs", d.programs},     {"completed", ok},
-                          {"reason", reason},             {"started_ns", run_started_ns_}, {"finished_ns", finished},
+    nlohmann::json rec = {{"dispatch_id", d.dispatch_id},
+                          {"station", cfg_.id},
+                          {"job_id", d.job_id},
+                          {"pallet", d.pallet},
+                          {"programs", d.programs},
+                          {"completed", ok},
+                          {"reason", reason},
+                          {"started_ns", run_started_ns_},
+                          {"finished_ns", finished},
                           {"machine_s", machine_s}};
     auto o = db_.Prepare("INSERT OR REPLACE INTO outbox(dispatch_id, record) VALUES(?,?)");
     o.BindInt64(1, d.dispatch_id).BindText(2, rec.dump());
@@ -474,7 +489,11 @@ void Station::Execute(const Dispatch& d, std::stop_token st) {
     status_.dispatch_id(0);
     status_.queued(queued);
   }
-  PublishRun(d, ok ? cell::RUN_COMPLETED : state == "CANCELLED" ? cell::RUN_CANCELLED : cell::RUN_FAILED, reason);
+  PublishRun(d,
+             ok                     ? cell::RUN_COMPLETED
+             : state == "CANCELLED" ? cell::RUN_CANCELLED
+                                    : cell::RUN_FAILED,
+             reason);
   PublishStatus();
   FlushOutbox();
 }
@@ -486,7 +505,9 @@ void Station::RunProgram(const Dispatch& d, const std::string& name, std::stop_t
   opt.dialect = cfg_.dialect;
   opt.program_name = name;
   opt.program_text = std::move(*text);
-  opt.library = [this, node = d.node](const std::string& lib) { return programs_.GetWithFallback(node, lib); };
+  opt.library = [this, node = d.node](const std::string& lib) {
+    return programs_.GetWithFallback(node, lib);
+  };
   opt.tools = InterpTools();
   opt.params["PALLET"] = std::to_string(d.pallet);
   {
@@ -534,7 +555,8 @@ void Station::Send(cell::MotionSegment seg, std::stop_token st) {
   last_progress_ = std::chrono::steady_clock::now();
   // Credit-based flow control: never more segments in flight than the servo granted.
   while (seg.seq() > credit_seq_) {
-    if (servo_alarm_) throw Error(Errc::kFailedPrecondition, "[" + servo_alarm_code_ + "] " + servo_alarm_text_);
+    if (servo_alarm_)
+      throw Error(Errc::kFailedPrecondition, "[" + servo_alarm_code_ + "] " + servo_alarm_text_);
     if (st.stop_requested()) throw Error(Errc::kUnavailable, "station stopping");
     if (seg_w_.Matched() == 0 && std::chrono::steady_clock::now() - last_progress_ > std::chrono::seconds(5))
       throw Error(Errc::kUnavailable, "axis servo of " + cfg_.id + " vanished during the run");
@@ -547,7 +569,8 @@ void Station::Send(cell::MotionSegment seg, std::stop_token st) {
 void Station::WaitDrained(std::stop_token st) {
   std::unique_lock lk(motion_mu_);
   while (completed_seq_ < sent_seq_) {
-    if (servo_alarm_) throw Error(Errc::kFailedPrecondition, "[" + servo_alarm_code_ + "] " + servo_alarm_text_);
+    if (servo_alarm_)
+      throw Error(Errc::kFailedPrecondition, "[" + servo_alarm_code_ + "] " + servo_alarm_text_);
     if (st.stop_requested()) throw Error(Errc::kUnavailable, "station stopping");
     if (seg_w_.Matched() == 0 && std::chrono::steady_clock::now() - last_progress_ > std::chrono::seconds(5))
       throw Error(Errc::kUnavailable, "axis servo of " + cfg_.id + " vanished during the run");
@@ -644,7 +667,8 @@ void Station::PublishRun(const Dispatch& d, cell::RunState state, const std::str
   s.state(state);
   s.program(program_.substr(0, 64));
   s.programs_done(programs_done_);
-  s.program_index(static_cast<int32_t>(d.programs.empty() ? 0 : programs_done_ % static_cast<int>(d.programs.size())));
+  s.program_index(
+      static_cast<int32_t>(d.programs.empty() ? 0 : programs_done_ % static_cast<int>(d.programs.size())));
   {
     std::lock_guard lk(motion_mu_);
     s.machine_s(run_machine_s_);

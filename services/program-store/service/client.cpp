@@ -21,11 +21,13 @@ nlohmann::json Info(const cell::ProgramReply& r) {
 }  // namespace
 
 void CheckWireName(const std::string& node, const std::string& name) {
-  if (node.size() > 16) throw Error(Errc::kInvalidArgument, "namespace '" + node + "' is longer than 16 characters");
+  if (node.size() > 16)
+    throw Error(Errc::kInvalidArgument, "namespace '" + node + "' is longer than 16 characters");
   if (name.size() > 128) throw Error(Errc::kInvalidArgument, "name is longer than 128 characters: " + name);
 }
 
-Client::Client(bus::Participant& p, bus::Millis timeout) : client_(p, bus::topics::kProgramStore), timeout_(timeout) {}
+Client::Client(bus::Participant& p, bus::Millis timeout)
+    : client_(p, bus::topics::kProgramStore), timeout_(timeout) {}
 
 cell::ProgramReply Client::Call(cell::ProgramRequest req) {
   cell::ProgramReply r = client_.Call(std::move(req), timeout_);
@@ -56,7 +58,8 @@ nlohmann::json Client::Put(const std::string& name, const std::string& content, 
     size_t off = i * kChunkBytes, len = std::min(kChunkBytes, content.size() - off);
     req.chunk_index(static_cast<uint32_t>(i));
     req.last_chunk(i + 1 == n);
-    req.data().assign(content.begin() + static_cast<long>(off), content.begin() + static_cast<long>(off + len));
+    req.data().assign(content.begin() + static_cast<long>(off),
+                      content.begin() + static_cast<long>(off + len));
     last = Call(req);
   }
   return Info(last);
@@ -142,8 +145,8 @@ nlohmann::json Client::Copy(const std::string& from_node, const std::string& fro
   return Info(Call(req));
 }
 
-nlohmann::json Client::Rename(const std::string& from_node, const std::string& from, const std::string& to_node,
-                              const std::string& to, const std::string& key) {
+nlohmann::json Client::Rename(const std::string& from_node, const std::string& from,
+                              const std::string& to_node, const std::string& to, const std::string& key) {
   CheckWireName(from_node, from);
   CheckWireName(to_node, to);
   cell::ProgramRequest req;

@@ -22,7 +22,8 @@ std::chrono::seconds StreamIdle() {
     char* end = nullptr;
     long s = std::strtol(v, &end, 10);
     if (*end != '\0' || s < 1 || s > 86400)
-      throw cell::Error(cell::Errc::kInvalidArgument, "CELL_PROGRAM_STORE_STREAM_IDLE_S must be 1..86400 seconds");
+      throw cell::Error(cell::Errc::kInvalidArgument,
+                        "CELL_PROGRAM_STORE_STREAM_IDLE_S must be 1..86400 seconds");
     return std::chrono::seconds(s);
   }
   return std::chrono::seconds(120);
@@ -47,11 +48,12 @@ int main() {
     cell::program_store::Service service(bus, store, idle);
     health.Set(cell::SERVICE_READY, "serving " + (opts.data_dir / opts.database_file).string());
     daemon.NotifyReady("serving programs");
-    spdlog::info("ready on domain {}, database {}", bus.domain(), (opts.data_dir / opts.database_file).string());
+    spdlog::info("ready on domain {}, database {}", bus.domain(),
+                 (opts.data_dir / opts.database_file).string());
     // Abandoned uploads are looked for at a quarter of the idle limit (at least every 30 s), whatever the
     // main loop's tick (1 s, or a quarter of the systemd watchdog interval).
-    const auto every = std::clamp<std::chrono::steady_clock::duration>(idle / 4, std::chrono::milliseconds(250),
-                                                                       std::chrono::seconds(30));
+    const auto every = std::clamp<std::chrono::steady_clock::duration>(
+        idle / 4, std::chrono::milliseconds(250), std::chrono::seconds(30));
     auto next = std::chrono::steady_clock::now() + every;
     daemon.RunUntilStop([&] {
       if (std::chrono::steady_clock::now() >= next) {

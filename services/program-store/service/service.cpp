@@ -47,7 +47,8 @@ constexpr size_t kListPageBytes = 60000;  // below the 65,536 bound of ProgramRe
 void SetInfo(cell::ProgramReply& rep, const nlohmann::json& j) {
   std::string s = j.dump();
   if (s.size() > 65536)
-    throw Error(Errc::kFailedPrecondition, "reply too large (" + std::to_string(s.size()) + " bytes); narrow the pattern");
+    throw Error(Errc::kFailedPrecondition,
+                "reply too large (" + std::to_string(s.size()) + " bytes); narrow the pattern");
   rep.info(s);
 }
 
@@ -110,7 +111,8 @@ cell::ProgramReply Service::Handle(const cell::ProgramRequest& r) {
     }
     case cell::PROGRAM_GET: {
       // Chunk i of a large file: the content is read once per revision, not once per chunk.
-      if (r.chunk_index() == 0 || cache_.node != node || cache_.name != name || cache_.revision != r.revision()) {
+      if (r.chunk_index() == 0 || cache_.node != node || cache_.name != name ||
+          cache_.revision != r.revision()) {
         GetResult g = store_.Get(node, name, r.revision());
         cache_ = {node, name, g.file.revision, std::move(g.content)};
       }
@@ -130,7 +132,9 @@ cell::ProgramReply Service::Handle(const cell::ProgramRequest& r) {
       nlohmann::json j = FileJson(s.file);
       j["revisions"] = nlohmann::json::array();
       for (auto& rv : s.revisions)
-        j["revisions"].push_back({{"revision", rv.revision}, {"sha256", rv.sha256}, {"size", rv.size},
+        j["revisions"].push_back({{"revision", rv.revision},
+                                  {"sha256", rv.sha256},
+                                  {"size", rv.size},
                                   {"created_at", rv.created_at}});
       rep.revision(s.file.revision);
       SetInfo(rep, j);
@@ -161,7 +165,8 @@ cell::ProgramReply Service::Handle(const cell::ProgramRequest& r) {
         bytes += rows[i].size() + 1;
       }
       if (r.chunk_index() >= page_start.size())
-        throw Error(Errc::kInvalidArgument, "listing page " + std::to_string(r.chunk_index()) + " past the end");
+        throw Error(Errc::kInvalidArgument,
+                    "listing page " + std::to_string(r.chunk_index()) + " past the end");
       size_t begin = page_start[r.chunk_index()];
       size_t end = r.chunk_index() + 1 < page_start.size() ? page_start[r.chunk_index() + 1] : rows.size();
       std::string page = "[";

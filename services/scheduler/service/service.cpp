@@ -16,13 +16,20 @@ namespace {
 
 cell::JobState Wire(JobState s) {
   switch (s) {
-    case JobState::kQueued: return cell::JOB_QUEUED;
-    case JobState::kWaiting: return cell::JOB_WAITING;
-    case JobState::kDispatched: return cell::JOB_DISPATCHED;
-    case JobState::kRunning: return cell::JOB_RUNNING;
-    case JobState::kCompleted: return cell::JOB_COMPLETED;
-    case JobState::kFailed: return cell::JOB_FAILED;
-    case JobState::kCancelled: return cell::JOB_CANCELLED;
+    case JobState::kQueued:
+      return cell::JOB_QUEUED;
+    case JobState::kWaiting:
+      return cell::JOB_WAITING;
+    case JobState::kDispatched:
+      return cell::JOB_DISPATCHED;
+    case JobState::kRunning:
+      return cell::JOB_RUNNING;
+    case JobState::kCompleted:
+      return cell::JOB_COMPLETED;
+    case JobState::kFailed:
+      return cell::JOB_FAILED;
+    case JobState::kCancelled:
+      return cell::JOB_CANCELLED;
   }
   return cell::JOB_QUEUED;
 }
@@ -60,7 +67,9 @@ Service::Service(bus::Participant& p, const std::filesystem::path& data_dir)
       jobs_w_(p, bus::topics::kJobStatus, bus::QosKind::kEvent),
       state_w_(p, bus::topics::kSchedulerState, bus::QosKind::kState) {}
 
-Service::~Service() { Stop(); }
+Service::~Service() {
+  Stop();
+}
 
 void Service::Start() {
   {
@@ -72,7 +81,8 @@ void Service::Start() {
       sched_.ConfigureStation(id, cfg.dialect);
     }
     Effects e = sched_.Recover();
-    if (!e.dispatches.empty()) spdlog::info("recovery: re-sending {} unacknowledged dispatch(es)", e.dispatches.size());
+    if (!e.dispatches.empty())
+      spdlog::info("recovery: re-sending {} unacknowledged dispatch(es)", e.dispatches.size());
     Apply(e);
     // After a restart a station keeps its last known online state until the discovery window has passed
     // (Tick), so a station that is still running its pallet is not taken for vanished meanwhile.
@@ -82,13 +92,14 @@ void Service::Start() {
   }
   // Observations are subscribed only now, with the stations configured and recovery done: samples that
   // arrive at once (state topics are transient-local) are not dropped as coming from unknown stations.
-  status_r_.emplace(bus_, bus::topics::kStationStatus, bus::QosKind::kState,
-                    [this](const cell::StationStatus& s, const bus::SampleInfo&) {
-                      std::lock_guard lk(mu_);
-                      if (!dialect_.count(s.station().to_string())) return;
-                      Apply(sched_.StationCondition(s.station().to_string(), s.condition() == cell::CONDITION_FAULT,
-                                                    s.alarm_code().to_string(), s.alarm_text().to_string()));
-                    });
+  status_r_.emplace(
+      bus_, bus::topics::kStationStatus, bus::QosKind::kState,
+      [this](const cell::StationStatus& s, const bus::SampleInfo&) {
+        std::lock_guard lk(mu_);
+        if (!dialect_.count(s.station().to_string())) return;
+        Apply(sched_.StationCondition(s.station().to_string(), s.condition() == cell::CONDITION_FAULT,
+                                      s.alarm_code().to_string(), s.alarm_text().to_string()));
+      });
   tools_r_.emplace(bus_, bus::topics::kToolTable, bus::QosKind::kState,
                    [this](const cell::ToolTable& t, const bus::SampleInfo&) {
                      std::lock_guard lk(mu_);
@@ -127,7 +138,8 @@ void Service::Tick() {
       if (now == was) continue;
       // Heartbeats of stations that survived a restart of the scheduler take up to a heartbeat period to
       // arrive: only after the discovery window does a missing one mean "offline".
-      if (!now && std::chrono::steady_clock::now() - started_ < std::chrono::milliseconds(bus::topics::kOfflineAfterMs))
+      if (!now && std::chrono::steady_clock::now() - started_ <
+                      std::chrono::milliseconds(bus::topics::kOfflineAfterMs))
         continue;
       was = now;
       spdlog::info("station {} {}", id, now ? "online" : "offline");
@@ -186,7 +198,8 @@ cell::SchedulerReply Service::Handle(const cell::SchedulerRequest& r) {
       spec.name = name;
       if (!r.text().to_string().empty()) {
         auto routes = ParseRouteFile(r.text().to_string(), name);
-        auto it = std::find_if(routes.begin(), routes.end(), [&](const RouteSpec& s) { return s.name == name; });
+        auto it =
+            std::find_if(routes.begin(), routes.end(), [&](const RouteSpec& s) { return s.name == name; });
         if (it == routes.end()) throw Error(Errc::kNotFound, "the route file defines no route " + name);
         spec = *it;
       }
@@ -195,7 +208,8 @@ cell::SchedulerReply Service::Handle(const cell::SchedulerRequest& r) {
       for (size_t i = 0; i < spec.ops.size(); ++i)
         for (auto& st : spec.ops[i].stations)
           if (!dialect_.count(st))
-            throw Error(Errc::kNotFound, fmt::format("route {}: operation {} names unknown station '{}'", name, i + 1, st));
+            throw Error(Errc::kNotFound,
+                        fmt::format("route {}: operation {} names unknown station '{}'", name, i + 1, st));
       info(ToJson(sched_.DefineRoute(key, spec)));
       break;
     }
@@ -219,7 +233,8 @@ cell::SchedulerReply Service::Handle(const cell::SchedulerRequest& r) {
       std::string text = r.text().to_string();
       if (text.empty()) {
         auto stored = programs_.GetWithFallback(station, name);
-        if (!stored) throw Error(Errc::kNotFound, "schedule program '" + name + "' is not in " + station + " or HOST");
+        if (!stored)
+          throw Error(Errc::kNotFound, "schedule program '" + name + "' is not in " + station + " or HOST");
         text = std::move(*stored);
       }
       JobResult j = sched_.RunSchedule(key, name, text, station);
@@ -240,7 +255,8 @@ cell::SchedulerReply Service::Handle(const cell::SchedulerRequest& r) {
       break;
     }
     case cell::SCHED_JOB_CANCEL:
-      if (!sched_.Job(r.job_id(), false)) throw Error(Errc::kNotFound, "unknown job " + std::to_string(r.job_id()));
+      if (!sched_.Job(r.job_id(), false))
+        throw Error(Errc::kNotFound, "unknown job " + std::to_string(r.job_id()));
       Apply(sched_.Cancel(key, r.job_id()));
       break;
   }
@@ -297,8 +313,12 @@ void Service::OnRun(const cell::RunStatus& s) {
   r.dispatch_id = s.dispatch_id();
   r.programs_done = s.programs_done();
   switch (s.state()) {
-    case cell::RUN_QUEUED: r.status = RunStatus::kAccepted; break;
-    case cell::RUN_ACTIVE: r.status = RunStatus::kRunning; break;
+    case cell::RUN_QUEUED:
+      r.status = RunStatus::kAccepted;
+      break;
+    case cell::RUN_ACTIVE:
+      r.status = RunStatus::kRunning;
+      break;
     case cell::RUN_COMPLETED:
       r.status = RunStatus::kCompleted;
       r.cycle_s = s.machine_s();
@@ -319,7 +339,8 @@ void Service::Sender(std::stop_token st) {
     Outgoing o;
     {
       std::unique_lock lk(out_mu_);
-      out_cv_.wait_for(lk, std::chrono::milliseconds(500), [&] { return !outgoing_.empty() || st.stop_requested(); });
+      out_cv_.wait_for(lk, std::chrono::milliseconds(500),
+                       [&] { return !outgoing_.empty() || st.stop_requested(); });
       if (outgoing_.empty()) continue;
       o = outgoing_.front();
       outgoing_.pop_front();
@@ -331,7 +352,8 @@ void Service::Sender(std::stop_token st) {
     const bool cancel = o.kind == Outgoing::kCancel;
     auto& client = station_clients_[o.d.station];
     if (!client)
-      client = std::make_unique<bus::Client<cell::RunRequest, cell::RunReply>>(bus_, bus::topics::StationRun(o.d.station));
+      client = std::make_unique<bus::Client<cell::RunRequest, cell::RunReply>>(
+          bus_, bus::topics::StationRun(o.d.station));
     cell::RunRequest req;
     req.station(o.d.station);
     req.dispatch_id(static_cast<int32_t>(o.d.dispatch_id));
@@ -369,7 +391,8 @@ void Service::Retry(const Outgoing& o) {
   // Back into the queue ahead of anything else for the same station (its order is kept: variable writes
   // before the dispatch that reads them), behind other stations' work (a dead station blocks no other).
   std::unique_lock lk(out_mu_);
-  auto it = std::find_if(outgoing_.begin(), outgoing_.end(), [&](const Outgoing& x) { return x.d.station == o.d.station; });
+  auto it = std::find_if(outgoing_.begin(), outgoing_.end(),
+                         [&](const Outgoing& x) { return x.d.station == o.d.station; });
   outgoing_.insert(it, o);
   out_cv_.wait_for(lk, std::chrono::seconds(1));
 }

@@ -22,9 +22,9 @@ enum class QosKind {
 };
 
 struct TypeSupport {
-  std::string name;      // registered type name, "cell::StationStatus"
+  std::string name;  // registered type name, "cell::StationStatus"
   bool keyed = false;
-  size_t max_size = 0;   // bound of a serialized sample, header included
+  size_t max_size = 0;  // bound of a serialized sample, header included
   size_t key_max_size = 0;
   // Big-endian key CDR (what serializeKey writes) from a serialized sample; false if undecodable.
   std::function<bool(const uint8_t* cdr, size_t n, std::vector<uint8_t>& key)> key_from_cdr;

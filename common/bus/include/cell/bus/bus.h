@@ -25,10 +25,10 @@ namespace cell::bus {
 using Millis = std::chrono::milliseconds;
 
 struct ParticipantOptions {
-  std::string name;          // shown in logs and discovery, e.g. "cell-interpreter/KT01"
-  std::optional<int> domain; // default: cell::config::Domain() (CELL_DOMAIN, else 101)
-  std::string backend;       // default: CELL_DDS, else "fastdds"
-  std::string profile_path;  // default: CELL_DDS_PROFILE, else the built-in loopback profile
+  std::string name;           // shown in logs and discovery, e.g. "cell-interpreter/KT01"
+  std::optional<int> domain;  // default: cell::config::Domain() (CELL_DOMAIN, else 101)
+  std::string backend;        // default: CELL_DDS, else "fastdds"
+  std::string profile_path;   // default: CELL_DDS_PROFILE, else the built-in loopback profile
 };
 
 // One DDS participant per process plus one dispatch thread that runs every user callback in
@@ -183,8 +183,12 @@ class Reader {
 };
 
 // Topic names of a request/reply service.
-inline std::string RequestTopic(const std::string& service) { return service + "/request"; }
-inline std::string ReplyTopic(const std::string& service) { return service + "/reply"; }
+inline std::string RequestTopic(const std::string& service) {
+  return service + "/request";
+}
+inline std::string ReplyTopic(const std::string& service) {
+  return service + "/reply";
+}
 
 // Throws the cell::Error a reply carries (code != 0).
 template <class Rep>
@@ -208,20 +212,19 @@ class Client {
     std::string me = p.id();
     // Replies are matched on the receive path, not the dispatch thread, so a caller blocked in
     // Call() from a dispatch-thread callback cannot deadlock.
-    rep_raw_ = p.backend().CreateReader(
-        ReplyTopic(service), TypeSupportFor<Rep>(), QosKind::kCommand,
-        [weak, me](const RawSample& s, const RawInfo& info) {
-          auto st = weak.lock();
-          if (!st || !info.valid) return;
-          Rep r;
-          if (!FromCdr(s.cdr.data(), s.cdr.size(), r)) return;
-          if (r.hdr().client() != me) return;
-          std::lock_guard lk(st->mu);
-          auto it = st->pending.find(r.hdr().request_id());
-          if (it == st->pending.end() || it->second) return;
-          it->second = std::move(r);
-          st->cv.notify_all();
-        });
+    rep_raw_ = p.backend().CreateReader(ReplyTopic(service), TypeSupportFor<Rep>(), QosKind::kCommand,
+                                        [weak, me](const RawSample& s, const RawInfo& info) {
+                                          auto st = weak.lock();
+                                          if (!st || !info.valid) return;
+                                          Rep r;
+                                          if (!FromCdr(s.cdr.data(), s.cdr.size(), r)) return;
+                                          if (r.hdr().client() != me) return;
+                                          std::lock_guard lk(st->mu);
+                                          auto it = st->pending.find(r.hdr().request_id());
+                                          if (it == st->pending.end() || it->second) return;
+                                          it->second = std::move(r);
+                                          st->cv.notify_all();
+                                        });
   }
 
   bool WaitForServer(Millis timeout) const {
@@ -235,7 +238,8 @@ class Client {
     auto deadline = std::chrono::steady_clock::now() + timeout;
     // Discovery takes milliseconds (1 s across vendors); a server missing after 5 s is down.
     if (!WaitForServer(std::min(timeout, Millis(5000))))
-      throw Error(Errc::kUnavailable, "no " + service_ + " service on DDS domain " + std::to_string(p_.domain()));
+      throw Error(Errc::kUnavailable,
+                  "no " + service_ + " service on DDS domain " + std::to_string(p_.domain()));
     uint64_t id = ++state_->next_id;
     req.hdr().client(p_.id());
     req.hdr().request_id(id);
@@ -256,8 +260,8 @@ class Client {
       }
       if (std::chrono::steady_clock::now() >= deadline) {
         state_->pending.erase(id);
-        throw Error(Errc::kTimeout, service_ + " did not answer within " +
-                                        std::to_string(timeout.count()) + " ms");
+        throw Error(Errc::kTimeout,
+                    service_ + " did not answer within " + std::to_string(timeout.count()) + " ms");
       }
     }
   }

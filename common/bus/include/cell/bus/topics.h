@@ -9,28 +9,36 @@
 namespace cell::bus::topics {
 
 // State topics (kState): last value per key, late joiners get it.
-inline constexpr const char* kHealth = "cell/health";                  // ServiceHealth, 1 Hz heartbeat
-inline constexpr const char* kStationStatus = "cell/station/status";   // StationStatus
-inline constexpr const char* kToolTable = "cell/station/tools";        // ToolTable
-inline constexpr const char* kVariables = "cell/station/variables";    // StationVariables
-inline constexpr const char* kProgress = "cell/motion/progress";       // SegmentProgress (credits)
-inline constexpr const char* kSchedulerState = "cell/scheduler/state"; // SchedulerState (backlog)
+inline constexpr const char* kHealth = "cell/health";                   // ServiceHealth, 1 Hz heartbeat
+inline constexpr const char* kStationStatus = "cell/station/status";    // StationStatus
+inline constexpr const char* kToolTable = "cell/station/tools";         // ToolTable
+inline constexpr const char* kVariables = "cell/station/variables";     // StationVariables
+inline constexpr const char* kProgress = "cell/motion/progress";        // SegmentProgress (credits)
+inline constexpr const char* kSchedulerState = "cell/scheduler/state";  // SchedulerState (backlog)
 // Event topics (kEvent): recent history for late joiners.
-inline constexpr const char* kRunStatus = "cell/run/status";           // RunStatus
-inline constexpr const char* kJobStatus = "cell/job/status";           // JobStatus
-inline constexpr const char* kProgramChange = "cell/program/change";   // ProgramChange
-inline constexpr const char* kAlarm = "cell/alarm";                    // Alarm
+inline constexpr const char* kRunStatus = "cell/run/status";          // RunStatus
+inline constexpr const char* kJobStatus = "cell/job/status";          // JobStatus
+inline constexpr const char* kProgramChange = "cell/program/change";  // ProgramChange
+inline constexpr const char* kAlarm = "cell/alarm";                   // Alarm
 // Telemetry (kTelemetry).
-inline constexpr const char* kAxisState = "cell/motion/axes";          // AxisState, 50 Hz wall
+inline constexpr const char* kAxisState = "cell/motion/axes";  // AxisState, 50 Hz wall
 // Streams (kStream), per station.
-inline std::string Segments(const std::string& station) { return "cell/station/" + station + "/segments"; }
-inline std::string Probe(const std::string& station) { return "cell/station/" + station + "/probe"; }
+inline std::string Segments(const std::string& station) {
+  return "cell/station/" + station + "/segments";
+}
+inline std::string Probe(const std::string& station) {
+  return "cell/station/" + station + "/probe";
+}
 // Request/reply services (two kCommand topics each: <name>/request, <name>/reply).
-inline constexpr const char* kProgramStore = "cell/program_store";    // ProgramRequest / ProgramReply
-inline constexpr const char* kScheduler = "cell/scheduler";           // SchedulerRequest / SchedulerReply
-inline constexpr const char* kInspection = "cell/inspection";         // InspectionRequest / InspectionReply
-inline std::string StationRun(const std::string& station) { return "cell/station/" + station + "/run"; }
-inline std::string StationCommand(const std::string& station) { return "cell/station/" + station + "/command"; }
+inline constexpr const char* kProgramStore = "cell/program_store";  // ProgramRequest / ProgramReply
+inline constexpr const char* kScheduler = "cell/scheduler";         // SchedulerRequest / SchedulerReply
+inline constexpr const char* kInspection = "cell/inspection";       // InspectionRequest / InspectionReply
+inline std::string StationRun(const std::string& station) {
+  return "cell/station/" + station + "/run";
+}
+inline std::string StationCommand(const std::string& station) {
+  return "cell/station/" + station + "/command";
+}
 
 // A station (its interpreter) counts as online while its heartbeat is younger than this.
 inline constexpr int kHeartbeatMs = 1000;

@@ -8,14 +8,14 @@
 namespace cell {
 
 enum class Errc {
-  kInvalidArgument,  // the caller sent something malformed
-  kNotFound,         // the named thing does not exist
-  kAlreadyExists,    // would overwrite without permission
-  kPermissionDenied, // protected, read-only
+  kInvalidArgument,   // the caller sent something malformed
+  kNotFound,          // the named thing does not exist
+  kAlreadyExists,     // would overwrite without permission
+  kPermissionDenied,  // protected, read-only
   kFailedPrecondition,
   kTimeout,
-  kUnavailable,      // peer not matched / service down
-  kIo,               // file system, SQLite
+  kUnavailable,  // peer not matched / service down
+  kIo,           // file system, SQLite
   kInternal,
   kUnimplemented,
 };

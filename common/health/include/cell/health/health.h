@@ -39,9 +39,7 @@ class Liveness {
   explicit Liveness(bus::Participant& p);
   // Online: announced READY and heard from within topics::kOfflineAfterMs.
   bool Online(const std::string& service_id) const;
-  bool StationOnline(const std::string& station) const {
-    return Online("cell-interpreter/" + station);
-  }
+  bool StationOnline(const std::string& station) const { return Online("cell-interpreter/" + station); }
   std::map<std::string, cell::ServiceHealth> Snapshot() const;
 
  private:

@@ -41,7 +41,8 @@ struct RunResult {
   std::string err;
 };
 RunResult RunCommand(std::vector<std::string> argv, const std::map<std::string, std::string>& env = {},
-              std::chrono::milliseconds timeout = std::chrono::seconds(60), const std::string& stdin_text = "");
+                     std::chrono::milliseconds timeout = std::chrono::seconds(60),
+                     const std::string& stdin_text = "");
 
 std::string ReadFile(const std::string& path);
 std::string MakeTempDir(const std::string& prefix);

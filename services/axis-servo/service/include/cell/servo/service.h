@@ -42,8 +42,8 @@ class Service {
   // Run bookkeeping (loop thread only).
   int32_t run_id_ = 0;
   uint64_t next_id_ = 0;
-  std::map<uint64_t, uint64_t> seq_of_;  // machine segment id -> run seq
-  std::map<uint64_t, bool> probe_;       // machine ids of probe segments
+  std::map<uint64_t, uint64_t> seq_of_;    // machine segment id -> run seq
+  std::map<uint64_t, bool> probe_;         // machine ids of probe segments
   std::deque<cell::MotionSegment> inbox_;  // received, not yet pushed (held while a run is abandoned)
   bool abandoning_ = false;                // aborting the previous run's leftovers
   bool end_received_ = false;              // the run's END segment has arrived

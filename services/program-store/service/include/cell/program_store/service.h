@@ -3,8 +3,8 @@
 
 #include <chrono>
 #include <map>
-#include <mutex>
 #include <memory>
+#include <mutex>
 #include <string>
 
 #include <nlohmann/json.hpp>
@@ -22,7 +22,8 @@ nlohmann::json FileJson(const FileInfo& f);
 class Service {
  public:
   // Chunked uploads silent for longer than stream_idle are dropped by Housekeeping.
-  Service(bus::Participant& p, ProgramStore& store, std::chrono::seconds stream_idle = std::chrono::seconds(120));
+  Service(bus::Participant& p, ProgramStore& store,
+          std::chrono::seconds stream_idle = std::chrono::seconds(120));
   // Called from the main loop: forgets chunk streams abandoned by a dead client.
   void Housekeeping();
 
