@@ -194,21 +194,27 @@ Station::~Station() {
   Stop();
 }
 
+// The whole table replaces the stored one in one transaction (caller holds db_mu_).
+void Station::SaveTools() {
+  store::Transaction tx(db_);
+  db_.Exec("DELETE FROM tools");
+  auto save = db_.Prepare(
+      "INSERT INTO tools(tool, socket, length, diameter, life_left_min, worn, broken, ord) "
+      "VALUES(?,?,?,?,?,?,?,?)");
+  int ord = 0;
+  for (auto& e : tools_.entries()) {
+    save.BindText(1, e.tool).BindInt64(2, e.socket).BindDouble(3, e.length).BindDouble(4, e.diameter);
+    save.BindInt64(5, e.life_left_min).BindInt64(6, e.worn).BindInt64(7, e.broken).BindInt64(8, ord++);
+    save.Run();
+    save.Reset();
+  }
+  tx.Commit();
+}
+
 void Station::Start() {
   {
     std::lock_guard lk(db_mu_);
-    store::Transaction tx(db_);
-    auto save = db_.Prepare(
-        "INSERT OR REPLACE INTO tools(tool, socket, length, diameter, life_left_min, worn, broken, ord) "
-        "VALUES(?,?,?,?,?,?,?,?)");
-    int ord = 0;
-    for (auto& e : tools_.entries()) {
-      save.BindText(1, e.tool).BindInt64(2, e.socket).BindDouble(3, e.length).BindDouble(4, e.diameter);
-      save.BindInt64(5, e.life_left_min).BindInt64(6, e.worn).BindInt64(7, e.broken).BindInt64(8, ord++);
-      save.Run();
-      save.Reset();
-    }
-    tx.Commit();
+    SaveTools();
   }
   PublishTools();
   PublishVariables();
@@ -287,19 +293,7 @@ cell::StationReply Station::OnCommand(const cell::StationRequest& r) {
       auto statements = tooltable::ParseTld(r.text().to_string(), "tools");
       std::lock_guard lk(db_mu_);
       tools_.Merge(statements);
-      store::Transaction tx(db_);
-      db_.Exec("DELETE FROM tools");
-      auto save = db_.Prepare(
-          "INSERT INTO tools(tool, socket, length, diameter, life_left_min, worn, broken, ord) "
-          "VALUES(?,?,?,?,?,?,?,?)");
-      int ord = 0;
-      for (auto& e : tools_.entries()) {
-        save.BindText(1, e.tool).BindInt64(2, e.socket).BindDouble(3, e.length).BindDouble(4, e.diameter);
-        save.BindInt64(5, e.life_left_min).BindInt64(6, e.worn).BindInt64(7, e.broken).BindInt64(8, ord++);
-        save.Run();
-        save.Reset();
-      }
-      tx.Commit();
+      SaveTools();
       spdlog::info("tool table loaded: {} statement(s), {} tools", statements.size(),
                    tools_.entries().size());
       PublishTools();

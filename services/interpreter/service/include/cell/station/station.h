@@ -65,6 +65,7 @@ class Station {
   void PublishVariables();
   void PublishRun(const Dispatch& d, cell::RunState state, const std::string& reason = "");
   void SaveRun(int32_t id, const std::string& state, const std::string& reason);
+  void SaveTools();
   void FlushOutbox();
   std::vector<interp::ToolEntry> InterpTools() const;
 
