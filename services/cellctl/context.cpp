@@ -3,8 +3,10 @@
 #include <unistd.h>
 
 #include <cstdlib>
+#include <fstream>
 #include <map>
 #include <random>
+#include <sstream>
 
 #include <fmt/format.h>
 
@@ -73,6 +75,14 @@ std::string Context::IdempotencyKey(const std::string& what) const {
   if (const char* k = std::getenv("CELLCTL_IDEMPOTENCY_KEY"); k && *k) return std::string(k) + ":" + what;
   std::random_device rd;
   return fmt::format("cellctl-{}-{:08x}{:08x}:{}", getpid(), rd(), rd(), what);
+}
+
+std::string ReadLocalFile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw Exit{1, "cannot read " + path};
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
 }
 
 void Print(const Context& ctx, const nlohmann::json& j, const std::vector<std::string>& columns) {

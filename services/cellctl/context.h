@@ -47,6 +47,9 @@ class Context {
   std::unique_ptr<bus::Client<cell::SchedulerRequest, cell::SchedulerReply>> scheduler_;
 };
 
+// The whole content of a local file; Exit{1, "cannot read PATH"} when it cannot be read.
+std::string ReadLocalFile(const std::string& path);
+
 void Print(const Context& ctx, const nlohmann::json& j, const std::vector<std::string>& columns);
 
 // Verb registration, one file per noun.

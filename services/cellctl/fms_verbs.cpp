@@ -9,14 +9,6 @@ namespace cellctl {
 
 namespace {
 
-std::string ReadText(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw Exit{1, "cannot read " + path};
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
 void CheckPallet(int p) {
   if (p < 1 || p > 255) throw Exit{2, "pallet " + std::to_string(p) + " is outside 1-255"};
 }
@@ -94,7 +86,7 @@ void AddFmsVerbs(CLI::App& app, Context& ctx) {
     auto r = Req(cell::SCHED_ROUTE_DEFINE, ctx, "route-define");
     r.name(o->name);
     for (auto& op : o->ops) r.args().push_back(op);
-    if (!o->file.empty()) r.text(ReadText(o->file));
+    if (!o->file.empty()) r.text(ReadLocalFile(o->file));
     auto j = Info(ctx.Scheduler(r));
     if (ctx.json) Print(ctx, j, {});
   });
@@ -135,7 +127,7 @@ void AddFmsVerbs(CLI::App& app, Context& ctx) {
     r.station(o->station);
     std::ifstream probe(o->file);
     if (probe) {
-      r.text(ReadText(o->file));
+      r.text(ReadLocalFile(o->file));
       r.name(std::filesystem::path(o->file).filename().string());
     } else {
       r.name(o->file);
@@ -151,7 +143,7 @@ void AddFmsVerbs(CLI::App& app, Context& ctx) {
     CheckStation(o->station);
     cell::StationRequest req;
     req.op(cell::STATION_LOAD_TOOLS);
-    std::string text = ReadText(o->file);
+    std::string text = ReadLocalFile(o->file);
     if (text.size() > 65536) throw Exit{1, o->file + " is larger than 64 KiB"};
     req.text(text);
     ctx.StationCommand(o->station, req);
