@@ -138,16 +138,26 @@ int main(int argc, char** argv) {
     std::cerr << "cell-interp: " << e.what() << "\n";
     return 2;
   }
+  // Lines are gathered in one buffer and written in large pieces (the output of a long program is most of
+  // the CLI's work).
+  std::string out;
+  out.reserve(1 << 17);
+  auto flush = [&out] {
+    std::fwrite(out.data(), 1, out.size(), stdout);
+    out.clear();
+  };
   for (;;) {
     cell::interp::Step s = run->Next();
     if (s.kind == cell::interp::Step::kCanon) {
-      std::string line = cell::interp::ToJsonLine(s.canon);
-      line += '\n';
-      std::fwrite(line.data(), 1, line.size(), stdout);
+      cell::interp::AppendJsonLine(out, s.canon);
+      out += '\n';
+      if (out.size() > (1 << 16)) flush();
     } else if (s.kind == cell::interp::Step::kEnd) {
+      flush();
       std::fflush(stdout);
       return 0;
     } else {
+      flush();
       std::fflush(stdout);
       std::cerr << s.diag.Format() << "\n";
       return 1;

@@ -73,14 +73,59 @@ const char* OpName(Op op) {
 
 namespace {
 
-std::string Num(double v) {
-  if (!std::isfinite(v)) return "0";
+// Appends v with six decimals, trailing zeros trimmed down to four ("1.5000", "0.000125"), exactly as
+// fmt's correctly rounded "{:.6f}" would. The fast path scales to integer micro-units; it is taken only
+// when the scaled value is clear of a rounding tie by far more than the product's rounding error, so the
+// digits never differ from the slow path (which handles ties, huge values and non-finite input).
+void Num(std::string& out, double v) {
+  if (!std::isfinite(v)) {
+    out += '0';
+    return;
+  }
   if (std::fabs(v) < 5e-7) v = 0;  // no "-0.000000"
+  double a = std::fabs(v) * 1e6;
+  double frac = a - std::floor(a);
+  if (a < 1e12 && std::fabs(frac - 0.5) > 1e-3) {
+    auto r = static_cast<uint64_t>(std::llround(a));
+    char buf[32];
+    char* e = buf + sizeof buf;
+    char* p = e;
+    uint64_t ip = r / 1000000, fp = r % 1000000;
+    int trim = 0;  // trailing zeros dropped, at most 2 (four decimals stay)
+    while (trim < 2 && fp % 10 == 0) {
+      fp /= 10;
+      ++trim;
+    }
+    for (int k = 0; k < 6 - trim; ++k) {
+      *--p = static_cast<char>('0' + fp % 10);
+      fp /= 10;
+    }
+    *--p = '.';
+    do {
+      *--p = static_cast<char>('0' + ip % 10);
+      ip /= 10;
+    } while (ip);
+    if (v < 0) *--p = '-';
+    out.append(p, static_cast<size_t>(e - p));
+    return;
+  }
   std::string s = fmt::format("{:.6f}", v);
-  // Trim trailing zeros but keep at least 4 decimals.
   auto dot = s.find('.');
   while (s.size() > dot + 5 && s.back() == '0') s.pop_back();
-  return s;
+  out += s;
+}
+
+void Int(std::string& out, long v) {
+  char buf[24];
+  char* e = buf + sizeof buf;
+  char* p = e;
+  unsigned long u = v < 0 ? 0ul - static_cast<unsigned long>(v) : static_cast<unsigned long>(v);
+  do {
+    *--p = static_cast<char>('0' + u % 10);
+    u /= 10;
+  } while (u);
+  if (v < 0) *--p = '-';
+  out.append(p, static_cast<size_t>(e - p));
 }
 
 void Str(std::string& out, const std::string& s) {
@@ -123,20 +168,22 @@ void Axes(std::string& out, const Canon& c) {
   for (int i = 0; i < kAxisCount; ++i) {
     if (c.used & (1u << i)) {
       Key(out, AxisName(i));
-      out += Num(c.pos[i]);
+      Num(out, c.pos[i]);
     }
   }
   for (int i = 0; i < kAxisCount; ++i) {
     if (c.travel_mask & (1u << i)) {
-      out += fmt::format(",\"{}_travel\":", AxisName(i));
-      out += Num(c.travel[i]);
+      out += ",\"";
+      out += AxisName(i);
+      out += "_travel\":";
+      Num(out, c.travel[i]);
     }
   }
 }
 
 void Feed(std::string& out, const Canon& c) {
   Key(out, "f");
-  out += Num(c.feed);
+  Num(out, c.feed);
   switch (c.f_mode) {
     case FeedMode::kPerMinute:
       break;
@@ -155,10 +202,16 @@ void Feed(std::string& out, const Canon& c) {
 }  // namespace
 
 std::string ToJsonLine(const Canon& c) {
-  std::string out = "{\"op\":\"";
+  std::string out;
+  AppendJsonLine(out, c);
+  return out;
+}
+
+void AppendJsonLine(std::string& out, const Canon& c) {
+  out += "{\"op\":\"";
   out += OpName(c.op);
   out += "\",\"line\":";
-  out += std::to_string(c.line);
+  Int(out, c.line);
   switch (c.op) {
     case Op::kUnits:
       out += c.metric ? ",\"length\":\"mm\"" : ",\"length\":\"inch\"";
@@ -176,30 +229,36 @@ std::string ToJsonLine(const Canon& c) {
       Axes(out, c);
       Feed(out, c);
       if (c.exact_stop) out += ",\"exact_stop\":true";
-      out += fmt::format(",\"center\":[{},{},{}]", Num(c.center[0]), Num(c.center[1]), Num(c.center[2]));
+      out += ",\"center\":[";
+      Num(out, c.center[0]);
+      out += ',';
+      Num(out, c.center[1]);
+      out += ',';
+      Num(out, c.center[2]);
+      out += ']';
       out += c.cw ? ",\"dir\":\"cw\"" : ",\"dir\":\"ccw\"";
       Key(out, "plane");
       Str(out, c.plane);
       Key(out, "angle");
-      out += Num(c.turns);
+      Num(out, c.turns);
       break;
     case Op::kDwell:
       Key(out, "seconds");
-      out += Num(c.value);
+      Num(out, c.value);
       break;
     case Op::kSpindle:
       Key(out, "dir");
       Str(out, c.text);
       Key(out, "s");
-      out += Num(c.value);
+      Num(out, c.value);
       if (c.text == "orient") {
         Key(out, "angle");
-        out += Num(c.value2);
+        Num(out, c.value2);
       }
       break;
     case Op::kCoolant:
       Key(out, "m");
-      out += std::to_string(c.code);
+      Int(out, c.code);
       Key(out, "mode");
       Str(out, c.text);
       break;
@@ -210,17 +269,17 @@ std::string ToJsonLine(const Canon& c) {
       break;
     case Op::kStop:
       Key(out, "m");
-      out += std::to_string(c.code);
+      Int(out, c.code);
       out += c.flag ? ",\"optional\":true" : ",\"optional\":false";
       break;
     case Op::kEnd:
       Key(out, "m");
-      out += std::to_string(c.code);
+      Int(out, c.code);
       out += c.flag ? ",\"shuttle\":true" : ",\"shuttle\":false";
       break;
     case Op::kPallet:
       Key(out, "m");
-      out += std::to_string(c.code);
+      Int(out, c.code);
       break;
     case Op::kMessage:
     case Op::kAlarm:
@@ -230,14 +289,14 @@ std::string ToJsonLine(const Canon& c) {
       break;
     case Op::kAux:
       Key(out, "m");
-      out += std::to_string(c.code);
+      Int(out, c.code);
       break;
     case Op::kRegrid:
       Axes(out, c);
       break;
     case Op::kProbe:
       Key(out, "g");
-      out += std::to_string(c.code);
+      Int(out, c.code);
       Axes(out, c);
       Feed(out, c);
       Key(out, "result");
@@ -272,13 +331,12 @@ std::string ToJsonLine(const Canon& c) {
       Key(out, "tool");
       Str(out, c.text);
       Key(out, "length");
-      out += Num(c.value);
+      Num(out, c.value);
       Key(out, "diameter");
-      out += Num(c.value2);
+      Num(out, c.value2);
       break;
   }
   out += '}';
-  return out;
 }
 
 }  // namespace cell::interp

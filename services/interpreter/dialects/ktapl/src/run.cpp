@@ -43,8 +43,8 @@ bool IsDigit(char c) {
 bool IsAlpha(char c) {
   return std::isalpha(static_cast<unsigned char>(c)) != 0;
 }
-char Up(char c) {
-  return static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+char Up(char c) {  // ASCII only: std::toupper's locale lookup showed in profiles
+  return (c >= 'a' && c <= 'z') ? static_cast<char>(c - 'a' + 'A') : c;
 }
 
 int AxisOfLetter(char c) {
@@ -86,9 +86,13 @@ struct RawWord {
   WordKind kind = WordKind::kNumber;
   RawNum num;
   int param = 0;
-  std::string expr;
+  std::string_view expr;  // into the block text, which outlives the block's execution
   int col = 1;
 };
+
+// At most 40 words fit in an 80-character block; 48 leaves room for IFT action words.
+constexpr size_t kMaxWords = 48;
+using RawWords = InlineVec<RawWord, kMaxWords>;
 
 struct Word {
   char letter = 0;
@@ -98,11 +102,19 @@ struct Word {
   int col = 1;
 };
 
+using Words = InlineVec<Word, kMaxWords>;
+
+// A G code of the block and its column.
+struct GWord {
+  int first = 0;  // the code
+  int second = 1;  // column
+};
+
 struct ParsedBlock {
   bool deleted = false;
   bool has_n = false;
   RawNum n;  // the sequence number as written (passed to G800-series cycles as L814)
-  std::vector<RawWord> words;
+  RawWords words;
   std::vector<Statement> stmts;
   std::string comment;
 };
@@ -147,7 +159,11 @@ double ScaleLiteral(char letter, const RawNum& n, bool metric, bool dwell, bool 
   return n.neg ? -v : v;
 }
 
-// Parses one block (or an IFT action fragment) into words and statements.
+void AddWord(RawWords& words, const RawWord& w) {
+  if (!words.push_back(w)) Fail(w.col, "TOO MANY WORDS IN THE BLOCK");
+}
+
+// Parses one block (or an IFT action fragment) into words and statements. Expression words view `s`.
 ParsedBlock ParseBlock(std::string_view s, bool fragment) {
   ParsedBlock pb;
   size_t i = 0;
@@ -227,10 +243,10 @@ ParsedBlock ParseBlock(std::string_view s, bool fragment) {
         ++i;
       }
       w.kind = WordKind::kExpr;
-      w.expr = std::string(s.substr(start, i - start));
-      if (Trim(w.expr).empty()) Fail(w.col, "EXPRESSION EXPECTED AFTER ','");
+      w.expr = s.substr(start, i - start);
+      if (TrimView(w.expr).empty()) Fail(w.col, "EXPRESSION EXPECTED AFTER ','");
       if (i < s.size() && s[i] == ',') ++i;
-      pb.words.push_back(std::move(w));
+      AddWord(pb.words, w);
       continue;
     }
     bool neg = false;
@@ -250,7 +266,7 @@ ParsedBlock ParseBlock(std::string_view s, bool fragment) {
       if (n > 3999) Fail(w.col, "Error L numbers range from 0..3999");
       w.kind = neg ? WordKind::kNegParam : WordKind::kParam;
       w.param = static_cast<int>(n);
-      pb.words.push_back(std::move(w));
+      AddWord(pb.words, w);
       continue;
     }
     RawNum num;
@@ -277,7 +293,7 @@ ParsedBlock ParseBlock(std::string_view s, bool fragment) {
     if (digits > 9) Fail(w.col, fmt::format("TOO MANY DIGITS IN {} WORD", w.letter));
     num.as_written = v;
     w.num = num;
-    pb.words.push_back(std::move(w));
+    AddWord(pb.words, w);
   }
   return pb;
 }
@@ -313,7 +329,7 @@ struct FixtureLine {
 };
 
 struct BlockCtx {
-  std::vector<RawWord> words;
+  RawWords words;
   std::optional<int> jump;
   int jump_col = 1;
   bool end = false;
@@ -337,7 +353,7 @@ class KtRun final : public Run, public ExprContext {
   // Tool-table files: applies G70/G71 and (TLD,...) of one line.
   void LoadToolLine(std::string_view line) {
     if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
-    std::string t = Trim(line);
+    std::string_view t = TrimView(line);
     if (t.empty() || t == "%") return;
     ParsedBlock pb = ParseBlock(line, false);
     for (const auto& w : pb.words) {
@@ -381,7 +397,7 @@ class KtRun final : public Run, public ExprContext {
   void SetParam(int n, double v, int col);
   void DeleteParam(int n);
   int EvalParamRef(const std::string& text, int col);
-  double Eval(const std::string& text, int col);
+  double Eval(std::string_view text, int col);
   bool EvalCond(const std::string& text, int col);
   std::string ExpandName(const std::string& name, int col);
 
@@ -392,7 +408,7 @@ class KtRun final : public Run, public ExprContext {
   void ResetAtEnd();
   void EmitMove(const std::array<double, kAxisCount>& target, uint32_t moved, bool rapid, double feed,
                 FeedMode fm, bool exact, const std::array<double, kAxisCount>& travel, uint32_t travel_mask);
-  void Arc(const std::vector<Word>& words, bool cw, int col, double feed, FeedMode fm);
+  void Arc(const Words& words, bool cw, int col, double feed, FeedMode fm);
   void ApplyTool();
   void SetUnits(bool metric);
 
@@ -852,7 +868,7 @@ bool KtRun::ActiveCode(char gm, int code) {
   }
 }
 
-double KtRun::Eval(const std::string& text, int col) {
+double KtRun::Eval(std::string_view text, int col) {
   try {
     return EvalValue(text, *this);
   } catch (const ExprError& e) {
@@ -922,7 +938,7 @@ void KtRun::ExecBlock(std::string_view text, int line_no, size_t start) {
   (void)line_no;
   if (!text.empty() && text.back() == '\r') text.remove_suffix(1);
   if (text.size() + 1 > 80) Fail(80, "BLOCK EXCEEDS 80 CHARACTERS");
-  std::string t = Trim(text);
+  std::string_view t = TrimView(text);
   if (t.empty() || t == "%") return;
   ParsedBlock pb = ParseBlock(text, false);
   if (pb.deleted && block_delete_) return;
@@ -1165,7 +1181,9 @@ void KtRun::ExecStatement(const Statement& st, BlockCtx& bc, bool in_ift) {
     auto parts = SplitTopLevel(st.body, ',');
     if (parts.size() < 2) Fail(st.col, "IFT NEEDS A CONDITION AND AN ACTION");
     std::string cond = parts[0];
-    std::string action = st.body.substr(cond.size() + 1);
+    // A view into st.body: the action's expression words must outlive this branch (they run with the
+    // block's Type I words).
+    std::string_view action = std::string_view(st.body).substr(cond.size() + 1);
     if (!EvalCond(cond, st.col)) return;
     ParsedBlock ab;
     try {
@@ -1184,7 +1202,7 @@ void KtRun::ExecStatement(const Statement& st, BlockCtx& bc, bool in_ift) {
       inner.col = st.col;
       ExecStatement(inner, bc, true);
     }
-    for (auto& w : ab.words) bc.words.push_back(w);
+    for (auto& w : ab.words) AddWord(bc.words, w);
   } else if (m == "GTO") {
     std::string v = Trim(st.body);
     if (v.empty() || v.size() > 4 || !std::all_of(v.begin(), v.end(), IsDigit) || std::stoi(v) < 1) {
@@ -1901,7 +1919,7 @@ void KtRun::ExecTypeI(BlockCtx& bc, const ParsedBlock* pb) {
   };
 
   // G codes first: they decide the units and the cycle mode of the block.
-  std::vector<std::pair<int, int>> gs;
+  InlineVec<GWord, kMaxWords> gs;  // fits: one per raw word
   for (const auto& w : raw) {
     if (w.letter != 'G') continue;
     bool dropped;
@@ -1939,7 +1957,7 @@ void KtRun::ExecTypeI(BlockCtx& bc, const ParsedBlock* pb) {
   bool pass800 = !running_cycle && !g77 && new_cycle >= 801;
 
   bool dwell = std::any_of(gs.begin(), gs.end(), [](auto p) { return p.first == 4; });
-  std::vector<Word> words;
+  Words words;
   for (const auto& w : raw) {
     if (w.letter == 'G') continue;
     bool dropped;
@@ -1952,7 +1970,7 @@ void KtRun::ExecTypeI(BlockCtx& bc, const ParsedBlock* pb) {
   bool g92 = false, g98 = false, g99 = false, probe = false;
   int probe_g = 0, probe_cycle = 0;
   bool plane_set = false, b20 = false, b21 = false;
-  std::vector<std::pair<int, int>> passed_g;
+  InlineVec<GWord, kMaxWords> passed_g;
   for (auto [g, col] : gs) {
     if (pass800 && !(g == 77 || g == 78 || g == 70 || g == 71 || g == 80 || g == 800 ||
                      (g >= 801 && g <= 899) || (g >= 81 && g <= 89))) {
@@ -2634,7 +2652,7 @@ void KtRun::ExecTypeI(BlockCtx& bc, const ParsedBlock* pb) {
   }
 }
 
-void KtRun::Arc(const std::vector<Word>& words, bool cw, int col, double feed, FeedMode fm) {
+void KtRun::Arc(const Words& words, bool cw, int col, double feed, FeedMode fm) {
   // Plane axes (first, second, normal); App. H: G18 is (Z, X), G20/G21 substitute the co-axes.
   int p1, p2, pn;
   if (plane_ == 17) {

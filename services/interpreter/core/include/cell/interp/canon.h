@@ -86,5 +86,7 @@ struct Canon {
 
 // One JSON object on a single line, without the trailing newline (DESIGN §4).
 std::string ToJsonLine(const Canon& c);
+// The same, appended to `out` (no allocation once `out` has grown: the CLI's hot path).
+void AppendJsonLine(std::string& out, const Canon& c);
 
 }  // namespace cell::interp
