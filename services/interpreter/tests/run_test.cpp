@@ -1,4 +1,5 @@
 // Library-level tests of the run API and the metadata helper.
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include "cell/error/error.h"
@@ -33,6 +34,36 @@ TEST(Run, FirstOpIsUnitsAndMotionCarriesUsedAxes) {
   EXPECT_EQ(out[1], R"({"op":"rapid","line":3,"x":10.0000})");
   EXPECT_EQ(out[2], R"({"op":"rapid","line":4,"x":10.0000,"y":5.0000,"z":2.0000})");
   EXPECT_EQ(out[3], R"({"op":"end","line":5,"m":30,"shuttle":true})");
+}
+
+// Parsed blocks of subroutine bodies and GTO loops are cached by (text, offset) in a fixed table; more
+// distinct repeated blocks than the table has slots must still each run their own words, and a cached
+// expression word must see the current parameter values.
+TEST(Run, RepeatedBlocksRunTheirOwnWordsThroughTheParseCache) {
+  std::string text = "%\nG71 G90 G0 X0 Y0 F0\n";
+  const int kSubs = 20, kBlocks = 20;  // 400 distinct repeated blocks
+  for (int k = 1; k <= kSubs; ++k) {
+    text += "(DFS,S" + std::to_string(k) + ")\n";
+    for (int b = 0; b < kBlocks; ++b) text += "G01 G91 F100. X," + std::to_string(k) + ".*L1\n";
+    text += "(END)\n";
+  }
+  text += "(PAR,L101=1.)\n(LBL,1)\n";
+  for (int k = 1; k <= kSubs; ++k) text += "(CLS,S" + std::to_string(k) + ",1,L1=L101)\n";
+  text += "(PAR,L101=L101+1.)\n(IFT,L101<3.5,(GTO,1))\nM30\n";
+  auto out = RunAll(text);
+  // Passes with L1 = 1, 2, 3: every block of S<k> moves X by k*L1 mm. (units, the moves, end: the G0 to
+  // where the slides already are moves nothing and emits nothing.)
+  ASSERT_EQ(out.size(), 1u + 3u * kSubs * kBlocks + 1u);
+  double x = 0;
+  for (int pass = 1; pass <= 3; ++pass) {
+    for (int k = 1; k <= kSubs; ++k) {
+      for (int b = 0; b < kBlocks; ++b) {
+        x += k * pass;
+        size_t i = 1 + ((pass - 1) * kSubs + (k - 1)) * kBlocks + b;
+        ASSERT_NE(out[i].find(fmt::format("\"x\":{:.4f},", x)), std::string::npos) << i << " " << out[i];
+      }
+    }
+  }
 }
 
 TEST(Run, UnknownAndUnimplementedDialects) {

@@ -84,30 +84,39 @@ void Num(std::string& out, double v) {
   }
   if (std::fabs(v) < 5e-7) v = 0;  // no "-0.000000"
   double a = std::fabs(v) * 1e6;
-  double frac = a - std::floor(a);
-  if (a < 1e12 && std::fabs(frac - 0.5) > 1e-3) {
-    auto r = static_cast<uint64_t>(std::llround(a));
-    char buf[32];
-    char* e = buf + sizeof buf;
-    char* p = e;
-    uint64_t ip = r / 1000000, fp = r % 1000000;
-    int trim = 0;  // trailing zeros dropped, at most 2 (four decimals stay)
-    while (trim < 2 && fp % 10 == 0) {
-      fp /= 10;
-      ++trim;
+  if (a < 1e12) {
+    auto whole = static_cast<uint64_t>(a);
+    double frac = a - static_cast<double>(whole);
+    if (std::fabs(frac - 0.5) > 1e-3) {
+      uint64_t r = whole + (frac > 0.5 ? 1 : 0);
+      char buf[32];
+      char* e = buf + sizeof buf;
+      char* p = e;
+      uint64_t ip = r / 1000000;
+      auto fp = static_cast<uint32_t>(r % 1000000);
+      static constexpr char kPairs[] =
+          "00010203040506070809101112131415161718192021222324252627282930313233343536373839"
+          "40414243444546474849505152535455565758596061626364656667686970717273747576777879"
+          "8081828384858687888990919293949596979899";
+      for (int k = 0; k < 3; ++k) {  // six fraction digits, two at a time
+        uint32_t d = fp % 100;
+        fp /= 100;
+        p -= 2;
+        p[0] = kPairs[2 * d];
+        p[1] = kPairs[2 * d + 1];
+      }
+      char* end = e;
+      if (end[-1] == '0') --end;  // at most two trailing zeros dropped: four decimals stay
+      if (end[-1] == '0') --end;
+      *--p = '.';
+      do {
+        *--p = static_cast<char>('0' + ip % 10);
+        ip /= 10;
+      } while (ip);
+      if (v < 0) *--p = '-';
+      out.append(p, static_cast<size_t>(end - p));
+      return;
     }
-    for (int k = 0; k < 6 - trim; ++k) {
-      *--p = static_cast<char>('0' + fp % 10);
-      fp /= 10;
-    }
-    *--p = '.';
-    do {
-      *--p = static_cast<char>('0' + ip % 10);
-      ip /= 10;
-    } while (ip);
-    if (v < 0) *--p = '-';
-    out.append(p, static_cast<size_t>(e - p));
-    return;
   }
   std::string s = fmt::format("{:.6f}", v);
   auto dot = s.find('.');

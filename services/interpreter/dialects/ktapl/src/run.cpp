@@ -154,8 +154,9 @@ bool IntegerLetter(char c) {
 }
 
 double ScaleLiteral(char letter, const RawNum& n, bool metric, bool dwell, bool passing) {
+  static constexpr double kPow10[] = {1.0, 10.0, 100.0, 1000.0, 10000.0};
   double v = n.as_written;
-  if (!n.point) v /= std::pow(10.0, ImpliedDecimals(letter, metric, dwell, passing));
+  if (!n.point) v /= kPow10[ImpliedDecimals(letter, metric, dwell, passing)];
   return n.neg ? -v : v;
 }
 
@@ -319,6 +320,39 @@ struct Level {
   std::string name;
   std::map<int, double> locals;
   std::deque<std::pair<int, std::pair<size_t, int>>> labels;  // label -> (block start, line)
+  bool jumped = false;  // a GTO has run here: blocks may run again
+};
+
+// Parsed blocks that run more than once (subroutine and cycle bodies, GTO loops) are kept in a small
+// direct-mapped table keyed by (text, offset), so a loop parses each block once. The entry pins its text:
+// expression words view it. Size is fixed, so memory does not grow with the program.
+class BlockCache {
+ public:
+  const ParsedBlock* Find(const std::string* text, size_t off) const {
+    const Entry& e = table_[Slot(text, off)];
+    return (e.valid && e.text.get() == text && e.off == off) ? &e.pb : nullptr;
+  }
+  const ParsedBlock& Put(const std::shared_ptr<const std::string>& text, size_t off, ParsedBlock&& pb) {
+    Entry& e = table_[Slot(text.get(), off)];
+    e.valid = true;
+    e.text = text;
+    e.off = off;
+    e.pb = std::move(pb);
+    return e.pb;
+  }
+
+ private:
+  static constexpr size_t kSlots = 256;
+  struct Entry {
+    bool valid = false;
+    std::shared_ptr<const std::string> text;
+    size_t off = 0;
+    ParsedBlock pb;
+  };
+  static size_t Slot(const std::string* text, size_t off) {
+    return (reinterpret_cast<uintptr_t>(text) / 16 + off * 2654435761u) % kSlots;
+  }
+  std::vector<Entry> table_ = std::vector<Entry>(kSlots);
 };
 
 struct FixtureLine {
@@ -486,6 +520,7 @@ class KtRun final : public Run, public ExprContext {
   void CloseFile();
   std::map<std::string, Def> defs_;
   std::map<std::string, Def> lib_cache_;
+  BlockCache cache_;
   int local_defs_ = 0;
 };
 
@@ -940,16 +975,24 @@ void KtRun::ExecBlock(std::string_view text, int line_no, size_t start) {
   if (text.size() + 1 > 80) Fail(80, "BLOCK EXCEEDS 80 CHARACTERS");
   std::string_view t = TrimView(text);
   if (t.empty() || t == "%") return;
-  ParsedBlock pb = ParseBlock(text, false);
-  if (pb.deleted && block_delete_) return;
   size_t li = levels_.size() - 1;
+  Level& lv = levels_[li];
+  ParsedBlock fresh;
+  const ParsedBlock* cached = nullptr;
+  bool repeats = li > 0 || lv.jumped;
+  if (repeats) cached = cache_.Find(lv.text.get(), start);
+  if (!cached) {
+    fresh = ParseBlock(text, false);
+    if (repeats) cached = &cache_.Put(lv.text, start, std::move(fresh));
+  }
+  const ParsedBlock& pb = cached ? *cached : fresh;
+  if (pb.deleted && block_delete_) return;
   for (const auto& st : pb.stmts) {
     if (st.mnemonic == "DFS" || st.mnemonic == "DFC") {
       Define(st, li);
       return;
     }
   }
-  (void)start;
   BlockCtx bc;
   bc.words = pb.words;
   bc.items = static_cast<int>(pb.words.size() + pb.stmts.size());
@@ -1111,6 +1154,7 @@ void KtRun::DoEnd(int col) {
 
 void KtRun::DoJump(int label, int col) {
   Level& lv = levels_.back();
+  lv.jumped = true;
   for (auto it = lv.labels.begin(); it != lv.labels.end(); ++it) {
     if (it->first == label) {
       auto entry = *it;
@@ -2774,7 +2818,7 @@ void KtRun::Arc(const Words& words, bool cw, int col, double feed, FeedMode fm) 
   c.f_mode = fm;
   c.exact_stop = !g01_;
   c.cw = cw;
-  c.plane = std::string(AxisName(p1)) + AxisName(p2);
+  c.plane.assign({AxisName(p1)[0], AxisName(p2)[0]});
   c.turns = sweep;
   Emit(c);
 }
