@@ -146,8 +146,9 @@ int main(int argc, char** argv) {
     std::fwrite(out.data(), 1, out.size(), stdout);
     out.clear();
   };
+  cell::interp::Step s;
   for (;;) {
-    cell::interp::Step s = run->Next();
+    run->NextInto(s);
     if (s.kind == cell::interp::Step::kCanon) {
       cell::interp::AppendJsonLine(out, s.canon);
       out += '\n';

@@ -3,17 +3,9 @@
 #include <fmt/format.h>
 
 #include <cmath>
+#include <string_view>
 
 namespace cell::interp {
-
-const char* AxisName(int axis) {
-  static const char* const kNames[kAxisCount] = {"x", "y", "z", "a", "b", "c", "u", "v", "w"};
-  return (axis >= 0 && axis < kAxisCount) ? kNames[axis] : "?";
-}
-
-bool IsRotaryAxis(int axis) {
-  return axis == kA || axis == kB || axis == kC;
-}
 
 const char* OpName(Op op) {
   switch (op) {
@@ -174,9 +166,11 @@ void Key(std::string& out, const char* k) {
 }
 
 void Axes(std::string& out, const Canon& c) {
+  static constexpr std::string_view kKeys[kAxisCount] = {",\"x\":", ",\"y\":", ",\"z\":", ",\"a\":", ",\"b\":",
+                                                         ",\"c\":", ",\"u\":", ",\"v\":", ",\"w\":"};
   for (int i = 0; i < kAxisCount; ++i) {
     if (c.used & (1u << i)) {
-      Key(out, AxisName(i));
+      out += kKeys[i];
       Num(out, c.pos[i]);
     }
   }
@@ -191,7 +185,7 @@ void Axes(std::string& out, const Canon& c) {
 }
 
 void Feed(std::string& out, const Canon& c) {
-  Key(out, "f");
+  out += std::string_view(",\"f\":");
   Num(out, c.feed);
   switch (c.f_mode) {
     case FeedMode::kPerMinute:
@@ -217,9 +211,9 @@ std::string ToJsonLine(const Canon& c) {
 }
 
 void AppendJsonLine(std::string& out, const Canon& c) {
-  out += "{\"op\":\"";
+  out += std::string_view("{\"op\":\"");
   out += OpName(c.op);
-  out += "\",\"line\":";
+  out += std::string_view("\",\"line\":");
   Int(out, c.line);
   switch (c.op) {
     case Op::kUnits:

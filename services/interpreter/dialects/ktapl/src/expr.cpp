@@ -10,8 +10,8 @@ namespace {
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kMax = 999999999.0;
 
-char Up(char c) {
-  return static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+char Up(char c) {  // ASCII only (std::toupper's locale lookup is slow and not wanted)
+  return (c >= 'a' && c <= 'z') ? static_cast<char>(c - 'a' + 'A') : c;
 }
 
 bool IsValueLetter(char c) {

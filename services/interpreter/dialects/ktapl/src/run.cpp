@@ -381,6 +381,7 @@ class KtRun final : public Run, public ExprContext {
   explicit KtRun(const RunOptions& o);
 
   Step Next() override;
+  void NextInto(Step& s) override;
   std::map<int, double> MachineParameters() const override { return machine_; }
   std::vector<ToolEntry> Tools() const override { return tools_; }
 
@@ -580,15 +581,20 @@ KtRun::KtRun(const RunOptions& o) : env_(o.env ? o.env : &default_env_) {
 }
 
 Step KtRun::Next() {
+  Step s;
+  NextInto(s);
+  return s;
+}
+
+void KtRun::NextInto(Step& s) {
   while (out_.empty() && !finished_) StepOnce();
   if (!out_.empty()) {
-    Step s;
     s.kind = Step::kCanon;
     s.canon = std::move(out_.front());
     out_.pop_front();
-    return s;
+    return;
   }
-  return final_;
+  s = final_;
 }
 
 void KtRun::Finish(Step::Kind kind) {
@@ -1284,12 +1290,12 @@ void KtRun::ExecStatement(const Statement& st, BlockCtx& bc, bool in_ift) {
       c.code = 1;
       OpenFile(c.text, "AS", false, st.col);
       file_open_ = true;
-      Emit(c);
+      Emit(std::move(c));
       return;
     }
     Canon c = Base(Op::kMessage);
     c.text = Trim(body);
-    Emit(c);
+    Emit(c);  // copied: the file write below repeats the text
     if (file_open_) {
       Canon w = Base(Op::kFileWrite);
       w.text = c.text.substr(0, 80);
@@ -1308,7 +1314,7 @@ void KtRun::ExecStatement(const Statement& st, BlockCtx& bc, bool in_ift) {
     c.code = 1;
     OpenFile(c.text, "AS", false, st.col);
     file_open_ = true;
-    Emit(c);
+    Emit(std::move(c));
   } else if (m == "OPF") {
     Opf(st);
   } else if (m == "CLF") {
@@ -1339,7 +1345,7 @@ void KtRun::ExecStatement(const Statement& st, BlockCtx& bc, bool in_ift) {
       }
     }
     c.text = args;
-    Emit(c);
+    Emit(c);  // copied: the environment is asked about the same operation
     bool done = env_->FileOperation(c);
     if (done) {
       if (m == "DLF") {
@@ -1367,7 +1373,7 @@ void KtRun::ExecStatement(const Statement& st, BlockCtx& bc, bool in_ift) {
       if (ch != ' ') spec += static_cast<char>(std::toupper(static_cast<unsigned char>(ch)));
     }
     c.text = st.has_body ? spec : "SAVE";
-    Emit(c);
+    Emit(c);  // copied: the wait below still reads the spec
     if (m == "WAI") env_->WaitInputs(c.text);
   } else if (m == "TLD") {
     Tld(st);
@@ -1381,7 +1387,7 @@ void KtRun::ExecStatement(const Statement& st, BlockCtx& bc, bool in_ift) {
         tools_.clear();
         Canon c = Base(Op::kToolData);
         c.text = "*";
-        Emit(c);
+        Emit(std::move(c));
       } else if (k == "H") {
         fixtures_ = {};
         active_h_ = 0;
@@ -1429,7 +1435,7 @@ void KtRun::ExecStatement(const Statement& st, BlockCtx& bc, bool in_ift) {
   } else if (m == "EVT") {
     Canon c = Base(Op::kEvent);
     c.text = Trim(st.body);
-    Emit(c);
+    Emit(std::move(c));
   } else {
     Fail(st.col, "TYPE II COMMAND SYNTAX ERROR");
   }
@@ -1572,7 +1578,7 @@ void KtRun::Opf(const Statement& st) {
   c.flag = append;
   OpenFile(c.text, type, append, st.col);
   file_open_ = true;
-  Emit(c);
+  Emit(std::move(c));
 }
 
 void KtRun::Fwr(const Statement& st) {
@@ -1797,7 +1803,7 @@ void KtRun::Tld(const Statement& st) {
   c.text = it->tool;
   c.value = it->length;
   c.value2 = it->diameter;
-  Emit(c);
+  Emit(std::move(c));
   ApplyTool();
 }
 
@@ -1919,7 +1925,7 @@ void KtRun::EmitMove(const std::array<double, kAxisCount>& target, uint32_t move
     c.f_mode = fm;
     c.exact_stop = exact;
   }
-  Emit(c);
+  Emit(std::move(c));
 }
 
 void KtRun::ExecTypeI(BlockCtx& bc, const ParsedBlock* pb) {
@@ -2079,7 +2085,7 @@ void KtRun::ExecTypeI(BlockCtx& bc, const ParsedBlock* pb) {
         c.pos = pos_;
         c.used = used_;
         c.text = "tool_ok";
-        Emit(c);
+        Emit(std::move(c));
         break;
       }
       case 39:
@@ -2300,7 +2306,7 @@ void KtRun::ExecTypeI(BlockCtx& bc, const ParsedBlock* pb) {
     selected_tool_ = ToolName(t->v);
     Canon c = Base(Op::kToolSelect);
     c.text = selected_tool_;
-    Emit(c);
+    Emit(std::move(c));
   }
   bool spindle_cmd = false;
   const Word* s = find('S');
@@ -2323,7 +2329,7 @@ void KtRun::ExecTypeI(BlockCtx& bc, const ParsedBlock* pb) {
         c = Base(Op::kSpindle);
         c.text = code == 3 ? "cw" : "ccw";
         c.value = speed_;
-        Emit(c);
+        Emit(std::move(c));
         break;
       case 19:
         spindle_ = 19;
@@ -2331,7 +2337,7 @@ void KtRun::ExecTypeI(BlockCtx& bc, const ParsedBlock* pb) {
         c.text = "orient";
         c.value = speed_;
         c.value2 = s ? s->v : 0;
-        Emit(c);
+        Emit(std::move(c));
         break;
       case 7:
       case 8:
@@ -2350,7 +2356,7 @@ void KtRun::ExecTypeI(BlockCtx& bc, const ParsedBlock* pb) {
         if (code >= 57) aux_coolant_ = code, coolant_ = coolant_ == 9 ? 9 : coolant_;
         if (code == 51) m51_ = true, m52_ = false;
         if (code == 52) m52_ = true, m51_ = false;
-        Emit(c);
+        Emit(std::move(c));
         break;
       }
       case 20:
@@ -2373,12 +2379,12 @@ void KtRun::ExecTypeI(BlockCtx& bc, const ParsedBlock* pb) {
         if (code == 49) m49_ = true;
         c = Base(Op::kAux);
         c.code = code;
-        Emit(c);
+        Emit(std::move(c));
         break;
       case 99:
         c = Base(Op::kAlarm);
         c.text = "M99 alarm - see MAIN display";
-        Emit(c);
+        Emit(std::move(c));
         break;
       default:
         break;
@@ -2388,7 +2394,7 @@ void KtRun::ExecTypeI(BlockCtx& bc, const ParsedBlock* pb) {
     Canon c = Base(Op::kSpindle);
     c.text = spindle_ == 3 ? "cw" : "ccw";
     c.value = speed_;
-    Emit(c);
+    Emit(std::move(c));
   }
 
   // Feed.
@@ -2443,7 +2449,7 @@ void KtRun::ExecTypeI(BlockCtx& bc, const ParsedBlock* pb) {
     if (secs < 0.1 || secs > 99999.9) Fail(f->col, "G04 DWELL MUST BE F.1-F99999.9 SECONDS");
     Canon c = Base(Op::kDwell);
     c.value = secs;
-    Emit(c);
+    Emit(std::move(c));
   } else if (g92) {
     Canon c = Base(Op::kRegrid);
     for (const auto& w : words) {
@@ -2454,7 +2460,7 @@ void KtRun::ExecTypeI(BlockCtx& bc, const ParsedBlock* pb) {
     }
     c.pos = pos_;
     c.used = used_;
-    Emit(c);
+    Emit(std::move(c));
   } else if (g98 || g99) {
     if (g99) g98_ = {};
     if (g98) {
@@ -2608,7 +2614,7 @@ void KtRun::ExecTypeI(BlockCtx& bc, const ParsedBlock* pb) {
         used_ |= axis_mask;
         c.pos = pos_;
         c.used = used_;
-        Emit(c);
+        Emit(std::move(c));
       } else if (b_moves && b_index_ && (axis_mask & (1u << kZ)) && std::fabs(target[kZ] - pos_[kZ]) > 1e-9) {
         // Index B (with X, Y) first, then Z.
         std::array<double, kAxisCount> first = target;
@@ -2632,7 +2638,7 @@ void KtRun::ExecTypeI(BlockCtx& bc, const ParsedBlock* pb) {
         c = Base(Op::kStop);
         c.code = after_m;
         c.flag = after_m == 1;
-        Emit(c);
+        Emit(std::move(c));
         if (spindle_ == 3 || spindle_ == 4) spindle_ = 5;
         coolant_ = 9;
         aux_coolant_ = 0;
@@ -2642,12 +2648,12 @@ void KtRun::ExecTypeI(BlockCtx& bc, const ParsedBlock* pb) {
         c = Base(Op::kSpindle);
         c.text = "stop";
         c.value = speed_;
-        Emit(c);
+        Emit(std::move(c));
         break;
       case 6:
         c = Base(Op::kToolChange);
         c.text = selected_tool_;
-        Emit(c);
+        Emit(std::move(c));
         active_tool_ = selected_tool_;
         uat_ = 0;
         ApplyTool();
@@ -2661,19 +2667,19 @@ void KtRun::ExecTypeI(BlockCtx& bc, const ParsedBlock* pb) {
         c = Base(Op::kCoolant);
         c.code = 9;
         c.text = "off";
-        Emit(c);
+        Emit(std::move(c));
         break;
       case 23:
       case 24:
         m24_ = after_m == 24;
         c = Base(Op::kAux);
         c.code = after_m;
-        Emit(c);
+        Emit(std::move(c));
         break;
       case 60:
         c = Base(Op::kPallet);
         c.code = 60;
-        Emit(c);
+        Emit(std::move(c));
         g01_ = false;
         u88_x_ = 0.254;
         u88_y_ = 0;
@@ -2683,7 +2689,7 @@ void KtRun::ExecTypeI(BlockCtx& bc, const ParsedBlock* pb) {
         c = Base(Op::kEnd);
         c.code = after_m;
         c.flag = after_m == 30;
-        Emit(c);
+        Emit(std::move(c));
         ResetAtEnd();
         Finish(Step::kEnd);
         break;
@@ -2820,7 +2826,7 @@ void KtRun::Arc(const Words& words, bool cw, int col, double feed, FeedMode fm) 
   c.cw = cw;
   c.plane.assign({AxisName(p1)[0], AxisName(p2)[0]});
   c.turns = sweep;
-  Emit(c);
+  Emit(std::move(c));
 }
 
 }  // namespace

@@ -12,9 +12,14 @@ namespace cell::interp {
 enum Axis : int { kX = 0, kY, kZ, kA, kB, kC, kU, kV, kW, kAxisCount };
 
 // Lower-case JSON key of an axis ("x" .. "w").
-const char* AxisName(int axis);
+inline const char* AxisName(int axis) {
+  static constexpr const char* kNames[kAxisCount] = {"x", "y", "z", "a", "b", "c", "u", "v", "w"};
+  return (axis >= 0 && axis < kAxisCount) ? kNames[axis] : "?";
+}
 // True for the rotary axes A, B, C (degrees); the others are linear (millimetres).
-bool IsRotaryAxis(int axis);
+inline bool IsRotaryAxis(int axis) {
+  return axis == kA || axis == kB || axis == kC;
+}
 
 enum class Op {
   kUnits,       // first op of every run, and again whenever the unit mode changes

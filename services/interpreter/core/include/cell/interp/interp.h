@@ -109,6 +109,8 @@ class Run {
   // The next canonical command, or the end of the program, or the (first and last) error.
   // After kEnd or kError every further call returns the same result.
   virtual Step Next() = 0;
+  // The same, into a Step the caller keeps between calls (long runs: no per-command construction).
+  virtual void NextInto(Step& s) { s = Next(); }
   // Persistent machine parameters (L1000-L2999) as they stand; the service stores them between runs.
   virtual std::map<int, double> MachineParameters() const = 0;
   // The tool table as modified by TLD / ZTB.
