@@ -81,10 +81,10 @@ int main(int argc, char** argv) {
   cell::interp::RunOptions opt;
   opt.dialect = dialect;
   opt.program_name = program;
-  {
-    auto text = std::make_shared<std::string>();
-    if (!ReadFile(program, *text)) return Usage("cannot read " + program);
-    opt.program = std::move(text);
+  try {
+    opt.program = cell::interp::ProgramText::MapFile(program);  // memory flat however long the program
+  } catch (const cell::Error& e) {
+    return Usage(e.what());
   }
   if (!tools.empty()) {
     std::string text;

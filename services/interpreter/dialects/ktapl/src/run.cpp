@@ -300,7 +300,7 @@ ParsedBlock ParseBlock(std::string_view s, bool fragment) {
 }
 
 struct Def {
-  std::shared_ptr<const std::string> text;
+  std::shared_ptr<const ProgramText> text;
   size_t begin = 0, end = 0;
   int begin_line = 1;
   bool report_own = true;
@@ -309,7 +309,7 @@ struct Def {
 };
 
 struct Level {
-  std::shared_ptr<const std::string> text;
+  std::shared_ptr<const ProgramText> text;
   size_t begin = 0, end = 0;
   int begin_line = 1;
   size_t pos = 0;
@@ -328,11 +328,11 @@ struct Level {
 // expression words view it. Size is fixed, so memory does not grow with the program.
 class BlockCache {
  public:
-  const ParsedBlock* Find(const std::string* text, size_t off) const {
+  const ParsedBlock* Find(const ProgramText* text, size_t off) const {
     const Entry& e = table_[Slot(text, off)];
     return (e.valid && e.text.get() == text && e.off == off) ? &e.pb : nullptr;
   }
-  const ParsedBlock& Put(const std::shared_ptr<const std::string>& text, size_t off, ParsedBlock&& pb) {
+  const ParsedBlock& Put(const std::shared_ptr<const ProgramText>& text, size_t off, ParsedBlock&& pb) {
     Entry& e = table_[Slot(text.get(), off)];
     e.valid = true;
     e.text = text;
@@ -345,11 +345,11 @@ class BlockCache {
   static constexpr size_t kSlots = 256;
   struct Entry {
     bool valid = false;
-    std::shared_ptr<const std::string> text;
+    std::shared_ptr<const ProgramText> text;
     size_t off = 0;
     ParsedBlock pb;
   };
-  static size_t Slot(const std::string* text, size_t off) {
+  static size_t Slot(const ProgramText* text, size_t off) {
     return (reinterpret_cast<uintptr_t>(text) / 16 + off * 2654435761u) % kSlots;
   }
   std::vector<Entry> table_ = std::vector<Entry>(kSlots);
@@ -522,6 +522,8 @@ class KtRun final : public Run, public ExprContext {
   std::map<std::string, Def> defs_;
   std::map<std::string, Def> lib_cache_;
   BlockCache cache_;
+  static constexpr size_t kReleaseStep = 1 << 20;
+  size_t released_ = 0;  // main program bytes before this were released
   int local_defs_ = 0;
 };
 
@@ -568,11 +570,11 @@ KtRun::KtRun(const RunOptions& o) : env_(o.env ? o.env : &default_env_) {
   }
   metric_ = basic_metric_;
   tools_ = o.tools;
-  auto text = o.program ? o.program : std::make_shared<const std::string>(o.program_text);
+  auto text = o.program ? o.program : ProgramText::FromString(o.program_text);
   Level main;
   main.text = text;
   main.begin = 0;
-  main.end = text->size();
+  main.end = text->view().size();
   main.pos = 0;
   main.line = 1;
   main.begin_line = 1;
@@ -647,7 +649,7 @@ void KtRun::StepOnce() {
     }
     return;
   }
-  const std::string& text = *lv.text;
+  std::string_view text = lv.text->view();
   size_t start = lv.pos;
   size_t nl = text.find('\n', start);
   if (nl == std::string::npos || nl > lv.end) nl = lv.end;
@@ -655,6 +657,12 @@ void KtRun::StepOnce() {
   int line_no = lv.line;
   lv.pos = nl < lv.end ? nl + 1 : lv.end;
   lv.line++;
+  if (li == 0 && lv.pos - released_ >= kReleaseStep) {
+    // The main program runs forward: give back what it has passed (a mapped file faults back in if a GTO
+    // or a call returns there).
+    lv.text->Release(released_, lv.pos);
+    released_ = lv.pos;
+  }
   cur_own_ = lv.report_own;
   cur_line_ = lv.report_own ? line_no : lv.call_line;
   try {
@@ -1052,7 +1060,7 @@ void KtRun::Define(const Statement& st, size_t li) {
   d.name = name;
   size_t def_start = lv.pos;
   // Skip to the block holding (END).
-  const std::string& text = *lv.text;
+  std::string_view text = lv.text->view();
   size_t p = lv.pos;
   int line = lv.line;
   bool found = false;
@@ -1076,11 +1084,11 @@ void KtRun::Define(const Statement& st, size_t li) {
   lv.line = line;
   if (!defs_.count(name)) ++local_defs_;
   defs_[name] = d;
-  if (save && opt_.save) opt_.save(name, text.substr(def_start, p - def_start));
+  if (save && opt_.save) opt_.save(name, std::string(text.substr(def_start, p - def_start)));
 }
 
 std::optional<Def> KtRun::LoadLibrary(const std::string& name, const std::string& body) {
-  auto text = std::make_shared<const std::string>(body);
+  auto text = ProgramText::FromString(body);
   Def d;
   d.text = text;
   d.report_own = false;
@@ -1090,12 +1098,13 @@ std::optional<Def> KtRun::LoadLibrary(const std::string& name, const std::string
   size_t p = 0;
   int line = 1;
   d.begin = 0;
-  d.end = text->size();
-  while (p < text->size()) {
-    size_t nl = text->find('\n', p);
-    if (nl == std::string::npos) nl = text->size();
-    std::string_view b(text->data() + p, nl - p);
-    p = nl < text->size() ? nl + 1 : text->size();
+  std::string_view all = text->view();
+  d.end = all.size();
+  while (p < all.size()) {
+    size_t nl = all.find('\n', p);
+    if (nl == std::string::npos) nl = all.size();
+    std::string_view b(all.data() + p, nl - p);
+    p = nl < all.size() ? nl + 1 : all.size();
     ++line;
     for (const auto& s : FindStatements(b, nullptr)) {
       if ((s.mnemonic == "DFS" || s.mnemonic == "DFC") &&
@@ -1171,7 +1180,7 @@ void KtRun::DoJump(int label, int col) {
       return;
     }
   }
-  const std::string& text = *lv.text;
+  std::string_view text = lv.text->view();
   auto scan = [&](size_t from, int from_line, size_t to) -> std::optional<std::pair<size_t, int>> {
     size_t p = from;
     int line = from_line;

@@ -12,7 +12,8 @@
 //     else { report(s.diag); break; }                 // kError: the run stops at the first error
 //   }
 //
-// Memory does not grow with program length: the program text is scanned block by block.
+// Memory does not grow with program length: the program text is scanned block by block, and a mapped
+// program (ProgramText::MapFile) gives back the pages the run has passed.
 #pragma once
 
 #include <functional>
@@ -23,6 +24,7 @@
 #include <vector>
 
 #include "cell/interp/canon.h"
+#include "cell/interp/program_text.h"
 
 namespace cell::interp {
 
@@ -83,8 +85,9 @@ struct RunOptions {
   std::string dialect = "ktapl";  // ktapl, okuma, emco, balt
   std::string program_name;       // PROGRAM as given, used in diagnostics
   std::string program_text;
-  // Alternative to program_text that is shared instead of copied (large programs); used when set.
-  std::shared_ptr<const std::string> program;
+  // Alternative to program_text, shared instead of copied; used when set. ProgramText::MapFile maps a file
+  // (long programs: resident memory does not grow with their length).
+  std::shared_ptr<const ProgramText> program;
   // SAVE-d subroutines and cycles (and, for KT-APL, user overrides of the shipped G81-G89): name -> text.
   // Offline: files in --lib DIR; in the service: the program store. Return nullopt when unknown.
   std::function<std::optional<std::string>(const std::string& name)> library;

@@ -1,0 +1,37 @@
+// The text of a part program as the interpreter reads it: an owned string, or a read-only mapping of a
+// file. A mapped program is paged in as the run reaches it and the pages the run has passed are given
+// back (Release), so resident memory does not grow with program length; a GTO or a subroutine call back
+// into released text faults it in again from the page cache.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <string_view>
+
+namespace cell::interp {
+
+class ProgramText {
+ public:
+  static std::shared_ptr<const ProgramText> FromString(std::string text);
+  // Throws cell::Error(kNotFound / kInvalidArgument) when the file cannot be opened or mapped. An empty
+  // file is held as an empty string (mmap refuses length 0).
+  static std::shared_ptr<const ProgramText> MapFile(const std::string& path);
+
+  ProgramText(const ProgramText&) = delete;
+  ProgramText& operator=(const ProgramText&) = delete;
+  ~ProgramText();
+
+  std::string_view view() const { return view_; }
+  // Advice that bytes [from, to) are unlikely to be read soon: a mapping drops the whole pages inside
+  // that range from the process (the data stays valid). No effect on an owned string.
+  void Release(size_t from, size_t to) const;
+
+ private:
+  ProgramText() = default;
+  std::string owned_;
+  void* map_ = nullptr;
+  size_t map_len_ = 0;
+  std::string_view view_;
+};
+
+}  // namespace cell::interp
