@@ -181,8 +181,8 @@ double ExprParser::Primary() {
     return v;
   }
   if (c == '(') {
+    if (++depth_ > 8) Fail("Error - exceeds 8 open parentheses");  // at the ninth '('
     ++pos_;
-    if (++depth_ > 8) Fail("Error - exceeds 8 open parentheses");
     double v = Value();
     if (!Accept(')')) Fail("MISSING )");
     --depth_;
@@ -197,8 +197,8 @@ double ExprParser::Primary() {
     if (AcceptWord(name)) {
       if (Peek() == '(') {
         size_t at = save;
-        ++pos_;
         if (++depth_ > 8) Fail("Error - exceeds 8 open parentheses");
+        ++pos_;
         double a = Value();
         if (!Accept(')')) Fail("MISSING )");
         --depth_;
@@ -255,7 +255,16 @@ double ExprParser::Primary() {
       pos_ = save;
     }
   }
-  if (c == 'L') return ctx_.Param(ParamRef());
+  if (c == 'L') {
+    size_t at = pos_;
+    int n = ParamRef();
+    try {
+      return ctx_.Param(n);
+    } catch (ExprError& e) {
+      e.offset = at;  // the context does not know where the reference stands: point at it
+      throw;
+    }
+  }
   if (IsValueLetter(c)) {
     ++pos_;
     return ctx_.Letter(c);

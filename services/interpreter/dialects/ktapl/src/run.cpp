@@ -433,6 +433,8 @@ class KtRun final : public Run, public ExprContext {
   void DeleteParam(int n);
   int EvalParamRef(const std::string& text, int col);
   double Eval(std::string_view text, int col);
+  // 1-based column in the current block of `offset` within `text`, or `col` when `text` is not found.
+  int ExprCol(std::string_view text, size_t offset, int col) const;
   bool EvalCond(const std::string& text, int col);
   std::string ExpandName(const std::string& name, int col);
 
@@ -522,6 +524,7 @@ class KtRun final : public Run, public ExprContext {
   std::map<std::string, Def> defs_;
   std::map<std::string, Def> lib_cache_;
   BlockCache cache_;
+  std::string_view block_;  // the block being executed (diagnostic columns)
   static constexpr size_t kReleaseStep = 1 << 20;
   size_t released_ = 0;  // main program bytes before this were released
   int local_defs_ = 0;
@@ -670,7 +673,9 @@ void KtRun::StepOnce() {
       Fail(1, fmt::format("PROGRAM RAN {} BLOCKS WITHOUT MOTION OR OUTPUT (ENDLESS LOOP?)", max_idle_));
     }
     ExecBlock(block, line_no, start);
+    block_ = {};
   } catch (const RunError& e) {
+    block_ = {};
     Diagnostic d;
     d.program = opt_.program_name;
     d.line = cur_line_;
@@ -688,6 +693,7 @@ void KtRun::StepOnce() {
     final_.diag = d;
     Finish(Step::kError);
   } catch (const ExprError& e) {
+    block_ = {};
     Diagnostic d;
     d.program = opt_.program_name;
     d.line = cur_line_;
@@ -917,11 +923,26 @@ bool KtRun::ActiveCode(char gm, int code) {
   }
 }
 
+int KtRun::ExprCol(std::string_view text, size_t offset, int col) const {
+  // Expression texts are views into the block or verbatim copies of part of it (statement bodies, PAR
+  // fields): find them to point the diagnostic at the failing token rather than at the statement.
+  if (block_.empty() || text.empty()) return col;
+  const char* b = block_.data();
+  size_t at = std::string_view::npos;
+  if (text.data() >= b && text.data() + text.size() <= b + block_.size()) {
+    at = static_cast<size_t>(text.data() - b);
+  } else {
+    at = block_.find(text, col > 0 ? static_cast<size_t>(col - 1) : 0);
+  }
+  if (at == std::string_view::npos) return col;
+  return static_cast<int>(at + std::min(offset, text.size())) + 1;
+}
+
 double KtRun::Eval(std::string_view text, int col) {
   try {
     return EvalValue(text, *this);
   } catch (const ExprError& e) {
-    Fail(col, e.text);
+    Fail(ExprCol(text, e.offset, col), e.text);
   }
 }
 
@@ -929,7 +950,7 @@ bool KtRun::EvalCond(const std::string& text, int col) {
   try {
     return EvalCondition(text, *this);
   } catch (const ExprError& e) {
-    Fail(col, e.text);
+    Fail(ExprCol(text, e.offset, col), e.text);
   }
 }
 
@@ -940,7 +961,7 @@ int KtRun::EvalParamRef(const std::string& text, int col) {
     if (!p.AtEnd()) Fail(col, "PARAMETER REFERENCE EXPECTED");
     return n;
   } catch (const ExprError& e) {
-    Fail(col, e.text);
+    Fail(ExprCol(text, e.offset, col), e.text);
   }
 }
 
@@ -987,6 +1008,7 @@ void KtRun::ExecBlock(std::string_view text, int line_no, size_t start) {
   (void)line_no;
   if (!text.empty() && text.back() == '\r') text.remove_suffix(1);
   if (text.size() + 1 > 80) Fail(80, "BLOCK EXCEEDS 80 CHARACTERS");
+  block_ = text;
   std::string_view t = TrimView(text);
   if (t.empty() || t == "%") return;
   size_t li = levels_.size() - 1;
@@ -1971,7 +1993,7 @@ void KtRun::ExecTypeI(BlockCtx& bc, const ParsedBlock* pb) {
         dropped = true;
         return r;
       }
-      Fail(w.col, e.text);
+      Fail(w.kind == WordKind::kExpr ? ExprCol(w.expr, e.offset, w.col) : w.col, e.text);
     }
     if (IntegerLetter(w.letter)) r.v = std::floor(r.v + 0.5);
     return r;
