@@ -66,5 +66,38 @@ TEST(CanonJson, AppendReusesTheBufferAndMatchesToJsonLine) {
             "\"center\":[15.0000,5.0000,5.0000],\"dir\":\"cw\",\"plane\":\"xy\",\"angle\":180.0000}");
 }
 
+TEST(CanonJson, ResetGivesAFreshCommand) {
+  Canon c;
+  c.op = Op::kFileOp;
+  c.line = 9;
+  c.pos[kB] = 90;
+  c.used = 0x1ff;
+  c.travel[kB] = 90;
+  c.travel_mask = 1u << kB;
+  c.feed = 5;
+  c.f_mode = FeedMode::kInverseTime;
+  c.exact_stop = true;
+  c.center = {1, 2, 3};
+  c.cw = false;
+  c.plane = "zx";
+  c.turns = 360;
+  c.metric = true;
+  c.value = 1;
+  c.value2 = 2;
+  c.text = "a long text that does not fit in the small-string buffer";
+  c.text2 = "CPY";
+  c.code = 7;
+  c.flag = true;
+  c.Reset();
+  for (Op op : {Op::kRapid, Op::kArc, Op::kFileOp, Op::kSpindle, Op::kProbe}) {
+    Canon fresh;
+    fresh.op = op;
+    c.op = op;
+    EXPECT_EQ(ToJsonLine(c), ToJsonLine(fresh));
+  }
+  EXPECT_EQ(c.op, Op::kProbe);
+  EXPECT_TRUE(c.text.empty() && c.text2.empty() && c.plane.empty() && c.cw && !c.flag && c.code == 0);
+}
+
 }  // namespace
 }  // namespace cell::interp

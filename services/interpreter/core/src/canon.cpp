@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <cmath>
+#include <cstring>
 #include <string_view>
 
 namespace cell::interp {
@@ -65,11 +66,51 @@ const char* OpName(Op op) {
 
 namespace {
 
+// The writer's staging buffer: pieces are copied into a fixed local array and appended to the caller's
+// string in one go (per-piece std::string appends dominated the cost of a line). Anything larger than the
+// array goes straight through.
+class Buf {
+ public:
+  explicit Buf(std::string& out) : out_(out) {}
+  Buf(const Buf&) = delete;
+  Buf& operator=(const Buf&) = delete;
+  ~Buf() { Flush(); }
+  Buf& operator+=(char c) {
+    if (p_ == end_) Flush();
+    *p_++ = c;
+    return *this;
+  }
+  Buf& operator+=(std::string_view s) {
+    if (s.size() > static_cast<size_t>(end_ - p_)) {
+      Flush();
+      if (s.size() > kCap) {
+        out_.append(s);
+        return *this;
+      }
+    }
+    std::memcpy(p_, s.data(), s.size());
+    p_ += s.size();
+    return *this;
+  }
+  void append(const char* p, size_t n) { *this += std::string_view(p, n); }
+  void Flush() {
+    out_.append(buf_, static_cast<size_t>(p_ - buf_));
+    p_ = buf_;
+  }
+
+ private:
+  static constexpr size_t kCap = 512;
+  char buf_[kCap];
+  char* p_ = buf_;
+  char* const end_ = buf_ + kCap;
+  std::string& out_;
+};
+
 // Appends v with six decimals, trailing zeros trimmed down to four ("1.5000", "0.000125"), exactly as
 // fmt's correctly rounded "{:.6f}" would. The fast path scales to integer micro-units; it is taken only
 // when the scaled value is clear of a rounding tie by far more than the product's rounding error, so the
 // digits never differ from the slow path (which handles ties, huge values and non-finite input).
-void Num(std::string& out, double v) {
+void Num(Buf& out, double v) {
   if (!std::isfinite(v)) {
     out += '0';
     return;
@@ -84,7 +125,7 @@ void Num(std::string& out, double v) {
       char buf[32];
       char* e = buf + sizeof buf;
       char* p = e;
-      uint64_t ip = r / 1000000;
+      auto ip = static_cast<uint32_t>(r / 1000000);  // < 10^6: 32-bit division is cheaper
       auto fp = static_cast<uint32_t>(r % 1000000);
       static constexpr char kPairs[] =
           "00010203040506070809101112131415161718192021222324252627282930313233343536373839"
@@ -113,10 +154,10 @@ void Num(std::string& out, double v) {
   std::string s = fmt::format("{:.6f}", v);
   auto dot = s.find('.');
   while (s.size() > dot + 5 && s.back() == '0') s.pop_back();
-  out += s;
+  out += std::string_view(s);
 }
 
-void Int(std::string& out, long v) {
+void Int(Buf& out, long v) {
   char buf[24];
   char* e = buf + sizeof buf;
   char* p = e;
@@ -129,7 +170,7 @@ void Int(std::string& out, long v) {
   out.append(p, static_cast<size_t>(e - p));
 }
 
-void Str(std::string& out, const std::string& s) {
+void Str(Buf& out, const std::string& s) {
   out += '"';
   for (unsigned char ch : s) {
     switch (ch) {
@@ -150,7 +191,7 @@ void Str(std::string& out, const std::string& s) {
         break;
       default:
         if (ch < 0x20 || ch >= 0x7f) {
-          out += fmt::format("\\u{:04x}", ch);
+          out += std::string_view(fmt::format("\\u{:04x}", ch));
         } else {
           out += static_cast<char>(ch);
         }
@@ -159,13 +200,13 @@ void Str(std::string& out, const std::string& s) {
   out += '"';
 }
 
-void Key(std::string& out, const char* k) {
+void Key(Buf& out, const char* k) {
   out += ",\"";
   out += k;
   out += "\":";
 }
 
-void Axes(std::string& out, const Canon& c) {
+void Axes(Buf& out, const Canon& c) {
   static constexpr std::string_view kKeys[kAxisCount] = {",\"x\":", ",\"y\":", ",\"z\":", ",\"a\":", ",\"b\":",
                                                          ",\"c\":", ",\"u\":", ",\"v\":", ",\"w\":"};
   for (int i = 0; i < kAxisCount; ++i) {
@@ -184,7 +225,7 @@ void Axes(std::string& out, const Canon& c) {
   }
 }
 
-void Feed(std::string& out, const Canon& c) {
+void Feed(Buf& out, const Canon& c) {
   out += std::string_view(",\"f\":");
   Num(out, c.feed);
   switch (c.f_mode) {
@@ -210,7 +251,8 @@ std::string ToJsonLine(const Canon& c) {
   return out;
 }
 
-void AppendJsonLine(std::string& out, const Canon& c) {
+void AppendJsonLine(std::string& str, const Canon& c) {
+  Buf out(str);
   out += std::string_view("{\"op\":\"");
   out += OpName(c.op);
   out += std::string_view("\",\"line\":");

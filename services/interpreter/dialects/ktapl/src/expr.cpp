@@ -188,10 +188,13 @@ double ExprParser::Primary() {
     --depth_;
     return v;
   }
-  // Functions, longest names first.
+  // Functions, longest names first. Every name has at least two letters: a letter followed by anything else
+  // (L5, X) is not a function, and the 15 names need not be tried.
+  bool maybe_func = pos_ + 1 < s_.size() && std::isalpha(static_cast<unsigned char>(s_[pos_ + 1]));
   static const char* const kFuncs[] = {"SQRT", "ALOG", "ABS", "SIN", "COS", "TAN", "ASN", "ACS",
                                        "ATN",  "INT",  "FRA", "LOG", "EXP", "SQ",  "LN"};
   for (const char* f : kFuncs) {
+    if (!maybe_func) break;
     size_t save = pos_;
     std::string_view name(f);
     if (AcceptWord(name)) {

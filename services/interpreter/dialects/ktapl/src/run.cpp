@@ -319,7 +319,9 @@ struct Level {
   bool is_cycle = false;
   std::string name;
   std::map<int, double> locals;
-  std::deque<std::pair<int, std::pair<size_t, int>>> labels;  // label -> (block start, line)
+  // label -> (block start, line), most recently used first (a vector: a deque allocates when constructed,
+  // and a level is constructed at every call).
+  std::vector<std::pair<int, std::pair<size_t, int>>> labels;
   bool jumped = false;  // a GTO has run here: blocks may run again
 };
 
@@ -353,6 +355,38 @@ class BlockCache {
     return (reinterpret_cast<uintptr_t>(text) / 16 + off * 2654435761u) % kSlots;
   }
   std::vector<Entry> table_ = std::vector<Entry>(kSlots);
+};
+
+// FIFO of commands produced by a block and not yet taken: a ring over a vector, because a deque of
+// Canon (larger than a deque node) allocates and frees a node for every command.
+class CanonQueue {
+ public:
+  bool empty() const { return size_ == 0; }
+  Canon& front() { return ring_[head_]; }
+  void pop_front() {
+    head_ = (head_ + 1) % ring_.size();
+    --size_;
+  }
+  void push_back(Canon c) { Slot() = std::move(c); }
+  // A new last element to be filled in place (reset to the defaults; its strings keep their buffers).
+  Canon& Slot() {
+    if (size_ == ring_.size()) Grow();
+    Canon& c = ring_[(head_ + size_) % ring_.size()];
+    ++size_;
+    c.Reset();
+    return c;
+  }
+  void clear() { head_ = size_ = 0; }
+
+ private:
+  void Grow() {
+    std::vector<Canon> bigger(ring_.empty() ? 16 : ring_.size() * 2);
+    for (size_t i = 0; i < size_; ++i) bigger[i] = std::move(ring_[(head_ + i) % ring_.size()]);
+    ring_.swap(bigger);
+    head_ = 0;
+  }
+  std::vector<Canon> ring_;
+  size_t head_ = 0, size_ = 0;
 };
 
 struct FixtureLine {
@@ -415,6 +449,8 @@ class KtRun final : public Run, public ExprContext {
   void Finish(Step::Kind kind);
   void Emit(Canon c);
   Canon Base(Op op) const;
+  // The next output command, filled in place by the caller (the motion hot path: no Canon copies).
+  Canon& EmitSlot(Op op);
   int ReportLine() const { return cur_line_; }
 
   // Blocks
@@ -462,7 +498,7 @@ class KtRun final : public Run, public ExprContext {
   Environment default_env_;
   Environment* env_;
   std::vector<Level> levels_;
-  std::deque<Canon> out_;
+  CanonQueue out_;
   bool finished_ = false;
   Step final_;
   bool units_emitted_ = false;
@@ -621,6 +657,10 @@ Canon KtRun::Base(Op op) const {
 }
 
 void KtRun::Emit(Canon c) {
+  EmitSlot(c.op) = std::move(c);
+}
+
+Canon& KtRun::EmitSlot(Op op) {
   if (!units_emitted_) {
     Canon u = Base(Op::kUnits);
     u.metric = metric_;
@@ -628,7 +668,10 @@ void KtRun::Emit(Canon c) {
     out_.push_back(u);
   }
   idle_ = 0;
-  out_.push_back(std::move(c));
+  Canon& c = out_.Slot();
+  c.op = op;
+  c.line = cur_line_;
+  return c;
 }
 
 void KtRun::SetUnits(bool metric) {
@@ -1196,7 +1239,7 @@ void KtRun::DoJump(int label, int col) {
     if (it->first == label) {
       auto entry = *it;
       lv.labels.erase(it);
-      lv.labels.push_front(entry);
+      lv.labels.insert(lv.labels.begin(), entry);
       lv.pos = entry.second.first;
       lv.line = entry.second.second;
       return;
@@ -1242,7 +1285,7 @@ void KtRun::DoJump(int label, int col) {
   auto hit = scan(lv.pos, lv.line, lv.end);
   if (!hit) hit = scan(lv.begin, lv.begin_line, lv.pos);
   if (!hit) Fail(col, fmt::format("Error -GTO label not found ({})", label));
-  lv.labels.push_front({label, *hit});
+  lv.labels.insert(lv.labels.begin(), {label, *hit});
   if (lv.labels.size() > 10) lv.labels.pop_back();
   lv.pos = hit->first;
   lv.line = hit->second;
@@ -1253,7 +1296,7 @@ void KtRun::SetFlag(int n) {
 }
 
 void KtRun::ExecStatement(const Statement& st, BlockCtx& bc, bool in_ift) {
-  const std::string& m = st.mnemonic;
+  std::string_view m = st.mnemonic;  // compared with literals: no strlen
   if (st.body.size() > 73) Fail(st.col, "TYPE II STATEMENT EXCEEDS 73 CHARACTERS");
   if (m == "PAR") {
     Par(st);
@@ -1943,10 +1986,10 @@ void KtRun::EmitMove(const std::array<double, kAxisCount>& target, uint32_t move
   }
   if (travel_mask) change = true;
   if (!change) return;
-  Canon c = Base(rapid ? Op::kRapid : Op::kLinear);
   for (int a = 0; a < kAxisCount; ++a) {
     if (moved & (1u << a)) pos_[a] = target[a];
   }
+  Canon& c = EmitSlot(rapid ? Op::kRapid : Op::kLinear);
   c.pos = pos_;
   c.used = used_;
   c.travel = travel;
@@ -1956,7 +1999,6 @@ void KtRun::EmitMove(const std::array<double, kAxisCount>& target, uint32_t move
     c.f_mode = fm;
     c.exact_stop = exact;
   }
-  Emit(std::move(c));
 }
 
 void KtRun::ExecTypeI(BlockCtx& bc, const ParsedBlock* pb) {

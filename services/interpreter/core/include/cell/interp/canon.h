@@ -87,6 +87,30 @@ struct Canon {
   std::string text2;  // file type / second name / ...
   int code = 0;       // M code, probe G code, ...
   bool flag = false;  // optional stop, shuttle at M30, append, ...
+
+  // Back to the defaults above, keeping the strings' buffers (a reused command slot). Keep in step with
+  // the member list (canon_test checks Reset against a fresh Canon).
+  void Reset() {
+    op = Op::kRapid;
+    line = 0;
+    pos = {};
+    used = 0;
+    travel = {};
+    travel_mask = 0;
+    feed = 0;
+    f_mode = FeedMode::kPerMinute;
+    exact_stop = false;
+    center = {};
+    cw = true;
+    plane.clear();
+    turns = 0;
+    metric = false;
+    value = value2 = 0;
+    text.clear();
+    text2.clear();
+    code = 0;
+    flag = false;
+  }
 };
 
 // One JSON object on a single line, without the trailing newline (DESIGN §4).
