@@ -8,6 +8,7 @@
 #include <map>
 
 #include "cell/error/error.h"
+#include "cell/interp/ktapl_meta.h"
 
 namespace cell::program_store {
 namespace {
@@ -628,148 +629,6 @@ std::uint64_t CountLines(std::string_view content) {
 
 namespace {
 
-struct KtStatement {
-  std::string mnemonic;
-  std::string body;  // as written (not upper-cased), between ',' and ')'
-};
-
-// The first NAM/UTL/UCY statement of a raw block, if any.
-std::optional<KtStatement> HeadingStatement(std::string_view raw) {
-  if (raw.find('(') == std::string_view::npos && (raw.empty() || raw[0] != '%')) return std::nullopt;
-  std::string upper = Upper(raw);
-  for (std::string_view m : {"NAM", "UTL", "UCY"}) {
-    for (std::size_t pos = 0; (pos = upper.find(m, pos)) != std::string::npos; ++pos) {
-      std::size_t open = pos;
-      while (open > 0 && upper[open - 1] == ' ') --open;
-      if (open == 0 || (upper[open - 1] != '(' && !(upper[open - 1] == '%' && open - 1 == 0))) continue;
-      char close = upper[open - 1] == '(' ? ')' : '%';
-      std::size_t comma = pos + 3;
-      while (comma < upper.size() && upper[comma] == ' ') ++comma;
-      if (comma >= upper.size() || upper[comma] != ',') continue;
-      std::size_t end = upper.find(close, comma + 1);
-      if (end == std::string::npos) end = upper.size();
-      return KtStatement{std::string(m), std::string(raw.substr(comma + 1, end - comma - 1))};
-    }
-  }
-  return std::nullopt;
-}
-
-void KtaplHeading(const std::vector<std::string_view>& lines, FileType type, Metadata& md) {
-  enum class Kind { kNone, kPercent, kNam, kUtl, kUcy, kOther };
-  Kind previous = Kind::kNone;
-  bool numbered_seen = false, has_percent_first = false, first = true;
-  int utl_line = 0, ucy_line = 0, nam_line = 0;
-  for (std::size_t idx = 0; idx < lines.size(); ++idx) {
-    int ln = static_cast<int>(idx) + 1;
-    std::string_view raw = Trim(lines[idx]);
-    if (raw.empty() || raw[0] == '!') continue;  // blank and comment lines do not break the heading
-    Kind kind = Kind::kOther;
-    if (raw == "%") {
-      kind = Kind::kPercent;
-      if (first) has_percent_first = true;
-    }
-    first = false;
-    bool numbered = raw.size() >= 2 && (raw[0] == 'N' || raw[0] == 'n') && IsDigit(raw[1]);
-    if (!numbered && raw[0] == '/') SkipSequence(Upper(raw), &numbered);
-    std::optional<KtStatement> st = kind == Kind::kPercent ? std::nullopt : HeadingStatement(raw);
-    if (st && st->mnemonic == "NAM") {
-      kind = Kind::kNam;
-      if (nam_line != 0) {
-        md.warnings.push_back(
-            fmt::format("line {}: second (NAM,...) ignored (first on line {})", ln, nam_line));
-      } else {
-        nam_line = ln;
-        std::string name(Trim(st->body));
-        if (name.empty()) md.warnings.push_back(fmt::format("line {}: (NAM,...) has an empty name", ln));
-        if (name.size() > 32) {
-          md.warnings.push_back(fmt::format("line {}: NAM name '{}' is longer than 32 characters", ln, name));
-        }
-        if (!std::all_of(name.begin(), name.end(), [](char c) { return IsAlnum(c) || c == ' '; })) {
-          md.warnings.push_back(
-              fmt::format("line {}: NAM name '{}' should have only letters, digits and spaces", ln, name));
-        }
-        md.nam = name;
-        if (numbered) md.warnings.push_back(fmt::format("line {}: (NAM,...) carries no sequence number", ln));
-        if (numbered_seen) {
-          md.warnings.push_back(
-              fmt::format("line {}: (NAM,...) must come before the first numbered block", ln));
-        }
-      }
-    } else if (st && st->mnemonic == "UTL") {
-      kind = Kind::kUtl;
-      if (utl_line != 0) {
-        md.warnings.push_back(
-            fmt::format("line {}: second (UTL,...) ignored (first on line {})", ln, utl_line));
-      } else {
-        utl_line = ln;
-        if (previous != Kind::kPercent && previous != Kind::kNam) {
-          md.warnings.push_back(fmt::format(
-              "line {}: (UTL,...) must come right after % or (NAM,...) (FMS heading: %, NAM, UTL, UCY)", ln));
-        }
-        std::string_view rest = st->body;
-        std::size_t start = 0;
-        bool any = false;
-        while (start <= rest.size()) {
-          std::size_t comma = rest.find(',', start);
-          if (comma == std::string_view::npos) comma = rest.size();
-          std::string_view item = Trim(rest.substr(start, comma - start));
-          std::string_view digits = item;
-          if (!digits.empty() && (digits[0] == 'T' || digits[0] == 't')) digits.remove_prefix(1);
-          if (item.empty() && comma == rest.size() && !any) {
-            // "(UTL,)" with nothing in it
-          } else if (!AllDigits(digits) || digits.size() > 7) {
-            md.warnings.push_back(fmt::format(
-                "line {}: UTL entry '{}' is not a tool number (up to 7 digits, optionally prefixed with T)",
-                ln, item));
-          } else {
-            md.utl.emplace_back(digits);
-            any = true;
-          }
-          start = comma + 1;
-        }
-        if (!any) md.warnings.push_back(fmt::format("line {}: (UTL,...) lists no tools", ln));
-      }
-    } else if (st && st->mnemonic == "UCY") {
-      kind = Kind::kUcy;
-      if (ucy_line != 0) {
-        md.warnings.push_back(
-            fmt::format("line {}: second (UCY,...) ignored (first on line {})", ln, ucy_line));
-      } else {
-        ucy_line = ln;
-        if (utl_line != 0 && previous != Kind::kUtl) {
-          md.warnings.push_back(
-              fmt::format("line {}: (UCY,...) must come directly after (UTL,...) (line {})", ln, utl_line));
-        } else if (utl_line == 0 && previous != Kind::kPercent && previous != Kind::kNam) {
-          md.warnings.push_back(fmt::format(
-              "line {}: (UCY,...) must come in the heading, after %, (NAM,...) and (UTL,...)", ln));
-        }
-        std::string value(Trim(st->body));
-        std::size_t dot = value.find('.');
-        std::string_view whole = std::string_view(value).substr(0, dot);
-        std::string_view frac =
-            dot == std::string::npos ? std::string_view() : std::string_view(value).substr(dot + 1);
-        if (AllDigits(whole) && whole.size() <= 7 && (frac.empty() || AllDigits(frac))) {
-          md.ucy_s = std::stod(value);
-        } else {
-          md.warnings.push_back(fmt::format(
-              "line {}: UCY value '{}' is not a cycle time in seconds (up to 7 digits)", ln, value));
-        }
-      }
-    }
-    if (numbered) numbered_seen = true;
-    previous = kind;
-  }
-  if ((utl_line != 0 || ucy_line != 0) && !has_percent_first) {
-    md.warnings.push_back("the FMS heading must start with a % line (rewind stop) before NAM, UTL and UCY");
-  }
-  if (utl_line != 0 && ucy_line == 0 && type == FileType::kPartProgram) {
-    md.warnings.push_back(
-        fmt::format("line {}: (UTL,...) without (UCY,...): KT/FMS part programs need a cycle "
-                    "time right after the tool list",
-                    utl_line));
-  }
-}
-
 void ProgramNames(const std::vector<std::string_view>& lines, Dialect dialect, Metadata& md) {
   std::map<std::string, int> first_line;
   for (std::size_t idx = 0; idx < lines.size(); ++idx) {
@@ -907,7 +766,12 @@ Metadata ExtractMetadata(std::string_view content, const ExtractOptions& options
   }
 
   if (md.dialect == Dialect::kKtapl) {
-    KtaplHeading(lines, md.type, md);
+    interp::KtaplMetadata heading =
+        interp::ExtractKtaplMetadata(content, {.part_program = md.type == FileType::kPartProgram});
+    md.nam = heading.name.value_or("");
+    md.utl = std::move(heading.tools);
+    md.ucy_s = heading.cycle_s;
+    for (const interp::KtaplMetaWarning& w : heading.warnings) md.warnings.push_back(w.Format());
   } else if (md.dialect != Dialect::kNone) {
     ProgramNames(lines, md.dialect, md);
   }

@@ -63,49 +63,28 @@ TEST(Ktapl, FmsHeadingIsExtracted) {
   EXPECT_THAT(md.warnings, IsEmpty()) << Joined(md.warnings);
 }
 
-TEST(Ktapl, HeadingWithoutNamAndEiaForm) {
-  Metadata md = ExtractMetadata("%\n%UTL,1,2%\n%UCY,30.5%\nN1 G0 X1 F0\nN2 M30\n", {});
-  EXPECT_EQ(md.dialect, Dialect::kKtapl);
-  EXPECT_THAT(md.utl, ElementsAre("1", "2"));
+// The heading rules themselves are cell_ktapl_meta's (ktapl_meta_test); the store keeps every warning as a
+// line of text and asks for the part-program rule only for part programs.
+TEST(Ktapl, HeadingWarningsAreKeptAsLines) {
+  Metadata md = ExtractMetadata("%\n(UTL,12,X7)\n(UCY,30.5)\nN1 M30\n", {});
+  EXPECT_THAT(md.utl, ElementsAre("12"));
   EXPECT_DOUBLE_EQ(md.ucy_s.value_or(0), 30.5);
-  EXPECT_THAT(md.warnings, IsEmpty()) << Joined(md.warnings);
-}
+  EXPECT_THAT(
+      md.warnings,
+      ElementsAre(
+          "line 2: UTL entry 'X7' is not a tool number (up to 7 digits, optionally prefixed with T)"));
 
-TEST(Ktapl, PlacementViolationsAreWarnings) {
-  // UTL not right after %/NAM, UCY before UTL.
-  Metadata md = ExtractMetadata("%\n(NAM,PUMP341)\nN10 G0 X0 F0\n(UCY,100)\n(UTL,5)\nN20 M30\n", {});
-  EXPECT_EQ(md.nam, "PUMP341");
-  EXPECT_THAT(md.utl, ElementsAre("5"));
-  EXPECT_DOUBLE_EQ(md.ucy_s.value_or(0), 100);
-  std::string w = Joined(md.warnings);
-  EXPECT_THAT(w, HasSubstr("line 5: (UTL,...) must come right after % or (NAM,...)"));
-  EXPECT_THAT(w, HasSubstr("line 4: (UCY,...) must come in the heading"));
+  md = ExtractMetadata("(UTL,1)\n(UCY,2)\nN7 M30\n", {});
+  EXPECT_THAT(md.warnings,
+              ElementsAre(HasSubstr("line 1: (UTL,...) must come right after %"),
+                          "the FMS heading must start with a % line (rewind stop) before NAM, UTL and UCY"));
 
-  // UCY not directly after UTL.
-  md = ExtractMetadata("%\n(NAM,A)\n(UTL,5)\nN1 G0 X0 F0\n(UCY,100)\nN2 M30\n", {});
-  EXPECT_THAT(Joined(md.warnings),
-              HasSubstr("line 5: (UCY,...) must come directly after (UTL,...) (line 3)"));
-
-  // No % first; NAM after a numbered block and with an N number.
-  md = ExtractMetadata("N5 G0 X0 F0\nN6 (NAM,LATE)\n(UTL,1)\n(UCY,2)\nN7 M30\n", {});
-  w = Joined(md.warnings);
-  EXPECT_THAT(w, HasSubstr("FMS heading must start with a % line"));
-  EXPECT_THAT(w, HasSubstr("line 2: (NAM,...) carries no sequence number"));
-  EXPECT_THAT(w, HasSubstr("line 2: (NAM,...) must come before the first numbered block"));
-
-  // UTL without UCY in a part program.
+  // UTL without UCY in a part program, not in a library.
   md = ExtractMetadata("%\n(UTL,1)\nN1 M30\n", {});
-  EXPECT_THAT(Joined(md.warnings), HasSubstr("without (UCY,...)"));
-}
-
-TEST(Ktapl, MalformedUtlAndUcyAreWarnings) {
-  Metadata md = ExtractMetadata("%\n(UTL,12,X7,12345678,T0033412)\n(UCY,ten)\nN1 M30\n", {});
-  EXPECT_THAT(md.utl, ElementsAre("12", "0033412"));
-  EXPECT_FALSE(md.ucy_s.has_value());
-  std::string w = Joined(md.warnings);
-  EXPECT_THAT(w, HasSubstr("UTL entry 'X7' is not a tool number"));
-  EXPECT_THAT(w, HasSubstr("UTL entry '12345678' is not a tool number"));
-  EXPECT_THAT(w, HasSubstr("UCY value 'ten' is not a cycle time"));
+  EXPECT_EQ(md.type, FileType::kPartProgram);
+  EXPECT_THAT(Joined(md.warnings), HasSubstr("line 2: (UTL,...) without (UCY,...)"));
+  md = ExtractMetadata("%\n(UTL,1)\nN1 M30\n", Opts(Dialect::kKtapl, FileType::kLibrary, ""));
+  EXPECT_THAT(md.warnings, IsEmpty()) << Joined(md.warnings);
 }
 
 TEST(Ktapl, ToolTableAndLibraryTypes) {

@@ -18,7 +18,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "cell/testing/process.h"
+#include "cell/testing/local_cell.h"
 
 using namespace cell::testing;
 using nlohmann::json;
@@ -39,11 +39,8 @@ std::string FirstLine(const std::string& s) {
 class Fms : public ::testing::Test {
  protected:
   void SetUp() override {
-    data_ = MakeTempDir("cell-fms-");
-    env_ = {{"CELL_DATA_DIR", data_}};
-    auto r = Ctl({"up", "--stations", "KT01,KT02", "--clock", "virtual"});
+    auto r = cell_.Up("KT01,KT02", "virtual");
     ASSERT_EQ(r.code, 0) << r.out << r.err;
-    procs_ = json::parse(ReadFile(data_ + "/cell-up.json"));
   }
   void TearDown() override {
     for (pid_t pid : stopped_) kill(pid, SIGCONT);  // a stopped process would ignore SIGTERM
@@ -52,19 +49,11 @@ class Fms : public ::testing::Test {
       if (!restarted_->Wait(std::chrono::seconds(10))) restarted_->Signal(SIGKILL);
       restarted_.reset();
     }
-    auto r = Ctl({"down"});
+    auto r = cell_.Down();  // LocalCell kills leftovers of a failed `down` and removes the data dir
     EXPECT_EQ(r.code, 0) << r.err;
-    for (auto& p : procs_) {  // leftovers (a failed `down`): never leak services into other tests
-      pid_t pid = p["pid"].get<int>();
-      if (kill(pid, 0) == 0) kill(pid, SIGKILL);
-    }
-    std::filesystem::remove_all(data_);
   }
 
-  RunResult Ctl(std::vector<std::string> args, std::chrono::seconds timeout = std::chrono::seconds(60)) {
-    args.insert(args.begin(), BinDir() + "/cellctl");
-    return RunCommand(args, env_, timeout);
-  }
+  RunResult Ctl(std::vector<std::string> args) { return cell_.Ctl(std::move(args)); }
   json CtlJson(std::vector<std::string> args) {
     auto r = Ctl(args);
     EXPECT_EQ(r.code, 0) << r.err;
@@ -102,8 +91,8 @@ class Fms : public ::testing::Test {
     EXPECT_EQ(w.out, "COMPLETED\n");
   }
   pid_t Pid(const std::string& service) {
-    for (auto& p : procs_)
-      if (p["service"] == service) return p["pid"].get<int>();
+    auto pids = cell_.Pids();
+    if (auto it = pids.find(service); it != pids.end()) return it->second;
     ADD_FAILURE() << "no " << service << " in cell-up.json";
     return -1;
   }
@@ -127,9 +116,8 @@ class Fms : public ::testing::Test {
     return out;
   }
 
-  std::string data_;
-  std::map<std::string, std::string> env_;
-  json procs_;
+  LocalCell cell_{"cell-fms-"};
+  const std::string& data_ = cell_.data_dir();
   std::vector<pid_t> stopped_;
   std::unique_ptr<Process> restarted_;
 };
@@ -267,7 +255,7 @@ TEST_F(Fms, SchedulerKilledMidRunRestartsAndJobCompletesExactlyOnce) {
   {  // The restarted scheduler is this test's child (TearDown stops it): `cellctl down` is not to wait for
      // it.
     json rest = json::array();
-    for (auto& p : procs_)
+    for (auto& p : json::parse(ReadFile(data_ + "/cell-up.json")))
       if (p["service"] != "cell-scheduler") rest.push_back(p);
     std::ofstream(data_ + "/cell-up.json") << rest.dump(2);
   }

@@ -2,7 +2,6 @@
 // conformance programs with motion go through the program store, a pallet map and the station KT01
 // (interpreter + axis servo on the virtual clock) to a COMPLETED job with machine time; a negative-corpus
 // program fails the job with the interpreter's compiler-style diagnostic as its reason.
-#include <filesystem>
 #include <string>
 #include <utility>
 #include <vector>
@@ -10,7 +9,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "cell/testing/process.h"
+#include "cell/testing/local_cell.h"
 
 using namespace cell::testing;
 using nlohmann::json;
@@ -22,23 +21,16 @@ const std::string kCorpus = "/tests/conformance/ktapl/";
 class StationCorpus : public ::testing::Test {
  protected:
   void SetUp() override {
-    data_ = MakeTempDir("cell-station-corpus-");
-    env_ = {{"CELL_DATA_DIR", data_}};
-    auto r = Ctl({"up", "--stations", "KT01", "--clock", "virtual"});
+    auto r = cell_.Up("KT01", "virtual");
     ASSERT_EQ(r.code, 0) << r.out << r.err;
-    up_ = true;
   }
   void TearDown() override {
-    if (up_) {
-      auto r = Ctl({"down"});
+    if (cell_.is_up()) {
+      auto r = cell_.Down();
       EXPECT_EQ(r.code, 0) << r.err;
     }
-    std::filesystem::remove_all(data_);
   }
-  RunResult Ctl(std::vector<std::string> args, std::chrono::seconds timeout = std::chrono::seconds(60)) {
-    args.insert(args.begin(), BinDir() + "/cellctl");
-    return RunCommand(args, env_, timeout);
-  }
+  RunResult Ctl(std::vector<std::string> args) { return cell_.Ctl(std::move(args)); }
   json CtlJson(std::vector<std::string> args) {
     auto r = Ctl(args);
     EXPECT_EQ(r.code, 0) << r.err;
@@ -63,9 +55,7 @@ class StationCorpus : public ::testing::Test {
     EXPECT_EQ(wait.code, expect_wait_code) << wait.out << wait.err;
     return job;
   }
-  std::string data_;
-  std::map<std::string, std::string> env_;
-  bool up_ = false;
+  LocalCell cell_{"cell-station-corpus-"};
 };
 
 TEST_F(StationCorpus, PositiveProgramsWithMotionComplete) {

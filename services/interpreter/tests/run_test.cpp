@@ -113,19 +113,6 @@ TEST(Run, LibrarySubroutineReportsTheCallingLine) {
   EXPECT_DOUBLE_EQ(moves[1].pos[kX], 2.0);
 }
 
-TEST(Metadata, HeadingAndWarnings) {
-  auto md = ExtractKtaplMetadata("%\n(NAM, GEAR HOUSING)\n(UTL,T33412,202,1234567)\n(UCY,345)\nN10G0X1.F0\n");
-  ASSERT_TRUE(md.name);
-  EXPECT_EQ(*md.name, "GEAR HOUSING");
-  EXPECT_EQ(md.tools, (std::vector<std::string>{"33412", "202", "1234567"}));
-  ASSERT_TRUE(md.cycle_s);
-  EXPECT_EQ(*md.cycle_s, 345);
-  EXPECT_TRUE(md.warnings.empty());
-  auto bad = ExtractKtaplMetadata("%\n(UCY,10)\n(UTL,12345678)\n");
-  EXPECT_FALSE(bad.warnings.empty());
-  EXPECT_TRUE(bad.tools.empty());
-}
-
 TEST(ToolTable, TldExamples) {
   // Manual ln 4063-4097: primary, suffix 5, and the process compensation for pallet 12.
   auto t = ParseKtaplToolTable(

@@ -7,47 +7,43 @@
 namespace cell::scheduler {
 namespace {
 
+// The heading itself is read by cell::interp::ExtractKtaplMetadata (ktapl_meta_test); these are the
+// scheduler's rules on top of it.
 std::string ErrorOf(std::string_view text) {
   try {
-    ExtractKtaplMeta(text, "P1");
+    KtaplProgramMeta(text, "P1");
   } catch (const Error& e) {
+    EXPECT_EQ(e.code(), Errc::kInvalidArgument);
     return e.what();
   }
   return "";
 }
 
-// KT-APL FMS heading (seed lines 4146-4150): %, (NAM) optional, (UTL) optional, (UCY) required.
-TEST(KtaplMeta, ReadsFmsHeading) {
-  auto m = ExtractKtaplMeta("%\n(NAM,GEAR HOUSING)\n(UTL,T12,0034,T7654321,12)\n(UCY,600)\nN10G71\n", "GH");
+TEST(KtaplProgramMeta, ToolsNormalisedAndDeduplicated) {
+  auto m = KtaplProgramMeta("%\n(NAM,GEAR HOUSING)\n(UTL,T12,0034,T7654321,12)\n(UTL,0)\n(UCY,600)\nN10G71\n",
+                            "GH");
   EXPECT_EQ(m.name, "GH");
-  EXPECT_EQ(m.tools, (std::vector<std::string>{"12", "34", "7654321"}));
+  EXPECT_EQ(m.tools, (std::vector<std::string>{"12", "34", "7654321", "0"}));
   ASSERT_TRUE(m.ucy_s);
   EXPECT_EQ(*m.ucy_s, 600);
+  EXPECT_FALSE(KtaplProgramMeta("%\n(UTL,1)\nN10G0X1.\n", "X").ucy_s);
 }
 
-TEST(KtaplMeta, EiaFormsCaseAndSeveralUtl) {
-  auto m = ExtractKtaplMeta("%\n%utl,1,2%\n(UTL, T3 )\n%UCY,45%\n", "X");
-  EXPECT_EQ(m.tools, (std::vector<std::string>{"1", "2", "3"}));
-  EXPECT_EQ(m.ucy_s.value_or(-1), 45);
-}
-
-TEST(KtaplMeta, UcyAbsentAndCommentsIgnored) {
-  auto m = ExtractKtaplMeta("%\n! (UCY,5) is only a comment\nN10G0X1.\n", "X");
-  EXPECT_FALSE(m.ucy_s);
-  EXPECT_TRUE(m.tools.empty());
-}
-
-TEST(KtaplMeta, ErrorsNameLineAndColumn) {
+TEST(KtaplProgramMeta, MalformedUtlOrUcyIsAnErrorWithNameLineAndColumn) {
   EXPECT_EQ(ErrorOf("%\n(UTL,T12345678)"),
-            "P1:2:6: error: UTL tool number must be up to 7 digits, optionally prefixed with T: 'T12345678'");
+            "P1:2:6: error: UTL entry 'T12345678' is not a tool number (up to 7 digits, optionally prefixed "
+            "with T)");
   EXPECT_EQ(ErrorOf("(UTL,1,,2)"),
-            "P1:1:8: error: UTL tool number must be up to 7 digits, optionally prefixed with T: ''");
-  EXPECT_EQ(ErrorOf("(UCY,1.5)"), "P1:1:6: error: UCY needs whole seconds of up to 7 digits (UCY,nnnnnnn)");
+            "P1:1:8: error: UTL entry '' is not a tool number (up to 7 digits, optionally prefixed with T)");
+  EXPECT_EQ(ErrorOf("(UTL,)"), "P1:1:6: error: (UTL,...) lists no tools");
+  EXPECT_EQ(ErrorOf("(UCY,1.5)"), "P1:1:6: error: UCY value '1.5' is not whole seconds (UCY,nnnnnnn)");
   EXPECT_EQ(ErrorOf("(UCY,12345678)"),
-            "P1:1:6: error: UCY needs whole seconds of up to 7 digits (UCY,nnnnnnn)");
-  EXPECT_EQ(ErrorOf("(UCY,1)\n(UCY,2)"), "P1:2:1: error: second UCY statement");
-  EXPECT_EQ(ErrorOf("(UCY,1,2)"), "P1:1:8: error: UCY takes one value: (UCY,seconds)");
-  EXPECT_EQ(ErrorOf("(UTL,1"), "P1:1:1: error: UTL statement without closing ')'");
+            "P1:1:6: error: UCY value '12345678' is not a cycle time in seconds (up to 7 digits)");
+  EXPECT_EQ(ErrorOf("(UCY,1)\n(UCY,2)"), "P1:2:1: error: second (UCY,...) ignored (first on line 1)");
+  EXPECT_EQ(ErrorOf("(UTL,1"), "P1:1:1: error: (UTL,...) without closing ')'");
+  EXPECT_EQ(ErrorOf("(UCY)"), "P1:1:5: error: expected ',' after UCY");
+  // Heading order and NAM are not the scheduler's business.
+  EXPECT_EQ(ErrorOf("N1 G0 X0\n(UCY,5)\n(UTL,1)\n(NAM,)\n(NAM,A)"), "");
 }
 
 TEST(ProgramSources, MemoryAndText) {
@@ -57,10 +53,13 @@ TEST(ProgramSources, MemoryAndText) {
   EXPECT_FALSE(mem.Lookup("B"));
   TextProgramSource text([](std::string_view n) -> std::optional<std::string> {
     if (n == "Q") return std::string("(UTL,9)(UCY,3)");
+    if (n == "BAD") return std::string("(UCY,x)");
     return std::nullopt;
   });
   EXPECT_EQ(text.Lookup("Q")->tools, std::vector<std::string>{"9"});
+  EXPECT_EQ(text.Lookup("Q")->ucy_s.value_or(0), 3);
   EXPECT_FALSE(text.Lookup("R"));
+  EXPECT_THROW(text.Lookup("BAD"), Error);
 }
 
 }  // namespace

@@ -9,12 +9,10 @@
 #include <type_traits>
 #include <vector>
 
-namespace cell::interp::ktapl {
+// Upper, Trim, TrimView, SplitTopLevel, Statement, FindStatements (shared with the heading reader).
+#include "cell/interp/ktapl_statements.h"
 
-std::string Upper(std::string_view s);
-std::string Trim(std::string_view s);
-// Trim without a copy.
-std::string_view TrimView(std::string_view s);
+namespace cell::interp::ktapl {
 
 // A vector with fixed inline capacity for the per-block word lists: a block is at most 80 characters, so
 // it never holds more than 40 words, and the hot path allocates nothing. push_back reports overflow by
@@ -61,19 +59,5 @@ class InlineVec {
   alignas(T) unsigned char buf_[N * sizeof(T)];
   size_t n_ = 0;
 };
-// Splits at `sep` outside quotes and parentheses (and <...> when `angle`).
-std::vector<std::string> SplitTopLevel(std::string_view body, char sep, bool angle = false);
-
-// A Type II statement found in a block: (MNE,body) or %MNE,body%.
-struct Statement {
-  std::string mnemonic;  // upper case
-  std::string body;      // text after the comma
-  bool has_body = false;
-  int col = 0;     // 1-based column of the control-out character
-  size_t end = 0;  // index just after the control-in character
-};
-
-// Type II statements at the top level of a block (not inside a ! comment).
-std::vector<Statement> FindStatements(std::string_view line, std::string* error);
 
 }  // namespace cell::interp::ktapl

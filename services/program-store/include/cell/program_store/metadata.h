@@ -2,8 +2,9 @@
 // or detected), the KT-APL FMS heading (NAM, UTL, UCY) with its placement rules, the program names inside
 // Okuma / EMCO / Balt files, size and line count; plus the name rules of each dialect and the text check.
 //
-// This is the program store's own small extractor (not the interpreter's parser): it reads only what the
-// store, `program ls` and the scheduler need. docs/program-store.md lists the rules and their sources.
+// The store's own small extractor (not the interpreter's parser): it reads only what the store, `program ls`
+// and the scheduler need; the KT-APL heading comes from cell_ktapl_meta (cell/interp/ktapl_meta.h), the
+// reader the interpreter and the scheduler use too. docs/program-store.md lists the rules and their sources.
 #pragma once
 
 #include <cstdint>
@@ -72,7 +73,7 @@ struct Metadata {
   Dialect dialect = Dialect::kNone;
   bool dialect_detected = false;           // true when detected, false when declared (or none)
   std::string nam;                         // KT-APL (NAM,name), trimmed; "" when absent
-  std::vector<std::string> utl;            // KT-APL (UTL,...) tool numbers, without the T prefix
+  std::vector<std::string> utl;            // KT-APL (UTL,...) tool numbers, without the T prefix, as written
   std::optional<double> ucy_s;             // KT-APL (UCY,seconds)
   std::vector<std::string> program_names;  // Okuma O names, EMCO O numbers / %nn, Balt %:NAME
   std::uint64_t size = 0;                  // bytes

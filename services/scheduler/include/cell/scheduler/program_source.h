@@ -18,11 +18,12 @@ struct ProgramMeta {
   std::optional<std::int64_t> ucy_s;  // UCY seconds; absent when the program has no UCY statement
 };
 
-// Extracts UTL and UCY from KT-APL program text. DESIGN §5: `(UTL,t1,t2,...)` with tool numbers of up to 7
-// digits, each optionally prefixed with T; `(UCY,seconds)` (manual seed line 4136: "(UCY,nnnnnnn)"). The EIA
-// forms `%UTL,...%` and `%UCY,...%` are accepted too; mnemonics are case-insensitive. Several UTL statements
-// add up. Throws cell::Error (kInvalidArgument) "NAME:LINE:COL: error: text" for a malformed UTL or UCY.
-ProgramMeta ExtractKtaplMeta(std::string_view text, std::string_view name);
+// The scheduler's view of a KT-APL program's heading, read by cell::interp::ExtractKtaplMetadata (DESIGN §5:
+// `(UTL,t1,t2,...)`, tool numbers of up to 7 digits each optionally prefixed with T; `(UCY,nnnnnnn)`, manual
+// seed line 4136). Tool numbers are normalised and de-duplicated; UCY must be whole seconds. Heading order is
+// not checked here. Throws cell::Error (kInvalidArgument) "NAME:LINE:COL: error: text" for a malformed UTL or
+// UCY (a bad tool entry, a bad or second UCY, a missing ',' or closing character).
+ProgramMeta KtaplProgramMeta(std::string_view text, std::string_view name);
 
 // Looks a program up by name (in the HOST namespace of the program store). nullopt when no such program
 // exists. A program that exists but cannot be read may throw cell::Error.
@@ -32,8 +33,8 @@ class ProgramSource {
   virtual std::optional<ProgramMeta> Lookup(std::string_view name) = 0;
 };
 
-// A ProgramSource over program text: `fetch` returns the text of a program (nullopt: no such program) and the
-// KT-APL extractor reads UTL/UCY from it.
+// A ProgramSource over program text: `fetch` returns the text of a program (nullopt: no such program) and
+// KtaplProgramMeta reads UTL/UCY from it.
 class TextProgramSource : public ProgramSource {
  public:
   using Fetch = std::function<std::optional<std::string>(std::string_view name)>;

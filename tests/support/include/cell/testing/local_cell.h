@@ -23,6 +23,7 @@ class LocalCell {
   // `cellctl up --stations S --clock C`; the result for the caller to assert on.
   RunResult Up(const std::string& stations = "KT01,KT02", const std::string& clock = "virtual");
   RunResult Down();
+  bool is_up() const { return up_; }  // Up succeeded and Down was not called
   RunResult Ctl(std::vector<std::string> args, std::chrono::seconds timeout = std::chrono::seconds(60)) const;
   // Runs a cellctl verb that must succeed and prints JSON; a failure yields a null JSON value.
   nlohmann::json Json(std::vector<std::string> args) const;

@@ -8,19 +8,11 @@
 #include <vector>
 
 #include "cell/interp/interp.h"
+// KtaplMetadata, ExtractKtaplMetadata: the program heading (%, NAM, UTL, UCY) for the interpreter, the
+// program store and the scheduler (DESIGN §5), in the small library cell_ktapl_meta.
+#include "cell/interp/ktapl_meta.h"
 
 namespace cell::interp {
-
-// Program heading data for the program store and the scheduler (DESIGN §5).
-struct KtaplMetadata {
-  std::optional<std::string> name;    // (NAM,name), trimmed
-  std::vector<std::string> tools;     // (UTL,t1,t2,...): tool numbers without the T prefix
-  std::optional<long> cycle_s;        // (UCY,seconds)
-  std::vector<std::string> warnings;  // placement and format problems, "LINE: text"
-};
-
-// Scans the heading (%, NAM, UTL, UCY) of a KT-APL program. Never throws.
-KtaplMetadata ExtractKtaplMetadata(std::string_view text);
 
 // The control's 8-significant-digit number format (FWR, <Ln> file names, parameter display):
 // 9.8000000, 123.45670, -45.670000, .25000000, 0.0.

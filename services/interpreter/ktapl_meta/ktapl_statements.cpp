@@ -1,0 +1,111 @@
+// KT-APL block text helpers and the Type II statement scanner (see ktapl_statements.h).
+#include "cell/interp/ktapl_statements.h"
+
+#include <cctype>
+#include <string>
+
+namespace cell::interp::ktapl {
+
+std::string Upper(std::string_view s) {
+  std::string r(s);
+  for (char& c : r) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+  return r;
+}
+
+std::string_view TrimView(std::string_view s) {
+  size_t b = 0, e = s.size();
+  while (b < e && (s[b] == ' ' || s[b] == '\t' || s[b] == '\r')) ++b;
+  while (e > b && (s[e - 1] == ' ' || s[e - 1] == '\t' || s[e - 1] == '\r')) --e;
+  return s.substr(b, e - b);
+}
+
+std::string Trim(std::string_view s) {
+  return std::string(TrimView(s));
+}
+
+std::vector<std::string> SplitTopLevel(std::string_view body, char sep, bool angle) {
+  std::vector<std::string> out;
+  int depth = 0;
+  bool quote = false;
+  size_t start = 0;
+  for (size_t i = 0; i < body.size(); ++i) {
+    char c = body[i];
+    if (quote) {
+      if (c == '"') quote = false;
+      continue;
+    }
+    if (c == '"') {
+      quote = true;
+    } else if (c == '(' || (angle && c == '<')) {
+      ++depth;
+    } else if ((c == ')' || (angle && c == '>')) && depth > 0) {
+      --depth;
+    } else if (c == sep && depth == 0) {
+      out.emplace_back(body.substr(start, i - start));
+      start = i + 1;
+    }
+  }
+  out.emplace_back(body.substr(start));
+  return out;
+}
+
+std::vector<Statement> FindStatements(std::string_view line, std::string* error, size_t* error_at) {
+  std::vector<Statement> out;
+  size_t i = 0;
+  while (i < line.size()) {
+    char c = line[i];
+    if (c == '!') break;
+    if (c == '(' ||
+        (c == '%' && i + 3 < line.size() && std::isalpha(static_cast<unsigned char>(line[i + 1])))) {
+      char close = c == '(' ? ')' : '%';
+      int depth = 0;
+      bool quote = false;
+      size_t j = i + 1;
+      for (; j < line.size(); ++j) {
+        char d = line[j];
+        if (quote) {
+          if (d == '"') quote = false;
+          continue;
+        }
+        if (d == '"') {
+          quote = true;
+        } else if (close == ')' && d == '(') {
+          ++depth;
+        } else if (d == close) {
+          if (depth == 0) break;
+          --depth;
+        }
+      }
+      if (j >= line.size()) {
+        if (error) *error = "MISSING CONTROL-IN CHARACTER";
+        if (error_at) *error_at = i;
+        return out;
+      }
+      Statement st;
+      st.col = static_cast<int>(i) + 1;
+      std::string_view inner = line.substr(i + 1, j - i - 1);
+      size_t k = 0;
+      while (k < inner.size() && inner[k] == ' ') ++k;
+      size_t m = k;
+      while (m < inner.size() && m - k < 3 && std::isalnum(static_cast<unsigned char>(inner[m]))) ++m;
+      st.mnemonic = Upper(inner.substr(k, m - k));
+      size_t rest = m;
+      while (rest < inner.size() && inner[rest] == ' ') ++rest;
+      if (rest < inner.size() && inner[rest] == ',') {
+        st.has_body = true;
+        st.body = std::string(inner.substr(rest + 1));
+      } else {
+        st.has_body = false;
+        st.body = std::string(inner.substr(rest));
+      }
+      st.end = j + 1;
+      out.push_back(std::move(st));
+      i = j + 1;
+      continue;
+    }
+    ++i;
+  }
+  return out;
+}
+
+}  // namespace cell::interp::ktapl
