@@ -15,6 +15,7 @@
 
 #include "cell/error/error.h"
 #include "cell/interp/ktapl.h"
+#include "cutter_comp.h"
 #include "expr.h"
 #include "util.h"
 
@@ -453,6 +454,22 @@ class KtRun final : public Run, public ExprContext {
   Canon& EmitSlot(Op op);
   int ReportLine() const { return cur_line_; }
 
+  // Cutter diameter compensation (cutter_comp.h): while comp_ is engaged, commands are staged in
+  // comp_stage_ and handed to it (its finished commands then go to out_).
+  struct CompCodes {  // G40-G46 of the block being executed (comp_codes_; reset by CompPrepare)
+    bool any = false;  // one of them is in the block
+    bool g43 = false, g46 = false;
+    int g = 0;  // G40/G41/G42
+    int g_col = 1, g46_col = 1;
+  };
+  void CompPrepare(const Words& words, int motion_col, bool running_cycle, bool probe, bool g92);
+  Canon& CompSlot(Op op);
+  void CompCommit();
+  void CompEndBlock(bool counts);
+  void CompFinish();
+  void CompDrain();
+  [[noreturn]] void CompFail(const cc::CompError& e);
+
   // Blocks
   void ExecBlock(std::string_view text, int line_no, size_t start);
   void ExecStatement(const Statement& st, BlockCtx& bc, bool in_ift);
@@ -499,6 +516,12 @@ class KtRun final : public Run, public ExprContext {
   Environment* env_;
   std::vector<Level> levels_;
   CanonQueue out_;
+  cc::Compensator comp_;
+  Canon comp_stage_;
+  bool comp_staged_ = false;
+  CompCodes comp_codes_;  // written only by blocks that have the codes: nothing to set up per block
+  int comp_g_ = 40;  // modal G40/G41/G42 as programmed (IFT tests it)
+  int comp_col_ = 1, comp_g_col_ = 1;
   bool finished_ = false;
   Step final_;
   bool units_emitted_ = false;
@@ -639,6 +662,7 @@ void KtRun::NextInto(Step& s) {
 }
 
 void KtRun::Finish(Step::Kind kind) {
+  if (kind == Step::kEnd && comp_.engaged()) CompFinish();
   if (!units_emitted_ && kind == Step::kEnd) {
     Canon u = Base(Op::kUnits);
     u.metric = metric_;
@@ -668,6 +692,7 @@ Canon& KtRun::EmitSlot(Op op) {
     out_.push_back(u);
   }
   idle_ = 0;
+  if (comp_.engaged()) [[unlikely]] return CompSlot(op);
   Canon& c = out_.Slot();
   c.op = op;
   c.line = cur_line_;
@@ -680,6 +705,10 @@ void KtRun::SetUnits(bool metric) {
   if (units_emitted_) {
     Canon u = Base(Op::kUnits);
     u.metric = metric_;
+    if (comp_.engaged()) [[unlikely]] {
+      CompSlot(Op::kUnits) = u;
+      return;
+    }
     out_.push_back(u);
   }
 }
@@ -875,10 +904,9 @@ bool KtRun::ActiveCode(char gm, int code) {
       case 47:
         return g47_;
       case 40:
-        return true;
       case 41:
       case 42:
-        return false;
+        return comp_g_ == code;
       case 46:
         return g46_;
       case 48:
@@ -1086,6 +1114,7 @@ void KtRun::ExecBlock(std::string_view text, int line_no, size_t start) {
     }
   }
   ExecTypeI(bc, &pb);
+  if (comp_.engaged()) [[unlikely]] CompEndBlock(!pb.words.empty() || !pb.stmts.empty());
   if (bc.jump) DoJump(*bc.jump, bc.jump_col);
   if (bc.call) DoCall(bc.call_def, bc.call_locals, false);
   if (bc.end) DoEnd(bc.end_col);
@@ -1504,6 +1533,8 @@ void KtRun::ExecStatement(const Statement& st, BlockCtx& bc, bool in_ift) {
   } else if (m == "UAT") {
     std::string v = Trim(st.body);
     if (v.size() != 1 || v[0] < '0' || v[0] > '7') Fail(st.col, "UAT SUFFIX MUST BE 0-7");
+    // ln 6179: G40 must be modal to invoke a suffix compensation.
+    if (comp_g_ != 40) Fail(st.col, "G40 must be modal in order to invoke a Suffix Compensation (UAT)");
     uat_ = v[0] - '0';
     ApplyTool();
   } else if (m == "EVT") {
@@ -1965,6 +1996,7 @@ void KtRun::ResetAtEnd() {
   incremental_ = false;
   inverse_time_ = false;
   g46_ = g47_ = false;
+  comp_g_ = 40;
   m21_ = m27_ = m29_ = m51_ = m52_ = false;
   coolant_ = 9;
   aux_coolant_ = 0;
@@ -1999,6 +2031,125 @@ void KtRun::EmitMove(const std::array<double, kAxisCount>& target, uint32_t move
     c.f_mode = fm;
     c.exact_stop = exact;
   }
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// Cutter diameter compensation G40/G41/G42/G43/G46 (manual ln 1599-1676, 6437-6696): the geometry and the
+// one-block look-ahead are in cutter_comp.h; here the block's codes are checked and handed over.
+
+void KtRun::CompPrepare(const Words& words, int motion_col, bool running_cycle, bool probe, bool g92) {
+  const CompCodes k = comp_codes_;
+  comp_codes_ = CompCodes();
+  comp_col_ = motion_col;
+  comp_g_col_ = k.g ? k.g_col : 1;
+  bool set = k.g == 41 || k.g == 42;
+  // G46 goes in the G41/G42 block and lasts until the next G41/G42 unless repeated there (ln 1658-1676).
+  if (k.g46 && !set) Fail(k.g46_col, "G46 MUST BE ENTERED IN THE SAME BLOCK AS G41 OR G42");
+  if (set) {
+    g46_ = k.g46;
+    comp_.SetBypass(g46_);
+  }
+  // The plane's axes as in Arc (App. H: G18 is Z, X; G20/G21 substitute the co-axes).
+  int p1 = plane_ == 17 ? kX : (plane_ == 18 ? kZ : kY);
+  int p2 = plane_ == 17 ? kY : (plane_ == 18 ? kX : kZ);
+  auto coaxis = [](int a) { return a == kX ? kU : (a == kY ? kV : kW); };
+  if (g20_) p1 = coaxis(p1);
+  if (g21_) p2 = coaxis(p2);
+  if (set || (comp_.on() && k.g != 40)) {
+    // Compensation is in effect through this block.
+    if (comp_.on() && (p1 != comp_.p1() || p2 != comp_.p2())) {
+      Fail(1, "THE PLANE CANNOT CHANGE WITH G41/G42 IN EFFECT");
+    }
+    if (cycle_ != 80 && !running_cycle) Fail(1, "FIXED CYCLES ARE NOT ALLOWED WITH G41/G42 IN EFFECT");
+    if (probe) Fail(1, "PROBE MOVES ARE NOT ALLOWED WITH G41/G42 IN EFFECT");
+    if (g92) Fail(1, "G92 IS NOT ALLOWED WITH G41/G42 IN EFFECT");
+    for (const auto& w : words) {
+      if (w.letter != 'M') continue;
+      // ln 6523: G40 must precede the next tool change.
+      if (w.v == 6) Fail(w.col, "An automatic tool change cannot be programmed with G41 or G42 in effect");
+      if (w.v != 25) continue;
+      for (const auto& a : words) {
+        int ax = AxisOfLetter(a.letter);
+        if (ax == p1 || ax == p2) Fail(w.col, "M25 MAY NOT MOVE THE COMPENSATION PLANE WITH G41/G42 IN EFFECT");
+      }
+    }
+  }
+  if (set) {
+    int side = k.g == 41 ? cc::kLeft : cc::kRight;
+    // Inverting exactly one axis of the plane swaps G41 and G42 (ln 5354-5355).
+    if (((p1 == kX || p2 == kX) && mir_x_) != ((p1 == kY || p2 == kY) && mir_y_)) side = -side;
+    double r = tool_dia_ / 2;
+    if (r < 0) {  // preset tooling, a smaller cutter than programmed (ln 6447): the other side
+      r = -r;
+      side = -side;
+    }
+    if (comp_.on()) {
+      comp_.SetSide(side, k.g);
+    } else {
+      cc::Compensator::Setup s;
+      s.p1 = p1;
+      s.p2 = p2;
+      s.radius = r;
+      s.side = side;
+      s.pos = pos_;
+      s.min_move = metric_ ? 0.001 : 0.0001 * kInch;  // ln 1617, 6466
+      s.g = k.g;
+      used_ |= (1u << p1) | (1u << p2);  // the offset moves both axes of the plane
+      comp_.RampOn(s);
+    }
+    comp_g_ = k.g;
+  } else if (k.g == 40) {
+    comp_.Cancel();
+    comp_g_ = 40;
+  }
+  if (k.g43) comp_.Perpendicular();
+}
+
+Canon& KtRun::CompSlot(Op op) {
+  if (comp_staged_) CompCommit();
+  comp_stage_.Reset();
+  comp_stage_.op = op;
+  comp_stage_.line = cur_line_;
+  comp_staged_ = true;
+  return comp_stage_;
+}
+
+void KtRun::CompCommit() {
+  comp_staged_ = false;
+  try {
+    comp_.Take(std::move(comp_stage_));
+  } catch (const cc::CompError& e) {
+    CompFail(e);
+  }
+  CompDrain();
+}
+
+void KtRun::CompEndBlock(bool counts) {
+  if (comp_staged_) CompCommit();
+  try {
+    comp_.EndBlock(counts);
+  } catch (const cc::CompError& e) {
+    CompFail(e);
+  }
+  CompDrain();
+  comp_col_ = comp_g_col_ = 1;
+}
+
+void KtRun::CompFinish() {
+  if (comp_staged_) CompCommit();
+  comp_.Finish();
+  CompDrain();
+}
+
+void KtRun::CompDrain() {
+  auto& ready = comp_.Ready();
+  for (auto& c : ready) out_.push_back(std::move(c));
+  ready.clear();
+}
+
+void KtRun::CompFail(const cc::CompError& e) {
+  int col = e.at == cc::CompError::kAtCode ? comp_g_col_ : (e.at == cc::CompError::kAtMotion ? comp_col_ : 1);
+  Fail(col, e.text, e.alarm);
 }
 
 void KtRun::ExecTypeI(BlockCtx& bc, const ParsedBlock* pb) {
@@ -2168,14 +2319,21 @@ void KtRun::ExecTypeI(BlockCtx& bc, const ParsedBlock* pb) {
         g47_ = true;
         break;
       case 40:
-      case 43:
-      case 44:
-        break;
       case 41:
       case 42:
-        Fail(col, "CUTTER DIAMETER COMPENSATION G41/G42 IS NOT IMPLEMENTED");
+        if (comp_codes_.g && comp_codes_.g != g) Fail(col, "G40, G41 AND G42 CANNOT BE IN THE SAME BLOCK");
+        comp_codes_.any = true;
+        comp_codes_.g = g;
+        comp_codes_.g_col = col;
+        break;
+      case 43:
+        comp_codes_.any = comp_codes_.g43 = true;
+        break;
+      case 44:
+        break;
       case 46:
-        g46_ = true;
+        comp_codes_.any = comp_codes_.g46 = true;
+        comp_codes_.g46_col = col;
         break;
       case 48:
         g48_ = true;
@@ -2273,6 +2431,9 @@ void KtRun::ExecTypeI(BlockCtx& bc, const ParsedBlock* pb) {
       motion_col = w.col;
       break;
     }
+  }
+  if (comp_codes_.any || comp_.engaged()) [[unlikely]] {
+    CompPrepare(words, motion_col, running_cycle, probe || probe_cycle != 0, g92);
   }
   const uint32_t cycle_axes = (1u << kX) | (1u << kY) | (1u << kZ) | (1u << kA) | (1u << kB) | (1u << kC);
 
