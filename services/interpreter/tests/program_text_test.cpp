@@ -16,9 +16,10 @@ namespace cell::interp {
 namespace {
 
 std::string TempFile(const std::string& content) {
-  std::string path = (std::filesystem::temp_directory_path() /
-                      ("program_text_test_" + std::to_string(::getpid()) + "_" + std::to_string(content.size())))
-                         .string();
+  std::string path =
+      (std::filesystem::temp_directory_path() /
+       ("program_text_test_" + std::to_string(::getpid()) + "_" + std::to_string(content.size())))
+          .string();
   std::ofstream(path, std::ios::binary) << content;
   return path;
 }
@@ -32,7 +33,7 @@ TEST(ProgramText, MappedFileReadsLikeTheFileAndSurvivesRelease) {
   ASSERT_EQ(t->view().size(), content.size());
   EXPECT_EQ(t->view(), content);
   t->Release(0, content.size() / 2);
-  t->Release(17, 5);  // an empty or reversed range is harmless
+  t->Release(17, 5);              // an empty or reversed range is harmless
   EXPECT_EQ(t->view(), content);  // released pages fault back in with the same bytes
 }
 

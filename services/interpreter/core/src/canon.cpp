@@ -207,8 +207,8 @@ void Key(Buf& out, const char* k) {
 }
 
 void Axes(Buf& out, const Canon& c) {
-  static constexpr std::string_view kKeys[kAxisCount] = {",\"x\":", ",\"y\":", ",\"z\":", ",\"a\":", ",\"b\":",
-                                                         ",\"c\":", ",\"u\":", ",\"v\":", ",\"w\":"};
+  static constexpr std::string_view kKeys[kAxisCount] = {
+      ",\"x\":", ",\"y\":", ",\"z\":", ",\"a\":", ",\"b\":", ",\"c\":", ",\"u\":", ",\"v\":", ",\"w\":"};
   for (int i = 0; i < kAxisCount; ++i) {
     if (c.used & (1u << i)) {
       out += kKeys[i];

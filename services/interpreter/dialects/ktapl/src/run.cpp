@@ -107,7 +107,7 @@ using Words = InlineVec<Word, kMaxWords>;
 
 // A G code of the block and its column.
 struct GWord {
-  int first = 0;  // the code
+  int first = 0;   // the code
   int second = 1;  // column
 };
 
@@ -456,7 +456,7 @@ class KtRun final : public Run, public ExprContext {
 
   // Cutter diameter compensation (cutter_comp.h): while comp_ is engaged, commands are staged in
   // comp_stage_ and handed to it (its finished commands then go to out_).
-  struct CompCodes {  // G40-G46 of the block being executed (comp_codes_; reset by CompPrepare)
+  struct CompCodes {   // G40-G46 of the block being executed (comp_codes_; reset by CompPrepare)
     bool any = false;  // one of them is in the block
     bool g43 = false, g46 = false;
     int g = 0;  // G40/G41/G42
@@ -520,7 +520,7 @@ class KtRun final : public Run, public ExprContext {
   Canon comp_stage_;
   bool comp_staged_ = false;
   CompCodes comp_codes_;  // written only by blocks that have the codes: nothing to set up per block
-  int comp_g_ = 40;  // modal G40/G41/G42 as programmed (IFT tests it)
+  int comp_g_ = 40;       // modal G40/G41/G42 as programmed (IFT tests it)
   int comp_col_ = 1, comp_g_col_ = 1;
   bool finished_ = false;
   Step final_;
@@ -692,7 +692,8 @@ Canon& KtRun::EmitSlot(Op op) {
     out_.push_back(u);
   }
   idle_ = 0;
-  if (comp_.engaged()) [[unlikely]] return CompSlot(op);
+  if (comp_.engaged()) [[unlikely]]
+    return CompSlot(op);
   Canon& c = out_.Slot();
   c.op = op;
   c.line = cur_line_;
@@ -1114,7 +1115,8 @@ void KtRun::ExecBlock(std::string_view text, int line_no, size_t start) {
     }
   }
   ExecTypeI(bc, &pb);
-  if (comp_.engaged()) [[unlikely]] CompEndBlock(!pb.words.empty() || !pb.stmts.empty());
+  if (comp_.engaged()) [[unlikely]]
+    CompEndBlock(!pb.words.empty() || !pb.stmts.empty());
   if (bc.jump) DoJump(*bc.jump, bc.jump_col);
   if (bc.call) DoCall(bc.call_def, bc.call_locals, false);
   if (bc.end) DoEnd(bc.end_col);
@@ -2070,7 +2072,8 @@ void KtRun::CompPrepare(const Words& words, int motion_col, bool running_cycle, 
       if (w.v != 25) continue;
       for (const auto& a : words) {
         int ax = AxisOfLetter(a.letter);
-        if (ax == p1 || ax == p2) Fail(w.col, "M25 MAY NOT MOVE THE COMPENSATION PLANE WITH G41/G42 IN EFFECT");
+        if (ax == p1 || ax == p2)
+          Fail(w.col, "M25 MAY NOT MOVE THE COMPENSATION PLANE WITH G41/G42 IN EFFECT");
       }
     }
   }
