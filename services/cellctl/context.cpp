@@ -33,18 +33,6 @@ cell::SchedulerReply Context::Scheduler(cell::SchedulerRequest req, bus::Millis 
   return rep;
 }
 
-std::vector<cell::StationStatus> Context::StationStatuses(bus::Millis settle) {
-  bus::Reader<cell::StationStatus> r(Bus(), bus::topics::kStationStatus, bus::QosKind::kState);
-  std::map<std::string, cell::StationStatus> seen;
-  // Transient-local: every announced station's last status arrives shortly after matching.
-  if (r.WaitForMatched(1, settle)) {
-    while (auto s = r.Take(bus::Millis(300))) seen[s->station().to_string()] = *s;
-  }
-  std::vector<cell::StationStatus> out;
-  for (auto& [k, v] : seen) out.push_back(v);
-  return out;
-}
-
 std::optional<cell::ToolTable> Context::Tools(const std::string& station, bus::Millis timeout) {
   bus::Reader<cell::ToolTable> r(Bus(), bus::topics::kToolTable, bus::QosKind::kState);
   return r.WaitFor([&](const cell::ToolTable& t) { return t.station() == station; }, timeout);

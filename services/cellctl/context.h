@@ -33,8 +33,6 @@ class Context {
   bus::Participant& Bus();
   cell::program_store::Client& Programs();
   cell::SchedulerReply Scheduler(cell::SchedulerRequest req, bus::Millis timeout = bus::Millis(30000));
-  // Waits up to `timeout` for the cell's state topics (late-joiner data) to arrive.
-  std::vector<cell::StationStatus> StationStatuses(bus::Millis settle);
   std::optional<cell::ToolTable> Tools(const std::string& station, bus::Millis timeout);
   std::optional<cell::StationVariables> Variables(const std::string& station, bus::Millis timeout);
   cell::StationReply StationCommand(const std::string& station, cell::StationRequest req);

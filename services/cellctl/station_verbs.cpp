@@ -1,5 +1,7 @@
 // cellctl station ls|tools|vars|input|reset
+#include <chrono>
 #include <map>
+#include <thread>
 
 #include "cell/bus/topics.h"
 #include "cell/config/config.h"
@@ -81,14 +83,38 @@ void AddStationVerbs(CLI::App& app, Context& ctx) {
   ls->callback([&ctx] {
     cell::health::Liveness live(ctx.Bus());
     bus::Reader<cell::SchedulerState> sched(ctx.Bus(), bus::topics::kSchedulerState, bus::QosKind::kState);
-    auto statuses = ctx.StationStatuses(bus::Millis(1500));
+    bus::Reader<cell::StationStatus> status(ctx.Bus(), bus::topics::kStationStatus, bus::QosKind::kState);
+    const auto ids = cell::config::ListStations();
     std::map<std::string, double> backlog;
-    if (auto s = sched.Take(bus::Millis(sched.Matched() > 0 ? 500 : 0)))
-      for (auto& b : s->backlog()) backlog[b.station().to_string()] = b.backlog_s();
     std::map<std::string, cell::StationStatus> by_id;
-    for (auto& s : statuses) by_id[s.station().to_string()] = s;
+    // All three topics are transient-local: each announced service's last sample arrives soon after this
+    // process discovers it. Gather until every station that heartbeats has sent its status and a running
+    // scheduler its backlog (discovery is slower on a loaded machine, so no fixed window), with a grace
+    // period for stations not heard at all and an overall bound.
+    bool sched_seen = false;
+    const auto t0 = std::chrono::steady_clock::now();
+    for (;;) {
+      while (auto st = status.Take(bus::Millis(0))) by_id[st->station().to_string()] = *st;
+      while (auto sc = sched.Take(bus::Millis(0))) {
+        sched_seen = true;
+        backlog.clear();
+        for (auto& b : sc->backlog()) backlog[b.station().to_string()] = b.backlog_s();
+      }
+      bool all_online = true, waiting = false;
+      for (auto& id : ids) {
+        if (!live.StationOnline(id))
+          all_online = false;
+        else if (!by_id.count(id))
+          waiting = true;
+      }
+      if (live.Online("cell-scheduler") && !sched_seen) waiting = true;
+      auto waited = std::chrono::steady_clock::now() - t0;
+      if (!waiting && (all_online || waited >= std::chrono::milliseconds(1500))) break;
+      if (waited >= std::chrono::milliseconds(4000)) break;
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
     nlohmann::json arr = nlohmann::json::array();
-    for (auto& id : cell::config::ListStations()) {
+    for (auto& id : ids) {
       auto cfg = cell::config::LoadStation(id);
       bool online =
           live.StationOnline(id) ||
