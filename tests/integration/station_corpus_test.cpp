@@ -2,6 +2,7 @@
 // conformance programs with motion go through the program store, a pallet map and the station KT01
 // (interpreter + axis servo on the virtual clock) to a COMPLETED job with machine time; a negative-corpus
 // program fails the job with the interpreter's compiler-style diagnostic as its reason.
+#include <fstream>
 #include <string>
 #include <utility>
 #include <vector>
@@ -41,6 +42,13 @@ class StationCorpus : public ::testing::Test {
                   "--dialect", "ktapl"});
     ASSERT_EQ(r.code, 0) << corpus_case << ": " << r.out << r.err;
   }
+  // A program that is not a corpus file (it needs the station's own tools).
+  void PutText(const std::string& text, const std::string& name) {
+    std::string path = cell_.data_dir() + "/" + name + ".ktapl";
+    std::ofstream(path) << text;
+    auto r = Ctl({"program", "put", path, "--name", name, "--dialect", "ktapl"});
+    ASSERT_EQ(r.code, 0) << name << ": " << r.out << r.err;
+  }
   // Maps the programs to pallet P, runs it on KT01 and waits for the end; returns the job id.
   std::string RunPallet(const std::string& pallet, const std::vector<std::string>& names,
                         int expect_wait_code) {
@@ -74,6 +82,12 @@ TEST_F(StationCorpus, PositiveProgramsWithMotionComplete) {
     Put(c, n);
     names.push_back(n);
   }
+  // Cutter compensation on the station (the corpus's cc_* cases use a T1 that KT01 does not have): KT01's
+  // T1002 (D 12.7 mm) round an outside square with G41, fill-in arcs at the corners, G40 ramp-off.
+  PutText("%\n(NAM,CCSQ)\nG71 T1002\nM06\nG90 G0 X100. Y100. Z100. F0\nG1 Z50. F500.\nG41 X120. Y100.\n"
+          "Y200.\nX220.\nY100.\nX120.\nG40 X100.\nG0 Z100. F0\nM30\n",
+          "CCSQ");
+  names.push_back("CCSQ");
   std::string job = RunPallet("5", names, 0);
   auto shown = CtlJson({"job", "show", job, "--json"});
   ASSERT_TRUE(shown.is_object());
