@@ -168,18 +168,31 @@ void AddProgramVerbs(CLI::App& app, Context& ctx) {
     for (auto& e : std::filesystem::directory_iterator(o->file))
       if (e.is_regular_file()) files.push_back(e.path());
     std::sort(files.begin(), files.end());
+    // A refused file (bad name, not text, protected, exists without --force) is reported and the rest are
+    // still imported; a store that cannot be reached stops the import at once.
+    int refused = 0;
     for (auto& f : files) {
-      std::string content = ReadLocalFile(f.string());
-      cell::program_store::Client::PutOptions po;
-      po.node = o->node;
-      po.force = o->force;
-      std::string name = NameFor(f.string(), content, "");
-      po.idempotency_key = ctx.IdempotencyKey("import:" + o->node + ":" + name);
-      PrintWarnings(ctx.Programs().Put(name, content, po));
-      std::cout << "stored " << o->node << ":" << name << "\n";
-      ++n;
+      try {
+        std::string content = ReadLocalFile(f.string());
+        cell::program_store::Client::PutOptions po;
+        po.node = o->node;
+        po.force = o->force;
+        std::string name = NameFor(f.string(), content, "");
+        po.idempotency_key = ctx.IdempotencyKey("import:" + o->node + ":" + name);
+        PrintWarnings(ctx.Programs().Put(name, content, po));
+        std::cout << "stored " << o->node << ":" << name << "\n";
+        ++n;
+      } catch (const cell::Error& e) {
+        if (e.code() == cell::Errc::kTimeout || e.code() == cell::Errc::kUnavailable) throw;
+        std::cerr << "cellctl: " << f.filename().string() << ": " << e.what() << "\n";
+        ++refused;
+      } catch (const Exit& e) {
+        std::cerr << "cellctl: " << f.filename().string() << ": " << e.message << "\n";
+        ++refused;
+      }
     }
     std::cout << n << " file(s) imported\n";
+    if (refused > 0) throw Exit{1, std::to_string(refused) + " file(s) refused"};
   });
 
   auto* exp = prog->add_subcommand("export", "write every program of a namespace into DIR");

@@ -294,6 +294,23 @@ TEST_F(ProgramStoreTest, ImportAndExportDirectories) {
   EXPECT_EQ(cell::testing::ReadFile(out + "/O1000.MIN"), files["O1000.MIN"]);
 }
 
+// A refused file does not stop an import: each refusal is one line naming the file, the others are stored,
+// and the exit status says something was refused.
+TEST_F(ProgramStoreTest, ImportReportsRefusedFilesAndStoresTheRest) {
+  std::string in = *dir_ + "/import-mixed";
+  fs::create_directories(in);
+  std::ofstream(in + "/a.apl", std::ios::binary) << kGear;
+  std::ofstream(in + "/b.bin", std::ios::binary) << std::string("AB\0CD\n", 6);  // not text
+  std::ofstream(in + "/c.txt", std::ios::binary) << "G0 X1.\n";
+  RunResult r = Cellctl({"program", "import", in, "--node", "KT03"});
+  EXPECT_EQ(r.code, 1) << r.out << r.err;
+  EXPECT_NE(r.out.find("2 file(s) imported"), std::string::npos) << r.out;
+  EXPECT_NE(r.err.find("b.bin: "), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("not text"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("1 file(s) refused"), std::string::npos) << r.err;
+  EXPECT_EQ(Names(Ls("KT03")), (std::vector<std::string>{"GEAR HOUSING", "c.txt"}));
+}
+
 TEST_F(ProgramStoreTest, BadInputIsRefusedWithOneLineAndChangesNothing) {
   std::string f = Write("bad.apl", kGear);
   ExpectRefused({"program", "put", f, "--name", ""}, "empty");
