@@ -84,9 +84,10 @@ TEST_F(StationCorpus, PositiveProgramsWithMotionComplete) {
   }
   // Cutter compensation on the station (the corpus's cc_* cases use a T1 that KT01 does not have): KT01's
   // T1002 (D 12.7 mm) round an outside square with G41, fill-in arcs at the corners, G40 ramp-off.
-  PutText("%\n(NAM,CCSQ)\nG71 T1002\nM06\nG90 G0 X100. Y100. Z100. F0\nG1 Z50. F500.\nG41 X120. Y100.\n"
-          "Y200.\nX220.\nY100.\nX120.\nG40 X100.\nG0 Z100. F0\nM30\n",
-          "CCSQ");
+  PutText(
+      "%\n(NAM,CCSQ)\nG71 T1002\nM06\nG90 G0 X100. Y100. Z100. F0\nG1 Z50. F500.\nG41 X120. Y100.\n"
+      "Y200.\nX220.\nY100.\nX120.\nG40 X100.\nG0 Z100. F0\nM30\n",
+      "CCSQ");
   names.push_back("CCSQ");
   std::string job = RunPallet("5", names, 0);
   auto shown = CtlJson({"job", "show", job, "--json"});
