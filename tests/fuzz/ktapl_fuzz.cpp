@@ -19,6 +19,20 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   opt.program_name = "fuzz";
   opt.program_text = text;
   opt.params["MAX_IDLE_BLOCKS"] = "500";
+  // Tools with a diameter, so that programs selecting T1/T2 (as the cc_* corpus seeds do) run cutter
+  // compensation with a real offset, including a negative (preset) one.
+  {
+    cell::interp::ToolEntry t1;
+    t1.tool = "1";
+    t1.socket = 1;
+    t1.length = 100;
+    t1.diameter = 10;
+    cell::interp::ToolEntry t2 = t1;
+    t2.tool = "2";
+    t2.socket = 2;
+    t2.diameter = -0.5;
+    opt.tools = {t1, t2};
+  }
   opt.library = [](const std::string& name) -> std::optional<std::string> {
     if (name == "LIBSUB") return std::string("(DFS,LIBSUB)\nG91X1.F0\n(END)\n");
     return std::nullopt;
