@@ -127,8 +127,20 @@ void AddFmsVerbs(CLI::App& app, Context& ctx) {
     r.station(o->station);
     std::ifstream probe(o->file);
     if (probe) {
-      r.text(ReadLocalFile(o->file));
-      r.name(std::filesystem::path(o->file).filename().string());
+      // DESIGN §6: a local file is stored first in the station's namespace (a new revision when the name is
+      // there already), so the job's program can be shown and run again by name.
+      std::string text = ReadLocalFile(o->file);
+      std::string name = std::filesystem::path(o->file).filename().string();
+      cell::program_store::Client::PutOptions po;
+      po.node = o->station;
+      po.force = true;
+      po.file_type = "schedule";
+      po.idempotency_key = ctx.IdempotencyKey("schedule-put:" + o->station + ":" + name);
+      auto stored = ctx.Programs().Put(name, text, po);
+      for (auto& w : stored.value("warnings", nlohmann::json::array()))
+        std::cerr << "warning: " << w.get<std::string>() << "\n";
+      r.text(text);
+      r.name(name);
     } else {
       r.name(o->file);
     }

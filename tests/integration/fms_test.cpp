@@ -354,6 +354,11 @@ TEST_F(Fms, ScheduleProgramSetsVariablesAndRunsPselectRepeats) {
   ASSERT_EQ(run.code, 0) << run.err;
   const std::string job = FirstLine(run.out);
   ASSERT_EQ(run.out, job + "\n");
+  // DESIGN §6: the local file was stored first in the station's namespace.
+  auto stored = CtlJson({"program", "ls", "S1.SDF", "--node", "KT01", "--json"});
+  ASSERT_TRUE(stored.is_array());
+  ASSERT_EQ(stored.size(), 1u) << stored;
+  EXPECT_EQ(stored[0]["type"], "schedule") << stored;
   ExpectCompleted(job);
   auto vars = CtlJson({"station", "vars", "KT01", "--json"});
   EXPECT_EQ(vars["V5"], 7) << vars;
