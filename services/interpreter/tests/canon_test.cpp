@@ -39,6 +39,7 @@ TEST(CanonJson, NumbersMatchCorrectlyRoundedFormatting) {
         0.0000005, 1.0000005,   2.5e-6, 0.1,  0.29, 123.456789, -987654.3210005, 999999.9999995, 1e6,   1e12,
         -3e15,     12345.000050}) {
     EXPECT_EQ(Written(v), Expected(v)) << v;
+    EXPECT_EQ(Written(v), Expected(v)) << v << " (again: from the writer's cache of recent numbers)";
   }
   std::mt19937_64 rng(42);
   std::uniform_real_distribution<double> unit(-1.0, 1.0);
@@ -47,6 +48,9 @@ TEST(CanonJson, NumbersMatchCorrectlyRoundedFormatting) {
     double v = unit(rng) * scale;
     if (i % 3 == 0) v = std::round(v * 1e6) / 1e6 + 5e-7;  // on or next to a tie
     ASSERT_EQ(Written(v), Expected(v)) << fmt::format("{:.17g}", v);
+    if (i % 7 == 0) {
+      ASSERT_EQ(Written(v), Expected(v)) << fmt::format("{:.17g} (cached)", v);
+    }
   }
 }
 

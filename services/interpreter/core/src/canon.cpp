@@ -110,9 +110,25 @@ class Buf {
 // fmt's correctly rounded "{:.6f}" would. The fast path scales to integer micro-units; it is taken only
 // when the scaled value is clear of a rounding tie by far more than the product's rounding error, so the
 // digits never differ from the slow path (which handles ties, huge values and non-finite input).
+// Recently written numbers, by bit pattern: a toolpath repeats most values from line to line (the feed, an
+// axis that does not move, arc centres), and copying the text is cheaper than formatting it again.
+struct NumCacheEntry {
+  uint64_t bits = 0;
+  uint8_t len = 0;  // 0: empty
+  char text[23];
+};
+thread_local NumCacheEntry num_cache[64];
+
 void Num(Buf& out, double v) {
   if (!std::isfinite(v)) {
     out += '0';
+    return;
+  }
+  uint64_t bits;
+  std::memcpy(&bits, &v, sizeof bits);
+  NumCacheEntry& hit = num_cache[(bits * 0x9E3779B97F4A7C15ull) >> 58];
+  if (hit.len != 0 && hit.bits == bits) {
+    out += std::string_view(hit.text, hit.len);
     return;
   }
   if (std::fabs(v) < 5e-7) v = 0;  // no "-0.000000"
@@ -147,7 +163,13 @@ void Num(Buf& out, double v) {
         ip /= 10;
       } while (ip);
       if (v < 0) *--p = '-';
-      out.append(p, static_cast<size_t>(end - p));
+      auto n = static_cast<size_t>(end - p);
+      if (n <= sizeof hit.text) {
+        hit.bits = bits;
+        hit.len = static_cast<uint8_t>(n);
+        std::memcpy(hit.text, p, n);
+      }
+      out.append(p, n);
       return;
     }
   }
