@@ -1,5 +1,7 @@
 #include "expr.h"
 
+#include "cell/interp/ktapl_statements.h"
+
 #include <cctype>
 #include <cmath>
 
@@ -9,10 +11,6 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kMax = 999999999.0;
-
-char Up(char c) {  // ASCII only (std::toupper's locale lookup is slow and not wanted)
-  return (c >= 'a' && c <= 'z') ? static_cast<char>(c - 'a' + 'A') : c;
-}
 
 bool IsValueLetter(char c) {
   switch (c) {

@@ -44,10 +44,6 @@ bool IsDigit(char c) {
 bool IsAlpha(char c) {
   return std::isalpha(static_cast<unsigned char>(c)) != 0;
 }
-char Up(char c) {  // ASCII only: std::toupper's locale lookup showed in profiles
-  return (c >= 'a' && c <= 'z') ? static_cast<char>(c - 'a' + 'A') : c;
-}
-
 int AxisOfLetter(char c) {
   switch (c) {
     case 'X':
@@ -746,9 +742,7 @@ void KtRun::StepOnce() {
       Fail(1, fmt::format("PROGRAM RAN {} BLOCKS WITHOUT MOTION OR OUTPUT (ENDLESS LOOP?)", max_idle_));
     }
     ExecBlock(block, line_no, start);
-    block_ = {};
   } catch (const RunError& e) {
-    block_ = {};
     Diagnostic d;
     d.program = opt_.program_name;
     d.line = cur_line_;
@@ -766,7 +760,6 @@ void KtRun::StepOnce() {
     final_.diag = d;
     Finish(Step::kError);
   } catch (const ExprError& e) {
-    block_ = {};
     Diagnostic d;
     d.program = opt_.program_name;
     d.line = cur_line_;
@@ -775,6 +768,7 @@ void KtRun::StepOnce() {
     final_.diag = d;
     Finish(Step::kError);
   }
+  block_ = {};  // the view is only valid while its block runs (diagnostic columns)
 }
 
 // ---------------------------------------------------------------------------------------------------------

@@ -9,6 +9,11 @@
 
 namespace cell::interp::ktapl {
 
+// One character to upper case, ASCII only (std::toupper's locale lookup is slow on the interpreter's hot
+// path, and KT-APL text is ASCII).
+inline char Up(char c) {
+  return (c >= 'a' && c <= 'z') ? static_cast<char>(c - 'a' + 'A') : c;
+}
 std::string Upper(std::string_view s);
 std::string Trim(std::string_view s);
 // Trim without a copy.
