@@ -73,6 +73,11 @@ std::string ReadLocalFile(const std::string& path) {
   return ss.str();
 }
 
+void PrintWarnings(const nlohmann::json& reply) {
+  for (auto& w : reply.value("warnings", nlohmann::json::array()))
+    std::cerr << "warning: " << w.get<std::string>() << "\n";
+}
+
 void Print(const Context& ctx, const nlohmann::json& j, const std::vector<std::string>& columns) {
   if (ctx.json) {
     std::cout << j.dump(2) << "\n";

@@ -49,6 +49,8 @@ class Context {
 std::string ReadLocalFile(const std::string& path);
 
 void Print(const Context& ctx, const nlohmann::json& j, const std::vector<std::string>& columns);
+// The store's warnings of a put reply ("warnings": [...]), one "warning: " line each on stderr.
+void PrintWarnings(const nlohmann::json& reply);
 
 // Verb registration, one file per noun.
 void AddProgramVerbs(CLI::App& app, Context& ctx);

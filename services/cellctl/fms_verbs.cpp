@@ -136,9 +136,7 @@ void AddFmsVerbs(CLI::App& app, Context& ctx) {
       po.force = true;
       po.file_type = "schedule";
       po.idempotency_key = ctx.IdempotencyKey("schedule-put:" + o->station + ":" + name);
-      auto stored = ctx.Programs().Put(name, text, po);
-      for (auto& w : stored.value("warnings", nlohmann::json::array()))
-        std::cerr << "warning: " << w.get<std::string>() << "\n";
+      PrintWarnings(ctx.Programs().Put(name, text, po));
       r.text(text);
       r.name(name);
     } else {

@@ -30,11 +30,6 @@ std::string NameFor(const std::string& path, const std::string& content, const s
   }
 }
 
-void PrintWarnings(const nlohmann::json& j) {
-  for (auto& w : j.value("warnings", nlohmann::json::array()))
-    std::cerr << "warning: " << w.get<std::string>() << "\n";
-}
-
 }  // namespace
 
 void AddProgramVerbs(CLI::App& app, Context& ctx) {
