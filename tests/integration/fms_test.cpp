@@ -54,11 +54,7 @@ class Fms : public ::testing::Test {
   }
 
   RunResult Ctl(std::vector<std::string> args) { return cell_.Ctl(std::move(args)); }
-  json CtlJson(std::vector<std::string> args) {
-    auto r = Ctl(args);
-    EXPECT_EQ(r.code, 0) << r.err;
-    return r.code == 0 ? json::parse(r.out) : json();
-  }
+  json CtlJson(std::vector<std::string> args) { return cell_.Json(std::move(args)); }
   void Put(const std::string& name, const std::string& text) {
     std::string path = data_ + "/" + name + ".apl";
     std::ofstream(path) << text;

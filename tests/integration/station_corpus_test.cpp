@@ -32,11 +32,7 @@ class StationCorpus : public ::testing::Test {
     }
   }
   RunResult Ctl(std::vector<std::string> args) { return cell_.Ctl(std::move(args)); }
-  json CtlJson(std::vector<std::string> args) {
-    auto r = Ctl(args);
-    EXPECT_EQ(r.code, 0) << r.err;
-    return json::parse(r.out, nullptr, false);
-  }
+  json CtlJson(std::vector<std::string> args) { return cell_.Json(std::move(args)); }
   void Put(const std::string& corpus_case, const std::string& name) {
     auto r = Ctl({"program", "put", SourceDir() + kCorpus + corpus_case + ".ktapl", "--name", name,
                   "--dialect", "ktapl"});

@@ -32,11 +32,7 @@ class Cell : public ::testing::Test {
     EXPECT_EQ(r.code, 0) << r.err;
   }
   RunResult Ctl(std::vector<std::string> args) { return cell_.Ctl(std::move(args)); }
-  json CtlJson(std::vector<std::string> args) {
-    auto r = Ctl(args);
-    EXPECT_EQ(r.code, 0) << r.err;
-    return json::parse(r.out);
-  }
+  json CtlJson(std::vector<std::string> args) { return cell_.Json(std::move(args)); }
   LocalCell cell_{"cell-skeleton-"};
   std::string prog_;
 };

@@ -5,6 +5,8 @@
 #include <filesystem>
 #include <fstream>
 
+#include <gtest/gtest.h>
+
 namespace cell::testing {
 
 LocalCell::LocalCell(const std::string& prefix)
@@ -35,8 +37,13 @@ RunResult LocalCell::Ctl(std::vector<std::string> args, std::chrono::seconds tim
 
 nlohmann::json LocalCell::Json(std::vector<std::string> args) const {
   RunResult r = Ctl(args);
+  std::string what = "cellctl";
+  for (auto& a : args) what += " " + a;
+  EXPECT_EQ(r.code, 0) << what << ": " << r.err;
   if (r.code != 0) return nullptr;
-  return nlohmann::json::parse(r.out, nullptr, false);
+  auto j = nlohmann::json::parse(r.out, nullptr, false);
+  EXPECT_FALSE(j.is_discarded()) << what << " printed no JSON: " << r.out;
+  return j;
 }
 
 std::map<std::string, int> LocalCell::Pids() const {

@@ -25,7 +25,8 @@ class LocalCell {
   RunResult Down();
   bool is_up() const { return up_; }  // Up succeeded and Down was not called
   RunResult Ctl(std::vector<std::string> args, std::chrono::seconds timeout = std::chrono::seconds(60)) const;
-  // Runs a cellctl verb that must succeed and prints JSON; a failure yields a null JSON value.
+  // Runs a cellctl verb that must succeed and print JSON: a non-zero exit or output that is not JSON is a
+  // test failure (reported here) and yields a null or discarded JSON value.
   nlohmann::json Json(std::vector<std::string> args) const;
   const std::string& data_dir() const { return data_; }
   const std::map<std::string, std::string>& env() const { return env_; }
