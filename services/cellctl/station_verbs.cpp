@@ -89,9 +89,8 @@ void AddStationVerbs(CLI::App& app, Context& ctx) {
     std::map<std::string, cell::StationStatus> by_id;
     // All three topics are transient-local: each announced service's last sample arrives soon after this
     // process discovers it. Gather until every station that heartbeats has sent its status and a running
-    // scheduler its backlog, and every station that sent a status has been heard heartbeating (discovery is
-    // slower on a loaded machine, so no fixed window), with a grace period for stations not heard at all and
-    // an overall bound.
+    // scheduler its backlog (discovery is slower on a loaded machine, so no fixed window), with a grace
+    // period for stations not heard at all and an overall bound.
     bool sched_seen = false;
     const auto t0 = std::chrono::steady_clock::now();
     for (;;) {
@@ -103,9 +102,10 @@ void AddStationVerbs(CLI::App& app, Context& ctx) {
       }
       bool all_online = true, waiting = false;
       for (auto& id : ids) {
-        bool on = live.StationOnline(id), has_status = by_id.count(id) > 0;
-        if (!on) all_online = false;
-        if (on != has_status) waiting = true;  // its status, or its heartbeat, is still on the way
+        if (!live.StationOnline(id))
+          all_online = false;
+        else if (!by_id.count(id))
+          waiting = true;
       }
       if (live.Online("cell-scheduler") && !sched_seen) waiting = true;
       auto waited = std::chrono::steady_clock::now() - t0;
@@ -116,7 +116,9 @@ void AddStationVerbs(CLI::App& app, Context& ctx) {
     nlohmann::json arr = nlohmann::json::array();
     for (auto& id : ids) {
       auto cfg = cell::config::LoadStation(id);
-      bool online = live.StationOnline(id);
+      bool online =
+          live.StationOnline(id) ||
+          (by_id.count(id) && bus::WaitUntil([&] { return live.StationOnline(id); }, bus::Millis(1500)));
       nlohmann::json j = {{"id", id},
                           {"dialect", cfg.dialect},
                           {"online", online},
