@@ -126,6 +126,11 @@ class CycWriter : public RawWriter {
     dds_get_publication_matched_status(w_, &st);
     return static_cast<int>(st.current_count);
   }
+  uint64_t TotalMatched() const override {
+    dds_publication_matched_status_t st;
+    dds_get_publication_matched_status(w_, &st);
+    return st.total_count;
+  }
 
  private:
   dds_entity_t w_;

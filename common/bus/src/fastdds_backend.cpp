@@ -126,6 +126,11 @@ class FastWriter : public RawWriter {
     w_->get_publication_matched_status(st);
     return st.current_count;
   }
+  uint64_t TotalMatched() const override {
+    dds::PublicationMatchedStatus st;
+    w_->get_publication_matched_status(st);
+    return static_cast<uint64_t>(st.total_count);
+  }
 
  private:
   dds::Publisher* pub_;

@@ -46,6 +46,9 @@ class RawWriter {
   virtual ~RawWriter() = default;
   virtual void Write(const RawSample& s) = 0;
   virtual int Matched() const = 0;
+  // Readers matched since creation, a reader that was lost and came back counting again: a change
+  // tells a volatile stream's producer that samples written meanwhile may never have arrived.
+  virtual uint64_t TotalMatched() const = 0;
   // True once every matched reliable reader acknowledged everything written so far.
   virtual bool WaitForAcked(int timeout_ms) = 0;
 };

@@ -81,6 +81,7 @@ class Writer {
     w_->Write(RawSample{ToCdr(v), KeyCdr(v)});
   }
   int Matched() const { return w_->Matched(); }
+  uint64_t TotalMatched() const { return w_->TotalMatched(); }
   bool WaitForMatched(int n, Millis timeout) const {
     return WaitUntil([&] { return w_->Matched() >= n; }, timeout);
   }

@@ -14,6 +14,7 @@ inline constexpr const char* kStationStatus = "cell/station/status";    // Stati
 inline constexpr const char* kToolTable = "cell/station/tools";         // ToolTable
 inline constexpr const char* kVariables = "cell/station/variables";     // StationVariables
 inline constexpr const char* kProgress = "cell/motion/progress";        // SegmentProgress (credits)
+inline constexpr const char* kServoControl = "cell/motion/control";     // ServoControl (hold, overrides)
 inline constexpr const char* kSchedulerState = "cell/scheduler/state";  // SchedulerState (backlog)
 // Event topics (kEvent): recent history for late joiners.
 inline constexpr const char* kRunStatus = "cell/run/status";          // RunStatus
