@@ -1,7 +1,11 @@
 #include "cell/testing/local_cell.h"
+#include <cstdio>
+#include <cstdlib>
 
 #include <signal.h>
 
+#include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 
@@ -15,6 +19,11 @@ LocalCell::LocalCell(const std::string& prefix)
 LocalCell::~LocalCell() {
   if (up_) Down();
   for (auto& [id, pid] : Pids()) kill(pid, SIGKILL);  // whatever `down` could not stop
+  if (const char* keep = std::getenv("CELL_TEST_KEEP");
+      keep && *keep) {  // logs and databases, for a post-mortem
+    std::fprintf(stderr, "CELL_TEST_KEEP: kept %s\n", data_.c_str());
+    return;
+  }
   std::error_code ec;
   std::filesystem::remove_all(data_, ec);
 }
