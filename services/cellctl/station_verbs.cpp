@@ -1,4 +1,4 @@
-// cellctl station ls|tools|vars|input|reset
+// cellctl station ls|tools|vars|input|reset|hold|resume|override
 #include <chrono>
 #include <map>
 #include <thread>
@@ -75,6 +75,7 @@ void AddStationVerbs(CLI::App& app, Context& ctx) {
     std::string id;
     std::vector<std::string> sets;
     std::string input;
+    double feed_pct = -1, rapid_pct = -1;
   };
   auto o = std::make_shared<Opts>();
 
@@ -217,6 +218,44 @@ void AddStationVerbs(CLI::App& app, Context& ctx) {
     RequireConfigured(o->id);
     cell::StationRequest req;
     req.op(cell::STATION_RESET);
+    ctx.StationCommand(o->id, req);
+  });
+
+  // The panel's feed hold and cycle start: each returns once the station reports the hold in effect or
+  // released (execution FEED_HOLD in `station ls`, from the servo's own report), or fails saying the
+  // servo has not confirmed it; the request stands either way (a servo that comes back applies it).
+  auto panel = [&ctx](const std::string& id, bool hold) {
+    RequireConfigured(id);
+    bus::Reader<cell::StationStatus> status(ctx.Bus(), bus::topics::kStationStatus, bus::QosKind::kState);
+    cell::StationRequest req;
+    req.op(hold ? cell::STATION_FEED_HOLD : cell::STATION_CYCLE_START);
+    ctx.StationCommand(id, req);
+    auto s = status.WaitFor(
+        [&](const cell::StationStatus& x) {
+          return x.station() == id && (x.execution() == cell::EXECUTION_FEED_HOLD) == hold;
+        },
+        bus::Millis(5000));
+    if (!s)
+      throw Exit{1, std::string(hold ? "feed hold" : "cycle start") + " recorded, but the axis servo of " +
+                        id + " has not confirmed it within 5 s (is it running?)"};
+  };
+  auto* hold = st->add_subcommand("hold", "feed hold: motion stops on its path until resume");
+  hold->add_option("ID", o->id)->required();
+  hold->callback([o, panel] { panel(o->id, true); });
+  auto* resume = st->add_subcommand("resume", "cycle start: release the feed hold");
+  resume->add_option("ID", o->id)->required();
+  resume->callback([o, panel] { panel(o->id, false); });
+  auto* ovr = st->add_subcommand("override", "feed (0-200 %) and rapid (0-100 %) override");
+  ovr->add_option("ID", o->id)->required();
+  ovr->add_option("--feed", o->feed_pct, "feed override, percent")->check(CLI::Range(0.0, 200.0));
+  ovr->add_option("--rapid", o->rapid_pct, "rapid override, percent")->check(CLI::Range(0.0, 100.0));
+  ovr->callback([o, &ctx] {
+    RequireConfigured(o->id);
+    if (o->feed_pct < 0 && o->rapid_pct < 0) throw Exit{2, "give --feed PCT, --rapid PCT or both"};
+    cell::StationRequest req;
+    req.op(cell::STATION_OVERRIDE);
+    req.feed_override(o->feed_pct < 0 ? -1 : o->feed_pct / 100);
+    req.rapid_override(o->rapid_pct < 0 ? -1 : o->rapid_pct / 100);
     ctx.StationCommand(o->id, req);
   });
 }

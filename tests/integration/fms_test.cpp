@@ -1,12 +1,13 @@
 // FMS dispatch across real processes (issue 7): `cellctl up` starts the cell on this test's private DDS
 // domain (virtual machine clock), and every step goes through `cellctl` verbs, as an operator would:
 // backlog balancing between two stations, the UTL tool check (and a TLD load releasing a waiting pallet),
-// a `kill -9` of the scheduler in the middle of a run, and bad input.
+// a `kill -9` of the scheduler in the middle of a run, an axis servo stopped past the DDS lease, and bad
+// input.
 //
-// Determinism without fixed sleeps: a pallet is held "in the middle of its run" by stopping the station's
-// axis servo with SIGSTOP (the interpreter has sent its first segments under the initial credits and waits
-// for progress); SIGCONT lets the run finish. Conditions are waited for with deadlines (`job wait
-// --timeout`, or polling `job show` / `inspect ls` until a predicate holds).
+// Determinism without fixed sleeps: a pallet is held "in the middle of its run" by the station's feed hold
+// (`cellctl station hold`, which returns once the servo reports the hold in effect); `station resume` lets
+// the run finish. Conditions are waited for with deadlines (`job wait --timeout`, or polling `job show` /
+// `inspect ls` until a predicate holds).
 #include <signal.h>
 
 #include <chrono>
@@ -18,6 +19,9 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "cell/bus/bus.h"
+#include "cell/bus/topics.h"
+#include "cell/idl/motion.h"
 #include "cell/testing/local_cell.h"
 
 using namespace cell::testing;
@@ -99,6 +103,14 @@ class Fms : public ::testing::Test {
     stopped_.push_back(pid);
   }
   void Thaw(const std::string& service) { kill(Pid(service), SIGCONT); }
+  void Hold(const std::string& station) {
+    auto r = Ctl({"station", "hold", station});
+    ASSERT_EQ(r.code, 0) << r.err;
+  }
+  void Resume(const std::string& station) {
+    auto r = Ctl({"station", "resume", station});
+    ASSERT_EQ(r.code, 0) << r.err;
+  }
   // Run records (`inspect ls` + `inspect cat`) of a pallet.
   std::vector<json> RunRecords(int pallet) {
     std::vector<json> out;
@@ -123,20 +135,20 @@ class Fms : public ::testing::Test {
 TEST_F(Fms, BacklogBalancesTwoPalletsAcrossStations) {
   Put("BAL1", Program("BAL1", "1001", 100));
   ASSERT_EQ(Ctl({"route", "define", "RB", "--op", "KT01,KT02:BAL1"}).code, 0);
-  // Pallet 1 stays in the middle of its run on KT01 while its servo is stopped. Keep this window short: a
-  // process stopped for longer than the DDS lease (3 s) looks vanished, and the interpreter fails a run whose
-  // servo has been gone for 5 s.
-  Freeze("cell-axis-servo/KT01");
+  // Pallet 1 stays in the middle of its run on KT01 under feed hold.
+  Hold("KT01");
   const std::string j1 = Operate("RB", 1);
   const std::string j2 = Operate("RB", 2);
+  WaitJob(j1, [](const json& j) { return j["state"] == "RUNNING"; });
+  EXPECT_EQ(Ctl({"job", "wait", j1, "--timeout", "1"}).code, 3);  // held: it does not finish
   // KT01 still holds pallet 1's 100 s; the scheduler publishes it.
   auto ls = CtlJson({"station", "ls", "--json"});
-  Thaw("cell-axis-servo/KT01");
+  Resume("KT01");
   ASSERT_TRUE(ls.is_array());
   ASSERT_GE(ls.size(), 2u);
   EXPECT_EQ(ls[0]["id"], "KT01");
   EXPECT_EQ(ls[0]["backlog_s"], 100.0);
-  EXPECT_EQ(ls[0]["execution"], "ACTIVE");
+  EXPECT_EQ(ls[0]["execution"], "FEED_HOLD");
   EXPECT_EQ(ls[0]["pallet"], 1);
 
   ExpectCompleted(j1);
@@ -218,7 +230,7 @@ TEST_F(Fms, ToolCheckRejectsStationsWithoutTheToolsAndTldLoadReleases) {
 TEST_F(Fms, SchedulerKilledMidRunRestartsAndJobCompletesExactlyOnce) {
   Put("KILL1", Program("KILL1", "1001", 40));
   ASSERT_EQ(Ctl({"route", "define", "RK", "--op", "KT01,KT02:KILL1"}).code, 0);
-  Freeze("cell-axis-servo/KT01");
+  Hold("KT01");
   const std::string job = Operate("RK", 7);
   WaitJob(job, [](const json& j) { return j["state"] == "RUNNING"; });
 
@@ -257,7 +269,7 @@ TEST_F(Fms, SchedulerKilledMidRunRestartsAndJobCompletesExactlyOnce) {
   }
 
   // While the scheduler is down the station finishes the run and stores its record.
-  Thaw("cell-axis-servo/KT01");
+  Resume("KT01");
   auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
   while (RunRecords(7).empty() && std::chrono::steady_clock::now() < deadline)
     std::this_thread::sleep_for(std::chrono::milliseconds(100));
@@ -282,6 +294,36 @@ TEST_F(Fms, SchedulerKilledMidRunRestartsAndJobCompletesExactlyOnce) {
   EXPECT_NE(again, job);
   ExpectCompleted(again);
   EXPECT_EQ(RunRecords(7).size(), 2u);
+}
+
+// (e) An axis servo stopped (SIGSTOP) until the DDS lease has run out, then continued. Its peers dropped it
+// meanwhile and Fast DDS 2.9 may not exchange endpoints again with a participant that kept its own view, so
+// the servo, finding it stood still past the lease, joins the bus with a new participant; the interpreter
+// sends again what the servo has not reported received (the segment stream is volatile), the servo drops
+// what it already has, and the run completes once. The station then takes the next pallet. This test
+// watches the lease through its own writer on the servo's segment topic (never written to).
+TEST_F(Fms, ServoStoppedPastItsLeaseRejoinsAndFinishesTheRun) {
+  Put("LEASE1", Program("LEASE1", "1001", 20));
+  ASSERT_EQ(Ctl({"route", "define", "RL", "--op", "KT01:LEASE1"}).code, 0);
+  cell::bus::Participant observer("fms-test/observer");
+  cell::bus::Writer<cell::MotionSegment> watch(observer, cell::bus::topics::Segments("KT01"),
+                                               cell::bus::QosKind::kStream);
+  ASSERT_TRUE(watch.WaitForMatched(1, std::chrono::seconds(10)));
+
+  Freeze("cell-axis-servo/KT01");
+  const std::string job = Operate("RL", 9);
+  WaitJob(job, [](const json& j) { return j["state"] == "RUNNING"; });
+  ASSERT_TRUE(cell::bus::WaitUntil([&] { return watch.Matched() == 0; }, std::chrono::seconds(15)))
+      << "the stopped servo's lease did not run out";
+  Thaw("cell-axis-servo/KT01");
+  ExpectCompleted(job);
+  auto recs = RunRecords(9);
+  ASSERT_EQ(recs.size(), 1u);
+  EXPECT_EQ(recs[0]["completed"], true);
+  EXPECT_GT(recs[0]["machine_s"].get<double>(), 0.0);
+  const std::string log = ReadFile(data_ + "/logs/cell-axis-servo@KT01.service.log");
+  EXPECT_NE(log.find("joining the bus anew"), std::string::npos) << log;
+  ExpectCompleted(Operate("RL", 10));
 }
 
 // (d) Bad input: one-line reasons and the documented exit codes.
@@ -333,6 +375,16 @@ TEST_F(Fms, BadInput) {
     EXPECT_TRUE(one_line(r)) << r.err;
   }
   EXPECT_EQ(Ctl({"job", "cancel", "4242"}).code, 2);
+  // The panel verbs: unknown or unstarted stations, overrides out of range or missing.
+  for (auto args : std::vector<std::vector<std::string>>{{"station", "hold", "KT99"},
+                                                         {"station", "resume", "KT03"},
+                                                         {"station", "override", "KT01", "--feed", "250"},
+                                                         {"station", "override", "KT01", "--rapid", "-5"},
+                                                         {"station", "override", "KT01"}}) {
+    auto r = Ctl(args);
+    EXPECT_NE(r.code, 0) << args[1] << " " << args[2];
+    EXPECT_TRUE(one_line(r)) << r.err;
+  }
 }
 
 // Okuma schedule program through the scheduler service: VSET goes to the station's common variables before

@@ -100,15 +100,34 @@ class Interpreter {
         progress_(p_, topics::kProgress, QosKind::kState),
         axes_(p_, topics::kAxisState, QosKind::kTelemetry),
         probe_(p_, topics::Probe("KT01"), QosKind::kCommand),
-        tools_(p_, topics::kToolTable, QosKind::kState) {}
+        tools_(p_, topics::kToolTable, QosKind::kState),
+        control_(p_, topics::kServoControl, QosKind::kState) {}
 
   bool WaitForServos() {
     return seg_kt01_.WaitForMatched(1, kMatch) && seg_kt02_.WaitForMatched(1, kMatch) &&
            progress_.WaitForMatched(2, kMatch) && axes_.WaitForMatched(2, kMatch) &&
-           probe_.WaitForMatched(1, kMatch) && tools_.WaitForMatched(2, kMatch);
+           probe_.WaitForMatched(1, kMatch) && tools_.WaitForMatched(2, kMatch) &&
+           control_.WaitForMatched(2, kMatch);
   }
 
   cell::bus::Writer<cell::ToolTable>& tools() { return tools_; }
+  cell::bus::Writer<cell::ServoControl>& control() { return control_; }
+
+  // One segment as given (seq and run chosen by the test): re-sends, gaps, runs joined in the middle.
+  void WriteRaw(const std::string& station, int32_t run_id, uint64_t seq, cell::MotionSegment m) {
+    m.station(station);
+    m.run_id(run_id);
+    m.seq(seq);
+    (station == "KT01" ? seg_kt01_ : seg_kt02_).Write(m);
+  }
+  // The next progress of `station` satisfying pred (other samples are dropped).
+  std::optional<cell::SegmentProgress> WaitProgress(
+      const std::string& station, const std::function<bool(const cell::SegmentProgress&)>& pred,
+      std::chrono::milliseconds timeout = kRunTimeout) {
+    return progress_.WaitFor(
+        [&](const cell::SegmentProgress& p) { return p.station().to_string() == station && pred(p); },
+        timeout);
+  }
   cell::bus::Reader<cell::ProbeResult>& probe() { return probe_; }
 
   // The next AxisState of `station` satisfying pred (other samples are dropped).
@@ -217,6 +236,7 @@ class Interpreter {
   cell::bus::Reader<cell::AxisState> axes_;
   cell::bus::Reader<cell::ProbeResult> probe_;
   cell::bus::Writer<cell::ToolTable> tools_;
+  cell::bus::Writer<cell::ServoControl> control_;
 };
 
 // The machine library's own cycle time for `prog`, started at rest at the end of `home`.
@@ -532,6 +552,117 @@ TEST_F(ServoDds, ProbeContactAgainstThePartModel) {
   EXPECT_EQ(miss->seq(), 3u);
   EXPECT_FALSE(miss->contact());
   EXPECT_NEAR(miss->position()[1], 300, 0.03);
+}
+
+// (f) The producer re-sends what the servo may have missed (after losing the match, docs/axis-servo.md):
+// duplicates are dropped and a segment after a gap waits for the re-send, so the run executes each segment
+// once, in seq order — the cycle time is the machine library's for the program as written.
+TEST_F(ServoDds, ReSentSegmentsRunOnceAndInOrder) {
+  auto home = Home(100, 100, 100);
+  ExpectClean(bus_->Run("KT01", NextRun(), home), home.size());
+  std::vector<cell::MotionSegment> prog{Seg(cell::SEGMENT_RAPID, 400, 100, 100),
+                                        Seg(cell::SEGMENT_LINEAR, 400, 300, 100, 3000),
+                                        Seg(cell::SEGMENT_LINEAR, 100, 300, 100, 3000), End()};
+  const int32_t run = NextRun();
+  for (uint64_t seq : {1, 2, 1, 4, 2, 3, 4}) bus_->WriteRaw("KT01", run, seq, prog[seq - 1]);
+  auto p = bus_->WaitProgress("KT01", [&](const cell::SegmentProgress& x) {
+    return x.run_id() == run && (x.completed_seq() == 4 || x.alarm());
+  });
+  ASSERT_TRUE(p) << "run did not complete" << Log("kt01.err");
+  EXPECT_FALSE(p->alarm()) << p->alarm_text().to_string();
+  EXPECT_EQ(p->received_seq(), 4u);
+  const double ref = ReferenceCycle(StationConfig("KT01"), home, prog);
+  EXPECT_NEAR(p->run_machine_s(), ref, 0.01 * ref) << "a duplicate ran, or the END overtook seq 3";
+  ASSERT_TRUE(bus_->WaitIdle("KT01"));
+  auto a = bus_->NextAxes("KT01", [](const cell::AxisState&) { return true; });
+  ASSERT_TRUE(a);
+  EXPECT_NEAR(a->commanded()[0], 100, 0.01);
+  EXPECT_NEAR(a->commanded()[1], 300, 0.01);
+}
+
+// (f) A run is joined only at its first segment: a servo that restarted mid-run never moves the rest of a
+// run from wherever its axes are. Segments 2 and 3 of a run it never saw start are dropped; when the run
+// is then sent from seq 1 it runs whole.
+TEST_F(ServoDds, ARunIsJoinedOnlyAtItsStart) {
+  auto home = Home(100, 100, 100);
+  ExpectClean(bus_->Run("KT01", NextRun(), home), home.size());
+  std::vector<cell::MotionSegment> prog{Seg(cell::SEGMENT_RAPID, 700, 100, 100),
+                                        Seg(cell::SEGMENT_RAPID, 700, 500, 100), End()};
+  const int32_t run = NextRun();
+  bus_->WriteRaw("KT01", run, 2, prog[1]);
+  bus_->WriteRaw("KT01", run, 3, prog[2]);
+  for (uint64_t seq = 1; seq <= 3; ++seq) bus_->WriteRaw("KT01", run, seq, prog[seq - 1]);
+  auto p = bus_->WaitProgress("KT01", [&](const cell::SegmentProgress& x) {
+    return x.run_id() == run && (x.completed_seq() == 3 || x.alarm());
+  });
+  ASSERT_TRUE(p) << "run did not complete" << Log("kt01.err");
+  EXPECT_FALSE(p->alarm()) << p->alarm_text().to_string();
+  const double whole = ReferenceCycle(StationConfig("KT01"), home, prog);
+  const double joined = ReferenceCycle(StationConfig("KT01"), home, {prog[1], prog[2]});
+  ASSERT_GT(whole - joined, 0.1);  // the two readings are told apart
+  EXPECT_NEAR(p->run_machine_s(), whole, 0.01 * whole) << "joined at seq 2: " << joined << " s";
+}
+
+// (g) The operator's panel (ServoControl): a feed hold keeps a run from moving until it is released, and
+// progress says so; the feed override scales feed moves (50 % takes twice the machine time). Every progress
+// sample carries the same boot_id (this servo process).
+TEST_F(ServoDds, FeedHoldAndFeedOverride) {
+  auto home = Home(100, 100, 100);
+  ExpectClean(bus_->Run("KT01", NextRun(), home), home.size());
+  uint32_t rev = 0;
+  auto panel = [&](bool hold, double feed) {
+    cell::ServoControl c;
+    c.station("KT01");
+    c.revision(++rev);
+    c.feed_hold(hold);
+    c.feed_override(feed);
+    c.rapid_override(1.0);
+    bus_->control().Write(c);
+  };
+  struct Restore {  // later tests expect a free machine at 100 %
+    std::function<void()> f;
+    ~Restore() { f(); }
+  } restore{[&] { panel(false, 1.0); }};
+
+  panel(true, 1.0);
+  auto held = bus_->WaitProgress(
+      "KT01", [](const cell::SegmentProgress& x) { return x.feed_hold(); }, 5000ms);
+  ASSERT_TRUE(held) << "the servo did not report the hold";
+  const uint64_t boot = held->boot_id();
+  EXPECT_NE(boot, 0u);
+  std::vector<cell::MotionSegment> prog{Seg(cell::SEGMENT_LINEAR, 400, 100, 100, 3000), End()};
+  const int32_t run = NextRun();
+  bus_->WriteRaw("KT01", run, 1, prog[0]);
+  bus_->WriteRaw("KT01", run, 2, prog[1]);
+  auto got = bus_->WaitProgress(
+      "KT01", [&](const cell::SegmentProgress& x) { return x.run_id() == run && x.received_seq() == 2; });
+  ASSERT_TRUE(got);
+  EXPECT_TRUE(got->feed_hold());
+  // 300 ms of wall time is thousands of machine seconds on the virtual clock: the 6 s move would be done.
+  auto early = bus_->WaitProgress(
+      "KT01", [&](const cell::SegmentProgress& x) { return x.run_id() == run && x.completed_seq() > 0; },
+      300ms);
+  EXPECT_FALSE(early) << "a segment completed under feed hold";
+
+  panel(false, 1.0);
+  auto done = bus_->WaitProgress("KT01", [&](const cell::SegmentProgress& x) {
+    return x.run_id() == run && (x.completed_seq() == 2 || x.alarm());
+  });
+  ASSERT_TRUE(done) << "the run did not finish after the hold was released" << Log("kt01.err");
+  EXPECT_FALSE(done->alarm()) << done->alarm_text().to_string();
+  EXPECT_FALSE(done->feed_hold());
+  EXPECT_EQ(done->boot_id(), boot);
+
+  // Same 300 mm feed move at 100 % and at 50 %.
+  std::vector<cell::MotionSegment> back{Seg(cell::SEGMENT_LINEAR, 100, 100, 100, 3000), End()};
+  RunResult full = bus_->Run("KT01", NextRun(), back);
+  ExpectClean(full, back.size());
+  panel(false, 0.5);
+  RunResult half = bus_->Run("KT01", NextRun(), prog);
+  ExpectClean(half, prog.size());
+  const double t100 = full.last->run_machine_s(), t50 = half.last->run_machine_s();
+  ASSERT_GT(t100, 5.9);  // 300 mm at 3000 mm/min = 6 s, plus acceleration
+  EXPECT_NEAR(t50 / t100, 2.0, 0.05) << t100 << " s at 100 %, " << t50 << " s at 50 %";
 }
 
 }  // namespace

@@ -12,6 +12,9 @@ constexpr auto kAxisPeriod = std::chrono::milliseconds(20);  // 50 Hz in wall ti
 // Virtual clock: how long (wall) the machine waits for the producer to refill a look-ahead queue that is
 // less than half full before it runs on with what it has (see LookAheadStarved()).
 constexpr auto kLookAheadWait = std::chrono::milliseconds(5);
+// A loop pass normally takes milliseconds; a gap this long means the process was stopped, and peers may have
+// let its 3 s DDS lease run out.
+constexpr auto kStoodStill = std::chrono::milliseconds(2500);
 }  // namespace
 
 Segment FromWire(const cell::MotionSegment& m, uint64_t id) {
@@ -79,23 +82,53 @@ Segment FromWire(const cell::MotionSegment& m, uint64_t id) {
   return s;
 }
 
-Service::Service(bus::Participant& p, MachineConfig cfg, ClockKind clock)
+struct Service::Endpoints {
+  Endpoints(bus::Participant& p, Service& s)
+      : segments(p, bus::topics::Segments(s.station_), bus::QosKind::kStream),
+        progress(p, bus::topics::kProgress, bus::QosKind::kState),
+        axes(p, bus::topics::kAxisState, bus::QosKind::kTelemetry),
+        probe(p, bus::topics::Probe(s.station_), bus::QosKind::kCommand),
+        tools(p, bus::topics::kToolTable, bus::QosKind::kState,
+              [&s](const cell::ToolTable& t, const bus::SampleInfo&) {
+                if (t.station() != s.station_) return;
+                std::vector<ToolSlot> slots;
+                for (auto& e : t.tools())
+                  if (e.socket() > 0) slots.push_back({e.tool().to_string(), e.socket()});
+                std::lock_guard lk(s.tools_mu_);
+                s.pending_tools_ = std::move(slots);
+              }),
+        control(p, bus::topics::kServoControl, bus::QosKind::kState,
+                [&s](const cell::ServoControl& c, const bus::SampleInfo&) {
+                  if (c.station() != s.station_) return;
+                  std::lock_guard lk(s.tools_mu_);
+                  s.pending_control_ = c;
+                }) {}
+  bus::Reader<cell::MotionSegment> segments;
+  bus::Writer<cell::SegmentProgress> progress;
+  bus::Writer<cell::AxisState> axes;
+  bus::Writer<cell::ProbeResult> probe;
+  bus::Reader<cell::ToolTable> tools;
+  bus::Reader<cell::ServoControl> control;
+};
+
+Service::Service(const std::string& bus_name, MachineConfig cfg, ClockKind clock)
     : station_(cfg.station_id),
       clock_(clock),
+      boot_id_(static_cast<uint64_t>(health::WallNs())),
       machine_(std::move(cfg), clock),
-      segments_(p, bus::topics::Segments(station_), bus::QosKind::kStream),
-      progress_(p, bus::topics::kProgress, bus::QosKind::kState),
-      axes_(p, bus::topics::kAxisState, bus::QosKind::kTelemetry),
-      probe_w_(p, bus::topics::Probe(station_), bus::QosKind::kCommand),
-      tools_r_(p, bus::topics::kToolTable, bus::QosKind::kState,
-               [this](const cell::ToolTable& t, const bus::SampleInfo&) {
-                 if (t.station() != station_) return;
-                 std::vector<ToolSlot> slots;
-                 for (auto& e : t.tools())
-                   if (e.socket() > 0) slots.push_back({e.tool().to_string(), e.socket()});
-                 std::lock_guard lk(tools_mu_);
-                 pending_tools_ = std::move(slots);
-               }) {}
+      bus_name_(bus_name),
+      bus_(std::make_unique<bus::Participant>(bus_name)),
+      ep_(std::make_unique<Endpoints>(*bus_, *this)) {}
+
+// On the loop thread. Segments queued in the old reader are lost with it: the producer re-sends what the
+// servo has not reported received.
+void Service::Rejoin() {
+  ep_.reset();
+  bus_.reset();
+  bus_ = std::make_unique<bus::Participant>(bus_name_);
+  ep_ = std::make_unique<Endpoints>(*bus_, *this);
+  dirty_ = true;
+}
 
 Service::~Service() {
   Stop();
@@ -123,12 +156,26 @@ void Service::Loop(std::stop_token st) {
         pending_tools_.reset();
       }
     }
+    ApplyControl();
+    if (const auto now = std::chrono::steady_clock::now();
+        last_pass_ != std::chrono::steady_clock::time_point{} && now - last_pass_ > kStoodStill) {
+      spdlog::warn("this process stood still for {:.1f} s (longer than the DDS lease): joining the bus anew",
+                   std::chrono::duration<double>(now - last_pass_).count());
+      Rejoin();
+      last_pass_ = std::chrono::steady_clock::now();
+    } else {
+      last_pass_ = now;
+    }
     // Segments in: a new run id starts a new run (its first segment is seq 1).
-    while (auto m = segments_.Take(std::chrono::milliseconds(0))) {
+    while (auto m = ep_->segments.Take(std::chrono::milliseconds(0))) {
       inbox_.push_back(std::move(*m));
       last_segment_at_ = std::chrono::steady_clock::now();
     }
     while (!inbox_.empty()) {
+      if (!Accept(inbox_.front())) {
+        inbox_.pop_front();
+        continue;
+      }
       if (inbox_.front().run_id() != run_id_) {
         if (!seq_of_.empty() && machine_.alarm().code == AlarmCode::kNone) {
           // The previous run was abandoned with segments still queued or running (the producer moved
@@ -145,6 +192,7 @@ void Service::Loop(std::stop_token st) {
         const bool aborted = abandoning_;
         abandoning_ = false;
         run_id_ = inbox_.front().run_id();
+        received_seq_ = 0;
         completed_seq_ = 0;
         seq_of_.clear();
         probe_.clear();
@@ -161,6 +209,8 @@ void Service::Loop(std::stop_token st) {
       }
       cell::MotionSegment m = std::move(inbox_.front());
       inbox_.pop_front();
+      received_seq_ = m.seq();
+      dirty_ = true;  // the producer learns what arrived (it re-sends what did not)
       if (alarm_.code != AlarmCode::kNone || machine_.alarm().code != AlarmCode::kNone) {
         // The run is stopped by an alarm: later segments of it (sent within their credits before the
         // producer saw the alarm) are dropped; they must not replace the alarm that stopped the run.
@@ -189,7 +239,7 @@ void Service::Loop(std::stop_token st) {
     if (LookAheadStarved()) {
       // Virtual clock only: wait (wall time) for the refill instead of running the machine into a stop
       // that the segments in flight would have avoided.
-      if (auto m = segments_.Take(std::chrono::milliseconds(1))) {
+      if (auto m = ep_->segments.Take(std::chrono::milliseconds(1))) {
         inbox_.push_back(std::move(*m));
         last_segment_at_ = std::chrono::steady_clock::now();
       }
@@ -197,6 +247,8 @@ void Service::Loop(std::stop_token st) {
       if (std::chrono::steady_clock::now() - last_axes_ >= kAxisPeriod) PublishAxes();
       continue;
     }
+    // Every step: a reset (new run, alarm cleared) releases the planner's hold, never the operator's.
+    if (feed_hold_) machine_.FeedHold();
     bool stepped = machine_.Step();
     HandleEvents();
     if (dirty_) PublishProgress();
@@ -205,6 +257,49 @@ void Service::Loop(std::stop_token st) {
     if (!stepped) std::this_thread::sleep_for(std::chrono::milliseconds(1));
   }
   alive_ = false;
+}
+
+// Segments arrive in order within one DDS match, but a producer that lost the match (this process stopped
+// past the lease, say) re-sends everything not yet completed once it matches again. Taking only the next seq
+// makes that safe: duplicates are dropped, and so is anything after a gap (the re-send fills it in order).
+// A run is only ever joined at its first segment: a servo restarted mid-run never moves a run from the
+// middle (from wherever the axes are to a point the program reached from elsewhere); the producer sees the
+// new boot_id and fails the run.
+bool Service::Accept(const cell::MotionSegment& m) {
+  const bool next = m.run_id() == run_id_ ? m.seq() == received_seq_ + 1 : m.seq() == 1;
+  if (next) return true;
+  if (m.run_id() == run_id_ && m.seq() <= received_seq_) {
+    spdlog::debug("segment run {} seq {} dropped: already received", m.run_id(), m.seq());
+  } else if (m.run_id() == run_id_) {
+    spdlog::warn("segment run {} seq {} dropped: expected seq {} (waiting for the re-send)", m.run_id(),
+                 m.seq(), received_seq_ + 1);
+  } else {
+    spdlog::warn("segment run {} seq {} dropped: this servo did not receive the run's start", m.run_id(),
+                 m.seq());
+  }
+  return false;
+}
+
+// The operator's panel (ServoControl from the station's interpreter): applied between steps.
+void Service::ApplyControl() {
+  std::optional<cell::ServoControl> c;
+  {
+    std::lock_guard lk(tools_mu_);
+    c.swap(pending_control_);
+  }
+  if (!c) return;
+  if (c->feed_hold() != feed_hold_) {
+    feed_hold_ = c->feed_hold();
+    if (feed_hold_) {
+      machine_.FeedHold();
+    } else {
+      machine_.Resume();
+    }
+    spdlog::info("feed hold {}", feed_hold_ ? "on" : "released");
+  }
+  machine_.SetFeedOverride(c->feed_override());
+  machine_.SetRapidOverride(c->rapid_override());
+  dirty_ = true;
 }
 
 // On the virtual clock the machine runs ~1000x faster than real time, so a look-ahead queue starved by the
@@ -239,7 +334,7 @@ void Service::HandleEvents() {
             r.seq(it->second);
             r.contact(e.probe.contact);
             for (int i = 0; i < kNumAxes; ++i) r.position()[static_cast<size_t>(i)] = e.probe.position[i];
-            probe_w_.Write(r);
+            ep_->probe.Write(r);
           }
           seq_of_.erase(it);
           dirty_ = true;
@@ -262,6 +357,7 @@ void Service::PublishProgress() {
   p.station(station_);
   p.run_id(run_id_);
   p.completed_seq(completed_seq_);
+  p.received_seq(received_seq_);
   // One credit per free queue slot: segments in flight or queued never exceed the capacity.
   p.credit_seq(completed_seq_ + machine_.capacity());
   p.machine_s(machine_.machine_time());
@@ -271,7 +367,9 @@ void Service::PublishProgress() {
     p.alarm_code(std::to_string(static_cast<int>(alarm_.code)));
     p.alarm_text(alarm_.text.substr(0, 255));
   }
-  progress_.Write(p);
+  p.feed_hold(feed_hold_);
+  p.boot_id(boot_id_);
+  ep_->progress.Write(p);
   dirty_ = false;
 }
 
@@ -287,7 +385,7 @@ void Service::PublishAxes() {
   }
   a.machine_s(s.machine_time);
   a.wall_ns(health::WallNs());
-  axes_.Write(a);
+  ep_->axes.Write(a);
   last_axes_ = std::chrono::steady_clock::now();
 }
 

@@ -14,17 +14,25 @@ namespace {
 
 constexpr uint64_t kInitialCredit = 4;  // segments sent before the servo has spoken for a run
 constexpr auto kServoWait = std::chrono::seconds(10);
+// A run fails when its servo has been unmatched and silent this long. A servo that comes back sooner (a
+// process stopped past the 3 s DDS lease and continued, a network cut) gets the missing segments again; one
+// that restarted is told apart by its boot_id and fails the run at once.
+constexpr auto kServoGone = std::chrono::seconds(10);
 
 std::vector<store::Migration> Migrations() {
-  return {store::Migration::Sql(
-      1, "station state",
-      "CREATE TABLE tools(tool TEXT PRIMARY KEY, socket INTEGER, length REAL, diameter REAL,"
-      " life_left_min INTEGER, worn INTEGER, broken INTEGER, ord INTEGER);"
-      "CREATE TABLE variables(name TEXT PRIMARY KEY, value REAL);"
-      "CREATE TABLE runs(dispatch_id INTEGER PRIMARY KEY, job_id INTEGER, pallet INTEGER,"
-      " node TEXT, programs TEXT, repeat INTEGER, state TEXT, reason TEXT,"
-      " machine_s REAL, started_ns INTEGER, finished_ns INTEGER, received_ns INTEGER);"
-      "CREATE TABLE outbox(dispatch_id INTEGER PRIMARY KEY, record TEXT);")};
+  return {
+      store::Migration::Sql(
+          1, "station state",
+          "CREATE TABLE tools(tool TEXT PRIMARY KEY, socket INTEGER, length REAL, diameter REAL,"
+          " life_left_min INTEGER, worn INTEGER, broken INTEGER, ord INTEGER);"
+          "CREATE TABLE variables(name TEXT PRIMARY KEY, value REAL);"
+          "CREATE TABLE runs(dispatch_id INTEGER PRIMARY KEY, job_id INTEGER, pallet INTEGER,"
+          " node TEXT, programs TEXT, repeat INTEGER, state TEXT, reason TEXT,"
+          " machine_s REAL, started_ns INTEGER, finished_ns INTEGER, received_ns INTEGER);"
+          "CREATE TABLE outbox(dispatch_id INTEGER PRIMARY KEY, record TEXT);"),
+      // The operator's panel survives a restart of this process: a held machine must not start moving
+      // because its interpreter was restarted.
+      store::Migration::Sql(2, "operator panel", "CREATE TABLE panel(name TEXT PRIMARY KEY, value REAL);")};
 }
 
 cell::RunState StateFromText(const std::string& s) {
@@ -123,10 +131,18 @@ class Station::Env : public interp::Environment {
     uint64_t want = s_.sent_seq_;
     int32_t run = s_.run_id_;
     interp::ProbeResult r;
-    auto got =
-        s_.probe_r_.WaitFor([&](const cell::ProbeResult& p) { return p.run_id() == run && p.seq() == want; },
-                            std::chrono::seconds(120));
-    if (!got) throw Error(Errc::kTimeout, "no probe result from the axis servo");
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(120);
+    std::optional<cell::ProbeResult> got;
+    while (!(got = s_.probe_r_.WaitFor(
+                 [&](const cell::ProbeResult& p) { return p.run_id() == run && p.seq() == want; },
+                 std::chrono::milliseconds(200)))) {
+      {
+        std::unique_lock lk(s_.motion_mu_);
+        s_.CheckServo(lk, st_);  // alarms, a lost servo, and the re-send after it matched again
+      }
+      if (std::chrono::steady_clock::now() > deadline)
+        throw Error(Errc::kTimeout, "no probe result from the axis servo");
+    }
     r.event = got->contact() == contact;
     for (size_t i = 0; i < r.at.size(); ++i) r.at[i] = got->position()[i];
     return r;
@@ -147,6 +163,7 @@ Station::Station(bus::Participant& p, config::StationConfig cfg, const std::file
       vars_w_(p, bus::topics::kVariables, bus::QosKind::kState),
       run_w_(p, bus::topics::kRunStatus, bus::QosKind::kEvent),
       seg_w_(p, bus::topics::Segments(cfg_.id), bus::QosKind::kStream),
+      control_w_(p, bus::topics::kServoControl, bus::QosKind::kState),
       progress_r_(p, bus::topics::kProgress, bus::QosKind::kState,
                   [this](const cell::SegmentProgress& s, const bus::SampleInfo&) { OnProgress(s); }),
       probe_r_(p, bus::topics::Probe(cfg_.id), bus::QosKind::kCommand),
@@ -183,9 +200,20 @@ Station::Station(bus::Participant& p, config::StationConfig cfg, const std::file
   auto v = db_.Prepare("SELECT name, value FROM variables");
   while (v.Step()) vars_[v.ColumnText(0)] = v.ColumnDouble(1);
 
+  control_.station(cfg_.id);
+  control_.feed_override(1.0);
+  control_.rapid_override(1.0);
+  auto pq = db_.Prepare("SELECT name, value FROM panel");
+  while (pq.Step()) {
+    const std::string n = pq.ColumnText(0);
+    if (n == "feed_hold") control_.feed_hold(pq.ColumnDouble(1) != 0);
+    if (n == "feed_override") control_.feed_override(pq.ColumnDouble(1));
+    if (n == "rapid_override") control_.rapid_override(pq.ColumnDouble(1));
+  }
+
   status_.station(cfg_.id);
   status_.dialect(cfg_.dialect);
-  status_.execution(cell::EXECUTION_READY);
+  SetExecution(cell::EXECUTION_READY);
   status_.condition(cell::CONDITION_NORMAL);
   status_.queued(static_cast<int32_t>(db_.QueryInt64("SELECT COUNT(*) FROM runs WHERE state='QUEUED'")));
 }
@@ -218,6 +246,7 @@ void Station::Start() {
   }
   PublishTools();
   PublishVariables();
+  PublishControl();
   PublishStatus();
   run_srv_ = std::make_unique<bus::Server<cell::RunRequest, cell::RunReply>>(
       bus_, bus::topics::StationRun(cfg_.id), [this](const cell::RunRequest& r) { return OnRun(r); });
@@ -326,24 +355,90 @@ cell::StationReply Station::OnCommand(const cell::StationRequest& r) {
     }
       PublishStatus();
       return rep;
+    case cell::STATION_FEED_HOLD:
+    case cell::STATION_CYCLE_START:
+    case cell::STATION_OVERRIDE:
+      return SetPanel(r);
   }
   throw Error(Errc::kInvalidArgument, "unknown station command");
 }
 
+// Feed hold, feed and rapid override: recorded, persisted, published to the servo (ServoControl). The servo
+// reports the hold in its progress, which turns the station's execution to FEED_HOLD and back (OnProgress);
+// the reply does not wait for that: this handler runs on the bus thread that delivers the progress.
+cell::StationReply Station::SetPanel(const cell::StationRequest& r) {
+  cell::StationReply rep;
+  rep.station(cfg_.id);
+  cell::ServoControl c;
+  {
+    std::lock_guard s(status_mu_);
+    c = control_;
+  }
+  if (r.op() == cell::STATION_OVERRIDE) {
+    if (r.feed_override() > 2.0 || r.rapid_override() > 1.0)
+      throw Error(Errc::kInvalidArgument, "feed override is 0..200 %, rapid override 0..100 %");
+    if (r.feed_override() >= 0) c.feed_override(r.feed_override());
+    if (r.rapid_override() >= 0) c.rapid_override(r.rapid_override());
+  } else {
+    c.feed_hold(r.op() == cell::STATION_FEED_HOLD);
+  }
+  c.revision(c.revision() + 1);
+  {
+    std::lock_guard lk(db_mu_);
+    store::Transaction tx(db_);
+    auto save = db_.Prepare("INSERT OR REPLACE INTO panel(name, value) VALUES(?,?)");
+    for (auto [n, v] : {std::pair<const char*, double>{"feed_hold", c.feed_hold() ? 1.0 : 0.0},
+                        {"feed_override", c.feed_override()},
+                        {"rapid_override", c.rapid_override()}}) {
+      save.BindText(1, n).BindDouble(2, v);
+      save.Run();
+      save.Reset();
+    }
+    tx.Commit();
+    std::lock_guard s(status_mu_);
+    control_ = c;
+  }
+  PublishControl();
+  spdlog::info("panel: feed hold {}, feed override {:.0f} %, rapid override {:.0f} %",
+               c.feed_hold() ? "on" : "off", c.feed_override() * 100, c.rapid_override() * 100);
+  rep.revision(c.revision());
+  return rep;
+}
+
 void Station::OnProgress(const cell::SegmentProgress& p) {
   if (p.station() != cfg_.id) return;
-  std::lock_guard lk(motion_mu_);
-  if (p.run_id() != run_id_) return;
-  completed_seq_ = std::max(completed_seq_, p.completed_seq());
-  credit_seq_ = std::max(credit_seq_, p.credit_seq());
-  run_machine_s_ = p.run_machine_s();
-  last_progress_ = std::chrono::steady_clock::now();
-  if (p.alarm()) {
-    servo_alarm_ = true;
-    servo_alarm_code_ = p.alarm_code().to_string();
-    servo_alarm_text_ = p.alarm_text().to_string();
+  bool held_changed;
+  {
+    std::lock_guard lk(motion_mu_);
+    held_changed = servo_held_ != p.feed_hold();
+    servo_held_ = p.feed_hold();
+    // Progress from another servo process than the one this run started on: the servo restarted and the
+    // segments it had are gone (it refuses to join a run in the middle).
+    if (run_id_ != 0 && run_boot_ != 0 && p.boot_id() != run_boot_) servo_restarted_ = true;
+    if (p.run_id() == run_id_ && run_id_ != 0) {
+      if (run_boot_ == 0) run_boot_ = p.boot_id();
+      completed_seq_ = std::max(completed_seq_, p.completed_seq());
+      credit_seq_ = std::max(credit_seq_, p.credit_seq());
+      received_seq_ = p.received_seq();
+      last_report_ = std::chrono::steady_clock::now();
+      while (!unacked_.empty() && unacked_.front().seq() <= completed_seq_) unacked_.pop_front();
+      run_machine_s_ = p.run_machine_s();
+      last_progress_ = std::chrono::steady_clock::now();
+      if (p.alarm()) {
+        servo_alarm_ = true;
+        servo_alarm_code_ = p.alarm_code().to_string();
+        servo_alarm_text_ = p.alarm_text().to_string();
+      }
+    }
+    motion_cv_.notify_all();
   }
-  motion_cv_.notify_all();
+  if (held_changed) {
+    {
+      std::lock_guard s(status_mu_);
+      status_.execution(p.feed_hold() ? cell::EXECUTION_FEED_HOLD : base_execution_);
+    }
+    PublishStatus();
+  }
 }
 
 void Station::Worker(std::stop_token st) {
@@ -409,10 +504,16 @@ void Station::Execute(const Dispatch& d, std::stop_token st) {
     sent_seq_ = completed_seq_ = run_machine_s_ = 0;
     credit_seq_ = kInitialCredit;
     servo_alarm_ = false;
+    servo_restarted_ = false;
+    run_boot_ = 0;
+    unacked_.clear();
+    received_seq_ = 0;
+    seg_matches_ = seg_w_.TotalMatched();
+    last_report_ = last_resend_ = std::chrono::steady_clock::now();
   }
   {
     std::lock_guard s(status_mu_);
-    status_.execution(cell::EXECUTION_ACTIVE);
+    SetExecution(cell::EXECUTION_ACTIVE);
     status_.pallet(d.pallet);
     status_.dispatch_id(d.dispatch_id);
   }
@@ -478,7 +579,7 @@ void Station::Execute(const Dispatch& d, std::stop_token st) {
   }
   {
     std::lock_guard s(status_mu_);
-    status_.execution(ok ? cell::EXECUTION_PROGRAM_COMPLETED : cell::EXECUTION_STOPPED);
+    SetExecution(ok ? cell::EXECUTION_PROGRAM_COMPLETED : cell::EXECUTION_STOPPED);
     status_.part_count(status_.part_count() + (ok ? 1 : 0));
     status_.dispatch_id(0);
     status_.queued(queued);
@@ -549,13 +650,11 @@ void Station::Send(cell::MotionSegment seg, std::stop_token st) {
   last_progress_ = std::chrono::steady_clock::now();
   // Credit-based flow control: never more segments in flight than the servo granted.
   while (seg.seq() > credit_seq_) {
-    if (servo_alarm_)
-      throw Error(Errc::kFailedPrecondition, "[" + servo_alarm_code_ + "] " + servo_alarm_text_);
-    if (st.stop_requested()) throw Error(Errc::kUnavailable, "station stopping");
-    if (seg_w_.Matched() == 0 && std::chrono::steady_clock::now() - last_progress_ > std::chrono::seconds(5))
-      throw Error(Errc::kUnavailable, "axis servo of " + cfg_.id + " vanished during the run");
+    CheckServo(lk, st);
     motion_cv_.wait_for(lk, std::chrono::milliseconds(200));
   }
+  ResendMissing(lk);  // the earlier segments first: the servo takes them in seq order only
+  unacked_.push_back(seg);
   lk.unlock();
   seg_w_.Write(seg);
 }
@@ -563,13 +662,65 @@ void Station::Send(cell::MotionSegment seg, std::stop_token st) {
 void Station::WaitDrained(std::stop_token st) {
   std::unique_lock lk(motion_mu_);
   while (completed_seq_ < sent_seq_) {
-    if (servo_alarm_)
-      throw Error(Errc::kFailedPrecondition, "[" + servo_alarm_code_ + "] " + servo_alarm_text_);
-    if (st.stop_requested()) throw Error(Errc::kUnavailable, "station stopping");
-    if (seg_w_.Matched() == 0 && std::chrono::steady_clock::now() - last_progress_ > std::chrono::seconds(5))
-      throw Error(Errc::kUnavailable, "axis servo of " + cfg_.id + " vanished during the run");
+    CheckServo(lk, st);
     motion_cv_.wait_for(lk, std::chrono::milliseconds(200));
   }
+}
+
+// While waiting on the servo (lk holds motion_mu_): stop on an alarm, a stop request, a restarted or
+// vanished servo; re-send what it may have missed when it matched again.
+void Station::CheckServo(std::unique_lock<std::mutex>& lk, std::stop_token st) {
+  if (servo_alarm_)
+    throw Error(Errc::kFailedPrecondition, "[" + servo_alarm_code_ + "] " + servo_alarm_text_);
+  if (st.stop_requested()) throw Error(Errc::kUnavailable, "station stopping");
+  if (servo_restarted_)
+    throw Error(Errc::kUnavailable, "axis servo of " + cfg_.id + " restarted during the run");
+  const auto now = std::chrono::steady_clock::now();
+  if (seg_w_.Matched() == 0 && now - last_progress_ > kServoGone)
+    throw Error(Errc::kUnavailable, "axis servo of " + cfg_.id + " vanished during the run");
+  // Matched on this side but deaf on the other (Fast DDS 2.9 may not re-exchange endpoints after only one
+  // side let the lease run out, docs/operations.md): segments are missing and nothing comes back.
+  if (!unacked_.empty() && received_seq_ < unacked_.back().seq() && now - last_report_ > kServoGone)
+    throw Error(Errc::kUnavailable, "axis servo of " + cfg_.id + " has taken no segment for " +
+                                        std::to_string(kServoGone.count()) + " s");
+  ResendMissing(lk);
+}
+
+// The segment stream is volatile: what is written while the servo is unmatched (its process stopped past the
+// DDS lease, a network cut) never arrives, and a servo that dropped the match on its side may miss samples
+// the writer still thinks delivered. So segments are kept until completed and sent again, in order, from
+// the first one the servo has not reported (received_seq), when the writer matches a servo again or when
+// the servo has been silent for a second with segments missing. The servo drops what it already holds.
+void Station::ResendMissing(std::unique_lock<std::mutex>& lk) {
+  if (unacked_.empty() || seg_w_.Matched() == 0) return;
+  const auto now = std::chrono::steady_clock::now();
+  const uint64_t matches = seg_w_.TotalMatched();
+  const bool rematched = matches != seg_matches_;
+  const bool silent = received_seq_ < unacked_.back().seq() && now - last_report_ > std::chrono::seconds(1) &&
+                      now - last_resend_ > std::chrono::seconds(1);
+  seg_matches_ = matches;
+  if (!rematched && !silent) return;
+  last_resend_ = now;
+  std::vector<cell::MotionSegment> again;
+  for (auto& seg : unacked_)
+    if (seg.seq() > received_seq_) again.push_back(seg);
+  if (again.empty()) return;
+  spdlog::warn("axis servo of {} {}: re-sending seq {}..{} of run {}", cfg_.id,
+               rematched ? "matched again" : "reported nothing for 1 s", again.front().seq(),
+               again.back().seq(), run_id_);
+  lk.unlock();  // never write under motion_mu_: the progress callback takes it on the DDS thread
+  for (auto& seg : again) seg_w_.Write(seg);
+  lk.lock();
+}
+
+void Station::SetExecution(cell::Execution base) {
+  base_execution_ = base;
+  status_.execution(servo_held_ ? cell::EXECUTION_FEED_HOLD : base);
+}
+
+void Station::PublishControl() {
+  std::lock_guard s(status_mu_);
+  control_w_.Write(control_);
 }
 
 void Station::SaveRun(int32_t id, const std::string& state, const std::string& reason) {

@@ -5,6 +5,7 @@
 #include <atomic>
 #include <deque>
 #include <map>
+#include <memory>
 #include <mutex>
 #include <optional>
 #include <thread>
@@ -20,9 +21,14 @@ namespace cell::servo {
 // IDL segment -> library segment (exposed for tests).
 Segment FromWire(const cell::MotionSegment& m, uint64_t id);
 
+// The machine's traffic (segments, progress, axes, probe results, tool table, panel) runs on a participant
+// of the service's own, rebuilt when the loop finds the process stood still longer than the DDS lease
+// (SIGSTOP, a paused VM): peers let its lease run out meanwhile, and Fast DDS 2.9 does not always exchange
+// endpoints again with a participant that kept its own view (docs/operations.md). A new participant is a
+// stranger to everyone, so discovery starts clean; the machine and the run carry on.
 class Service {
  public:
-  Service(bus::Participant& p, MachineConfig cfg, ClockKind clock);
+  Service(const std::string& bus_name, MachineConfig cfg, ClockKind clock);
   ~Service();
   void Start();
   void Stop();
@@ -34,9 +40,14 @@ class Service {
   void PublishProgress();
   void PublishAxes();
   bool LookAheadStarved() const;
+  bool Accept(const cell::MotionSegment& m);
+  void ApplyControl();
+  void Rejoin();
+  struct Endpoints;
 
   std::string station_;
   ClockKind clock_;
+  const uint64_t boot_id_;  // this process, in every progress sample
   Machine machine_;
   std::atomic<bool> alive_{false};
   // Run bookkeeping (loop thread only).
@@ -48,6 +59,7 @@ class Service {
   bool abandoning_ = false;                // aborting the previous run's leftovers
   bool end_received_ = false;              // the run's END segment has arrived
   std::chrono::steady_clock::time_point last_segment_at_{};
+  uint64_t received_seq_ = 0;  // highest seq of this run taken in order (re-sent duplicates are dropped)
   uint64_t completed_seq_ = 0;
   std::optional<double> run_start_s_;
   double run_end_s_ = 0;
@@ -57,12 +69,13 @@ class Service {
 
   std::mutex tools_mu_;
   std::optional<std::vector<ToolSlot>> pending_tools_;
+  std::optional<cell::ServoControl> pending_control_;  // guarded by tools_mu_
+  bool feed_hold_ = false;                             // the operator's hold, re-applied after a reset
 
-  bus::Reader<cell::MotionSegment> segments_;
-  bus::Writer<cell::SegmentProgress> progress_;
-  bus::Writer<cell::AxisState> axes_;
-  bus::Writer<cell::ProbeResult> probe_w_;
-  bus::Reader<cell::ToolTable> tools_r_;
+  const std::string bus_name_;
+  std::unique_ptr<bus::Participant> bus_;
+  std::unique_ptr<Endpoints> ep_;
+  std::chrono::steady_clock::time_point last_pass_{};
   std::jthread loop_;
 };
 

@@ -6,6 +6,7 @@
 
 #include <atomic>
 #include <condition_variable>
+#include <deque>
 #include <filesystem>
 #include <map>
 #include <memory>
@@ -60,6 +61,11 @@ class Station {
   void RunProgram(const Dispatch& d, const std::string& name, std::stop_token st);
   void Send(cell::MotionSegment seg, std::stop_token st);
   void WaitDrained(std::stop_token st);
+  void CheckServo(std::unique_lock<std::mutex>& lk, std::stop_token st);
+  void ResendMissing(std::unique_lock<std::mutex>& lk);
+  cell::StationReply SetPanel(const cell::StationRequest& r);
+  void PublishControl();
+  void SetExecution(cell::Execution base);
   void PublishStatus();
   void PublishTools();
   void PublishVariables();
@@ -90,6 +96,19 @@ class Station {
   bool servo_alarm_ = false;
   std::string servo_alarm_code_, servo_alarm_text_;
   std::chrono::steady_clock::time_point last_progress_;
+  // Written, not yet completed: what the servo has not received is sent again (ResendMissing).
+  std::deque<cell::MotionSegment> unacked_;
+  uint64_t received_seq_ = 0;  // the servo holds 1..received_seq_ of this run (its last progress)
+  uint64_t seg_matches_ = 0;   // seg_w_.TotalMatched() at the last check
+  std::chrono::steady_clock::time_point last_report_, last_resend_;  // progress of this run; re-send
+  uint64_t servo_boot_ = 0;              // boot_id of the servo progress came from; 0 before any
+  uint64_t run_boot_ = 0;                // the servo this run started on
+  bool servo_restarted_ = false;         // progress came from another servo process mid-run
+  std::atomic<bool> servo_held_{false};  // the servo reports the operator's feed hold in effect
+
+  // The operator's panel (guarded by status_mu_, persisted): feed hold and overrides for the servo.
+  cell::ServoControl control_;
+  cell::Execution base_execution_ = cell::EXECUTION_READY;  // what the run state alone says
 
   // Current run bookkeeping.
   int64_t run_started_ns_ = 0;
@@ -108,6 +127,7 @@ class Station {
   bus::Writer<cell::StationVariables> vars_w_;
   bus::Writer<cell::RunStatus> run_w_;
   bus::Writer<cell::MotionSegment> seg_w_;
+  bus::Writer<cell::ServoControl> control_w_;
   bus::Reader<cell::SegmentProgress> progress_r_;
   bus::Reader<cell::ProbeResult> probe_r_;
   program_store::Client programs_;
