@@ -326,6 +326,30 @@ TEST_F(Fms, ServoStoppedPastItsLeaseRejoinsAndFinishesTheRun) {
   ExpectCompleted(Operate("RL", 10));
 }
 
+// (f) `job cancel` of a pallet in the middle of its run (held by the feed hold) stops it on the machine
+// as well: the job ends CANCELLED, the servo aborts the run, and the station takes the next pallet.
+TEST_F(Fms, CancelStopsARunningPalletOnTheMachine) {
+  Put("CAN1", Program("CAN1", "1001", 30));
+  ASSERT_EQ(Ctl({"route", "define", "RC", "--op", "KT01:CAN1"}).code, 0);
+  Hold("KT01");
+  const std::string job = Operate("RC", 11);
+  WaitJob(job, [](const json& j) { return j["state"] == "RUNNING"; });
+  ASSERT_EQ(Ctl({"job", "cancel", job}).code, 0);
+  auto w = Ctl({"job", "wait", job, "--timeout", "30"});
+  EXPECT_EQ(w.code, 1) << w.out << w.err;
+  EXPECT_EQ(w.out, "CANCELLED\n");
+  Resume("KT01");
+  auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+  while (RunRecords(11).empty() && std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  auto recs = RunRecords(11);
+  ASSERT_EQ(recs.size(), 1u);
+  EXPECT_EQ(recs[0]["completed"], false);
+  const std::string log = ReadFile(data_ + "/logs/cell-axis-servo@KT01.service.log");
+  EXPECT_NE(log.find("cancelled: aborting it"), std::string::npos) << log;
+  ExpectCompleted(Operate("RC", 12));
+}
+
 // (d) Bad input: one-line reasons and the documented exit codes.
 TEST_F(Fms, BadInput) {
   auto one_line = [](const RunResult& r) { return !r.err.empty() && r.err.find('\n') == r.err.size() - 1; };

@@ -665,4 +665,40 @@ TEST_F(ServoDds, FeedHoldAndFeedOverride) {
   EXPECT_NEAR(t50 / t100, 2.0, 0.05) << t100 << " s at 100 %, " << t50 << " s at 50 %";
 }
 
+// (g) A cancelled run (ServoControl.abort_run, written by the interpreter when the scheduler cancels the
+// dispatch) stops on the machine too: the queue is flushed, later segments of the run are dropped, and the
+// next run starts clean.
+TEST_F(ServoDds, CancelledRunIsAbortedOnTheMachine) {
+  const uint64_t capacity = static_cast<uint64_t>(StationConfig("KT01").queue_capacity);
+  auto home = Home(100, 100, 100);
+  RunResult h = bus_->Run("KT01", NextRun(), home);
+  ExpectClean(h, home.size());
+  const double t0 = h.last->machine_s();
+  std::vector<cell::MotionSegment> old;
+  for (uint64_t i = 0; i < capacity; ++i)  // 600 mm at 2000 mm/min: 18 s of machine time each
+    old.push_back(Seg(cell::SEGMENT_LINEAR, i % 2 ? 100 : 700, 100, 100, 2000));
+  const int32_t run = NextRun();
+  RunResult a = bus_->Run("KT01", run, old, AbandonAfter(capacity));
+  ASSERT_EQ(a.sent, capacity);
+  cell::ServoControl c;
+  c.station("KT01");
+  c.revision(100);
+  c.feed_override(1.0);
+  c.rapid_override(1.0);
+  c.abort_run(run);
+  bus_->control().Write(c);
+  ASSERT_TRUE(bus_->WaitIdle("KT01")) << Log("kt01.err");
+  auto idle = bus_->NextAxes("KT01", [](const cell::AxisState&) { return true; });
+  ASSERT_TRUE(idle);
+  EXPECT_LT(idle->machine_s() - t0, 30.0) << "the cancelled run went on";              // all of it: 64 x 18 s
+  bus_->WriteRaw("KT01", run, capacity + 1, Seg(cell::SEGMENT_RAPID, 500, 500, 100));  // dropped
+  RunResult b = bus_->Run("KT01", NextRun(), Home(100, 200, 100));
+  ASSERT_FALSE(b.timed_out) << "the next run did not complete" << Log("kt01.err");
+  ExpectClean(b, 2);
+  EXPECT_LT(b.last->machine_s() - t0, 40.0);
+  auto at = bus_->NextAxes("KT01", [](const cell::AxisState&) { return true; });
+  ASSERT_TRUE(at);
+  EXPECT_NEAR(at->commanded()[1], 200, 0.01) << "a segment of the cancelled run ran";
+}
+
 }  // namespace

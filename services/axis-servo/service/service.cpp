@@ -266,6 +266,7 @@ void Service::Loop(std::stop_token st) {
 // middle (from wherever the axes are to a point the program reached from elsewhere); the producer sees the
 // new boot_id and fails the run.
 bool Service::Accept(const cell::MotionSegment& m) {
+  if (m.run_id() == aborted_run_) return false;  // a cancelled run: nothing more of it runs
   const bool next = m.run_id() == run_id_ ? m.seq() == received_seq_ + 1 : m.seq() == 1;
   if (next) return true;
   if (m.run_id() == run_id_ && m.seq() <= received_seq_) {
@@ -288,6 +289,16 @@ void Service::ApplyControl() {
     c.swap(pending_control_);
   }
   if (!c) return;
+  if (c->abort_run() != 0 && c->abort_run() == run_id_ && aborted_run_ != run_id_) {
+    // The run was cancelled: stop it as the abandon of a run does (decelerate along the path, flush the
+    // rest); the next run resets the machine.
+    aborted_run_ = run_id_;
+    spdlog::warn("run {} cancelled: aborting it with {} segments queued", run_id_, seq_of_.size());
+    if (!seq_of_.empty() && machine_.alarm().code == AlarmCode::kNone) {
+      machine_.Abort();
+      abandoning_ = true;
+    }
+  }
   if (c->feed_hold() != feed_hold_) {
     feed_hold_ = c->feed_hold();
     if (feed_hold_) {

@@ -281,7 +281,16 @@ cell::RunReply Station::OnRun(const cell::RunRequest& r) {
   std::string state = known ? find.ColumnText(0) : "";
   if (r.cancel()) {
     if (state == "QUEUED") SaveRun(r.dispatch_id(), "CANCELLED", "cancelled by the scheduler");
-    if (state == "ACTIVE") cancel_id_ = r.dispatch_id();
+    if (state == "ACTIVE") {
+      cancel_id_ = r.dispatch_id();
+      {
+        std::lock_guard s(status_mu_);
+        control_.abort_run(r.dispatch_id());  // the machine stops too, not only the sending (not persisted)
+        control_.revision(control_.revision() + 1);
+      }
+      PublishControl();
+      motion_cv_.notify_all();
+    }
     rep.state(known ? StateFromText(state) : cell::RUN_CANCELLED);
     return rep;
   }
@@ -670,6 +679,7 @@ void Station::WaitDrained(std::stop_token st) {
 // While waiting on the servo (lk holds motion_mu_): stop on an alarm, a stop request, a restarted or
 // vanished servo; re-send what it may have missed when it matched again.
 void Station::CheckServo(std::unique_lock<std::mutex>& lk, std::stop_token st) {
+  if (cancel_id_ == run_id_) throw Error(Errc::kFailedPrecondition, "cancelled");
   if (servo_alarm_)
     throw Error(Errc::kFailedPrecondition, "[" + servo_alarm_code_ + "] " + servo_alarm_text_);
   if (st.stop_requested()) throw Error(Errc::kUnavailable, "station stopping");

@@ -70,7 +70,9 @@ class Service {
   std::mutex tools_mu_;
   std::optional<std::vector<ToolSlot>> pending_tools_;
   std::optional<cell::ServoControl> pending_control_;  // guarded by tools_mu_
-  bool feed_hold_ = false;                             // the operator's hold, re-applied after a reset
+  bool feed_hold_ = false;
+  int32_t aborted_run_ = 0;  // cancelled by the operator: its later segments are dropped // the operator's
+                             // hold, re-applied after a reset
 
   const std::string bus_name_;
   std::unique_ptr<bus::Participant> bus_;
