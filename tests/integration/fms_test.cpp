@@ -107,6 +107,15 @@ class Fms : public ::testing::Test {
     auto r = Ctl({"station", "hold", station});
     ASSERT_EQ(r.code, 0) << r.err;
   }
+  // A pallet on a route of KT01 only, held in the middle of its run by KT01's feed hold; returns the job id.
+  std::string HeldMidRun(const std::string& program, int ucy, int pallet) {
+    Put(program, Program(program, "1001", ucy));
+    EXPECT_EQ(Ctl({"route", "define", "R" + program, "--op", "KT01:" + program}).code, 0);
+    Hold("KT01");
+    const std::string job = Operate("R" + program, pallet);
+    WaitJob(job, [](const json& j) { return j["state"] == "RUNNING"; });
+    return job;
+  }
   void Resume(const std::string& station) {
     auto r = Ctl({"station", "resume", station});
     ASSERT_EQ(r.code, 0) << r.err;
@@ -228,11 +237,7 @@ TEST_F(Fms, ToolCheckRejectsStationsWithoutTheToolsAndTldLoadReleases) {
 // (c) kill -9 of the scheduler while a pallet runs: the station finishes the run meanwhile, the scheduler
 // is started again with the same command line and environment, and the job completes exactly once.
 TEST_F(Fms, SchedulerKilledMidRunRestartsAndJobCompletesExactlyOnce) {
-  Put("KILL1", Program("KILL1", "1001", 40));
-  ASSERT_EQ(Ctl({"route", "define", "RK", "--op", "KT01,KT02:KILL1"}).code, 0);
-  Hold("KT01");
-  const std::string job = Operate("RK", 7);
-  WaitJob(job, [](const json& j) { return j["state"] == "RUNNING"; });
+  const std::string job = HeldMidRun("KILL1", 40, 7);
 
   // The scheduler's command line and environment, as `cellctl up` started it.
   pid_t sched = Pid("cell-scheduler");
@@ -290,7 +295,7 @@ TEST_F(Fms, SchedulerKilledMidRunRestartsAndJobCompletesExactlyOnce) {
   EXPECT_EQ(recs[0]["station"], "KT01");
   EXPECT_EQ(recs[0]["completed"], true);
   // The restarted scheduler goes on dispatching: the same pallet runs again as a new job.
-  const std::string again = Operate("RK", 7);
+  const std::string again = Operate("RKILL1", 7);
   EXPECT_NE(again, job);
   ExpectCompleted(again);
   EXPECT_EQ(RunRecords(7).size(), 2u);
@@ -329,11 +334,7 @@ TEST_F(Fms, ServoStoppedPastItsLeaseRejoinsAndFinishesTheRun) {
 // (f) `job cancel` of a pallet in the middle of its run (held by the feed hold) stops it on the machine
 // as well: the job ends CANCELLED, the servo aborts the run, and the station takes the next pallet.
 TEST_F(Fms, CancelStopsARunningPalletOnTheMachine) {
-  Put("CAN1", Program("CAN1", "1001", 30));
-  ASSERT_EQ(Ctl({"route", "define", "RC", "--op", "KT01:CAN1"}).code, 0);
-  Hold("KT01");
-  const std::string job = Operate("RC", 11);
-  WaitJob(job, [](const json& j) { return j["state"] == "RUNNING"; });
+  const std::string job = HeldMidRun("CAN1", 30, 11);
   ASSERT_EQ(Ctl({"job", "cancel", job}).code, 0);
   auto w = Ctl({"job", "wait", job, "--timeout", "30"});
   EXPECT_EQ(w.code, 1) << w.out << w.err;
@@ -347,7 +348,7 @@ TEST_F(Fms, CancelStopsARunningPalletOnTheMachine) {
   EXPECT_EQ(recs[0]["completed"], false);
   const std::string log = ReadFile(data_ + "/logs/cell-axis-servo@KT01.service.log");
   EXPECT_NE(log.find("cancelled: aborting it"), std::string::npos) << log;
-  ExpectCompleted(Operate("RC", 12));
+  ExpectCompleted(Operate("RCAN1", 12));
 }
 
 // (d) Bad input: one-line reasons and the documented exit codes.

@@ -341,6 +341,14 @@ std::vector<cell::MotionSegment> Home(double x, double y, double z) {
   return {Seg(cell::SEGMENT_RAPID, x, y, z), End()};
 }
 
+// n long feed moves without an END, from X 100 (Y 100, Z 100): 600 mm at 2000 mm/min, 18 s of machine time
+// each — a run that is still far from done when it is given up or cancelled.
+std::vector<cell::MotionSegment> LongMoves(uint64_t n) {
+  std::vector<cell::MotionSegment> v;
+  for (uint64_t i = 0; i < n; ++i) v.push_back(Seg(cell::SEGMENT_LINEAR, i % 2 ? 100 : 700, 100, 100, 2000));
+  return v;
+}
+
 // (a) Credits bound the segments outstanding, and a producer that stops reading progress is held.
 TEST_F(ServoDds, CreditsBoundOutstandingAndHoldASlowConsumer) {
   const uint64_t capacity = static_cast<uint64_t>(StationConfig("KT01").queue_capacity);
@@ -371,9 +379,7 @@ TEST_F(ServoDds, AbandonedRunIsAbortedForTheNext) {
   RunResult h = bus_->Run("KT01", NextRun(), home);
   ExpectClean(h, home.size());
   const double t0 = h.last->machine_s();
-  std::vector<cell::MotionSegment> old;
-  for (uint64_t i = 0; i < capacity + 10; ++i)  // 600 mm at 2000 mm/min: 18 s of machine time each
-    old.push_back(Seg(cell::SEGMENT_LINEAR, i % 2 ? 100 : 700, 100, 100, 2000));
+  std::vector<cell::MotionSegment> old = LongMoves(capacity + 10);
   RunResult a = bus_->Run("KT01", NextRun(), old, AbandonAfter(capacity));
   ASSERT_EQ(a.sent, capacity);
   RunResult b = bus_->Run("KT01", NextRun(), Home(100, 200, 100));
@@ -674,9 +680,7 @@ TEST_F(ServoDds, CancelledRunIsAbortedOnTheMachine) {
   RunResult h = bus_->Run("KT01", NextRun(), home);
   ExpectClean(h, home.size());
   const double t0 = h.last->machine_s();
-  std::vector<cell::MotionSegment> old;
-  for (uint64_t i = 0; i < capacity; ++i)  // 600 mm at 2000 mm/min: 18 s of machine time each
-    old.push_back(Seg(cell::SEGMENT_LINEAR, i % 2 ? 100 : 700, 100, 100, 2000));
+  std::vector<cell::MotionSegment> old = LongMoves(capacity);
   const int32_t run = NextRun();
   RunResult a = bus_->Run("KT01", run, old, AbandonAfter(capacity));
   ASSERT_EQ(a.sent, capacity);
