@@ -132,6 +132,51 @@ TEST(Bus, RequestReplyCarriesResultAndErrors) {
   EXPECT_EQ(calls, 2);
 }
 
+// A participant that rejoins (what its watch thread does after the process stood still past the lease)
+// keeps every endpoint working: pub/sub both ways, a state reader gets the last sample again, a server and
+// a client answer; TotalMatched counts the lost match.
+TEST(Bus, RejoinKeepsEveryEndpointWorking) {
+  Participant a("bus-test-rejoin"), b("bus-test-peer");
+  Writer<cell::StationStatus> wa(a, "test/rejoin/out", QosKind::kCommand);
+  Reader<cell::StationStatus> rb(b, "test/rejoin/out", QosKind::kCommand);
+  Writer<cell::StationStatus> wb(b, "test/rejoin/state", QosKind::kState);
+  Reader<cell::StationStatus> ra(a, "test/rejoin/state", QosKind::kState);
+  Server<Req, Rep> server(a, "test/rejoin/svc", [](const Req& r) {
+    Rep rep;
+    rep.station(r.station());
+    return rep;
+  });
+  Client<Req, Rep> client(a, "test/rejoin/svc2");
+  Server<Req, Rep> server2(b, "test/rejoin/svc2", [](const Req& r) {
+    Rep rep;
+    rep.station(r.station());
+    rep.revision(2);
+    return rep;
+  });
+  Client<Req, Rep> peer_client(b, "test/rejoin/svc");
+  wb.Write(Status("KT01", 1));
+  ASSERT_TRUE(wa.WaitForMatched(1, kMatch));
+  ASSERT_TRUE(ra.Take(kMatch));
+  const uint64_t before = wa.TotalMatched();
+
+  ASSERT_TRUE(a.Rejoin());
+  EXPECT_EQ(a.rejoins(), 1u);
+  ASSERT_TRUE(wa.WaitForMatched(1, kMatch));
+  ASSERT_TRUE(rb.WaitForMatched(1, kMatch));
+  EXPECT_GT(wa.TotalMatched(), before);
+  wa.Write(Status("KT02", 5));
+  auto got = rb.Take(kMatch);
+  ASSERT_TRUE(got);
+  EXPECT_EQ(got->line(), 5);
+  auto again = ra.Take(kMatch);  // transient-local: the new reader gets the last sample
+  ASSERT_TRUE(again);
+  EXPECT_EQ(again->station(), "KT01");
+  Req req;
+  req.station("KT03");
+  EXPECT_EQ(peer_client.Call(req, kMatch).station(), "KT03");  // the rejoined side serves
+  EXPECT_EQ(client.Call(req, kMatch).revision(), 2u);          // and calls
+}
+
 TEST(Bus, CallWithoutServerIsUnavailable) {
   Participant b("bus-test-client");
   Client<Req, Rep> client(b, "test/nobody");

@@ -22,6 +22,7 @@
 #include "cell/bus/bus.h"
 #include "cell/bus/topics.h"
 #include "cell/idl/motion.h"
+#include "cell/idl/run.h"
 #include "cell/testing/local_cell.h"
 
 using namespace cell::testing;
@@ -329,6 +330,33 @@ TEST_F(Fms, ServoStoppedPastItsLeaseRejoinsAndFinishesTheRun) {
   const std::string log = ReadFile(data_ + "/logs/cell-axis-servo@KT01.service.log");
   EXPECT_NE(log.find("joining the bus anew"), std::string::npos) << log;
   ExpectCompleted(Operate("RL", 10));
+}
+
+// (e) The same for a station's interpreter stopped past its lease in the middle of a run: the scheduler
+// takes the station for vanished and fails the pallet (docs/scheduler.md: it needs an operator), the
+// interpreter rejoins the bus when it continues, and the station takes the next pallet and files the failed
+// run's record. The lease is watched through a writer on the station's run request topic.
+TEST_F(Fms, InterpreterStoppedPastItsLeaseRejoinsAndTheStationGoesOn) {
+  cell::bus::Participant observer("fms-test/observer");
+  cell::bus::Writer<cell::RunRequest> watch(
+      observer, cell::bus::RequestTopic(cell::bus::topics::StationRun("KT01")), cell::bus::QosKind::kCommand);
+  ASSERT_TRUE(watch.WaitForMatched(1, std::chrono::seconds(10)));
+  const std::string job = HeldMidRun("STOP1", 20, 13);
+  Freeze("cell-interpreter/KT01");
+  ASSERT_TRUE(cell::bus::WaitUntil([&] { return watch.Matched() == 0; }, std::chrono::seconds(15)))
+      << "the stopped interpreter's lease did not run out";
+  Thaw("cell-interpreter/KT01");
+  auto w = Ctl({"job", "wait", job, "--timeout", "30"});
+  EXPECT_EQ(w.code, 1) << w.out << w.err;
+  EXPECT_NE(w.err.find("went offline while running pallet 13"), std::string::npos) << w.err;
+  Resume("KT01");
+  ExpectCompleted(Operate("RSTOP1", 14));
+  const std::string log = ReadFile(data_ + "/logs/cell-interpreter@KT01.service.log");
+  EXPECT_NE(log.find("joining the bus anew"), std::string::npos) << log;
+  auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+  while (RunRecords(13).empty() && std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  EXPECT_EQ(RunRecords(13).size(), 1u) << "the held run's record was not filed";
 }
 
 // (f) `job cancel` of a pallet in the middle of its run (held by the feed hold) stops it on the machine

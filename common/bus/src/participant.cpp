@@ -4,6 +4,7 @@
 #include <random>
 
 #include <fmt/format.h>
+#include <spdlog/spdlog.h>
 
 #include "cell/bus/bus.h"
 #include "cell/config/config.h"
@@ -37,7 +38,8 @@ Participant::Participant(const ParticipantOptions& opts) {
   if (id_.size() > 63) id_ = id_.substr(id_.size() - 63);
   BackendOptions bo{domain_, profile, opts.name};
   if (backend == "fastdds") {
-    backend_ = MakeFastDdsBackend(bo);
+    make_backend_ = [bo] { return MakeFastDdsBackend(bo); };
+    backend_ = make_backend_();
   } else if (backend == "cyclonedds") {
     throw Error(Errc::kUnimplemented,
                 "CELL_DDS=cyclonedds: the Cyclone DDS backend of the bus is not built yet");
@@ -45,6 +47,7 @@ Participant::Participant(const ParticipantOptions& opts) {
     throw Error(Errc::kInvalidArgument, "CELL_DDS=" + backend + ": expected fastdds or cyclonedds");
   }
   thread_ = std::thread([this] { Run(); });
+  watch_ = std::thread([this] { Watch(); });
 }
 
 Participant::Participant(const std::string& name, int domain, std::unique_ptr<Backend> backend)
@@ -58,6 +61,12 @@ Participant::Participant(const std::string& name, int domain, std::unique_ptr<Ba
 }
 
 Participant::~Participant() {
+  {
+    std::lock_guard lk(watch_mu_);
+    watch_stop_ = true;
+  }
+  watch_cv_.notify_all();
+  if (watch_.joinable()) watch_.join();
   {
     std::lock_guard lk(mu_);
     stop_ = true;
@@ -75,6 +84,61 @@ void Participant::Post(std::function<void()> fn) {
     queue_.push_back(std::move(fn));
   }
   cv_.notify_one();
+}
+
+void Participant::Register(Rejoinable* e) {
+  std::lock_guard lk(reg_mu_);
+  endpoints_.insert(e);
+}
+
+void Participant::Unregister(Rejoinable* e) {
+  std::lock_guard lk(reg_mu_);
+  endpoints_.erase(e);
+}
+
+bool Participant::Rejoin() {
+  if (!make_backend_) return false;
+  std::unique_lock lk(ep_mu_);  // no endpoint is used, made or released meanwhile
+  std::lock_guard rl(reg_mu_);
+  for (Rejoinable* e : endpoints_) e->Drop();
+  backend_.reset();
+  for (int attempt = 1;; ++attempt) {
+    try {
+      backend_ = make_backend_();
+      break;
+    } catch (const std::exception& e) {
+      // Without a participant every endpoint is gone: better a restart (systemd) than a deaf service.
+      if (attempt == 3) {
+        spdlog::critical("{}: cannot join the bus again: {}", id_, e.what());
+        std::abort();
+      }
+      std::this_thread::sleep_for(Millis(200));
+    }
+  }
+  for (Rejoinable* e : endpoints_) e->Recreate(*backend_);
+  ++rejoins_;
+  return true;
+}
+
+// Sleeps 250 ms at a time; a sleep that took over 2.5 s means the process stood still (stopped or starved)
+// long enough for peers to let its 3 s lease run out.
+void Participant::Watch() {
+  constexpr auto kTick = Millis(250);
+  constexpr auto kStoodStill = Millis(2500);
+  std::unique_lock lk(watch_mu_);
+  auto last = std::chrono::steady_clock::now();
+  while (!watch_cv_.wait_for(lk, kTick, [&] { return watch_stop_; })) {
+    const auto now = std::chrono::steady_clock::now();
+    if (now - last > kStoodStill && make_backend_) {
+      spdlog::warn(
+          "{}: this process stood still for {:.1f} s (longer than the DDS lease): joining the bus anew", id_,
+          std::chrono::duration<double>(now - last).count());
+      lk.unlock();
+      Rejoin();
+      lk.lock();
+    }
+    last = std::chrono::steady_clock::now();
+  }
 }
 
 void Participant::Run() {

@@ -31,8 +31,7 @@ int main(int argc, char** argv) {
     cell::bus::Participant bus("cell-axis-servo/" + station);
     cell::health::Announcer health(bus, "cell-axis-servo", station);
     cell::servo::Service svc(
-        "cell-axis-servo/" + station + "/machine", machine,
-        clock == "virtual" ? cell::servo::ClockKind::kVirtual : cell::servo::ClockKind::kReal);
+        bus, machine, clock == "virtual" ? cell::servo::ClockKind::kVirtual : cell::servo::ClockKind::kReal);
     svc.Start();
     health.Set(cell::SERVICE_READY, clock + " clock");
     daemon.NotifyReady("machine " + station + " ready (" + clock + " clock)");

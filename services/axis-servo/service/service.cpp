@@ -12,9 +12,6 @@ constexpr auto kAxisPeriod = std::chrono::milliseconds(20);  // 50 Hz in wall ti
 // Virtual clock: how long (wall) the machine waits for the producer to refill a look-ahead queue that is
 // less than half full before it runs on with what it has (see LookAheadStarved()).
 constexpr auto kLookAheadWait = std::chrono::milliseconds(5);
-// A loop pass normally takes milliseconds; a gap this long means the process was stopped, and peers may have
-// let its 3 s DDS lease run out.
-constexpr auto kStoodStill = std::chrono::milliseconds(2500);
 }  // namespace
 
 Segment FromWire(const cell::MotionSegment& m, uint64_t id) {
@@ -111,24 +108,12 @@ struct Service::Endpoints {
   bus::Reader<cell::ServoControl> control;
 };
 
-Service::Service(const std::string& bus_name, MachineConfig cfg, ClockKind clock)
+Service::Service(bus::Participant& p, MachineConfig cfg, ClockKind clock)
     : station_(cfg.station_id),
       clock_(clock),
       boot_id_(static_cast<uint64_t>(health::WallNs())),
       machine_(std::move(cfg), clock),
-      bus_name_(bus_name),
-      bus_(std::make_unique<bus::Participant>(bus_name)),
-      ep_(std::make_unique<Endpoints>(*bus_, *this)) {}
-
-// On the loop thread. Segments queued in the old reader are lost with it: the producer re-sends what the
-// servo has not reported received.
-void Service::Rejoin() {
-  ep_.reset();
-  bus_.reset();
-  bus_ = std::make_unique<bus::Participant>(bus_name_);
-  ep_ = std::make_unique<Endpoints>(*bus_, *this);
-  dirty_ = true;
-}
+      ep_(std::make_unique<Endpoints>(p, *this)) {}
 
 Service::~Service() {
   Stop();
@@ -157,15 +142,6 @@ void Service::Loop(std::stop_token st) {
       }
     }
     ApplyControl();
-    if (const auto now = std::chrono::steady_clock::now();
-        last_pass_ != std::chrono::steady_clock::time_point{} && now - last_pass_ > kStoodStill) {
-      spdlog::warn("this process stood still for {:.1f} s (longer than the DDS lease): joining the bus anew",
-                   std::chrono::duration<double>(now - last_pass_).count());
-      Rejoin();
-      last_pass_ = std::chrono::steady_clock::now();
-    } else {
-      last_pass_ = now;
-    }
     // Segments in: a new run id starts a new run (its first segment is seq 1).
     while (auto m = ep_->segments.Take(std::chrono::milliseconds(0))) {
       inbox_.push_back(std::move(*m));

@@ -12,6 +12,8 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <set>
+#include <shared_mutex>
 #include <string>
 #include <thread>
 #include <utility>
@@ -31,8 +33,24 @@ struct ParticipantOptions {
   std::string profile_path;   // default: CELL_DDS_PROFILE, else the built-in loopback profile
 };
 
+// The backend half of a Writer, Reader or Client, made again when the participant rejoins.
+class Rejoinable {
+ public:
+  virtual ~Rejoinable() = default;
+  virtual void Drop() = 0;                // release the backend endpoint
+  virtual void Recreate(Backend& b) = 0;  // the same endpoint on a new backend
+};
+
 // One DDS participant per process plus one dispatch thread that runs every user callback in
 // arrival order, so callbacks never run on (or block) the DDS receive threads.
+//
+// Rejoin: a process stopped longer than the 3 s DDS lease (SIGSTOP, a paused VM) is dropped by its peers,
+// and Fast DDS 2.9 does not always exchange endpoints again with a participant that kept its own view of
+// them (eProsima/Fast-DDS #155, #457: one-sided lease expiry) — measured here, a stopped axis servo or
+// interpreter could stay cut off from some peers for good. A watch thread notices that the process stood
+// still (its 250 ms sleep took over 2.5 s) and replaces the DDS participant with a new one, a stranger to
+// every peer, so discovery starts clean; every Writer, Reader and Client re-creates its backend endpoint on
+// it, and their users see at most a lost match (re-sends and request retries cover it).
 class Participant {
  public:
   explicit Participant(const ParticipantOptions& opts);
@@ -48,11 +66,31 @@ class Participant {
   Backend& backend() { return *backend_; }
   void Post(std::function<void()> fn);
 
+  // Held shared around every use of a backend endpoint (and while one is made or released), exclusively
+  // while the participant rejoins.
+  std::shared_mutex& endpoints_mu() { return ep_mu_; }
+  void Register(Rejoinable* e);    // with endpoints_mu() held shared
+  void Unregister(Rejoinable* e);  // with endpoints_mu() held shared
+  // A new DDS participant under every endpoint (done by the watch thread; public for tests). False with
+  // an injected backend, which cannot be made again.
+  bool Rejoin();
+  uint64_t rejoins() const { return rejoins_.load(); }
+
  private:
   void Run();
+  void Watch();
   std::string id_;
   int domain_;
+  std::function<std::unique_ptr<Backend>()> make_backend_;  // empty for an injected backend
   std::unique_ptr<Backend> backend_;
+  std::shared_mutex ep_mu_;
+  std::mutex reg_mu_;
+  std::set<Rejoinable*> endpoints_;
+  std::atomic<uint64_t> rejoins_{0};
+  std::mutex watch_mu_;
+  std::condition_variable watch_cv_;
+  bool watch_stop_ = false;
+  std::thread watch_;
   std::mutex mu_;
   std::condition_variable cv_;
   std::deque<std::function<void()>> queue_;
@@ -68,59 +106,103 @@ struct SampleInfo {
 };
 
 template <class T>
-class Writer {
+class Writer : public Rejoinable {
  public:
-  Writer(Participant& p, const std::string& topic, QosKind qos)
-      : w_(p.backend().CreateWriter(topic, TypeSupportFor<T>(), qos)), topic_(topic) {}
+  Writer(Participant& p, const std::string& topic, QosKind qos) : p_(p), topic_(topic), qos_(qos) {
+    std::shared_lock lk(p_.endpoints_mu());
+    w_ = p_.backend().CreateWriter(topic_, TypeSupportFor<T>(), qos_);
+    p_.Register(this);
+  }
+  ~Writer() override {
+    std::shared_lock lk(p_.endpoints_mu());
+    p_.Unregister(this);
+    w_.reset();
+  }
+  Writer(const Writer&) = delete;
+  Writer& operator=(const Writer&) = delete;
 
   // Throws cell::Error(kInvalidArgument) when a sequence exceeds its IDL bound: Fast CDR would
   // send it and a Cyclone reader would drop it.
   void Write(const T& v) {
     std::string why;
     if (!cell::idl::CheckBounds(v, why)) throw Error(Errc::kInvalidArgument, topic_ + ": " + why);
-    w_->Write(RawSample{ToCdr(v), KeyCdr(v)});
+    RawSample s{ToCdr(v), KeyCdr(v)};
+    std::shared_lock lk(p_.endpoints_mu());
+    w_->Write(s);
   }
-  int Matched() const { return w_->Matched(); }
-  uint64_t TotalMatched() const { return w_->TotalMatched(); }
+  int Matched() const {
+    std::shared_lock lk(p_.endpoints_mu());
+    return w_->Matched();
+  }
+  // Counts on across a rejoin (the new endpoint's matches are added to the old one's).
+  uint64_t TotalMatched() const {
+    std::shared_lock lk(p_.endpoints_mu());
+    return base_matches_ + w_->TotalMatched();
+  }
   bool WaitForMatched(int n, Millis timeout) const {
-    return WaitUntil([&] { return w_->Matched() >= n; }, timeout);
+    return WaitUntil([&] { return Matched() >= n; }, timeout);
   }
   // Before a process exits: everything written reached every matched reader.
-  bool WaitForAcked(Millis timeout) { return w_->WaitForAcked(static_cast<int>(timeout.count())); }
+  bool WaitForAcked(Millis timeout) {
+    std::shared_lock lk(p_.endpoints_mu());
+    return w_->WaitForAcked(static_cast<int>(timeout.count()));
+  }
+
+  void Drop() override {
+    base_matches_ += w_->TotalMatched() + 1;  // +1: the rejoin itself is a lost match
+    w_.reset();
+  }
+  void Recreate(Backend& b) override { w_ = b.CreateWriter(topic_, TypeSupportFor<T>(), qos_); }
 
  private:
-  std::unique_ptr<RawWriter> w_;
+  Participant& p_;
   std::string topic_;
+  QosKind qos_;
+  uint64_t base_matches_ = 0;
+  std::unique_ptr<RawWriter> w_;
 };
 
 // With a callback, samples are delivered on the participant's dispatch thread. Without one,
 // they queue for Take().
 template <class T>
-class Reader {
+class Reader : public Rejoinable {
  public:
   using Callback = std::function<void(const T&, const SampleInfo&)>;
 
   Reader(Participant& p, const std::string& topic, QosKind qos, Callback cb = nullptr)
-      : state_(std::make_shared<State>()) {
+      : p_(p), topic_(topic), qos_(qos), state_(std::make_shared<State>()) {
     state_->cb = std::move(cb);
     std::weak_ptr<State> weak = state_;
     Participant* part = &p;
-    r_ = p.backend().CreateReader(topic, TypeSupportFor<T>(), qos,
-                                  [weak, part](const RawSample& s, const RawInfo& info) {
-                                    auto st = weak.lock();
-                                    if (st) st->Deliver(*part, weak, s, info);
-                                  });
+    raw_cb_ = [weak, part](const RawSample& s, const RawInfo& info) {
+      auto st = weak.lock();
+      if (st) st->Deliver(*part, weak, s, info);
+    };
+    std::shared_lock lk(p_.endpoints_mu());
+    r_ = p_.backend().CreateReader(topic_, TypeSupportFor<T>(), qos_, raw_cb_);
+    p_.Register(this);
   }
-  ~Reader() {
-    r_.reset();  // no more backend callbacks after this
+  ~Reader() override {
+    {
+      std::shared_lock lk(p_.endpoints_mu());
+      p_.Unregister(this);
+      r_.reset();  // no more backend callbacks after this
+    }
     std::lock_guard lk(state_->mu);
     state_->cb = nullptr;
   }
+  Reader(const Reader&) = delete;
+  Reader& operator=(const Reader&) = delete;
 
-  int Matched() const { return r_->Matched(); }
-  bool WaitForMatched(int n, Millis timeout) const {
-    return WaitUntil([&] { return r_->Matched() >= n; }, timeout);
+  int Matched() const {
+    std::shared_lock lk(p_.endpoints_mu());
+    return r_->Matched();
   }
+  bool WaitForMatched(int n, Millis timeout) const {
+    return WaitUntil([&] { return Matched() >= n; }, timeout);
+  }
+  void Drop() override { r_.reset(); }
+  void Recreate(Backend& b) override { r_ = b.CreateReader(topic_, TypeSupportFor<T>(), qos_, raw_cb_); }
 
   std::optional<T> Take(Millis timeout) {
     std::unique_lock lk(state_->mu);
@@ -179,6 +261,10 @@ class Reader {
       });
     }
   };
+  Participant& p_;
+  std::string topic_;
+  QosKind qos_;
+  RawCallback raw_cb_;
   std::shared_ptr<State> state_;
   std::unique_ptr<RawReader> r_;
 };
@@ -202,7 +288,7 @@ void ThrowIfError(const Rep& rep) {
 // re-sends until answered, the server answers a duplicate from its reply cache, so a request
 // written before discovery completed is not lost and never runs twice.
 template <class Req, class Rep>
-class Client {
+class Client : public Rejoinable {
  public:
   Client(Participant& p, const std::string& service)
       : p_(p),
@@ -213,23 +299,42 @@ class Client {
     std::string me = p.id();
     // Replies are matched on the receive path, not the dispatch thread, so a caller blocked in
     // Call() from a dispatch-thread callback cannot deadlock.
-    rep_raw_ = p.backend().CreateReader(ReplyTopic(service), TypeSupportFor<Rep>(), QosKind::kCommand,
-                                        [weak, me](const RawSample& s, const RawInfo& info) {
-                                          auto st = weak.lock();
-                                          if (!st || !info.valid) return;
-                                          Rep r;
-                                          if (!FromCdr(s.cdr.data(), s.cdr.size(), r)) return;
-                                          if (r.hdr().client() != me) return;
-                                          std::lock_guard lk(st->mu);
-                                          auto it = st->pending.find(r.hdr().request_id());
-                                          if (it == st->pending.end() || it->second) return;
-                                          it->second = std::move(r);
-                                          st->cv.notify_all();
-                                        });
+    raw_cb_ = [weak, me](const RawSample& s, const RawInfo& info) {
+      auto st = weak.lock();
+      if (!st || !info.valid) return;
+      Rep r;
+      if (!FromCdr(s.cdr.data(), s.cdr.size(), r)) return;
+      if (r.hdr().client() != me) return;
+      std::lock_guard lk(st->mu);
+      auto it = st->pending.find(r.hdr().request_id());
+      if (it == st->pending.end() || it->second) return;
+      it->second = std::move(r);
+      st->cv.notify_all();
+    };
+    std::shared_lock lk(p_.endpoints_mu());
+    Recreate(p_.backend());
+    p_.Register(this);
   }
+  ~Client() override {
+    std::shared_lock lk(p_.endpoints_mu());
+    p_.Unregister(this);
+    rep_raw_.reset();
+  }
+  Client(const Client&) = delete;
+  Client& operator=(const Client&) = delete;
 
   bool WaitForServer(Millis timeout) const {
-    return WaitUntil([&] { return req_.Matched() > 0 && rep_raw_->Matched() > 0; }, timeout);
+    return WaitUntil(
+        [&] {
+          if (req_.Matched() == 0) return false;
+          std::shared_lock lk(p_.endpoints_mu());
+          return rep_raw_->Matched() > 0;
+        },
+        timeout);
+  }
+  void Drop() override { rep_raw_.reset(); }
+  void Recreate(Backend& b) override {
+    rep_raw_ = b.CreateReader(ReplyTopic(service_), TypeSupportFor<Rep>(), QosKind::kCommand, raw_cb_);
   }
 
   // Sends req and waits for its reply. Throws cell::Error: kUnavailable when no server was
@@ -278,6 +383,7 @@ class Client {
   std::string service_;
   std::shared_ptr<State> state_;
   Writer<Req> req_;
+  RawCallback raw_cb_;
   std::unique_ptr<RawReader> rep_raw_;
 };
 

@@ -21,14 +21,9 @@ namespace cell::servo {
 // IDL segment -> library segment (exposed for tests).
 Segment FromWire(const cell::MotionSegment& m, uint64_t id);
 
-// The machine's traffic (segments, progress, axes, probe results, tool table, panel) runs on a participant
-// of the service's own, rebuilt when the loop finds the process stood still longer than the DDS lease
-// (SIGSTOP, a paused VM): peers let its lease run out meanwhile, and Fast DDS 2.9 does not always exchange
-// endpoints again with a participant that kept its own view (docs/operations.md). A new participant is a
-// stranger to everyone, so discovery starts clean; the machine and the run carry on.
 class Service {
  public:
-  Service(const std::string& bus_name, MachineConfig cfg, ClockKind clock);
+  Service(bus::Participant& p, MachineConfig cfg, ClockKind clock);
   ~Service();
   void Start();
   void Stop();
@@ -42,7 +37,6 @@ class Service {
   bool LookAheadStarved() const;
   bool Accept(const cell::MotionSegment& m);
   void ApplyControl();
-  void Rejoin();
   struct Endpoints;
 
   std::string station_;
@@ -74,10 +68,7 @@ class Service {
   int32_t aborted_run_ = 0;  // cancelled by the operator: its later segments are dropped // the operator's
                              // hold, re-applied after a reset
 
-  const std::string bus_name_;
-  std::unique_ptr<bus::Participant> bus_;
   std::unique_ptr<Endpoints> ep_;
-  std::chrono::steady_clock::time_point last_pass_{};
   std::jthread loop_;
 };
 
