@@ -332,10 +332,10 @@ TEST_F(Fms, ServoStoppedPastItsLeaseRejoinsAndFinishesTheRun) {
   ExpectCompleted(Operate("RL", 10));
 }
 
-// (e) The same for a station's interpreter stopped past its lease in the middle of a run: the scheduler
-// takes the station for vanished and fails the pallet (docs/scheduler.md: it needs an operator), the
-// interpreter rejoins the bus when it continues, and the station takes the next pallet and files the failed
-// run's record. The lease is watched through a writer on the station's run request topic.
+// (e) The same for a station's interpreter stopped past its lease in the middle of a run: it stays stopped
+// until the scheduler has taken the station for vanished and failed the pallet (docs/scheduler.md: it needs
+// an operator) and the lease has run out (watched through a writer on the station's run request topic).
+// When it continues it rejoins the bus, files the run's record, and the station takes the next pallet.
 TEST_F(Fms, InterpreterStoppedPastItsLeaseRejoinsAndTheStationGoesOn) {
   cell::bus::Participant observer("fms-test/observer");
   cell::bus::Writer<cell::RunRequest> watch(
@@ -343,12 +343,13 @@ TEST_F(Fms, InterpreterStoppedPastItsLeaseRejoinsAndTheStationGoesOn) {
   ASSERT_TRUE(watch.WaitForMatched(1, std::chrono::seconds(10)));
   const std::string job = HeldMidRun("STOP1", 20, 13);
   Freeze("cell-interpreter/KT01");
+  auto failed = WaitJob(job, [](const json& j) { return j["state"] == "FAILED"; });
+  EXPECT_NE(failed["reason"].get<std::string>().find("went offline while running pallet 13"),
+            std::string::npos)
+      << failed;
   ASSERT_TRUE(cell::bus::WaitUntil([&] { return watch.Matched() == 0; }, std::chrono::seconds(15)))
       << "the stopped interpreter's lease did not run out";
   Thaw("cell-interpreter/KT01");
-  auto w = Ctl({"job", "wait", job, "--timeout", "30"});
-  EXPECT_EQ(w.code, 1) << w.out << w.err;
-  EXPECT_NE(w.err.find("went offline while running pallet 13"), std::string::npos) << w.err;
   Resume("KT01");
   ExpectCompleted(Operate("RSTOP1", 14));
   const std::string log = ReadFile(data_ + "/logs/cell-interpreter@KT01.service.log");
