@@ -79,41 +79,30 @@ Segment FromWire(const cell::MotionSegment& m, uint64_t id) {
   return s;
 }
 
-struct Service::Endpoints {
-  Endpoints(bus::Participant& p, Service& s)
-      : segments(p, bus::topics::Segments(s.station_), bus::QosKind::kStream),
-        progress(p, bus::topics::kProgress, bus::QosKind::kState),
-        axes(p, bus::topics::kAxisState, bus::QosKind::kTelemetry),
-        probe(p, bus::topics::Probe(s.station_), bus::QosKind::kCommand),
-        tools(p, bus::topics::kToolTable, bus::QosKind::kState,
-              [&s](const cell::ToolTable& t, const bus::SampleInfo&) {
-                if (t.station() != s.station_) return;
-                std::vector<ToolSlot> slots;
-                for (auto& e : t.tools())
-                  if (e.socket() > 0) slots.push_back({e.tool().to_string(), e.socket()});
-                std::lock_guard lk(s.tools_mu_);
-                s.pending_tools_ = std::move(slots);
-              }),
-        control(p, bus::topics::kServoControl, bus::QosKind::kState,
-                [&s](const cell::ServoControl& c, const bus::SampleInfo&) {
-                  if (c.station() != s.station_) return;
-                  std::lock_guard lk(s.tools_mu_);
-                  s.pending_control_ = c;
-                }) {}
-  bus::Reader<cell::MotionSegment> segments;
-  bus::Writer<cell::SegmentProgress> progress;
-  bus::Writer<cell::AxisState> axes;
-  bus::Writer<cell::ProbeResult> probe;
-  bus::Reader<cell::ToolTable> tools;
-  bus::Reader<cell::ServoControl> control;
-};
-
 Service::Service(bus::Participant& p, MachineConfig cfg, ClockKind clock)
     : station_(cfg.station_id),
       clock_(clock),
       boot_id_(static_cast<uint64_t>(health::WallNs())),
       machine_(std::move(cfg), clock),
-      ep_(std::make_unique<Endpoints>(p, *this)) {}
+      segments_(p, bus::topics::Segments(station_), bus::QosKind::kStream),
+      progress_(p, bus::topics::kProgress, bus::QosKind::kState),
+      axes_(p, bus::topics::kAxisState, bus::QosKind::kTelemetry),
+      probe_w_(p, bus::topics::Probe(station_), bus::QosKind::kCommand),
+      tools_r_(p, bus::topics::kToolTable, bus::QosKind::kState,
+               [this](const cell::ToolTable& t, const bus::SampleInfo&) {
+                 if (t.station() != station_) return;
+                 std::vector<ToolSlot> slots;
+                 for (auto& e : t.tools())
+                   if (e.socket() > 0) slots.push_back({e.tool().to_string(), e.socket()});
+                 std::lock_guard lk(tools_mu_);
+                 pending_tools_ = std::move(slots);
+               }),
+      control_r_(p, bus::topics::kServoControl, bus::QosKind::kState,
+                 [this](const cell::ServoControl& c, const bus::SampleInfo&) {
+                   if (c.station() != station_) return;
+                   std::lock_guard lk(tools_mu_);
+                   pending_control_ = c;
+                 }) {}
 
 Service::~Service() {
   Stop();
@@ -143,7 +132,7 @@ void Service::Loop(std::stop_token st) {
     }
     ApplyControl();
     // Segments in: a new run id starts a new run (its first segment is seq 1).
-    while (auto m = ep_->segments.Take(std::chrono::milliseconds(0))) {
+    while (auto m = segments_.Take(std::chrono::milliseconds(0))) {
       inbox_.push_back(std::move(*m));
       last_segment_at_ = std::chrono::steady_clock::now();
     }
@@ -215,7 +204,7 @@ void Service::Loop(std::stop_token st) {
     if (LookAheadStarved()) {
       // Virtual clock only: wait (wall time) for the refill instead of running the machine into a stop
       // that the segments in flight would have avoided.
-      if (auto m = ep_->segments.Take(std::chrono::milliseconds(1))) {
+      if (auto m = segments_.Take(std::chrono::milliseconds(1))) {
         inbox_.push_back(std::move(*m));
         last_segment_at_ = std::chrono::steady_clock::now();
       }
@@ -321,7 +310,7 @@ void Service::HandleEvents() {
             r.seq(it->second);
             r.contact(e.probe.contact);
             for (int i = 0; i < kNumAxes; ++i) r.position()[static_cast<size_t>(i)] = e.probe.position[i];
-            ep_->probe.Write(r);
+            probe_w_.Write(r);
           }
           seq_of_.erase(it);
           dirty_ = true;
@@ -356,7 +345,7 @@ void Service::PublishProgress() {
   }
   p.feed_hold(feed_hold_);
   p.boot_id(boot_id_);
-  ep_->progress.Write(p);
+  progress_.Write(p);
   dirty_ = false;
 }
 
@@ -372,7 +361,7 @@ void Service::PublishAxes() {
   }
   a.machine_s(s.machine_time);
   a.wall_ns(health::WallNs());
-  ep_->axes.Write(a);
+  axes_.Write(a);
   last_axes_ = std::chrono::steady_clock::now();
 }
 

@@ -5,7 +5,6 @@
 #include <atomic>
 #include <deque>
 #include <map>
-#include <memory>
 #include <mutex>
 #include <optional>
 #include <thread>
@@ -37,7 +36,6 @@ class Service {
   bool LookAheadStarved() const;
   bool Accept(const cell::MotionSegment& m);
   void ApplyControl();
-  struct Endpoints;
 
   std::string station_;
   ClockKind clock_;
@@ -64,11 +62,15 @@ class Service {
   std::mutex tools_mu_;
   std::optional<std::vector<ToolSlot>> pending_tools_;
   std::optional<cell::ServoControl> pending_control_;  // guarded by tools_mu_
-  bool feed_hold_ = false;
-  int32_t aborted_run_ = 0;  // cancelled by the operator: its later segments are dropped // the operator's
-                             // hold, re-applied after a reset
+  bool feed_hold_ = false;                             // the operator's hold, re-applied after every reset
+  int32_t aborted_run_ = 0;  // cancelled by the operator: its later segments are dropped
 
-  std::unique_ptr<Endpoints> ep_;
+  bus::Reader<cell::MotionSegment> segments_;
+  bus::Writer<cell::SegmentProgress> progress_;
+  bus::Writer<cell::AxisState> axes_;
+  bus::Writer<cell::ProbeResult> probe_w_;
+  bus::Reader<cell::ToolTable> tools_r_;
+  bus::Reader<cell::ServoControl> control_r_;
   std::jthread loop_;
 };
 
