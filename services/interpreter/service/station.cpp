@@ -444,7 +444,7 @@ void Station::OnProgress(const cell::SegmentProgress& p) {
   if (held_changed) {
     {
       std::lock_guard s(status_mu_);
-      status_.execution(p.feed_hold() ? cell::EXECUTION_FEED_HOLD : base_execution_);
+      SetExecution(base_execution_);  // the hold shown, or what the run state says
     }
     PublishStatus();
   }

@@ -101,8 +101,7 @@ class Station {
   uint64_t received_seq_ = 0;  // the servo holds 1..received_seq_ of this run (its last progress)
   uint64_t seg_matches_ = 0;   // seg_w_.TotalMatched() at the last check
   std::chrono::steady_clock::time_point last_report_, last_resend_;  // progress of this run; re-send
-  uint64_t servo_boot_ = 0;              // boot_id of the servo progress came from; 0 before any
-  uint64_t run_boot_ = 0;                // the servo this run started on
+  uint64_t run_boot_ = 0;                                            // the servo this run started on
   bool servo_restarted_ = false;         // progress came from another servo process mid-run
   std::atomic<bool> servo_held_{false};  // the servo reports the operator's feed hold in effect
 
