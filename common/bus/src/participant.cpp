@@ -129,7 +129,7 @@ void Participant::Watch() {
   auto last = std::chrono::steady_clock::now();
   while (!watch_cv_.wait_for(lk, kTick, [&] { return watch_stop_; })) {
     const auto now = std::chrono::steady_clock::now();
-    if (now - last > kStoodStill && make_backend_) {
+    if (now - last > kStoodStill) {  // (only started when the backend can be made again)
       spdlog::warn(
           "{}: this process stood still for {:.1f} s (longer than the DDS lease): joining the bus anew", id_,
           std::chrono::duration<double>(now - last).count());
