@@ -128,6 +128,12 @@ class Interpreter {
         [&](const cell::SegmentProgress& p) { return p.station().to_string() == station && pred(p); },
         timeout);
   }
+  // The progress that ends run `run_id` of `station`: `n` segments completed, or an alarm.
+  std::optional<cell::SegmentProgress> WaitRunEnd(const std::string& station, int32_t run_id, uint64_t n) {
+    return WaitProgress(station, [&](const cell::SegmentProgress& x) {
+      return x.run_id() == run_id && (x.completed_seq() == n || x.alarm());
+    });
+  }
   cell::bus::Reader<cell::ProbeResult>& probe() { return probe_; }
 
   // The next AxisState of `station` satisfying pred (other samples are dropped).
@@ -571,9 +577,7 @@ TEST_F(ServoDds, ReSentSegmentsRunOnceAndInOrder) {
                                         Seg(cell::SEGMENT_LINEAR, 100, 300, 100, 3000), End()};
   const int32_t run = NextRun();
   for (uint64_t seq : {1, 2, 1, 4, 2, 3, 4}) bus_->WriteRaw("KT01", run, seq, prog[seq - 1]);
-  auto p = bus_->WaitProgress("KT01", [&](const cell::SegmentProgress& x) {
-    return x.run_id() == run && (x.completed_seq() == 4 || x.alarm());
-  });
+  auto p = bus_->WaitRunEnd("KT01", run, 4);
   ASSERT_TRUE(p) << "run did not complete" << Log("kt01.err");
   EXPECT_FALSE(p->alarm()) << p->alarm_text().to_string();
   EXPECT_EQ(p->received_seq(), 4u);
@@ -598,9 +602,7 @@ TEST_F(ServoDds, ARunIsJoinedOnlyAtItsStart) {
   bus_->WriteRaw("KT01", run, 2, prog[1]);
   bus_->WriteRaw("KT01", run, 3, prog[2]);
   for (uint64_t seq = 1; seq <= 3; ++seq) bus_->WriteRaw("KT01", run, seq, prog[seq - 1]);
-  auto p = bus_->WaitProgress("KT01", [&](const cell::SegmentProgress& x) {
-    return x.run_id() == run && (x.completed_seq() == 3 || x.alarm());
-  });
+  auto p = bus_->WaitRunEnd("KT01", run, 3);
   ASSERT_TRUE(p) << "run did not complete" << Log("kt01.err");
   EXPECT_FALSE(p->alarm()) << p->alarm_text().to_string();
   const double whole = ReferenceCycle(StationConfig("KT01"), home, prog);
@@ -651,9 +653,7 @@ TEST_F(ServoDds, FeedHoldAndFeedOverride) {
   EXPECT_FALSE(early) << "a segment completed under feed hold";
 
   panel(false, 1.0);
-  auto done = bus_->WaitProgress("KT01", [&](const cell::SegmentProgress& x) {
-    return x.run_id() == run && (x.completed_seq() == 2 || x.alarm());
-  });
+  auto done = bus_->WaitRunEnd("KT01", run, 2);
   ASSERT_TRUE(done) << "the run did not finish after the hold was released" << Log("kt01.err");
   EXPECT_FALSE(done->alarm()) << done->alarm_text().to_string();
   EXPECT_FALSE(done->feed_hold());
