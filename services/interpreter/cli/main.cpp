@@ -1,5 +1,5 @@
 // cell-interp: the offline front door of the interpreter (DESIGN §4 "Offline CLI contract").
-//   cell-interp --dialect D [--tools FILE] [--params FILE] [--lib DIR] [--probe-model FILE] PROGRAM
+//   cell-interp --dialect D [--tools FILE] [--params FILE] [--lib DIR] [--probe-model FILE] [--listing] PROGRAM
 // Exit 0: ran to its end; 1: program error (diagnostic on stderr); 2: usage error or unimplemented dialect.
 #include <cstdio>
 #include <filesystem>
@@ -8,20 +8,21 @@
 #include <memory>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "cell/error/error.h"
 #include "cell/interp/interp.h"
-#include "cell/interp/ktapl.h"
 #include "probe_model.h"
 
 namespace {
 
-constexpr const char* kUsage =
-    "usage: cell-interp --dialect ktapl|okuma|emco|balt [--tools FILE] [--params FILE] [--lib DIR] "
-    "[--probe-model FILE] PROGRAM";
+std::string UsageLine() {
+  return "usage: cell-interp --dialect " + cell::interp::DialectChoices() +
+         " [--tools FILE] [--params FILE] [--lib DIR] [--probe-model FILE] [--listing] PROGRAM";
+}
 
 int Usage(const std::string& why) {
-  std::cerr << "cell-interp: " << why << "\n" << kUsage << "\n";
+  std::cerr << "cell-interp: " << why << "\n" << UsageLine() << "\n";
   return 2;
 }
 
@@ -41,6 +42,7 @@ bool ReadFile(const std::string& path, std::string& out) {
 
 int main(int argc, char** argv) {
   std::string dialect, tools, params, lib, probe_model, program;
+  bool listing = false;
   for (int i = 1; i < argc; ++i) {
     std::string a = argv[i];
     auto value = [&](std::string& dst) -> bool {
@@ -49,7 +51,7 @@ int main(int argc, char** argv) {
       return true;
     };
     if (a == "--help" || a == "-h") {
-      std::cout << kUsage << "\n";
+      std::cout << UsageLine() << "\n";
       return 0;
     } else if (a == "--dialect") {
       if (!value(dialect)) return Usage("--dialect needs a value");
@@ -61,6 +63,8 @@ int main(int argc, char** argv) {
       if (!value(lib)) return Usage("--lib needs a directory");
     } else if (a == "--probe-model") {
       if (!value(probe_model)) return Usage("--probe-model needs a file");
+    } else if (a == "--listing") {
+      listing = true;
     } else if (a.size() > 1 && a[0] == '-') {
       return Usage("unknown option " + a);
     } else if (program.empty()) {
@@ -70,19 +74,25 @@ int main(int argc, char** argv) {
     }
   }
   if (dialect.empty()) return Usage("--dialect is required");
-  const cell::interp::DialectInfo* d = cell::interp::FindDialect(dialect);
+  const cell::interp::Dialect* d = cell::interp::FindDialect(dialect);
   if (!d) return Usage("unknown dialect '" + dialect + "'");
-  if (!d->implemented) {
+  if (!d->implemented()) {
     std::cerr << "cell-interp: dialect '" << dialect << "' is not implemented yet\n";
     return 2;
   }
   if (program.empty()) return Usage("PROGRAM is required");
 
   cell::interp::RunOptions opt;
-  opt.dialect = dialect;
+  opt.dialect = std::string(d->name());
   opt.program_name = program;
   try {
-    opt.program = cell::interp::ProgramText::MapFile(program);  // memory flat however long the program
+    if (listing) {
+      std::string text;
+      if (!ReadFile(program, text)) return Usage("cannot read " + program);
+      opt.program_text = d->ImportListing(text);
+    } else {
+      opt.program = cell::interp::ProgramText::MapFile(program);  // memory flat however long the program
+    }
   } catch (const cell::Error& e) {
     return Usage(e.what());
   }
@@ -90,9 +100,9 @@ int main(int argc, char** argv) {
     std::string text;
     if (!ReadFile(tools, text)) return Usage("cannot read " + tools);
     try {
-      opt.tools = cell::interp::ParseKtaplToolTable(text);
+      opt.tools = d->ParseToolTable(text, tools, {});
     } catch (const cell::Error& e) {
-      return Usage("bad tool table " + tools + ": " + e.what());
+      return Usage("bad tool table: " + std::string(e.what()));
     }
   }
   if (!params.empty()) {
@@ -115,8 +125,10 @@ int main(int argc, char** argv) {
   }
   if (!lib.empty()) {
     if (!std::filesystem::is_directory(lib)) return Usage("--lib " + lib + " is not a directory");
-    opt.library = [lib](const std::string& name) -> std::optional<std::string> {
-      for (const char* ext : {"", ".ktapl", ".apl", ".nc", ".txt"}) {
+    std::vector<std::string> exts = {""};
+    for (std::string_view e : d->extensions()) exts.emplace_back(e);
+    opt.library = [lib, exts](const std::string& name) -> std::optional<std::string> {
+      for (const std::string& ext : exts) {
         std::string text;
         if (ReadFile(lib + "/" + name + ext, text)) return text;
       }
@@ -133,7 +145,7 @@ int main(int argc, char** argv) {
 
   std::unique_ptr<cell::interp::Run> run;
   try {
-    run = cell::interp::StartRun(opt);
+    run = d->StartRun(opt);
   } catch (const cell::Error& e) {
     std::cerr << "cell-interp: " << e.what() << "\n";
     return 2;

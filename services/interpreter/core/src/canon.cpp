@@ -18,6 +18,8 @@ const char* OpName(Op op) {
       return "linear";
     case Op::kArc:
       return "arc";
+    case Op::kThread:
+      return "thread";
     case Op::kDwell:
       return "dwell";
     case Op::kSpindle:
@@ -192,7 +194,7 @@ void Int(Buf& out, long v) {
   out.append(p, static_cast<size_t>(e - p));
 }
 
-void Str(Buf& out, const std::string& s) {
+void Str(Buf& out, std::string_view s) {
   out += '"';
   for (unsigned char ch : s) {
     switch (ch) {
@@ -228,29 +230,29 @@ void Key(Buf& out, const char* k) {
   out += "\":";
 }
 
-void Axes(Buf& out, const Canon& c) {
+void Axes(Buf& out, const Target& t) {
   static constexpr std::string_view kKeys[kAxisCount] = {
       ",\"x\":", ",\"y\":", ",\"z\":", ",\"a\":", ",\"b\":", ",\"c\":", ",\"u\":", ",\"v\":", ",\"w\":"};
   for (int i = 0; i < kAxisCount; ++i) {
-    if (c.used & (1u << i)) {
+    if (t.used & (1u << i)) {
       out += kKeys[i];
-      Num(out, c.pos[i]);
+      Num(out, t.pos[i]);
     }
   }
   for (int i = 0; i < kAxisCount; ++i) {
-    if (c.travel_mask & (1u << i)) {
+    if (t.travel_mask & (1u << i)) {
       out += ",\"";
       out += AxisName(i);
       out += "_travel\":";
-      Num(out, c.travel[i]);
+      Num(out, t.travel[i]);
     }
   }
 }
 
-void Feed(Buf& out, const Canon& c) {
+void FeedOf(Buf& out, const Feed& f, bool with_exact_stop) {
   out += std::string_view(",\"f\":");
-  Num(out, c.feed);
-  switch (c.f_mode) {
+  Num(out, f.rate);
+  switch (f.mode) {
     case FeedMode::kPerMinute:
       break;
     case FeedMode::kInverseTime:
@@ -263,9 +265,276 @@ void Feed(Buf& out, const Canon& c) {
       out += ",\"f_mode\":\"deg_per_min\"";
       break;
   }
+  if (with_exact_stop && f.exact_stop) out += ",\"exact_stop\":true";
 }
 
+void Bool(Buf& out, const char* key, bool v) {
+  Key(out, key);
+  out += v ? std::string_view("true") : std::string_view("false");
+}
+
+// One writer per payload type (overload set for std::visit).
+struct Writer {
+  Buf& out;
+  void operator()(const UnitsOp& u) const {
+    out += u.metric ? std::string_view(",\"length\":\"mm\"") : std::string_view(",\"length\":\"inch\"");
+    out += u.x_mode == XMode::kDiameter ? std::string_view(",\"x_mode\":\"diameter\"")
+                                        : std::string_view(",\"x_mode\":\"radius\"");
+  }
+  void operator()(const RapidOp& r) const { Axes(out, r.to); }
+  void operator()(const LinearOp& l) const {
+    Axes(out, l.to);
+    FeedOf(out, l.feed, true);
+  }
+  void operator()(const ArcOp& a) const {
+    Axes(out, a.to);
+    FeedOf(out, a.feed, true);
+    out += ",\"center\":[";
+    Num(out, a.center[0]);
+    out += ',';
+    Num(out, a.center[1]);
+    out += ',';
+    Num(out, a.center[2]);
+    out += ']';
+    out += a.cw ? std::string_view(",\"dir\":\"cw\"") : std::string_view(",\"dir\":\"ccw\"");
+    const char plane[2] = {AxisName(a.plane.first)[0], AxisName(a.plane.second)[0]};
+    out += std::string_view(",\"plane\":\"");
+    out += std::string_view(plane, 2);
+    out += '"';
+    Key(out, "angle");
+    Num(out, a.angle);
+  }
+  void operator()(const ThreadOp& t) const {
+    Axes(out, t.to);
+    Key(out, "lead");
+    Num(out, t.lead);
+    if (t.lead_change != 0) {
+      Key(out, "lead_change");
+      Num(out, t.lead_change);
+    }
+    Key(out, "start_angle");
+    Num(out, t.start_angle);
+  }
+  void operator()(const DwellOp& d) const {
+    Key(out, "seconds");
+    Num(out, d.seconds);
+  }
+  void operator()(const SpindleOp& s) const {
+    Key(out, "dir");
+    Str(out, SpindleDirName(s.dir));
+    Key(out, "s");
+    Num(out, s.rpm);
+    if (s.dir == SpindleDir::kOrient) {
+      Key(out, "angle");
+      Num(out, s.angle);
+    }
+    if (s.css > 0) {
+      Key(out, "css");
+      Num(out, s.css);
+    }
+    if (s.max_rpm > 0) {
+      Key(out, "max_rpm");
+      Num(out, s.max_rpm);
+    }
+  }
+  void operator()(const CoolantOp& c) const {
+    Key(out, "m");
+    Int(out, c.m);
+    Key(out, "mode");
+    Str(out, CoolantModeName(c.mode));
+  }
+  void operator()(const ToolSelectOp& t) const {
+    Key(out, "tool");
+    Str(out, t.tool);
+  }
+  void operator()(const ToolChangeOp& t) const {
+    Key(out, "tool");
+    Str(out, t.tool);
+    if (t.offset != 0) {
+      Key(out, "offset");
+      Int(out, t.offset);
+    }
+    if (t.tip >= 0) {
+      Key(out, "tip");
+      Int(out, t.tip);
+    }
+  }
+  void operator()(const StopOp& s) const {
+    Key(out, "m");
+    Int(out, s.m);
+    Bool(out, "optional", s.optional);
+  }
+  void operator()(const EndOp& e) const {
+    Key(out, "m");
+    Int(out, e.m);
+    Bool(out, "shuttle", e.shuttle);
+  }
+  void operator()(const PalletOp& p) const {
+    Key(out, "m");
+    Int(out, p.m);
+  }
+  void operator()(const MessageOp& m) const {
+    Key(out, "text");
+    Str(out, m.text);
+  }
+  void operator()(const AlarmOp& a) const {
+    Key(out, "text");
+    Str(out, a.text);
+  }
+  void operator()(const AuxOp& a) const {
+    Key(out, "m");
+    Int(out, a.m);
+  }
+  void operator()(const RegridOp& r) const { Axes(out, r.to); }
+  void operator()(const ProbeOp& p) const {
+    Key(out, "g");
+    Int(out, p.g);
+    Axes(out, p.to);
+    FeedOf(out, p.feed, false);
+    Key(out, "result");
+    Str(out, ProbeOutcomeName(p.result));
+  }
+  void operator()(const OutputOp& o) const {
+    Key(out, "spec");
+    Str(out, o.spec);
+  }
+  void operator()(const WaitInputOp& w) const {
+    Key(out, "spec");
+    Str(out, w.spec);
+  }
+  void operator()(const FileOpenOp& f) const {
+    Key(out, "name");
+    Str(out, f.name);
+    Key(out, "type");
+    Str(out, f.type);
+    Bool(out, "append", f.append);
+    if (f.inspection) out += std::string_view(",\"inspection\":true");
+  }
+  void operator()(const FileWriteOp& f) const {
+    Key(out, "text");
+    Str(out, f.text);
+  }
+  void operator()(const FileCloseOp&) const {}
+  void operator()(const FileOpOp& f) const {
+    Key(out, "what");
+    Str(out, f.what);
+    Key(out, "args");
+    Str(out, f.args);
+  }
+  void operator()(const EventOp& e) const {
+    Key(out, "text");
+    Str(out, e.text);
+  }
+  void operator()(const ToolDataOp& t) const {
+    Key(out, "tool");
+    Str(out, t.cleared ? std::string_view("*") : std::string_view(t.entry.tool));
+    Key(out, "length");
+    Num(out, t.entry.length);
+    Key(out, "diameter");
+    Num(out, t.entry.diameter);
+    if (t.pallet != 0) {
+      Key(out, "pallet");
+      Int(out, t.pallet);
+    }
+    // Lathe data only where a dialect sets it (KT-APL lines stay as they were).
+    if (t.entry.x_offset != 0 || t.entry.z_offset != 0 || t.entry.nose_radius != 0 || t.entry.tip != 0) {
+      Key(out, "x_offset");
+      Num(out, t.entry.x_offset);
+      Key(out, "z_offset");
+      Num(out, t.entry.z_offset);
+      Key(out, "nose_radius");
+      Num(out, t.entry.nose_radius);
+      Key(out, "tip");
+      Int(out, t.entry.tip);
+    }
+  }
+};
+
 }  // namespace
+
+const char* SpindleDirName(SpindleDir d) {
+  switch (d) {
+    case SpindleDir::kStop:
+      return "stop";
+    case SpindleDir::kCw:
+      return "cw";
+    case SpindleDir::kCcw:
+      return "ccw";
+    case SpindleDir::kOrient:
+      return "orient";
+  }
+  return "stop";
+}
+
+const char* CoolantModeName(CoolantMode m) {
+  switch (m) {
+    case CoolantMode::kOff:
+      return "off";
+    case CoolantMode::kMist:
+      return "mist";
+    case CoolantMode::kFlood:
+      return "flood";
+    case CoolantMode::kWashFlood:
+      return "wash_flood";
+    case CoolantMode::kWashAir:
+      return "wash_air";
+    case CoolantMode::kAuxMist:
+      return "aux_mist";
+    case CoolantMode::kAuxFlood:
+      return "aux_flood";
+    case CoolantMode::kAuxPulse:
+      return "aux_pulse";
+  }
+  return "off";
+}
+
+const char* ProbeOutcomeName(ProbeOutcome r) {
+  switch (r) {
+    case ProbeOutcome::kContact:
+      return "contact";
+    case ProbeOutcome::kBreak:
+      return "break";
+    case ProbeOutcome::kNone:
+      return "none";
+    case ProbeOutcome::kAlready:
+      return "already";
+    case ProbeOutcome::kToolOk:
+      return "tool_ok";
+  }
+  return "none";
+}
+
+Target* Canon::target() {
+  switch (op()) {
+    case Op::kRapid:
+      return &std::get<RapidOp>(p).to;
+    case Op::kLinear:
+      return &std::get<LinearOp>(p).to;
+    case Op::kArc:
+      return &std::get<ArcOp>(p).to;
+    case Op::kThread:
+      return &std::get<ThreadOp>(p).to;
+    case Op::kRegrid:
+      return &std::get<RegridOp>(p).to;
+    case Op::kProbe:
+      return &std::get<ProbeOp>(p).to;
+    default:
+      return nullptr;
+  }
+}
+
+Feed* Canon::feed() {
+  switch (op()) {
+    case Op::kLinear:
+      return &std::get<LinearOp>(p).feed;
+    case Op::kArc:
+      return &std::get<ArcOp>(p).feed;
+    case Op::kProbe:
+      return &std::get<ProbeOp>(p).feed;
+    default:
+      return nullptr;
+  }
+}
 
 std::string ToJsonLine(const Canon& c) {
   std::string out;
@@ -276,133 +545,10 @@ std::string ToJsonLine(const Canon& c) {
 void AppendJsonLine(std::string& str, const Canon& c) {
   Buf out(str);
   out += std::string_view("{\"op\":\"");
-  out += OpName(c.op);
+  out += OpName(c.op());
   out += std::string_view("\",\"line\":");
   Int(out, c.line);
-  switch (c.op) {
-    case Op::kUnits:
-      out += c.metric ? ",\"length\":\"mm\"" : ",\"length\":\"inch\"";
-      out += ",\"x_mode\":\"radius\"";
-      break;
-    case Op::kRapid:
-      Axes(out, c);
-      break;
-    case Op::kLinear:
-      Axes(out, c);
-      Feed(out, c);
-      if (c.exact_stop) out += ",\"exact_stop\":true";
-      break;
-    case Op::kArc:
-      Axes(out, c);
-      Feed(out, c);
-      if (c.exact_stop) out += ",\"exact_stop\":true";
-      out += ",\"center\":[";
-      Num(out, c.center[0]);
-      out += ',';
-      Num(out, c.center[1]);
-      out += ',';
-      Num(out, c.center[2]);
-      out += ']';
-      out += c.cw ? ",\"dir\":\"cw\"" : ",\"dir\":\"ccw\"";
-      Key(out, "plane");
-      Str(out, c.plane);
-      Key(out, "angle");
-      Num(out, c.turns);
-      break;
-    case Op::kDwell:
-      Key(out, "seconds");
-      Num(out, c.value);
-      break;
-    case Op::kSpindle:
-      Key(out, "dir");
-      Str(out, c.text);
-      Key(out, "s");
-      Num(out, c.value);
-      if (c.text == "orient") {
-        Key(out, "angle");
-        Num(out, c.value2);
-      }
-      break;
-    case Op::kCoolant:
-      Key(out, "m");
-      Int(out, c.code);
-      Key(out, "mode");
-      Str(out, c.text);
-      break;
-    case Op::kToolSelect:
-    case Op::kToolChange:
-      Key(out, "tool");
-      Str(out, c.text);
-      break;
-    case Op::kStop:
-      Key(out, "m");
-      Int(out, c.code);
-      out += c.flag ? ",\"optional\":true" : ",\"optional\":false";
-      break;
-    case Op::kEnd:
-      Key(out, "m");
-      Int(out, c.code);
-      out += c.flag ? ",\"shuttle\":true" : ",\"shuttle\":false";
-      break;
-    case Op::kPallet:
-      Key(out, "m");
-      Int(out, c.code);
-      break;
-    case Op::kMessage:
-    case Op::kAlarm:
-    case Op::kEvent:
-      Key(out, "text");
-      Str(out, c.text);
-      break;
-    case Op::kAux:
-      Key(out, "m");
-      Int(out, c.code);
-      break;
-    case Op::kRegrid:
-      Axes(out, c);
-      break;
-    case Op::kProbe:
-      Key(out, "g");
-      Int(out, c.code);
-      Axes(out, c);
-      Feed(out, c);
-      Key(out, "result");
-      Str(out, c.text);
-      break;
-    case Op::kOutput:
-    case Op::kWaitInput:
-      Key(out, "spec");
-      Str(out, c.text);
-      break;
-    case Op::kFileOpen:
-      Key(out, "name");
-      Str(out, c.text);
-      Key(out, "type");
-      Str(out, c.text2);
-      out += c.flag ? ",\"append\":true" : ",\"append\":false";
-      if (c.code) out += ",\"inspection\":true";
-      break;
-    case Op::kFileWrite:
-      Key(out, "text");
-      Str(out, c.text);
-      break;
-    case Op::kFileClose:
-      break;
-    case Op::kFileOp:
-      Key(out, "what");
-      Str(out, c.text2);
-      Key(out, "args");
-      Str(out, c.text);
-      break;
-    case Op::kToolData:
-      Key(out, "tool");
-      Str(out, c.text);
-      Key(out, "length");
-      Num(out, c.value);
-      Key(out, "diameter");
-      Num(out, c.value2);
-      break;
-  }
+  std::visit(Writer{out}, c.p);
   out += '}';
 }
 

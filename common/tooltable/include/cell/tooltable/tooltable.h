@@ -1,38 +1,43 @@
-// A station's tool table (the CNC's tool management table) and the KT-APL TLD statement that loads it.
+// A station's tool table (the CNC's tool management table): the one tool model of the cell. The interpreter,
+// the station service, the axis servo, the scheduler and the station config all use it; the IDL ToolEntry is
+// its wire form (cell/tooltable/wire.h) and ToJson/FromJson its stored and printed form.
 //
-// TLD (KT-APL manual, "TLD TOOL LIFE DATA STATEMENT", seed lines 3975-4097):
-//   (TLD,SnnTnnnnnnn[.s]CMWnnnPnnnnnDnnnnnnnnnLnnnnHnn.n)   ASCII form
-//   %TLD,...%                                                 EIA form
-// S socket, T tool (up to 7 digits, optional suffix .1-.7), C check flag, M manual flag, W pallet (process
-// compensation), P length comp, D diameter comp, L tool life hhmm, H maximum horsepower, B broken, E worn.
-// Flags are bare letters. Values are read in the current unit (G70 inch / G71 metric); the table stores mm.
+// Each dialect reads and writes tool tables in its own form (KT-APL TLD statements, a lathe's X/Z/R/L table,
+// a mill's offset file) through the dialect registry (services/interpreter); this library only holds the data.
 #pragma once
 
 #include <cstdint>
-#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
 
+#include <nlohmann/json_fwd.hpp>
+
 namespace cell::tooltable {
 
-// One primary or suffix data set of a tool.
+// One data set of a tool: what every dialect needs. Lengths in millimetres; fields a dialect does not use
+// stay at their defaults (and are left out of `station tools --json`).
 struct ToolEntry {
-  std::string tool;       // "33412" (primary) or "33412.5" (suffix set 5)
-  int socket = 0;         // magazine socket; 0 = none (manual tool or not in the magazine)
-  double length = 0;      // P: tool length compensation, mm
-  double diameter = 0;    // D: cutter diameter compensation, mm
-  int life_left_min = 0;  // L: remaining life in minutes (0 = no limit given)
-  bool worn = false;      // E
-  bool broken = false;    // B
-  bool check = false;     // C: check the tool on its first use
-  bool manual = false;    // M: manual tool
-  double max_hp = 0;      // H: maximum allowable horsepower (0 = not given)
+  std::string tool;          // "33412" (primary), "33412.5" (KT-APL suffix set 5), a lathe's "3"
+  int socket = 0;            // magazine socket or turret station; 0 = none (manual tool, not loaded)
+  double length = 0;         // length compensation (KT-APL P, a mill's length along length_axis), signed
+  double diameter = 0;       // cutter diameter compensation (KT-APL D, Balt-System K), signed
+  double life_left_min = 0;  // remaining tool life, minutes (KT-APL L, hhmm); 0 = no limit given
+  bool worn = false;         // KT-APL E
+  bool broken = false;       // KT-APL B
+  bool check = false;        // KT-APL C: check the tool on its first use
+  bool manual = false;       // KT-APL M: manual tool
+  double max_hp = 0;         // KT-APL H: maximum allowable horsepower (0 = not given)
+  char length_axis = 'Z';    // mills: the axis the length compensation acts along (X, Y or Z)
+  double x_offset = 0;       // lathes: tool offset along X (on the diameter where the dialect programs one)
+  double z_offset = 0;       // lathes: tool offset along Z
+  double nose_radius = 0;    // lathes: tool-nose radius
+  int tip = 0;               // lathes: tip position code 0-9 (0: the nose centre)
 
   bool operator==(const ToolEntry&) const = default;
 };
 
-// A process compensation: added to a tool's data while pallet `pallet` is on the table.
+// A process compensation (KT-APL TLD with W): added to a tool's data set while pallet `pallet` is on the table.
 struct ProcessComp {
   std::string tool;
   int pallet = 0;
@@ -40,25 +45,6 @@ struct ProcessComp {
   double diameter = 0;
   bool operator==(const ProcessComp&) const = default;
 };
-
-// One parsed TLD statement: either a data set (entry) or a process compensation (W given).
-struct TldStatement {
-  int line = 0;  // 1-based line of the statement in the source
-  int column = 0;
-  std::optional<ToolEntry> entry;
-  std::optional<ProcessComp> process;
-};
-
-struct ParseOptions {
-  bool metric = true;    // unit mode at the start (G71); G70/G71 in the text switch it
-  int max_pallet = 255;  // 127 for coded-pallet FMS stations (seed line 4081-4083)
-};
-
-// Parses every TLD statement of a tool-table file (a KT-APL program of TLD blocks). Lines holding G70/G71
-// switch the unit; other blocks (%, N numbers, NAM, comments) are skipped. Throws cell::Error
-// (kInvalidArgument) with "SOURCE:LINE:COL: error: text" at the first malformed TLD.
-std::vector<TldStatement> ParseTld(std::string_view text, std::string_view source = "tld",
-                                   const ParseOptions& options = {});
 
 // Normalises a tool number as written in UTL or TLD: strips a leading T and leading zeros of the number part
 // ("T0012" -> "12", "33412.5" stays). Throws cell::Error on anything that is not 1-7 digits with an optional
@@ -76,22 +62,41 @@ class ToolTable {
   const std::vector<ToolEntry>& entries() const { return entries_; }
   const std::vector<ProcessComp>& process_comps() const { return process_; }
   const ToolEntry* Find(std::string_view tool) const;
+  ToolEntry* Find(std::string_view tool);
 
-  // Adds or replaces data sets by tool number (a TLD statement loads a whole data set, as on the control) and
-  // adds or replaces process compensations by (tool, pallet). A process compensation needs a primary or
-  // suffix data set of its tool first (seed line 4073, "Before a process compensation is entered either a
-  // primary or a suffix compensation must be entered"): otherwise cell::Error kFailedPrecondition naming the
-  // line, and the table is left unchanged. Returns the number of statements applied.
-  std::size_t Merge(const std::vector<TldStatement>& statements, std::string_view source = "tld");
+  // Adds or replaces a data set by tool number (a TLD statement loads a whole data set, as on the control).
   void Upsert(const ToolEntry& entry);
+  // Adds or replaces a process compensation by (tool, pallet). A process compensation needs a primary or
+  // suffix data set of its tool first (KT-APL manual ln 4073): returns false, table unchanged, without one.
+  bool UpsertProcess(const ProcessComp& comp);
+  // Empties the table (KT-APL ZTB,T).
+  void Clear();
+
+  // The length and diameter compensation of a data set with the process compensation for `pallet` added
+  // (0 = no pallet); false when there is no such data set.
+  struct Compensation {
+    double length = 0;
+    double diameter = 0;
+  };
+  bool Effective(std::string_view tool, int pallet, Compensation* out) const;
 
   // True when a usable (not broken) data set of this tool number is in the table. A bare UTL number such as
   // "33412" is held by its primary set or any suffix set of it.
   bool Holds(std::string_view tool) const;
 
+  bool operator==(const ToolTable&) const = default;
+
  private:
   std::vector<ToolEntry> entries_;  // kept in insertion order
   std::vector<ProcessComp> process_;
 };
+
+// The stored and printed form: {"entries":[{tool, socket, length, diameter, life_left_min, worn, broken,
+// ...}], "process":[{tool, pallet, length, diameter}]}. EntryJson is one entry as `station tools --json`
+// prints it (DESIGN §6 keys always; other dialects' fields where they are set).
+nlohmann::json ToJson(const ToolTable& t);
+ToolTable FromJson(const nlohmann::json& j);  // throws cell::Error(kInvalidArgument) on a malformed table
+nlohmann::json EntryJson(const ToolEntry& e);
+ToolEntry EntryFromJson(const nlohmann::json& j);
 
 }  // namespace cell::tooltable

@@ -18,96 +18,12 @@
 #include <vector>
 
 #include "cell/interp/canon.h"
+#include "cell/interp/geometry/offset_path.h"
 
 namespace cell::interp::ktapl::cc {
 
-// A point or vector in the compensation plane: x = the plane's first axis, y = its second (G17 X,Y; G18
-// Z,X; G19 Y,Z; App. H), millimetres.
-struct Vec2 {
-  double x = 0, y = 0;
-};
-inline Vec2 operator+(Vec2 a, Vec2 b) {
-  return {a.x + b.x, a.y + b.y};
-}
-inline Vec2 operator-(Vec2 a, Vec2 b) {
-  return {a.x - b.x, a.y - b.y};
-}
-inline Vec2 operator*(double k, Vec2 a) {
-  return {k * a.x, k * a.y};
-}
-inline double Dot(Vec2 a, Vec2 b) {
-  return a.x * b.x + a.y * b.y;
-}
-inline double Cross(Vec2 a, Vec2 b) {
-  return a.x * b.y - a.y * b.x;
-}
-inline double Norm(Vec2 a) {
-  return std::hypot(a.x, a.y);
-}
-
-// Below this (mm) two points are the same and a move has no extent in the plane.
-constexpr double kTiny = 1e-6;
-
-// Compensation side: the cutter left (G41) or right (G42) of the path, looking along the cut.
-constexpr int kLeft = 1;
-constexpr int kRight = -1;
-
-// A programmed path in the plane: a line, or an arc about `center` (cw/ccw in the plane's orientation,
-// `sweep` degrees, 360 for a full circle).
-struct Path {
-  bool arc = false;
-  Vec2 start, end, center;
-  bool cw = false;
-  double sweep = 0;
-};
-
-// Unit tangent (direction of travel) at the start and at the end.
-Vec2 StartTangent(const Path& p);
-Vec2 EndTangent(const Path& p);
-// Unit normal toward `side` of a direction of travel.
-inline Vec2 SideNormal(Vec2 t, int side) {
-  return {-side * t.y, side * t.x};
-}
-// True when the compensation side is the inside of the arc (G41 on a ccw arc, G42 on a cw arc).
-bool InsideArc(const Path& p, int side);
-// Radius of the offset arc (programmed radius at the start or end -/+ r); < 0 when r is too large.
-double OffsetRadiusAtStart(const Path& p, double r, int side);
-double OffsetRadiusAtEnd(const Path& p, double r, int side);
-// The cutter centre at 90 degrees to the path at its start / end.
-Vec2 OffsetStart(const Path& p, double r, int side);
-Vec2 OffsetEnd(const Path& p, double r, int side);
-// Extent of a path: mm for a line, degrees for an arc (its sweep).
-double Extent(const Path& p);
-// Length (mm) of the offset path left when it is cut back by `trim_start` at its start and `trim_end` at
-// its end (mm for lines, degrees for arcs; negative = extended). Negative: it would run backwards.
-double RemainingLength(const Path& p, double r, int side, double trim_start, double trim_end);
-
-// Intersections of a line (point, unit direction) with a line or a circle, and of two circles; the
-// functions return how many points they wrote.
-int IntersectLineLine(Vec2 p, Vec2 d, Vec2 q, Vec2 e, Vec2* out);
-int IntersectLineCircle(Vec2 p, Vec2 d, Vec2 c, double r, Vec2 out[2]);
-int IntersectCircleCircle(Vec2 c1, double r1, Vec2 c2, double r2, Vec2 out[2]);
-
-// The corner where path `a` ends and path `b` starts, with the cutter on `side` at distance `r`.
-struct Corner {
-  enum Kind {
-    kNone,    // the offset paths meet (tangent paths, or r == 0)
-    kToward,  // the path turns toward the compensation: the offset paths are cut back to their intersection
-    kAway,    // the path turns away: a fill-in arc about the programmed corner, or (G46) the offset paths
-              // extended to their intersection
-  };
-  Kind kind = kNone;
-  bool intersects = true;  // kToward: false when the offset paths do not intersect (error 0002)
-  Vec2 a_end, b_start;     // compensated end of a, compensated start of b
-  double a_trim = 0;       // a cut back at its end (mm / degrees; negative = extended)
-  double b_trim = 0;       // b cut back at its start
-  bool fill_in = false;    // a fill-in arc from a_end to b_start about a.end
-  bool fill_cw = false;
-  double fill_sweep = 0;  // degrees
-};
-// bypass_fill_in (G46): a turn away meets at the intersection of the extended offset paths instead of a
-// fill-in arc (a fill-in arc is still used when they do not meet ahead of both ends, e.g. a reversal).
-Corner ComputeCorner(const Path& a, const Path& b, double r, int side, bool bypass_fill_in);
+// The geometry (Vec2, Path, Corner, offsets, intersections) is the core's (cell/interp/geometry/offset_path.h).
+using namespace ::cell::interp::geom;  // NOLINT: the compensator is written in the geometry's terms
 
 // A compensation error: the manual's alarm number (empty for the control's other rejections) and text.
 struct CompError {

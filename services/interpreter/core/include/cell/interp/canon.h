@@ -1,10 +1,21 @@
 // Canonical commands: the seam between a dialect front-end and the rest of the cell (RS274NGC-style canon).
-// Every op is documented in docs/canonical-commands.md.
+// Every op has its own payload type; no field changes its meaning from one op to another. Every op and its
+// JSON form are documented in docs/canonical-commands.md.
+//
+//   Canon c;                                // a command: the program line and one payload
+//   auto& m = c.Set<LinearOp>();            // choose the op (fields at their defaults)
+//   m.to.pos[kX] = 10; m.feed.rate = 500;
+//   if (auto* arc = c.If<ArcOp>()) ...      // read by type
+//   switch (c.op()) ...                     // or by op
 #pragma once
 
 #include <array>
 #include <cstdint>
 #include <string>
+#include <type_traits>
+#include <variant>
+
+#include "cell/tooltable/tooltable.h"
 
 namespace cell::interp {
 
@@ -21,97 +32,266 @@ inline bool IsRotaryAxis(int axis) {
   return axis == kA || axis == kB || axis == kC;
 }
 
-enum class Op {
+using AxisArray = std::array<double, kAxisCount>;
+
+// The ops, in the order of the payload alternatives in Canon::Payload.
+enum class Op : std::uint8_t {
   kUnits,       // first op of every run, and again whenever the unit mode changes
   kRapid,       // move at rapid rate
   kLinear,      // straight feed move
   kArc,         // circular or helical feed move
-  kDwell,       // G04
-  kSpindle,     // spindle on cw/ccw, stop, orient, speed change
+  kThread,      // spindle-synchronised straight move (lathe threading)
+  kDwell,       // pause
+  kSpindle,     // spindle on cw/ccw, stop, orient, speed change, constant surface speed
   kCoolant,     // coolant mode change
-  kToolSelect,  // T word: magazine pre-selection
-  kToolChange,  // M06
-  kStop,        // M00 / M01
-  kEnd,         // M02 / M30
-  kPallet,      // M60 mid-program pallet shuttle (M30's shuttle is a field of kEnd)
-  kMessage,     // (MSG,...) operator message
-  kAlarm,       // M99 audible alarm
-  kAux,         // any other M function (clamps, overrides, probe select, ...)
-  kRegrid,      // G92: the absolute position registers are reloaded, no motion
-  kProbe,       // G22/G23 probe move; the result is reported by the Environment
-  kOutput,      // (SET,...) discrete outputs
-  kWaitInput,   // (WAI,...) wait for discrete inputs
-  kFileOpen,    // OIF / OPF / (MSG,NAM,...)
-  kFileWrite,   // FWR / MSG into an open file
-  kFileClose,   // CLF / G37
-  kFileOp,      // CPY, DLF, PRT, RCP, USF, ULF
-  kEvent,       // (EVT,...)
-  kToolData,    // TLD / ZTB,T changes to the tool table
+  kToolSelect,  // magazine pre-selection (the change follows with tool_change)
+  kToolChange,  // tool into the spindle / turret station into the cutting position
+  kStop,        // program stop / optional stop
+  kEnd,         // program end
+  kPallet,      // mid-program pallet shuttle
+  kMessage,     // operator message
+  kAlarm,       // audible / operator alarm that does not stop the run
+  kAux,         // any other M function (clamps, overrides, probe select, chuck, tailstock, ...)
+  kRegrid,      // the absolute position registers are reloaded, no motion
+  kProbe,       // probe move; the result comes from the Environment
+  kOutput,      // discrete outputs
+  kWaitInput,   // wait for discrete inputs
+  kFileOpen,    // a file the program writes is opened
+  kFileWrite,   // a line written to it
+  kFileClose,   // it is closed
+  kFileOp,      // copy, delete, print, remote copy, save/load of tables
+  kEvent,       // an event record
+  kToolData,    // the program changed the tool table
 };
+inline constexpr int kOpCount = static_cast<int>(Op::kToolData) + 1;
 
+// Stable JSON name of an op ("rapid", "tool_change", ...).
 const char* OpName(Op op);
 
-enum class FeedMode { kPerMinute, kInverseTime, kPerRev, kDegPerMinute };
+enum class FeedMode : std::uint8_t { kPerMinute, kInverseTime, kPerRev, kDegPerMinute };
+enum class XMode : std::uint8_t { kRadius, kDiameter };  // lathes program X as a diameter
+enum class SpindleDir : std::uint8_t { kStop, kCw, kCcw, kOrient };
+enum class CoolantMode : std::uint8_t {
+  kOff,
+  kMist,
+  kFlood,
+  kWashFlood,  // KT-APL M51 pallet wash
+  kWashAir,    // M52
+  kAuxMist,    // M57
+  kAuxFlood,   // M58
+  kAuxPulse,   // M59
+};
+enum class ProbeOutcome : std::uint8_t { kContact, kBreak, kNone, kAlready, kToolOk };
 
-enum class Plane { kXY, kZX, kYZ };
+const char* SpindleDirName(SpindleDir d);
+const char* CoolantModeName(CoolantMode m);
+const char* ProbeOutcomeName(ProbeOutcome r);
+
+// Where a move ends: the absolute position (mm / deg) after all offsets. `used` says which axes the run has
+// used so far (bit i = Axis i); only those are written. Rotary axes that turned in this block carry their
+// signed travel in degrees (bit i of `travel_mask`).
+struct Target {
+  AxisArray pos{};
+  std::uint32_t used = 0;
+  AxisArray travel{};
+  std::uint32_t travel_mask = 0;
+};
+
+struct Feed {
+  double rate = 0;  // mm/min, deg/min, 1/min (inverse time) or mm/rev, per `mode`
+  FeedMode mode = FeedMode::kPerMinute;
+  bool exact_stop = false;  // decelerate to a stop at the end of the block
+};
+
+// The two axes of a circular plane: first and second (G17 X,Y; G18 Z,X; G19 Y,Z; co-axis pairs such as
+// Z,U). The arc direction is seen from the positive end of the plane normal.
+struct PlaneAxes {
+  std::int8_t first = kX, second = kY;
+};
+
+struct UnitsOp {
+  static constexpr Op kOp = Op::kUnits;
+  bool metric = false;
+  XMode x_mode = XMode::kRadius;
+};
+struct RapidOp {
+  static constexpr Op kOp = Op::kRapid;
+  Target to;
+};
+struct LinearOp {
+  static constexpr Op kOp = Op::kLinear;
+  Target to;
+  Feed feed;
+};
+struct ArcOp {
+  static constexpr Op kOp = Op::kArc;
+  Target to;
+  Feed feed;
+  std::array<double, 3> center{};  // absolute x y z (a co-axis in the slot of its parallel axis)
+  bool cw = true;
+  PlaneAxes plane;
+  double angle = 0;  // degrees swept (positive; 360 for a full circle)
+};
+// A thread cut: a straight move whose travel along the major axis (the axis with the larger travel) is
+// `lead` mm per spindle revolution, starting at spindle angle `start_angle` (deg from the index mark).
+struct ThreadOp {
+  static constexpr Op kOp = Op::kThread;
+  Target to;
+  double lead = 0;         // mm per revolution
+  double lead_change = 0;  // mm per revolution, per revolution (variable lead); 0 normally
+  double start_angle = 0;  // degrees
+};
+struct DwellOp {
+  static constexpr Op kOp = Op::kDwell;
+  double seconds = 0;
+};
+struct SpindleOp {
+  static constexpr Op kOp = Op::kSpindle;
+  SpindleDir dir = SpindleDir::kStop;
+  double rpm = 0;          // programmed speed (constant rpm mode; the last speed for stop / orient)
+  double angle = 0;        // orient: keylock angle, degrees
+  double css = 0;          // constant surface speed, m/min; 0 = off (rpm applies)
+  double max_rpm = 0;      // programmed spindle limit (lathes: Okuma G50 S, EMCO G92 S); 0 = none
+};
+struct CoolantOp {
+  static constexpr Op kOp = Op::kCoolant;
+  int m = 0;  // the M code as programmed
+  CoolantMode mode = CoolantMode::kOff;
+};
+struct ToolSelectOp {
+  static constexpr Op kOp = Op::kToolSelect;
+  std::string tool;
+};
+struct ToolChangeOp {
+  static constexpr Op kOp = Op::kToolChange;
+  std::string tool;  // tool number (KT-APL "1001" or "33412.5"; a lathe's turret tool "3")
+  int offset = 0;    // lathes: the tool offset number the T word selects; 0 = none / the tool's own
+  int tip = -1;      // lathes: tool-nose tip position code 0-9 in force; -1 = not a lathe tool
+};
+struct StopOp {
+  static constexpr Op kOp = Op::kStop;
+  int m = 0;
+  bool optional = false;
+};
+struct EndOp {
+  static constexpr Op kOp = Op::kEnd;
+  int m = 0;
+  bool shuttle = false;  // KT-APL M30: the pallet leaves
+};
+struct PalletOp {
+  static constexpr Op kOp = Op::kPallet;
+  int m = 60;
+};
+struct MessageOp {
+  static constexpr Op kOp = Op::kMessage;
+  std::string text;
+};
+struct AlarmOp {
+  static constexpr Op kOp = Op::kAlarm;
+  std::string text;
+};
+struct AuxOp {
+  static constexpr Op kOp = Op::kAux;
+  int m = 0;
+};
+struct RegridOp {
+  static constexpr Op kOp = Op::kRegrid;
+  Target to;
+};
+struct ProbeOp {
+  static constexpr Op kOp = Op::kProbe;
+  int g = 0;  // the dialect's probe code (KT-APL 22, 23, 38)
+  Target to;  // where the probe stopped
+  Feed feed;
+  ProbeOutcome result = ProbeOutcome::kNone;
+};
+struct OutputOp {
+  static constexpr Op kOp = Op::kOutput;
+  std::string spec;
+};
+struct WaitInputOp {
+  static constexpr Op kOp = Op::kWaitInput;
+  std::string spec;
+};
+struct FileOpenOp {
+  static constexpr Op kOp = Op::kFileOpen;
+  std::string name;
+  std::string type;  // KT-APL "AS" / "NC"
+  bool append = false;
+  bool inspection = false;
+};
+struct FileWriteOp {
+  static constexpr Op kOp = Op::kFileWrite;
+  std::string text;
+};
+struct FileCloseOp {
+  static constexpr Op kOp = Op::kFileClose;
+};
+struct FileOpOp {
+  static constexpr Op kOp = Op::kFileOp;
+  std::string what;  // CPY, DLF, PRT, RCP, USF, ULF
+  std::string args;
+};
+struct EventOp {
+  static constexpr Op kOp = Op::kEvent;
+  std::string text;
+};
+// A tool-table change made by the program: the data set as it now stands (every field of the dialect's
+// form), a process compensation for one pallet (KT-APL TLD with W: `pallet` set, the entry's length and
+// diameter are the compensation's), or the whole table cleared.
+struct ToolDataOp {
+  static constexpr Op kOp = Op::kToolData;
+  bool cleared = false;
+  int pallet = 0;
+  tooltable::ToolEntry entry;
+};
 
 struct Canon {
-  Op op = Op::kRapid;
+  using Payload = std::variant<UnitsOp, RapidOp, LinearOp, ArcOp, ThreadOp, DwellOp, SpindleOp, CoolantOp,
+                               ToolSelectOp, ToolChangeOp, StopOp, EndOp, PalletOp, MessageOp, AlarmOp, AuxOp,
+                               RegridOp, ProbeOp, OutputOp, WaitInputOp, FileOpenOp, FileWriteOp, FileCloseOp,
+                               FileOpOp, EventOp, ToolDataOp>;
+
   int line = 0;  // 1-based line of the block in PROGRAM that caused it (calling block for library code)
+  Payload p;
 
-  // Motion: absolute end position (mm / deg) after all offsets; `used` says which axes the run has used so
-  // far (bit i = Axis i); only those are written.
-  std::array<double, kAxisCount> pos{};
-  uint32_t used = 0;
-  // Signed rotary travel of this block in degrees (rotary axes only, bit i of `travel_mask`).
-  std::array<double, kAxisCount> travel{};
-  uint32_t travel_mask = 0;
-
-  double feed = 0;  // mm/min, deg/min, 1/min (inverse time)
-  FeedMode f_mode = FeedMode::kPerMinute;
-  bool exact_stop = false;  // KT-APL G00 (decelerate at block end)
-
-  // Arcs.
-  std::array<double, 3> center{};  // absolute x y z (mm)
-  bool cw = true;
-  std::string plane;  // "xy", "zx", "yz", or co-axis pairs such as "zu"
-  double turns = 0;   // angle swept, degrees (positive)
-
-  // Units op.
-  bool metric = false;
-
-  // Generic fields used by the other ops (see docs/canonical-commands.md).
-  double value = 0;   // dwell seconds, spindle speed, M number, ...
-  double value2 = 0;  // spindle orientation angle, ...
-  std::string text;   // message / alarm / file name / tool / mode word
-  std::string text2;  // file type / second name / ...
-  int code = 0;       // M code, probe G code, ...
-  bool flag = false;  // optional stop, shuttle at M30, append, ...
-
-  // Back to the defaults above, keeping the strings' buffers (a reused command slot). Keep in step with
-  // the member list (canon_test checks Reset against a fresh Canon).
-  void Reset() {
-    op = Op::kRapid;
-    line = 0;
-    pos = {};
-    used = 0;
-    travel = {};
-    travel_mask = 0;
-    feed = 0;
-    f_mode = FeedMode::kPerMinute;
-    exact_stop = false;
-    center = {};
-    cw = true;
-    plane.clear();
-    turns = 0;
-    metric = false;
-    value = value2 = 0;
-    text.clear();
-    text2.clear();
-    code = 0;
-    flag = false;
+  Op op() const { return static_cast<Op>(p.index()); }
+  template <class T>
+  T& Set() {
+    return p.emplace<T>();
   }
+  template <class T>
+  T& As() {
+    return std::get<T>(p);
+  }
+  template <class T>
+  const T& As() const {
+    return std::get<T>(p);
+  }
+  template <class T>
+  T* If() {
+    return std::get_if<T>(&p);
+  }
+  template <class T>
+  const T* If() const {
+    return std::get_if<T>(&p);
+  }
+  // The end position of the ops that have one (rapid, linear, arc, thread, regrid, probe); nullptr else.
+  Target* target();
+  const Target* target() const { return const_cast<Canon*>(this)->target(); }
+  // The feed of the ops that have one (linear, arc, probe); nullptr else.
+  Feed* feed();
+  const Feed* feed() const { return const_cast<Canon*>(this)->feed(); }
 };
+
+// Each payload sits at the index of its op.
+template <class T>
+inline constexpr bool kPayloadAtItsOp =
+    std::is_same_v<std::variant_alternative_t<static_cast<std::size_t>(T::kOp), Canon::Payload>, T>;
+static_assert(std::variant_size_v<Canon::Payload> == static_cast<std::size_t>(kOpCount));
+static_assert(kPayloadAtItsOp<UnitsOp> && kPayloadAtItsOp<ArcOp> && kPayloadAtItsOp<ThreadOp> &&
+              kPayloadAtItsOp<ToolChangeOp> && kPayloadAtItsOp<ProbeOp> && kPayloadAtItsOp<FileOpOp> &&
+              kPayloadAtItsOp<ToolDataOp>);
 
 // One JSON object on a single line, without the trailing newline (DESIGN §4).
 std::string ToJsonLine(const Canon& c);

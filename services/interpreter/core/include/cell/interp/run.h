@@ -1,0 +1,117 @@
+// A run of a part program: what every dialect's executor implements and every caller (the offline CLI, the
+// station service, tests) drives. Dialects are chosen through the registry (cell/interp/interp.h).
+//
+//   RunOptions opt; opt.program_name = "PUMP341"; opt.program_text = text;
+//   auto run = FindDialect("ktapl")->StartRun(opt);   // or cell::interp::StartRun with opt.dialect
+//   for (Step s;;) {
+//     run->NextInto(s);                                  // blocks only inside Environment callbacks
+//     if (s.kind == Step::kCanon) publish(s.canon);
+//     else if (s.kind == Step::kEnd) break;              // ran to its end
+//     else { report(s.diag); break; }                    // kError: the run stops at the first error
+//   }
+//
+// Memory does not grow with program length: the program text is scanned block by block, and a mapped
+// program (ProgramText::MapFile) gives back the pages the run has passed.
+#pragma once
+
+#include <array>
+#include <functional>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "cell/interp/canon.h"
+#include "cell/interp/program_text.h"
+#include "cell/tooltable/tooltable.h"
+
+namespace cell::interp {
+
+// A program error, printed as PROGRAM:LINE:COL: error: [ALARM] text (brackets omitted when alarm is empty).
+struct Diagnostic {
+  std::string program;
+  int line = 0;  // 1-based
+  int col = 0;   // 1-based
+  std::string alarm;
+  std::string text;
+  std::string Format() const;
+};
+
+// Result of a probe move (contact or break).
+struct ProbeResult {
+  bool already = false;  // already in the requested state at the start: no motion
+  bool event = false;    // the contact (break) happened
+  AxisArray at{};        // machine position where the event happened (mm / deg)
+};
+
+// Queue busters: everything whose result the program reads. The offline CLI answers at once; the service
+// answers over DDS (a blocking call is fine).
+class Environment {
+ public:
+  virtual ~Environment() = default;
+  // A probe move toward contact (contact=true) or break, from `from` to `to` (machine coordinates).
+  virtual ProbeResult Probe(bool contact, const AxisArray& from, const AxisArray& to);
+  // Waits until the discrete inputs match `spec` (the dialect's form). Offline: at once.
+  virtual void WaitInputs(const std::string& spec) { (void)spec; }
+  // Machine state the program may read (KT-APL L3000-L3999, Okuma system variables, ...), by the dialect's
+  // own name ("L3020"); nullopt = not known.
+  virtual std::optional<double> SystemVariable(const std::string& name) {
+    (void)name;
+    return std::nullopt;
+  }
+  // Wall clock: year, month, day, hour, minute, second.
+  virtual std::array<int, 6> Now();
+  // Completion of a file operation the program waits for (close, delete, print, copy): true = finished.
+  virtual bool FileOperation(const Canon& op) {
+    (void)op;
+    return true;
+  }
+};
+
+struct RunOptions {
+  std::string dialect;       // registry name (cell/interp/interp.h StartRun); unused by Dialect::StartRun
+  std::string program_name;  // PROGRAM as given, used in diagnostics
+  std::string program_text;
+  // Alternative to program_text, shared instead of copied; used when set. ProgramText::MapFile maps a file
+  // (long programs: resident memory does not grow with their length).
+  std::shared_ptr<const ProgramText> program;
+  // Subprograms, subroutines and cycles by name -> text; nullopt when unknown. Offline: files in --lib DIR
+  // (NAME, then NAME + each of the dialect's extensions); in the service: the program store.
+  std::function<std::optional<std::string>(const std::string& name)> library;
+  // Called when a program saves a definition for later programs (KT-APL DFS/DFC with SAVE).
+  std::function<void(const std::string& name, const std::string& text)> save;
+  // The station's tool table at the start (the run works on its own copy; Run::Tools() returns it).
+  tooltable::ToolTable tools;
+  // Persistent variables at the start, keyed by the dialect's own names ("L1500", "V1", "E12").
+  std::map<std::string, double> variables;
+  // Machine settings and initial values ("NAME" -> "VALUE"), per dialect; see docs/dialects/<name>.md.
+  std::map<std::string, std::string> params;
+  Environment* env = nullptr;  // nullptr: the offline behaviour (immediate answers, no probe contact)
+};
+
+struct Step {
+  enum Kind { kCanon, kEnd, kError } kind = kEnd;
+  Canon canon;
+  Diagnostic diag;
+};
+
+class Run {
+ public:
+  virtual ~Run() = default;
+  // The next canonical command, or the end of the program, or the (first and last) error.
+  // After kEnd or kError every further call returns the same result.
+  virtual Step Next() {
+    Step s;
+    NextInto(s);
+    return s;
+  }
+  // The same, into a Step the caller keeps between calls (long runs: no per-command construction).
+  virtual void NextInto(Step& s) = 0;
+  // Persistent variables as they stand, keyed by the dialect's own names (KT-APL L1000-L2999 as "L1000",
+  // Okuma common variables "V1"); the station stores them between runs and gives them to the next.
+  virtual std::map<std::string, double> Variables() const = 0;
+  // The tool table as the program left it (KT-APL TLD / ZTB, a lathe's offset writes).
+  virtual tooltable::ToolTable Tools() const = 0;
+};
+
+}  // namespace cell::interp

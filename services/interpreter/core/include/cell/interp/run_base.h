@@ -1,0 +1,56 @@
+// The skeleton every dialect's executor shares: commands a block produces wait in a queue until the caller
+// takes them, and blocks are executed one at a time only when the queue is empty (read-ahead stops at each
+// block, so a queue buster's answer is there before the next block runs).
+#pragma once
+
+#include <utility>
+
+#include "cell/interp/canon_queue.h"
+#include "cell/interp/run.h"
+
+namespace cell::interp {
+
+class RunBase : public Run {
+ public:
+  void NextInto(Step& s) final {
+    while (out_.empty() && !finished_) StepOnce();
+    if (!out_.empty()) {
+      s.kind = Step::kCanon;
+      s.canon = std::move(out_.front());
+      out_.pop_front();
+      return;
+    }
+    s = final_;
+  }
+
+ protected:
+  // Executes one block (or ends the run with End / Fail).
+  virtual void StepOnce() = 0;
+
+  // A new command at the end of the queue, filled in place.
+  template <class T>
+  T& Emit(int line) {
+    return out_.Emplace<T>(line);
+  }
+  void Emit(Canon c) { out_.push_back(std::move(c)); }
+
+  // The run ends after the queued commands: at its end, or at its first error (the run stops there).
+  void End() {
+    finished_ = true;
+    final_.kind = Step::kEnd;
+  }
+  void EndWithError(Diagnostic d) {
+    finished_ = true;
+    final_.kind = Step::kError;
+    final_.diag = std::move(d);
+  }
+  bool finished() const { return finished_; }
+
+  CanonQueue out_;
+
+ private:
+  bool finished_ = false;
+  Step final_;
+};
+
+}  // namespace cell::interp

@@ -1,0 +1,94 @@
+// Balt-System NC-110/210 as the host sees it: file names and kinds, detection evidence, %:NAME program
+// headers (../shared/reference/seed-balt.md). The executor is built by its own issue.
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <array>
+
+#include "cell/interp/balt.h"
+#include "cell/interp/scan.h"
+
+namespace cell::interp {
+namespace {
+
+using namespace scan;
+
+// Three-letter commands only Balt-System uses (MIR, CLS, WAI, SET and MSG are shared with KT-APL or too
+// generic).
+constexpr auto kBaltOnly = std::to_array<std::string_view>(
+    {"DIS", "URT", "UAO", "UOT", "RPT", "UAV", "ERP", "BEQ", "RQU", "DPI", "RQO", "EPP", "TOF",
+     "BGT", "DLO", "UIO", "SCF", "DSA", "DPT", "BLT", "ASC", "BNC", "INP", "DSC", "UCG", "CTL",
+     "BNE", "DLY", "SND", "RQP", "EXE", "DTL", "GTL", "EPT", "BGE", "BLE", "BGR", "BLS", "TCA"});
+
+class Balt final : public UnimplementedRuns {
+ public:
+  std::string_view name() const override { return "balt"; }
+  std::string_view title() const override { return "Balt-System NC-110/210"; }
+  std::vector<std::string_view> aliases() const override {
+    return {"BALT-SYSTEM", "BALT_SYSTEM", "NC110", "NC210"};
+  }
+  MachineKind machine() const override { return MachineKind::kMachiningCentre; }
+  std::vector<FileKind> kinds() const override {
+    return {FileKind::kPartProgram, FileKind::kLibrary, FileKind::kToolTable};
+  }
+  std::vector<std::string_view> extensions() const override { return {".balt", ".nc"}; }
+
+  void CheckName(std::string_view name, FileKind kind) const override {
+    (void)kind;
+    CheckPlainName(name, "Balt-System");
+  }
+
+  FileKind Classify(std::string_view text) const override {
+    (void)text;
+    return FileKind::kPartProgram;
+  }
+
+  void FindEvidence(std::string_view text, std::vector<Evidence>& out) const override {
+    std::vector<std::string_view> lines = Lines(text);
+    for (std::size_t idx = 0; idx < lines.size(); ++idx) {
+      int ln = static_cast<int>(idx) + 1;
+      std::string upper = Upper(Trim(lines[idx]));
+      if (upper.empty()) continue;
+      for (const std::string& m : Mnemonics(upper)) {
+        if (std::find(kBaltOnly.begin(), kBaltOnly.end(), m) != kBaltOnly.end()) {
+          out.push_back({ln, fmt::format("({},...) statement", m), true});
+        }
+      }
+      if (upper.rfind("%:", 0) == 0) out.push_back({ln, "%:NAME program header", true});
+      if (upper[0] == ';') out.push_back({ln, "';' comment line", false});
+      std::string_view body = SkipSequence(upper);
+      // E parameter assignment "E40=..."
+      if (body.size() >= 3 && body[0] == 'E' && IsDigit(body[1])) {
+        std::size_t i = 1;
+        while (i < body.size() && IsDigit(body[i])) ++i;
+        while (i < body.size() && body[i] == ' ') ++i;
+        if (i < body.size() && body[i] == '=') out.push_back({ln, "E parameter assignment", true});
+      }
+    }
+  }
+
+  Heading ReadHeading(std::string_view text, const HeadingOptions& options) const override {
+    (void)options;
+    Heading h;
+    ProgramNameCollector names(h);
+    std::vector<std::string_view> lines = Lines(text);
+    for (std::size_t idx = 0; idx < lines.size(); ++idx) {
+      int ln = static_cast<int>(idx) + 1;
+      std::string upper = Upper(Trim(lines[idx]));
+      if (upper.rfind("%:", 0) != 0) continue;
+      std::string name(Trim(std::string_view(upper).substr(2)));
+      if (name.empty()) continue;
+      if (!names.Add(name, ln, "%:")) continue;
+    }
+    return h;
+  }
+};
+
+}  // namespace
+
+const Dialect& BaltDialect() {
+  static const Balt kBalt;
+  return kBalt;
+}
+
+}  // namespace cell::interp

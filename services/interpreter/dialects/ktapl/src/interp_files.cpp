@@ -1,0 +1,240 @@
+// Files a KT-APL program writes (manual ch. 7, part 2 ch. 9): inspection files (G36 + OIF or MSG,NAM, G37 /
+// CLF), OPF/FWR/CLF data and NC files, and the file operations CPY, DLF, PRT, RCP, USF, ULF with their
+// completion flags L1050-L1054.
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "interp_internal.h"
+
+namespace cell::interp::ktapl {
+
+void KtRun::OpenInspectionFile(std::string name) {
+  OpenFile(name, "AS", false, 1);
+  file_open_ = true;
+  FileOpenOp& c = Out<FileOpenOp>();
+  c.name = std::move(name);
+  c.type = "AS";
+  c.inspection = true;
+}
+
+void KtRun::CloseInspectionFile() {
+  if (file_open_) Out<FileCloseOp>();
+  file_open_ = false;
+  CloseFile();
+}
+
+void KtRun::EmitFileWrite(std::string text) {
+  WriteFile(text);
+  Out<FileWriteOp>().text = std::move(text);
+}
+
+void KtRun::StMsg(const Statement& st, BlockCtx&, bool) {
+  const std::string& body = st.body;
+  auto parts = SplitTopLevel(body, ',');
+  if (parts.size() >= 2 && Upper(Trim(parts[0])) == "NAM") {
+    if (!mode_.inspection_recording) Fail(st.col, "(MSG,NAM,...) NEEDS G36");
+    OpenInspectionFile(ExpandName(Trim(body.substr(parts[0].size() + 1)), st.col));
+    return;
+  }
+  std::string text = Trim(body);
+  Out<MessageOp>().text = text;
+  if (file_open_) {
+    // A message while a file is open is written to it, with an empty line after it.
+    EmitFileWrite(text.substr(0, 80));
+    EmitFileWrite("");
+  }
+}
+
+void KtRun::StOif(const Statement& st, BlockCtx&, bool) {
+  if (!mode_.inspection_recording) Fail(st.col, "OIF NEEDS G36 IN THE BLOCK BEFORE");
+  std::string name = ExpandName(Trim(st.body), st.col);
+  if (name.empty() || name.size() > 32) Fail(st.col, "FILE NAME MUST HAVE 1-32 CHARACTERS");
+  OpenInspectionFile(std::move(name));
+}
+
+void KtRun::StClf(const Statement&, BlockCtx&, bool) {
+  CloseInspectionFile();
+  SetFlag(1050);
+}
+
+void KtRun::StFileOp(const Statement& st, BlockCtx&, bool) {
+  const std::string& m = st.mnemonic;
+  std::string args = st.body;
+  if (m == "USF" || m == "ULF") {
+    std::string name = ExpandName(Trim(args), st.col);
+    if (name.empty()) name = fmt::format("PALLET{:02d}", pallet_);
+    if (name.size() > 28) Fail(st.col, "FIXTURE TABLE FILE NAME EXCEEDS 28 CHARACTERS");
+    args = name + ";FXT";
+  } else {
+    auto parts = SplitTopLevel(args, ',', true);
+    args.clear();
+    for (size_t i = 0; i < parts.size(); ++i) {
+      if (i) args += ',';
+      args += ExpandName(Trim(parts[i]), st.col);
+    }
+  }
+  FileOpOp& op = Out<FileOpOp>();
+  op.what = m;
+  op.args = args;
+  Canon asked;  // the environment is asked about the same operation
+  asked.line = cur_line_;
+  asked.p = FileOpOp{m, args};
+  bool done = env_->FileOperation(asked);
+  if (done) {
+    if (m == "DLF") {
+      files_.erase(Upper(Trim(SplitTopLevel(args, '/')[0])));
+      SetFlag(1051);
+    }
+    if (m == "PRT") SetFlag(1052);
+    if (m == "CPY") SetFlag(1053);
+    if (m == "RCP") SetFlag(1054);
+  }
+}
+
+void KtRun::OpenFile(const std::string& name, const std::string& type, bool append, int col) {
+  std::string key = Upper(name);
+  CloseFile();
+  auto it = files_.find(key);
+  if (it != files_.end() && it->second.type != type) Fail(col, "FILE ALREADY EXISTS");
+  MemFile& f = files_[key];
+  f.type = type;
+  if (!append) f.text.clear();
+  open_file_ = key;
+}
+
+void KtRun::WriteFile(const std::string& line) {
+  if (open_file_.empty()) return;
+  files_[open_file_].text += line + "\n";
+}
+
+void KtRun::CloseFile() {
+  open_file_.clear();
+}
+
+void KtRun::StOpf(const Statement& st, BlockCtx&, bool) {
+  auto parts = SplitTopLevel(st.body, ',', true);
+  std::string name = Trim(parts[0]);
+  std::string type = "AS";
+  bool append = false;
+  auto take_type = [&](std::string& s) {
+    size_t slash = s.rfind('/');
+    if (slash != std::string::npos && s.find('>', slash) == std::string::npos) {
+      type = Upper(Trim(s.substr(slash + 1)));
+      s = Trim(s.substr(0, slash));
+    }
+  };
+  take_type(name);
+  for (size_t i = 1; i < parts.size(); ++i) {
+    std::string f = Upper(Trim(parts[i]));
+    if (!f.empty() && f[0] == 'A' && (f.size() == 1 || f[1] == '/')) {
+      append = true;
+      if (f.size() > 1) type = Trim(f.substr(2));
+    } else if (f == "AS" || f == "NC" || f == "ASCII") {
+      type = f;
+    } else {
+      type = f;
+    }
+  }
+  if (type == "ASCII") type = "AS";
+  if (type != "AS" && type != "NC") Fail(st.col, "ERROR - MUST BE EITHER NC prog OR ASCII");
+  std::string file = ExpandName(name, st.col);
+  if (file.empty() || file.size() > 32) Fail(st.col, "FILE NAME MUST HAVE 1-32 CHARACTERS");
+  OpenFile(file, type, append, st.col);
+  file_open_ = true;
+  FileOpenOp& c = Out<FileOpenOp>();
+  c.name = std::move(file);
+  c.type = type;
+  c.append = append;
+}
+
+void KtRun::StFwr(const Statement& st, BlockCtx&, bool) {
+  if (!file_open_) {
+    if (cer_mas_) return;
+    Fail(st.col, "PROCESS INSPECTION FILE NOT NAMED");
+  }
+  std::string body = st.body;
+  bool cont = false;
+  std::string tb = Trim(body);
+  if (!tb.empty() && tb.back() == ';') {
+    cont = true;
+    tb.pop_back();
+  }
+  std::string line = fwr_pending_;
+  // Fields: "text", Ln / LnI / LnR, or an axis letter; separated by commas (or simply adjacent).
+  size_t i = 0;
+  while (i < tb.size()) {
+    char c = tb[i];
+    if (c == ' ' || c == ',') {
+      ++i;
+      continue;
+    }
+    if (c == '"') {
+      ++i;
+      while (i < tb.size()) {
+        if (tb[i] == '"') {
+          if (i + 1 < tb.size() && tb[i + 1] == '"') {
+            line += '"';
+            i += 2;
+            continue;
+          }
+          break;
+        }
+        line += tb[i++];
+      }
+      if (i >= tb.size()) Fail(st.col, "MISSING \" IN FWR TEXT");
+      ++i;
+      continue;
+    }
+    char u = Up(c);
+    if (u == 'L' && i + 1 < tb.size() && (IsDigit(tb[i + 1]) || tb[i + 1] == '(')) {
+      size_t j = i + 1;
+      if (tb[j] == '(') {
+        int depth = 0;
+        for (; j < tb.size(); ++j) {
+          if (tb[j] == '(') ++depth;
+          if (tb[j] == ')' && --depth == 0) {
+            ++j;
+            break;
+          }
+        }
+      } else {
+        while (j < tb.size() && IsDigit(tb[j])) ++j;
+      }
+      int n = EvalParamRef(tb.substr(i, j - i), st.col);
+      double v;
+      try {
+        v = Param(n);
+      } catch (const ExprError& e) {
+        Fail(st.col, e.text);
+      }
+      char mode = j < tb.size() ? Up(tb[j]) : 0;
+      if (mode == 'I') {
+        line += fmt::format("{}", static_cast<long long>(std::trunc(v)));
+        ++j;
+      } else if (mode == 'R') {
+        line += fmt::format("{}", static_cast<long long>(std::floor(v + 0.5)));
+        ++j;
+      } else {
+        line += FormatKtNumber(v);
+      }
+      i = j;
+      continue;
+    }
+    if (AxisOfLetter(u) >= 0) {
+      line += FormatKtNumber(Letter(u));
+      ++i;
+      continue;
+    }
+    Fail(st.col, "FWR FIELD MUST BE \"text\", A PARAMETER OR AN AXIS LETTER");
+  }
+  if (cont) {
+    fwr_pending_ = line;
+    return;
+  }
+  fwr_pending_.clear();
+  EmitFileWrite(line.substr(0, 80));
+}
+
+}  // namespace cell::interp::ktapl

@@ -1,0 +1,270 @@
+// KT-APL motion (manual ch. 2, 5, 6): offsets (floating zero G98, fixture lines, tool length on Z), dwell,
+// regrid G92, linear moves with rotary and index-table axes, implicit fixture offsets (G49), probe moves
+// G22/G23 (queue busters), and the reset at program end.
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "interp_internal.h"
+
+namespace cell::interp::ktapl {
+
+double KtRun::Offset(int axis) const {
+  double o = g98_[axis];
+  if (active_h_ > 0) o += fixtures_[active_h_].v[axis];
+  if (axis == kZ) o += tool_len_;
+  return o;
+}
+
+void KtRun::ResetAtEnd() {
+  mode_.contouring = false;
+  mode_.plane = geom::Plane::kXY;
+  mode_.coaxis_first = mode_.coaxis_second = false;
+  mode_.incremental = false;
+  mode_.inverse_time = false;
+  mode_.fill_in_bypass = mode_.calculated_offsets = false;
+  mode_.cutter_comp = CutterComp::kOff;
+  mode_.secondary_probe = mode_.b_clamp_off = mode_.c_clamp_off = mode_.wash_flood = mode_.wash_air = false;
+  mode_.coolant = CoolantMode::kOff;
+  mode_.aux_coolant = CoolantMode::kOff;
+  mode_.spindle = SpindleDir::kStop;
+  u88_x_ = 0.254;
+  u88_y_ = 0;
+  mode_.cycle = 0;
+  program_.clear();
+  for (auto& f : *frames_) f.data.locals.clear();
+}
+
+void KtRun::EmitMove(const AxisArray& target, uint32_t moved, bool rapid, double feed, FeedMode fm, bool exact,
+                     const AxisArray& travel, uint32_t travel_mask) {
+  used_ |= moved;
+  bool change = travel_mask != 0;
+  for (int a = 0; a < kAxisCount && !change; ++a) {
+    if ((moved & (1u << a)) && std::fabs(target[a] - pos_[a]) > 1e-9) change = true;
+  }
+  if (!change) return;  // ln 2264: a block that commands the current position does not move
+  for (int a = 0; a < kAxisCount; ++a) {
+    if (moved & (1u << a)) pos_[a] = target[a];
+  }
+  Target* to;
+  if (rapid) {
+    to = &Out<RapidOp>().to;
+  } else {
+    LinearOp& l = Out<LinearOp>();
+    l.feed = {feed, fm, exact};
+    to = &l.to;
+  }
+  to->pos = pos_;
+  to->used = used_;
+  to->travel = travel;
+  to->travel_mask = travel_mask;
+}
+
+void KtRun::Regrid(const Words& words) {
+  for (const auto& w : words) {
+    int a = AxisOfLetter(w.letter);
+    if (a < 0) continue;
+    pos_[a] = IsRotaryAxis(a) ? w.v : ToMm(w.v);
+    used_ |= 1u << a;
+  }
+  RegridOp& c = Out<RegridOp>();
+  c.to.pos = pos_;
+  c.to.used = used_;
+}
+
+void KtRun::FloatingZero(const Words& words, const BlockCodes& k) {
+  if (k.g99) g98_ = {};
+  if (!k.g98) return;
+  for (const auto& w : words) {
+    int a = AxisOfLetter(w.letter);
+    if (a < 0) Fail(w.col, "G98 BLOCK MAY CONTAIN ONLY AXIS WORDS");
+    double v = IsRotaryAxis(a) ? w.v : ToMm(w.v);
+    if (a == kX && mir_x_) v = -v;
+    if (a == kY && mir_y_) v = -v;
+    g98_[a] = 0;
+    g98_[a] = pos_[a] - Offset(a) - v;
+    used_ |= 1u << a;
+  }
+}
+
+void KtRun::Motion(const Words& words, const BlockCodes& k, const BlockMCodes& mc, uint32_t axis_mask,
+                   int motion_col, const Word* f, std::optional<double> block_feed) {
+  const uint32_t rotary_mask = (1u << kA) | (1u << kB) | (1u << kC);
+  if (k.dwell) {
+    if (axis_mask) Fail(motion_col, "NO AXIS WORDS ALLOWED IN A G04 BLOCK");
+    if (!f) Fail(1, "G04 NEEDS F (DWELL SECONDS)");
+    double secs = std::floor(f->v * 10 + 1e-6) / 10;  // F format 5.1
+    if (secs < 0.1 || secs > 99999.9) Fail(f->col, "G04 DWELL MUST BE F.1-F99999.9 SECONDS");
+    Out<DwellOp>().seconds = secs;
+  } else if (k.g92) {
+    Regrid(words);
+  } else if (k.g98 || k.g99) {
+    FloatingZero(words, k);
+  } else if (mc.m06) {
+    if (selected_tool_.empty()) Fail(mc.after_col, "M06 NEEDS A SELECTED TOOL (T WORD)");
+    // Axis words of the M06 block are ignored (the slides go to the tool change position).
+  } else if (axis_mask || k.arc) {
+    std::optional<double> eff = mode_.inverse_time ? block_feed : feed_;
+    if (mode_.inverse_time && !block_feed && !mc.m25) {
+      Fail(k.arc ? k.arc_col : motion_col, "F MUST BE PROGRAMMED IN EVERY G93 MOTION BLOCK");
+    }
+    if (k.arc) {
+      if (axis_mask & rotary_mask) Fail(k.arc_col, "ROTARY AXIS WORDS ARE NOT ALLOWED IN A CIRCULAR BLOCK");
+      if (mc.m25) Fail(k.arc_col, "M25 IS NOT ALLOWED IN A CIRCULAR BLOCK");
+      if (!eff) Fail(k.arc_col, "NO FEEDRATE PROGRAMMED");
+      if (*eff == 0) Fail(f ? f->col : k.arc_col, "F0 IS NOT ALLOWED IN A CIRCULAR BLOCK");
+      bool cw = k.arc == 2;
+      if (mir_x_ != mir_y_) cw = !cw;
+      double feed = mode_.inverse_time ? *eff : ToMm(*eff);
+      Arc(words, cw, k.arc_col, feed, mode_.inverse_time ? FeedMode::kInverseTime : FeedMode::kPerMinute);
+    } else {
+      LinearMotion(words, k, mc, axis_mask, motion_col, eff);
+    }
+  }
+}
+
+void KtRun::LinearMotion(const Words& words, const BlockCodes& k, const BlockMCodes& mc, uint32_t axis_mask,
+                         int motion_col, std::optional<double> eff) {
+  const uint32_t rotary_mask = (1u << kA) | (1u << kB) | (1u << kC);
+  AxisArray target = pos_;
+  AxisArray travel{};
+  uint32_t travel_mask = 0;
+  bool b_moves = false;
+  const Word* b_word = nullptr;
+  for (const auto& w : words) {
+    int a = AxisOfLetter(w.letter);
+    if (a < 0) continue;
+    if (IsRotaryAxis(a)) {
+      if (a == kB) b_word = &w;
+      if (a == kB && b_index_ && std::fabs(w.v - std::round(w.v)) > 1e-9) {
+        Fail(w.col, "INDEX TABLE POSITIONS ARE WHOLE DEGREES");
+      }
+      double cur = pos_[a];
+      double t, tr;
+      if (mode_.incremental && !mc.m25) {
+        tr = w.v;
+        t = std::fmod(cur + tr, 360.0);
+        if (t < 0) t += 360.0;
+      } else {
+        t = std::fmod(std::fabs(w.v), 360.0);
+        bool ccw = w.v < 0 || w.neg_zero;
+        tr = ccw ? -std::fmod(cur - t + 360.0, 360.0) : std::fmod(t - cur + 360.0, 360.0);
+        if (std::fabs(tr) < 1e-9 || std::fabs(std::fabs(tr) - 360.0) < 1e-9) tr = 0;
+      }
+      target[a] = t;
+      if (std::fabs(tr) > 1e-9) {
+        travel[a] = tr;
+        travel_mask |= 1u << a;
+        if (a == kB) b_moves = true;
+      }
+      continue;
+    }
+    double v = ToMm(w.v);
+    if (mc.m25) {
+      target[a] = v;  // M25: machine coordinates, every offset bypassed for the block
+      continue;
+    }
+    if ((a == kX && mir_x_) || (a == kY && mir_y_)) v = -v;
+    double off = Offset(a);
+    double prog = pos_[a] - off;
+    target[a] = (mode_.incremental ? prog + v : v) + off;
+  }
+  // G49 implicit fixture offsets follow a G90 G00 move of B to a listed position.
+  if (!mode_.explicit_fixtures && !mode_.incremental && !mode_.contouring && (axis_mask & (1u << kB)) && !mc.m25) {
+    int hit = 0;
+    for (int h = 1; h <= 32; ++h) {
+      if (fixtures_[h].set && fixtures_[h].has_i && std::fabs(fixtures_[h].i - target[kB]) < 1e-6) hit = h;
+    }
+    if (hit != active_h_) {
+      // Linear targets in this block are re-based on the new offsets.
+      for (int a : {kX, kY, kZ}) {
+        if (!(axis_mask & (1u << a))) continue;
+        double old_off = Offset(a);
+        double prog = target[a] - old_off;
+        int save = active_h_;
+        active_h_ = hit;
+        target[a] = prog + Offset(a);
+        active_h_ = save;
+      }
+      active_h_ = hit;
+    }
+  }
+  bool rapid = mc.m25 || (eff && *eff == 0);
+  const uint32_t linear_mask = axis_mask & ~rotary_mask;
+  if (b_index_ && (axis_mask & (1u << kB)) && !rapid) {
+    if (linear_mask || (axis_mask & ((1u << kA) | (1u << kC)))) {
+      Fail(b_word->col, "INDEX TABLE MOVES WITH OTHER AXES REQUIRE F0");
+    }
+    rapid = true;  // an index-only block is forced to F0 for the block
+  }
+  if (!rapid && !eff) Fail(motion_col, "NO FEEDRATE PROGRAMMED");
+  double feed = 0;
+  FeedMode fm = FeedMode::kPerMinute;
+  if (!rapid) {
+    bool linear_moves = false;
+    for (int a = 0; a < kAxisCount; ++a) {
+      if (!IsRotaryAxis(a) && (linear_mask & (1u << a)) && std::fabs(target[a] - pos_[a]) > 1e-9) {
+        linear_moves = true;
+      }
+    }
+    if (mode_.inverse_time) {
+      fm = FeedMode::kInverseTime;
+      feed = *eff;
+    } else if (!linear_moves && travel_mask) {
+      fm = FeedMode::kDegPerMinute;
+      feed = *eff;
+    } else {
+      feed = ToMm(*eff);
+    }
+  }
+  const bool exact = !mode_.contouring;
+  if (k.probe) {
+    ProbeMove(k, axis_mask, target, rapid, feed, fm);
+  } else if (b_moves && b_index_ && (axis_mask & (1u << kZ)) && std::fabs(target[kZ] - pos_[kZ]) > 1e-9) {
+    // Index B (with X, Y) first, then Z.
+    AxisArray first = target;
+    first[kZ] = pos_[kZ];
+    EmitMove(first, axis_mask & ~(1u << kZ), rapid, feed, fm, exact, travel, travel_mask);
+    EmitMove(target, 1u << kZ, rapid, feed, fm, exact, {}, 0);
+  } else {
+    EmitMove(target, axis_mask, rapid, feed, fm, exact, travel, travel_mask);
+  }
+}
+
+void KtRun::ProbeMove(const BlockCodes& k, uint32_t axis_mask, const AxisArray& target, bool rapid, double feed,
+                      FeedMode fm) {
+  // G22 (stop on contact) / G23 (stop on break): a queue buster, answered by the Environment.
+  ProbeResult pr = env_->Probe(k.probe_g == 22, pos_, target);
+  ProbeOutcome result;
+  if (pr.already) {
+    machine_[1021] = 1;
+    result = ProbeOutcome::kAlready;
+  } else if (pr.event) {
+    machine_[1021] = 8;
+    result = k.probe_g == 22 ? ProbeOutcome::kContact : ProbeOutcome::kBreak;
+    static const int kOrder[8] = {kX, kY, kZ, kB, kA, kC, kU, kV};
+    for (int i = 0; i < 8; ++i) probe_latch_[i] = pr.at[kOrder[i]];
+    for (int a = 0; a < kAxisCount; ++a) {
+      if (axis_mask & (1u << a)) pos_[a] = pr.at[a];
+    }
+    if (mode_.probe_count == ProbeCount::kContacts && k.probe_g == 22) machine_[1022] += 1;
+    if (mode_.probe_count == ProbeCount::kBreaks && k.probe_g == 23) machine_[1022] += 1;
+  } else {
+    machine_[1021] = 2;
+    result = ProbeOutcome::kNone;
+    for (int a = 0; a < kAxisCount; ++a) {
+      if (axis_mask & (1u << a)) pos_[a] = target[a];
+    }
+  }
+  machine_[1020] = 1;
+  used_ |= axis_mask;
+  ProbeOp& c = Out<ProbeOp>();
+  c.g = k.probe_g;
+  c.feed = {rapid ? 0 : feed, fm, false};
+  c.result = result;
+  c.to.pos = pos_;
+  c.to.used = used_;
+}
+
+}  // namespace cell::interp::ktapl

@@ -1,0 +1,147 @@
+// KT-APL tool data and fixture offsets (manual ch. 6, 7): TLD (through tld.h, the one TLD parser), ZTB,
+// UAT suffix sets, the length and diameter compensation of the active tool, FXC/UFX fixture offset lines.
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "interp_internal.h"
+
+namespace cell::interp::ktapl {
+
+std::string ToolName(double v) {
+  double ip = std::trunc(v + (v >= 0 ? 1e-9 : -1e-9));
+  int suffix = static_cast<int>(std::floor((v - ip) * 10 + 0.5));
+  if (suffix <= 0) return fmt::format("{}", static_cast<long long>(ip));
+  return fmt::format("{}.{}", static_cast<long long>(ip), suffix);
+}
+
+void KtRun::StTld(const Statement& st, BlockCtx&, bool) {
+  TldContext ctx;
+  ctx.metric = metric_;
+  ctx.max_pallet = max_pallet_;
+  ctx.col0 = st.col;
+  ctx.param = [this](int n, int col) {
+    try {
+      return Param(n);
+    } catch (const ExprError& e) {
+      throw TldError{col, e.text};
+    }
+  };
+  TldStatement t;
+  try {
+    // The body's columns: it starts after "(TLD," (statement columns are those of the control-out).
+    ctx.col0 = st.col + 5;
+    t = ParseTld(st.body, ctx);
+  } catch (const TldError& e) {
+    Fail(e.col, e.text);
+  }
+  ToolDataOp data;
+  if (t.process) {
+    // ln 4073: "Before a process compensation is entered either a primary or a suffix compensation must
+    // be entered."
+    if (!tools_.UpsertProcess(*t.process)) {
+      Fail(st.col, "PROCESS COMPENSATION NEEDS A PRIMARY OR SUFFIX ENTRY FIRST");
+    }
+    data.pallet = t.process->pallet;
+    data.entry.tool = t.process->tool;
+    data.entry.length = t.process->length;
+    data.entry.diameter = t.process->diameter;
+  } else {
+    tools_.Upsert(*t.entry);
+    data.entry = *t.entry;
+  }
+  Out<ToolDataOp>() = std::move(data);
+  ApplyTool();
+}
+
+void KtRun::StZtb(const Statement& st, BlockCtx&, bool) {
+  if (!st.has_body) Fail(st.col, "ZTB NEEDS A COMMA AND T AND/OR H");
+  for (const auto& f : SplitTopLevel(st.body, ',')) {
+    std::string k = Upper(Trim(f));
+    if (k == "T") {
+      tools_.Clear();
+      Out<ToolDataOp>().cleared = true;
+    } else if (k == "H") {
+      fixtures_ = {};
+      active_h_ = 0;
+    } else {
+      Fail(st.col, "ZTB TABLES ARE T AND H");
+    }
+  }
+}
+
+void KtRun::StUat(const Statement& st, BlockCtx&, bool) {
+  std::string v = Trim(st.body);
+  if (v.size() != 1 || v[0] < '0' || v[0] > '7') Fail(st.col, "UAT SUFFIX MUST BE 0-7");
+  // ln 6179: G40 must be modal to invoke a suffix compensation.
+  if (mode_.cutter_comp != CutterComp::kOff) {
+    Fail(st.col, "G40 must be modal in order to invoke a Suffix Compensation (UAT)");
+  }
+  uat_ = v[0] - '0';
+  ApplyTool();
+}
+
+void KtRun::ApplyTool() {
+  tool_len_ = tool_dia_ = 0;
+  if (active_tool_.empty()) return;
+  std::string key = active_tool_;
+  if (uat_ > 0) key += "." + std::to_string(uat_);
+  // A process compensation for the pallet on the table is added to the data set (ln 4093-4095).
+  tooltable::ToolTable::Compensation c;
+  if (tools_.Effective(key, pallet_, &c)) {
+    tool_len_ = c.length;
+    tool_dia_ = c.diameter;
+  }
+}
+
+void KtRun::StFxc(const Statement& st, BlockCtx&, bool) {
+  const bool ufx = st.mnemonic == "UFX";
+  std::string b = Upper(st.body);
+  b.erase(std::remove(b.begin(), b.end(), ' '), b.end());
+  b.erase(std::remove(b.begin(), b.end(), ','), b.end());
+  ParsedBlock pb;
+  try {
+    pb = ParseBlock(b, true);
+  } catch (RunError& e) {
+    e.col = st.col;
+    throw;
+  }
+  int h = -1;
+  auto value = [&](const RawWord& w) -> double {
+    if (w.kind == WordKind::kNumber) return ScaleLiteral(w.letter, w.num, metric_, false, false);
+    double v;
+    try {
+      v = Param(w.param);
+    } catch (const ExprError& e) {
+      Fail(st.col, e.text);
+    }
+    return w.kind == WordKind::kNegParam ? -v : v;
+  };
+  for (const auto& w : pb.words) {
+    double v = value(w);
+    if (w.letter == 'H') {
+      h = static_cast<int>(std::floor(v + 0.5));
+      if (h < 1 || h > 32) Fail(st.col, "Error FXC 'H' codes range from 1..32");
+      fixtures_[h].set = true;
+      continue;
+    }
+    if (h < 0) Fail(st.col, "FXC/UFX NEEDS H FIRST");
+    if (w.letter == 'I') {
+      fixtures_[h].has_i = true;
+      fixtures_[h].i = v;
+      continue;
+    }
+    int a = AxisOfLetter(w.letter);
+    if (a < 0) Fail(st.col, "Input Source Error");
+    double mm = IsRotaryAxis(a) ? v : ToMm(v);
+    if (ufx) {
+      // offset = actual position - the given (programmed) position
+      mm = pos_[a] - g98_[a] - (a == kZ ? tool_len_ : 0) - mm;
+    }
+    if (!IsRotaryAxis(a) && std::fabs(mm) > 42949.672) Fail(st.col, "Error axis fixture offset out of range");
+    fixtures_[h].v[a] = mm;
+  }
+}
+
+}  // namespace cell::interp::ktapl
