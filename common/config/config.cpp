@@ -7,6 +7,7 @@
 #include <toml++/toml.h>
 #include <algorithm>
 #include <cerrno>
+#include <cmath>
 #include <cstdlib>
 #include <cstring>
 #include <map>
@@ -14,6 +15,7 @@
 #include <system_error>
 
 #include "cell/error/error.h"
+#include "cell/interp/interp.h"
 
 #ifndef CELL_CONFIG_SOURCE_DIR
 #error "CELL_CONFIG_SOURCE_DIR must name the source tree (set by common/config/CMakeLists.txt)"
@@ -34,11 +36,12 @@ bool IsUnder(const fs::path& p, const fs::path& root) {
   return r == root.end() && q != p.end();
 }
 
+// The dialects a station may be programmed in: the registry's (no other list in the product).
 std::string DialectList() {
   std::string out;
-  for (auto d : kDialects) {
+  for (const interp::Dialect* d : interp::Dialects()) {
     if (!out.empty()) out += ", ";
-    out += d;
+    out += d->name();
   }
   return out;
 }
@@ -82,17 +85,20 @@ double GetNumber(const fs::path& file, const toml::node& n, std::string_view key
   Fail(file, &n, fmt::format("{} must be a number, not {}", key, TypeName(n)));
 }
 
-ToolConfig ParseTool(const fs::path& file, const toml::node& entry, size_t index) {
+tooltable::ToolEntry ParseTool(const fs::path& file, const toml::node& entry, size_t index) {
   const std::string where = fmt::format("[[tools]] entry {}", index + 1);
   const toml::table* t = entry.as_table();
   if (t == nullptr) Fail(file, &entry, fmt::format("{} must be a table", where));
-  static const std::set<std::string, std::less<>> kKeys = {"tool", "socket", "length", "diameter",
-                                                           "life_left_min"};
+  static const std::set<std::string, std::less<>> kKeys = {
+      "tool",        "socket",   "length",   "diameter",    "life_left_min",
+      "length_axis", "x_offset", "z_offset", "nose_radius", "tip"};
   for (auto&& [k, v] : *t) {
     if (!kKeys.contains(k.str())) {
       Fail(file, &v,
-           fmt::format("{}: unknown key '{}' (allowed: tool, socket, length, diameter, life_left_min)", where,
-                       k.str()));
+           fmt::format(
+               "{}: unknown key '{}' (allowed: tool, socket, length, diameter, life_left_min, length_axis, "
+               "x_offset, z_offset, nose_radius, tip)",
+               where, k.str()));
     }
   }
   auto require = [&](std::string_view key) -> const toml::node& {
@@ -100,7 +106,7 @@ ToolConfig ParseTool(const fs::path& file, const toml::node& entry, size_t index
     if (n == nullptr) Fail(file, &entry, fmt::format("{}: missing key '{}'", where, key));
     return *n;
   };
-  ToolConfig tool;
+  tooltable::ToolEntry tool;
   const toml::node& tn = require("tool");
   if (tn.is_integer()) {
     tool.tool = fmt::format("{}", *tn.value<int64_t>());
@@ -121,16 +127,39 @@ ToolConfig ParseTool(const fs::path& file, const toml::node& entry, size_t index
     Fail(file, &sn, fmt::format("{} (tool {}): socket must be an integer in 1..9999", where, tool.tool));
   }
   tool.socket = static_cast<int>(*sn.value<int64_t>());
-  auto non_negative = [&](std::string_view key, double& out) {
-    const toml::node& n = require(key);
-    out = GetNumber(file, n, fmt::format("{} (tool {}): {}", where, tool.tool, key));
-    if (!(out >= 0)) {
-      Fail(file, &n, fmt::format("{} (tool {}): {} = {}: must be >= 0", where, tool.tool, key, out));
+  // Compensations and offsets are signed (the KT-APL manual's example E45 has D-.25); life and nose radius
+  // are not.
+  auto number = [&](std::string_view key, double& out, bool non_negative) {
+    const toml::node* n = t->get(key);
+    if (n == nullptr) return;
+    out = GetNumber(file, *n, fmt::format("{} (tool {}): {}", where, tool.tool, key));
+    if (!std::isfinite(out) || (non_negative && out < 0)) {
+      Fail(file, n,
+           fmt::format("{} (tool {}): {} = {}: must be a {}number", where, tool.tool, key, out,
+                       non_negative ? "non-negative " : "finite "));
     }
   };
-  non_negative("length", tool.length);
-  non_negative("diameter", tool.diameter);
-  non_negative("life_left_min", tool.life_left_min);
+  number("length", tool.length, false);
+  number("diameter", tool.diameter, false);
+  number("life_left_min", tool.life_left_min, true);
+  number("x_offset", tool.x_offset, false);
+  number("z_offset", tool.z_offset, false);
+  number("nose_radius", tool.nose_radius, true);
+  if (const toml::node* n = t->get("tip")) {
+    if (!n->is_integer() || *n->value<int64_t>() < 0 || *n->value<int64_t>() > 9) {
+      Fail(file, n, fmt::format("{} (tool {}): tip must be a tip position code 0..9", where, tool.tool));
+    }
+    tool.tip = static_cast<int>(*n->value<int64_t>());
+  }
+  if (const toml::node* n = t->get("length_axis")) {
+    std::string a = GetString(file, *n, fmt::format("{} (tool {}): length_axis", where, tool.tool));
+    if (a != "X" && a != "Y" && a != "Z") {
+      Fail(file, n,
+           fmt::format("{} (tool {}): length_axis = '{}': must be \"X\", \"Y\" or \"Z\"", where, tool.tool,
+                       a));
+    }
+    tool.length_axis = a[0];
+  }
   return tool;
 }
 
@@ -288,10 +317,12 @@ StationConfig LoadStationFile(const fs::path& file) {
   if (dialect == nullptr)
     Fail(file, sn, fmt::format("[station]: missing key 'dialect' (one of {})", DialectList()));
   cfg.dialect = GetString(file, *dialect, "[station] dialect");
-  if (std::find(std::begin(kDialects), std::end(kDialects), cfg.dialect) == std::end(kDialects)) {
+  const interp::Dialect* d = interp::FindDialect(cfg.dialect);
+  if (d == nullptr) {
     Fail(file, dialect,
          fmt::format("[station] dialect = '{}': must be one of {}", cfg.dialect, DialectList()));
   }
+  cfg.dialect = std::string(d->name());
   if (const toml::node* d = st->get("description"))
     cfg.description = GetString(file, *d, "[station] description");
   if (const toml::node* c = st->get("coded_pallets")) {
@@ -306,7 +337,7 @@ StationConfig LoadStationFile(const fs::path& file) {
     std::map<int, std::string> by_socket;  // socket -> base tool number
     for (size_t i = 0; i < arr->size(); ++i) {
       const toml::node& entry = *arr->get(i);
-      ToolConfig tool = ParseTool(file, entry, i);
+      tooltable::ToolEntry tool = ParseTool(file, entry, i);
       if (auto [it, fresh] = by_tool.emplace(tool.tool, i); !fresh) {
         Fail(file, &entry,
              fmt::format("[[tools]] entry {}: tool {} is already listed in entry {}", i + 1, tool.tool,

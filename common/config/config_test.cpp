@@ -97,9 +97,13 @@ TEST_F(ConfigTest, LoadsStationAndTools) {
   EXPECT_TRUE(s.coded_pallets);
   EXPECT_EQ(s.file, root_ / "etc" / "stations" / "KT09.toml");
   ASSERT_EQ(s.tools.size(), 3u);
-  EXPECT_EQ(s.tools[0], (cell::config::ToolConfig{"1001", 1, 150.5, 25, 120}));
-  EXPECT_EQ(s.tools[1], (cell::config::ToolConfig{"33412", 2, 0, 0, 0}));
-  EXPECT_EQ(s.tools[2], (cell::config::ToolConfig{"33412.5", 2, 10, 12.5, 30.5}));
+  using cell::tooltable::ToolEntry;
+  EXPECT_EQ(s.tools[0],
+            (ToolEntry{.tool = "1001", .socket = 1, .length = 150.5, .diameter = 25, .life_left_min = 120}));
+  EXPECT_EQ(s.tools[1], (ToolEntry{.tool = "33412", .socket = 2}));
+  EXPECT_EQ(
+      s.tools[2],
+      (ToolEntry{.tool = "33412.5", .socket = 2, .length = 10, .diameter = 12.5, .life_left_min = 30.5}));
 }
 
 TEST_F(ConfigTest, OptionalFieldsDefault) {
@@ -166,18 +170,25 @@ TEST_F(ConfigTest, ToolErrors) {
   EXPECT_NE(err("tool = \"1\"\nsocket = 0\nlength = 1\ndiameter = 1\nlife_left_min = 1\n")
                 .find("KT01.toml:6: [[tools]] entry 1 (tool 1): socket must be an integer in 1..9999"),
             std::string::npos);
-  EXPECT_NE(err("tool = \"1\"\nsocket = 1\nlength = -1\ndiameter = 1\nlife_left_min = 1\n")
-                .find("length = -1: must be >= 0"),
+  // Compensations are signed (KT-APL manual example E45: D-.25); life and nose radius are not.
+  EXPECT_EQ(err("tool = \"1\"\nsocket = 1\nlength = -1\ndiameter = -0.25\nlife_left_min = 1\n"), "");
+  EXPECT_NE(err("tool = \"1\"\nsocket = 1\nlength = 1\nlife_left_min = -1\n")
+                .find("life_left_min = -1: must be a non-negative number"),
             std::string::npos);
-  EXPECT_NE(err("tool = \"1\"\nsocket = 1\nlength = 1\nlife_left_min = 1\n")
-                .find("[[tools]] entry 1: missing key 'diameter'"),
+  EXPECT_NE(err("tool = \"1\"\nlength = 1\n").find("[[tools]] entry 1: missing key 'socket'"),
             std::string::npos);
+  EXPECT_NE(err("tool = \"1\"\nsocket = 1\ntip = 10\n").find("tip must be a tip position code 0..9"),
+            std::string::npos);
+  EXPECT_NE(err("tool = \"1\"\nsocket = 1\nlength_axis = \"Q\"\n").find("length_axis = 'Q'"),
+            std::string::npos);
+  EXPECT_EQ(err("tool = \"1\"\nsocket = 1\nx_offset = -1.5\nz_offset = 2\nnose_radius = 0.4\ntip = 3\n"), "");
   EXPECT_NE(err("tool = \"1\"\nsocket = 1\nlength = 1\ndiameter = \"big\"\nlife_left_min = 1\n")
                 .find("diameter must be a number, not a string"),
             std::string::npos);
-  EXPECT_NE(err("tool = \"1\"\nsocket = 1\nlength = 1\ndiameter = 1\nlife_left_min = 1\nwear = 2\n")
-                .find("unknown key 'wear' (allowed: tool, socket, length, diameter, life_left_min)"),
-            std::string::npos);
+  EXPECT_NE(
+      err("tool = \"1\"\nsocket = 1\nlength = 1\ndiameter = 1\nlife_left_min = 1\nwear = 2\n")
+          .find("unknown key 'wear' (allowed: tool, socket, length, diameter, life_left_min, length_axis"),
+      std::string::npos);
   const std::string one = "tool = \"7\"\nsocket = 3\nlength = 1\ndiameter = 1\nlife_left_min = 1\n";
   EXPECT_NE(err(one + "[[tools]]\n" + one).find("[[tools]] entry 2: tool 7 is already listed in entry 1"),
             std::string::npos);

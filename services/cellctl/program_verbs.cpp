@@ -3,6 +3,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "cell/interp/interp.h"
 #include "cell/program_store/metadata.h"
 #include "context.h"
 
@@ -48,7 +49,7 @@ void AddProgramVerbs(CLI::App& app, Context& ctx) {
   auto* name_opt =
       put->add_option("--name", o->name, "stored name (default: the KT-APL NAM, else the file name)");
   put->add_option("--node", o->node, "namespace: HOST or a station id");
-  put->add_option("--dialect", o->dialect, "ktapl, okuma, emco or balt (default: detected)");
+  put->add_option("--dialect", o->dialect, cell::interp::DialectList() + " (default: detected)");
   put->add_option("--type", o->type,
                   "part_program, library, schedule, tool_table, fixture_offsets, inspection, data");
   put->add_flag("--force", o->force, "store a new revision of an existing name");

@@ -6,6 +6,7 @@
 #include "cell/bus/topics.h"
 #include "cell/config/config.h"
 #include "cell/idl/scheduler.h"
+#include "cell/tooltable/wire.h"
 #include "context.h"
 
 namespace cellctl {
@@ -154,15 +155,10 @@ void AddStationVerbs(CLI::App& app, Context& ctx) {
     RequireConfigured(o->id);
     auto t = ctx.Tools(o->id, bus::Millis(3000));
     if (!t) throw Exit{1, "station " + o->id + " has not published a tool table (is it online?)"};
+    // DESIGN §6 keys for every entry; the other dialects' fields where they apply (tooltable::EntryJson).
     nlohmann::json arr = nlohmann::json::array();
-    for (auto& e : t->tools())
-      arr.push_back({{"tool", e.tool().to_string()},
-                     {"socket", e.socket()},
-                     {"length", e.length()},
-                     {"diameter", e.diameter()},
-                     {"life_left_min", e.life_left_min()},
-                     {"worn", e.worn()},
-                     {"broken", e.broken()}});
+    const cell::tooltable::ToolTable table = cell::tooltable::FromWire(*t);
+    for (const auto& e : table.entries()) arr.push_back(cell::tooltable::EntryJson(e));
     Print(ctx, arr, {"tool", "socket", "length", "diameter", "life_left_min", "worn", "broken"});
   });
 

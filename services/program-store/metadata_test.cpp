@@ -10,6 +10,12 @@
 namespace cell::program_store {
 namespace {
 
+const Dialect kNone = nullptr;
+const Dialect kKtapl = interp::FindDialect("ktapl");
+const Dialect kOkuma = interp::FindDialect("okuma");
+const Dialect kEmco = interp::FindDialect("emco");
+const Dialect kBalt = interp::FindDialect("balt");
+
 using ::testing::ElementsAre;
 using ::testing::HasSubstr;
 using ::testing::IsEmpty;
@@ -51,7 +57,7 @@ constexpr const char* kFmsProgram =
 
 TEST(Ktapl, FmsHeadingIsExtracted) {
   Metadata md = ExtractMetadata(kFmsProgram, {});
-  EXPECT_EQ(md.dialect, Dialect::kKtapl);
+  EXPECT_EQ(md.dialect, kKtapl);
   EXPECT_TRUE(md.dialect_detected);
   EXPECT_EQ(md.type, FileType::kPartProgram);
   EXPECT_EQ(md.nam, "GEAR HOUSING");
@@ -83,13 +89,13 @@ TEST(Ktapl, HeadingWarningsAreKeptAsLines) {
   md = ExtractMetadata("%\n(UTL,1)\nN1 M30\n", {});
   EXPECT_EQ(md.type, FileType::kPartProgram);
   EXPECT_THAT(Joined(md.warnings), HasSubstr("line 2: (UTL,...) without (UCY,...)"));
-  md = ExtractMetadata("%\n(UTL,1)\nN1 M30\n", Opts(Dialect::kKtapl, FileType::kLibrary, ""));
+  md = ExtractMetadata("%\n(UTL,1)\nN1 M30\n", Opts(kKtapl, FileType::kLibrary, ""));
   EXPECT_THAT(md.warnings, IsEmpty()) << Joined(md.warnings);
 }
 
 TEST(Ktapl, ToolTableAndLibraryTypes) {
   Metadata tools = ExtractMetadata("(TLD,T12,L5.5,D.5)\n(TLD,T13,L6.,D1.)\n", {});
-  EXPECT_EQ(tools.dialect, Dialect::kKtapl);
+  EXPECT_EQ(tools.dialect, kKtapl);
   EXPECT_EQ(tools.type, FileType::kToolTable);
   Metadata lib = ExtractMetadata("N60 (DFC,G881) !An example\nN70 G1 Z-1. F10.\nN80 (END)\n", {});
   EXPECT_EQ(lib.type, FileType::kLibrary);
@@ -104,7 +110,7 @@ TEST(Ktapl, ToolTableAndLibraryTypes) {
 TEST(Okuma, ProgramNamesAndTypes) {
   Metadata md =
       ExtractMetadata("$A.MIN%\nO1234\nN1 G00 X100 Z100\nNAT01 G81\nN2 M02\nOPP1 (SECOND)\nN3 M02\n", {});
-  EXPECT_EQ(md.dialect, Dialect::kOkuma);
+  EXPECT_EQ(md.dialect, kOkuma);
   EXPECT_EQ(md.type, FileType::kPartProgram);
   EXPECT_THAT(md.program_names, ElementsAre("O1234", "OPP1"));
 
@@ -113,7 +119,7 @@ TEST(Okuma, ProgramNamesAndTypes) {
   EXPECT_THAT(sub.program_names, ElementsAre("O1000"));
 
   Metadata sched = ExtractMetadata("N010 PSELECT A.MIN,O100,,Q=20\nN020 VSET V1=V1+1\nEND\n", {});
-  EXPECT_EQ(sched.dialect, Dialect::kOkuma);
+  EXPECT_EQ(sched.dialect, kOkuma);
   EXPECT_EQ(sched.type, FileType::kSchedule);
 
   Metadata dup = ExtractMetadata("O100\nVSET V1=1\nM02\nO100\nM02\n", {});
@@ -124,25 +130,25 @@ TEST(Okuma, ScheduleByNameIsOkumaAndOtherDialectsAreRefused) {
   Metadata md =
       ExtractMetadata("PSELECT A.MIN,O100,,Q=2\nEND\n", Opts(std::nullopt, std::nullopt, "SHAFT-1.SDF"));
   EXPECT_EQ(md.type, FileType::kSchedule);
-  EXPECT_EQ(md.dialect, Dialect::kOkuma);
-  ExpectError([] { ExtractMetadata("END\n", Opts(Dialect::kKtapl, FileType::kSchedule, "")); },
-              Errc::kInvalidArgument, "schedule programs (.SDF) are Okuma");
+  EXPECT_EQ(md.dialect, kOkuma);
+  ExpectError([] { ExtractMetadata("END\n", Opts(kKtapl, FileType::kSchedule, "")); }, Errc::kInvalidArgument,
+              "schedule files are Okuma OSP-E100L files, not ktapl");
 }
 
 TEST(Emco, PercentAndFourDigitBlocksWithCycles) {
   Metadata md = ExtractMetadata(
       "%\nO0010\nN0000 G54\nN0010 G00 X32.000 Z2.000\nN0020 G84 X20.000 Z-30.000 D3=500 F0.2\nN0030 M30\n",
       {});
-  EXPECT_EQ(md.dialect, Dialect::kEmco);
+  EXPECT_EQ(md.dialect, kEmco);
   EXPECT_EQ(md.type, FileType::kPartProgram);
   EXPECT_THAT(md.program_names, ElementsAre("O0010"));
   // Without D parameters: the 4-digit block structure with a lathe cycle is enough.
   Metadata plain =
       ExtractMetadata("%\nN0000 G00 X32 Z2\nN0010 G84 X20 Z-30 F0.2\nN0020 G00 X40\nN0030 M30\n", {});
-  EXPECT_EQ(plain.dialect, Dialect::kEmco);
+  EXPECT_EQ(plain.dialect, kEmco);
   // A program may also begin with its O number instead of %.
   Metadata o_first = ExtractMetadata("O0020\nN0000 G00 X32 Z2\nN0010 G86 X20 Z-30 F0.2\nN0020 M30\n", {});
-  EXPECT_EQ(o_first.dialect, Dialect::kEmco);
+  EXPECT_EQ(o_first.dialect, kEmco);
   EXPECT_THAT(o_first.program_names, ElementsAre("O0020"));
   // Mixed block-number widths are not EMCO's N4 format.
   ExpectError(
@@ -157,10 +163,10 @@ TEST(Balt, ProgramHeaderAndStatements) {
       "%:V1ISO\n;VIRTUALIZATION 1 IN ISO PROGR.\nT0.1M6\nE40=110*180/(3.14159*800)\n(UAV, 1, XC, PW, "
       "E40)\nM30\n%\n",
       {});
-  EXPECT_EQ(md.dialect, Dialect::kBalt);
+  EXPECT_EQ(md.dialect, kBalt);
   EXPECT_THAT(md.program_names, ElementsAre("V1ISO"));
   Metadata dis = ExtractMetadata("%\nN1 (DIS,\"TWIST DRILL D6\")\nN2 T1.1 M6 S800\nN237 M30\n%\n", {});
-  EXPECT_EQ(dis.dialect, Dialect::kBalt);
+  EXPECT_EQ(dis.dialect, kBalt);
 }
 
 TEST(Detection, AmbiguousAndUnknownGiveClearErrors) {
@@ -174,53 +180,53 @@ TEST(Detection, AmbiguousAndUnknownGiveClearErrors) {
               Errc::kInvalidArgument, "declare it (--dialect");
   Detection det = DetectDialect("%\n(NAM,MIXED)\nN10 VSET V1=2\n");
   EXPECT_TRUE(det.ambiguous);
-  EXPECT_EQ(det.dialect, Dialect::kNone);
+  EXPECT_EQ(det.dialect, kNone);
 }
 
 TEST(Detection, DeclaredDialectWinsButMismatchWarns) {
-  Metadata md = ExtractMetadata(kFmsProgram, Opts(Dialect::kOkuma, std::nullopt, ""));
-  EXPECT_EQ(md.dialect, Dialect::kOkuma);
+  Metadata md = ExtractMetadata(kFmsProgram, Opts(kOkuma, std::nullopt, ""));
+  EXPECT_EQ(md.dialect, kOkuma);
   EXPECT_FALSE(md.dialect_detected);
   EXPECT_THAT(Joined(md.warnings), HasSubstr("declared dialect okuma, but the content looks like ktapl"));
   // A plain G-code file is fine once the dialect is declared.
-  Metadata plain = ExtractMetadata("G0 X0\nM30\n", Opts(Dialect::kEmco, std::nullopt, ""));
-  EXPECT_EQ(plain.dialect, Dialect::kEmco);
+  Metadata plain = ExtractMetadata("G0 X0\nM30\n", Opts(kEmco, std::nullopt, ""));
+  EXPECT_EQ(plain.dialect, kEmco);
   EXPECT_THAT(plain.warnings, IsEmpty());
 }
 
 TEST(Detection, StationDialectIsTheFallback) {
   ExtractOptions kt;
-  kt.namespace_dialect = Dialect::kKtapl;
+  kt.namespace_dialect = kKtapl;
   // Nothing dialect-specific: the station's dialect.
   Metadata plain = ExtractMetadata("N10 G0 X1. F0\nN20 M30\n", kt);
-  EXPECT_EQ(plain.dialect, Dialect::kKtapl);
+  EXPECT_EQ(plain.dialect, kKtapl);
   EXPECT_EQ(plain.type, FileType::kPartProgram);
   EXPECT_THAT(plain.warnings, IsEmpty());
   // A clear detection wins over the station.
   Metadata okuma = ExtractMetadata("O100\nVSET V1=1\nM02\n", kt);
-  EXPECT_EQ(okuma.dialect, Dialect::kOkuma);
+  EXPECT_EQ(okuma.dialect, kOkuma);
   // Ambiguous, and the station's dialect is one of the candidates: taken, with a warning.
   Metadata mixed = ExtractMetadata("%\n(NAM,MIXED)\nN10 VSET V1=2\nN20 M30\n", kt);
-  EXPECT_EQ(mixed.dialect, Dialect::kKtapl);
+  EXPECT_EQ(mixed.dialect, kKtapl);
   EXPECT_THAT(Joined(mixed.warnings), HasSubstr("took ktapl, the dialect of the station namespace"));
   // Ambiguous between two others: still an error.
   ExtractOptions emco;
-  emco.namespace_dialect = Dialect::kEmco;
+  emco.namespace_dialect = kEmco;
   ExpectError([&] { ExtractMetadata("%\n(NAM,MIXED)\nN10 VSET V1=2\nN20 M30\n", emco); },
               Errc::kInvalidArgument, "cannot tell the dialect");
   // Plain text stays data.
   Metadata data = ExtractMetadata("just some notes\n", kt);
   EXPECT_EQ(data.type, FileType::kData);
-  EXPECT_EQ(data.dialect, Dialect::kNone);
+  EXPECT_EQ(data.dialect, kNone);
 }
 
 TEST(Detection, PlainTextIsData) {
   Metadata md = ExtractMetadata("part,feature,nominal,actual\n1,BORE A,25.000,25.004\n", {});
   EXPECT_EQ(md.type, FileType::kData);
-  EXPECT_EQ(md.dialect, Dialect::kNone);
+  EXPECT_EQ(md.dialect, kNone);
   Metadata insp = ExtractMetadata("G26 X1\n", Opts(std::nullopt, FileType::kInspection, ""));
   EXPECT_EQ(insp.type, FileType::kInspection);
-  EXPECT_EQ(insp.dialect, Dialect::kNone);
+  EXPECT_EQ(insp.dialect, kNone);
 }
 
 TEST(Text, BinaryContentIsRejected) {
@@ -236,60 +242,59 @@ TEST(Text, BinaryContentIsRejected) {
 }
 
 TEST(Names, KtaplRules) {
-  ValidateName("GEAR HOUSING", FileType::kPartProgram, Dialect::kKtapl);
-  ValidateName("PALLET38;FXT", FileType::kFixtureOffsets, Dialect::kKtapl);
-  ValidateName("PALLET38;FXT", FileType::kFixtureOffsets, Dialect::kNone);
-  ValidateName("MFD;SYS", FileType::kData, Dialect::kKtapl);
-  ValidateName(std::string(32, 'A'), FileType::kPartProgram, Dialect::kKtapl);
-  ValidateName(std::string(28, 'B') + ";FXT", FileType::kFixtureOffsets, Dialect::kKtapl);
-  ExpectError([] { ValidateName("", FileType::kPartProgram, Dialect::kKtapl); }, Errc::kInvalidArgument,
+  ValidateName("GEAR HOUSING", FileType::kPartProgram, kKtapl);
+  ValidateName("PALLET38;FXT", FileType::kFixtureOffsets, kKtapl);
+  ValidateName("PALLET38;FXT", FileType::kFixtureOffsets, kNone);
+  ValidateName("MFD;SYS", FileType::kData, kKtapl);
+  ValidateName(std::string(32, 'A'), FileType::kPartProgram, kKtapl);
+  ValidateName(std::string(28, 'B') + ";FXT", FileType::kFixtureOffsets, kKtapl);
+  ExpectError([] { ValidateName("", FileType::kPartProgram, kKtapl); }, Errc::kInvalidArgument,
               "empty KT-APL name");
-  ExpectError([] { ValidateName(std::string(33, 'A'), FileType::kPartProgram, Dialect::kKtapl); },
+  ExpectError([] { ValidateName(std::string(33, 'A'), FileType::kPartProgram, kKtapl); },
               Errc::kInvalidArgument, "too long: 33 characters");
-  ExpectError([] { ValidateName(std::string(29, 'B') + ";FXT", FileType::kFixtureOffsets, Dialect::kKtapl); },
+  ExpectError([] { ValidateName(std::string(29, 'B') + ";FXT", FileType::kFixtureOffsets, kKtapl); },
               Errc::kInvalidArgument, "at most 28");
-  ExpectError([] { ValidateName("PUMP,341", FileType::kPartProgram, Dialect::kKtapl); },
-              Errc::kInvalidArgument, "contains a comma");
-  ExpectError([] { ValidateName("A;TOOLONG", FileType::kPartProgram, Dialect::kKtapl); },
-              Errc::kInvalidArgument, "extension after ';'");
-  ExpectError([] { ValidateName("PALLET38", FileType::kFixtureOffsets, Dialect::kKtapl); },
-              Errc::kInvalidArgument, "must end in ;FXT");
-  ExpectError([] { ValidateName(" LEAD", FileType::kPartProgram, Dialect::kKtapl); }, Errc::kInvalidArgument,
+  ExpectError([] { ValidateName("PUMP,341", FileType::kPartProgram, kKtapl); }, Errc::kInvalidArgument,
+              "contains a comma");
+  ExpectError([] { ValidateName("A;TOOLONG", FileType::kPartProgram, kKtapl); }, Errc::kInvalidArgument,
+              "extension after ';'");
+  ExpectError([] { ValidateName("PALLET38", FileType::kFixtureOffsets, kKtapl); }, Errc::kInvalidArgument,
+              "must end in ;FXT");
+  ExpectError([] { ValidateName(" LEAD", FileType::kPartProgram, kKtapl); }, Errc::kInvalidArgument,
               "leading or trailing spaces");
-  ExpectError([] { ValidateName("A*", FileType::kPartProgram, Dialect::kKtapl); }, Errc::kInvalidArgument,
-              "wildcard");
-  ExpectError([] { ValidateName("A/B", FileType::kPartProgram, Dialect::kKtapl); }, Errc::kInvalidArgument,
+  ExpectError([] { ValidateName("A*", FileType::kPartProgram, kKtapl); }, Errc::kInvalidArgument, "wildcard");
+  ExpectError([] { ValidateName("A/B", FileType::kPartProgram, kKtapl); }, Errc::kInvalidArgument,
               "path separator");
-  ExpectError([] { ValidateName("A\tB", FileType::kPartProgram, Dialect::kKtapl); }, Errc::kInvalidArgument,
+  ExpectError([] { ValidateName("A\tB", FileType::kPartProgram, kKtapl); }, Errc::kInvalidArgument,
               "non-printable");
-  ExpectError([] { ValidateName("A#B", FileType::kPartProgram, Dialect::kKtapl); }, Errc::kInvalidArgument,
+  ExpectError([] { ValidateName("A#B", FileType::kPartProgram, kKtapl); }, Errc::kInvalidArgument,
               "contains '#'");
 }
 
 TEST(Names, OkumaEmcoBaltAndGenericRules) {
-  ValidateName("A.MIN", FileType::kPartProgram, Dialect::kOkuma);
-  ValidateName("SHAFT-1.SDF", FileType::kSchedule, Dialect::kOkuma);
-  ValidateName("SHAFT-ABC.SUB", FileType::kLibrary, Dialect::kOkuma);
-  ValidateName(std::string(16, 'P'), FileType::kPartProgram, Dialect::kOkuma);
-  ExpectError([] { ValidateName("1SHAFT.MIN", FileType::kPartProgram, Dialect::kOkuma); },
-              Errc::kInvalidArgument, "must begin with a letter");
-  ExpectError([] { ValidateName(std::string(17, 'P') + ".MIN", FileType::kPartProgram, Dialect::kOkuma); },
+  ValidateName("A.MIN", FileType::kPartProgram, kOkuma);
+  ValidateName("SHAFT-1.SDF", FileType::kSchedule, kOkuma);
+  ValidateName("SHAFT-ABC.SUB", FileType::kLibrary, kOkuma);
+  ValidateName(std::string(16, 'P'), FileType::kPartProgram, kOkuma);
+  ExpectError([] { ValidateName("1SHAFT.MIN", FileType::kPartProgram, kOkuma); }, Errc::kInvalidArgument,
+              "must begin with a letter");
+  ExpectError([] { ValidateName(std::string(17, 'P') + ".MIN", FileType::kPartProgram, kOkuma); },
               Errc::kInvalidArgument, "at most 16");
-  ExpectError([] { ValidateName("MD1:A.MIN", FileType::kPartProgram, Dialect::kOkuma); },
-              Errc::kInvalidArgument, "device prefixes");
-  ExpectError([] { ValidateName("A B.MIN", FileType::kPartProgram, Dialect::kOkuma); },
-              Errc::kInvalidArgument, "contains ' '");
-  ValidateName("O0010", FileType::kPartProgram, Dialect::kEmco);
-  ValidateName("turn-1.nc", FileType::kPartProgram, Dialect::kEmco);
-  ExpectError([] { ValidateName(std::string(33, 'E'), FileType::kPartProgram, Dialect::kEmco); },
-              Errc::kInvalidArgument, "at most 32");
-  ExpectError([] { ValidateName("V1 ISO", FileType::kPartProgram, Dialect::kBalt); }, Errc::kInvalidArgument,
+  ExpectError([] { ValidateName("MD1:A.MIN", FileType::kPartProgram, kOkuma); }, Errc::kInvalidArgument,
+              "device prefixes");
+  ExpectError([] { ValidateName("A B.MIN", FileType::kPartProgram, kOkuma); }, Errc::kInvalidArgument,
               "contains ' '");
-  ValidateName("inspection run 7; pallet 3, op 10.txt", FileType::kInspection, Dialect::kNone);
-  ValidateName(std::string(128, 'd'), FileType::kData, Dialect::kNone);
-  ExpectError([] { ValidateName(std::string(129, 'd'), FileType::kData, Dialect::kNone); },
-              Errc::kInvalidArgument, "too long");
-  ExpectError([] { ValidateName("", FileType::kData, Dialect::kNone); }, Errc::kInvalidArgument, "empty");
+  ValidateName("O0010", FileType::kPartProgram, kEmco);
+  ValidateName("turn-1.nc", FileType::kPartProgram, kEmco);
+  ExpectError([] { ValidateName(std::string(33, 'E'), FileType::kPartProgram, kEmco); },
+              Errc::kInvalidArgument, "at most 32");
+  ExpectError([] { ValidateName("V1 ISO", FileType::kPartProgram, kBalt); }, Errc::kInvalidArgument,
+              "contains ' '");
+  ValidateName("inspection run 7; pallet 3, op 10.txt", FileType::kInspection, kNone);
+  ValidateName(std::string(128, 'd'), FileType::kData, kNone);
+  ExpectError([] { ValidateName(std::string(129, 'd'), FileType::kData, kNone); }, Errc::kInvalidArgument,
+              "too long");
+  ExpectError([] { ValidateName("", FileType::kData, kNone); }, Errc::kInvalidArgument, "empty");
 }
 
 TEST(Names, TypeFromNameAndParsing) {
@@ -299,10 +304,10 @@ TEST(Names, TypeFromNameAndParsing) {
   EXPECT_EQ(TypeFromName("A.MIN"), FileType::kPartProgram);
   EXPECT_EQ(TypeFromName("GEAR HOUSING"), std::nullopt);
   EXPECT_EQ(TypeFromName(";FXT"), std::nullopt);
-  EXPECT_EQ(ParseDialect("KT-APL"), Dialect::kKtapl);
-  EXPECT_EQ(ParseDialect("okuma"), Dialect::kOkuma);
-  EXPECT_EQ(ParseDialect("emco"), Dialect::kEmco);
-  EXPECT_EQ(ParseDialect("balt"), Dialect::kBalt);
+  EXPECT_EQ(ParseDialect("KT-APL"), kKtapl);
+  EXPECT_EQ(ParseDialect("okuma"), kOkuma);
+  EXPECT_EQ(ParseDialect("emco"), kEmco);
+  EXPECT_EQ(ParseDialect("balt"), kBalt);
   ExpectError([] { ParseDialect("fanuc"); }, Errc::kInvalidArgument, "unknown dialect 'fanuc'");
   EXPECT_EQ(ParseFileType("fxt"), FileType::kFixtureOffsets);
   EXPECT_EQ(ParseFileType("part_program"), FileType::kPartProgram);

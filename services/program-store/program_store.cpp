@@ -429,7 +429,7 @@ ProgramStore::~ProgramStore() = default;
 
 Dialect ProgramStore::NamespaceDialect(std::string_view node) const {
   auto it = options_.namespace_dialects.find(std::string(node));
-  return it == options_.namespace_dialects.end() ? Dialect::kNone : it->second;
+  return it == options_.namespace_dialects.end() ? nullptr : it->second;
 }
 
 bool ProgramStore::HasNamespace(std::string_view node) const {
@@ -755,9 +755,8 @@ void ProgramStore::BeginPut(const std::string& stream_id, const PutRequest& head
   if (header.name.empty()) Fail(Errc::kInvalidArgument, "empty file name");
   // Check the name now when its rules are already known (declared or implied by the extension).
   std::optional<FileType> type = header.type ? header.type : TypeFromName(header.name);
-  if (header.dialect || type == FileType::kFixtureOffsets) {
-    ValidateName(header.name, type.value_or(FileType::kPartProgram),
-                 header.dialect.value_or(Dialect::kKtapl));
+  if (header.dialect || (type && OwnerOf(*type) != nullptr)) {
+    ValidateName(header.name, type.value_or(FileType::kPartProgram), header.dialect.value_or(nullptr));
   }
   {
     Transaction tx(db, Transaction::Mode::kDeferred);

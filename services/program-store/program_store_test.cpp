@@ -22,6 +22,10 @@
 namespace cell::program_store {
 namespace {
 
+const Dialect kNoDialect = nullptr;
+const Dialect kKtapl = interp::FindDialect("ktapl");
+const Dialect kOkuma = interp::FindDialect("okuma");
+
 namespace fs = std::filesystem;
 using ::testing::ElementsAre;
 using ::testing::HasSubstr;
@@ -120,7 +124,7 @@ TEST(ProgramStore, PutGetShowRoundTrip) {
   EXPECT_EQ(put.file.head_revision, 1u);
   EXPECT_EQ(put.file.sha256, Sha256Hex(kGear));
   EXPECT_EQ(put.file.metadata.type, FileType::kPartProgram);
-  EXPECT_EQ(put.file.metadata.dialect, Dialect::kKtapl);
+  EXPECT_EQ(put.file.metadata.dialect, kKtapl);
   EXPECT_EQ(put.file.metadata.nam, "GEAR HOUSING");
   EXPECT_THAT(put.file.metadata.utl, ElementsAre("12", "3"));
   EXPECT_EQ(put.file.metadata.lines, 6u);
@@ -175,7 +179,7 @@ TEST(ProgramStore, NamespacesAndDialectNames) {
   PutRequest fxt = Req("KT01", "PALLET38;FXT", "(FXC,H1 I0 X-.0012 Y.0030)\n");
   PutResult r = ps.Put(fxt);
   EXPECT_EQ(r.file.metadata.type, FileType::kFixtureOffsets);
-  EXPECT_EQ(r.file.metadata.dialect, Dialect::kKtapl);
+  EXPECT_EQ(r.file.metadata.dialect, kKtapl);
   EXPECT_EQ(ps.Get("KT01", "PALLET38;FXT").content, fxt.content);
 
   PutResult okuma = ps.Put(Req("OK01", "SHAFT-1.SDF", "N010 PSELECT A.MIN,O100,,Q=20\nEND\n"));
@@ -197,14 +201,14 @@ TEST(ProgramStore, NamespacesAndDialectNames) {
 TEST(ProgramStore, StationNamespacesLendTheirDialect) {
   TempDir tmp;
   StoreOptions opts = Options(tmp.path());
-  opts.namespace_dialects = {{"KT01", Dialect::kKtapl}, {"OK01", Dialect::kOkuma}};
+  opts.namespace_dialects = {{"KT01", kKtapl}, {"OK01", kOkuma}};
   ProgramStore ps(opts);
-  EXPECT_EQ(ps.NamespaceDialect("KT01"), Dialect::kKtapl);
-  EXPECT_EQ(ps.NamespaceDialect("HOST"), Dialect::kNone);
+  EXPECT_EQ(ps.NamespaceDialect("KT01"), kKtapl);
+  EXPECT_EQ(ps.NamespaceDialect("HOST"), kNoDialect);
   const std::string plain = "N10 G0 X1. F0\nN20 M30\n";
   PutResult kt = ps.Put(Req("KT01", "PLAIN", plain));
-  EXPECT_EQ(kt.file.metadata.dialect, Dialect::kKtapl);
-  EXPECT_EQ(ps.Put(Req("OK01", "PLAIN", plain)).file.metadata.dialect, Dialect::kOkuma);
+  EXPECT_EQ(kt.file.metadata.dialect, kKtapl);
+  EXPECT_EQ(ps.Put(Req("OK01", "PLAIN", plain)).file.metadata.dialect, kOkuma);
   ExpectError([&] { ps.Put(Req("HOST", "PLAIN", plain)); }, Errc::kInvalidArgument,
               "cannot tell the dialect");
   // Copying to HOST keeps the dialect the file was stored with.
@@ -216,9 +220,9 @@ TEST(ProgramStore, StationNamespacesLendTheirDialect) {
                      .force = false,
                      .idempotency_key = ""})
                 .file.metadata.dialect,
-            Dialect::kKtapl);
+            kKtapl);
   StoreOptions bad = Options(tmp.path());
-  bad.namespace_dialects = {{"KT07", Dialect::kKtapl}};
+  bad.namespace_dialects = {{"KT07", kKtapl}};
   ExpectError([&] { ProgramStore x(bad); }, Errc::kInvalidArgument, "not a configured station namespace");
 }
 
@@ -683,7 +687,7 @@ TEST(ProgramStore, BrokenStreamsLeaveTheStoreAsItWas) {
     // Checked at begin: existing without force, bad declared name, unknown namespace, inline content.
     ExpectError([&] { ps.BeginPut("s0", Req("HOST", "GEAR HOUSING", "")); }, Errc::kAlreadyExists, "--force");
     PutRequest bad = Req("HOST", "BAD,NAME", "");
-    bad.dialect = Dialect::kKtapl;
+    bad.dialect = kKtapl;
     ExpectError([&] { ps.BeginPut("s0", bad); }, Errc::kInvalidArgument, "comma");
     ExpectError([&] { ps.BeginPut("s0", Req("XX", "A", "")); }, Errc::kNotFound, "unknown namespace");
     ExpectError([&] { ps.BeginPut("s0", Req("HOST", "A", "x")); }, Errc::kInvalidArgument, "in chunks");

@@ -5,14 +5,14 @@
 #include <string>
 
 #include "cell/error/error.h"
-#include "cell/interp/interp.h"
 #include "cell/interp/ktapl.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   std::string text(reinterpret_cast<const char*>(data), size);
-  (void)cell::interp::ExtractKtaplMetadata(text);
+  const cell::interp::Dialect& ktapl = cell::interp::KtaplDialect();
+  (void)ktapl.ReadHeading(text, {});
   try {
-    (void)cell::interp::ParseKtaplToolTable(text);
+    (void)ktapl.ParseToolTable(text, "fuzz", {});
   } catch (const cell::Error&) {
   }
   cell::interp::RunOptions opt;
@@ -22,22 +22,22 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   // Tools with a diameter, so that programs selecting T1/T2 (as the cc_* corpus seeds do) run cutter
   // compensation with a real offset, including a negative (preset) one.
   {
-    cell::interp::ToolEntry t1;
+    cell::tooltable::ToolEntry t1;
     t1.tool = "1";
     t1.socket = 1;
     t1.length = 100;
     t1.diameter = 10;
-    cell::interp::ToolEntry t2 = t1;
+    cell::tooltable::ToolEntry t2 = t1;
     t2.tool = "2";
     t2.socket = 2;
     t2.diameter = -0.5;
-    opt.tools = {t1, t2};
+    opt.tools = cell::tooltable::ToolTable({t1, t2});
   }
   opt.library = [](const std::string& name) -> std::optional<std::string> {
     if (name == "LIBSUB") return std::string("(DFS,LIBSUB)\nG91X1.F0\n(END)\n");
     return std::nullopt;
   };
-  auto run = cell::interp::StartRun(opt);
+  auto run = ktapl.StartRun(opt);
   for (int i = 0; i < 2000; ++i) {
     cell::interp::Step s = run->Next();
     if (s.kind != cell::interp::Step::kCanon) break;

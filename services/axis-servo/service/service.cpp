@@ -4,6 +4,7 @@
 
 #include "cell/bus/topics.h"
 #include "cell/health/health.h"
+#include "cell/tooltable/wire.h"
 
 namespace cell::servo {
 
@@ -91,11 +92,9 @@ Service::Service(bus::Participant& p, MachineConfig cfg, ClockKind clock)
       tools_r_(p, bus::topics::kToolTable, bus::QosKind::kState,
                [this](const cell::ToolTable& t, const bus::SampleInfo&) {
                  if (t.station() != station_) return;
-                 std::vector<ToolSlot> slots;
-                 for (auto& e : t.tools())
-                   if (e.socket() > 0) slots.push_back({e.tool().to_string(), e.socket()});
+                 tooltable::ToolTable table = tooltable::FromWire(t);
                  std::lock_guard lk(tools_mu_);
-                 pending_tools_ = std::move(slots);
+                 pending_tools_ = std::move(table);
                }),
       control_r_(p, bus::topics::kServoControl, bus::QosKind::kState,
                  [this](const cell::ServoControl& c, const bus::SampleInfo&) {

@@ -284,7 +284,7 @@ MachineConfig ParseMachineConfig(std::string_view text, const std::string& sourc
     for (size_t i = 0; i < tools->size(); ++i) {
       const toml::table* t = (*tools)[i].as_table();
       if (!t) continue;
-      ToolSlot slot;
+      tooltable::ToolEntry slot;
       if (auto s = (*t)["tool"].value_exact<std::string>())
         slot.tool = *s;
       else if (auto n = (*t)["tool"].value_exact<int64_t>())
@@ -298,7 +298,7 @@ MachineConfig ParseMachineConfig(std::string_view text, const std::string& sourc
                     fmt::format("{}: tools[{}].socket: {} is outside the magazine's sockets [1, {}]", source,
                                 i, *sock, m.magazine_sockets));
       slot.socket = static_cast<int>(*sock);
-      m.tools.push_back(slot);
+      m.tools.Upsert(slot);
     }
   }
   return m;

@@ -112,10 +112,12 @@ Machine::Machine(MachineConfig config, ClockKind clock)
   events_.reserve(64);
 }
 
-void Machine::SetToolTable(const std::vector<ToolSlot>& sockets) {
+void Machine::SetToolTable(const tooltable::ToolTable& table) {
   magazine_.clear();
-  for (const auto& s : sockets)
-    if (s.tool != spindle_tool_ || spindle_tool_.empty()) magazine_[s.socket] = s.tool;
+  for (const auto& e : table.entries()) {
+    if (e.socket <= 0) continue;  // a manual tool, or not loaded
+    if (e.tool != spindle_tool_ || spindle_tool_.empty()) magazine_[e.socket] = e.tool;
+  }
 }
 
 void Machine::SetPartModel(int pallet, PartModel model) {

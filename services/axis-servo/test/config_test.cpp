@@ -22,7 +22,7 @@ TEST(Config, ShippedStationsLoad) {
     EXPECT_GT(c.axes[kB].index_increment, 0);
     EXPECT_DOUBLE_EQ(c.in_position, 0.025);
     EXPECT_DOUBLE_EQ(c.servo_period_s, 0.001);
-    EXPECT_FALSE(c.tools.empty());  // from the station's [[tools]]
+    EXPECT_FALSE(c.tools.entries().empty());  // from the station's [[tools]]
   }
   MachineConfig ok = LoadMachineConfig(kStations + "OK01.toml");
   EXPECT_EQ(ok.kind, "lathe");

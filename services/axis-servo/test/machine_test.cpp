@@ -207,7 +207,7 @@ TEST(Clock, VirtualAndRealAgreeOnCycleTime) {
 
 TEST(Devices, ToolChangeFromMagazine) {
   Machine m = Kt();
-  m.SetToolTable({{"1001", 1}, {"1002", 5}});
+  m.SetToolTable(tooltable::ToolTable({{.tool = "1001", .socket = 1}, {.tool = "1002", .socket = 5}}));
   Segment t;
   t.id = 1;
   t.kind = SegmentKind::kToolChange;

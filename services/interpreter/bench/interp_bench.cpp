@@ -26,6 +26,7 @@ std::shared_ptr<const cell::interp::ProgramText> StraightProgram(int blocks) {
 
 long RunAll(const std::shared_ptr<const cell::interp::ProgramText>& text) {
   cell::interp::RunOptions opt;
+  opt.dialect = "ktapl";
   opt.program_name = "bench";
   opt.program = text;
   auto run = cell::interp::StartRun(opt);

@@ -7,6 +7,8 @@
 
 #include "cell/bus/topics.h"
 #include "cell/health/health.h"
+#include "cell/interp/interp.h"
+#include "cell/tooltable/wire.h"
 
 namespace cell::station {
 
@@ -43,18 +45,29 @@ cell::RunState StateFromText(const std::string& s) {
   return cell::RUN_QUEUED;
 }
 
-void SetTarget(cell::MotionSegment& s, const interp::Canon& c) {
+void SetTarget(cell::MotionSegment& s, const interp::Target& t) {
   uint16_t mask = 0;
   for (int i = 0; i < interp::kAxisCount; ++i) {
-    s.target()[static_cast<size_t>(i)] = c.pos[static_cast<size_t>(i)];
-    if (c.used & (1u << i)) mask = static_cast<uint16_t>(mask | (1u << i));
+    s.target()[static_cast<size_t>(i)] = t.pos[static_cast<size_t>(i)];
+    if (t.used & (1u << i)) mask = static_cast<uint16_t>(mask | (1u << i));
   }
   s.axis_mask(mask);
 }
 
-void SetFeed(cell::MotionSegment& s, const interp::Canon& c) {
-  s.feed(c.feed);
-  s.feed_mode(c.f_mode == interp::FeedMode::kPerRev ? 1 : c.f_mode == interp::FeedMode::kInverseTime ? 2 : 0);
+void SetFeed(cell::MotionSegment& s, const interp::Feed& f) {
+  s.feed(f.rate);
+  s.feed_mode(f.mode == interp::FeedMode::kPerRev ? 1 : f.mode == interp::FeedMode::kInverseTime ? 2 : 0);
+  s.exact_stop(f.exact_stop);
+}
+
+cell::ArcPlane PlaneOf(const interp::PlaneAxes& p) {
+  auto base = [](int a) {
+    return a >= interp::kU ? a - interp::kU : a;
+  };  // a co-axis moves like its parallel
+  int first = base(p.first);
+  if (first == interp::kZ) return cell::PLANE_ZX;
+  if (first == interp::kY) return cell::PLANE_YZ;
+  return cell::PLANE_XY;
 }
 
 }  // namespace
@@ -62,46 +75,54 @@ void SetFeed(cell::MotionSegment& s, const interp::Canon& c) {
 std::optional<cell::MotionSegment> ToSegment(const interp::Canon& c) {
   cell::MotionSegment s;
   s.line(c.line);
-  switch (c.op) {
+  switch (c.op()) {
     case interp::Op::kRapid:
       s.kind(cell::SEGMENT_RAPID);
-      SetTarget(s, c);
+      SetTarget(s, c.As<interp::RapidOp>().to);
       s.exact_stop(true);
       return s;
-    case interp::Op::kLinear:
+    case interp::Op::kLinear: {
+      const auto& l = c.As<interp::LinearOp>();
       s.kind(cell::SEGMENT_LINEAR);
-      SetTarget(s, c);
-      SetFeed(s, c);
-      s.exact_stop(c.exact_stop);
+      SetTarget(s, l.to);
+      SetFeed(s, l.feed);
       return s;
+    }
     case interp::Op::kArc: {
+      const auto& a = c.As<interp::ArcOp>();
       s.kind(cell::SEGMENT_ARC);
-      SetTarget(s, c);
-      SetFeed(s, c);
-      s.exact_stop(c.exact_stop);
-      s.center({c.center[0], c.center[1], c.center[2]});
-      s.plane(c.plane == "zx" ? cell::PLANE_ZX : c.plane == "yz" ? cell::PLANE_YZ : cell::PLANE_XY);
-      s.ccw(!c.cw);
+      SetTarget(s, a.to);
+      SetFeed(s, a.feed);
+      s.center({a.center[0], a.center[1], a.center[2]});
+      s.plane(PlaneOf(a.plane));
+      s.ccw(!a.cw);
       // A one-block full circle sweeps 360 degrees with end == start: no extra turn.
-      s.turns(c.turns > 360.0 + 1e-6 ? static_cast<int32_t>(std::floor((c.turns - 1e-6) / 360.0)) : 0);
+      s.turns(a.angle > 360.0 + 1e-6 ? static_cast<int32_t>(std::floor((a.angle - 1e-6) / 360.0)) : 0);
       return s;
     }
     case interp::Op::kDwell:
       s.kind(cell::SEGMENT_DWELL);
-      s.dwell_s(c.value);
+      s.dwell_s(c.As<interp::DwellOp>().seconds);
       return s;
-    case interp::Op::kSpindle:
+    case interp::Op::kSpindle: {
+      const auto& sp = c.As<interp::SpindleOp>();
       s.kind(cell::SEGMENT_SPINDLE);
-      s.spindle_rpm(c.value);
-      s.spindle_mode(c.text == "cw" ? 1 : c.text == "ccw" ? 2 : c.text == "orient" ? 3 : 0);
+      s.spindle_rpm(sp.rpm);
+      s.spindle_mode(sp.dir == interp::SpindleDir::kCw       ? 1
+                     : sp.dir == interp::SpindleDir::kCcw    ? 2
+                     : sp.dir == interp::SpindleDir::kOrient ? 3
+                                                             : 0);
       return s;
-    case interp::Op::kCoolant:
+    }
+    case interp::Op::kCoolant: {
+      interp::CoolantMode m = c.As<interp::CoolantOp>().mode;
       s.kind(cell::SEGMENT_COOLANT);
-      s.coolant(c.text == "off" ? 0 : c.text == "mist" ? 2 : 1);
+      s.coolant(m == interp::CoolantMode::kOff ? 0 : m == interp::CoolantMode::kMist ? 2 : 1);
       return s;
+    }
     case interp::Op::kToolChange:
       s.kind(cell::SEGMENT_TOOL_CHANGE);
-      s.tool(c.text);
+      s.tool(c.As<interp::ToolChangeOp>().tool);
       return s;
     case interp::Op::kPallet:
       s.kind(cell::SEGMENT_PALLET);
@@ -118,8 +139,8 @@ std::optional<cell::MotionSegment> ToSegment(const interp::Canon& c) {
 class Station::Env : public interp::Environment {
  public:
   Env(Station& s, std::stop_token st) : s_(s), st_(std::move(st)) {}
-  interp::ProbeResult Probe(bool contact, const std::array<double, interp::kAxisCount>& from,
-                            const std::array<double, interp::kAxisCount>& to) override {
+  interp::ProbeResult Probe(bool contact, const interp::AxisArray& from,
+                            const interp::AxisArray& to) override {
     (void)from;
     cell::MotionSegment seg;
     seg.kind(cell::SEGMENT_PROBE);
@@ -180,21 +201,13 @@ Station::Station(bus::Participant& p, config::StationConfig cfg, const std::file
     e.socket = static_cast<int>(q.ColumnInt64(1));
     e.length = q.ColumnDouble(2);
     e.diameter = q.ColumnDouble(3);
-    e.life_left_min = static_cast<int>(q.ColumnInt64(4));
+    e.life_left_min = q.ColumnDouble(4);
     e.worn = q.ColumnInt64(5) != 0;
     e.broken = q.ColumnInt64(6) != 0;
     entries.push_back(e);
   }
   if (entries.empty() && db_.QueryInt64("SELECT COUNT(*) FROM runs") == 0) {
-    for (auto& t : cfg_.tools) {
-      tooltable::ToolEntry e;
-      e.tool = t.tool;
-      e.socket = t.socket;
-      e.length = t.length;
-      e.diameter = t.diameter;
-      e.life_left_min = static_cast<int>(t.life_left_min);
-      entries.push_back(e);
-    }
+    entries = cfg_.tools;
   }
   tools_ = tooltable::ToolTable(entries);
   auto v = db_.Prepare("SELECT name, value FROM variables");
@@ -328,12 +341,13 @@ cell::StationReply Station::OnCommand(const cell::StationRequest& r) {
   rep.station(cfg_.id);
   switch (r.op()) {
     case cell::STATION_LOAD_TOOLS: {
-      auto statements = tooltable::ParseTld(r.text().to_string(), "tools");
+      // The station's own tool-table form (KT-APL: a program of TLD statements), on top of the table.
+      const interp::Dialect& dialect = interp::DialectOrThrow(cfg_.dialect);
       std::lock_guard lk(db_mu_);
-      tools_.Merge(statements);
+      tools_ = dialect.ParseToolTable(r.text().to_string(), "tools", tools_);
       SaveTools();
-      spdlog::info("tool table loaded: {} statement(s), {} tools", statements.size(),
-                   tools_.entries().size());
+      spdlog::info("tool table loaded: {} tools, {} process compensations", tools_.entries().size(),
+                   tools_.process_comps().size());
       PublishTools();
       rep.revision(tools_rev_);
       return rep;
@@ -612,11 +626,11 @@ void Station::RunProgram(const Dispatch& d, const std::string& name, std::stop_t
   opt.library = [this, node = d.node](const std::string& lib) {
     return programs_.GetWithFallback(node, lib);
   };
-  opt.tools = InterpTools();
   opt.params["PALLET"] = std::to_string(d.pallet);
   {
     std::lock_guard lk(db_mu_);
-    for (auto& [k, v] : vars_) opt.params[k] = fmt::format("{}", v);
+    opt.tools = tools_;
+    opt.variables = vars_;
   }
   Env env(*this, st);
   opt.env = &env;
@@ -639,10 +653,15 @@ void Station::RunProgram(const Dispatch& d, const std::string& name, std::stop_t
       std::lock_guard lk(status_mu_);
       status_.program(name.substr(0, 64));
       status_.line(c.line);
-      if (c.op == interp::Op::kToolChange) status_.tool(c.text.substr(0, 16));
+      if (auto* t = c.If<interp::ToolChangeOp>()) status_.tool(t->tool.substr(0, 16));
+    }
+    if (c.op() == interp::Op::kThread) {
+      throw Error(Errc::kUnimplemented, fmt::format("{} line {}: thread moves need the lathe servo's "
+                                                    "spindle-synchronised segments",
+                                                    name, c.line));
     }
     if (auto seg = ToSegment(c)) Send(*seg, st);
-    if (c.op == interp::Op::kMessage) spdlog::info("{} line {}: {}", name, c.line, c.text);
+    if (auto* m = c.If<interp::MessageOp>()) spdlog::info("{} line {}: {}", name, c.line, m->text);
     if (std::chrono::steady_clock::now() - last_status > std::chrono::milliseconds(100)) {
       PublishStatus();
       last_status = std::chrono::steady_clock::now();
@@ -783,21 +802,7 @@ void Station::PublishStatus() {
 }
 
 void Station::PublishTools() {
-  cell::ToolTable t;
-  t.station(cfg_.id);
-  t.revision(++tools_rev_);
-  for (auto& e : tools_.entries()) {
-    cell::ToolEntry w;
-    w.tool(e.tool);
-    w.socket(e.socket);
-    w.length(e.length);
-    w.diameter(e.diameter);
-    w.life_left_min(e.life_left_min);
-    w.worn(e.worn);
-    w.broken(e.broken);
-    t.tools().push_back(w);
-  }
-  tools_w_.Write(t);
+  tools_w_.Write(tooltable::ToWire(tools_, cfg_.id, ++tools_rev_));
 }
 
 void Station::PublishVariables() {
@@ -833,23 +838,6 @@ void Station::PublishRun(const Dispatch& d, cell::RunState state, const std::str
     s.finished_ns(health::WallNs());
   s.reason(reason.substr(0, 255));
   run_w_.Write(s);
-}
-
-std::vector<interp::ToolEntry> Station::InterpTools() const {
-  std::lock_guard lk(db_mu_);
-  std::vector<interp::ToolEntry> out;
-  for (auto& e : tools_.entries()) {
-    interp::ToolEntry t;
-    t.tool = e.tool;
-    t.socket = e.socket;
-    t.length = e.length;
-    t.diameter = e.diameter;
-    t.life_min = e.life_left_min;
-    t.worn = e.worn;
-    t.broken = e.broken;
-    out.push_back(t);
-  }
-  return out;
 }
 
 }  // namespace cell::station

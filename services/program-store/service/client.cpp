@@ -66,13 +66,20 @@ nlohmann::json Client::Put(const std::string& name, const std::string& content, 
 }
 
 std::optional<std::string> Client::Get(const std::string& node, const std::string& name, uint32_t revision) {
+  auto f = Fetch(node, name, revision);
+  if (!f) return std::nullopt;
+  return std::move(f->content);
+}
+
+std::optional<Client::File> Client::Fetch(const std::string& node, const std::string& name,
+                                          uint32_t revision) {
   CheckWireName(node, name);
   cell::ProgramRequest req;
   req.op(cell::PROGRAM_GET);
   req.node(node);
   req.name(name);
   req.revision(revision);
-  std::string out;
+  File out;
   uint32_t count = 1;
   for (uint32_t i = 0; i < count; ++i) {
     req.chunk_index(i);
@@ -85,20 +92,27 @@ std::optional<std::string> Client::Get(const std::string& node, const std::strin
     }
     count = r.chunk_count();
     req.revision(r.revision());  // every chunk from the same revision
-    out.append(r.data().begin(), r.data().end());
+    out.content.append(r.data().begin(), r.data().end());
+    if (i == 0) out.info = Info(r);
   }
   return out;
 }
 
 std::optional<std::string> Client::GetWithFallback(const std::string& node, const std::string& name) {
+  auto f = FetchWithFallback(node, name);
+  if (!f) return std::nullopt;
+  return std::move(f->content);
+}
+
+std::optional<Client::File> Client::FetchWithFallback(const std::string& node, const std::string& name) {
   if (node != "HOST") {
     try {
-      if (auto t = Get(node, name)) return t;
+      if (auto f = Fetch(node, name)) return f;
     } catch (const Error& e) {
       if (e.code() != Errc::kNotFound && e.code() != Errc::kInvalidArgument) throw;
     }
   }
-  return Get("HOST", name);
+  return Fetch("HOST", name);
 }
 
 nlohmann::json Client::Show(const std::string& node, const std::string& name) {

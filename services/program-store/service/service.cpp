@@ -114,7 +114,7 @@ cell::ProgramReply Service::Handle(const cell::ProgramRequest& r) {
       if (r.chunk_index() == 0 || cache_.node != node || cache_.name != name ||
           cache_.revision != r.revision()) {
         GetResult g = store_.Get(node, name, r.revision());
-        cache_ = {node, name, g.file.revision, std::move(g.content)};
+        cache_ = {node, name, g.file.revision, std::move(g.content), FileJson(g.file)};
       }
       size_t n = std::max<size_t>(1, (cache_.content.size() + kChunkBytes - 1) / kChunkBytes);
       if (r.chunk_index() >= n) throw Error(Errc::kInvalidArgument, "chunk index past the end of " + name);
@@ -124,7 +124,8 @@ cell::ProgramReply Service::Handle(const cell::ProgramRequest& r) {
       rep.revision(cache_.revision);
       rep.chunk_index(r.chunk_index());
       rep.chunk_count(static_cast<uint32_t>(n));
-      if (r.chunk_index() + 1 == n) cache_ = {};  // do not hold up to 256 MiB between gets
+      if (r.chunk_index() == 0) SetInfo(rep, cache_.info);  // what the file is: its dialect, type, heading
+      if (r.chunk_index() + 1 == n) cache_ = {};            // do not hold up to 256 MiB between gets
       break;
     }
     case cell::PROGRAM_SHOW: {

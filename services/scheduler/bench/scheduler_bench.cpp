@@ -131,7 +131,7 @@ void RunScheduler(benchmark::State& state, bool durable, int pallets) {
     for (int r = 0; r < kRoutes; ++r) {
       std::string utl;
       for (const auto& t : cell.op_tools[static_cast<std::size_t>(r)]) utl += (utl.empty() ? "" : ",") + t;
-      progs.Put(fmt::format("P{}", r), fmt::format("%\n(UTL,{})\n(UCY,300)\nN10M30\n", utl));
+      progs.Put(fmt::format("P{}", r), fmt::format("%\n(UTL,{})\n(UCY,300)\nN10M30\n", utl), "ktapl");
       OpSpec op{stations, {fmt::format("P{}", r)}};
       s->DefineRoute(fmt::format("define-{}", r), RouteSpec{fmt::format("R{}", r), {op}});
     }

@@ -9,6 +9,7 @@
 #include "cell/config/config.h"
 #include "cell/scheduler/json.h"
 #include "cell/scheduler/route.h"
+#include "cell/tooltable/wire.h"
 
 namespace cell::scheduler {
 
@@ -34,22 +35,6 @@ cell::JobState Wire(JobState s) {
   return cell::JOB_QUEUED;
 }
 
-tooltable::ToolTable FromWire(const cell::ToolTable& t) {
-  std::vector<tooltable::ToolEntry> entries;
-  for (auto& w : t.tools()) {
-    tooltable::ToolEntry e;
-    e.tool = w.tool().to_string();
-    e.socket = w.socket();
-    e.length = w.length();
-    e.diameter = w.diameter();
-    e.life_left_min = static_cast<int>(w.life_left_min());
-    e.worn = w.worn();
-    e.broken = w.broken();
-    entries.push_back(e);
-  }
-  return tooltable::ToolTable(entries);
-}
-
 std::string Key(const cell::SchedulerRequest& r) {
   std::string k = r.hdr().idempotency_key().to_string();
   // Without a key a command is still made unique per request, so it never replays by accident.
@@ -61,7 +46,11 @@ std::string Key(const cell::SchedulerRequest& r) {
 Service::Service(bus::Participant& p, const std::filesystem::path& data_dir)
     : bus_(p),
       programs_(p),
-      source_([this](std::string_view name) { return programs_.Get("HOST", std::string(name)); }),
+      source_([this](std::string_view name) -> std::optional<StoredProgram> {
+        auto f = programs_.Fetch("HOST", std::string(name));
+        if (!f) return std::nullopt;
+        return StoredProgram{std::move(f->content), f->dialect()};
+      }),
       sched_(Options{(data_dir / "scheduler.db").string(), false, {}}, source_),
       live_(p),
       jobs_w_(p, bus::topics::kJobStatus, bus::QosKind::kEvent),
@@ -104,7 +93,7 @@ void Service::Start() {
                    [this](const cell::ToolTable& t, const bus::SampleInfo&) {
                      std::lock_guard lk(mu_);
                      if (!dialect_.count(t.station().to_string())) return;
-                     Apply(sched_.StationTools(t.station().to_string(), FromWire(t)));
+                     Apply(sched_.StationTools(t.station().to_string(), tooltable::FromWire(t)));
                    });
   runs_r_.emplace(bus_, bus::topics::kRunStatus, bus::QosKind::kEvent,
                   [this](const cell::RunStatus& s, const bus::SampleInfo&) { OnRun(s); });

@@ -82,17 +82,9 @@ json ToJson(const RouteView& r) {
   return {{"name", r.name}, {"valid", r.valid}, {"invalid_reason", OrNull(r.invalid_reason)}, {"ops", ops}};
 }
 
-json ToJson(const tooltable::ToolTable& t) {
+json ToolsJson(const tooltable::ToolTable& t) {
   json out = json::array();
-  for (const auto& e : t.entries()) {
-    out.push_back({{"tool", e.tool},
-                   {"socket", e.socket},
-                   {"length", e.length},
-                   {"diameter", e.diameter},
-                   {"life_left_min", e.life_left_min},
-                   {"worn", e.worn},
-                   {"broken", e.broken}});
-  }
+  for (const auto& e : t.entries()) out.push_back(tooltable::EntryJson(e));
   return out;
 }
 

@@ -6,20 +6,28 @@
 #include <string>
 
 #include "cell/error/error.h"
-#include "cell/interp/ktapl_meta.h"
+#include "cell/interp/interp.h"
 #include "cell/tooltable/tooltable.h"
 
 namespace cell::scheduler {
 
-ProgramMeta KtaplProgramMeta(std::string_view text, std::string_view name) {
-  interp::KtaplMetadata heading = interp::ExtractKtaplMetadata(text, {.whole_seconds = true});
-  for (const interp::KtaplMetaWarning& w : heading.warnings) {
-    if (w.kind == interp::KtaplMetaWarning::Kind::kValue && (w.mnemonic == "UTL" || w.mnemonic == "UCY")) {
+ProgramMeta ReadProgramMeta(std::string_view text, std::string_view dialect, std::string_view name) {
+  const interp::Dialect* d = interp::FindDialect(dialect);
+  if (d == nullptr) {
+    throw Error(Errc::kInvalidArgument, fmt::format("program {} has {} (the store records one of {})", name,
+                                                    dialect.empty() ? std::string("no dialect")
+                                                                    : fmt::format("dialect '{}'", dialect),
+                                                    interp::DialectList()));
+  }
+  interp::Heading heading = d->ReadHeading(text, {.whole_seconds = true});
+  for (const interp::HeadingNotice& w : heading.notices) {
+    if (w.kind == interp::HeadingNotice::Kind::kValue && (w.key == "UTL" || w.key == "UCY")) {
       throw Error(Errc::kInvalidArgument, fmt::format("{}:{}:{}: error: {}", name, w.line, w.column, w.text));
     }
   }
   ProgramMeta meta;
   meta.name = std::string(name);
+  meta.dialect = std::string(d->name());
   for (const std::string& written : heading.tools) {
     std::string tool = tooltable::NormalizeToolNumber(written);  // "0034" -> "34"
     if (std::find(meta.tools.begin(), meta.tools.end(), tool) == meta.tools.end()) {
@@ -31,15 +39,15 @@ ProgramMeta KtaplProgramMeta(std::string_view text, std::string_view name) {
 }
 
 std::optional<ProgramMeta> TextProgramSource::Lookup(std::string_view name) {
-  std::optional<std::string> text = fetch_(name);
-  if (!text) return std::nullopt;
-  return KtaplProgramMeta(*text, name);
+  std::optional<StoredProgram> p = fetch_(name);
+  if (!p) return std::nullopt;
+  return ReadProgramMeta(p->text, p->dialect, name);
 }
 
 std::optional<ProgramMeta> MemoryProgramSource::Lookup(std::string_view name) {
   auto it = texts_.find(name);
   if (it == texts_.end()) return std::nullopt;
-  return KtaplProgramMeta(it->second, name);
+  return ReadProgramMeta(it->second.text, it->second.dialect, name);
 }
 
 }  // namespace cell::scheduler

@@ -642,41 +642,6 @@ ALTER TABLE jobs ADD COLUMN schedule TEXT NOT NULL DEFAULT '';
   return m;
 }
 
-json ToolsToJson(const tooltable::ToolTable& t) {
-  json entries = json::array(), process = json::array();
-  for (const auto& e : t.entries()) {
-    entries.push_back({{"tool", e.tool},
-                       {"socket", e.socket},
-                       {"length", e.length},
-                       {"diameter", e.diameter},
-                       {"life_left_min", e.life_left_min},
-                       {"worn", e.worn},
-                       {"broken", e.broken},
-                       {"check", e.check},
-                       {"manual", e.manual},
-                       {"max_hp", e.max_hp}});
-  }
-  for (const auto& p : t.process_comps()) {
-    process.push_back(
-        {{"tool", p.tool}, {"pallet", p.pallet}, {"length", p.length}, {"diameter", p.diameter}});
-  }
-  return {{"entries", entries}, {"process", process}};
-}
-
-tooltable::ToolTable ToolsFromJson(const json& j) {
-  std::vector<tooltable::ToolEntry> entries;
-  std::vector<tooltable::ProcessComp> process;
-  for (const auto& e : j.at("entries")) {
-    entries.push_back(tooltable::ToolEntry{e.at("tool"), e.at("socket"), e.at("length"), e.at("diameter"),
-                                           e.at("life_left_min"), e.at("worn"), e.at("broken"), e.at("check"),
-                                           e.at("manual"), e.at("max_hp")});
-  }
-  for (const auto& p : j.at("process")) {
-    process.push_back(tooltable::ProcessComp{p.at("tool"), p.at("pallet"), p.at("length"), p.at("diameter")});
-  }
-  return tooltable::ToolTable(std::move(entries), std::move(process));
-}
-
 json SpecToJson(const RouteSpec& s) {
   json ops = json::array();
   for (const auto& op : s.ops) ops.push_back({{"stations", op.stations}, {"programs", op.programs}});
@@ -753,7 +718,7 @@ void Scheduler::Impl::Load() {
       states[static_cast<std::size_t>(s)].fault = q.ColumnInt64(3) != 0;
       st.alarm_code = q.ColumnText(4);
       st.alarm_text = q.ColumnText(5);
-      st.tools = ToolsFromJson(json::parse(q.ColumnText(6)));
+      st.tools = tooltable::FromJson(json::parse(q.ColumnText(6)));
       st.program = q.ColumnText(7);
       const json vars = json::parse(q.ColumnText(8));
       for (auto it = vars.begin(); it != vars.end(); ++it)
@@ -941,7 +906,7 @@ void Scheduler::Impl::Flush() {
       q.BindText(1, st.id).BindText(2, st.dialect).BindInt64(3, ss.online).BindInt64(4, ss.fault);
       q.BindText(5, st.alarm_code).BindText(6, st.alarm_text).BindInt64(7, ss.backlog_s);
       q.BindText(10, vars.dump());
-      q.BindText(8, ToolsToJson(st.tools).dump()).BindText(9, st.program).Run();
+      q.BindText(8, tooltable::ToJson(st.tools).dump()).BindText(9, st.program).Run();
       q.Reset();
     }
   }

@@ -26,13 +26,14 @@ inline std::string FmsProgram(const std::string& name, const std::vector<std::st
   return text + "N10G71\nN20M30\n";
 }
 
-// A tool table with the given tool numbers in sockets 1, 2, ... loaded through TLD statements.
+// A tool table with the given tool numbers in sockets 1, 2, ... (length 100, diameter 10).
 inline tooltable::ToolTable Tools(const std::vector<std::string>& tools) {
-  std::string tld;
-  int socket = 1;
-  for (const auto& t : tools) tld += fmt::format("(TLD,S{}T{}P100.D10.)\n", socket++, t);
   tooltable::ToolTable table;
-  table.Merge(tooltable::ParseTld(tld));
+  int socket = 1;
+  for (const auto& t : tools) {
+    table.Upsert(tooltable::ToolEntry{
+        .tool = tooltable::NormalizeToolNumber(t), .socket = socket++, .length = 100, .diameter = 10});
+  }
   return table;
 }
 
@@ -50,7 +51,7 @@ class FakeCell {
   }
 
   void Program(const std::string& name, const std::vector<std::string>& tools, int ucy) {
-    programs.Put(name, FmsProgram(name, tools, ucy));
+    programs.Put(name, FmsProgram(name, tools, ucy), "ktapl");
   }
 
   void Online(const std::string& id, const std::vector<std::string>& tools = {}) {

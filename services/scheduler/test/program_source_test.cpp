@@ -7,11 +7,11 @@
 namespace cell::scheduler {
 namespace {
 
-// The heading itself is read by cell::interp::ExtractKtaplMetadata (ktapl_meta_test); these are the
-// scheduler's rules on top of it.
+// The heading itself is read by the dialect (KT-APL: heading_test); these are the scheduler's rules on top
+// of it.
 std::string ErrorOf(std::string_view text) {
   try {
-    KtaplProgramMeta(text, "P1");
+    ReadProgramMeta(text, "ktapl", "P1");
   } catch (const Error& e) {
     EXPECT_EQ(e.code(), Errc::kInvalidArgument);
     return e.what();
@@ -19,17 +19,24 @@ std::string ErrorOf(std::string_view text) {
   return "";
 }
 
-TEST(KtaplProgramMeta, ToolsNormalisedAndDeduplicated) {
-  auto m = KtaplProgramMeta("%\n(NAM,GEAR HOUSING)\n(UTL,T12,0034,T7654321,12)\n(UTL,0)\n(UCY,600)\nN10G71\n",
-                            "GH");
+TEST(ProgramMeta, ToolsNormalisedAndDeduplicated) {
+  auto m = ReadProgramMeta("%\n(NAM,GEAR HOUSING)\n(UTL,T12,0034,T7654321,12)\n(UTL,0)\n(UCY,600)\nN10G71\n",
+                           "ktapl", "GH");
+  EXPECT_EQ(m.dialect, "ktapl");
   EXPECT_EQ(m.name, "GH");
   EXPECT_EQ(m.tools, (std::vector<std::string>{"12", "34", "7654321", "0"}));
   ASSERT_TRUE(m.ucy_s);
   EXPECT_EQ(*m.ucy_s, 600);
-  EXPECT_FALSE(KtaplProgramMeta("%\n(UTL,1)\nN10G0X1.\n", "X").ucy_s);
+  EXPECT_FALSE(ReadProgramMeta("%\n(UTL,1)\nN10G0X1.\n", "ktapl", "X").ucy_s);
+  // Another dialect's heading has no UTL or UCY: no tools, no backlog; an unknown dialect is an error.
+  auto ok = ReadProgramMeta("O1000\nG00 X10\nM02\n", "okuma", "LATHE.MIN");
+  EXPECT_EQ(ok.dialect, "okuma");
+  EXPECT_TRUE(ok.tools.empty());
+  EXPECT_FALSE(ok.ucy_s);
+  EXPECT_THROW(ReadProgramMeta("(UCY,5)", "", "NODIALECT"), Error);
 }
 
-TEST(KtaplProgramMeta, MalformedUtlOrUcyIsAnErrorWithNameLineAndColumn) {
+TEST(ProgramMeta, MalformedUtlOrUcyIsAnErrorWithNameLineAndColumn) {
   EXPECT_EQ(ErrorOf("%\n(UTL,T12345678)"),
             "P1:2:6: error: UTL entry 'T12345678' is not a tool number (up to 7 digits, optionally prefixed "
             "with T)");
@@ -48,12 +55,12 @@ TEST(KtaplProgramMeta, MalformedUtlOrUcyIsAnErrorWithNameLineAndColumn) {
 
 TEST(ProgramSources, MemoryAndText) {
   MemoryProgramSource mem;
-  mem.Put("A", "(UCY,10)");
+  mem.Put("A", "(UCY,10)", "ktapl");
   EXPECT_EQ(mem.Lookup("A")->ucy_s.value_or(0), 10);
   EXPECT_FALSE(mem.Lookup("B"));
-  TextProgramSource text([](std::string_view n) -> std::optional<std::string> {
-    if (n == "Q") return std::string("(UTL,9)(UCY,3)");
-    if (n == "BAD") return std::string("(UCY,x)");
+  TextProgramSource text([](std::string_view n) -> std::optional<StoredProgram> {
+    if (n == "Q") return StoredProgram{"(UTL,9)(UCY,3)", "ktapl"};
+    if (n == "BAD") return StoredProgram{"(UCY,x)", "ktapl"};
     return std::nullopt;
   });
   EXPECT_EQ(text.Lookup("Q")->tools, std::vector<std::string>{"9"});

@@ -252,8 +252,8 @@ struct MemorySink : Sink {
 };
 
 void Programs(MemoryProgramSource& p) {
-  p.Put("A", testing::FmsProgram("A", {"1"}, 100));
-  p.Put("B", testing::FmsProgram("B", {"1"}, 50));
+  p.Put("A", testing::FmsProgram("A", {"1"}, 100), "ktapl");
+  p.Put("B", testing::FmsProgram("B", {"1"}, 50), "ktapl");
 }
 
 TEST(Recovery, KillNineAtRandomMomentsNeitherLosesNorDuplicates) {

@@ -131,9 +131,9 @@ TEST(Operate, MissingToolsMakeThePalletWaitUntilAToolLoadReleasesIt) {
   EXPECT_EQ(c.State(job), JobState::kWaiting);
   EXPECT_EQ(c.Reason(job), "no eligible station: KT01 missing tools 2002; KT02 missing tools 1001");
   EXPECT_TRUE(c.all.empty());
-  // Host tool data: a TLD file merged into KT02's table and republished.
+  // Host tool data: a data set loaded into KT02's table and republished.
   auto table = c.sched->StationToolTable("KT02").value();
-  table.Merge(tooltable::ParseTld("(TLD,S9T1001P120.D12.)"));
+  table.Upsert(tooltable::ToolEntry{.tool = "1001", .socket = 9, .length = 120, .diameter = 12});
   c.Take(c.sched->StationTools("KT02", table));
   EXPECT_EQ(c.State(job), JobState::kDispatched);
   EXPECT_EQ(c.StationOf(job), "KT02");
@@ -170,8 +170,7 @@ TEST(Operate, BrokenToolDoesNotCount) {
   FakeCell c;
   c.Program("A", {"9"}, 60);
   c.Online("KT01");
-  tooltable::ToolTable t;
-  t.Merge(tooltable::ParseTld("(TLD,S1T9B)"));
+  tooltable::ToolTable t({tooltable::ToolEntry{.tool = "9", .socket = 1, .broken = true}});
   c.Take(c.sched->StationTools("KT01", t));
   c.Route("R", {"KT01:A"});
   const auto job = c.Operate("R", 1);
@@ -387,7 +386,7 @@ TEST(PalletMaps, OneToSeventyFivePrograms) {
 TEST(PalletMaps, RunPalletOnAStation) {
   FakeCell c;
   c.Program("A", {"5"}, 30);
-  c.programs.Put("NOFMS", "%\nN10M30\n");  // a non-FMS program: no UCY, 0 s of backlog
+  c.programs.Put("NOFMS", "%\nN10M30\n", "ktapl");  // a non-FMS program: no UCY, 0 s of backlog
   c.Online("KT01", {"5"});
   c.sched->SetPalletMap("m", 9, {"A", "NOFMS"});
   JobResult r = c.sched->RunPallet("run9", 9, "KT01");
@@ -522,7 +521,7 @@ TEST(Views, JsonShapesOfDesignSection6) {
   auto st = ToJson(c.sched->Station("KT01").value());
   EXPECT_EQ(st["backlog_s"], 0);
   EXPECT_EQ(st["online"], true);
-  auto tools = ToJson(c.sched->StationToolTable("KT01").value());
+  auto tools = ToolsJson(c.sched->StationToolTable("KT01").value());
   EXPECT_EQ(tools[0]["tool"], "3");
   EXPECT_EQ(tools[0]["socket"], 1);
   EXPECT_EQ(tools[0]["length"], 100.0);

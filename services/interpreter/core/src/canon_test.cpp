@@ -22,10 +22,10 @@ std::string Expected(double v) {
 
 std::string Written(double v) {
   Canon c;
-  c.op = Op::kRapid;
   c.line = 7;
-  c.pos[kX] = v;
-  c.used = 1u << kX;
+  RapidOp& r = c.Set<RapidOp>();
+  r.to.pos[kX] = v;
+  r.to.used = 1u << kX;
   std::string out;
   AppendJsonLine(out, c);
   const std::string head = "{\"op\":\"rapid\",\"line\":7,\"x\":";
@@ -56,14 +56,13 @@ TEST(CanonJson, NumbersMatchCorrectlyRoundedFormatting) {
 
 TEST(CanonJson, AppendReusesTheBufferAndMatchesToJsonLine) {
   Canon c;
-  c.op = Op::kArc;
   c.line = 3;
-  c.pos = {20, 5, 5};
-  c.used = 7;
-  c.feed = 800;
-  c.center = {15, 5, 5};
-  c.plane = "xy";
-  c.turns = 180;
+  ArcOp& a = c.Set<ArcOp>();
+  a.to.pos = {20, 5, 5};
+  a.to.used = 7;
+  a.feed.rate = 800;
+  a.center = {15, 5, 5};
+  a.angle = 180;
   std::string out = "prefix\n";
   AppendJsonLine(out, c);
   EXPECT_EQ(out, "prefix\n" + ToJsonLine(c));
@@ -72,37 +71,110 @@ TEST(CanonJson, AppendReusesTheBufferAndMatchesToJsonLine) {
             "\"center\":[15.0000,5.0000,5.0000],\"dir\":\"cw\",\"plane\":\"xy\",\"angle\":180.0000}");
 }
 
-TEST(CanonJson, ResetGivesAFreshCommand) {
+// Each op has its own payload at its own index; a slot reused for another op starts from that op's
+// defaults (the ring queue reuses slots).
+TEST(Canon, SetGivesTheOpsDefaultsAndTargetAndFeedFindTheirFields) {
   Canon c;
-  c.op = Op::kFileOp;
   c.line = 9;
-  c.pos[kB] = 90;
-  c.used = 0x1ff;
-  c.travel[kB] = 90;
-  c.travel_mask = 1u << kB;
-  c.feed = 5;
-  c.f_mode = FeedMode::kInverseTime;
-  c.exact_stop = true;
-  c.center = {1, 2, 3};
-  c.cw = false;
-  c.plane = "zx";
-  c.turns = 360;
-  c.metric = true;
-  c.value = 1;
-  c.value2 = 2;
-  c.text = "a long text that does not fit in the small-string buffer";
-  c.text2 = "CPY";
-  c.code = 7;
-  c.flag = true;
-  c.Reset();
-  for (Op op : {Op::kRapid, Op::kArc, Op::kFileOp, Op::kSpindle, Op::kProbe}) {
-    Canon fresh;
-    fresh.op = op;
-    c.op = op;
-    EXPECT_EQ(ToJsonLine(c), ToJsonLine(fresh));
+  FileOpOp& f = c.Set<FileOpOp>();
+  f.what = "CPY";
+  f.args = "a long text that does not fit in the small-string buffer";
+  EXPECT_EQ(c.op(), Op::kFileOp);
+  EXPECT_EQ(c.target(), nullptr);
+  EXPECT_EQ(c.feed(), nullptr);
+  ProbeOp& p = c.Set<ProbeOp>();
+  EXPECT_EQ(c.op(), Op::kProbe);
+  EXPECT_EQ(p.result, ProbeOutcome::kNone);
+  ASSERT_NE(c.target(), nullptr);
+  ASSERT_NE(c.feed(), nullptr);
+  c.target()->pos[kZ] = 4;
+  EXPECT_EQ(c.As<ProbeOp>().to.pos[kZ], 4);
+  for (Op op : {Op::kRapid, Op::kLinear, Op::kArc, Op::kThread, Op::kRegrid}) {
+    Canon m;
+    switch (op) {
+      case Op::kRapid:
+        m.Set<RapidOp>();
+        break;
+      case Op::kLinear:
+        m.Set<LinearOp>();
+        break;
+      case Op::kArc:
+        m.Set<ArcOp>();
+        break;
+      case Op::kThread:
+        m.Set<ThreadOp>();
+        break;
+      default:
+        m.Set<RegridOp>();
+        break;
+    }
+    EXPECT_EQ(m.op(), op);
+    EXPECT_NE(m.target(), nullptr) << OpName(op);
+    EXPECT_EQ(m.feed() != nullptr, op == Op::kLinear || op == Op::kArc) << OpName(op);
   }
-  EXPECT_EQ(c.op, Op::kProbe);
-  EXPECT_TRUE(c.text.empty() && c.text2.empty() && c.plane.empty() && c.cw && !c.flag && c.code == 0);
+}
+
+// DESIGN §4 lathes: x_mode diameter, per-revolution feed, constant surface speed with a spindle limit on
+// the spindle op, spindle-synchronised threads carrying the lead, turret tool with offset and tip code.
+TEST(CanonJson, LatheOps) {
+  Canon c;
+  c.line = 1;
+  c.Set<UnitsOp>() = {true, XMode::kDiameter};
+  EXPECT_EQ(ToJsonLine(c), R"({"op":"units","line":1,"length":"mm","x_mode":"diameter"})");
+  LinearOp& l = c.Set<LinearOp>();
+  l.to.pos[kX] = 40;
+  l.to.pos[kZ] = -20;
+  l.to.used = (1u << kX) | (1u << kZ);
+  l.feed = {0.2, FeedMode::kPerRev, false};
+  EXPECT_EQ(ToJsonLine(c),
+            R"({"op":"linear","line":1,"x":40.0000,"z":-20.0000,"f":0.2000,"f_mode":"per_rev"})");
+  SpindleOp& s = c.Set<SpindleOp>();
+  s.dir = SpindleDir::kCw;
+  s.css = 150;
+  s.max_rpm = 2500;
+  EXPECT_EQ(ToJsonLine(c),
+            R"({"op":"spindle","line":1,"dir":"cw","s":0.0000,"css":150.0000,"max_rpm":2500.0000})");
+  ThreadOp& t = c.Set<ThreadOp>();
+  t.to.pos[kX] = 38.2;
+  t.to.pos[kZ] = -30;
+  t.to.used = (1u << kX) | (1u << kZ);
+  t.lead = 1.5;
+  t.start_angle = 180;
+  EXPECT_EQ(ToJsonLine(c),
+            R"({"op":"thread","line":1,"x":38.2000,"z":-30.0000,"lead":1.5000,"start_angle":180.0000})");
+  t.lead_change = 0.05;
+  EXPECT_NE(ToJsonLine(c).find(R"("lead_change":0.0500)"), std::string::npos);
+  ToolChangeOp& tc = c.Set<ToolChangeOp>();
+  tc.tool = "3";
+  tc.offset = 3;
+  tc.tip = 2;
+  EXPECT_EQ(ToJsonLine(c), R"({"op":"tool_change","line":1,"tool":"3","offset":3,"tip":2})");
+  c.Set<ToolChangeOp>().tool = "1001";  // a machining centre's tool: no lathe keys
+  EXPECT_EQ(ToJsonLine(c), R"({"op":"tool_change","line":1,"tool":"1001"})");
+}
+
+TEST(CanonJson, ToolDataKeepsKtaplKeysAndAddsLatheKeysOnlyWhereSet) {
+  Canon c;
+  c.line = 2;
+  ToolDataOp& t = c.Set<ToolDataOp>();
+  t.entry.tool = "33412.5";
+  t.entry.length = 0.5;
+  t.entry.diameter = -6.35;
+  EXPECT_EQ(ToJsonLine(c),
+            R"({"op":"tool_data","line":2,"tool":"33412.5","length":0.5000,"diameter":-6.3500})");
+  t.pallet = 12;
+  EXPECT_NE(ToJsonLine(c).find(R"("pallet":12)"), std::string::npos);
+  c.Set<ToolDataOp>().cleared = true;
+  EXPECT_EQ(ToJsonLine(c), R"({"op":"tool_data","line":2,"tool":"*","length":0.0000,"diameter":0.0000})");
+  ToolDataOp& lathe = c.Set<ToolDataOp>();
+  lathe.entry.tool = "5";
+  lathe.entry.x_offset = -1.25;
+  lathe.entry.z_offset = 2.634;
+  lathe.entry.nose_radius = 0.8;
+  lathe.entry.tip = 3;
+  EXPECT_EQ(ToJsonLine(c),
+            R"({"op":"tool_data","line":2,"tool":"5","length":0.0000,"diameter":0.0000,"x_offset":-1.2500,)"
+            R"("z_offset":2.6340,"nose_radius":0.8000,"tip":3})");
 }
 
 }  // namespace

@@ -7,6 +7,8 @@
 #include <string_view>
 #include <vector>
 
+#include "cell/tooltable/tooltable.h"
+
 namespace cell::config {
 
 // CELL_CONFIG_DIR if set; else /etc/cell when the running binary is installed (its path is under /usr or
@@ -31,34 +33,22 @@ int Domain();
 inline constexpr int kDefaultDomain = 101;
 inline constexpr int kMaxDomain = 232;
 
-// Dialects a station may be programmed in.
-inline constexpr std::string_view kDialects[] = {"ktapl", "okuma", "emco", "balt"};
-
-// One entry of a station's initial tool table (`[[tools]]` in the station file).
-struct ToolConfig {
-  std::string tool;          // tool number, 1-7 digits with an optional suffix .1-.7, e.g. "1001", "33412.5"
-  int socket = 0;            // magazine socket / turret station, >= 1
-  double length = 0;         // length compensation, mm, >= 0
-  double diameter = 0;       // diameter compensation, mm, >= 0
-  double life_left_min = 0;  // remaining tool life, minutes, >= 0
-
-  bool operator==(const ToolConfig&) const = default;
-};
-
 // A station file `<ConfigDir()>/stations/<ID>.toml`:
 //
 //   [station]
 //   id = "KT01"              # must equal the file name's stem
-//   dialect = "ktapl"        # ktapl | okuma | emco | balt
+//   dialect = "ktapl"        # a dialect of the registry (cell/interp/interp.h): ktapl | okuma | emco | balt
 //   description = "..."      # optional, default ""
 //   coded_pallets = false    # optional, default false (KT-APL coded-pallet FMS module: pallets 1-127)
 //
-//   [[tools]]                # optional, any number
+//   [[tools]]                # optional, any number: the initial tool table (common/tooltable's ToolEntry)
 //   tool = "1001"            # string (or integer); suffix tools as strings: "33412.5"
-//   socket = 1
-//   length = 152.4           # mm
-//   diameter = 25.0          # mm
-//   life_left_min = 120      # minutes
+//   socket = 1               # magazine socket / turret station, 1..9999
+//   length = 152.4           # mm, signed (optional, default 0); length_axis = "Z" for a mill's other axes
+//   diameter = 25.0          # mm, signed (optional)
+//   life_left_min = 120      # minutes, >= 0 (optional)
+//   x_offset, z_offset       # lathes: mm, signed (optional)
+//   nose_radius, tip         # lathes: mm >= 0, tip position code 0..9 (optional)
 //
 // Unknown keys inside [station] and [[tools]] are errors (typos must not pass silently); other tables
 // ([machine], [axes.x], [magazine], ...) belong to other readers and are ignored here.
@@ -67,7 +57,7 @@ struct StationConfig {
   std::string dialect;
   std::string description;
   bool coded_pallets = false;
-  std::vector<ToolConfig> tools;
+  std::vector<tooltable::ToolEntry> tools;
   std::filesystem::path file;  // the file it was read from
 };
 

@@ -1,6 +1,6 @@
 // Station machine configuration: the machine tables of deploy/stations/<ID>.toml.
 // Tables owned by others ([station] apart from id/dialect, anything unknown) are ignored; [[tools]] is read
-// only for its `tool` and `socket` keys (initial magazine contents).
+// only for its `tool` and `socket` keys (initial magazine contents; common/config reads the rest).
 #pragma once
 
 #include <array>
@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "cell/servo/segment.h"
+#include "cell/tooltable/tooltable.h"
 
 namespace cell::servo {
 
@@ -47,11 +48,6 @@ struct AxisConfig {
   DriveConfig drive;
 };
 
-struct ToolSlot {
-  std::string tool;
-  int socket = 0;
-};
-
 struct PartModelRef {
   int pallet = 0;
   std::filesystem::path file;  // absolute, or relative to the station file's directory when loaded
@@ -77,7 +73,7 @@ struct MachineConfig {
   double tool_change_time = 6.0;     // s, chip to chip without magazine travel
   double pallet_change_time = 25.0;  // s
   double coolant_time = 0.3;         // s
-  std::vector<ToolSlot> tools;       // initial magazine contents
+  tooltable::ToolTable tools;        // initial magazine contents (tool and socket of [[tools]])
   // Probe
   double probe_ball_diameter = 6.0;  // mm
   double probe_max_feed = 2000.0;    // mm/min

@@ -88,7 +88,7 @@ class Machine {
   void SetRapidOverride(double fraction);  // 0..1
 
   // ---- Devices and probing.
-  void SetToolTable(const std::vector<ToolSlot>& sockets);  // magazine contents from the station table
+  void SetToolTable(const tooltable::ToolTable& table);  // magazine contents: the station table's sockets
   void SetPartModel(int pallet, PartModel model);
   void SetPallets(int on_table, int on_shuttle);
 

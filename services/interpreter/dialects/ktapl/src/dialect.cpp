@@ -29,8 +29,7 @@ class Ktapl final : public Dialect {
   std::vector<std::string_view> aliases() const override { return {"KT-APL", "KT_APL", "KT"}; }
   MachineKind machine() const override { return MachineKind::kMachiningCentre; }
   std::vector<FileKind> kinds() const override {
-    return {FileKind::kPartProgram, FileKind::kLibrary, FileKind::kToolTable, FileKind::kFixtureOffsets,
-            FileKind::kInspection};
+    return {FileKind::kPartProgram, FileKind::kLibrary, FileKind::kToolTable, FileKind::kFixtureOffsets};
   }
   std::vector<std::string_view> extensions() const override { return {".ktapl", ".apl", ".nc", ".txt"}; }
 
@@ -51,8 +50,8 @@ class Ktapl final : public Dialect {
     if (base.empty()) Invalid(fmt::format("KT-APL name '{}' has an empty file name before ';'", name));
     if (semi != std::string_view::npos) {
       if (ext.empty() || ext.size() > 3 || !std::all_of(ext.begin(), ext.end(), IsAlnum)) {
-        Invalid(fmt::format("KT-APL name '{}': the extension after ';' must be 1-3 letters or digits (e.g. ;FXT)",
-                            name));
+        Invalid(fmt::format(
+            "KT-APL name '{}': the extension after ';' must be 1-3 letters or digits (e.g. ;FXT)", name));
       }
     }
     bool fxt = scan::Upper(ext) == "FXT";
@@ -61,16 +60,18 @@ class Ktapl final : public Dialect {
     }
     std::size_t limit = fxt ? 28 : 32;
     if (base.size() > limit) {
-      Invalid(fmt::format("KT-APL name '{}' is too long: {} characters before {}, at most {}", name, base.size(),
-                          fxt ? "';FXT'" : "the extension", limit));
+      Invalid(fmt::format("KT-APL name '{}' is too long: {} characters before {}, at most {}", name,
+                          base.size(), fxt ? "';FXT'" : "the extension", limit));
     }
     for (char c : base) {
-      if (c == ',') Invalid(fmt::format("KT-APL name '{}' contains a comma (not allowed in local file names)", name));
+      if (c == ',')
+        Invalid(fmt::format("KT-APL name '{}' contains a comma (not allowed in local file names)", name));
       if (!(IsAlnum(c) || c == ' ' || c == '.' || c == '-' || c == '_')) {
-        Invalid(fmt::format(
-            "KT-APL name '{}' contains '{}'; allowed: letters, digits, spaces, '.', '-', '_' and one ';' before "
-            "the extension",
-            name, c));
+        Invalid(
+            fmt::format("KT-APL name '{}' contains '{}'; allowed: letters, digits, spaces, '.', '-', '_' and "
+                        "one ';' before "
+                        "the extension",
+                        name, c));
       }
     }
   }
@@ -157,7 +158,8 @@ class Ktapl final : public Dialect {
         if (c == '(') in_paren = true;
         if (c == ')') in_paren = false;
         if (!in_paren && ktapl::Up(c) == 'G' && i + 2 < line.size() && line[i + 1] == '7' &&
-            (line[i + 2] == '0' || line[i + 2] == '1') && (i + 3 >= line.size() || !scan::IsDigit(line[i + 3]))) {
+            (line[i + 2] == '0' || line[i + 2] == '1') &&
+            (i + 3 >= line.size() || !scan::IsDigit(line[i + 3]))) {
           metric = line[i + 2] == '1';
         }
       }
@@ -175,7 +177,8 @@ class Ktapl final : public Dialect {
         }
         if (t.entry) table.Upsert(*t.entry);
         if (t.process && !table.UpsertProcess(*t.process)) {
-          fail(st.col, "PROCESS COMPENSATION NEEDS A PRIMARY OR SUFFIX ENTRY FIRST (tool " + t.process->tool + ")");
+          fail(st.col,
+               "PROCESS COMPENSATION NEEDS A PRIMARY OR SUFFIX ENTRY FIRST (tool " + t.process->tool + ")");
         }
       }
       if (!err.empty() && ktapl::Upper(line).find("TLD") != std::string::npos) {
@@ -183,9 +186,10 @@ class Ktapl final : public Dialect {
       }
     }
     if (found == 0) {
-      throw Error(Errc::kInvalidArgument, fmt::format("{}: no TLD statement found (a KT-APL tool table is a program "
-                                                      "of (TLD,...) statements)",
-                                                      source));
+      throw Error(Errc::kInvalidArgument,
+                  fmt::format("{}: no TLD statement found (a KT-APL tool table is a program "
+                              "of (TLD,...) statements)",
+                              source));
     }
     return table;
   }

@@ -1,19 +1,23 @@
-// Library-level tests of the run API and the metadata helper.
+// Library-level tests of the KT-APL run: output, the parse cache, errors, library code, queue busters,
+// persistent variables and settings.
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include "cell/error/error.h"
-#include "cell/interp/interp.h"
 #include "cell/interp/ktapl.h"
 
 namespace cell::interp {
 namespace {
 
+std::unique_ptr<Run> Start(const RunOptions& o) {
+  return KtaplDialect().StartRun(o);
+}
+
 std::vector<std::string> RunAll(const std::string& text, Diagnostic* diag = nullptr) {
   RunOptions o;
   o.program_name = "T";
   o.program_text = text;
-  auto run = StartRun(o);
+  auto run = Start(o);
   std::vector<std::string> out;
   for (;;) {
     Step s = run->Next();
@@ -66,24 +70,6 @@ TEST(Run, RepeatedBlocksRunTheirOwnWordsThroughTheParseCache) {
   }
 }
 
-TEST(Run, UnknownAndUnimplementedDialects) {
-  RunOptions o;
-  o.dialect = "okuma";
-  try {
-    StartRun(o);
-    FAIL();
-  } catch (const Error& e) {
-    EXPECT_EQ(e.code(), Errc::kUnimplemented);
-  }
-  o.dialect = "fanuc";
-  try {
-    StartRun(o);
-    FAIL();
-  } catch (const Error& e) {
-    EXPECT_EQ(e.code(), Errc::kInvalidArgument);
-  }
-}
-
 TEST(Run, ErrorStopsTheRunAndKeepsEarlierOutput) {
   Diagnostic d;
   auto out = RunAll("G71G0X1.F0\nG04 X1. F2.\n", &d);
@@ -101,35 +87,16 @@ TEST(Run, LibrarySubroutineReportsTheCallingLine) {
     if (name == "SUB1") return std::string("(DFS,SUB1,SAVE)\nG91X1.\n(END)\n");
     return std::nullopt;
   };
-  auto run = StartRun(o);
+  auto run = Start(o);
   std::vector<Canon> moves;
   for (;;) {
     Step s = run->Next();
     if (s.kind != Step::kCanon) break;
-    if (s.canon.op == Op::kRapid) moves.push_back(s.canon);
+    if (s.canon.op() == Op::kRapid) moves.push_back(s.canon);
   }
   ASSERT_EQ(moves.size(), 2u);
   EXPECT_EQ(moves[0].line, 2);
-  EXPECT_DOUBLE_EQ(moves[1].pos[kX], 2.0);
-}
-
-TEST(ToolTable, TldExamples) {
-  // Manual ln 4063-4097: primary, suffix 5, and the process compensation for pallet 12.
-  auto t = ParseKtaplToolTable(
-      "G70\n(TLD,S12T33412CP.02D-.25L345H5.9)\n(TLD,S12T33412.5CP.02D-.25L345H5.9)\n"
-      "(TLD,T33412.5W12P.0003D-.0004)\n");
-  ASSERT_EQ(t.size(), 3u);
-  EXPECT_EQ(t[2].tool, "33412.5");
-  EXPECT_EQ(t[2].pallet, 12);
-  EXPECT_NEAR(t[2].length, 0.0003 * 25.4, 1e-9);
-  EXPECT_EQ(t[0].tool, "33412");
-  EXPECT_EQ(t[0].socket, 12);
-  EXPECT_TRUE(t[0].check);
-  EXPECT_NEAR(t[0].length, 0.02 * 25.4, 1e-9);
-  EXPECT_NEAR(t[0].diameter, -0.25 * 25.4, 1e-9);
-  EXPECT_EQ(t[0].life_min, 3 * 60 + 45);
-  EXPECT_DOUBLE_EQ(t[0].max_hp, 5.9);
-  EXPECT_THROW(ParseKtaplToolTable("(TLD,T99W12P.0003)\n"), Error);
+  EXPECT_DOUBLE_EQ(moves[1].target()->pos[kX], 2.0);
 }
 
 }  // namespace
@@ -152,8 +119,8 @@ class FakeEnv : public Environment {
     return r;
   }
   void WaitInputs(const std::string& spec) override { waited = spec; }
-  std::optional<double> SystemParameter(int n) override {
-    if (n == 3500) return 42.0;
+  std::optional<double> SystemVariable(const std::string& name) override {
+    if (name == "L3500") return 42.0;
     return std::nullopt;
   }
 };
@@ -165,17 +132,19 @@ TEST(Service, EnvironmentAnswersQueueBusters) {
   o.program_text =
       "G71 G0 X0 F0\nG22 X10. F100.\n(PAR,L1000=L3042+L3500)\n(WAI,I04D,1=1, I03D,3=0)\nXL1000\nM30\n";
   o.env = &env;
-  auto run = StartRun(o);
+  auto run = Start(o);
   std::vector<Canon> ops;
   for (Step s = run->Next(); s.kind == Step::kCanon; s = run->Next()) ops.push_back(s.canon);
   EXPECT_EQ(env.probes, 1);
   EXPECT_EQ(env.waited, "I04D,1=1,I03D,3=0");
-  auto mp = run->MachineParameters();
-  ASSERT_TRUE(mp.count(1000));
-  EXPECT_DOUBLE_EQ(mp[1000], 5.0 + 42.0);  // contact at X5 (mm, G71) + L3500 from the environment
-  EXPECT_DOUBLE_EQ(mp[1021], 8.0);         // event happened
+  auto vars = run->Variables();
+  ASSERT_TRUE(vars.count("L1000"));
+  EXPECT_DOUBLE_EQ(vars["L1000"], 5.0 + 42.0);  // contact at X5 (mm, G71) + L3500 from the environment
+  EXPECT_DOUBLE_EQ(vars["L1021"], 8.0);         // event happened
   bool moved = false;
-  for (const auto& c : ops) moved |= c.op == Op::kLinear && c.pos[kX] == 47.0;  // F100 is modal after G22
+  for (const auto& c : ops) {
+    moved |= c.op() == Op::kLinear && c.target()->pos[kX] == 47.0;  // F100 is modal after G22
+  }
   EXPECT_TRUE(moved);
 }
 
@@ -185,7 +154,7 @@ TEST(Service, SaveCallbackGetsTheDefinitionText) {
   o.program_text = "(DFS,DRILL25,SAVE)\nG91X1.F0\n(END)\n(DFC,G881)\nZ1.\n(END)\n";
   std::map<std::string, std::string> saved;
   o.save = [&](const std::string& name, const std::string& text) { saved[name] = text; };
-  auto run = StartRun(o);
+  auto run = Start(o);
   while (run->Next().kind == Step::kCanon) {
   }
   ASSERT_EQ(saved.size(), 1u);  // G881 has no SAVE
@@ -197,16 +166,64 @@ TEST(Service, ParamsSetUnitsPalletAndParameters) {
   o.program_name = "S";
   o.program_text = "G0 F0 XL1000 YL3020\n";
   o.params = {{"UNITS", "mm"}, {"PALLET", "38"}, {"L1000", "12.5"}};
-  auto run = StartRun(o);
+  auto run = Start(o);
   Step u = run->Next();
   ASSERT_EQ(u.kind, Step::kCanon);
-  EXPECT_TRUE(u.canon.metric);
+  EXPECT_TRUE(u.canon.As<UnitsOp>().metric);
   Step m = run->Next();
   ASSERT_EQ(m.kind, Step::kCanon);
-  EXPECT_DOUBLE_EQ(m.canon.pos[kX], 12.5);
-  EXPECT_DOUBLE_EQ(m.canon.pos[kY], 38.0);
+  EXPECT_DOUBLE_EQ(m.canon.target()->pos[kX], 12.5);
+  EXPECT_DOUBLE_EQ(m.canon.target()->pos[kY], 38.0);
   EXPECT_EQ(run->Next().kind, Step::kEnd);
   EXPECT_EQ(run->Next().kind, Step::kEnd);  // stays at the end
+}
+
+// The station keeps L1000-L2999 between programs (RunOptions::variables in, Run::Variables out); program and
+// local parameters do not persist.
+TEST(Service, PersistentVariablesInAndOut) {
+  RunOptions o;
+  o.program_name = "S";
+  o.program_text = "(PAR,L1500=L1500+7.,L101=3.)\nG71G0F0XL1500\nM30\n";
+  o.variables = {{"L1500", 1.0}, {"L77", 5.0}, {"V1", 2.0}};  // not machine parameters: ignored
+  auto run = Start(o);
+  std::vector<Canon> ops;
+  for (Step s = run->Next(); s.kind == Step::kCanon; s = run->Next()) ops.push_back(s.canon);
+  auto vars = run->Variables();
+  EXPECT_DOUBLE_EQ(vars.at("L1500"), 8.0);
+  EXPECT_EQ(vars.count("L101"), 0u);
+  EXPECT_EQ(vars.count("L77"), 0u);
+  ASSERT_GE(ops.size(), 2u);
+  EXPECT_DOUBLE_EQ(ops[1].target()->pos[kX], 8.0);
+}
+
+// A TLD in a program changes the run's table (every field), and the active tool's compensation follows.
+TEST(Service, TldChangesTheToolTableAndTheActiveLength) {
+  RunOptions o;
+  o.program_name = "S";
+  o.program_text = "G71T5M6\nG0F0Z0\n(TLD,S3T5CP100.D-.25L130H2.5)\nZ0\n(TLD,T5W7P.5)\nM30\n";
+  o.tools = tooltable::ToolTable({tooltable::ToolEntry{.tool = "5", .socket = 3, .length = 50}});
+  o.params = {{"PALLET", "7"}};
+  auto run = Start(o);
+  std::vector<Canon> ops;
+  for (Step s = run->Next(); s.kind == Step::kCanon; s = run->Next()) ops.push_back(s.canon);
+  tooltable::ToolTable t = run->Tools();
+  const tooltable::ToolEntry* e = t.Find("5");
+  ASSERT_NE(e, nullptr);
+  EXPECT_TRUE(e->check);
+  EXPECT_DOUBLE_EQ(e->length, 100);
+  EXPECT_DOUBLE_EQ(e->diameter, -0.25);
+  EXPECT_DOUBLE_EQ(e->life_left_min, 90);
+  EXPECT_DOUBLE_EQ(e->max_hp, 2.5);
+  ASSERT_EQ(t.process_comps().size(), 1u);
+  EXPECT_EQ(t.process_comps()[0].pallet, 7);
+  std::vector<double> z;
+  for (const auto& c : ops) {
+    if (c.op() == Op::kRapid) z.push_back(c.target()->pos[kZ]);
+  }
+  // Z0 with length 50, then 100 (the TLD reloads the active tool's data set).
+  ASSERT_EQ(z.size(), 2u);
+  EXPECT_DOUBLE_EQ(z[0], 50);
+  EXPECT_DOUBLE_EQ(z[1], 100);
 }
 
 }  // namespace

@@ -1,10 +1,8 @@
 // What the program store knows about a file from its name and content alone: file type, dialect (declared
-// or detected), the KT-APL FMS heading (NAM, UTL, UCY) with its placement rules, the program names inside
-// Okuma / EMCO / Balt files, size and line count; plus the name rules of each dialect and the text check.
-//
-// The store's own small extractor (not the interpreter's parser): it reads only what the store, `program ls`
-// and the scheduler need; the KT-APL heading comes from cell_ktapl_meta (cell/interp/ktapl_meta.h), the
-// reader the interpreter and the scheduler use too. docs/program-store.md lists the rules and their sources.
+// or detected), the dialect's heading (KT-APL NAM, UTL, UCY with their placement rules; the program names
+// inside Okuma / EMCO / Balt files), size and line count; the name rules and the text check. The dialect
+// knowledge comes from the registry (cell/interp/interp.h): the same readers the interpreter and the
+// scheduler use. docs/program-store.md lists the rules and their sources.
 #pragma once
 
 #include <cstdint>
@@ -13,29 +11,28 @@
 #include <string_view>
 #include <vector>
 
+#include "cell/interp/interp.h"
+
 namespace cell::program_store {
 
-enum class FileType {
-  kPartProgram,  // a main program a station runs
-  kLibrary,      // subroutines / cycles / subprograms (KT-APL DFS/DFC, Okuma .SUB/.SSB, EMCO M17 subroutines)
-  kSchedule,     // Okuma schedule program (.SDF)
-  kToolTable,    // tool data (KT-APL TLD statements, or the dialect's own form)
-  kFixtureOffsets,  // KT-APL saved fixture offset table (NAME;FXT)
-  kInspection,      // inspection file (KT-APL OIF output, CSV, QIF)
-  kData,            // any other text file
-};
-
-enum class Dialect { kNone, kKtapl, kOkuma, kEmco, kBalt };
+// A file's type is the registry's file kind; a dialect is a registry entry (nullptr: none). Every dialect
+// rule (names, detection evidence, kinds, headings) comes from the dialect itself (cell/interp/interp.h).
+using FileType = interp::FileKind;
+using Dialect = const interp::Dialect*;
 
 // Stable wire names: "part_program", "library", "schedule", "tool_table", "fixture_offsets", "inspection",
-// "data"; dialects "ktapl", "okuma", "emco", "balt" and "" for none.
+// "data"; dialects by their registry names and "" for none.
 std::string_view FileTypeName(FileType type);
 std::string_view DialectName(Dialect dialect);
 // Accepts the wire names and a few aliases ("program", "sdf", "fxt", "tools", "lib", ...), case-insensitive.
 // Throws cell::Error(kInvalidArgument) naming the accepted values.
 FileType ParseFileType(std::string_view text);
-// Accepts the wire names and aliases ("kt-apl", "kt", "osp", "emcotronic", "tm02", "balt-system", "none").
+// Accepts the registry's names and aliases ("kt-apl", "osp", "tm02", "balt-system", ...) and "" / "none"
+// (nullptr). Throws cell::Error(kInvalidArgument) naming the dialects.
 Dialect ParseDialect(std::string_view text);
+// The one dialect that has a kind of file no other dialect has (schedules: Okuma; fixture offset tables:
+// KT-APL), or nullptr.
+Dialect OwnerOf(FileType type);
 
 // Throws cell::Error(kInvalidArgument) unless `content` is text: no NUL or other control bytes (tab, LF, CR,
 // FF, VT and the DOS end-of-file ^Z are allowed) and valid UTF-8. The message gives the byte offset.
@@ -45,22 +42,22 @@ void CheckText(std::string_view content);
 // this type and dialect (empty, too long, illegal characters, bad extension). See docs/program-store.md.
 void ValidateName(std::string_view name, FileType type, Dialect dialect);
 
-// The file type a name implies by its extension, if any: ";FXT" fixture offsets, ".SDF" schedule, Okuma
-// ".SUB"/".SSB"/".MSB"/".LIB" library, ".MIN" part program (case-insensitive).
+// The file type a name implies by a dialect's extension rule, if any: ";FXT" fixture offsets (KT-APL),
+// ".SDF" schedule, ".SUB"/".SSB"/".MSB"/".LIB" library, ".MIN" part program (Okuma); case-insensitive.
 std::optional<FileType> TypeFromName(std::string_view name);
 
 struct Evidence {
-  Dialect dialect = Dialect::kNone;
+  Dialect dialect = nullptr;
   int line = 0;         // 1-based
   std::string what;     // e.g. "(UTL,...) statement"
   bool strong = false;  // decisive on its own
 };
 
 struct Detection {
-  Dialect dialect = Dialect::kNone;  // kNone when nothing or more than one dialect fits
-  bool ambiguous = false;            // strong evidence for more than one dialect
-  bool looks_like_nc = false;        // N/G/M blocks seen, whatever the dialect
-  std::vector<Evidence> evidence;    // at most a few items per dialect
+  Dialect dialect = nullptr;       // none when nothing or more than one dialect fits
+  bool ambiguous = false;          // strong evidence for more than one dialect
+  bool looks_like_nc = false;      // N/G/M blocks seen, whatever the dialect
+  std::vector<Evidence> evidence;  // at most a few items per dialect
   // One line for the user: "ktapl ((UTL,...) statement, line 2)" or why no answer.
   std::string Explain() const;
 };
@@ -70,7 +67,7 @@ Detection DetectDialect(std::string_view content);
 
 struct Metadata {
   FileType type = FileType::kData;
-  Dialect dialect = Dialect::kNone;
+  Dialect dialect = nullptr;
   bool dialect_detected = false;           // true when detected, false when declared (or none)
   std::string nam;                         // KT-APL (NAM,name), trimmed; "" when absent
   std::vector<std::string> utl;            // KT-APL (UTL,...) tool numbers, without the T prefix, as written
@@ -85,10 +82,10 @@ struct ExtractOptions {
   std::optional<Dialect> dialect;  // declared; detected when absent
   std::optional<FileType> type;    // declared; from name and content when absent
   std::string name;                // the name it is stored under (for TypeFromName)
-  // The dialect of the station whose namespace the file goes to (kNone for HOST). Used when detection finds
+  // The dialect of the station whose namespace the file goes to (none for HOST). Used when detection finds
   // nothing dialect-specific in an NC program, or when the content fits several dialects and this is one of
   // them (with a warning). Never overrides a clear detection or a declaration.
-  Dialect namespace_dialect = Dialect::kNone;
+  Dialect namespace_dialect = nullptr;
 };
 
 // Checks the text, decides the type and dialect and extracts the metadata. Throws cell::Error

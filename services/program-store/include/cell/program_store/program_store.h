@@ -170,7 +170,7 @@ class ProgramStore {
   void SetChangeListener(std::function<void(const ChangeEvent&)> listener);
 
   bool HasNamespace(std::string_view node) const;
-  Dialect NamespaceDialect(std::string_view node) const;  // kNone for HOST or when not configured
+  Dialect NamespaceDialect(std::string_view node) const;  // nullptr for HOST or when not configured
   const std::vector<std::string>& namespaces() const { return namespaces_; }
   const std::filesystem::path& database_path() const { return db_path_; }
 

@@ -19,6 +19,6 @@ nlohmann::json ToJson(const Decision& d);
 nlohmann::json ToJson(const StationView& s);
 nlohmann::json ToJson(const RouteView& r);
 // `station tools ID`: an array of {tool, socket, length, diameter, life_left_min, worn, broken}.
-nlohmann::json ToJson(const tooltable::ToolTable& t);
+nlohmann::json ToolsJson(const tooltable::ToolTable& t);
 
 }  // namespace cell::scheduler

@@ -1,5 +1,6 @@
-// Program metadata the scheduler needs (KT-APL FMS heading: UTL tool list, UCY cycle seconds) and the
-// interface through which it looks programs up. The service implements ProgramSource with the program store.
+// Program metadata the scheduler needs (the program's dialect and its heading: KT-APL's UTL tool list and UCY
+// cycle seconds) and the interface through which it looks programs up. The service implements ProgramSource
+// with the program store.
 #pragma once
 
 #include <cstdint>
@@ -14,16 +15,18 @@ namespace cell::scheduler {
 
 struct ProgramMeta {
   std::string name;
+  std::string dialect;             // the registry name the program store recorded (cell/interp/interp.h)
   std::vector<std::string> tools;  // UTL tool numbers, normalised ("T0012" -> "12"), in order, no duplicates
   std::optional<std::int64_t> ucy_s;  // UCY seconds; absent when the program has no UCY statement
 };
 
-// The scheduler's view of a KT-APL program's heading, read by cell::interp::ExtractKtaplMetadata (DESIGN §5:
+// The scheduler's view of a program's heading, read by its dialect (Dialect::ReadHeading; for KT-APL DESIGN
+// §5:
 // `(UTL,t1,t2,...)`, tool numbers of up to 7 digits each optionally prefixed with T; `(UCY,nnnnnnn)`, manual
-// seed line 4136). Tool numbers are normalised and de-duplicated; UCY must be whole seconds. Heading order is
-// not checked here. Throws cell::Error (kInvalidArgument) "NAME:LINE:COL: error: text" for a malformed UTL or
-// UCY (a bad tool entry, a bad or second UCY, a missing ',' or closing character).
-ProgramMeta KtaplProgramMeta(std::string_view text, std::string_view name);
+// seed line 4136). Tool numbers are normalised and de-duplicated; the cycle time must be whole seconds.
+// Heading order is not checked here. Throws cell::Error (kInvalidArgument) "NAME:LINE:COL: error: text" for
+// a malformed tool list or cycle time, and for a dialect the registry does not know.
+ProgramMeta ReadProgramMeta(std::string_view text, std::string_view dialect, std::string_view name);
 
 // Looks a program up by name (in the HOST namespace of the program store). nullopt when no such program
 // exists. A program that exists but cannot be read may throw cell::Error.
@@ -33,11 +36,17 @@ class ProgramSource {
   virtual std::optional<ProgramMeta> Lookup(std::string_view name) = 0;
 };
 
-// A ProgramSource over program text: `fetch` returns the text of a program (nullopt: no such program) and
-// KtaplProgramMeta reads UTL/UCY from it.
+// A program as the store keeps it: its text and the dialect it recorded.
+struct StoredProgram {
+  std::string text;
+  std::string dialect;
+};
+
+// A ProgramSource over stored programs: `fetch` returns a program (nullopt: no such program) and
+// ReadProgramMeta reads its heading.
 class TextProgramSource : public ProgramSource {
  public:
-  using Fetch = std::function<std::optional<std::string>(std::string_view name)>;
+  using Fetch = std::function<std::optional<StoredProgram>(std::string_view name)>;
   explicit TextProgramSource(Fetch fetch) : fetch_(std::move(fetch)) {}
   std::optional<ProgramMeta> Lookup(std::string_view name) override;
 
@@ -48,12 +57,14 @@ class TextProgramSource : public ProgramSource {
 // Program texts held in memory (tests, the benchmark, offline tools).
 class MemoryProgramSource : public ProgramSource {
  public:
-  void Put(std::string name, std::string text) { texts_[std::move(name)] = std::move(text); }
+  void Put(std::string name, std::string text, std::string dialect) {
+    texts_[std::move(name)] = {std::move(text), std::move(dialect)};
+  }
   void Remove(const std::string& name) { texts_.erase(name); }
   std::optional<ProgramMeta> Lookup(std::string_view name) override;
 
  private:
-  std::map<std::string, std::string, std::less<>> texts_;
+  std::map<std::string, StoredProgram, std::less<>> texts_;
 };
 
 }  // namespace cell::scheduler

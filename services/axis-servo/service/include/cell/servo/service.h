@@ -60,7 +60,7 @@ class Service {
   std::chrono::steady_clock::time_point last_axes_{};
 
   std::mutex tools_mu_;
-  std::optional<std::vector<ToolSlot>> pending_tools_;
+  std::optional<tooltable::ToolTable> pending_tools_;
   std::optional<cell::ServoControl> pending_control_;  // guarded by tools_mu_
   bool feed_hold_ = false;                             // the operator's hold, re-applied after every reset
   int32_t aborted_run_ = 0;  // cancelled by the operator: its later segments are dropped

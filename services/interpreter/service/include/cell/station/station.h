@@ -73,7 +73,6 @@ class Station {
   void SaveRun(int32_t id, const std::string& state, const std::string& reason);
   void SaveTools();
   void FlushOutbox();
-  std::vector<interp::ToolEntry> InterpTools() const;
 
   bus::Participant& bus_;
   config::StationConfig cfg_;

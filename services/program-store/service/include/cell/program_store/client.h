@@ -28,10 +28,21 @@ class Client {
   };
   // Stores a new file or (force) a new revision; returns the stored file's JSON (with warnings).
   nlohmann::json Put(const std::string& name, const std::string& content, const PutOptions& o);
-  // The content, or nullopt when there is no such file in that namespace.
+  // A stored file: its content and what the store knows of it (FileJson: name, node, type, dialect, ...).
+  struct File {
+    std::string content;
+    nlohmann::json info;
+    std::string dialect() const {
+      return info.is_object() ? info.value("dialect", std::string()) : std::string();
+    }
+  };
+  // The file, or nullopt when there is no such file in that namespace.
+  std::optional<File> Fetch(const std::string& node, const std::string& name, uint32_t revision = 0);
+  // The content alone.
   std::optional<std::string> Get(const std::string& node, const std::string& name, uint32_t revision = 0);
   // Looks in `node` first, then HOST (DESIGN §6 schedule lookup, KT-APL library search).
   std::optional<std::string> GetWithFallback(const std::string& node, const std::string& name);
+  std::optional<File> FetchWithFallback(const std::string& node, const std::string& name);
   nlohmann::json Show(const std::string& node, const std::string& name);
   nlohmann::json List(const std::string& node, const std::string& pattern);
   nlohmann::json Copy(const std::string& from_node, const std::string& from, const std::string& to_node,

@@ -37,6 +37,7 @@ class Service {
     std::string node, name;
     uint32_t revision = 0;
     std::string content;
+    nlohmann::json info;  // the file's metadata, sent with chunk 0
   } cache_;
   bus::Server<cell::ProgramRequest, cell::ProgramReply> server_;
 };
