@@ -167,7 +167,8 @@ nlohmann::json ToJson(const ToolTable& t) {
   nlohmann::json entries = nlohmann::json::array(), process = nlohmann::json::array();
   for (const auto& e : t.entries()) entries.push_back(EntryJson(e));
   for (const auto& p : t.process_comps()) {
-    process.push_back({{"tool", p.tool}, {"pallet", p.pallet}, {"length", p.length}, {"diameter", p.diameter}});
+    process.push_back(
+        {{"tool", p.tool}, {"pallet", p.pallet}, {"length", p.length}, {"diameter", p.diameter}});
   }
   return {{"entries", entries}, {"process", process}};
 }

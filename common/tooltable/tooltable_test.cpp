@@ -34,7 +34,8 @@ TEST(ToolTable, UpsertReplacesTheWholeDataSet) {
 }
 
 TEST(ToolTable, SuffixSetHoldsBaseToolButBrokenDoesNot) {
-  ToolTable t({ToolEntry{.tool = "33412.5", .socket = 1}, ToolEntry{.tool = "9", .socket = 2, .broken = true}});
+  ToolTable t(
+      {ToolEntry{.tool = "33412.5", .socket = 1}, ToolEntry{.tool = "9", .socket = 2, .broken = true}});
   EXPECT_TRUE(t.Holds("33412"));
   EXPECT_TRUE(t.Holds("33412.5"));
   EXPECT_FALSE(t.Holds("33412.4"));
@@ -64,16 +65,17 @@ TEST(ToolTable, ProcessCompensationNeedsDataSetAndAddsOnItsPallet) {
 }
 
 ToolTable EveryField() {
-  ToolTable t({ToolEntry{.tool = "33412",
-                         .socket = 12,
-                         .length = 0.02,
-                         .diameter = -0.25,  // signed, KT-APL manual example E45
-                         .life_left_min = 225,
-                         .worn = true,
-                         .check = true,
-                         .max_hp = 5.9},
-               ToolEntry{.tool = "3", .socket = 3, .x_offset = -1.5, .z_offset = 2.25, .nose_radius = 0.4, .tip = 3},
-               ToolEntry{.tool = "7", .socket = 7, .length = 80, .diameter = 12, .length_axis = 'X'}});
+  ToolTable t(
+      {ToolEntry{.tool = "33412",
+                 .socket = 12,
+                 .length = 0.02,
+                 .diameter = -0.25,  // signed, KT-APL manual example E45
+                 .life_left_min = 225,
+                 .worn = true,
+                 .check = true,
+                 .max_hp = 5.9},
+       ToolEntry{.tool = "3", .socket = 3, .x_offset = -1.5, .z_offset = 2.25, .nose_radius = 0.4, .tip = 3},
+       ToolEntry{.tool = "7", .socket = 7, .length = 80, .diameter = 12, .length_axis = 'X'}});
   t.UpsertProcess(ProcessComp{"33412", 12, 0.0003, -0.0004});
   return t;
 }

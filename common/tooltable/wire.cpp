@@ -9,7 +9,8 @@ namespace {
 
 void CheckName(const std::string& tool) {
   if (tool.size() > 16) {
-    throw Error(Errc::kInvalidArgument, "tool number '" + tool.substr(0, 20) + "...' longer than 16 characters");
+    throw Error(Errc::kInvalidArgument,
+                "tool number '" + tool.substr(0, 20) + "...' longer than 16 characters");
   }
 }
 

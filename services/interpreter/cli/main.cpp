@@ -1,5 +1,6 @@
 // cell-interp: the offline front door of the interpreter (DESIGN §4 "Offline CLI contract").
-//   cell-interp --dialect D [--tools FILE] [--params FILE] [--lib DIR] [--probe-model FILE] [--listing] PROGRAM
+//   cell-interp --dialect D [--tools FILE] [--params FILE] [--lib DIR] [--probe-model FILE] [--listing]
+//   PROGRAM
 // Exit 0: ran to its end; 1: program error (diagnostic on stderr); 2: usage error or unimplemented dialect.
 #include <cstdio>
 #include <filesystem>

@@ -40,8 +40,8 @@ bool ProgramNameCollector::Add(const std::string& name, int line, std::string_vi
   auto [it, inserted] = first_line_.emplace(name, line);
   if (!inserted) {
     h_.notices.push_back({HeadingNotice::Kind::kValue, std::string(key), line, 1,
-                          "program name " + name + " appears again (first on line " + std::to_string(it->second) +
-                              "); selection by name is ambiguous"});
+                          "program name " + name + " appears again (first on line " +
+                              std::to_string(it->second) + "); selection by name is ambiguous"});
     return false;
   }
   h_.program_names.push_back(name);

@@ -91,7 +91,8 @@ bool HasMCode(std::string_view upper, int code) {
     if (pos > 0 && (IsUpperAlpha(upper[pos - 1]) || IsDigit(upper[pos - 1]))) continue;
     std::size_t i = pos + 1;
     int value = 0, digits = 0;
-    while (i < upper.size() && IsDigit(upper[i]) && digits < 4) value = value * 10 + (upper[i++] - '0'), ++digits;
+    while (i < upper.size() && IsDigit(upper[i]) && digits < 4)
+      value = value * 10 + (upper[i++] - '0'), ++digits;
     if (digits > 0 && value == code && (i >= upper.size() || !IsDigit(upper[i]))) return true;
   }
   return false;
@@ -103,16 +104,17 @@ void CheckNameCharacters(std::string_view name, std::string_view label) {
   for (std::size_t i = 0; i < name.size(); ++i) {
     auto c = static_cast<unsigned char>(name[i]);
     if (c < 0x20 || c >= 0x7f) {
-      invalid(fmt::format("{} name contains a non-printable or non-ASCII byte 0x{:02x} at position {}", label, c,
-                          i + 1));
+      invalid(fmt::format("{} name contains a non-printable or non-ASCII byte 0x{:02x} at position {}", label,
+                          c, i + 1));
     }
     if (c == '*' || c == '?') {
-      invalid(fmt::format("{} name '{}' contains the wildcard '{}' (wildcards are for listing only)", label, name,
-                          static_cast<char>(c)));
+      invalid(fmt::format("{} name '{}' contains the wildcard '{}' (wildcards are for listing only)", label,
+                          name, static_cast<char>(c)));
     }
     if (c == '/' || c == '\\') {
-      invalid(fmt::format("{} name '{}' contains a path separator '{}'; the namespace is given separately (--node)",
-                          label, name, static_cast<char>(c)));
+      invalid(fmt::format(
+          "{} name '{}' contains a path separator '{}'; the namespace is given separately (--node)", label,
+          name, static_cast<char>(c)));
     }
   }
   if (name.front() == ' ' || name.back() == ' ') {
@@ -126,10 +128,12 @@ void CheckPlainName(std::string_view name, std::string_view label) {
   if (name.size() > 32) {
     invalid(fmt::format("{} name '{}' is too long: {} characters, at most 32", label, name, name.size()));
   }
-  if (!IsAlnum(name.front())) invalid(fmt::format("{} name '{}' must begin with a letter or digit", label, name));
+  if (!IsAlnum(name.front()))
+    invalid(fmt::format("{} name '{}' must begin with a letter or digit", label, name));
   for (char c : name) {
     if (!(IsAlnum(c) || c == '.' || c == '-' || c == '_')) {
-      invalid(fmt::format("{} name '{}' contains '{}'; allowed: letters, digits, '.', '-', '_'", label, name, c));
+      invalid(
+          fmt::format("{} name '{}' contains '{}'; allowed: letters, digits, '.', '-', '_'", label, name, c));
     }
   }
 }

@@ -3,7 +3,8 @@
 // its wire form (cell/tooltable/wire.h) and ToJson/FromJson its stored and printed form.
 //
 // Each dialect reads and writes tool tables in its own form (KT-APL TLD statements, a lathe's X/Z/R/L table,
-// a mill's offset file) through the dialect registry (services/interpreter); this library only holds the data.
+// a mill's offset file) through the dialect registry (services/interpreter); this library only holds the
+// data.
 #pragma once
 
 #include <cstdint>
@@ -37,7 +38,8 @@ struct ToolEntry {
   bool operator==(const ToolEntry&) const = default;
 };
 
-// A process compensation (KT-APL TLD with W): added to a tool's data set while pallet `pallet` is on the table.
+// A process compensation (KT-APL TLD with W): added to a tool's data set while pallet `pallet` is on the
+// table.
 struct ProcessComp {
   std::string tool;
   int pallet = 0;

@@ -1,5 +1,5 @@
-// The tool table on the bus: common/tooltable's model <-> the IDL ToolTable (idl/station.idl). The one mapping
-// every process uses (the station publishes it, the scheduler, servo, dashboard and cellctl read it).
+// The tool table on the bus: common/tooltable's model <-> the IDL ToolTable (idl/station.idl). The one
+// mapping every process uses (the station publishes it, the scheduler, servo, dashboard and cellctl read it).
 #pragma once
 
 #include <string_view>

@@ -2,7 +2,6 @@
 // (../shared/reference/seed-emco.md). The executor is built by its own issue.
 #include <fmt/format.h>
 
-
 #include "cell/interp/emco.h"
 #include "cell/interp/scan.h"
 

@@ -94,7 +94,8 @@ void Compensator::ReleaseHeld() {
     Canon h = std::move(held_.front());
     held_.pop_front();
     // Moves without travel in the plane (and G38 checks) happen where the cutter is.
-    if (h.op() == Op::kRapid || h.op() == Op::kLinear || h.op() == Op::kProbe) SetPlane(h.target()->pos, actual_);
+    if (h.op() == Op::kRapid || h.op() == Op::kLinear || h.op() == Op::kProbe)
+      SetPlane(h.target()->pos, actual_);
     Out(std::move(h));
   }
 }

@@ -22,7 +22,8 @@
 
 namespace cell::interp::ktapl::cc {
 
-// The geometry (Vec2, Path, Corner, offsets, intersections) is the core's (cell/interp/geometry/offset_path.h).
+// The geometry (Vec2, Path, Corner, offsets, intersections) is the core's
+// (cell/interp/geometry/offset_path.h).
 using namespace ::cell::interp::geom;  // NOLINT: the compensator is written in the geometry's terms
 
 // A compensation error: the manual's alarm number (empty for the control's other rejections) and text.

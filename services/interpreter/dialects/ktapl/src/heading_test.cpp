@@ -30,8 +30,7 @@ std::vector<std::string> ValueProblems(const Heading& md) {
   std::vector<std::string> out;
   for (const auto& w : md.notices) {
     if (w.kind == Kind::kValue)
-      out.push_back(w.key + " " + std::to_string(w.line) + ":" + std::to_string(w.column) + ": " +
-                    w.text);
+      out.push_back(w.key + " " + std::to_string(w.line) + ":" + std::to_string(w.column) + ": " + w.text);
   }
   return out;
 }
@@ -50,8 +49,7 @@ TEST(KtaplMeta, FmsHeading) {
   EXPECT_THAT(md.notices, IsEmpty()) << Joined(md);
 
   // Tool numbers as written (T dropped, zeros kept), duplicates kept; CR LF line ends.
-  md =
-      ReadKtaplHeading("%\r\n(NAM,GH)\r\n(UTL,T12,0034,T7654321,12,t0033412)\r\n(UCY,600)\r\nN10G71\r\n");
+  md = ReadKtaplHeading("%\r\n(NAM,GH)\r\n(UTL,T12,0034,T7654321,12,t0033412)\r\n(UCY,600)\r\nN10G71\r\n");
   EXPECT_THAT(md.tools, ElementsAre("12", "0034", "7654321", "12", "0033412"));
   EXPECT_DOUBLE_EQ(md.cycle_s.value_or(0), 600);
   EXPECT_THAT(md.notices, IsEmpty()) << Joined(md);
@@ -151,10 +149,8 @@ TEST(KtaplMeta, MalformedEntriesAndValuesAreLeftOut) {
   // Columns are those of the entry or value as written.
   EXPECT_THAT(ValueProblems(ReadKtaplHeading("%\n(UTL,T12345678)")),
               ElementsAre(HasSubstr("UTL 2:6: UTL entry 'T12345678'"), "UTL 2:6: (UTL,...) lists no tools"));
-  EXPECT_THAT(ValueProblems(ReadKtaplHeading("(UTL,1,,2)")),
-              ElementsAre(HasSubstr("UTL 1:8: UTL entry ''")));
-  EXPECT_THAT(ValueProblems(ReadKtaplHeading("(UTL,)")),
-              ElementsAre("UTL 1:6: (UTL,...) lists no tools"));
+  EXPECT_THAT(ValueProblems(ReadKtaplHeading("(UTL,1,,2)")), ElementsAre(HasSubstr("UTL 1:8: UTL entry ''")));
+  EXPECT_THAT(ValueProblems(ReadKtaplHeading("(UTL,)")), ElementsAre("UTL 1:6: (UTL,...) lists no tools"));
   EXPECT_THAT(ValueProblems(ReadKtaplHeading("(UCY,12345678)")),
               ElementsAre("UCY 1:6: UCY value '12345678' is not a cycle time in seconds (up to 7 digits)"));
   EXPECT_THAT(ValueProblems(ReadKtaplHeading("(UCY, 1,2)")),

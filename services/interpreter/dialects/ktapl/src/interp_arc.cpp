@@ -51,8 +51,8 @@ void KtRun::Arc(const Words& words, bool cw, int col, double feed, FeedMode fm) 
   constexpr double kMinRadius = 0.001;  // mm
   geom::ArcSolution sol;
   if (r) {
-    const bool g90_g17 = !mode_.incremental && mode_.plane == geom::Plane::kXY && !mode_.coaxis_first &&
-                         !mode_.coaxis_second;
+    const bool g90_g17 =
+        !mode_.incremental && mode_.plane == geom::Plane::kXY && !mode_.coaxis_first && !mode_.coaxis_second;
     const bool zu_plane = mode_.plane == geom::Plane::kZX && mode_.coaxis_second && !mode_.incremental;
     if (!g90_g17 && !zu_plane) Fail(r->col, "R CIRCLES ARE ALLOWED ONLY IN G90 G17");
     sol = geom::ArcFromRadius(start, end, ToMm(std::fabs(r->v)), cw, r->v < 0, kMinRadius);

@@ -47,8 +47,8 @@ Word KtRun::EvalWord(const RawWord& w, bool dwell, bool passing, bool drop_undef
 void KtRun::ConvertGCodes(const GWords& gs, bool pass800, BlockCodes& k) {
   bool plane_set = false, b20 = false, b21 = false;
   for (auto [g, col] : gs) {
-    if (pass800 && !(g == 77 || g == 78 || g == 70 || g == 71 || g == 80 || g == 800 || (g >= 801 && g <= 899) ||
-                     (g >= 81 && g <= 89))) {
+    if (pass800 && !(g == 77 || g == 78 || g == 70 || g == 71 || g == 80 || g == 800 ||
+                     (g >= 801 && g <= 899) || (g >= 81 && g <= 89))) {
       k.passed.push_back({g, col});
       continue;
     }
@@ -160,7 +160,8 @@ void KtRun::ConvertGCodes(const GWords& gs, bool pass800, BlockCodes& k) {
       case 60:
       case 61:
       case 62:
-        mode_.probe_count = g == 60 ? ProbeCount::kOff : (g == 61 ? ProbeCount::kContacts : ProbeCount::kBreaks);
+        mode_.probe_count =
+            g == 60 ? ProbeCount::kOff : (g == 61 ? ProbeCount::kContacts : ProbeCount::kBreaks);
         if (g != 60) machine_[1022] = 0;
         break;
       case 70:
@@ -226,8 +227,8 @@ bool KtRun::PassCycleParameters(const RawWords& raw, const BlockCodes& k, const 
   for (const auto& rw : raw) {
     char l = rw.letter;
     if (l == 'G') continue;
-    if (!series800 &&
-        !(l == 'A' || l == 'B' || l == 'C' || l == 'E' || l == 'F' || l == 'R' || l == 'X' || l == 'Y' || l == 'Z')) {
+    if (!series800 && !(l == 'A' || l == 'B' || l == 'C' || l == 'E' || l == 'F' || l == 'R' || l == 'X' ||
+                        l == 'Y' || l == 'Z')) {
       continue;
     }
     bool dropped;
@@ -243,8 +244,9 @@ bool KtRun::PassCycleParameters(const RawWords& raw, const BlockCodes& k, const 
   if (series800 && !trigger) {
     // A block without X Y Z A B C only passes its letters; its M, S, T and F still act (so that, for
     // example, M30 ends the program while a G800-series cycle is pending). Axis words do not move.
-    words.erase(std::remove_if(words.begin(), words.end(), [](const Word& w) { return AxisOfLetter(w.letter) >= 0; }),
-                words.end());
+    words.erase(
+        std::remove_if(words.begin(), words.end(), [](const Word& w) { return AxisOfLetter(w.letter) >= 0; }),
+        words.end());
   }
   return trigger;
 }
@@ -367,8 +369,8 @@ void KtRun::ImmediateMCodes(const Words& words, bool speed_changed, const Word* 
       case 58:
       case 59: {
         static const std::map<int, CoolantMode> kModes = {
-            {7, CoolantMode::kMist},          {8, CoolantMode::kFlood},        {51, CoolantMode::kWashFlood},
-            {52, CoolantMode::kWashAir},      {57, CoolantMode::kAuxMist},     {58, CoolantMode::kAuxFlood},
+            {7, CoolantMode::kMist},     {8, CoolantMode::kFlood},    {51, CoolantMode::kWashFlood},
+            {52, CoolantMode::kWashAir}, {57, CoolantMode::kAuxMist}, {58, CoolantMode::kAuxFlood},
             {59, CoolantMode::kAuxPulse}};
         CoolantMode mode = kModes.at(code);
         if (code == 7 || code == 8) mode_.coolant = mode, mode_.aux_coolant = CoolantMode::kOff;
@@ -480,8 +482,8 @@ void KtRun::ExecTypeI(BlockCtx& bc, const ParsedBlock* pb) {
   // Cycle parameter passing (manual ch. 8: letters A-Z -> L801-L826). M25 / M06 blocks move in machine
   // coordinates and never run a pending cycle.
   bool trigger = false;
-  const bool machine_block =
-      std::any_of(words.begin(), words.end(), [](const Word& w) { return w.letter == 'M' && (w.v == 25 || w.v == 6); });
+  const bool machine_block = std::any_of(
+      words.begin(), words.end(), [](const Word& w) { return w.letter == 'M' && (w.v == 25 || w.v == 6); });
   if (mode_.cycle != 0 && !running_cycle && !g77 && !machine_block) {
     trigger = PassCycleParameters(raw, k, pb, drop_undefined, axis_mask, words);
     if (mode_.cycle >= 801) {
@@ -529,7 +531,8 @@ void KtRun::ExecTypeI(BlockCtx& bc, const ParsedBlock* pb) {
   if (const Word* h = Find(words, 'H')) {
     int hv = static_cast<int>(h->v);
     if (hv < 0 || hv > 32) Fail(h->col, "H WORD OUT OF RANGE 0-32");
-    if (hv != 0 && !mode_.explicit_fixtures) Fail(h->col, "H WORD NOT ALLOWED IN G49 (IMPLICIT FIXTURE OFFSET) MODE");
+    if (hv != 0 && !mode_.explicit_fixtures)
+      Fail(h->col, "H WORD NOT ALLOWED IN G49 (IMPLICIT FIXTURE OFFSET) MODE");
     active_h_ = hv;
   }
 
@@ -548,7 +551,8 @@ void KtRun::AfterMCode(const BlockMCodes& mc) {
       StopOp& c = Out<StopOp>();
       c.m = mc.after;
       c.optional = mc.after == 1;
-      if (mode_.spindle == SpindleDir::kCw || mode_.spindle == SpindleDir::kCcw) mode_.spindle = SpindleDir::kStop;
+      if (mode_.spindle == SpindleDir::kCw || mode_.spindle == SpindleDir::kCcw)
+        mode_.spindle = SpindleDir::kStop;
       mode_.coolant = CoolantMode::kOff;
       mode_.aux_coolant = CoolantMode::kOff;
       break;
@@ -565,7 +569,8 @@ void KtRun::AfterMCode(const BlockMCodes& mc) {
       active_tool_ = selected_tool_;
       uat_ = 0;
       ApplyTool();
-      if (mode_.spindle == SpindleDir::kCw || mode_.spindle == SpindleDir::kCcw) mode_.spindle = SpindleDir::kStop;
+      if (mode_.spindle == SpindleDir::kCw || mode_.spindle == SpindleDir::kCcw)
+        mode_.spindle = SpindleDir::kStop;
       mode_.overrides_locked = false;
       break;
     case 9: {

@@ -18,7 +18,8 @@ KtRun::KtRun(const RunOptions& o) : env_(o.env ? o.env : &default_env_) {
   opt_.params = o.params;
   opt_.env = o.env;
   auto param_number = [](const std::string& key) -> int {
-    if (key.size() < 2 || key.size() > 5 || key[0] != 'L' || !std::all_of(key.begin() + 1, key.end(), IsDigit)) {
+    if (key.size() < 2 || key.size() > 5 || key[0] != 'L' ||
+        !std::all_of(key.begin() + 1, key.end(), IsDigit)) {
       return -1;
     }
     return std::stoi(key.substr(1));
@@ -254,7 +255,8 @@ std::optional<Def> KtRun::LoadLibrary(const std::string& name, const std::string
   while (p.pos < all.end) {
     Line b = ReadLine(all, p);
     for (const auto& s : FindStatements(b.text, nullptr)) {
-      if ((s.mnemonic == "DFS" || s.mnemonic == "DFC") && Upper(Trim(SplitTopLevel(s.body, ',')[0])) == name) {
+      if ((s.mnemonic == "DFS" || s.mnemonic == "DFC") &&
+          Upper(Trim(SplitTopLevel(s.body, ',')[0])) == name) {
         d.span.begin = p.pos;
         d.span.begin_line = p.line;
         return d;
@@ -334,7 +336,8 @@ void KtRun::DoJump(int label, int col) {
       bool maybe = false;
       for (size_t k = 0; k + 2 < b.text.size(); ++k) {
         const char c0 = Up(b.text[k]), c1 = Up(b.text[k + 1]), c2 = Up(b.text[k + 2]);
-        if ((c0 == 'L' && c1 == 'B' && c2 == 'L') || (c0 == 'D' && c1 == 'F') || (c0 == 'E' && c1 == 'N' && c2 == 'D')) {
+        if ((c0 == 'L' && c1 == 'B' && c2 == 'L') || (c0 == 'D' && c1 == 'F') ||
+            (c0 == 'E' && c1 == 'N' && c2 == 'D')) {
           maybe = true;
         }
       }
@@ -347,7 +350,8 @@ void KtRun::DoJump(int label, int col) {
         }
         if (!in_def && s.mnemonic == "LBL") {
           std::string v = Trim(s.body);
-          if (!v.empty() && std::all_of(v.begin(), v.end(), IsDigit) && v.size() < 6 && std::stoi(v) == label) {
+          if (!v.empty() && std::all_of(v.begin(), v.end(), IsDigit) && v.size() < 6 &&
+              std::stoi(v) == label) {
             return here;
           }
         }

@@ -165,36 +165,36 @@ struct BlockCtx {
 // Modal state, by meaning (the G and M codes that set each are in the comments; ActiveCode maps them back
 // for IFT).
 
-enum class Adaptive { kOff, kOn, kWithoutAirGap };  // G50 / G51 / G53
+enum class Adaptive { kOff, kOn, kWithoutAirGap };   // G50 / G51 / G53
 enum class ProbeCount { kOff, kContacts, kBreaks };  // G60 / G61 / G62 (L1022 counts)
 enum class CutterComp { kOff, kLeft, kRight };       // G40 / G41 / G42 as programmed
 
 struct Modal {
-  bool contouring = false;                       // G01; G00 is the decelerating feed mode
-  geom::Plane plane = geom::Plane::kXY;          // G17 / G18 / G19
-  bool coaxis_first = false;                     // G20: the plane's first axis is its co-axis (U V W)
-  bool coaxis_second = false;                    // G21: the second axis
-  bool incremental = false;                      // G91 (G90)
-  bool inverse_time = false;                     // G93 (G94)
-  int cycle = 0;                                 // defined cycle in force (81-89, 801-899); 0 = G80
-  bool obstruction_detection = false;            // G28 (G29)
-  bool inspection_recording = false;             // G36 (G37)
-  bool fill_in_bypass = false;                   // G46
-  bool calculated_offsets = false;               // G47 (G39)
-  bool explicit_fixtures = false;                // G48: H selects the fixture line (G49: implicit)
-  Adaptive adaptive = Adaptive::kOff;            // G50 / G51 / G53
-  ProbeCount probe_count = ProbeCount::kOff;     // G60 / G61 / G62
-  CutterComp cutter_comp = CutterComp::kOff;     // G40 / G41 / G42
-  SpindleDir spindle = SpindleDir::kStop;        // M03 / M04 / M05 / M19
-  CoolantMode coolant = CoolantMode::kOff;       // M07 / M08 / M09
-  CoolantMode aux_coolant = CoolantMode::kOff;   // M57 / M58 / M59
-  bool secondary_probe = false;                  // M21 (M20)
-  bool z_prime_retracted = true;                 // M24 (M23)
-  bool b_clamp_off = false;                      // M27 (M26)
-  bool c_clamp_off = false;                      // M29 (M28)
-  bool tapping_range = false;                    // M40
-  bool overrides_locked = false;                 // M49 (M48)
-  bool wash_flood = false, wash_air = false;     // M51, M52
+  bool contouring = false;                      // G01; G00 is the decelerating feed mode
+  geom::Plane plane = geom::Plane::kXY;         // G17 / G18 / G19
+  bool coaxis_first = false;                    // G20: the plane's first axis is its co-axis (U V W)
+  bool coaxis_second = false;                   // G21: the second axis
+  bool incremental = false;                     // G91 (G90)
+  bool inverse_time = false;                    // G93 (G94)
+  int cycle = 0;                                // defined cycle in force (81-89, 801-899); 0 = G80
+  bool obstruction_detection = false;           // G28 (G29)
+  bool inspection_recording = false;            // G36 (G37)
+  bool fill_in_bypass = false;                  // G46
+  bool calculated_offsets = false;              // G47 (G39)
+  bool explicit_fixtures = false;               // G48: H selects the fixture line (G49: implicit)
+  Adaptive adaptive = Adaptive::kOff;           // G50 / G51 / G53
+  ProbeCount probe_count = ProbeCount::kOff;    // G60 / G61 / G62
+  CutterComp cutter_comp = CutterComp::kOff;    // G40 / G41 / G42
+  SpindleDir spindle = SpindleDir::kStop;       // M03 / M04 / M05 / M19
+  CoolantMode coolant = CoolantMode::kOff;      // M07 / M08 / M09
+  CoolantMode aux_coolant = CoolantMode::kOff;  // M57 / M58 / M59
+  bool secondary_probe = false;                 // M21 (M20)
+  bool z_prime_retracted = true;                // M24 (M23)
+  bool b_clamp_off = false;                     // M27 (M26)
+  bool c_clamp_off = false;                     // M29 (M28)
+  bool tapping_range = false;                   // M40
+  bool overrides_locked = false;                // M49 (M48)
+  bool wash_flood = false, wash_air = false;    // M51, M52
 };
 
 // The G codes of a Type I block as they act (ConvertGCodes -> the rest of ExecTypeI).
@@ -204,10 +204,10 @@ struct BlockCodes {
   bool g92 = false, g98 = false, g99 = false;
   bool probe = false;  // G22 / G23
   int probe_g = 0;
-  int probe_cycle = 0;  // G24-G27
-  bool inhibit_cycle = false;       // G77
-  bool drop_undefined = false;      // G78
-  GWords passed;                    // G codes handed to a G800-series cycle (L807)
+  int probe_cycle = 0;          // G24-G27
+  bool inhibit_cycle = false;   // G77
+  bool drop_undefined = false;  // G78
+  GWords passed;                // G codes handed to a G800-series cycle (L807)
 };
 
 // The M codes of a block that act after its motion (one per block), and the immediate ones that matter
@@ -306,8 +306,8 @@ class KtRun final : public RunBase, public ExprContext {
   void ExecTypeI(BlockCtx& bc, const ParsedBlock* pb);
   Word EvalWord(const RawWord& w, bool dwell, bool passing, bool drop_undefined, bool& dropped);
   void ConvertGCodes(const GWords& gs, bool pass800, BlockCodes& k);
-  bool PassCycleParameters(const RawWords& raw, const BlockCodes& k, const ParsedBlock* pb, bool drop_undefined,
-                           uint32_t axis_mask, Words& words);
+  bool PassCycleParameters(const RawWords& raw, const BlockCodes& k, const ParsedBlock* pb,
+                           bool drop_undefined, uint32_t axis_mask, Words& words);
   BlockMCodes ReadMCodes(const Words& words, bool trigger);
   void ToolAndSpeed(const Words& words, const BlockMCodes& mc);
   void ImmediateMCodes(const Words& words, bool speed_changed, const Word* s);
@@ -318,8 +318,8 @@ class KtRun final : public RunBase, public ExprContext {
   double ToMm(double v) const { return metric_ ? v : v * kInch; }
   double FromMm(double v) const { return metric_ ? v : v / kInch; }
   void ResetAtEnd();
-  void Motion(const Words& words, const BlockCodes& k, const BlockMCodes& mc, uint32_t axis_mask, int motion_col,
-              const Word* f, std::optional<double> block_feed);
+  void Motion(const Words& words, const BlockCodes& k, const BlockMCodes& mc, uint32_t axis_mask,
+              int motion_col, const Word* f, std::optional<double> block_feed);
   void LinearMotion(const Words& words, const BlockCodes& k, const BlockMCodes& mc, uint32_t axis_mask,
                     int motion_col, std::optional<double> eff);
   void ProbeMove(const BlockCodes& k, uint32_t axis_mask, const AxisArray& target, bool rapid, double feed,

@@ -36,8 +36,8 @@ void KtRun::ResetAtEnd() {
   for (auto& f : *frames_) f.data.locals.clear();
 }
 
-void KtRun::EmitMove(const AxisArray& target, uint32_t moved, bool rapid, double feed, FeedMode fm, bool exact,
-                     const AxisArray& travel, uint32_t travel_mask) {
+void KtRun::EmitMove(const AxisArray& target, uint32_t moved, bool rapid, double feed, FeedMode fm,
+                     bool exact, const AxisArray& travel, uint32_t travel_mask) {
   used_ |= moved;
   bool change = travel_mask != 0;
   for (int a = 0; a < kAxisCount && !change; ++a) {
@@ -171,7 +171,8 @@ void KtRun::LinearMotion(const Words& words, const BlockCodes& k, const BlockMCo
     target[a] = (mode_.incremental ? prog + v : v) + off;
   }
   // G49 implicit fixture offsets follow a G90 G00 move of B to a listed position.
-  if (!mode_.explicit_fixtures && !mode_.incremental && !mode_.contouring && (axis_mask & (1u << kB)) && !mc.m25) {
+  if (!mode_.explicit_fixtures && !mode_.incremental && !mode_.contouring && (axis_mask & (1u << kB)) &&
+      !mc.m25) {
     int hit = 0;
     for (int h = 1; h <= 32; ++h) {
       if (fixtures_[h].set && fixtures_[h].has_i && std::fabs(fixtures_[h].i - target[kB]) < 1e-6) hit = h;
@@ -232,8 +233,8 @@ void KtRun::LinearMotion(const Words& words, const BlockCodes& k, const BlockMCo
   }
 }
 
-void KtRun::ProbeMove(const BlockCodes& k, uint32_t axis_mask, const AxisArray& target, bool rapid, double feed,
-                      FeedMode fm) {
+void KtRun::ProbeMove(const BlockCodes& k, uint32_t axis_mask, const AxisArray& target, bool rapid,
+                      double feed, FeedMode fm) {
   // G22 (stop on contact) / G23 (stop on break): a queue buster, answered by the Environment.
   ProbeResult pr = env_->Probe(k.probe_g == 22, pos_, target);
   ProbeOutcome result;

@@ -11,18 +11,18 @@ namespace cell::interp::ktapl {
 
 const std::map<std::string_view, KtRun::StatementFn>& KtRun::StatementTable() {
   static const std::map<std::string_view, StatementFn> kTable = {
-      {"PAR", &KtRun::StPar},      {"IFT", &KtRun::StIft},         {"GTO", &KtRun::StGto},
-      {"LBL", &KtRun::StLbl},      {"END", &KtRun::StEnd},         {"CLS", &KtRun::StCls},
-      {"DLP", &KtRun::StDlp},      {"NAM", &KtRun::StHeading},     {"UTL", &KtRun::StHeading},
-      {"UCY", &KtRun::StHeading},  {"ACP", &KtRun::StHeading},     {"SSA", &KtRun::StHeading},
-      {"MSG", &KtRun::StMsg},      {"OIF", &KtRun::StOif},         {"OPF", &KtRun::StOpf},
-      {"CLF", &KtRun::StClf},      {"FWR", &KtRun::StFwr},         {"DAT", &KtRun::StDat},
-      {"CPY", &KtRun::StFileOp},   {"DLF", &KtRun::StFileOp},      {"PRT", &KtRun::StFileOp},
-      {"RCP", &KtRun::StFileOp},   {"USF", &KtRun::StFileOp},      {"ULF", &KtRun::StFileOp},
-      {"CER", &KtRun::StErrorMode}, {"SER", &KtRun::StErrorMode},  {"SET", &KtRun::StSetWai},
-      {"WAI", &KtRun::StSetWai},   {"TLD", &KtRun::StTld},         {"FXC", &KtRun::StFxc},
-      {"UFX", &KtRun::StFxc},      {"ZTB", &KtRun::StZtb},         {"MIR", &KtRun::StMir},
-      {"U88", &KtRun::StU88},      {"UAT", &KtRun::StUat},         {"EVT", &KtRun::StEvt},
+      {"PAR", &KtRun::StPar},       {"IFT", &KtRun::StIft},       {"GTO", &KtRun::StGto},
+      {"LBL", &KtRun::StLbl},       {"END", &KtRun::StEnd},       {"CLS", &KtRun::StCls},
+      {"DLP", &KtRun::StDlp},       {"NAM", &KtRun::StHeading},   {"UTL", &KtRun::StHeading},
+      {"UCY", &KtRun::StHeading},   {"ACP", &KtRun::StHeading},   {"SSA", &KtRun::StHeading},
+      {"MSG", &KtRun::StMsg},       {"OIF", &KtRun::StOif},       {"OPF", &KtRun::StOpf},
+      {"CLF", &KtRun::StClf},       {"FWR", &KtRun::StFwr},       {"DAT", &KtRun::StDat},
+      {"CPY", &KtRun::StFileOp},    {"DLF", &KtRun::StFileOp},    {"PRT", &KtRun::StFileOp},
+      {"RCP", &KtRun::StFileOp},    {"USF", &KtRun::StFileOp},    {"ULF", &KtRun::StFileOp},
+      {"CER", &KtRun::StErrorMode}, {"SER", &KtRun::StErrorMode}, {"SET", &KtRun::StSetWai},
+      {"WAI", &KtRun::StSetWai},    {"TLD", &KtRun::StTld},       {"FXC", &KtRun::StFxc},
+      {"UFX", &KtRun::StFxc},       {"ZTB", &KtRun::StZtb},       {"MIR", &KtRun::StMir},
+      {"U88", &KtRun::StU88},       {"UAT", &KtRun::StUat},       {"EVT", &KtRun::StEvt},
   };
   return kTable;
 }

@@ -26,7 +26,8 @@ class TldParser {
     while (i_ < b_.size()) {
       const int col = Col();
       const char letter = Up(b_[i_]);
-      if (seen.find(letter) != std::string::npos) Error(col, fmt::format("TLD LETTER {} GIVEN TWICE", letter));
+      if (seen.find(letter) != std::string::npos)
+        Error(col, fmt::format("TLD LETTER {} GIVEN TWICE", letter));
       seen.push_back(letter);
       ++i_;
       Blanks();
@@ -74,7 +75,8 @@ class TldParser {
           worn = true;
           break;
         default:
-          Error(col, fmt::format("Input Source Error (TLD letter {})", b_[static_cast<size_t>(col - ctx_.col0)]));
+          Error(col,
+                fmt::format("Input Source Error (TLD letter {})", b_[static_cast<size_t>(col - ctx_.col0)]));
       }
       Blanks();
     }
@@ -122,12 +124,14 @@ class TldParser {
   }
   void Range(const std::optional<double>& v, double lim, char letter) const {
     if (v && std::fabs(*v) > lim + 1e-9) {
-      Error(ctx_.col0, fmt::format("TLD {} VALUE {} OUTSIDE +-{}", letter, FormatKtNumber(*v), FormatKtNumber(lim)));
+      Error(ctx_.col0,
+            fmt::format("TLD {} VALUE {} OUTSIDE +-{}", letter, FormatKtNumber(*v), FormatKtNumber(lim)));
     }
   }
   // Ln (parameter substitution) at the current position: its value, or nullopt.
   std::optional<double> Parameter(char letter, bool neg) {
-    if (i_ >= b_.size() || Up(b_[i_]) != 'L' || i_ + 1 >= b_.size() || !IsDigit(b_[i_ + 1])) return std::nullopt;
+    if (i_ >= b_.size() || Up(b_[i_]) != 'L' || i_ + 1 >= b_.size() || !IsDigit(b_[i_ + 1]))
+      return std::nullopt;
     const int col = Col();
     if (!ctx_.param) Error(col, fmt::format("TLD {}: PARAMETERS ARE ONLY ALLOWED IN A PROGRAM", letter));
     size_t j = i_ + 1;

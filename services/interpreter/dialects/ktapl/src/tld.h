@@ -30,8 +30,8 @@ struct TldContext {
 };
 
 struct TldStatement {
-  std::optional<tooltable::ToolEntry> entry;       // a primary or suffix data set
-  std::optional<tooltable::ProcessComp> process;   // or a process compensation (W given)
+  std::optional<tooltable::ToolEntry> entry;      // a primary or suffix data set
+  std::optional<tooltable::ProcessComp> process;  // or a process compensation (W given)
 };
 
 // Parses the body of one TLD statement (the text after "TLD,"). Throws TldError.

@@ -30,12 +30,15 @@ class Okuma final : public UnimplementedRuns {
   std::vector<FileKind> kinds() const override {
     return {FileKind::kPartProgram, FileKind::kLibrary, FileKind::kSchedule, FileKind::kToolTable};
   }
-  std::vector<std::string_view> extensions() const override { return {".MIN", ".SUB", ".SSB", ".MSB", ".LIB"}; }
+  std::vector<std::string_view> extensions() const override {
+    return {".MIN", ".SUB", ".SSB", ".MSB", ".LIB"};
+  }
 
   std::optional<FileKind> KindFromName(std::string_view name) const override {
     std::string upper = Upper(name);
     auto ends = [&](std::string_view suffix) {
-      return upper.size() > suffix.size() && upper.compare(upper.size() - suffix.size(), suffix.size(), suffix) == 0;
+      return upper.size() > suffix.size() &&
+             upper.compare(upper.size() - suffix.size(), suffix.size(), suffix) == 0;
     };
     if (ends(".SDF")) return FileKind::kSchedule;
     if (ends(".SUB") || ends(".SSB") || ends(".MSB") || ends(".LIB")) return FileKind::kLibrary;
@@ -47,27 +50,30 @@ class Okuma final : public UnimplementedRuns {
     (void)kind;
     CheckNameCharacters(name, "Okuma");
     if (name.find(':') != std::string_view::npos) {
-      Invalid(fmt::format("Okuma name '{}' contains ':'; device prefixes such as MD1: are not part of stored names",
-                          name));
+      Invalid(fmt::format(
+          "Okuma name '{}' contains ':'; device prefixes such as MD1: are not part of stored names", name));
     }
     std::size_t dot = name.rfind('.');
     std::string_view base = name.substr(0, dot);
     std::string_view ext = dot == std::string_view::npos ? std::string_view() : name.substr(dot + 1);
-    if (base.empty() || !IsAlpha(base.front())) Invalid(fmt::format("Okuma file name '{}' must begin with a letter", name));
+    if (base.empty() || !IsAlpha(base.front()))
+      Invalid(fmt::format("Okuma file name '{}' must begin with a letter", name));
     if (base.size() > 16) {
-      Invalid(fmt::format("Okuma file name '{}' is too long: {} characters before the extension, at most 16", name,
-                          base.size()));
+      Invalid(fmt::format("Okuma file name '{}' is too long: {} characters before the extension, at most 16",
+                          name, base.size()));
     }
     for (char c : base) {
       if (!(IsAlnum(c) || c == '-' || c == '_')) {
-        Invalid(fmt::format(
-            "Okuma file name '{}' contains '{}'; allowed: letters, digits, '-', '_' and one '.' before the extension",
-            name, c));
+        Invalid(
+            fmt::format("Okuma file name '{}' contains '{}'; allowed: letters, digits, '-', '_' and one '.' "
+                        "before the extension",
+                        name, c));
       }
     }
     if (dot != std::string_view::npos &&
         (ext.empty() || ext.size() > 3 || !std::all_of(ext.begin(), ext.end(), IsAlnum))) {
-      Invalid(fmt::format("Okuma name '{}': the extension must be 1-3 letters or digits (MIN, SUB, SSB, SDF)", name));
+      Invalid(fmt::format("Okuma name '{}': the extension must be 1-3 letters or digits (MIN, SUB, SSB, SDF)",
+                          name));
     }
   }
 
@@ -92,7 +98,8 @@ class Okuma final : public UnimplementedRuns {
       int ln = static_cast<int>(idx) + 1;
       std::string upper = Upper(Trim(lines[idx]));
       if (upper.empty()) continue;
-      if (upper[0] == '$' && upper.find('.') != std::string::npos) out.push_back({ln, "$FILE.EXT tape header", false});
+      if (upper[0] == '$' && upper.find('.') != std::string::npos)
+        out.push_back({ln, "$FILE.EXT tape header", false});
       std::string_view body = SkipSequence(upper);
       // A sequence *name* with letters ("NAT01 G81").
       std::string_view s = Trim(upper);
@@ -126,7 +133,8 @@ class Okuma final : public UnimplementedRuns {
       if (name.empty()) continue;
       if (!names.Add(name, ln, "O")) continue;
       if (name.rfind("OO", 0) == 0) {
-        h.notices.push_back({HeadingNotice::Kind::kValue, "O", ln, 1, "program names OO... are reserved for the system"});
+        h.notices.push_back(
+            {HeadingNotice::Kind::kValue, "O", ln, 1, "program names OO... are reserved for the system"});
       }
     }
     return h;
@@ -141,7 +149,8 @@ class Okuma final : public UnimplementedRuns {
     std::string_view rest = s.substr(1);
     if (AllDigits(rest)) return std::string(s);
     if (!IsUpperAlpha(rest[0])) return {};
-    if (!std::all_of(rest.begin(), rest.end(), [](char c) { return IsUpperAlpha(c) || IsDigit(c); })) return {};
+    if (!std::all_of(rest.begin(), rest.end(), [](char c) { return IsUpperAlpha(c) || IsDigit(c); }))
+      return {};
     return std::string(s);
   }
 };

@@ -70,11 +70,11 @@ class JumpTargets {
 template <class Data>
 struct Frame {
   TextSpan span;
-  TextPos at;                // the next line to read
-  std::string name;          // subprogram / cycle name ("" for the main program)
-  bool report_own = true;    // commands and errors carry this frame's lines (else the calling block's)
-  int call_line = 0;         // the line reported while report_own is false
-  bool jumped = false;       // a jump ran in this frame: its blocks may run again (parse cache)
+  TextPos at;              // the next line to read
+  std::string name;        // subprogram / cycle name ("" for the main program)
+  bool report_own = true;  // commands and errors carry this frame's lines (else the calling block's)
+  int call_line = 0;       // the line reported while report_own is false
+  bool jumped = false;     // a jump ran in this frame: its blocks may run again (parse cache)
   Data data{};
 };
 

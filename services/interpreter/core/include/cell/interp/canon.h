@@ -148,10 +148,10 @@ struct DwellOp {
 struct SpindleOp {
   static constexpr Op kOp = Op::kSpindle;
   SpindleDir dir = SpindleDir::kStop;
-  double rpm = 0;          // programmed speed (constant rpm mode; the last speed for stop / orient)
-  double angle = 0;        // orient: keylock angle, degrees
-  double css = 0;          // constant surface speed, m/min; 0 = off (rpm applies)
-  double max_rpm = 0;      // programmed spindle limit (lathes: Okuma G50 S, EMCO G92 S); 0 = none
+  double rpm = 0;      // programmed speed (constant rpm mode; the last speed for stop / orient)
+  double angle = 0;    // orient: keylock angle, degrees
+  double css = 0;      // constant surface speed, m/min; 0 = off (rpm applies)
+  double max_rpm = 0;  // programmed spindle limit (lathes: Okuma G50 S, EMCO G92 S); 0 = none
 };
 struct CoolantOp {
   static constexpr Op kOp = Op::kCoolant;

@@ -55,10 +55,11 @@ struct HeadingNotice {
 
 // What the host needs from a program without running it.
 struct Heading {
-  std::optional<std::string> name;         // the name the program gives itself (KT-APL NAM)
-  std::vector<std::string> tools;          // tools it needs (KT-APL UTL), as written
-  std::optional<double> cycle_s;           // its expected cycle time (KT-APL UCY)
-  std::vector<std::string> program_names;  // programs inside the file (Okuma O names, EMCO O numbers, Balt %:NAME)
+  std::optional<std::string> name;  // the name the program gives itself (KT-APL NAM)
+  std::vector<std::string> tools;   // tools it needs (KT-APL UTL), as written
+  std::optional<double> cycle_s;    // its expected cycle time (KT-APL UCY)
+  std::vector<std::string>
+      program_names;  // programs inside the file (Okuma O names, EMCO O numbers, Balt %:NAME)
   std::vector<HeadingNotice> notices;
 };
 
@@ -134,7 +135,7 @@ class UnimplementedRuns : public Dialect {
                                       const tooltable::ToolTable& base) const override;
 };
 
-std::string_view FileKindName(FileKind kind);         // "part_program", "library", ...
+std::string_view FileKindName(FileKind kind);        // "part_program", "library", ...
 std::string_view MachineKindName(MachineKind kind);  // "hmc", "lathe"
 
 }  // namespace cell::interp
