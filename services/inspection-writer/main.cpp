@@ -20,8 +20,18 @@ std::string Iso(int64_t ns) {
   return buf;
 }
 
-cell::InspectionReply Handle(cell::inspection::Records& records, const cell::InspectionRequest& r) {
+// The last lines of a file, up to `n` bytes, starting at a line.
+std::string Tail(const std::string& text, size_t n) {
+  if (text.size() <= n) return text;
+  size_t from = text.find('\n', text.size() - n);
+  return from == std::string::npos ? text.substr(text.size() - n) : text.substr(from + 1);
+}
+
+cell::InspectionReply Handle(cell::inspection::Records& records,
+                             cell::bus::Writer<cell::InspectionStored>& stored,
+                             const cell::InspectionRequest& r) {
   cell::InspectionReply rep;
+  cell::InspectionStored ev;  // published once the record is durable
   switch (r.op()) {
     case cell::INSPECTION_STORE_RUN: {
       const auto& x = r.run();
@@ -40,11 +50,19 @@ cell::InspectionReply Handle(cell::inspection::Records& records, const cell::Ins
       std::string name = records.StoreRun(j);
       spdlog::info("stored {}", name);
       rep.info(name);
+      ev.kind(cell::STORED_RUN);
+      ev.name(name);
+      ev.station(x.station());
+      ev.run(x);
       break;
     }
     case cell::INSPECTION_STORE_FILE:
       rep.info(records.StoreFile(r.file().station().to_string(), r.file().file().to_string(),
                                  r.file().text().to_string()));
+      ev.kind(cell::STORED_FILE);
+      ev.name(rep.info().to_string());
+      ev.station(r.file().station());
+      ev.excerpt(Tail(r.file().text().to_string(), 4000));
       break;
     case cell::INSPECTION_LIST: {
       std::string s = records.List(r.name().to_string().empty() ? "*" : r.name().to_string()).dump();
@@ -61,6 +79,14 @@ cell::InspectionReply Handle(cell::inspection::Records& records, const cell::Ins
       break;
     }
   }
+  if (!ev.name().to_string().empty()) {
+    ev.time_ns(cell::health::WallNs());
+    try {
+      stored.Write(ev);
+    } catch (const cell::Error& e) {  // a notice for viewers; the record itself is stored
+      spdlog::warn("{}: not announced: {}", ev.name().to_string(), e.what());
+    }
+  }
   return rep;
 }
 
@@ -73,9 +99,11 @@ int main() {
     cell::inspection::Records records(cell::config::DataDir() / "records");
     cell::bus::Participant bus("cell-inspection-writer");
     cell::health::Announcer health(bus, "cell-inspection-writer");
+    cell::bus::Writer<cell::InspectionStored> stored(bus, cell::bus::topics::kInspectionStored,
+                                                     cell::bus::QosKind::kEvent);
     cell::bus::Server<cell::InspectionRequest, cell::InspectionReply> server(
         bus, cell::bus::topics::kInspection,
-        [&](const cell::InspectionRequest& r) { return Handle(records, r); });
+        [&](const cell::InspectionRequest& r) { return Handle(records, stored, r); });
     health.Set(cell::SERVICE_READY);
     daemon.NotifyReady("writing records");
     spdlog::info("ready on domain {}", bus.domain());

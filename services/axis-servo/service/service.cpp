@@ -360,6 +360,8 @@ void Service::PublishAxes() {
   }
   a.machine_s(s.machine_time);
   a.wall_ns(health::WallNs());
+  a.spindle_rpm(s.spindle_rpm);
+  a.path_feed(s.path_feed);
   axes_.Write(a);
   last_axes_ = std::chrono::steady_clock::now();
 }

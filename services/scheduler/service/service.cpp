@@ -35,6 +35,64 @@ cell::JobState Wire(JobState s) {
   return cell::JOB_QUEUED;
 }
 
+std::string Cut(const std::string& s, size_t n) {
+  return s.size() <= n ? s : s.substr(0, n - 3) + "...";
+}
+
+// `job show` as a JobInfo sample (the latest 16 decisions).
+cell::JobInfo ToWire(const JobView& v) {
+  cell::JobInfo w;
+  w.slot(static_cast<int32_t>(v.id % bus::topics::kJobSlots));
+  w.job_id(static_cast<int32_t>(v.id));
+  w.state(Wire(v.state));
+  w.kind(Cut(v.kind, 16));
+  w.route(Cut(v.route, 64));
+  w.schedule(Cut(v.schedule, 64));
+  w.pallet(v.pallet);
+  w.station(v.station);
+  w.reason(Cut(v.reason, 1024));
+  w.started_ns(v.started_ms * 1000000);
+  w.finished_ns(v.finished_ms * 1000000);
+  w.cycle_s(v.cycle_s.value_or(-1));
+  w.op_index(v.op_index + 1);
+  w.op_count(v.op_count);
+  w.decision_count(static_cast<uint32_t>(v.decisions.size()));
+  const size_t first = v.decisions.size() > 16 ? v.decisions.size() - 16 : 0;
+  for (size_t i = first; i < v.decisions.size(); ++i) {
+    const Decision& d = v.decisions[i];
+    cell::JobDecision x;
+    x.seq(d.seq);
+    x.time_ns(d.time_ms * 1000000);
+    x.op(d.op_index + 1);
+    x.trigger(Cut(d.trigger, 256));
+    for (size_t c = 0; c < d.considered.size() && c < 16; ++c) {
+      const Candidate& k = d.considered[c];
+      cell::DecisionStation ds;
+      ds.station(k.station);
+      ds.online(k.online);
+      ds.fault(k.fault);
+      ds.backlog_s(k.backlog_s);
+      std::string tools;
+      size_t shown = 0;
+      for (auto& t : k.missing_tools) {
+        if (tools.size() + t.size() + 16 > 256) break;
+        tools += (tools.empty() ? "" : ",") + t;
+        ++shown;
+      }
+      if (shown < k.missing_tools.size()) tools += fmt::format(" +{} more", k.missing_tools.size() - shown);
+      ds.missing_tools(tools);
+      ds.eligible(k.eligible);
+      x.considered().push_back(ds);
+    }
+    x.winner(d.winner);
+    x.why(Cut(d.why, 1024));
+    x.added_backlog_s(d.added_backlog_s);
+    w.decisions().push_back(x);
+  }
+  w.updated_ns(health::WallNs());
+  return w;
+}
+
 std::string Key(const cell::SchedulerRequest& r) {
   std::string k = r.hdr().idempotency_key().to_string();
   // Without a key a command is still made unique per request, so it never replays by accident.
@@ -54,7 +112,8 @@ Service::Service(bus::Participant& p, const std::filesystem::path& data_dir)
       sched_(Options{(data_dir / "scheduler.db").string(), false, {}}, source_),
       live_(p),
       jobs_w_(p, bus::topics::kJobStatus, bus::QosKind::kEvent),
-      state_w_(p, bus::topics::kSchedulerState, bus::QosKind::kState) {}
+      state_w_(p, bus::topics::kSchedulerState, bus::QosKind::kState),
+      jobinfo_w_(p, bus::topics::kJobState, bus::QosKind::kState) {}
 
 Service::~Service() {
   Stop();
@@ -78,6 +137,10 @@ void Service::Start() {
     for (auto& v : sched_.Stations())
       if (online_.count(v.id)) online_[v.id] = v.online;
     started_ = std::chrono::steady_clock::now();
+    // The job state topic starts empty in a new process: announce the newest jobs again.
+    auto jobs = sched_.Jobs(false);
+    const size_t first = jobs.size() > bus::topics::kJobSlots ? jobs.size() - bus::topics::kJobSlots : 0;
+    for (size_t i = first; i < jobs.size(); ++i) PublishJob(jobs[i].id);
   }
   // Observations are subscribed only now, with the stations configured and recovery done: samples that
   // arrive at once (state topics are transient-local) are not dropped as coming from unknown stations.
@@ -277,6 +340,9 @@ void Service::Apply(const Effects& e) {
     }
   }
   out_cv_.notify_all();
+  std::set<std::int64_t> changed;
+  for (auto& c : e.job_changes) changed.insert(c.job_id);
+  for (auto id : changed) PublishJob(id);
   for (auto& c : e.job_changes) {
     auto v = sched_.Job(c.job_id, false);
     cell::JobStatus s;
@@ -293,6 +359,17 @@ void Service::Apply(const Effects& e) {
     }
     spdlog::info("job {} {}{}", c.job_id, JobStateName(c.state), c.reason.empty() ? "" : ": " + c.reason);
     jobs_w_.Write(s);
+  }
+}
+
+// Called with mu_ held.
+void Service::PublishJob(std::int64_t id) {
+  auto v = sched_.Job(id, true);
+  if (!v) return;
+  try {
+    jobinfo_w_.Write(ToWire(*v));
+  } catch (const Error& e) {  // a view for viewers: never let it stop the scheduler
+    spdlog::warn("job {}: state not published: {}", id, e.what());
   }
 }
 

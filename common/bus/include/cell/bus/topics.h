@@ -16,11 +16,14 @@ inline constexpr const char* kVariables = "cell/station/variables";     // Stati
 inline constexpr const char* kProgress = "cell/motion/progress";        // SegmentProgress (credits)
 inline constexpr const char* kServoControl = "cell/motion/control";     // ServoControl (hold, overrides)
 inline constexpr const char* kSchedulerState = "cell/scheduler/state";  // SchedulerState (backlog)
+inline constexpr const char* kJobState = "cell/job/state";              // JobInfo, key job_id % kJobSlots
 // Event topics (kEvent): recent history for late joiners.
 inline constexpr const char* kRunStatus = "cell/run/status";          // RunStatus
 inline constexpr const char* kJobStatus = "cell/job/status";          // JobStatus
 inline constexpr const char* kProgramChange = "cell/program/change";  // ProgramChange
 inline constexpr const char* kAlarm = "cell/alarm";                   // Alarm
+// What the inspection writer made durable (InspectionStored), for viewers.
+inline constexpr const char* kInspectionStored = "cell/inspection/stored";
 // Telemetry (kTelemetry).
 inline constexpr const char* kAxisState = "cell/motion/axes";  // AxisState, 50 Hz wall
 // Streams (kStream), per station.
@@ -40,6 +43,9 @@ inline std::string StationRun(const std::string& station) {
 inline std::string StationCommand(const std::string& station) {
   return "cell/station/" + station + "/command";
 }
+
+// JobInfo instances: the newest kJobSlots jobs (slot = job_id % kJobSlots), no instance disposed.
+inline constexpr int kJobSlots = 1024;
 
 // A station (its interpreter) counts as online while its heartbeat is younger than this.
 inline constexpr int kHeartbeatMs = 1000;

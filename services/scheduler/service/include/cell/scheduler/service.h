@@ -41,6 +41,7 @@ class Service {
   void OnRun(const cell::RunStatus& s);
   void Sender(std::stop_token st);
   void PublishBacklog();
+  void PublishJob(std::int64_t id);  // JobInfo on cell/job/state, for viewers
 
   bus::Participant& bus_;
   program_store::Client programs_;
@@ -69,6 +70,7 @@ class Service {
   health::Liveness live_;
   bus::Writer<cell::JobStatus> jobs_w_;
   bus::Writer<cell::SchedulerState> state_w_;
+  bus::Writer<cell::JobInfo> jobinfo_w_;
   std::chrono::steady_clock::time_point started_;
   // Created by Start(), after the stations are configured and recovery has run.
   std::optional<bus::Reader<cell::StationStatus>> status_r_;

@@ -1,0 +1,207 @@
+// The dashboard's read-only view of the cell: the latest state of every station, tool table, backlog, job
+// (with its decisions), axis positions, cycle times and inspection record, fed from the bus (feed.h) or by
+// tests. It renders three things from one state under one lock:
+//   - the page's state as JSON (Snapshot) and the changes since as a numbered event log (for SSE);
+//   - the MTConnect agent's observations in a sequence buffer (Probe, Current, Sample, Assets);
+//   - the same state for `cellctl watch` (text_view.h renders the snapshot).
+#pragma once
+
+#include <chrono>
+#include <condition_variable>
+#include <cstdint>
+#include <deque>
+#include <map>
+#include <mutex>
+#include <optional>
+#include <set>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "cell/dashboard/mtconnect.h"
+#include "cell/dashboard/sequence_buffer.h"
+#include "cell/dashboard/stations.h"
+
+namespace cell::dashboard {
+
+// ---- inputs: plain copies of the cell's topics (feed.h converts the DDS types) ----
+struct StatusIn {  // cell/station/status
+  std::string station;
+  std::string execution = "READY";   // MTConnect vocabulary: READY, ACTIVE, FEED_HOLD, ...
+  std::string condition = "NORMAL";  // NORMAL, WARNING, FAULT
+  std::string alarm_code, alarm_text;
+  std::string program;
+  int line = 0;
+  int pallet = 0;
+  std::uint32_t part_count = 0;
+  std::string tool;
+  int dispatch_id = 0;
+  int queued = 0;
+  std::int64_t time_ns = 0;
+};
+
+struct ToolIn {  // one entry of cell/station/tools
+  std::string tool;
+  int socket = 0;
+  double length = 0, diameter = 0, life_left_min = 0;
+  bool worn = false, broken = false;
+};
+
+struct AxesIn {  // cell/motion/axes
+  std::string station;
+  double actual[9] = {};
+  double spindle_rpm = 0;
+  double path_feed = 0;  // units/min
+  std::int64_t time_ns = 0;
+};
+
+struct DecisionStationIn {
+  std::string station;
+  bool online = false, fault = false, eligible = false;
+  std::int64_t backlog_s = 0;
+  std::string missing_tools;  // comma-separated
+};
+struct DecisionIn {
+  std::int64_t seq = 0, time_ns = 0;
+  int op = 1;
+  std::string trigger, winner, why;
+  std::int64_t added_backlog_s = 0;
+  std::vector<DecisionStationIn> considered;
+};
+struct JobIn {  // cell/job/state
+  int id = 0;
+  std::string state;  // QUEUED, WAITING, DISPATCHED, RUNNING, COMPLETED, FAILED, CANCELLED
+  std::string kind, route, schedule, station, reason;
+  int pallet = 0;
+  std::int64_t started_ns = 0, finished_ns = 0;
+  double cycle_s = -1;
+  int op_index = 1, op_count = 1;
+  std::uint32_t decision_count = 0;
+  std::vector<DecisionIn> decisions;
+};
+
+struct RunIn {  // cell/run/status
+  int dispatch_id = 0;
+  std::string station, program, state;  // state: QUEUED, ACTIVE, COMPLETED, FAILED, CANCELLED
+  int job_id = 0, pallet = 0, programs_done = 0;
+  double machine_s = 0;
+  std::int64_t time_ns = 0;
+};
+
+struct StoredIn {    // cell/inspection/stored
+  std::string kind;  // "run" or "inspection"
+  std::string name, station;
+  int job_id = 0, pallet = 0, dispatch_id = 0;
+  std::vector<std::string> programs;
+  bool completed = false;
+  std::string reason;
+  double machine_s = 0;
+  std::string excerpt;
+  std::int64_t time_ns = 0;
+};
+
+struct ViewOptions {
+  std::size_t buffer_size = 131072;  // MTConnect observations kept for /sample
+  std::size_t event_log = 4096;      // page events kept for reconnecting browsers
+  std::size_t jobs_kept = 1024;      // finished jobs kept (live ones always)
+  double axis_window_s = 60;         // the page's axis plot
+  double axis_period_s = 0.2;        // one page point per station per period
+  double mtc_axis_period_s = 0.1;    // MTConnect position samples at most this often per station
+};
+
+class CellView {
+ public:
+  CellView(std::vector<StationDef> stations, ViewOptions opts = {});
+
+  // ---- inputs (any thread) ----
+  void Status(const StatusIn& s);
+  void Online(const std::string& station, bool online);      // the interpreter's heartbeat
+  void Service(const std::string& service_id, bool online);  // host services, for the page's header
+  void Tools(const std::string& station, const std::vector<ToolIn>& tools);
+  void Backlog(const std::map<std::string, double>& backlog_s);
+  void Job(const JobIn& j);
+  void Axes(const AxesIn& a);
+  void Run(const RunIn& r);
+  void Stored(const StoredIn& s);
+
+  // ---- the page ----
+  nlohmann::json Snapshot() const;                        // whole state; "event" = the last event id in it
+  std::optional<nlohmann::json> JobDetail(int id) const;  // a job with its decisions
+  struct Event {
+    std::uint64_t id;
+    std::string data;  // JSON text
+  };
+  // Events after `after` (at most `max`); nullopt when some of them already left the log (resync).
+  std::optional<std::vector<Event>> EventsAfter(std::uint64_t after, std::size_t max) const;
+  // Blocks until an event after `after` exists or the timeout passes; true if one exists.
+  bool WaitEvent(std::uint64_t after, std::chrono::milliseconds timeout) const;
+  std::uint64_t LastEvent() const;
+
+  // ---- MTConnect ----
+  const mtc::DeviceModel& model() const { return model_; }
+  std::string Probe(int device) const;
+  std::string Current(int device) const;
+  struct SampleResult {
+    int status;        // HTTP status
+    std::string body;  // MTConnectStreams or MTConnectError
+  };
+  SampleResult Sample(std::optional<std::int64_t> from, std::int64_t count, int device) const;
+  std::string AssetsDoc(const std::string& id) const;  // "" = all; unknown id: an error document
+  bool HasAsset(const std::string& id) const;
+  std::string ErrorDoc(std::string_view code, std::string_view text) const;
+  std::uint64_t NextSequence() const;
+
+ private:
+  struct StationState {
+    bool online = false;
+    bool seen = false;  // a status sample arrived
+    StatusIn status;
+    double backlog_s = 0;
+    std::vector<ToolIn> tools;
+    double feed = 0, spindle_rpm = 0;
+    // Page plot: wall seconds and one position per configured axis.
+    std::deque<std::pair<double, std::vector<double>>> trail;
+    double last_trail = -1e18, last_mtc = -1e18;
+    std::vector<double> last_pos;
+    std::string card;  // the last station JSON sent to browsers
+  };
+  struct CycleTime {
+    std::string program, station;
+    double seconds;
+    std::int64_t time_ns;
+  };
+  struct RunTrack {
+    int done = 0;
+    double end_s = 0;
+  };
+
+  std::int64_t Now() const;
+  void Observe(int station, const std::string& key, std::string value, std::int64_t t,
+               const std::string& level = "", const std::string& code = "");
+  void ObserveStatus(int s, std::int64_t t);
+  void Push(nlohmann::json ev);  // with mu_ held
+  void PushStations();           // station cards that changed, with mu_ held
+  nlohmann::json StationJson(int s) const;
+  nlohmann::json JobJson(const JobIn& j, bool decisions) const;
+  nlohmann::json StoredJson(const StoredIn& s) const;
+  std::vector<mtc::ToolAsset> ToolAssets() const;
+
+  mtc::DeviceModel model_;
+  ViewOptions opts_;
+  mtc::AgentInfo agent_;
+  mutable std::mutex mu_;
+  mutable std::condition_variable cv_;
+  std::vector<StationState> st_;
+  std::map<std::string, bool> services_;
+  std::map<int, JobIn> jobs_;
+  std::map<int, RunTrack> runs_;
+  std::deque<CycleTime> cycles_;
+  std::deque<StoredIn> stored_;
+  std::set<std::string> stored_names_;
+  SequenceBuffer buffer_;
+  std::deque<Event> events_;
+  std::uint64_t next_event_ = 1;
+};
+
+}  // namespace cell::dashboard

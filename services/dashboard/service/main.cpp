@@ -1,0 +1,53 @@
+// cell-dashboard: the shop-floor view. Subscribes to the cell's state and event topics and serves the live
+// page and the MTConnect agent interface over HTTP (CELL_HTTP, default 127.0.0.1:7878). Read-only: it
+// sends no request and writes nothing to the cell (only its own heartbeat, like every process).
+#include <spdlog/spdlog.h>
+
+#include <cstdlib>
+#include <fstream>
+
+#include "cell/bus/bus.h"
+#include "cell/config/config.h"
+#include "cell/daemon/daemon.h"
+#include "cell/dashboard/feed.h"
+#include "cell/dashboard/server.h"
+#include "cell/health/health.h"
+#include "cell/log/log.h"
+
+int main() {
+  cell::log::Init("cell-dashboard");
+  try {
+    cell::daemon::Daemon daemon;
+    auto http_opts = cell::dashboard::ServerOptionsFromEnv();
+    cell::dashboard::ViewOptions view_opts;
+    if (const char* b = std::getenv("CELL_DASHBOARD_BUFFER"); b && *b) {
+      char* end = nullptr;
+      long n = std::strtol(b, &end, 10);
+      if (*end || n < 16 || n > (1l << 24))
+        throw cell::Error(cell::Errc::kInvalidArgument,
+                          std::string("CELL_DASHBOARD_BUFFER='") + b + "': observations, 16..16777216");
+      view_opts.buffer_size = static_cast<size_t>(n);
+    }
+    cell::dashboard::CellView view(cell::dashboard::LoadStationDefs(), view_opts);
+    cell::bus::Participant bus("cell-dashboard");
+    cell::health::Announcer health(bus, "cell-dashboard");
+    cell::dashboard::Feed feed(bus, view);
+    cell::dashboard::HttpServer http(view, http_opts);
+    http.Start();
+    // Where a local cell's tools (cellctl up, ./cell demo, tests) find the page when the port was 0.
+    std::ofstream(cell::config::DataDir() / "dashboard.url") << http.url() << "\n";
+    health.Set(cell::SERVICE_READY, http.url());
+    daemon.NotifyReady("serving " + http.url());
+    spdlog::info("serving {} on domain {} (MTConnect: {}probe)", http.url(), bus.domain(), http.url());
+    while (!daemon.WaitForStop(std::chrono::milliseconds(250))) {
+      feed.Tick();
+      if (http.running()) daemon.Tick();
+    }
+    daemon.NotifyStopping();
+    http.Stop();
+    return 0;
+  } catch (const std::exception& e) {
+    spdlog::critical("{}", e.what());
+    return 1;
+  }
+}

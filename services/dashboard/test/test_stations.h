@@ -1,0 +1,39 @@
+// Stations for the dashboard's tests: a KT machining centre (X Y Z + B) and a lathe (X diameter, Z).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "cell/dashboard/cell_view.h"
+#include "cell/testing/process.h"
+
+namespace cell::dashboard::testing {
+
+inline std::vector<StationDef> TwoStations() {
+  StationDef kt{
+      "KT01",
+      "ktapl",
+      "Kearney & Trecker machining centre",
+      "hmc",
+      {{"X", 0, false, false}, {"Y", 1, false, false}, {"Z", 2, false, false}, {"B", 4, true, false}}};
+  StationDef ok{"OK01", "okuma", "Okuma lathe", "lathe", {{"X", 0, false, true}, {"Z", 2, false, false}}};
+  return {kt, ok};
+}
+
+inline StatusIn Status(const std::string& station, const std::string& exec, const std::string& program = "",
+                       int line = 0, int pallet = 0) {
+  StatusIn s;
+  s.station = station;
+  s.execution = exec;
+  s.program = program;
+  s.line = line;
+  s.pallet = pallet;
+  return s;
+}
+
+// The MTConnect 2.4 schemas (`_1.0.xsd` variants) in the shared reference beside the repository.
+std::string SchemaDir();
+// Validates a document with xmllint --noout --nonet --schema; returns xmllint's complaint, "" when valid.
+std::string Validate(const std::string& xml, const std::string& schema);
+
+}  // namespace cell::dashboard::testing

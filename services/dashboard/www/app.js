@@ -1,0 +1,427 @@
+// The shop-floor page: renders the state embedded in the page, then applies the server's events
+// (/api/events, server-sent events) without reloading. Every text goes through textContent.
+(function () {
+  'use strict';
+  const S = JSON.parse(document.getElementById('state').textContent);
+  const byId = (id) => document.getElementById(id);
+  const HAS_CHART = typeof window.Chart === 'function';
+  const AXIS_COLOURS = ['#4fa3ff', '#ffb84d', '#6fdc8c', '#ff6f91', '#c792ea', '#7fdbff'];
+  const stations = new Map();  // id -> {data, el: {...}, chart}
+  let openJob = null;
+
+  function el(tag, cls, text) {
+    const e = document.createElement(tag);
+    if (cls) e.className = cls;
+    if (text !== undefined && text !== null) e.textContent = String(text);
+    return e;
+  }
+  function dur(s) {
+    if (s === null || s === undefined) return '—';
+    s = Math.round(s);
+    if (s < 60) return s + ' s';
+    if (s < 3600) return Math.floor(s / 60) + ' min ' + String(s % 60).padStart(2, '0') + ' s';
+    return Math.floor(s / 3600) + ' h ' + String(Math.floor((s % 3600) / 60)).padStart(2, '0') + ' min';
+  }
+  function time(iso) {
+    if (!iso) return '—';
+    const d = new Date(iso);
+    return d.toLocaleTimeString([], { hour12: false });
+  }
+  function val(v) { return v === null || v === undefined || v === '' ? '—' : v; }
+
+  // One sentence a supervisor reads first: what the station is doing, or why it is not.
+  function doing(st) {
+    if (!st.online) return 'Offline: its CNC is not announced on the bus';
+    const prog = st.program ? st.program : 'a program';
+    const on = st.pallet ? ' on pallet ' + st.pallet : '';
+    const fault = st.condition === 'FAULT' ? 'FAULT: ' : '';
+    switch (st.execution) {
+      case 'ACTIVE': return fault + 'Running ' + prog + on;
+      case 'FEED_HOLD': return fault + 'Feed hold: ' + prog + on + ' stopped on its path';
+      case 'INTERRUPTED': return fault + 'Interrupted: ' + prog + on;
+      case 'WAIT': return fault + 'Waiting for an input: ' + prog + on;
+      case 'PROGRAM_STOPPED': return fault + 'Program stop (M00)' + on + ': press cycle start';
+      case 'OPTIONAL_STOP': return fault + 'Optional stop (M01)' + on + ': press cycle start';
+      case 'STOPPED': return fault + 'Stopped' + on;
+      case 'PROGRAM_COMPLETED': return fault + 'Program completed' + on;
+      case 'READY': {
+        const next = st.queue.find((q) => q.state === 'DISPATCHED');
+        if (fault) return fault + 'idle, needs an operator';
+        return next ? 'Ready: pallet ' + next.pallet + ' is on its way' : 'Idle, ready for work';
+      }
+      default: return fault + 'No status yet';
+    }
+  }
+
+  function makeCard(st) {
+    const c = el('div', 'card');
+    c.id = 'station-' + st.id;
+    const top = el('div', 'top');
+    const e = {
+      id: el('span', 'id', st.id),
+      kind: el('span', 'kind'),
+      badge: el('span', 'badge'),
+      cond: el('span', 'cond'),
+      doing: el('div', 'doing'),
+      facts: el('div', 'facts'),
+      alarm: el('div', 'alarm'),
+      wait: el('div', 'wait'),
+      queue: el('div', 'queue'),
+      backlog: el('div', 'backlog'),
+      plot: el('div', 'plot'),
+      motion: el('div', 'motion'),
+    };
+    top.append(e.id, e.kind, e.cond, e.badge);
+    c.append(top, e.doing, e.facts, e.alarm, e.wait, e.queue, e.backlog, e.plot, e.motion);
+    e.fact = {};
+    for (const [k, label] of [['program', 'program'], ['line', 'line'], ['pallet', 'pallet'], ['tool', 'tool'],
+                              ['part_count', 'parts'], ['queued', 'queued'], ['tools', 'tool table'], ['alarm_code', 'alarm']]) {
+      const d = el('div');
+      d.append(el('span', null, label));
+      const b = el('b', 'f-' + k);
+      d.append(b);
+      e.facts.append(d);
+      e.fact[k] = b;
+    }
+    e.backlog.append(el('span', null, 'backlog'));
+    e.bar = el('div', 'bar');
+    e.barFill = el('i');
+    e.bar.append(e.barFill);
+    e.backlogText = el('b', 'backlog-s');
+    e.backlog.append(e.bar, e.backlogText);
+    const canvas = el('canvas');
+    e.plot.append(canvas);
+    const rec = { data: st, el: e, card: c, chart: null, trail: [] };
+    if (HAS_CHART) rec.chart = makeAxisChart(canvas, st.axes);
+    return rec;
+  }
+
+  function makeAxisChart(canvas, axes) {
+    const rotary = (n) => /^[ABC]/.test(n);
+    return new Chart(canvas, {
+      type: 'line',
+      data: {
+        datasets: axes.map((n, i) => ({
+          label: n, data: [], borderColor: AXIS_COLOURS[i % AXIS_COLOURS.length], borderWidth: 1.5,
+          pointRadius: 0, yAxisID: rotary(n) ? 'deg' : 'mm',
+        })),
+      },
+      options: {
+        animation: false, responsive: true, maintainAspectRatio: false, parsing: false, normalized: true,
+        plugins: { legend: { labels: { color: '#aab3bf', boxWidth: 10, font: { size: 10 } } }, tooltip: { enabled: false } },
+        scales: {
+          x: { type: 'linear', ticks: { color: '#7d8794', font: { size: 10 }, callback: (v) => (v === 0 ? 'now' : v + ' s') },
+               grid: { color: '#262c34' } },
+          mm: { position: 'left', ticks: { color: '#7d8794', font: { size: 10 } }, grid: { color: '#262c34' },
+                title: { display: true, text: 'mm', color: '#7d8794', font: { size: 10 } } },
+          deg: { position: 'right', display: axes.some(rotary), ticks: { color: '#7d8794', font: { size: 10 } },
+                 grid: { display: false }, title: { display: true, text: 'deg', color: '#7d8794', font: { size: 10 } } },
+        },
+      },
+    });
+  }
+
+  function maxBacklog() {
+    let m = 60;
+    for (const s of stations.values()) m = Math.max(m, s.data.backlog_s || 0);
+    return m;
+  }
+
+  function renderStation(st) {
+    let rec = stations.get(st.id);
+    if (!rec) {
+      rec = makeCard(st);
+      stations.set(st.id, rec);
+      byId('stations').append(rec.card);
+    }
+    rec.data = st;
+    const e = rec.el, c = rec.card;
+    c.className = 'card ex-' + st.execution + ' cond-' + st.condition;
+    c.dataset.execution = st.execution;
+    c.dataset.condition = st.condition;
+    c.dataset.online = st.online;
+    e.kind.textContent = (st.description || st.dialect) + ' · ' + st.axes.join(' ');
+    e.badge.textContent = st.execution;
+    e.badge.className = 'badge execution ex-' + st.execution;
+    e.cond.textContent = st.condition;
+    e.cond.className = 'cond condition ' + st.condition;
+    e.doing.textContent = doing(st);
+    e.fact.program.textContent = val(st.program);
+    e.fact.line.textContent = val(st.line);
+    e.fact.pallet.textContent = val(st.pallet);
+    e.fact.tool.textContent = val(st.tool);
+    e.fact.part_count.textContent = st.part_count;
+    e.fact.queued.textContent = st.queued;
+    const t = st.tools || { count: 0, worn: 0, broken: 0 };
+    e.fact.tools.textContent = t.count + ' tools' + (t.worn ? ', ' + t.worn + ' worn' : '') + (t.broken ? ', ' + t.broken + ' broken' : '');
+    e.fact.alarm_code.textContent = val(st.alarm_code);
+    // Alarm and message
+    e.alarm.replaceChildren();
+    e.alarm.style.display = st.alarm_text || st.alarm_code ? '' : 'none';
+    e.alarm.className = 'alarm ' + st.condition;
+    if (st.alarm_code) e.alarm.append(el('b', null, st.alarm_code));
+    if (st.alarm_text) e.alarm.append(document.createTextNode(st.alarm_text));
+    // Pallets that wait and why they cannot come here
+    e.wait.replaceChildren();
+    e.wait.style.display = st.waiting.length ? '' : 'none';
+    for (const w of st.waiting) {
+      const d = el('div', 'waiting');
+      d.dataset.job = w.job;
+      d.dataset.pallet = w.pallet;
+      d.append(el('b', null, 'Pallet ' + w.pallet + ' waits: '), document.createTextNode(w.why),
+               el('span', 'kind', '  (job ' + w.job + (w.route ? ', route ' + w.route : '') + ')'));
+      e.wait.append(d);
+    }
+    const queued = st.queue.filter((q) => q.state !== 'RUNNING');
+    e.queue.textContent = queued.length ? 'Queued here: ' + queued.map((q) => 'pallet ' + q.pallet + ' (job ' + q.job + ')').join(', ') : '';
+    e.backlogText.textContent = dur(st.backlog_s);
+    for (const r of stations.values()) r.el.barFill.style.width = Math.min(100, (100 * (r.data.backlog_s || 0)) / maxBacklog()) + '%';
+  }
+
+  function pushAxes(id, t, pos, feed, rpm) {
+    const rec = stations.get(id);
+    if (!rec) return;
+    rec.trail.push([t, pos]);
+    while (rec.trail.length && rec.trail[0][0] < t - 60) rec.trail.shift();
+    rec.el.motion.textContent = 'feed ' + Math.round(feed) + ' mm/min · spindle ' + Math.round(Math.abs(rpm)) + ' rpm' +
+      (pos.length ? ' · ' + rec.data.axes.map((n, i) => n.split(' ')[0] + ' ' + pos[i].toFixed(3)).join('  ') : '');
+  }
+
+  function drawAxes() {
+    const now = Date.now() / 1000 - skew;
+    for (const rec of stations.values()) {
+      if (!rec.chart) continue;
+      rec.chart.data.datasets.forEach((ds, i) => {
+        ds.data = rec.trail.map(([t, p]) => ({ x: Math.round((t - now) * 10) / 10, y: p[i] }));
+      });
+      rec.chart.options.scales.x.min = -60;
+      rec.chart.options.scales.x.max = 0;
+      rec.chart.update('none');
+    }
+  }
+
+  // ---- jobs ----
+  const jobs = new Map();
+  function jobRow(j) {
+    let tr = byId('job-' + j.id);
+    if (!tr) {
+      tr = el('tr', 'job');
+      tr.id = 'job-' + j.id;
+      tr.addEventListener('click', () => toggleLog(j.id));
+      const body = document.querySelector('#jobs tbody');
+      // Newest first.
+      let before = null;
+      for (const r of body.querySelectorAll('tr.job')) if (Number(r.id.slice(4)) < j.id) { before = r; break; }
+      body.insertBefore(tr, before);
+    }
+    tr.dataset.state = j.state;
+    tr.replaceChildren(
+      el('td', null, j.id),
+      (() => { const td = el('td'); td.append(el('span', 'st st-' + j.state, j.state)); return td; })(),
+      el('td', null, j.route || j.schedule || j.kind),
+      el('td', null, j.pallet || '—'),
+      el('td', null, val(j.station)),
+      el('td', null, j.op_index + '/' + j.op_count),
+      el('td', 'reason', j.reason || ''),
+      el('td', null, time(j.started)),
+      el('td', null, j.cycle_s === null ? '—' : j.cycle_s.toFixed(1) + ' s'));
+    const body = document.querySelector('#jobs tbody');
+    const rows = body.querySelectorAll('tr.job');
+    for (let i = 200; i < rows.length; i++) rows[i].remove();
+    if (openJob === j.id) loadLog(j.id);
+  }
+
+  function toggleLog(id) {
+    const old = byId('log-' + openJob);
+    if (old) old.remove();
+    const prev = byId('job-' + openJob);
+    if (prev) prev.classList.remove('open');
+    if (openJob === id) { openJob = null; return; }
+    openJob = id;
+    byId('job-' + id).classList.add('open');
+    loadLog(id);
+  }
+
+  function loadLog(id) {
+    fetch('/api/job/' + id).then((r) => r.json()).then((j) => {
+      if (openJob !== id) return;
+      let tr = byId('log-' + id);
+      if (!tr) {
+        tr = el('tr', 'log');
+        tr.id = 'log-' + id;
+        byId('job-' + id).after(tr);
+      }
+      const td = el('td');
+      td.colSpan = 9;
+      const decisions = j.decisions || [];
+      if (j.decision_count > decisions.length)
+        td.append(el('div', 'empty', (j.decision_count - decisions.length) + ' earlier decisions: cellctl job show ' + id));
+      if (!decisions.length) td.append(el('div', 'empty', 'no decisions logged'));
+      for (const d of decisions) {
+        const div = el('div', 'dec');
+        div.append(el('span', 'trig', time(d.time) + ' · op ' + d.op + ' · ' + d.trigger + ' → '));
+        div.append(d.winner ? el('span', 'win', d.winner) : el('span', 'bad', 'waits'));
+        div.append(document.createTextNode(': ' + d.why + (d.added_backlog_s ? ' (+' + d.added_backlog_s + ' s backlog)' : '')));
+        const t = el('table');
+        const h = el('tr');
+        for (const x of ['station', 'online', 'fault', 'backlog', 'missing tools', 'eligible']) h.append(el('th', null, x));
+        t.append(h);
+        for (const c of d.considered) {
+          const r = el('tr');
+          r.append(el('td', null, c.station), el('td', c.online ? 'ok' : 'bad', c.online ? 'yes' : 'no'),
+                   el('td', c.fault ? 'bad' : null, c.fault ? 'FAULT' : 'no'), el('td', null, dur(c.backlog_s)),
+                   el('td', c.missing_tools ? 'bad' : null, c.missing_tools || '—'),
+                   el('td', c.eligible ? 'ok' : 'bad', c.eligible ? 'yes' : 'no'));
+          t.append(r);
+        }
+        div.append(t);
+        td.append(div);
+      }
+      tr.replaceChildren(td);
+    }).catch(() => {});
+  }
+
+  // ---- cycle times ----
+  let cycleChart = null;
+  const cycles = new Map();  // program -> [seconds]
+  function addCycle(c) {
+    if (!cycles.has(c.program)) cycles.set(c.program, []);
+    cycles.get(c.program).push(c.s);
+  }
+  function renderCycles() {
+    const body = document.querySelector('#cycletable tbody');
+    body.replaceChildren();
+    if (!cycles.size) { const r = el('tr'); const td = el('td', 'empty', 'no program finished yet'); td.colSpan = 6; r.append(td); body.append(r); }
+    for (const [p, xs] of cycles) {
+      const mean = xs.reduce((a, b) => a + b, 0) / xs.length;
+      const r = el('tr');
+      r.append(el('td', null, p), el('td', null, xs.length), el('td', null, xs[xs.length - 1].toFixed(1) + ' s'),
+               el('td', null, mean.toFixed(1) + ' s'), el('td', null, Math.min(...xs).toFixed(1) + ' s'),
+               el('td', null, Math.max(...xs).toFixed(1) + ' s'));
+      body.append(r);
+    }
+    if (!HAS_CHART) return;
+    const data = [...cycles].map(([p, xs], i) => ({
+      label: p, data: xs.slice(-50).map((y, k) => ({ x: Math.max(0, xs.length - 50) + k + 1, y })),
+      borderColor: AXIS_COLOURS[i % AXIS_COLOURS.length], backgroundColor: AXIS_COLOURS[i % AXIS_COLOURS.length],
+      pointRadius: 3, borderWidth: 1.5,
+    }));
+    if (!cycleChart) {
+      cycleChart = new Chart(byId('cycles'), {
+        type: 'line', data: { datasets: data },
+        options: {
+          animation: false, responsive: true, maintainAspectRatio: false, parsing: false,
+          plugins: { legend: { labels: { color: '#aab3bf', boxWidth: 10 } } },
+          scales: {
+            x: { type: 'linear', title: { display: true, text: 'run of the program', color: '#7d8794' }, ticks: { color: '#7d8794', precision: 0 }, grid: { color: '#262c34' } },
+            y: { title: { display: true, text: 'machine seconds', color: '#7d8794' }, ticks: { color: '#7d8794' }, grid: { color: '#262c34' }, beginAtZero: true },
+          },
+        },
+      });
+    } else {
+      cycleChart.data.datasets = data;
+      cycleChart.update('none');
+    }
+  }
+
+  // ---- inspection records ----
+  function renderInspections() {
+    const body = document.querySelector('#inspections tbody');
+    body.replaceChildren();
+    if (!S.inspections.length) { const r = el('tr'); const td = el('td', 'empty', 'no record yet'); td.colSpan = 7; r.append(td); body.append(r); }
+    for (const x of S.inspections.slice(0, 12)) {
+      const r = el('tr');
+      r.dataset.name = x.name;
+      const result = el('td');
+      if (x.kind === 'run') {
+        result.append(x.completed ? el('span', 'ok', 'completed') : el('span', 'bad', 'not completed'));
+        if (x.reason) result.append(el('div', 'reason', x.reason));
+      } else {
+        result.append(el('span', null, x.name));
+        if (x.excerpt) result.append(el('pre', 'excerpt', x.excerpt));
+      }
+      r.append(el('td', null, time(x.time)), el('td', null, x.station), el('td', null, x.pallet || '—'),
+               el('td', null, x.job || '—'), el('td', null, (x.programs || []).join(', ') || '—'), result,
+               el('td', null, x.kind === 'run' ? x.machine_s.toFixed(1) + ' s' : ''));
+      body.append(r);
+    }
+  }
+
+  function renderServices() {
+    const names = { 'cell-program-store': 'program store', 'cell-scheduler': 'scheduler', 'cell-inspection-writer': 'inspection writer' };
+    const box = byId('services');
+    box.replaceChildren();
+    for (const [id, label] of Object.entries(names)) {
+      const up = S.services[id];
+      const s = el('span', 'svc ' + (up ? 'up' : 'off'), label + (up ? '' : ' offline'));
+      s.dataset.service = id;
+      box.append(s);
+    }
+  }
+
+  let skew = 0;  // browser clock minus server clock, s
+  function renderAll() {
+    skew = Date.now() / 1000 - S.now;
+    for (const st of S.stations) renderStation(st);
+    for (const [id, a] of Object.entries(S.axes)) {
+      const rec = stations.get(id);
+      if (!rec) continue;
+      rec.trail = [];
+      a.t.forEach((t, i) => rec.trail.push([t, a.pos[i]]));
+      if (a.t.length) pushAxes(id, a.t[a.t.length - 1], a.pos[a.pos.length - 1], a.feed, a.spindle_rpm);
+    }
+    document.querySelector('#jobs tbody').replaceChildren();
+    jobs.clear();
+    for (const j of S.jobs) { jobs.set(j.id, j); }
+    for (const j of [...S.jobs].reverse()) jobRow(j);
+    cycles.clear();
+    for (const c of S.cycles) addCycle(c);
+    renderCycles();
+    renderInspections();
+    renderServices();
+    drawAxes();
+  }
+
+  function apply(ev) {
+    switch (ev.type) {
+      case 'station': renderStation(ev.station); break;
+      case 'job': jobs.set(ev.job.id, ev.job); jobRow(ev.job); break;
+      case 'axes': pushAxes(ev.station, ev.t, ev.pos, ev.feed, ev.spindle_rpm); break;
+      case 'cycle': addCycle(ev.cycle); renderCycles(); break;
+      case 'inspection':
+        S.inspections = [ev.record, ...S.inspections.filter((x) => x.name !== ev.record.name)].slice(0, 50);
+        renderInspections();
+        break;
+      case 'services': S.services = ev.services; renderServices(); break;
+    }
+  }
+
+  // ---- the live stream: EventSource reconnects by itself and resumes after Last-Event-ID ----
+  const conn = byId('conn');
+  let lostAt = null;
+  function setLive(live) {
+    if (live) { lostAt = null; conn.className = 'conn live'; conn.textContent = 'live'; return; }
+    if (lostAt === null) lostAt = Date.now();
+    conn.className = 'conn down';
+    conn.textContent = 'connection lost: reconnecting (' + Math.round((Date.now() - lostAt) / 1000) + ' s)';
+  }
+  let es = null;
+  function connect() {
+    es = new EventSource('/api/events?after=' + S.event);
+    es.onopen = () => setLive(true);
+    es.onmessage = (m) => { const ev = JSON.parse(m.data); S.event = ev.id; apply(ev); };
+    es.addEventListener('resync', (m) => { Object.assign(S, JSON.parse(m.data)); renderAll(); });
+    es.onerror = () => {
+      setLive(false);
+      if (es.readyState === EventSource.CLOSED) { es.close(); setTimeout(connect, 1000); }
+    };
+  }
+
+  renderAll();
+  connect();
+  setInterval(drawAxes, 500);
+  setInterval(() => {
+    byId('clock').textContent = new Date().toLocaleTimeString([], { hour12: false });
+    if (lostAt !== null) setLive(false);
+  }, 1000);
+})();
