@@ -10,7 +10,7 @@ set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 BIN="${CELL_BUILD_DIR:-$ROOT/build}/bin"
 for exe in cellctl dispatch_latency_bench cell-scheduler cell-program-store cell-interpreter cell-axis-servo \
-           cell-inspection-writer; do
+           cell-inspection-writer cell-dashboard; do
   [ -x "$BIN/$exe" ] || { echo "70-dispatch-latency: $BIN/$exe not built" >&2; exit 1; }
 done
 PALLETS="${CELL_BENCH_PALLETS:-30}"
@@ -18,6 +18,7 @@ PALLETS="${CELL_BENCH_PALLETS:-30}"
 work="$(mktemp -d "${TMPDIR:-/tmp}/cell-dispatch-bench.XXXXXX")"
 export CELL_DATA_DIR="$work/data"
 export CELL_DOMAIN="${CELL_BENCH_DOMAIN:-97}"
+export CELL_HTTP="${CELL_HTTP:-127.0.0.1:0}"  # the cell's dashboard on any free port
 mkdir -p "$CELL_DATA_DIR"
 cleanup() {
   "$BIN/cellctl" down >/dev/null 2>&1 || true

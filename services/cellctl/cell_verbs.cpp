@@ -1,6 +1,7 @@
 // cellctl up|down|watch: a local cell from the systemd units' own command lines.
 #include <fcntl.h>
 #include <signal.h>
+#include <sys/ioctl.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -12,6 +13,8 @@
 #include "cell/bus/topics.h"
 #include "cell/config/config.h"
 #include "cell/config/units.h"
+#include "cell/dashboard/feed.h"
+#include "cell/dashboard/text_view.h"
 #include "context.h"
 
 namespace cellctl {
@@ -157,6 +160,11 @@ void AddCellVerbs(CLI::App& app, Context& ctx) {
     }
     std::cout << "cell up on domain " << ctx.Bus().domain() << ": " << procs.size() << " processes ready ("
               << o->clock << " clock), logs in " << logs.string() << "\n";
+    if (std::ifstream url(cell::config::DataDir() / "dashboard.url"); url) {
+      std::string u;
+      std::getline(url, u);
+      if (!u.empty()) std::cout << "dashboard: " << u << " (MTConnect: " << u << "probe)\n";
+    }
   });
 
   auto* down = app.add_subcommand("down", "stop the local cell (SIGTERM, then SIGKILL after 10 s)");
@@ -173,21 +181,42 @@ void AddCellVerbs(CLI::App& app, Context& ctx) {
     std::cout << "cell down: " << procs.size() << " processes stopped\n";
   });
 
-  auto* watch = app.add_subcommand("watch", "live view of stations (Ctrl-C to stop)");
-  watch->add_option("--count", o->count, "stop after N refreshes (0: never)");
+  auto* watch =
+      app.add_subcommand("watch", "live view of the cell: stations, backlog, waiting pallets, jobs");
+  watch->add_option("--count", o->count, "stop after N frames (0: never; 1: one frame for scripts)");
   watch->callback([o, &ctx] {
-    bus::Reader<cell::StationStatus> r(ctx.Bus(), bus::topics::kStationStatus, bus::QosKind::kState);
-    std::map<std::string, cell::StationStatus> last;
+    // The same view the dashboard serves (services/dashboard), fed from the same topics.
+    cell::dashboard::CellView view(cell::dashboard::LoadStationDefs());
+    cell::dashboard::Feed feed(ctx.Bus(), view, {.axes = false});
+    const bool tty = isatty(STDOUT_FILENO) != 0;
+    cell::dashboard::TextStyle style;
+    style.color = tty && !std::getenv("NO_COLOR");
+    const auto t0 = std::chrono::steady_clock::now();
+    while (!feed.Settled(std::chrono::duration_cast<bus::Millis>(std::chrono::steady_clock::now() - t0)) &&
+           std::chrono::steady_clock::now() - t0 < std::chrono::seconds(4)) {
+      feed.Tick();
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
     for (int n = 0; o->count == 0 || n < o->count; ++n) {
-      auto until = std::chrono::steady_clock::now() + std::chrono::seconds(1);
-      while (auto s = r.Take(std::max(bus::Millis(0), std::chrono::duration_cast<bus::Millis>(
-                                                          until - std::chrono::steady_clock::now()))))
-        last[s->station().to_string()] = *s;
-      for (auto& [id, s] : last)
-        std::cout << id << "  exec=" << s.execution() << "  pallet=" << s.pallet()
-                  << "  program=" << s.program() << "  line=" << s.line() << "  parts=" << s.part_count()
-                  << "\n";
-      std::cout << "--\n" << std::flush;
+      if (n > 0) {
+        // Refresh on a change (at most 4 times a second) or once a second for the heartbeats.
+        auto last = view.LastEvent();
+        view.WaitEvent(last, std::chrono::milliseconds(1000));
+        std::this_thread::sleep_for(std::chrono::milliseconds(250));
+      }
+      feed.Tick();
+      winsize ws{};
+      style.width = tty && ioctl(STDOUT_FILENO, TIOCGWINSZ, &ws) == 0 && ws.ws_col > 0 ? ws.ws_col : 100;
+      std::string frame = cell::dashboard::RenderText(view.Snapshot(), style);
+      if (tty) {
+        // Home, each line cleared to its end, the rest of the screen cleared: no flicker over ssh.
+        std::string out = "\x1b[H";
+        for (size_t a = 0, b; (b = frame.find('\n', a)) != std::string::npos; a = b + 1)
+          out += frame.substr(a, b - a) + "\x1b[K\n";
+        std::cout << out << "\x1b[J" << std::flush;
+      } else {
+        std::cout << frame << (o->count == 1 ? "" : "--\n") << std::flush;
+      }
     }
   });
 }

@@ -14,7 +14,8 @@
 namespace cell::testing {
 
 LocalCell::LocalCell(const std::string& prefix)
-    : data_(MakeTempDir(prefix)), env_{{"CELL_DATA_DIR", data_}} {}
+    // The dashboard on any free port: tests run side by side (it writes its address to dashboard.url).
+    : data_(MakeTempDir(prefix)), env_{{"CELL_DATA_DIR", data_}, {"CELL_HTTP", "127.0.0.1:0"}} {}
 
 LocalCell::~LocalCell() {
   if (up_) Down();

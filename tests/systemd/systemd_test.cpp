@@ -37,6 +37,7 @@ const std::vector<Unit> kUnits = {
     {"cell-program-store.service", "cell-program-store", false},
     {"cell-scheduler.service", "cell-scheduler", false},
     {"cell-inspection-writer.service", "cell-inspection-writer", false},
+    {"cell-dashboard.service", "cell-dashboard", false},
     {"cell-interpreter@.service", "cell-interpreter", true},
     {"cell-axis-servo@.service", "cell-axis-servo", true},
 };
@@ -291,6 +292,7 @@ TEST(Notify, EveryUnitCommandLineIsReadyWatchdogAndStops) {
                                                     {"WATCHDOG_USEC", "200000"},
                                                     {"WATCHDOG_PID", "self"},
                                                     {"CELL_DATA_DIR", (data.path() / u.service).string()},
+                                                    {"CELL_HTTP", "127.0.0.1:0"},  // the dashboard: any free port
                                                     {"CELL_CONFIG_DIR", (SourceDir() / "deploy").string()}});
     std::vector<std::string> seen;
     bool ready = l.WaitFor("READY=1", 30s, seen);

@@ -128,7 +128,11 @@ Feed::Feed(bus::Participant& p, CellView& view, FeedOptions opts)
       view_(view),
       live_(p),
       status_(p, topics::kStationStatus, bus::QosKind::kState,
-              [this](const cell::StationStatus& s, const bus::SampleInfo&) { view_.Status(FromWire(s)); }),
+              [this](const cell::StationStatus& s, const bus::SampleInfo&) {
+                view_.Status(FromWire(s));
+                std::lock_guard lk(mu_);
+                status_seen_.insert(s.station().to_string());
+              }),
       tools_(p, topics::kToolTable, bus::QosKind::kState,
              [this](const cell::ToolTable& t, const bus::SampleInfo&) {
                std::vector<ToolIn> tools;
@@ -142,6 +146,8 @@ Feed::Feed(bus::Participant& p, CellView& view, FeedOptions opts)
                  std::map<std::string, double> b;
                  for (auto& x : s.backlog()) b[x.station().to_string()] = x.backlog_s();
                  view_.Backlog(b);
+                 std::lock_guard lk(mu_);
+                 backlog_seen_ = true;
                }),
       jobs_(p, topics::kJobState, bus::QosKind::kState,
             [this](const cell::JobInfo& j, const bus::SampleInfo&) { view_.Job(FromWire(j)); }),
@@ -198,8 +204,17 @@ void Feed::Tick() {
     view_.Service(s, live_.Online(s));
 }
 
-int Feed::Matched() const {
-  return status_.Matched() + backlog_.Matched() + jobs_.Matched();
+bool Feed::Settled(std::chrono::milliseconds waited) const {
+  std::lock_guard lk(mu_);
+  bool all_online = true;
+  for (auto& st : view_.model().stations()) {
+    if (!live_.StationOnline(st.id))
+      all_online = false;
+    else if (!status_seen_.count(st.id))
+      return false;
+  }
+  if (live_.Online("cell-scheduler") && !backlog_seen_) return false;
+  return all_online || waited >= std::chrono::milliseconds(1500);
 }
 
 }  // namespace cell::dashboard

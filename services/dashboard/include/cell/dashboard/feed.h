@@ -3,8 +3,12 @@
 // Used by cell-dashboard and by `cellctl watch`, so both show the same state.
 #pragma once
 
+#include <chrono>
 #include <memory>
+#include <mutex>
 #include <optional>
+#include <set>
+#include <string>
 
 #include "cell/bus/bus.h"
 #include "cell/dashboard/cell_view.h"
@@ -26,8 +30,9 @@ class Feed {
   Feed(bus::Participant& p, CellView& view, FeedOptions opts = {});
   // Heartbeats: stations and host services going online or offline. Call every 250 ms or so.
   void Tick();
-  // Readers matched with at least one writer each on the state topics the page needs first.
-  int Matched() const;
+  // The first picture is complete: every station whose heartbeat is heard has sent its status, and a
+  // running scheduler its backlog; stations not heard at all get a grace period (as `station ls` does).
+  bool Settled(std::chrono::milliseconds waited) const;
 
  private:
   bus::Participant& p_;
@@ -40,6 +45,9 @@ class Feed {
   bus::Reader<cell::RunStatus> runs_;
   bus::Reader<cell::InspectionStored> stored_;
   std::optional<bus::Reader<cell::AxisState>> axes_;
+  mutable std::mutex mu_;
+  std::set<std::string> status_seen_;
+  bool backlog_seen_ = false;
 };
 
 // Conversions (exposed for tests).
