@@ -147,6 +147,7 @@ Feed::Feed(bus::Participant& p, CellView& view, FeedOptions opts)
                  for (auto& x : s.backlog()) b[x.station().to_string()] = x.backlog_s();
                  view_.Backlog(b);
                  std::lock_guard lk(mu_);
+                 if (!backlog_seen_) backlog_at_ = std::chrono::steady_clock::now();
                  backlog_seen_ = true;
                }),
       jobs_(p, topics::kJobState, bus::QosKind::kState,
@@ -213,7 +214,12 @@ bool Feed::Settled(std::chrono::milliseconds waited) const {
     else if (!status_seen_.count(st.id))
       return false;
   }
-  if (live_.Online("cell-scheduler") && !backlog_seen_) return false;
+  if (live_.Online("cell-scheduler")) {
+    // The scheduler's job states come from another writer of the same process: matched, and the moment
+    // its first transient-local samples take to follow the backlog's.
+    if (!backlog_seen_ || jobs_.Matched() == 0) return false;
+    if (std::chrono::steady_clock::now() - backlog_at_ < std::chrono::milliseconds(200)) return false;
+  }
   return all_online || waited >= std::chrono::milliseconds(1500);
 }
 

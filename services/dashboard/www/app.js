@@ -71,8 +71,11 @@
       plot: el('div', 'plot'),
       motion: el('div', 'motion'),
     };
-    top.append(e.id, e.kind, e.cond, e.badge);
-    c.append(top, e.doing, e.facts, e.alarm, e.wait, e.queue, e.backlog, e.plot, e.motion);
+    const gap = el('span', 'gap');
+    top.append(e.id, gap, e.cond, e.badge);
+    const body = el('div', 'body');
+    body.append(e.kind, e.doing, e.facts, e.alarm, e.wait, e.queue, e.backlog, e.plot, e.motion);
+    c.append(top, body);
     e.fact = {};
     for (const [k, label] of [['program', 'program'], ['line', 'line'], ['pallet', 'pallet'], ['tool', 'tool'],
                               ['part_count', 'parts'], ['queued', 'queued'], ['tools', 'tool table'], ['alarm_code', 'alarm']]) {
@@ -136,15 +139,19 @@
     }
     rec.data = st;
     const e = rec.el, c = rec.card;
-    c.className = 'card ex-' + st.execution + ' cond-' + st.condition;
+    c.className = 'card x-' + st.execution + ' c-' + st.condition;
     c.dataset.execution = st.execution;
     c.dataset.condition = st.condition;
     c.dataset.online = st.online;
-    e.kind.textContent = (st.description || st.dialect) + ' · ' + st.axes.join(' ');
-    e.badge.textContent = st.execution;
-    e.badge.className = 'badge execution ex-' + st.execution;
+    const DIALECT = { ktapl: 'KT-APL', okuma: 'Okuma OSP', emco: 'EMCOTRONIC', balt: 'Balt-System' };
+    const KIND = { hmc: 'machining centre', lathe: 'lathe', mill: 'mill' };
+    e.kind.textContent = (DIALECT[st.dialect] || st.dialect) + ' ' + (KIND[st.kind] || st.kind) + ' · ' + st.axes.join(' ');
+    c.title = st.description || '';
+    e.badge.textContent = st.execution.replace(/_/g, ' ');
+    e.badge.className = 'badge execution';
     e.cond.textContent = st.condition;
     e.cond.className = 'cond condition ' + st.condition;
+    e.cond.style.display = st.condition === 'UNAVAILABLE' ? 'none' : '';
     e.doing.textContent = doing(st);
     e.fact.program.textContent = val(st.program);
     e.fact.line.textContent = val(st.line);
@@ -168,8 +175,8 @@
       const d = el('div', 'waiting');
       d.dataset.job = w.job;
       d.dataset.pallet = w.pallet;
-      d.append(el('b', null, 'Pallet ' + w.pallet + ' waits: '), document.createTextNode(w.why),
-               el('span', 'kind', '  (job ' + w.job + (w.route ? ', route ' + w.route : '') + ')'));
+      d.append(el('b', null, 'Pallet ' + w.pallet + ' waits: '), document.createTextNode(w.why + ' '),
+               el('span', 'job', '(job ' + w.job + (w.route ? ', route ' + w.route : '') + ')'));
       e.wait.append(d);
     }
     const queued = st.queue.filter((q) => q.state !== 'RUNNING');
@@ -300,6 +307,7 @@
                el('td', null, Math.max(...xs).toFixed(1) + ' s'));
       body.append(r);
     }
+    byId('cycles').parentElement.style.display = cycles.size ? '' : 'none';
     if (!HAS_CHART) return;
     const data = [...cycles].map(([p, xs], i) => ({
       label: p, data: xs.slice(-50).map((y, k) => ({ x: Math.max(0, xs.length - 50) + k + 1, y })),

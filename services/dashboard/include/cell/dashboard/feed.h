@@ -48,6 +48,7 @@ class Feed {
   mutable std::mutex mu_;
   std::set<std::string> status_seen_;
   bool backlog_seen_ = false;
+  std::chrono::steady_clock::time_point backlog_at_;
 };
 
 // Conversions (exposed for tests).
