@@ -101,6 +101,8 @@ HttpServer::HttpServer(CellView& view, ServerOptions opts) : view_(view), opts_(
   const int threads = opts_.max_streams + 16;
   srv_->new_task_queue = [threads] { return new httplib::ThreadPool(static_cast<size_t>(threads)); };
   srv_->set_keep_alive_timeout(30);
+  // Small responses (/current, events) go out at once: Nagle plus delayed ACKs cost 40 ms a keep-alive GET.
+  srv_->set_tcp_nodelay(true);
   Routes();
 }
 
