@@ -2,7 +2,7 @@
 (NAM,HSG7)
 (UTL,7777)
 (UCY,45)
-! Gear housing: needs the 40 mm face mill 7777, which no station holds until it is loaded.
+! Gear housing: needs face mill 7777, which no station holds until loaded.
 N10 G71 G90 G01
 N20 T7777 M06
 N30 X0 Y0 Z50. F0
