@@ -5,6 +5,7 @@
 
 #include "cell/bus/topics.h"
 #include "cell/config/config.h"
+#include "cell/dashboard/feed.h"
 #include "cell/idl/scheduler.h"
 #include "cell/tooltable/wire.h"
 #include "context.h"
@@ -13,34 +14,9 @@ namespace cellctl {
 
 namespace {
 
-const char* ExecutionName(cell::Execution e) {
-  switch (e) {
-    case cell::EXECUTION_READY:
-      return "READY";
-    case cell::EXECUTION_ACTIVE:
-      return "ACTIVE";
-    case cell::EXECUTION_INTERRUPTED:
-      return "INTERRUPTED";
-    case cell::EXECUTION_FEED_HOLD:
-      return "FEED_HOLD";
-    case cell::EXECUTION_STOPPED:
-      return "STOPPED";
-    case cell::EXECUTION_OPTIONAL_STOP:
-      return "OPTIONAL_STOP";
-    case cell::EXECUTION_PROGRAM_STOPPED:
-      return "PROGRAM_STOPPED";
-    case cell::EXECUTION_PROGRAM_COMPLETED:
-      return "PROGRAM_COMPLETED";
-    case cell::EXECUTION_WAIT:
-      return "WAIT";
-    default:
-      return "UNAVAILABLE";
-  }
-}
-
-const char* ConditionName(cell::Condition c) {
-  return c == cell::CONDITION_FAULT ? "FAULT" : c == cell::CONDITION_WARNING ? "WARNING" : "NORMAL";
-}
+// The MTConnect words of the station state, as the dashboard shows them.
+using cell::dashboard::ConditionName;
+using cell::dashboard::ExecutionName;
 
 void RequireConfigured(const std::string& id) {
   auto ids = cell::config::ListStations();

@@ -12,13 +12,13 @@
 #include <httplib.h>
 
 #include <algorithm>
+#include <cctype>
 #include <atomic>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <numeric>
-#include <regex>
 #include <thread>
 
 #include "cell/bus/bus.h"
@@ -203,13 +203,12 @@ void LiveClients(FakeStations& st, const std::string& host, int port) {
   std::vector<std::unique_ptr<Client>> cs;
   std::map<int, double> sent;
   std::mutex sent_mu;
-  const std::regex line_re("\"id\":\"KT02\".*?\"line\":(\\d+)");
   for (int i = 0; i < clients; ++i) {
     auto c = std::make_unique<Client>();
     c->http = std::make_unique<httplib::Client>(host, port);
     c->http->set_read_timeout(30, 0);
     Client* me = c.get();
-    c->t = std::thread([me, &sent, &sent_mu, &line_re] {
+    c->t = std::thread([me, &sent, &sent_mu] {
       me->http->Get("/api/events", [&](const char* d, size_t n) {
         me->open = true;
         me->buf.append(d, n);
@@ -222,9 +221,12 @@ void LiveClients(FakeStations& st, const std::string& host, int port) {
           if (me->last_id != 0 && id != me->last_id + 1) ++me->gaps;
           me->last_id = id;
           ++me->events;
-          std::smatch m;
-          if (ev.find("\"type\":\"station\"") != std::string::npos && std::regex_search(ev, m, line_re)) {
-            int line = std::stoi(m[1]);
+          // KT02's card: its "line" (the first after its id in the station's JSON).
+          size_t kt02 = ev.find("\"id\":\"KT02\"");
+          size_t lp = kt02 == std::string::npos ? kt02 : ev.find("\"line\":", kt02);
+          if (ev.find("\"type\":\"station\"") != std::string::npos && lp != std::string::npos &&
+              std::isdigit(static_cast<unsigned char>(ev[lp + 7]))) {
+            int line = std::atoi(ev.c_str() + lp + 7);
             me->lines.push_back(line);
             std::lock_guard lk(sent_mu);
             if (sent.count(line)) me->lat.push_back(WallMs() - sent[line]);

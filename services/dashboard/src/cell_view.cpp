@@ -176,6 +176,7 @@ void CellView::Tools(const std::string& station, const std::vector<ToolIn>& tool
   }
   for (auto& [tool, e] : before) Observe(s, "asset_rem", station + ".T" + tool, t);
   x.tools = tools;
+  x.tools_ns = t;
   PushStations();
 }
 
@@ -501,7 +502,7 @@ std::vector<mtc::ToolAsset> CellView::ToolAssets() const {
   for (size_t s = 0; s < st_.size(); ++s)
     for (auto& t : st_[s].tools)
       out.push_back({model_.stations()[s].id, t.tool, t.socket, t.length, t.diameter, t.life_left_min, t.worn,
-                     t.broken, Now()});
+                     t.broken, st_[s].tools_ns});
   return out;
 }
 

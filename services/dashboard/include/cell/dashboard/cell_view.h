@@ -159,6 +159,7 @@ class CellView {
     StatusIn status;
     double backlog_s = 0;
     std::vector<ToolIn> tools;
+    std::int64_t tools_ns = 0;  // when the table last arrived (the assets' timestamp)
     double feed = 0, spindle_rpm = 0;
     // Page plot: wall seconds and one position per configured axis.
     std::deque<std::pair<double, std::vector<double>>> trail;
