@@ -279,7 +279,7 @@ TEST(Install, DestdirPrefixIdempotentAndVerified) {
 
 // Each unit's own command line (as `cellctl up` runs it: install path mapped to the build tree, %i to the
 // station) under a test-owned NOTIFY_SOCKET with WATCHDOG_USEC=200000: READY=1, at least two WATCHDOG=1,
-// and after SIGTERM, STOPPING=1 and exit code 0.
+// and after SIGTERM, STOPPING=1 and exit code 0. (The dashboard listens on any free port: CELL_HTTP.)
 TEST(Notify, EveryUnitCommandLineIsReadyWatchdogAndStops) {
   TempDir data;
   for (const auto& u : kUnits) {
@@ -292,7 +292,7 @@ TEST(Notify, EveryUnitCommandLineIsReadyWatchdogAndStops) {
                                                     {"WATCHDOG_USEC", "200000"},
                                                     {"WATCHDOG_PID", "self"},
                                                     {"CELL_DATA_DIR", (data.path() / u.service).string()},
-                                                    {"CELL_HTTP", "127.0.0.1:0"},  // the dashboard: any free port
+                                                    {"CELL_HTTP", "127.0.0.1:0"},
                                                     {"CELL_CONFIG_DIR", (SourceDir() / "deploy").string()}});
     std::vector<std::string> seen;
     bool ready = l.WaitFor("READY=1", 30s, seen);

@@ -157,25 +157,23 @@ void CellView::Service(const std::string& id, bool online) {
   Push({{"type", "services"}, {"services", services_}});
 }
 
-void CellView::Tools(const std::string& station, const std::vector<ToolIn>& tools) {
+void CellView::Tools(const std::string& station, const tooltable::ToolTable& table) {
+  const auto& tools = table.entries();
   std::lock_guard lk(mu_);
   int s = model_.StationIndex(station);
   if (s < 0) return;
   StationState& x = st_[static_cast<size_t>(s)];
   const std::int64_t t = Now();
-  auto key = [](const ToolIn& e) { return e.tool; };
-  std::map<std::string, const ToolIn*> before;
-  for (auto& e : x.tools) before[key(e)] = &e;
+  std::map<std::string, const tooltable::ToolEntry*> before;
+  for (auto& e : x.tools) before[e.tool] = &e;
   for (auto& e : tools) {
-    auto it = before.find(key(e));
-    bool same = it != before.end() && it->second->socket == e.socket && it->second->length == e.length &&
-                it->second->diameter == e.diameter && it->second->life_left_min == e.life_left_min &&
-                it->second->worn == e.worn && it->second->broken == e.broken;
+    auto it = before.find(e.tool);
+    bool same = it != before.end() && *it->second == e;
     if (!same) Observe(s, "asset_chg", station + ".T" + e.tool, t);
     if (it != before.end()) before.erase(it);
   }
   for (auto& [tool, e] : before) Observe(s, "asset_rem", station + ".T" + tool, t);
-  x.tools = tools;
+  x.tools.assign(tools.begin(), tools.end());
   x.tools_ns = t;
   PushStations();
 }

@@ -2,6 +2,7 @@
 
 #include "cell/bus/topics.h"
 #include "cell/config/config.h"
+#include "cell/tooltable/wire.h"
 
 namespace cell::dashboard {
 

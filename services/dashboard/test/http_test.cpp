@@ -233,7 +233,7 @@ TEST_F(HttpTest, LiveClientsBeyondTheLimitAreRefused) {
 TEST_F(HttpTest, MtconnectEndpointsAnswerWithValidDocuments) {
   view_->Online("KT01", true);
   view_->Status(Status("KT01", "ACTIVE", "PUMP341", 12, 3));
-  view_->Tools("KT01", {{"1001", 1, 152.4, 25.4, 240, false, false}});
+  view_->Tools("KT01", testing::Tools({{"1001", 1, 152.4, 25.4, 240, false, false}}));
   EXPECT_NE(Xml("/probe", 200, "MTConnectDevices_2.4_1.0.xsd").find("uuid=\"OK01\""), std::string::npos);
   EXPECT_EQ(Xml("/OK01/probe", 200, "MTConnectDevices_2.4_1.0.xsd").find("KT01"), std::string::npos);
   EXPECT_NE(Xml("/current", 200, "MTConnectStreams_2.4_1.0.xsd").find(">ACTIVE</Execution>"),

@@ -62,8 +62,9 @@ void Busy(CellView& v) {
   f.alarm_code = "2041";
   f.alarm_text = "axis X overtravel";
   v.Status(f);
-  v.Tools("KT01", {{"1001", 1, 152.4, 25.4, 240, false, false}, {"33412.5", 2, 100, 10, 0, true, false}});
-  v.Tools("OK01", {{"1", 1, 0, 0.8, 480, false, true}});
+  v.Tools("KT01", testing::Tools({{"1001", 1, 152.4, 25.4, 240, false, false},
+                                  {"33412.5", 2, 100, 10, 0, true, false}}));
+  v.Tools("OK01", testing::Tools({{"1", 1, 0, 0.8, 480, false, true}}));
   AxesIn a;
   a.station = "KT01";
   a.actual[0] = 12.5;

@@ -31,6 +31,29 @@ inline StatusIn Status(const std::string& station, const std::string& exec, cons
   return s;
 }
 
+// A tool table from (tool, socket, length, diameter, life, worn, broken) rows.
+struct ToolRow {
+  std::string tool;
+  int socket;
+  double length, diameter, life_left_min;
+  bool worn, broken;
+};
+inline tooltable::ToolTable Tools(const std::vector<ToolRow>& rows) {
+  std::vector<tooltable::ToolEntry> out;
+  for (auto& r : rows) {
+    tooltable::ToolEntry e;
+    e.tool = r.tool;
+    e.socket = r.socket;
+    e.length = r.length;
+    e.diameter = r.diameter;
+    e.life_left_min = r.life_left_min;
+    e.worn = r.worn;
+    e.broken = r.broken;
+    out.push_back(e);
+  }
+  return tooltable::ToolTable(out);
+}
+
 // The MTConnect 2.4 schemas (`_1.0.xsd` variants) in the shared reference beside the repository.
 std::string SchemaDir();
 // Validates a document with xmllint --noout --nonet --schema; returns xmllint's complaint, "" when valid.

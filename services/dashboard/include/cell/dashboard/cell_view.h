@@ -22,6 +22,7 @@
 #include "cell/dashboard/mtconnect.h"
 #include "cell/dashboard/sequence_buffer.h"
 #include "cell/dashboard/stations.h"
+#include "cell/tooltable/tooltable.h"
 
 namespace cell::dashboard {
 
@@ -39,13 +40,6 @@ struct StatusIn {  // cell/station/status
   int dispatch_id = 0;
   int queued = 0;
   std::int64_t time_ns = 0;
-};
-
-struct ToolIn {  // one entry of cell/station/tools
-  std::string tool;
-  int socket = 0;
-  double length = 0, diameter = 0, life_left_min = 0;
-  bool worn = false, broken = false;
 };
 
 struct AxesIn {  // cell/motion/axes
@@ -118,7 +112,7 @@ class CellView {
   void Status(const StatusIn& s);
   void Online(const std::string& station, bool online);      // the interpreter's heartbeat
   void Service(const std::string& service_id, bool online);  // host services, for the page's header
-  void Tools(const std::string& station, const std::vector<ToolIn>& tools);
+  void Tools(const std::string& station, const tooltable::ToolTable& tools);  // cell/station/tools
   void Backlog(const std::map<std::string, double>& backlog_s);
   void Job(const JobIn& j);
   void Axes(const AxesIn& a);
@@ -158,7 +152,7 @@ class CellView {
     bool seen = false;  // a status sample arrived
     StatusIn status;
     double backlog_s = 0;
-    std::vector<ToolIn> tools;
+    std::vector<tooltable::ToolEntry> tools;
     std::int64_t tools_ns = 0;  // when the table last arrived (the assets' timestamp)
     double feed = 0, spindle_rpm = 0;
     // Page plot: wall seconds and one position per configured axis.
