@@ -136,11 +136,7 @@ Feed::Feed(bus::Participant& p, CellView& view, FeedOptions opts)
               }),
       tools_(p, topics::kToolTable, bus::QosKind::kState,
              [this](const cell::ToolTable& t, const bus::SampleInfo&) {
-               std::vector<ToolIn> tools;
-               for (auto& e : t.tools())
-                 tools.push_back({e.tool().to_string(), e.socket(), e.length(), e.diameter(),
-                                  e.life_left_min(), e.worn(), e.broken()});
-               view_.Tools(t.station().to_string(), tools);
+               view_.Tools(t.station().to_string(), tooltable::FromWire(t));
              }),
       backlog_(p, topics::kSchedulerState, bus::QosKind::kState,
                [this](const cell::SchedulerState& s, const bus::SampleInfo&) {
