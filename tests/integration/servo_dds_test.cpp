@@ -426,6 +426,41 @@ TEST_F(ServoDds, CycleTimeMatchesTheMachineLibrary) {
   RecordProperty("cycle_library_s", std::to_string(ref));
 }
 
+// A spindle-synchronised thread over DDS (rigid-tap style on KT01's Z): the thread fields arrive in the
+// machine's segment, and the run takes the library's time for it (within 1 % plus one spindle revolution
+// of index wait: the servo's spindle angle depends on what ran before). The constant-surface-speed
+// fields map too (a lathe's; KT01 would refuse them).
+TEST_F(ServoDds, ThreadAndSurfaceSpeedFieldsReachTheMachine) {
+  cell::MotionSegment spindle;
+  spindle.kind(cell::SEGMENT_SPINDLE);
+  spindle.spindle_rpm(600);
+  spindle.spindle_mode(1);
+  std::vector<cell::MotionSegment> home{spindle, Seg(cell::SEGMENT_RAPID, 100, 100, 100), End()};
+  ExpectClean(bus_->Run("KT01", NextRun(), home), home.size());
+  auto thread = Seg(cell::SEGMENT_THREAD, 100, 100, 60);
+  thread.thread_lead(1.5);
+  thread.thread_lead_change(0.05);
+  thread.thread_start_angle(270);
+  const servo::Segment mapped = servo::FromWire(thread, 1);
+  EXPECT_EQ(mapped.kind, servo::SegmentKind::kThread);
+  EXPECT_EQ(mapped.thread_lead, 1.5);
+  EXPECT_EQ(mapped.thread_lead_change, 0.05);
+  EXPECT_EQ(mapped.thread_start_angle, 270);
+  cell::MotionSegment css = spindle;
+  css.css_surface_speed(180);
+  css.spindle_max_rpm(2500);
+  const servo::Segment css_mapped = servo::FromWire(css, 2);
+  EXPECT_EQ(css_mapped.css_surface_speed, 180);
+  EXPECT_EQ(css_mapped.spindle_max_rpm, 2500);
+  std::vector<cell::MotionSegment> prog{thread, Seg(cell::SEGMENT_RAPID, 100, 100, 100), End()};
+  RunResult r = bus_->Run("KT01", NextRun(), prog);
+  ExpectClean(r, prog.size());
+  const double ref = ReferenceCycle(StationConfig("KT01"), home, prog);
+  ASSERT_GT(ref, 2.0);  // 40 mm at 1.5 mm/rev + 0.05 mm/rev per rev: 21.4 revolutions at 10/s
+  EXPECT_NEAR(r.last->run_machine_s(), ref, 0.01 * ref + 0.1)
+      << "over DDS " << r.last->run_machine_s() << " s";
+}
+
 // (b) The real clock (KT02) and the virtual clock (KT01) agree on a ~2 s run; (d) the real-clock
 // machine's telemetry shows following error while accelerating.
 TEST_F(ServoDds, RealAndVirtualClocksAgreeAndFollowingErrorShows) {

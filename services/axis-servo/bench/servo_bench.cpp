@@ -140,7 +140,7 @@ Program Drilling(const MachineConfig& c, int nx, int ny) {
 }
 
 void Report() {
-  const MachineConfig kt = DefaultMachineConfig("ktapl");
+  const MachineConfig kt = DefaultMachineConfig("hmc");
   fmt::print("axis-servo benchmark (virtual clock, servo period {:.1f} ms, path tolerance {} mm)\n",
              kt.servo_period_s * 1e3, kt.path_tolerance);
   {
@@ -215,7 +215,7 @@ void Report() {
 }
 
 void BM_ServoTick(benchmark::State& state) {
-  Machine m(DefaultMachineConfig("ktapl"), ClockKind::kVirtual);
+  Machine m(DefaultMachineConfig("hmc"), ClockKind::kVirtual);
   Program p = Contour(10000, 6000);
   std::size_t next = 0;
   for (auto _ : state) {

@@ -52,6 +52,9 @@ Segment FromWire(const cell::MotionSegment& m, uint64_t id) {
     case cell::SEGMENT_END:
       s.kind = SegmentKind::kEnd;
       break;
+    case cell::SEGMENT_THREAD:
+      s.kind = SegmentKind::kThread;
+      break;
   }
   for (int i = 0; i < kNumAxes; ++i) s.end[static_cast<size_t>(i)] = m.target()[static_cast<size_t>(i)];
   s.axes = static_cast<uint8_t>(m.axis_mask() & 0x3f);
@@ -77,6 +80,11 @@ Segment FromWire(const cell::MotionSegment& m, uint64_t id) {
               : m.coolant() == 2 ? CoolantMode::kMist
                                  : CoolantMode::kFlood;
   s.pallet = m.pallet();
+  s.css_surface_speed = m.css_surface_speed();
+  s.spindle_max_rpm = m.spindle_max_rpm();
+  s.thread_lead = m.thread_lead();
+  s.thread_lead_change = m.thread_lead_change();
+  s.thread_start_angle = m.thread_start_angle();
   return s;
 }
 

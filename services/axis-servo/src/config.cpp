@@ -315,12 +315,11 @@ MachineConfig LoadMachineConfig(const std::filesystem::path& file) {
   return ParseMachineConfig(ss.str(), file.string());
 }
 
-MachineConfig DefaultMachineConfig(std::string_view dialect) {
-  if (dialect == "okuma") {
+MachineConfig DefaultMachineConfig(std::string_view kind) {
+  if (kind == "lathe") {
     return ParseMachineConfig(R"(
 [station]
 id = "OK01"
-dialect = "okuma"
 [machine]
 kind = "lathe"
 [axes.x]
@@ -352,12 +351,14 @@ index_time = 0.3
 tool_change = 1.2
 pallet_change = 40.0
 )",
-                              "<builtin okuma>");
+                              "<builtin lathe>");
   }
+  if (kind != "hmc")
+    throw Error(Errc::kInvalidArgument,
+                fmt::format("no built-in machine of kind \"{}\" (built-in: hmc, lathe)", kind));
   return ParseMachineConfig(R"(
 [station]
 id = "KT01"
-dialect = "ktapl"
 [machine]
 kind = "hmc"
 [axes.x]
@@ -415,7 +416,7 @@ coolant = 0.3
 ball_diameter = 6.0
 max_feed = 2000.0
 )",
-                            "<builtin ktapl>");
+                            "<builtin hmc>");
 }
 
 }  // namespace cell::servo

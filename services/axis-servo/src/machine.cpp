@@ -12,7 +12,8 @@ namespace cell::servo {
 namespace {
 
 bool IsPathMotion(SegmentKind k) {
-  return k == SegmentKind::kRapid || k == SegmentKind::kLinear || k == SegmentKind::kArc;
+  return k == SegmentKind::kRapid || k == SegmentKind::kLinear || k == SegmentKind::kArc ||
+         k == SegmentKind::kThread;
 }
 
 }  // namespace
@@ -39,6 +40,8 @@ const char* SegmentKindName(SegmentKind k) {
       return "probe";
     case SegmentKind::kEnd:
       return "end";
+    case SegmentKind::kThread:
+      return "thread";
   }
   return "?";
 }
@@ -106,6 +109,7 @@ Machine::Machine(MachineConfig config, ClockKind clock)
   }
   planner_.Flush(home);
   filter_.Reset(home);
+  spindle_.Configure(cfg_.spindle_max_rpm, cfg_.spindle_accel_rpm_s);
   prev_cmd_ = home;
   SetToolTable(cfg_.tools);
   for (const auto& ref : cfg_.part_models) parts_[ref.pallet] = LoadPartModel(ref.file);
@@ -135,8 +139,11 @@ void Machine::Push(const Segment& segment) {
   if (queue_.size() >= capacity())
     throw Error(Errc::kFailedPrecondition,
                 fmt::format("segment {} refused: no credit (queue of {} full)", segment.id, capacity()));
-  bool finite =
-      std::isfinite(segment.feed) && std::isfinite(segment.dwell_s) && std::isfinite(segment.spindle_rpm);
+  bool finite = true;
+  for (double v :
+       {segment.feed, segment.dwell_s, segment.spindle_rpm, segment.css_surface_speed,
+        segment.spindle_max_rpm, segment.thread_lead, segment.thread_lead_change, segment.thread_start_angle})
+    finite = finite && std::isfinite(v);
   for (double v : segment.end) finite = finite && std::isfinite(v);
   for (double v : segment.center) finite = finite && std::isfinite(v);
   if (!finite)
@@ -145,6 +152,10 @@ void Machine::Push(const Segment& segment) {
   if (segment.feed < 0 || segment.dwell_s < 0)
     throw Error(Errc::kInvalidArgument,
                 fmt::format("segment {} refused: negative feed or dwell", segment.id));
+  if (segment.css_surface_speed < 0 || segment.spindle_max_rpm < 0 || segment.thread_lead < 0)
+    throw Error(
+        Errc::kInvalidArgument,
+        fmt::format("segment {} refused: negative surface speed, spindle limit or thread lead", segment.id));
   Entry e;
   e.seg = segment;
   if (cfg_.axes[kX].diameter) {
@@ -161,16 +172,21 @@ AxisVector Machine::EndOf(const Segment& s, const AxisVector& start) const {
   return p;
 }
 
-double Machine::FeedOf(const Segment& s, double length) const {
+Feed Machine::FeedOf(const Segment& s, double length) const {
   switch (s.feed_mode) {
     case FeedMode::kPerMinute:
-      return s.feed / 60.0;
-    case FeedMode::kPerRevolution:
-      return s.feed * std::abs(spindle_rpm_) / 60.0;
+      return Feed(s.feed / 60.0);
+    case FeedMode::kPerRevolution:  // the planner follows the spindle's actual speed
+      return Feed(s.feed, true);
     case FeedMode::kInverseTime:
-      return s.feed * length / 60.0;
+      return Feed(s.feed * length / 60.0);
   }
-  return 0;
+  return Feed(0);
+}
+
+double Machine::FeedNow(const Segment& s, double length) const {
+  const Feed f = FeedOf(s, length);
+  return f.per_rev ? f.rate * std::abs(spindle_.rpm()) / 60.0 : f.rate;
 }
 
 bool Machine::SoftLimitCheck(const Segment& s, const AxisVector& start, std::string& why) const {
@@ -304,47 +320,51 @@ void Machine::FeedPlanner() {
     const AxisVector start = planner_.EndOfPath();
     const bool index_move = IsPathMotion(s.kind) && present_[kB] && cfg_.axes[kB].type == AxisType::kIndex &&
                             (s.axes >> kB & 1) && std::abs(s.end[kB] - start[kB]) > 1e-9;
-    if (IsPathMotion(s.kind) && !index_move) {
+    // An alarm found while planning ahead is raised once everything before the segment has run.
+    auto defer = [&](AlarmCode code, const std::string& why) {
+      alarm_pending_ = true;
+      alarm_ = {};
+      pending_alarm_ = {code, fmt::format("segment {}: {}", s.id, why)};
+      alarm_seg_ = s.id;
+    };
+    // Feeds per revolution need a running spindle (they follow its actual speed from then on).
+    auto feed_ok = [&](const Feed& f) {
+      if (!(f.rate > 0)) return defer(AlarmCode::kInvalidSegment, "feed is zero"), false;
+      if (f.per_rev && spindle_.TargetAt(XDiameter()) == 0)
+        return defer(AlarmCode::kInvalidSegment, "feed per revolution with the spindle stopped"), false;
+      return true;
+    };
+    if (IsPathMotion(s.kind) && (!index_move || s.kind == SegmentKind::kThread)) {
       if (planner_.Full()) break;
       std::string why;
       if (!SoftLimitCheck(s, start, why)) {
-        alarm_pending_ = true;
-        alarm_ = {};
-        pending_alarm_ = {AlarmCode::kSoftLimit, fmt::format("segment {}: {}", s.id, why)};
-        alarm_seg_ = s.id;
+        defer(AlarmCode::kSoftLimit, why);
         break;
       }
       const AxisVector end = EndOf(s, start);
       if (s.kind == SegmentKind::kRapid) {
         planner_.AddLine(end, 0, true, true, s.id);
+      } else if (s.kind == SegmentKind::kThread) {
+        if (!PlanThread(s, start, end, why)) {
+          defer(AlarmCode::kInvalidSegment, why);
+          break;
+        }
       } else if (s.kind == SegmentKind::kLinear) {
         AxisVector d = end - start;
         double len = d.head<3>().norm();
         if (len < 1e-9) len = d.tail<3>().norm();
-        const double f = FeedOf(s, len);
-        if (!(f > 0) && len > 1e-9) {
-          alarm_pending_ = true;
-          pending_alarm_ = {AlarmCode::kInvalidSegment, fmt::format("segment {}: feed is zero", s.id)};
-          alarm_seg_ = s.id;
-          break;
-        }
+        const Feed f = FeedOf(s, len);
+        if (len > 1e-9 && !feed_ok(f)) break;
         planner_.AddLine(end, f, false, s.exact_stop, s.id);
       } else {
         PathElement arc;
         std::string err;
         if (!planner_.MakeArc(start, end, s.center, s.plane, s.direction, s.turns, arc, err)) {
-          alarm_pending_ = true;
-          pending_alarm_ = {AlarmCode::kInvalidSegment, fmt::format("segment {}: {}", s.id, err)};
-          alarm_seg_ = s.id;
+          defer(AlarmCode::kInvalidSegment, err);
           break;
         }
-        const double f = FeedOf(s, arc.len);
-        if (!(f > 0)) {
-          alarm_pending_ = true;
-          pending_alarm_ = {AlarmCode::kInvalidSegment, fmt::format("segment {}: feed is zero", s.id)};
-          alarm_seg_ = s.id;
-          break;
-        }
+        const Feed f = FeedOf(s, arc.len);
+        if (!feed_ok(f)) break;
         planner_.AddArc(arc, f, s.exact_stop, s.id);
       }
       e.planned = true;
@@ -382,19 +402,9 @@ bool Machine::StartBarrier(Entry& e) {
       timer(s.dwell_s);
       break;
     case SegmentKind::kSpindle: {
-      double to = 0;
-      if (s.spindle_dir == SpindleDirection::kCW) to = std::abs(s.spindle_rpm);
-      if (s.spindle_dir == SpindleDirection::kCCW) to = -std::abs(s.spindle_rpm);
-      if (std::abs(to) > cfg_.spindle_max_rpm) {
-        RaiseAlarm(AlarmCode::kInvalidSegment,
-                   fmt::format("segment {}: spindle {:.0f} rpm above max_rpm {:.0f}", s.id, std::abs(to),
-                               cfg_.spindle_max_rpm),
-                   s.id);
-        return false;
-      }
-      op_.rpm_from = spindle_rpm_;
-      op_.rpm_to = to;
-      double t = std::abs(to - spindle_rpm_) / cfg_.spindle_accel_rpm_s;
+      if (!StartSpindle(s)) return false;
+      // Complete when the spindle is at speed (the ramp runs in Step()).
+      double t = std::abs(spindle_.TargetAt(XDiameter()) - spindle_.rpm()) / cfg_.spindle_accel_rpm_s;
       if (s.spindle_dir == SpindleDirection::kOrient) t += cfg_.spindle_orient_time;
       spindle_oriented_ = false;
       timer(t);
@@ -424,10 +434,12 @@ bool Machine::StartBarrier(Entry& e) {
       const int n = cfg_.magazine_sockets;
       int steps = std::abs(socket - magazine_at_) % n;
       steps = std::min(steps, n - steps);
-      double t = cfg_.tool_change_time + steps * cfg_.magazine_index_time +
-                 std::abs(spindle_rpm_) / cfg_.spindle_accel_rpm_s;
-      op_.rpm_from = spindle_rpm_;
-      op_.rpm_to = 0;
+      double t = cfg_.tool_change_time + steps * cfg_.magazine_index_time;
+      // A machining centre stops the spindle to change tools; a lathe's turret indexes while it turns.
+      if (cfg_.kind != "lathe") {
+        t += std::abs(spindle_.rpm()) / cfg_.spindle_accel_rpm_s;
+        spindle_.SetRpm(0);
+      }
       timer(t);
       break;
     }
@@ -445,7 +457,7 @@ bool Machine::StartBarrier(Entry& e) {
         return false;
       }
       const AxisVector end = EndOf(s, start);
-      double f = std::min(FeedOf(s, (end - start).head<3>().norm()), cfg_.probe_max_feed / 60.0);
+      double f = std::min(FeedNow(s, (end - start).head<3>().norm()), cfg_.probe_max_feed / 60.0);
       if (!(f > 0)) {
         RaiseAlarm(AlarmCode::kInvalidSegment, fmt::format("segment {}: probe feed is zero", s.id), s.id);
         return false;
@@ -500,22 +512,17 @@ void Machine::StepOp() {
         op_.t0 += cfg_.servo_period_s;
         return;
       }
-      if (s.kind == SegmentKind::kSpindle || s.kind == SegmentKind::kToolChange) {
-        const double ramp = std::abs(op_.rpm_to - op_.rpm_from) / cfg_.spindle_accel_rpm_s;
-        const double f = ramp > 0 ? std::clamp((now - op_.t0) / ramp, 0.0, 1.0) : 1.0;
-        spindle_rpm_ = op_.rpm_from + f * (op_.rpm_to - op_.rpm_from);
-      }
       if (now < op_.until) return;
       switch (s.kind) {
         case SegmentKind::kSpindle:
-          spindle_rpm_ = op_.rpm_to;
+          spindle_.Snap(XDiameter());
           spindle_oriented_ = s.spindle_dir == SpindleDirection::kOrient;
           break;
         case SegmentKind::kCoolant:
           coolant_ = s.coolant;
           break;
         case SegmentKind::kToolChange:
-          spindle_rpm_ = 0;
+          spindle_.Snap(XDiameter());
           if (!spindle_tool_.empty()) magazine_[spindle_tool_socket_] = spindle_tool_;
           spindle_tool_.clear();
           spindle_tool_socket_ = 0;
@@ -599,7 +606,7 @@ void Machine::StepOp() {
       if (rest.kind == SegmentKind::kRapid) {
         planner_.AddLine(end, 0, true, true, op_.seg);
       } else if (rest.kind == SegmentKind::kLinear) {
-        planner_.AddLine(end, std::max(FeedOf(rest, (end - start).head<3>().norm()), 1e-3), false, true,
+        planner_.AddLine(end, std::max(FeedNow(rest, (end - start).head<3>().norm()), 1e-3), false, true,
                          op_.seg);
       } else {
         PathElement arc;
@@ -608,7 +615,7 @@ void Machine::StepOp() {
           RaiseAlarm(AlarmCode::kInvalidSegment, fmt::format("segment {}: {}", rest.id, err), rest.id);
           return;
         }
-        planner_.AddArc(arc, std::max(FeedOf(rest, arc.len), 1e-3), true, op_.seg);
+        planner_.AddArc(arc, std::max(FeedNow(rest, arc.len), 1e-3), true, op_.seg);
       }
       op_.phase = OpPhase::kIndexRest;
       return;
@@ -647,7 +654,7 @@ bool Machine::Idle() const {
   const bool nothing_to_do = (queue_.empty() && planner_.Idle()) || alarm_.code != AlarmCode::kNone ||
                              (planner_.Holding() && planner_.Speed() == 0 && !aborting_);
   if (!nothing_to_do || alarm_pending_) return false;
-  if (!filter_.Settled()) return false;
+  if (!filter_.Settled() || !spindle_.AtSpeed()) return false;  // constant surface speed still ramping
   for (int i = 0; i < kNumAxes; ++i) {
     if (!present_[i]) continue;
     if (std::abs(servos_[i].following_error()) > 1e-5 || std::abs(servos_[i].velocity()) > 1e-3) return false;
@@ -699,6 +706,14 @@ bool Machine::StepNow() {
   FeedPlanner();
   StepOp();
 
+  // The spindle turns during the period; a thread in progress holds its speed, a thread waiting for its
+  // index pulse takes it (at the exact fraction of the period) once the spindle is at speed.
+  spindle_.Step(cfg_.servo_period_s, XDiameter(), planner_.InThread());
+  planner_.SetSpindle(spindle_.turned(), std::abs(spindle_.rpm()) / 60.0);
+  if (double angle; planner_.AwaitingIndex(&angle) && spindle_.AtSpeed()) {
+    const double at = spindle_.Crossing(angle);
+    if (at >= 0) planner_.IndexPulse(at);
+  }
   const AxisVector& pre = planner_.Tick();
   const bool op_motion =
       op_.phase == OpPhase::kMotion || op_.phase == OpPhase::kIndexMove || op_.phase == OpPhase::kIndexRest;
@@ -789,6 +804,7 @@ void Machine::Abort() {
   if (op_.phase == OpPhase::kTimer) op_ = Op{};
   aborting_ = true;
   planner_.SetHold(true);
+  planner_.BreakSync();
 }
 
 void Machine::Reset() {
@@ -852,7 +868,9 @@ AxisState Machine::State() const {
   } else if (planner_.Current(s.segment_id, frac)) {
     s.fraction = frac;
   }
-  s.spindle_rpm = spindle_rpm_;
+  s.spindle_rpm = spindle_.rpm();
+  s.spindle_angle = spindle_.angle();
+  s.spindle_revolutions = spindle_.position();
   s.spindle_oriented = spindle_oriented_;
   s.coolant = coolant_;
   s.tool = spindle_tool_;

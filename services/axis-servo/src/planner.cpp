@@ -51,40 +51,23 @@ void Planner::SetOverrides(double feed, double rapid) {
 
 double Planner::Cap(const PathElement& e) const {
   if (e.rapid) return e.vgeom * rapid_ovr_;
-  return std::min(e.vgeom, e.vfeed * feed_ovr_);
+  if (e.sync) return e.vgeom;  // the spindle sets a thread's speed; the feed override does not act
+  return std::min(e.vgeom, (e.per_rev ? e.vfeed * rps_ : e.vfeed) * feed_ovr_);
 }
 
-void Planner::AddLine(const AxisVector& end, double feed, bool rapid, bool exact_stop, std::uint64_t seg,
-                      bool probe) {
+PathElement Planner::LineElement(const AxisVector& end, bool rapid, bool stop_end) const {
   PathElement e;
   e.p0 = tail_;
-  e.p1 = end;
   AxisVector d = end - tail_;
   for (int i = 0; i < kNumAxes; ++i)
     if (!lim_.present[i]) d[i] = 0;
   e.p1 = tail_ + d;
   double len = d.head<3>().norm();
   if (len < 1e-9) len = d.tail<3>().norm();
-  e.len = e.orig_len = len;
+  e.len = e.orig_len = e.seg_total = len;
   e.rapid = rapid;
-  e.vfeed = rapid ? kInf : feed;
-  e.stop_end = exact_stop || rapid || probe;
-  e.wait_in_position = e.stop_end;
-  e.probe = probe;
-  e.seg = seg;
-  e.seg_total = len;
-  if (len < 1e-9) {
-    // A zero-length block (duplicate point): a transparent marker that completes when passed, unless it
-    // demands a stop.
-    e.len = 0;
-    e.vgeom = kInf;
-    e.vfeed = kInf;
-    e.rapid = false;
-    e.at = 1e9;
-    e.v_junction = kInf;
-    Append(e);
-    return;
-  }
+  e.stop_end = e.wait_in_position = stop_end;
+  if (len < 1e-9) return e;
   e.u = d / len;
   e.vgeom = kInf;
   e.at = kInf;
@@ -95,7 +78,44 @@ void Planner::AddLine(const AxisVector& end, double feed, bool rapid, bool exact
     e.vgeom = std::min(e.vgeom, vlim[i] / ui);
     e.at = std::min(e.at, lim_.max_acceleration[i] / ui);
   }
-  e.at *= kAccelMargin * (e.stop_end ? 1.0 : 1.0 - kKinkShare);
+  e.at *= kAccelMargin * (stop_end ? 1.0 : 1.0 - kKinkShare);
+  return e;
+}
+
+void Planner::AddLine(const AxisVector& end, Feed feed, bool rapid, bool exact_stop, std::uint64_t seg,
+                      bool probe) {
+  PathElement e = LineElement(end, rapid, exact_stop || rapid || probe);
+  e.vfeed = rapid ? kInf : feed.rate;
+  e.per_rev = !rapid && feed.per_rev;
+  e.probe = probe;
+  e.seg = seg;
+  if (e.len < 1e-9) {
+    // A zero-length block (duplicate point): a transparent marker that completes when passed, unless it
+    // demands a stop.
+    e.len = 0;
+    e.vgeom = kInf;
+    e.vfeed = kInf;
+    e.per_rev = false;
+    e.rapid = false;
+    e.at = 1e9;
+    e.v_junction = kInf;
+  }
+  Append(e);
+}
+
+void Planner::AddThread(const AxisVector& end, double lead, double lead_change, double major,
+                        double start_angle, std::uint64_t seg) {
+  // Full tangential acceleration: a thread starts and ends at rest, or passes into the next thread at
+  // the spindle's pace whatever the corner (the lead wins, as on a real lathe).
+  PathElement e = LineElement(end, false, true);
+  e.stop_end = e.wait_in_position = false;  // Link() decides: stop, or go on into a chained thread
+  e.seg = seg;
+  e.sync = true;
+  e.lead = lead;
+  e.lead_change = lead_change;
+  e.lead_k = major > 0 ? e.len / major : 0;
+  e.start_angle = start_angle;
+  e.vfeed = kInf;
   Append(e);
 }
 
@@ -150,9 +170,10 @@ bool Planner::MakeArc(const AxisVector& start, const AxisVector& end, const std:
   return true;
 }
 
-void Planner::AddArc(PathElement e, double feed, bool exact_stop, std::uint64_t seg) {
+void Planner::AddArc(PathElement e, Feed feed, bool exact_stop, std::uint64_t seg) {
   e.p0 = tail_;
-  e.vfeed = feed;
+  e.vfeed = feed.rate;
+  e.per_rev = feed.per_rev;
   e.stop_end = exact_stop;
   e.wait_in_position = exact_stop;
   e.seg = seg;
@@ -189,6 +210,17 @@ void Planner::AddArc(PathElement e, double feed, bool exact_stop, std::uint64_t 
 }
 
 void Planner::Link(PathElement& a, PathElement& b, bool a_is_current) {
+  if (a.sync || b.sync) {
+    // A thread after a thread that has not begun to stop continues its synchronisation at the spindle's
+    // pace; any other thread starts from rest (it waits for the index pulse), and ends at rest.
+    if (a.sync && b.sync && !a.stop_end) {
+      a.v_junction = kInf;
+    } else {
+      a.stop_end = a.wait_in_position = true;
+      a.v_junction = 0;
+    }
+    return;
+  }
   if (a.stop_end || a.len == 0 || b.len == 0) {
     a.v_junction = 0;
     return;
@@ -255,7 +287,11 @@ void Planner::Link(PathElement& a, PathElement& b, bool a_is_current) {
         f.len = f.orig_len = R * theta;
         f.k = 1.0 / R;
         f.rapid = a.rapid;
-        f.vfeed = std::min(a.vfeed, b.vfeed);
+        f.per_rev = a.per_rev && b.per_rev;
+        // Per-revolution and per-minute feeds meet: the fillet takes the lower at today's spindle speed.
+        f.vfeed = a.per_rev == b.per_rev
+                      ? std::min(a.vfeed, b.vfeed)
+                      : std::min(a.per_rev ? a.vfeed * rps_ : a.vfeed, b.per_rev ? b.vfeed * rps_ : b.vfeed);
         f.seg = a.seg;
         f.probe = false;
         f.stop_end = false;
@@ -367,11 +403,14 @@ void Planner::Flush(const AxisVector& pos) {
   started_ = false;
   waiting_ = false;
   has_pending_fillet_ = false;
+  sync_ = Sync::kNone;
+  break_sync_ = false;
   pos_ = tail_ = pos;
 }
 
 void Planner::FinishCurrent() {
   const PathElement& e = At(0);
+  if (e.sync) sync_ = Sync::kNone;
   if (e.last_of_segment) marks_.push_back({e.seg, true, e.wait_in_position});
   if (e.wait_in_position) {
     waiting_ = true;
@@ -399,11 +438,14 @@ const AxisVector& Planner::Tick() {
     started_ = true;
     if (e->seg_offset == 0) marks_.push_back({e->seg, false, false});
   }
+  if (e->sync && sync_ != Sync::kBraking && TickThread()) return pos_;
+  e = &At(0);
   // Speed for this tick from the current element's brake curve, acceleration limit and cap.
   const double a = e->at;
   const double d = std::max(e->len - s_, 0.0);
   const double vb = -a * ts + std::sqrt(a * a * ts * ts + e->v_exit * e->v_exit + 2 * a * d);
-  const double cap = hold_ ? 0.0 : Cap(*e);
+  // A thread is cut to its end whatever the feed hold (abort apart).
+  const double cap = hold_ && (!e->sync || break_sync_) ? 0.0 : Cap(*e);
   double vn = std::min(vb, std::max(v_ - a * ts, std::min(v_ + a * ts, cap)));
   vn = std::max(vn, 0.0);
   double dist = vn * ts;
@@ -426,9 +468,97 @@ const AxisVector& Planner::Tick() {
     e = &At(0);
     started_ = true;
     if (e->seg_offset == 0) marks_.push_back({e->seg, false, false});
+    if (e->sync) {  // a thread starts from rest at its start point (behind a zero-length marker)
+      vn = 0;
+      break;
+    }
   }
   v_ = vn;
   return pos_;
+}
+
+// ---- Threads: progress as a function of the spindle's revolutions.
+
+void Planner::SetSpindle(double turned, double rev_per_s) {
+  turned_ = turned;
+  rps_ = rev_per_s;
+  // Feeds per revolution follow the spindle: re-plan the exit speeds when it has changed by 1 %.
+  if (std::abs(rps_ - planned_rps_) > 0.01 * planned_rps_ || (rps_ > 0) != (planned_rps_ > 0)) {
+    planned_rps_ = rps_;
+    if (count_ > 0) BackwardPass(0);
+  }
+}
+
+bool Planner::AwaitingIndex(double* start_angle) const {
+  if (sync_ != Sync::kAwaitIndex || hold_ || count_ == 0) return false;
+  *start_angle = At(0).start_angle;
+  return true;
+}
+
+void Planner::IndexPulse(double turned) {
+  if (sync_ != Sync::kAwaitIndex || count_ == 0) return;
+  const PathElement& e = At(0);
+  sync_ = Sync::kTracking;
+  pulse_ = turned;
+  rho0_ = 0;
+  // The axes cannot jump to the spindle's pace: they accelerate at the element's limit over ramp_
+  // revolutions, progress rho = R²/(2 ramp) after R revolutions, then rho = R - ramp/2, exactly in step.
+  // The lag (ramp/2 revolutions) is the same on every pass at the same speed: same groove.
+  const double v = e.lead_k * e.lead * rps_;
+  ramp_ = e.at > 0 ? rps_ * v / e.at : 0;
+}
+
+void Planner::BreakSync() {
+  break_sync_ = true;
+  if (sync_ == Sync::kTracking && count_ > 0) {
+    At(0).stop_end = At(0).wait_in_position = true;
+    sync_ = Sync::kBraking;
+    BackwardPass(0);
+  }
+}
+
+bool Planner::TickThread() {
+  const double ts = lim_.period;
+  if (sync_ == Sync::kNone) sync_ = Sync::kAwaitIndex;  // the first thread of a chain: wait for the pulse
+  if (sync_ == Sync::kAwaitIndex) {
+    v_ = 0;
+    return true;
+  }
+  const double r = std::max(turned_ - pulse_, 0.0);
+  const double rho = r < ramp_ ? r * r / (2 * ramp_) : r - 0.5 * ramp_;
+  const double drho = r < ramp_ ? r / ramp_ : 1.0;  // d rho / d r
+  PathElement* e = &At(0);
+  while (true) {
+    const double local = rho - rho0_;
+    const double st = e->lead_k * (e->lead * local + 0.5 * e->lead_change * local * local);
+    const bool chained = count_ > 1 && At(1).sync && !e->stop_end;
+    if (!chained) {
+      // Leave the spindle where the remaining travel is the braking distance (the incomplete thread).
+      const double a = e->at, d = std::max(e->len - s_, 0.0);
+      const double vb = -a * ts + std::sqrt(a * a * ts * ts + 2 * a * d);
+      if (st - s_ > vb * ts || st >= e->len) {
+        e->stop_end = e->wait_in_position = true;
+        sync_ = Sync::kBraking;
+        BackwardPass(0);
+        return false;
+      }
+    }
+    if (st < e->len || !chained) {
+      s_ = st;
+      pos_ = e->Position(s_);
+      v_ = e->lead_k * (e->lead + e->lead_change * local) * rps_ * drho;
+      return true;
+    }
+    // Into the next thread of the chain: it starts where this one has covered its length.
+    const double d = e->len / e->lead_k, l0 = e->lead, dl = e->lead_change;
+    rho0_ += std::abs(dl) > 1e-12 ? (std::sqrt(l0 * l0 + 2 * dl * d) - l0) / dl : d / l0;
+    FinishCurrent();
+    sync_ = Sync::kTracking;
+    s_ = 0;
+    e = &At(0);
+    started_ = true;
+    if (e->seg_offset == 0) marks_.push_back({e->seg, false, false});
+  }
 }
 
 }  // namespace cell::servo

@@ -1,4 +1,5 @@
-// Machine-level behaviour: servo and plant, alarms, flow control, clocks, devices, lathe and index axes.
+// Machine-level behaviour: servo and plant, alarms, flow control, clocks, devices and the index axis
+// (lathes: lathe_test.cpp).
 #include <gtest/gtest.h>
 
 #include <chrono>
@@ -21,7 +22,7 @@ using testing::Rapid;
 using testing::RunChecked;
 
 Machine Kt(ClockKind clock = ClockKind::kVirtual) {
-  return Machine(DefaultMachineConfig("ktapl"), clock);
+  return Machine(DefaultMachineConfig("hmc"), clock);
 }
 
 TEST(Servo, FollowingErrorNonZeroWhileAcceleratingAndBounded) {
@@ -47,7 +48,7 @@ TEST(Servo, FollowingErrorNonZeroWhileAcceleratingAndBounded) {
 }
 
 TEST(Servo, DiffOverAlarmWhenTheDriveCannotFollow) {
-  MachineConfig c = DefaultMachineConfig("ktapl");
+  MachineConfig c = DefaultMachineConfig("hmc");
   c.axes[kX].drive.max_torque = 1.0;  // far too weak for the configured acceleration
   Machine m(c, ClockKind::kVirtual);
   m.Push(Line(1, 300, 0, 0, 9000, true));
@@ -92,7 +93,7 @@ TEST(Machine, SoftLimitAlarmBeforeMotion) {
 }
 
 TEST(Machine, FlowControlUnderSlowConsumer) {
-  MachineConfig c = DefaultMachineConfig("ktapl");
+  MachineConfig c = DefaultMachineConfig("hmc");
   c.queue_capacity = 4;
   Machine m(c, ClockKind::kVirtual);
   LimitChecker check(m);
@@ -308,39 +309,6 @@ TEST(Devices, BIndexTableUnclampsMovesClamps) {
   EXPECT_EQ(m.alarm().code, AlarmCode::kInvalidSegment);
 }
 
-TEST(Lathe, XIsProgrammedInDiameter) {
-  Machine m(DefaultMachineConfig("okuma"), ClockKind::kVirtual);
-  Segment s;
-  s.id = 1;
-  s.kind = SegmentKind::kLinear;
-  s.end = {100, 0, -50, 0, 0, 0};
-  s.axes = 0x05;
-  s.feed = 2000;
-  m.Push(s);
-  // A per-revolution feed needs the spindle: 0.2 mm/rev at 1000 rpm = 200 mm/min.
-  Segment sp;
-  sp.id = 2;
-  sp.kind = SegmentKind::kSpindle;
-  sp.spindle_rpm = 1000;
-  sp.spindle_dir = SpindleDirection::kCW;
-  m.Push(sp);
-  Segment f = s;
-  f.id = 3;
-  f.end = {100, 0, -60, 0, 0, 0};
-  f.feed = 0.2;
-  f.feed_mode = FeedMode::kPerRevolution;
-  f.exact_stop = true;
-  m.Push(f);
-  std::vector<Event> ev;
-  while (m.Step())
-    for (auto& e : m.TakeEvents()) ev.push_back(e);
-  EXPECT_NEAR(m.actual()[kX], 50, 1e-3);         // radius inside the machine
-  EXPECT_NEAR(m.State().actual[kX], 100, 2e-3);  // diameter outside
-  const double t =
-      Find(ev, EventKind::kCompleted, 3)->machine_time - Find(ev, EventKind::kStarted, 3)->machine_time;
-  EXPECT_NEAR(t, 10.0 / (200.0 / 60), 0.2);
-}
-
 }  // namespace
 }  // namespace cell::servo
 
@@ -348,7 +316,7 @@ namespace cell::servo {
 namespace {
 
 TEST(Devices, FeedHoldPausesDwell) {
-  Machine m(DefaultMachineConfig("ktapl"), ClockKind::kVirtual);
+  Machine m(DefaultMachineConfig("hmc"), ClockKind::kVirtual);
   Segment d;
   d.id = 1;
   d.kind = SegmentKind::kDwell;

@@ -19,7 +19,7 @@ using testing::Rapid;
 using testing::RunChecked;
 
 Machine Kt() {
-  return Machine(DefaultMachineConfig("ktapl"), ClockKind::kVirtual);
+  return Machine(DefaultMachineConfig("hmc"), ClockKind::kVirtual);
 }
 
 TEST(Planner, RandomContourRespectsAxisLimitsEveryTick) {
@@ -253,7 +253,7 @@ namespace cell::servo {
 namespace {
 
 TEST(Planner, ArcInYzPlaneAndRapidOverride) {
-  Machine m(DefaultMachineConfig("ktapl"), ClockKind::kVirtual);
+  Machine m(DefaultMachineConfig("hmc"), ClockKind::kVirtual);
   m.Push(testing::Rapid(1, 300, 240, 300));
   m.RunUntilIdle();
   testing::LimitChecker check(m);
@@ -277,7 +277,7 @@ TEST(Planner, ArcInYzPlaneAndRapidOverride) {
 
   double t[2];
   for (int k = 0; k < 2; ++k) {
-    Machine r(DefaultMachineConfig("ktapl"), ClockKind::kVirtual);
+    Machine r(DefaultMachineConfig("hmc"), ClockKind::kVirtual);
     r.SetRapidOverride(k == 0 ? 1.0 : 0.25);
     testing::LimitChecker c2(r);
     r.Push(testing::Rapid(1, 600, 0, 0));
@@ -297,7 +297,7 @@ namespace {
 
 // CAM output often repeats a point; a zero-length block must neither stop a blended path nor get lost.
 TEST(Planner, DuplicatePointsDoNotStopBlending) {
-  Machine m(DefaultMachineConfig("ktapl"), ClockKind::kVirtual);
+  Machine m(DefaultMachineConfig("hmc"), ClockKind::kVirtual);
   m.Push(testing::Rapid(1, 100, 100, 100));
   m.RunUntilIdle();
   m.TakeEvents();
@@ -331,7 +331,7 @@ namespace {
 
 // Line, tangent semicircle, line (a slot): blended without stopping, within the path tolerance.
 TEST(Planner, TangentLineArcLineBlends) {
-  Machine m(DefaultMachineConfig("ktapl"), ClockKind::kVirtual);
+  Machine m(DefaultMachineConfig("hmc"), ClockKind::kVirtual);
   m.Push(testing::Rapid(1, 100, 100, 100));
   m.RunUntilIdle();
   m.TakeEvents();

@@ -39,7 +39,7 @@ struct Hit {
 };
 
 Hit Probe(const AxisVector& from, const AxisVector& to, double feed = 600) {
-  Machine m(DefaultMachineConfig("ktapl"), ClockKind::kVirtual);
+  Machine m(DefaultMachineConfig("hmc"), ClockKind::kVirtual);
   m.SetPartModel(1, ParsePartModel(kPart, "part.toml"));
   m.SetPallets(1, 0);
   m.Push(Rapid(1, from[0], from[1], from[2]));
@@ -98,7 +98,7 @@ TEST(Probe, NoContactReportsEndOfTravel) {
 }
 
 TEST(Probe, NoPartModelMeansNoContact) {
-  Machine m(DefaultMachineConfig("ktapl"), ClockKind::kVirtual);
+  Machine m(DefaultMachineConfig("hmc"), ClockKind::kVirtual);
   Segment p;
   p.id = 1;
   p.kind = SegmentKind::kProbe;

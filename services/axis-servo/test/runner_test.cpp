@@ -16,7 +16,7 @@ namespace {
 
 TEST(Runner, FeedsOnCreditAndDeliversEventsInOrder) {
   for (ClockKind clock : {ClockKind::kVirtual, ClockKind::kReal}) {
-    MachineConfig c = DefaultMachineConfig("ktapl");
+    MachineConfig c = DefaultMachineConfig("hmc");
     c.queue_capacity = 3;
     std::mutex mu;
     std::vector<std::uint64_t> completed;

@@ -86,7 +86,8 @@ MachineConfig LoadMachineConfig(const std::filesystem::path& file);
 // Same from text; `source` names the text in messages and resolves relative part-model paths.
 MachineConfig ParseMachineConfig(std::string_view toml_text, const std::string& source);
 
-// A built-in machine for tests and benchmarks: "ktapl" (X Y Z + B index) or "okuma" (X diameter, Z).
-MachineConfig DefaultMachineConfig(std::string_view dialect);
+// A built-in machine for tests and benchmarks, by machine kind: "hmc" (X Y Z + B index, like KT01) or
+// "lathe" (X as a diameter, Z, like OK01). Throws cell::Error(kInvalidArgument) for another kind.
+MachineConfig DefaultMachineConfig(std::string_view kind);
 
 }  // namespace cell::servo

@@ -17,6 +17,7 @@
 #include "cell/servo/planner.h"
 #include "cell/servo/segment.h"
 #include "cell/servo/servo.h"
+#include "cell/servo/spindle.h"
 
 namespace cell::servo {
 
@@ -37,9 +38,11 @@ struct AxisState {
   double path_feed = 0;                             // interpolator speed, units/min
   Execution execution = Execution::kReady;
   Alarm alarm;
-  std::uint64_t segment_id = 0;  // segment being interpolated (0: none)
-  double fraction = 0;           // of that segment, 0..1
-  double spindle_rpm = 0;        // signed: + cw, - ccw
+  std::uint64_t segment_id = 0;    // segment being interpolated (0: none)
+  double fraction = 0;             // of that segment, 0..1
+  double spindle_rpm = 0;          // signed: + cw, - ccw
+  double spindle_angle = 0;        // degrees from the index mark, [0, 360), clockwise
+  double spindle_revolutions = 0;  // signed, since start-up (+ cw)
   bool spindle_oriented = false;
   CoolantMode coolant = CoolantMode::kOff;
   std::string tool;  // in the spindle ("" none)
@@ -117,8 +120,7 @@ class Machine {
     std::uint64_t seg = 0;
     double until = 0;  // machine time when the timer phase ends
     Segment s;
-    // spindle ramp
-    double rpm_from = 0, rpm_to = 0, t0 = 0;
+    double t0 = 0;            // machine time when the operation started
     double index_target = 0;  // B index move, shortest way (may lie outside [min, max] until clamped)
   };
   struct PendingCompletion {
@@ -136,7 +138,11 @@ class Machine {
   bool InPosition(const AxisVector& target, double tol = 0) const;
   bool SoftLimitCheck(const Segment& s, const AxisVector& start, std::string& why) const;
   AxisVector EndOf(const Segment& s, const AxisVector& start) const;
-  double FeedOf(const Segment& s, double length) const;
+  Feed FeedOf(const Segment& s, double length) const;
+  double FeedNow(const Segment& s, double length) const;  // units/s at today's spindle speed
+  bool PlanThread(const Segment& s, const AxisVector& start, const AxisVector& end, std::string& why);
+  bool StartSpindle(const Segment& s);
+  double XDiameter() const;  // commanded X as a diameter (constant surface speed)
   void Emit(EventKind kind, std::uint64_t seg, const Alarm* alarm = nullptr,
             const ProbeResult* probe = nullptr);
   AxisVector ToSegmentUnits(AxisVector v) const;
@@ -168,7 +174,7 @@ class Machine {
   double feed_ovr_ = 1.0, rapid_ovr_ = 1.0;
 
   // Devices
-  double spindle_rpm_ = 0;
+  Spindle spindle_;
   bool spindle_oriented_ = false;
   CoolantMode coolant_ = CoolantMode::kOff;
   std::map<int, std::string> magazine_;  // socket -> tool

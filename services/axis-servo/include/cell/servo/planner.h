@@ -12,6 +12,8 @@
 //  * A backward pass over the queue gives every element its exit speed; the queue always ends at rest, so
 //    a starved queue decelerates safely. Each tick picks v = min(brake curve, v ± a·Ts, cap): discrete
 //    velocity changes never exceed a·Ts.
+//  * Feed per revolution follows the spindle's actual speed; threads follow the spindle's angle
+//    (docs/axis-servo.md, "Lathes").
 #pragma once
 
 #include <array>
@@ -32,6 +34,13 @@ struct PlannerLimits {
   double filter_time = 0.05;                         // s, length of the jerk filter (contour error on curves)
 };
 
+// A programmed feed: units/s, or units per spindle revolution (feed per revolution).
+struct Feed {
+  Feed(double r = 0, bool rev = false) : rate(r), per_rev(rev) {}  // NOLINT: a plain number is units/s
+  double rate;
+  bool per_rev;
+};
+
 struct PathElement {
   bool arc = false;
   AxisVector p0 = AxisVector::Zero(), p1 = AxisVector::Zero();
@@ -41,7 +50,8 @@ struct PathElement {
   double r0 = 0, dr = 0, sweep = 0, k = 0;
   double len = 0, orig_len = 0;
   double vgeom = 0;  // geometric speed cap, units/s
-  double vfeed = 0;  // programmed speed, units/s, before override
+  double vfeed = 0;  // programmed speed, units/s (per_rev: units per spindle revolution), before override
+  bool per_rev = false;
   bool rapid = false;
   double at = 0;                  // tangential acceleration limit
   double v_junction = 0;          // geometric limit at the end (into the next element)
@@ -54,6 +64,11 @@ struct PathElement {
   bool probe = false;
   std::uint64_t seg = 0;
   double seg_offset = 0, seg_total = 0;  // for progress fractions
+  // Spindle-synchronised thread: after rho revolutions from its start the element has covered
+  // s = lead_k (lead rho + lead_change rho² / 2) (lead along the major axis, lead_k = path length per mm
+  // of it). The first thread of a chain waits for the spindle to pass start_angle (degrees).
+  bool sync = false;
+  double lead = 0, lead_change = 0, lead_k = 0, start_angle = 0;
 
   AxisVector Position(double s) const;
   AxisVector Tangent(double s) const;  // dp/ds
@@ -63,11 +78,18 @@ class Planner {
  public:
   Planner(const PlannerLimits& limits, std::size_t capacity);
 
-  // Adds a straight move from the current end of the path. feed: units/s (ignored for rapids).
-  void AddLine(const AxisVector& end, double feed, bool rapid, bool exact_stop, std::uint64_t seg,
+  // Adds a straight move from the current end of the path (the feed is ignored for rapids).
+  void AddLine(const AxisVector& end, Feed feed, bool rapid, bool exact_stop, std::uint64_t seg,
                bool probe = false);
   // Adds an arc/helix already converted to machine units (see Machine); `e` holds centre and basis.
-  void AddArc(PathElement e, double feed, bool exact_stop, std::uint64_t seg);
+  void AddArc(PathElement e, Feed feed, bool exact_stop, std::uint64_t seg);
+  // Adds a thread: a straight move whose progress follows the spindle, `lead` (units per revolution,
+  // changing by `lead_change` per revolution) along an axis whose travel is `major` units. A thread
+  // directly after a thread continues its synchronisation; otherwise the path stops before it, waits for
+  // the index pulse at `start_angle` (IndexPulse), accelerates and then tracks the spindle exactly. It ends
+  // at rest (unless a thread follows), decelerating over the last v²/2a: the incomplete thread.
+  void AddThread(const AxisVector& end, double lead, double lead_change, double major, double start_angle,
+                 std::uint64_t seg);
   // Builds an arc element from programme data; returns false (and leaves `why`) when radii disagree.
   bool MakeArc(const AxisVector& start, const AxisVector& end, const std::array<double, 3>& center,
                ArcPlane plane, ArcDirection dir, std::uint32_t turns, PathElement& out,
@@ -85,8 +107,19 @@ class Planner {
   // One servo tick: advances along the path and returns the new interpolated position.
   const AxisVector& Tick();
 
-  void SetHold(bool hold) { hold_ = hold; }
+  void SetHold(bool hold) { hold_ = hold; }  // a thread being cut finishes first
   bool Holding() const { return hold_; }
+  // Abort: a thread being cut leaves the spindle and decelerates like any move.
+  void BreakSync();
+
+  // The spindle for the next Tick(): revolutions turned (never decreasing) and speed (rev/s).
+  void SetSpindle(double turned, double rev_per_s);
+  // A thread waits for its index pulse at `*start_angle` degrees (not while held).
+  bool AwaitingIndex(double* start_angle) const;
+  // The spindle passed the start angle when it had turned `turned` revolutions (within this tick).
+  void IndexPulse(double turned);
+  // The current element is a thread (waiting or cutting): the spindle speed must not change.
+  bool InThread() const { return count_ > 0 && At(0).sync; }
   void SetOverrides(double feed, double rapid);
   // Stops as fast as the limits allow on the current element (probe trip). Later elements are kept.
   void StopOnCurrent();
@@ -112,6 +145,8 @@ class Planner {
   void Link(PathElement& a, PathElement& b, bool a_is_current);
   void BackwardPass(std::size_t changed_from);  // elements from this index on may have changed (0: all)
   void FinishCurrent();
+  PathElement LineElement(const AxisVector& end, bool rapid, bool exact_stop) const;
+  bool TickThread();  // false: the thread left synchronisation, the ordinary interpolator takes over
 
   PlannerLimits lim_;
   std::vector<PathElement> elems_;
@@ -125,6 +160,14 @@ class Planner {
   std::vector<Mark> marks_;
   PathElement pending_fillet_;
   bool has_pending_fillet_ = false;
+  // Spindle and thread synchronisation.
+  enum class Sync { kNone, kAwaitIndex, kTracking, kBraking };
+  Sync sync_ = Sync::kNone;
+  bool break_sync_ = false;
+  double turned_ = 0, rps_ = 0, planned_rps_ = 0;
+  double pulse_ = 0;  // turned revolutions at the index pulse
+  double ramp_ = 0;   // revolutions of the acceleration ramp after the pulse
+  double rho0_ = 0;   // synchronised revolutions at the start of the current element
 };
 
 }  // namespace cell::servo

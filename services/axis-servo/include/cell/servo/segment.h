@@ -22,11 +22,12 @@ enum class SegmentKind : std::uint8_t {
   kArc,           // circle or helix around `center` in `plane`, `turns` extra full revolutions
   kDwell,         // wait `dwell_s` machine seconds
   kToolChange,    // put `tool` in the spindle (must be in the magazine)
-  kSpindle,       // `spindle_rpm` and `spindle_dir` (stop, cw, ccw, orient)
+  kSpindle,       // `spindle_dir` (stop, cw, ccw, orient) at `spindle_rpm`, or at constant surface speed
   kCoolant,       // `coolant` on/off
   kPalletChange,  // shuttle `pallet` onto the table (0: swap table and shuttle)
   kProbe,         // straight move towards `end` at `feed`, stops at first contact with the part model
   kEnd,           // program end: completes once all motion is in position
+  kThread,        // spindle-synchronised straight move to `end`: `thread_lead` mm per spindle revolution
 };
 
 enum class ArcPlane : std::uint8_t { kXY, kZX, kYZ };
@@ -53,10 +54,23 @@ struct Segment {
   ArcPlane plane = ArcPlane::kXY;
   ArcDirection direction = ArcDirection::kCCW;
   std::uint32_t turns = 0;
-  double dwell_s = 0.0;      // kDwell
-  std::string tool;          // kToolChange, e.g. "1001" or "33412.5"
-  double spindle_rpm = 0.0;  // kSpindle
+  double dwell_s = 0.0;  // kDwell
+  std::string tool;      // kToolChange, e.g. "1001" or "33412.5"
+  // kSpindle. Every spindle segment states the whole spindle command; nothing carries over from the last.
+  double spindle_rpm = 0.0;  // rpm when css_surface_speed is 0
   SpindleDirection spindle_dir = SpindleDirection::kStop;
+  // Constant surface speed in m/min (0: off): rpm = min(limit, max_rpm, 1000 v / (pi D)), D = X diameter.
+  double css_surface_speed = 0.0;
+  // The programmed spindle limit in rpm (Okuma G50 S, EMCO G92 S); 0: the machine's max_rpm.
+  double spindle_max_rpm = 0.0;
+  // kThread: lead along the major axis (the one with the larger travel; lathe X counted as a radius),
+  // in mm per spindle revolution; it changes by `thread_lead_change` mm/rev every revolution (variable
+  // lead, Okuma G34/G35). The cut begins when the spindle passes `thread_start_angle` degrees from its
+  // index mark (each pass of a multi-pass thread lands in the same groove; multi-start threads use
+  // different angles). A thread directly after a thread continues its synchronisation (no index wait).
+  double thread_lead = 0.0;
+  double thread_lead_change = 0.0;
+  double thread_start_angle = 0.0;
   CoolantMode coolant = CoolantMode::kOff;  // kCoolant
   int pallet = 0;                           // kPalletChange
 };

@@ -1,0 +1,94 @@
+// The Machine's spindle commands (constant speed, constant surface speed, limit) and spindle-synchronised
+// threads: what a lathe adds to the machine (docs/axis-servo.md, "Lathes").
+#include <fmt/format.h>
+
+#include <cmath>
+
+#include "cell/servo/machine.h"
+
+namespace cell::servo {
+
+double Machine::XDiameter() const {
+  return 2.0 * std::abs(filter_.Output()[kX]);
+}
+
+bool Machine::StartSpindle(const Segment& s) {
+  const int dir = s.spindle_dir == SpindleDirection::kCW    ? 1
+                  : s.spindle_dir == SpindleDirection::kCCW ? -1
+                                                            : 0;
+  if (dir != 0 && s.css_surface_speed > 0) {
+    if (!cfg_.axes[kX].diameter) {
+      RaiseAlarm(
+          AlarmCode::kInvalidSegment,
+          fmt::format("segment {}: constant surface speed needs a lathe (X programmed as a diameter)", s.id),
+          s.id);
+      return false;
+    }
+    spindle_.SetSurfaceSpeed(s.css_surface_speed, s.spindle_max_rpm, dir);
+    return true;
+  }
+  // A programmed limit clamps a constant speed too (Okuma G50 S: "the maximum spindle speed").
+  double rpm = std::abs(s.spindle_rpm);
+  if (s.spindle_max_rpm > 0) rpm = std::min(rpm, s.spindle_max_rpm);
+  if (dir != 0 && rpm > cfg_.spindle_max_rpm) {
+    RaiseAlarm(
+        AlarmCode::kInvalidSegment,
+        fmt::format("segment {}: spindle {:.0f} rpm above max_rpm {:.0f}", s.id, rpm, cfg_.spindle_max_rpm),
+        s.id);
+    return false;
+  }
+  spindle_.SetRpm(dir * rpm);
+  return true;
+}
+
+bool Machine::PlanThread(const Segment& s, const AxisVector& start, const AxisVector& end, std::string& why) {
+  const AxisVector d = end - start;
+  if (present_[kB] && cfg_.axes[kB].type == AxisType::kIndex && std::abs(d[kB]) > 1e-9) {
+    why = "a thread cannot turn the B index table";
+    return false;
+  }
+  // The lead is measured along the axis with the larger travel (Z on a tie; lathe X as a radius).
+  int major = kZ;
+  for (int i : {kX, kY})
+    if (present_[i] && std::abs(d[i]) > std::abs(d[major])) major = i;
+  const double travel = std::abs(d[major]);
+  if (travel < 1e-9) {
+    why = "thread of zero length";
+    return false;
+  }
+  // The speed at the thread's start (constant surface speed holds it there for the whole thread).
+  const double rpm = std::abs(spindle_.TargetAt(2.0 * std::abs(start[kX])));
+  if (rpm == 0) {
+    why = "thread with the spindle stopped (no M03/M04 before it)";
+    return false;
+  }
+  const double l0 = s.thread_lead, dl = s.thread_lead_change;
+  if (!(l0 > 0)) {
+    why = "thread lead is zero";
+    return false;
+  }
+  // The lead after r revolutions is l0 + dl r; it must stay positive to the end (travel = l0 r + dl r²/2).
+  const double disc = l0 * l0 + 2 * dl * travel;
+  if (disc <= 0) {
+    why =
+        fmt::format("variable lead {:g} mm changing by {:g} mm/rev reaches zero before the end of {:.4f} mm",
+                    l0, dl, travel);
+    return false;
+  }
+  const double lead_max = std::max(l0, std::sqrt(disc));
+  for (int i = 0; i < kNumAxes; ++i) {
+    if (!present_[i] || std::abs(d[i]) < 1e-12) continue;
+    const double need = lead_max * std::abs(d[i]) / travel * rpm;  // units/min
+    if (need > cfg_.axes[i].max_velocity * (1 + 1e-9)) {
+      why = fmt::format("thread lead {:g} mm at {:.0f} rpm needs {} {:.0f} mm/min, above max_velocity {:.0f}",
+                        lead_max, rpm, static_cast<char>(std::toupper(kAxisNames[i])), need,
+                        cfg_.axes[i].max_velocity);
+      return false;
+    }
+  }
+  const double angle = std::fmod(std::fmod(s.thread_start_angle, 360.0) + 360.0, 360.0);
+  planner_.AddThread(end, l0, dl, travel, angle, s.id);
+  return true;
+}
+
+}  // namespace cell::servo
