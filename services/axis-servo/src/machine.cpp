@@ -139,13 +139,12 @@ void Machine::Push(const Segment& segment) {
   if (queue_.size() >= capacity())
     throw Error(Errc::kFailedPrecondition,
                 fmt::format("segment {} refused: no credit (queue of {} full)", segment.id, capacity()));
-  bool finite = true;
-  for (double v :
-       {segment.feed, segment.dwell_s, segment.spindle_rpm, segment.css_surface_speed,
-        segment.spindle_max_rpm, segment.thread_lead, segment.thread_lead_change, segment.thread_start_angle})
-    finite = finite && std::isfinite(v);
-  for (double v : segment.end) finite = finite && std::isfinite(v);
-  for (double v : segment.center) finite = finite && std::isfinite(v);
+  bool finite = std::isfinite(segment.feed) & std::isfinite(segment.dwell_s) &
+                std::isfinite(segment.spindle_rpm) & std::isfinite(segment.css_surface_speed) &
+                std::isfinite(segment.spindle_max_rpm) & std::isfinite(segment.thread_lead) &
+                std::isfinite(segment.thread_lead_change) & std::isfinite(segment.thread_start_angle);
+  for (double v : segment.end) finite &= std::isfinite(v);
+  for (double v : segment.center) finite &= std::isfinite(v);
   if (!finite)
     throw Error(Errc::kInvalidArgument,
                 fmt::format("segment {} refused: a value is not a finite number", segment.id));
@@ -156,13 +155,11 @@ void Machine::Push(const Segment& segment) {
     throw Error(
         Errc::kInvalidArgument,
         fmt::format("segment {} refused: negative surface speed, spindle limit or thread lead", segment.id));
-  Entry e;
-  e.seg = segment;
+  Segment& s = queue_.emplace_back(Entry{segment, false}).seg;
   if (cfg_.axes[kX].diameter) {
-    e.seg.end[kX] *= 0.5;
-    e.seg.center[kX] *= 0.5;
+    s.end[kX] *= 0.5;
+    s.center[kX] *= 0.5;
   }
-  queue_.push_back(std::move(e));
 }
 
 AxisVector Machine::EndOf(const Segment& s, const AxisVector& start) const {
@@ -707,12 +704,15 @@ bool Machine::StepNow() {
   StepOp();
 
   // The spindle turns during the period; a thread in progress holds its speed, a thread waiting for its
-  // index pulse takes it (at the exact fraction of the period) once the spindle is at speed.
-  spindle_.Step(cfg_.servo_period_s, XDiameter(), planner_.InThread());
-  planner_.SetSpindle(spindle_.turned(), std::abs(spindle_.rpm()) / 60.0);
-  if (double angle; planner_.AwaitingIndex(&angle) && spindle_.AtSpeed()) {
-    const double at = spindle_.Crossing(angle);
-    if (at >= 0) planner_.IndexPulse(at);
+  // index pulse takes it (at the exact fraction of the period) once the spindle is at speed. A spindle
+  // that stands still (and was told to) costs nothing: threads and feeds per revolution need it running.
+  if (spindle_.Active()) {
+    spindle_.Step(cfg_.servo_period_s, XDiameter(), planner_.InThread());
+    planner_.SetSpindle(spindle_.turned(), std::abs(spindle_.rpm()) * (1.0 / 60.0));
+    if (double angle; planner_.AwaitingIndex(&angle) && spindle_.AtSpeed()) {
+      const double at = spindle_.Crossing(angle);
+      if (at >= 0) planner_.IndexPulse(at);
+    }
   }
   const AxisVector& pre = planner_.Tick();
   const bool op_motion =

@@ -8,10 +8,6 @@
 
 namespace cell::servo {
 
-double Machine::XDiameter() const {
-  return 2.0 * std::abs(filter_.Output()[kX]);
-}
-
 bool Machine::StartSpindle(const Segment& s) {
   const int dir = s.spindle_dir == SpindleDirection::kCW    ? 1
                   : s.spindle_dir == SpindleDirection::kCCW ? -1

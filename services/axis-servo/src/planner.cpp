@@ -39,7 +39,7 @@ AxisVector PathElement::Tangent(double s) const {
 }
 
 Planner::Planner(const PlannerLimits& limits, std::size_t capacity)
-    : lim_(limits), elems_(std::max<std::size_t>(capacity, 8)) {
+    : lim_(limits), elems_(std::max<std::size_t>(capacity, 8)), tracks_(elems_.size()) {
   marks_.reserve(elems_.size() + 4);
 }
 
@@ -47,12 +47,6 @@ void Planner::SetOverrides(double feed, double rapid) {
   feed_ovr_ = std::clamp(feed, 0.0, 2.0);
   rapid_ovr_ = std::clamp(rapid, 0.0, 1.0);
   BackwardPass(0);
-}
-
-double Planner::Cap(const PathElement& e) const {
-  if (e.rapid) return e.vgeom * rapid_ovr_;
-  if (e.sync) return e.vgeom;  // the spindle sets a thread's speed; the feed override does not act
-  return std::min(e.vgeom, (e.per_rev ? e.vfeed * rps_ : e.vfeed) * feed_ovr_);
 }
 
 PathElement Planner::LineElement(const AxisVector& end, bool rapid, bool stop_end) const {
@@ -111,12 +105,10 @@ void Planner::AddThread(const AxisVector& end, double lead, double lead_change, 
   e.stop_end = e.wait_in_position = false;  // Link() decides: stop, or go on into a chained thread
   e.seg = seg;
   e.sync = true;
-  e.lead = lead;
-  e.lead_change = lead_change;
-  e.lead_k = major > 0 ? e.len / major : 0;
-  e.start_angle = start_angle;
   e.vfeed = kInf;
-  Append(e);
+  const double lead_k = major > 0 ? e.len / major : 0;
+  Append(e);  // no fillet before or after a thread: it is the last element placed
+  tracks_[(head_ + count_ - 1) % tracks_.size()] = {lead, lead_change, lead_k, start_angle};
 }
 
 bool Planner::MakeArc(const AxisVector& start, const AxisVector& end, const std::array<double, 3>& center,
@@ -438,14 +430,17 @@ const AxisVector& Planner::Tick() {
     started_ = true;
     if (e->seg_offset == 0) marks_.push_back({e->seg, false, false});
   }
-  if (e->sync && sync_ != Sync::kBraking && TickThread()) return pos_;
-  e = &At(0);
+  const bool sync = e->sync;  // (a chained thread that TickThread() moves on to is a thread too)
+  if (sync && sync_ != Sync::kBraking) {
+    if (TickThread()) return pos_;
+    e = &At(0);
+  }
   // Speed for this tick from the current element's brake curve, acceleration limit and cap.
   const double a = e->at;
   const double d = std::max(e->len - s_, 0.0);
   const double vb = -a * ts + std::sqrt(a * a * ts * ts + e->v_exit * e->v_exit + 2 * a * d);
   // A thread is cut to its end whatever the feed hold (abort apart).
-  const double cap = hold_ && (!e->sync || break_sync_) ? 0.0 : Cap(*e);
+  const double cap = hold_ && (!sync || break_sync_) ? 0.0 : Cap(*e);
   double vn = std::min(vb, std::max(v_ - a * ts, std::min(v_ + a * ts, cap)));
   vn = std::max(vn, 0.0);
   double dist = vn * ts;
@@ -479,32 +474,26 @@ const AxisVector& Planner::Tick() {
 
 // ---- Threads: progress as a function of the spindle's revolutions.
 
-void Planner::SetSpindle(double turned, double rev_per_s) {
-  turned_ = turned;
-  rps_ = rev_per_s;
-  // Feeds per revolution follow the spindle: re-plan the exit speeds when it has changed by 1 %.
+void Planner::SpindleChanged() {
+  // Feeds per revolution follow the spindle (Cap() reads it every tick); the exit speeds planned with
+  // it are re-planned when it has changed by 1 %.
   if (std::abs(rps_ - planned_rps_) > 0.01 * planned_rps_ || (rps_ > 0) != (planned_rps_ > 0)) {
     planned_rps_ = rps_;
     if (count_ > 0) BackwardPass(0);
   }
 }
 
-bool Planner::AwaitingIndex(double* start_angle) const {
-  if (sync_ != Sync::kAwaitIndex || hold_ || count_ == 0) return false;
-  *start_angle = At(0).start_angle;
-  return true;
-}
-
 void Planner::IndexPulse(double turned) {
   if (sync_ != Sync::kAwaitIndex || count_ == 0) return;
   const PathElement& e = At(0);
+  const ThreadTrack& th = TrackAt(0);
   sync_ = Sync::kTracking;
   pulse_ = turned;
   rho0_ = 0;
   // The axes cannot jump to the spindle's pace: they accelerate at the element's limit over ramp_
   // revolutions, progress rho = R²/(2 ramp) after R revolutions, then rho = R - ramp/2, exactly in step.
   // The lag (ramp/2 revolutions) is the same on every pass at the same speed: same groove.
-  const double v = e.lead_k * e.lead * rps_;
+  const double v = th.lead_k * th.lead * rps_;
   ramp_ = e.at > 0 ? rps_ * v / e.at : 0;
 }
 
@@ -529,8 +518,9 @@ bool Planner::TickThread() {
   const double drho = r < ramp_ ? r / ramp_ : 1.0;  // d rho / d r
   PathElement* e = &At(0);
   while (true) {
+    const ThreadTrack& th = TrackAt(0);
     const double local = rho - rho0_;
-    const double st = e->lead_k * (e->lead * local + 0.5 * e->lead_change * local * local);
+    const double st = th.lead_k * (th.lead * local + 0.5 * th.lead_change * local * local);
     const bool chained = count_ > 1 && At(1).sync && !e->stop_end;
     if (!chained) {
       // Leave the spindle where the remaining travel is the braking distance (the incomplete thread).
@@ -546,11 +536,11 @@ bool Planner::TickThread() {
     if (st < e->len || !chained) {
       s_ = st;
       pos_ = e->Position(s_);
-      v_ = e->lead_k * (e->lead + e->lead_change * local) * rps_ * drho;
+      v_ = th.lead_k * (th.lead + th.lead_change * local) * rps_ * drho;
       return true;
     }
     // Into the next thread of the chain: it starts where this one has covered its length.
-    const double d = e->len / e->lead_k, l0 = e->lead, dl = e->lead_change;
+    const double d = e->len / th.lead_k, l0 = th.lead, dl = th.lead_change;
     rho0_ += std::abs(dl) > 1e-12 ? (std::sqrt(l0 * l0 + 2 * dl * d) - l0) / dl : d / l0;
     FinishCurrent();
     sync_ = Sync::kTracking;

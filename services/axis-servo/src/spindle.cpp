@@ -28,14 +28,11 @@ double Spindle::TargetAt(double x_diameter) const {
   return css_dir_ * rpm;
 }
 
-void Spindle::Step(double ts, double x_diameter, bool hold_target) {
-  if (!hold_target) target_ = TargetAt(x_diameter);
+void Spindle::Turn(double ts) {
   const double before = rpm_;
   const double step = accel_ * ts;
   rpm_ = std::abs(target_ - rpm_) <= step ? target_ : rpm_ + std::copysign(step, target_ - rpm_);
-  prev_pos_ = pos_;
-  prev_turned_ = turned_;
-  pos_ += 0.5 * (before + rpm_) / 60.0 * ts;
+  pos_ += (before + rpm_) * (ts / 120.0);  // trapezoid: mean rpm over the period, in revolutions
   turned_ += std::abs(pos_ - prev_pos_);
 }
 

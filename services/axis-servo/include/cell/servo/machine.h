@@ -6,6 +6,7 @@
 #pragma once
 
 #include <chrono>
+#include <cmath>
 #include <cstdint>
 #include <deque>
 #include <map>
@@ -142,7 +143,7 @@ class Machine {
   double FeedNow(const Segment& s, double length) const;  // units/s at today's spindle speed
   bool PlanThread(const Segment& s, const AxisVector& start, const AxisVector& end, std::string& why);
   bool StartSpindle(const Segment& s);
-  double XDiameter() const;  // commanded X as a diameter (constant surface speed)
+  double XDiameter() const { return 2.0 * std::abs(filter_.Output()[kX]); }  // constant surface speed
   void Emit(EventKind kind, std::uint64_t seg, const Alarm* alarm = nullptr,
             const ProbeResult* probe = nullptr);
   AxisVector ToSegmentUnits(AxisVector v) const;

@@ -16,6 +16,7 @@
 //    (docs/axis-servo.md, "Lathes").
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <vector>
@@ -41,6 +42,14 @@ struct Feed {
   bool per_rev;
 };
 
+// A thread element's synchronisation: after rho revolutions from its start the element has covered
+// s = lead_k (lead rho + lead_change rho² / 2) (lead along the major axis, lead_k = path length per mm
+// of it). The first thread of a chain waits for the spindle to pass start_angle (degrees). Kept beside
+// the path elements, not in them: the interpolator's hot data stays small.
+struct ThreadTrack {
+  double lead = 0, lead_change = 0, lead_k = 0, start_angle = 0;
+};
+
 struct PathElement {
   bool arc = false;
   AxisVector p0 = AxisVector::Zero(), p1 = AxisVector::Zero();
@@ -51,8 +60,9 @@ struct PathElement {
   double len = 0, orig_len = 0;
   double vgeom = 0;  // geometric speed cap, units/s
   double vfeed = 0;  // programmed speed, units/s (per_rev: units per spindle revolution), before override
-  bool per_rev = false;
   bool rapid = false;
+  bool per_rev = false;           // (beside `rapid`: the fields Tick() reads share cache lines)
+  bool sync = false;              // a thread: its synchronisation is a ThreadTrack in the slot beside it
   double at = 0;                  // tangential acceleration limit
   double v_junction = 0;          // geometric limit at the end (into the next element)
   double v_exit = 0;              // planned exit speed (backward pass)
@@ -64,12 +74,6 @@ struct PathElement {
   bool probe = false;
   std::uint64_t seg = 0;
   double seg_offset = 0, seg_total = 0;  // for progress fractions
-  // Spindle-synchronised thread: after rho revolutions from its start the element has covered
-  // s = lead_k (lead rho + lead_change rho² / 2) (lead along the major axis, lead_k = path length per mm
-  // of it). The first thread of a chain waits for the spindle to pass start_angle (degrees).
-  bool sync = false;
-  double lead = 0, lead_change = 0, lead_k = 0, start_angle = 0;
-
   AxisVector Position(double s) const;
   AxisVector Tangent(double s) const;  // dp/ds
 };
@@ -113,13 +117,21 @@ class Planner {
   void BreakSync();
 
   // The spindle for the next Tick(): revolutions turned (never decreasing) and speed (rev/s).
-  void SetSpindle(double turned, double rev_per_s);
+  void SetSpindle(double turned, double rev_per_s) {
+    turned_ = turned;
+    rps_ = rev_per_s;
+    if (rps_ != planned_rps_) SpindleChanged();
+  }
   // A thread waits for its index pulse at `*start_angle` degrees (not while held).
-  bool AwaitingIndex(double* start_angle) const;
+  bool AwaitingIndex(double* start_angle) const {
+    if (sync_ != Sync::kAwaitIndex || hold_ || count_ == 0) return false;
+    *start_angle = TrackAt(0).start_angle;
+    return true;
+  }
   // The spindle passed the start angle when it had turned `turned` revolutions (within this tick).
   void IndexPulse(double turned);
-  // The current element is a thread (waiting or cutting): the spindle speed must not change.
-  bool InThread() const { return count_ > 0 && At(0).sync; }
+  // A thread is waiting for its index pulse or being cut: the spindle speed must not change.
+  bool InThread() const { return sync_ != Sync::kNone; }
   void SetOverrides(double feed, double rapid);
   // Stops as fast as the limits allow on the current element (probe trip). Later elements are kept.
   void StopOnCurrent();
@@ -140,7 +152,14 @@ class Planner {
  private:
   PathElement& At(std::size_t i) { return elems_[(head_ + i) % elems_.size()]; }
   const PathElement& At(std::size_t i) const { return elems_[(head_ + i) % elems_.size()]; }
-  double Cap(const PathElement& e) const;
+  const ThreadTrack& TrackAt(std::size_t i) const { return tracks_[(head_ + i) % tracks_.size()]; }
+  double Cap(const PathElement& e) const {
+    if (!(e.rapid | e.sync | e.per_rev)) return std::min(e.vgeom, e.vfeed * feed_ovr_);
+    if (e.rapid) return e.vgeom * rapid_ovr_;
+    if (e.sync) return e.vgeom;  // the spindle sets a thread's speed; the feed override does not act
+    return std::min(e.vgeom, e.vfeed * rps_ * feed_ovr_);  // feed per revolution
+  }
+  void SpindleChanged();
   void Append(PathElement e);
   void Link(PathElement& a, PathElement& b, bool a_is_current);
   void BackwardPass(std::size_t changed_from);  // elements from this index on may have changed (0: all)
@@ -150,6 +169,7 @@ class Planner {
 
   PlannerLimits lim_;
   std::vector<PathElement> elems_;
+  std::vector<ThreadTrack> tracks_;   // the same slots as elems_, used by thread elements
   std::size_t head_ = 0, count_ = 0;  // element 0 is the current one
   double s_ = 0, v_ = 0;
   bool started_ = false;  // current element has begun

@@ -19,10 +19,17 @@ class Spindle {
   double TargetAt(double x_diameter) const;
   // One servo period: the target follows the diameter unless `hold_target` (a thread is being cut), the
   // speed moves towards it by at most acceleration x ts, and the angle integrates the speed.
-  void Step(double ts, double x_diameter, bool hold_target);
+  void Step(double ts, double x_diameter, bool hold_target) {
+    if (!hold_target) target_ = css_v_ > 0 ? TargetAt(x_diameter) : cmd_rpm_;
+    prev_pos_ = pos_;
+    prev_turned_ = turned_;
+    if (rpm_ != 0 || target_ != 0) Turn(ts);  // inline: a machining centre's spindle mostly stands still
+  }
   // End of a commanded ramp: exactly at the target.
   void Snap(double x_diameter) { rpm_ = target_ = TargetAt(x_diameter); }
   bool AtSpeed() const { return rpm_ == target_; }
+  // Turning, or commanded to: Step() has something to do.
+  bool Active() const { return rpm_ != 0 || cmd_rpm_ != 0 || css_v_ > 0; }
 
   double rpm() const { return rpm_; }        // signed
   double position() const { return pos_; }   // signed revolutions since start-up
@@ -33,6 +40,8 @@ class Spindle {
   double Crossing(double deg) const;
 
  private:
+  void Turn(double ts);
+
   double max_rpm_ = 0, accel_ = 0;
   double cmd_rpm_ = 0;                   // constant-speed command
   double css_v_ = 0, css_limit_ = 0;     // m/min (0: off), rpm
