@@ -283,6 +283,19 @@ TEST(Lathe, ConstantSurfaceSpeedNeedsALathe) {
 
 // ---- Threads.
 
+// Rapid to (x, z), the spindle at `rpm`, then `thread`: the samples of the thread.
+std::vector<Sample> CutThread(Machine& m, double x, double z, double rpm, Segment thread,
+                              SpindleDirection dir = SpindleDirection::kCW) {
+  m.Push(Rapid(1, x, z));
+  m.Push(Spindle(2, rpm, dir));
+  thread.id = 3;
+  m.Push(thread);
+  std::vector<Event> ev;
+  const std::vector<Sample> all = RunSampled(m, ev);
+  EXPECT_EQ(m.alarm().code, AlarmCode::kNone) << m.alarm().text;
+  return Of(all, 3);
+}
+
 // Checks that the commanded positions move `dx` (diameter) and `dz` per spindle revolution over n
 // revolutions of the thread's steady part, starting where the commanded Z (or X) reaches `from`.
 void ExpectTravelPerRevolution(const std::vector<Sample>& th, double Sample::*axis, double from, int n,
@@ -398,13 +411,8 @@ TEST(Lathe, FaceThreadLeadIsRadialTravelOnX) {
   // revolution at 300 rpm, start angle 90°. X has the larger travel: the lead is measured on it.
   Machine m = Lathe();
   const double lead = 2, rps = 5, angle = 90;
-  m.Push(Rapid(1, 100, 0));
-  m.Push(Spindle(2, 300, SpindleDirection::kCCW));
-  m.Push(Thread(3, 20, 0, lead, 0, angle));
-  m.Push(Rapid(4, 20, 3));
-  std::vector<Event> ev;
-  const std::vector<Sample> th = Of(RunSampled(m, ev), 3);
-  ASSERT_EQ(m.alarm().code, AlarmCode::kNone) << m.alarm().text;
+  const std::vector<Sample> th =
+      CutThread(m, 100, 0, 300, Thread(3, 20, 0, lead, 0, angle), SpindleDirection::kCCW);
   ExpectTravelPerRevolution(th, &Sample::x, 90, 12, -2 * lead, 0);  // diameter: twice the radial lead
   // Turning backwards the spindle reaches 90° from above.
   std::size_t first = 0;
@@ -418,23 +426,13 @@ TEST(Lathe, TaperThreadLeadIsAlongTheMajorAxis) {
   // Gentle taper: Z travels 45, X 5 (radius): lead along Z, X follows in proportion.
   {
     Machine m = Lathe();
-    m.Push(Rapid(1, 40, 5));
-    m.Push(Spindle(2, 500));
-    m.Push(Thread(3, 50, -40, 2));
-    std::vector<Event> ev;
-    const std::vector<Sample> th = Of(RunSampled(m, ev), 3);
-    ASSERT_EQ(m.alarm().code, AlarmCode::kNone) << m.alarm().text;
+    const std::vector<Sample> th = CutThread(m, 40, 5, 500, Thread(3, 50, -40, 2));
     ExpectTravelPerRevolution(th, &Sample::z, -2, 15, 2 * 2 * 5.0 / 45, -2);
   }
   // Steep taper: X travels 50 (radius), Z 20: the lead is measured on X (Okuma G32, EMCO above 45°).
   {
     Machine m = Lathe();
-    m.Push(Rapid(1, 20, 0));
-    m.Push(Spindle(2, 400));
-    m.Push(Thread(3, 120, -20, 3));
-    std::vector<Event> ev;
-    const std::vector<Sample> th = Of(RunSampled(m, ev), 3);
-    ASSERT_EQ(m.alarm().code, AlarmCode::kNone) << m.alarm().text;
+    const std::vector<Sample> th = CutThread(m, 20, 0, 400, Thread(3, 120, -20, 3));
     ExpectTravelPerRevolution(th, &Sample::x, 35, 10, 2 * 3, -3 * 20.0 / 50);
   }
 }
@@ -446,12 +444,7 @@ TEST(Lathe, VariableLeadThreadChangesItsLeadEveryRevolution) {
   for (double e : {0.05, -0.03}) {
     Machine m = Lathe();
     const double l0 = e > 0 ? 2.0 : 3.0;
-    m.Push(Rapid(1, 40, 5));
-    m.Push(Spindle(2, 300));
-    m.Push(Thread(3, 40, -80, l0, e));
-    std::vector<Event> ev;
-    const std::vector<Sample> th = Of(RunSampled(m, ev), 3);
-    ASSERT_EQ(m.alarm().code, AlarmCode::kNone) << m.alarm().text;
+    const std::vector<Sample> th = CutThread(m, 40, 5, 300, Thread(3, 40, -80, l0, e));
     const double r0 = RevAt(th, 0, &Sample::z);
     double prev = NAN;
     for (int k = 0; k < 20; ++k) {
