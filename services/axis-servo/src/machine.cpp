@@ -706,7 +706,7 @@ bool Machine::StepNow() {
   // The spindle turns during the period; a thread in progress holds its speed, a thread waiting for its
   // index pulse takes it (at the exact fraction of the period) once the spindle is at speed. A spindle
   // that stands still (and was told to) costs nothing: threads and feeds per revolution need it running.
-  if (spindle_.Active()) {
+  if (spindle_.Active()) [[unlikely]] {
     spindle_.Step(cfg_.servo_period_s, XDiameter(), planner_.InThread());
     planner_.SetSpindle(spindle_.turned(), std::abs(spindle_.rpm()) * (1.0 / 60.0));
     if (double angle; planner_.AwaitingIndex(&angle) && spindle_.AtSpeed()) {

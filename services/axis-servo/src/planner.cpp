@@ -431,8 +431,8 @@ const AxisVector& Planner::Tick() {
     if (e->seg_offset == 0) marks_.push_back({e->seg, false, false});
   }
   const bool sync = e->sync;  // (a chained thread that TickThread() moves on to is a thread too)
-  if (sync && sync_ != Sync::kBraking) {
-    if (TickThread()) return pos_;
+  if (sync) [[unlikely]] {
+    if (sync_ != Sync::kBraking && TickThread()) return pos_;
     e = &At(0);
   }
   // Speed for this tick from the current element's brake curve, acceleration limit and cap.
