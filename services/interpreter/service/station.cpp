@@ -100,6 +100,17 @@ std::optional<cell::MotionSegment> ToSegment(const interp::Canon& c) {
       s.turns(a.angle > 360.0 + 1e-6 ? static_cast<int32_t>(std::floor((a.angle - 1e-6) / 360.0)) : 0);
       return s;
     }
+    case interp::Op::kThread: {
+      // Spindle-synchronised: the lead along the major axis, from the start angle (docs/axis-servo.md).
+      const auto& t = c.As<interp::ThreadOp>();
+      s.kind(cell::SEGMENT_THREAD);
+      SetTarget(s, t.to);
+      s.exact_stop(false);
+      s.thread_lead(t.lead);
+      s.thread_lead_change(t.lead_change);
+      s.thread_start_angle(t.start_angle);
+      return s;
+    }
     case interp::Op::kDwell:
       s.kind(cell::SEGMENT_DWELL);
       s.dwell_s(c.As<interp::DwellOp>().seconds);
@@ -112,6 +123,9 @@ std::optional<cell::MotionSegment> ToSegment(const interp::Canon& c) {
                      : sp.dir == interp::SpindleDir::kCcw    ? 2
                      : sp.dir == interp::SpindleDir::kOrient ? 3
                                                              : 0);
+      // The whole spindle state on every spindle segment: constant surface speed and the spindle limit.
+      s.css_surface_speed(sp.css);
+      s.spindle_max_rpm(sp.max_rpm);
       return s;
     }
     case interp::Op::kCoolant: {
@@ -654,11 +668,6 @@ void Station::RunProgram(const Dispatch& d, const std::string& name, std::stop_t
       status_.program(name.substr(0, 64));
       status_.line(c.line);
       if (auto* t = c.If<interp::ToolChangeOp>()) status_.tool(t->tool.substr(0, 16));
-    }
-    if (c.op() == interp::Op::kThread) {
-      throw Error(Errc::kUnimplemented, fmt::format("{} line {}: thread moves need the lathe servo's "
-                                                    "spindle-synchronised segments",
-                                                    name, c.line));
     }
     if (auto seg = ToSegment(c)) Send(*seg, st);
     if (auto* m = c.If<interp::MessageOp>()) spdlog::info("{} line {}: {}", name, c.line, m->text);

@@ -1,0 +1,68 @@
+// Canonical commands to the servo's segments (ToSegment): the lathe ops reach the servo's lathe kind.
+#include <gtest/gtest.h>
+
+#include "cell/station/station.h"
+
+namespace cell::station {
+namespace {
+
+using interp::Canon;
+
+TEST(ToSegment, ThreadCarriesLeadLeadChangeAndStartAngle) {
+  Canon c;
+  c.line = 7;
+  interp::ThreadOp& t = c.Set<interp::ThreadOp>();
+  t.to.pos[interp::kX] = 38.2;  // a diameter, as every lathe X
+  t.to.pos[interp::kZ] = -30;
+  t.to.used = (1u << interp::kX) | (1u << interp::kZ);
+  t.lead = 1.5;
+  t.lead_change = 0.05;
+  t.start_angle = 180;
+  auto s = ToSegment(c);
+  ASSERT_TRUE(s);
+  EXPECT_EQ(s->kind(), cell::SEGMENT_THREAD);
+  EXPECT_EQ(s->line(), 7);
+  EXPECT_DOUBLE_EQ(s->target()[0], 38.2);
+  EXPECT_DOUBLE_EQ(s->target()[2], -30);
+  EXPECT_EQ(s->axis_mask(), 0b101);
+  EXPECT_DOUBLE_EQ(s->thread_lead(), 1.5);
+  EXPECT_DOUBLE_EQ(s->thread_lead_change(), 0.05);
+  EXPECT_DOUBLE_EQ(s->thread_start_angle(), 180);
+}
+
+TEST(ToSegment, SpindleCarriesConstantSurfaceSpeedAndTheLimit) {
+  Canon c;
+  interp::SpindleOp& sp = c.Set<interp::SpindleOp>();
+  sp.dir = interp::SpindleDir::kCw;
+  sp.rpm = 800;
+  sp.css = 150;
+  sp.max_rpm = 2500;
+  auto s = ToSegment(c);
+  ASSERT_TRUE(s);
+  EXPECT_EQ(s->kind(), cell::SEGMENT_SPINDLE);
+  EXPECT_EQ(s->spindle_mode(), 1);
+  EXPECT_DOUBLE_EQ(s->spindle_rpm(), 800);
+  EXPECT_DOUBLE_EQ(s->css_surface_speed(), 150);
+  EXPECT_DOUBLE_EQ(s->spindle_max_rpm(), 2500);
+}
+
+TEST(ToSegment, PerRevolutionFeedAndArcPlanes) {
+  Canon c;
+  interp::ArcOp& a = c.Set<interp::ArcOp>();
+  a.plane = {interp::kZ, interp::kX};
+  a.feed = {0.2, interp::FeedMode::kPerRev, false};
+  a.angle = 90;
+  auto s = ToSegment(c);
+  ASSERT_TRUE(s);
+  EXPECT_EQ(s->plane(), cell::PLANE_ZX);
+  EXPECT_EQ(s->feed_mode(), 1);
+  EXPECT_DOUBLE_EQ(s->feed(), 0.2);
+  EXPECT_EQ(s->turns(), 0);
+  // Messages, tool selection and file ops are the CNC's own: no segment.
+  Canon m;
+  m.Set<interp::MessageOp>().text = "x";
+  EXPECT_FALSE(ToSegment(m));
+}
+
+}  // namespace
+}  // namespace cell::station
