@@ -68,11 +68,11 @@ TEST(RealUnits, CellCommandsForTwoStations) {
   std::vector<std::string> units;
   for (const auto& c : cmds) units.push_back(c.unit);
   EXPECT_EQ(units,
-            (Argv{"cell-inspection-writer.service", "cell-program-store.service", "cell-scheduler.service",
-                  "cell-axis-servo@KT01.service", "cell-interpreter@KT01.service",
+            (Argv{"cell-dashboard.service", "cell-inspection-writer.service", "cell-program-store.service",
+                  "cell-scheduler.service", "cell-axis-servo@KT01.service", "cell-interpreter@KT01.service",
                   "cell-axis-servo@KT02.service", "cell-interpreter@KT02.service"}));
-  EXPECT_EQ(cmds[6].argv, (Argv{"/b/cell-interpreter", "--station", "KT02"}));
-  EXPECT_EQ(cmds[1].argv, (Argv{"/b/cell-program-store"}));
+  EXPECT_EQ(cmds[7].argv, (Argv{"/b/cell-interpreter", "--station", "KT02"}));
+  EXPECT_EQ(cmds[2].argv, (Argv{"/b/cell-program-store"}));
   EXPECT_THROW(cell::config::CellCommands("/nonexistent", {}, "/b"), cell::Error);
 }
 
