@@ -106,5 +106,32 @@ TEST(Registry, RunsByNameUnimplementedDialectsRefuse) {
   EXPECT_THROW(StartRun(o), Error);
 }
 
+// The variables a station keeps between runs, by the dialect's rule (docs/station.md).
+TEST(Registry, KeptVariables) {
+  const Dialect& kt = DialectOrThrow("ktapl");
+  EXPECT_EQ(kt.CheckVariable("L1500", 7), "");
+  EXPECT_EQ(kt.CheckVariable("L2999", -99999999.0), "");
+  for (const char* bad : {"L999", "L3000", "L01500", "l1500", "V1", "E12", "L15X0", ""}) {
+    EXPECT_NE(kt.CheckVariable(bad, 1).find("L1000..L2999"), std::string::npos) << bad;
+  }
+  EXPECT_NE(kt.CheckVariable("L1500", 1e10).find("range"), std::string::npos);  // manual ln 8420
+  for (const Dialect* d : Dialects()) {
+    if (!d->implemented()) {
+      EXPECT_NE(d->CheckVariable("V1", 1), "") << d->name();
+    }
+  }
+  // What a KT-APL run reports is what the rule accepts.
+  RunOptions o;
+  o.dialect = "ktapl";
+  o.program_name = "T";
+  o.program_text = "(PAR,L1500=7.,L100=1.)\nM30\n";
+  o.variables = {{"L1600", 2.5}};
+  auto run = StartRun(o);
+  while (run->Next().kind == Step::kCanon) {
+  }
+  for (const auto& [name, value] : run->Variables()) EXPECT_EQ(kt.CheckVariable(name, value), "") << name;
+  EXPECT_EQ(run->Variables(), (std::map<std::string, double>{{"L1500", 7}, {"L1600", 2.5}}));
+}
+
 }  // namespace
 }  // namespace cell::interp

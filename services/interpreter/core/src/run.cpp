@@ -53,6 +53,12 @@ std::string Dialect::ImportListing(std::string_view text) const {
   throw Error(Errc::kInvalidArgument, "--listing is not defined for dialect '" + std::string(name()) + "'");
 }
 
+std::string Dialect::CheckVariable(std::string_view name, double value) const {
+  (void)value;
+  return "'" + std::string(name) + "' is not a variable a " + std::string(title()) +
+         " station keeps (it keeps none)";
+}
+
 std::unique_ptr<Run> UnimplementedRuns::StartRun(const RunOptions& options) const {
   (void)options;
   throw Error(Errc::kUnimplemented, "dialect '" + std::string(name()) + "' is not implemented yet");

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 
 #include "cell/error/error.h"
 #include "cell/interp/scan.h"
@@ -192,6 +193,22 @@ class Ktapl final : public Dialect {
                               source));
     }
     return table;
+  }
+
+  // Manual ln 8513-8525: machine related parameters L1000-L2999 "are not deleted when a program ends" and may
+  // be modified "by the program, PMI, a subroutine, or the parameter display"; ln 8420: assignments range
+  // -99999999. thru 999999999. Names as Run::Variables() reports them: "L" and the number, no leading zero.
+  std::string CheckVariable(std::string_view name, double value) const override {
+    bool kept = name.size() == 5 && name[0] == 'L' && name[1] != '0' &&
+                std::all_of(name.begin() + 1, name.end(), [](char c) { return scan::IsDigit(c); });
+    int n = kept ? std::stoi(std::string(name.substr(1))) : 0;
+    if (!kept || n < 1000 || n > 2999) {
+      return fmt::format(
+          "'{}' is not a variable a KT-APL station keeps (the machine parameters L1000..L2999)", name);
+    }
+    if (!std::isfinite(value) || value < -99999999.0 || value > 999999999.0)
+      return fmt::format("{} = {} is outside the parameter range -99999999. .. 999999999.", name, value);
+    return "";
   }
 };
 

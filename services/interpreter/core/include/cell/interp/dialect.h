@@ -123,6 +123,12 @@ class Dialect {
   // The manual's printed listing style turned into the tape format (EMCO --listing); others throw
   // cell::Error(kInvalidArgument).
   virtual std::string ImportListing(std::string_view text) const;
+
+  // The variables a station of this dialect keeps between runs (what Run::Variables() reports, by the
+  // dialect's own names: KT-APL machine parameters "L1000".."L2999"; Okuma common variables, Balt-System
+  // E parameters when those dialects run). "" when `name` is one of them and `value` fits it; otherwise a
+  // one-line reason (the station refuses `cellctl station vars --set` with it). The default keeps none.
+  virtual std::string CheckVariable(std::string_view name, double value) const;
 };
 
 // A dialect whose executor is not built yet: identity, names, detection and headings of its own, and
