@@ -1,5 +1,6 @@
-// Okuma OSP-E100L as the host sees it: file names and kinds, detection evidence, program names
-// (../shared/reference/seed-okuma.md). The executor is built by its own issue.
+// Okuma OSP-E100L as the cell sees it: the Dialect the registry lists (file names and kinds, detection
+// evidence, program names, runs, the tool table in Okuma's own form). The executor is OkRun
+// (interp_internal.h); docs/dialects/okuma.md lists what it supports and every judgement call.
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -8,6 +9,8 @@
 #include "cell/error/error.h"
 #include "cell/interp/okuma.h"
 #include "cell/interp/scan.h"
+#include "interp_internal.h"
+#include "tool_data.h"
 
 namespace cell::interp {
 namespace {
@@ -21,7 +24,7 @@ constexpr auto kStatements =
   throw Error(Errc::kInvalidArgument, what);
 }
 
-class Okuma final : public UnimplementedRuns {
+class Okuma final : public Dialect {
  public:
   std::string_view name() const override { return "okuma"; }
   std::string_view title() const override { return "Okuma OSP-E100L"; }
@@ -78,16 +81,22 @@ class Okuma final : public UnimplementedRuns {
   }
 
   FileKind Classify(std::string_view text) const override {
-    bool pselect = false, rts = false, end = false;
+    bool pselect = false, rts = false, end = false, tool_data = false, other = false;
     for (std::string_view raw : Lines(text)) {
       std::string upper = Upper(Trim(raw));
       if (upper.empty()) continue;
+      if (upper.rfind("VTOF", 0) == 0 || upper.rfind("VNSR", 0) == 0) {
+        tool_data = true;
+      } else if (upper != "%" && upper[0] != '(' && upper[0] != '$' && ProgramName(upper).empty()) {
+        other = true;
+      }
       if (HasMCode(upper, 30) || HasMCode(upper, 2)) end = true;
       std::string_view body = SkipSequence(upper);
       if (body.substr(0, 3) == "RTS" && (body.size() == 3 || body[3] == ' ')) rts = true;
       if (body.substr(0, 7) == "PSELECT") pselect = true;
     }
     if (pselect) return FileKind::kSchedule;
+    if (tool_data && !other) return FileKind::kToolTable;
     if (rts && !end) return FileKind::kLibrary;
     return FileKind::kPartProgram;
   }
@@ -138,6 +147,15 @@ class Okuma final : public UnimplementedRuns {
       }
     }
     return h;
+  }
+
+  std::unique_ptr<Run> StartRun(const RunOptions& options) const override {
+    return std::make_unique<okuma::OkRun>(options);
+  }
+
+  tooltable::ToolTable ParseToolTable(std::string_view text, std::string_view source,
+                                      const tooltable::ToolTable& base) const override {
+    return okuma::ParseToolDataText(text, source, base);
   }
 
   // Program name block: "O" + 1-4 digits, or "O" + a letter + up to 3 letters/digits; nothing else but a

@@ -29,9 +29,12 @@ struct TextSpan {
   std::shared_ptr<const ProgramText> text;
   std::size_t begin = 0, end = 0;
   int begin_line = 1;
+  // A lone '\r' ends a line too (tapes whose end of block is CR, as Okuma's EIA code; "\r\n" is one end).
+  bool cr_ends_line = false;
 };
 
-// One line of program text (without its '\n'; a trailing '\r' is left to the dialect).
+// One line of program text (without its '\n'; a trailing '\r' is left to the dialect unless the span's
+// cr_ends_line).
 struct Line {
   std::string_view text;
   int number = 1;
@@ -133,10 +136,12 @@ class CallStack {
 
 inline Line ReadLine(const TextSpan& span, TextPos& at) {
   std::string_view text = span.text->view();
-  std::size_t nl = text.find('\n', at.pos);
+  std::size_t nl = span.cr_ends_line ? text.find_first_of("\r\n", at.pos) : text.find('\n', at.pos);
   if (nl == std::string_view::npos || nl > span.end) nl = span.end;
   Line l{std::string_view(text.data() + at.pos, nl - at.pos), at.line, at.pos};
-  at.pos = nl < span.end ? nl + 1 : span.end;
+  std::size_t next = nl + 1;
+  if (span.cr_ends_line && nl < span.end && text[nl] == '\r' && next < span.end && text[next] == '\n') ++next;
+  at.pos = nl < span.end ? next : span.end;
   ++at.line;
   return l;
 }

@@ -1,0 +1,665 @@
+// Okuma User Task expressions: parsing into a node pool and evaluation (see expr.h).
+#include "expr.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+
+namespace cell::interp::okuma {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kDeg = kPi / 180.0;
+
+bool IsLetter(char c) {
+  return (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z');
+}
+bool IsDigitC(char c) {
+  return c >= '0' && c <= '9';
+}
+bool IsAlnumC(char c) {
+  return IsLetter(c) || IsDigitC(c);
+}
+char Up(char c) {
+  return (c >= 'a' && c <= 'z') ? static_cast<char>(c - 'a' + 'A') : c;
+}
+
+struct FnName {
+  std::string_view name;
+  Fn fn;
+  int args;
+};
+constexpr std::array<FnName, 16> kFunctions = {{
+    {"SIN", Fn::kSin, 1},
+    {"COS", Fn::kCos, 1},
+    {"TAN", Fn::kTan, 1},
+    {"ATAN", Fn::kAtan, 1},
+    {"ATAN2", Fn::kAtan2, 2},
+    {"SQRT", Fn::kSqrt, 1},
+    {"ABS", Fn::kAbs, 1},
+    {"BIN", Fn::kBin, 1},
+    {"BCD", Fn::kBcd, 1},
+    {"ROUND", Fn::kRound, 1},
+    {"FIX", Fn::kFix, 1},
+    {"FUP", Fn::kFup, 1},
+    {"DROUND", Fn::kDround, 1},
+    {"DFIX", Fn::kDfix, 1},
+    {"DFUP", Fn::kDfup, 1},
+    {"MOD", Fn::kMod, 2},
+}};
+
+const FnName* FindFunction(std::string_view name) {
+  for (const auto& f : kFunctions) {
+    if (f.name == name) return &f;
+  }
+  return nullptr;
+}
+
+// Appendix "Table of System Variables" (seed ln 9882-10087) and the I/O variables (ln 7892-7918, 8236-8278).
+constexpr auto kSystemNames = std::to_array<std::string_view>({
+    "VZOFZ", "VZOFX", "VZOFC", "VZOFY", "VZOFW", "VZSHZ", "VZSHX", "VZSHC", "VZSHY", "VZSHW", "VTOFZ",
+    "VTOFX", "VTSOY", "VNSRZ", "VNSRX", "VNSRP", "VPVLZ", "VPVLX", "VPVLW", "VNVLZ", "VNVLX", "VNVLW",
+    "VCHKL", "VCHKD", "VCHKZ", "VCHKX", "VTSL",  "VTSDA", "VTSDB", "VWKR",  "VINPZ", "VINPX", "VINPC",
+    "VINPY", "VPFVZ", "VPFVX", "VPFVC", "VPFVY", "VPFVT", "VPCHZ", "VPCHX", "VRSTT", "VUACM", "VPAI",
+    "VTRTS", "VTLGN", "VTLSN", "VTLCN", "VTLST", "VTLCT", "VTLSA", "VTLCA", "VTLOA", "VTLOB", "VTLOC",
+    "VTLUS", "VTLNG", "VTLLF", "VGRSL", "VGRLF", "VGRID", "VXMP0", "VXMCD", "VXMON", "VXMTG", "VXMOG",
+    "VXMXZ", "VXMNC", "VXMCO", "VXMMC", "VXMMO", "VXMMD", "VXMDR", "VRNGZ", "VRNGX", "VSNZ",  "VSNX",
+    "VIMDZ", "VIMDX", "VTOAA", "VTOBA", "VTOCA", "VTOAB", "VTOBB", "VTOCB", "VTHRZ", "VTHRX", "VLMON",
+    "VEINT", "VBNCT", "VPWSP", "VPWTP", "VTLIN", "VTLFN", "VTLA1", "VTLA2", "VTLL",  "VTLD",  "VTLW",
+    "VTIZN", "VTIZP", "VTIXN", "VTIXP", "VTIPN", "VGRIN", "VGRFN", "VGRA1", "VGRA2", "VGRL",  "VGRD",
+    "VGRW",  "VSIDC", "VEXPO", "VEXTR", "VEXAX", "VEXGF", "VEXTO", "VEXOG", "VEXOK", "VEXFB", "VEXDR",
+    "VSIOZ", "VSIOY", "VSIOX", "VSIOC", "VAPAZ", "VAPAX", "VSKPZ", "VSKPY", "VSKPX", "VSKPC", "VETFZ",
+    "VETFY", "VETFX", "VDIFZ", "VDIFX", "VETON", "VETLN", "VAPPZ", "VAPPX", "VMIRZ", "VCNGC", "VXMD5",
+    "VTOPC", "VCEJM", "VMCN",  "VMDT",  "VXMBD", "VXMAB", "VWKCS", "VWKCC", "VSKFA", "VSKFB", "VRZV",
+    "VRCV",  "VRRG",  "VRVY",  "VRBV",  "VRVW",  "VRVX",  "VLZV",  "VLYV",  "VLRG",  "VPLOF", "VTLMT",
+    "VMXA1", "VMNA1", "VMXA2", "VMNA2", "VCHIO", "VCHSW", "VZARP", "VZBRP", "VZCRP", "VXARP", "VXBRP",
+    "VWAP",  "VSNWD", "VSNTU", "VRUND", "VUNIT", "VDIN",  "VDOUT", "VIRD",  "VORD",
+});
+
+// Extended addresses (ln 7599-7603), comparison and boolean operators.
+constexpr auto kReserved = std::to_array<std::string_view>({
+    "AA", "AB", "DA",  "DB",  "FA",  "FB",  "IA",   "IB",   "KA",   "KB",   "LA",  "LB", "RA",
+    "RB", "SA", "SB",  "TA",  "TB",  "UA",  "UB",   "WA",   "WB",   "XA",   "XB",  "ZA", "ZB",
+    "BC", "LT", "LE",  "EQ",  "NE",  "GT",  "GE",   "OR",   "AND",  "EOR",  "NOT", "QA", "PZ",
+    "PW", "IF", "END", "RTS", "GET", "PUT", "CALL", "GOTO", "READ", "VSET",
+});
+
+int64_t Trunc(double v, int col) {
+  if (!std::isfinite(v) || std::fabs(v) > 2147483647.0) Fail(col, "value out of the integer range");
+  return static_cast<int64_t>(std::trunc(v));
+}
+
+Value Real(double v) {
+  return {v, false};
+}
+Value Int(double v) {
+  return {v, true};
+}
+
+}  // namespace
+
+uint64_t PackName(std::string_view name) {
+  uint64_t out = 0;
+  for (size_t i = 0; i < name.size() && i < 8; ++i) out |= static_cast<uint64_t>(Up(name[i])) << (8 * i);
+  return out;
+}
+
+std::string UnpackName(uint64_t packed) {
+  std::string out;
+  for (int i = 0; i < 8; ++i) {
+    char c = static_cast<char>((packed >> (8 * i)) & 0xff);
+    if (c == 0) break;
+    out.push_back(c);
+  }
+  return out;
+}
+
+bool IsSystemVariable(std::string_view name) {
+  return std::find(kSystemNames.begin(), kSystemNames.end(), name) != kSystemNames.end();
+}
+
+bool IsReservedName(std::string_view name) {
+  return FindFunction(name) != nullptr ||
+         std::find(kReserved.begin(), kReserved.end(), name) != kReserved.end();
+}
+
+bool IsLocalName(std::string_view name) {
+  if (name.size() < 2 || name.size() > 4) return false;
+  if (!IsLetter(name[0]) || !IsLetter(name[1])) return false;
+  if (name[0] == 'O' || name[0] == 'N' || name[0] == 'V') return false;
+  for (char c : name) {
+    if (!IsAlnumC(c)) return false;
+  }
+  return !IsReservedName(name);
+}
+
+double Snap(double v) {
+  double r = std::round(v);
+  return std::fabs(v - r) <= 1e-9 * std::max(1.0, std::fabs(v)) ? r : v;
+}
+
+double RoundAway(double v) {
+  v = Snap(v);
+  return v < 0 ? -std::floor(-v + 0.5) : std::floor(v + 0.5);
+}
+
+double RaiseAway(double v) {
+  v = Snap(v);
+  return v < 0 ? -std::ceil(-v) : std::ceil(v);
+}
+
+double TruncSnap(double v) {
+  return std::trunc(Snap(v));
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// Parsing
+
+void ExprParser::Error(const std::string& text) const {
+  Fail(Col(), text);
+}
+
+int32_t ExprParser::Add(Node n) {
+  pool_.push_back(n);
+  return static_cast<int32_t>(pool_.size() - 1);
+}
+
+void ExprParser::SkipBlanks() {
+  while (pos_ < s_.size() && (s_[pos_] == ' ' || s_[pos_] == '\t')) ++pos_;
+}
+
+std::string_view ExprParser::PeekWord() const {
+  size_t i = pos_;
+  while (i < s_.size() && (s_[i] == ' ' || s_[i] == '\t')) ++i;
+  size_t j = i;
+  while (j < s_.size() && IsLetter(s_[j])) ++j;
+  return s_.substr(i, j - i);
+}
+
+// At bracket depth 0 a blank ends the expression unless an operator follows it; inside brackets blanks are
+// always skipped.
+bool ExprParser::AtOperatorAfterBlanks() {
+  size_t i = pos_;
+  while (i < s_.size() && (s_[i] == ' ' || s_[i] == '\t')) ++i;
+  if (i >= s_.size()) return false;
+  if (depth_ > 0) return true;
+  if (i == pos_) return true;  // no blank: whatever follows is looked at by the caller
+  char c = s_[i];
+  if (c == '+' || c == '-' || c == '*' || c == '/') return true;
+  std::string_view w = PeekWord();
+  size_t end = i + w.size();
+  bool boundary = end >= s_.size() || !IsAlnumC(s_[end]);
+  if (!boundary) return false;
+  return w == "OR" || w == "AND" || w == "EOR" || w == "LT" || w == "LE" || w == "EQ" || w == "NE" ||
+         w == "GT" || w == "GE";
+}
+
+bool ExprParser::AcceptWord(std::string_view w) {
+  if (!AtOperatorAfterBlanks()) return false;
+  size_t i = pos_;
+  while (i < s_.size() && (s_[i] == ' ' || s_[i] == '\t')) ++i;
+  if (s_.substr(i, w.size()) != w) return false;
+  size_t end = i + w.size();
+  if (end < s_.size() && IsAlnumC(s_[end])) return false;
+  pos_ = end;
+  return true;
+}
+
+int32_t ExprParser::Parse() {
+  SkipBlanks();
+  if (pos_ >= s_.size() || s_[pos_] == '(') Error("expression expected");
+  return Or();
+}
+
+int32_t ExprParser::Or() {
+  int32_t l = And();
+  for (;;) {
+    int col = Col();
+    NodeOp op;
+    if (AcceptWord("OR")) {
+      op = NodeOp::kOr;
+    } else if (AcceptWord("EOR")) {
+      op = NodeOp::kEor;
+    } else {
+      return l;
+    }
+    int32_t r = And();
+    Node n;
+    n.op = op;
+    n.a = l;
+    n.b = r;
+    n.col = col;
+    l = Add(n);
+  }
+}
+
+int32_t ExprParser::And() {
+  int32_t l = Compare();
+  for (;;) {
+    int col = Col();
+    if (!AcceptWord("AND")) return l;
+    int32_t r = Compare();
+    Node n;
+    n.op = NodeOp::kAnd;
+    n.a = l;
+    n.b = r;
+    n.col = col;
+    l = Add(n);
+  }
+}
+
+int32_t ExprParser::Compare() {
+  int32_t l = Sum();
+  static constexpr std::array<std::pair<std::string_view, NodeOp>, 6> kOps = {{{"LT", NodeOp::kLt},
+                                                                               {"LE", NodeOp::kLe},
+                                                                               {"EQ", NodeOp::kEq},
+                                                                               {"NE", NodeOp::kNe},
+                                                                               {"GT", NodeOp::kGt},
+                                                                               {"GE", NodeOp::kGe}}};
+  for (;;) {
+    int col = Col();
+    bool found = false;
+    for (const auto& [w, op] : kOps) {
+      if (AcceptWord(w)) {
+        int32_t r = Sum();
+        Node n;
+        n.op = op;
+        n.a = l;
+        n.b = r;
+        n.col = col;
+        l = Add(n);
+        found = true;
+        break;
+      }
+    }
+    if (!found) return l;
+  }
+}
+
+int32_t ExprParser::Sum() {
+  int32_t l = Product();
+  for (;;) {
+    if (!AtOperatorAfterBlanks()) return l;
+    size_t save = pos_;
+    SkipBlanks();
+    if (pos_ >= s_.size() || (s_[pos_] != '+' && s_[pos_] != '-')) {
+      pos_ = save;
+      return l;
+    }
+    int col = Col();
+    NodeOp op = s_[pos_] == '+' ? NodeOp::kAdd : NodeOp::kSub;
+    ++pos_;
+    int32_t r = Product();
+    Node n;
+    n.op = op;
+    n.a = l;
+    n.b = r;
+    n.col = col;
+    l = Add(n);
+  }
+}
+
+int32_t ExprParser::Product() {
+  int32_t l = Unary();
+  for (;;) {
+    if (!AtOperatorAfterBlanks()) return l;
+    size_t save = pos_;
+    SkipBlanks();
+    if (pos_ >= s_.size() || (s_[pos_] != '*' && s_[pos_] != '/')) {
+      pos_ = save;
+      return l;
+    }
+    int col = Col();
+    NodeOp op = s_[pos_] == '*' ? NodeOp::kMul : NodeOp::kDiv;
+    ++pos_;
+    int32_t r = Unary();
+    Node n;
+    n.op = op;
+    n.a = l;
+    n.b = r;
+    n.col = col;
+    l = Add(n);
+  }
+}
+
+int32_t ExprParser::Unary() {
+  SkipBlanks();
+  if (pos_ >= s_.size()) Error("operand expected");
+  int col = Col();
+  if (s_[pos_] == '-' || s_[pos_] == '+') {
+    bool neg = s_[pos_] == '-';
+    ++pos_;
+    int32_t a = Unary();
+    if (!neg) return a;
+    Node n;
+    n.op = NodeOp::kNeg;
+    n.a = a;
+    n.col = col;
+    return Add(n);
+  }
+  if (s_.substr(pos_, 3) == "NOT" && (pos_ + 3 >= s_.size() || !IsAlnumC(s_[pos_ + 3]))) {
+    pos_ += 3;
+    int32_t a = Unary();
+    Node n;
+    n.op = NodeOp::kNot;
+    n.a = a;
+    n.col = col;
+    return Add(n);
+  }
+  return Primary();
+}
+
+int32_t ExprParser::Primary() {
+  SkipBlanks();
+  if (pos_ >= s_.size()) Error("operand expected");
+  const int col = Col();
+  const char c = s_[pos_];
+  if (c == '[') {
+    ++pos_;
+    ++depth_;
+    if (depth_ > 32) Error("brackets nested too deeply");
+    int32_t e = Or();
+    SkipBlanks();
+    if (pos_ >= s_.size() || s_[pos_] != ']') Error("']' expected");
+    ++pos_;
+    --depth_;
+    return e;
+  }
+  if (c == '(') Error("'(' starts a comment: group expressions with [ ]");
+  if (IsDigitC(c) || c == '.') {
+    Node n;
+    n.col = col;
+    n.integer = true;
+    double v = 0, scale = 0.1;
+    int digits = 0;
+    bool point = false;
+    while (pos_ < s_.size() && (IsDigitC(s_[pos_]) || s_[pos_] == '.')) {
+      if (s_[pos_] == '.') {
+        if (point) Error("two decimal points in a number");
+        point = true;
+        n.integer = false;
+      } else if (point) {
+        v += (s_[pos_] - '0') * scale;
+        scale /= 10;
+        ++digits;
+      } else {
+        v = v * 10 + (s_[pos_] - '0');
+        if (v > 0) ++digits;
+      }
+      ++pos_;
+    }
+    if (digits > 8) Fail(col, "a constant has at most 8 digits");
+    n.num = v;
+    return Add(n);
+  }
+  if (c == '$') {
+    ++pos_;
+    size_t start = pos_;
+    int64_t v = 0;
+    while (pos_ < s_.size() && std::isxdigit(static_cast<unsigned char>(s_[pos_]))) {
+      char d = Up(s_[pos_]);
+      v = v * 16 + (IsDigitC(d) ? d - '0' : d - 'A' + 10);
+      if (v > 0xffffffffLL) Error("hexadecimal constant too long");
+      ++pos_;
+    }
+    if (pos_ == start) Error("hexadecimal digits expected after '$'");
+    Node n;
+    n.col = col;
+    n.integer = true;
+    n.num = static_cast<double>(v);
+    return Add(n);
+  }
+  if (!IsLetter(c)) Error(fmt::format("unexpected '{}' in an expression", c));
+  size_t start = pos_;
+  while (pos_ < s_.size() && IsAlnumC(s_[pos_])) ++pos_;
+  std::string name(s_.substr(start, pos_ - start));
+  for (char& ch : name) ch = Up(ch);
+  if (const FnName* f = FindFunction(name)) {
+    SkipBlanks();
+    if (pos_ >= s_.size() || s_[pos_] != '[') Fail(col, fmt::format("{} needs its argument in [ ]", name));
+    ++pos_;
+    ++depth_;
+    Node n;
+    n.op = NodeOp::kFn;
+    n.fn = f->fn;
+    n.col = col;
+    n.a = Or();
+    SkipBlanks();
+    if (f->args == 2) {
+      if (pos_ >= s_.size() || s_[pos_] != ',') Fail(col, fmt::format("{} takes two arguments [a,b]", name));
+      ++pos_;
+      n.b = Or();
+      SkipBlanks();
+    }
+    if (pos_ >= s_.size() || s_[pos_] != ']')
+      Fail(col, fmt::format("']' expected after the {} argument", name));
+    ++pos_;
+    --depth_;
+    return Add(n);
+  }
+  if (name[0] == 'V' && name.size() > 1 && std::all_of(name.begin() + 1, name.end(), IsDigitC)) {
+    if (name.size() > 4) Fail(col, fmt::format("common variable {}: common variables are V1-V200", name));
+    int v = std::stoi(name.substr(1));
+    if (v < 1 || v > 200) Fail(col, fmt::format("common variable {}: common variables are V1-V200", name));
+    Node n;
+    n.op = NodeOp::kCommon;
+    n.num = v;
+    n.col = col;
+    return Add(n);
+  }
+  if (name[0] == 'V') {
+    if (!IsSystemVariable(name)) Fail(col, fmt::format("illegal system variable name {}", name));
+    Node n;
+    n.op = NodeOp::kSystem;
+    n.name = PackName(name);
+    n.col = col;
+    if (pos_ < s_.size() && s_[pos_] == '[') {
+      ++pos_;
+      ++depth_;
+      n.a = Or();
+      SkipBlanks();
+      if (pos_ >= s_.size() || s_[pos_] != ']')
+        Fail(col, fmt::format("']' expected after the {} suffix", name));
+      ++pos_;
+      --depth_;
+    }
+    return Add(n);
+  }
+  if (!IsLocalName(name)) {
+    if (IsReservedName(name)) Fail(col, fmt::format("{} cannot be used as a value here", name));
+    Fail(col, fmt::format("'{}' is not a variable name (local variables: two letters, then up to two "
+                          "letters or digits)",
+                          name));
+  }
+  Node n;
+  n.op = NodeOp::kLocal;
+  n.name = PackName(name);
+  n.col = col;
+  return Add(n);
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// Evaluation
+
+namespace {
+
+int64_t Bcd2Bin(int64_t v, int col) {
+  if (v < 0) Fail(col, "BIN of a negative value");
+  int64_t out = 0, mul = 1;
+  while (v > 0) {
+    int64_t d = v & 0xf;
+    if (d > 9) Fail(col, "BIN: the value is not binary-coded decimal");
+    out += d * mul;
+    mul *= 10;
+    v >>= 4;
+  }
+  return out;
+}
+
+int64_t Bin2Bcd(int64_t v, int col) {
+  if (v < 0) Fail(col, "BCD of a negative value");
+  int64_t out = 0;
+  int shift = 0;
+  while (v > 0) {
+    out |= (v % 10) << shift;
+    shift += 4;
+    v /= 10;
+  }
+  return out;
+}
+
+class Evaluator {
+ public:
+  Evaluator(const std::vector<Node>& pool, VarReader& vars) : pool_(pool), vars_(vars) {}
+
+  Value Eval(int32_t i) {
+    const Node& n = pool_[static_cast<size_t>(i)];
+    switch (n.op) {
+      case NodeOp::kNum:
+        return {n.num, n.integer};
+      case NodeOp::kCommon:
+        return Real(vars_.Common(static_cast<int>(n.num), n.col));
+      case NodeOp::kLocal:
+        return Real(vars_.Local(n.name, n.col));
+      case NodeOp::kSystem: {
+        if (n.a < 0) return vars_.System(n.name, nullptr, n.col);
+        Value idx = Eval(n.a);
+        return vars_.System(n.name, &idx, n.col);
+      }
+      case NodeOp::kNeg: {
+        Value a = Eval(n.a);
+        return {-a.v, a.integer};
+      }
+      case NodeOp::kNot:
+        return Int(static_cast<double>(static_cast<int32_t>(~Trunc(Eval(n.a).v, n.col))));
+      case NodeOp::kAdd:
+      case NodeOp::kSub: {
+        Value a = Eval(n.a), b = Eval(n.b);
+        double v = n.op == NodeOp::kAdd ? a.v + b.v : a.v - b.v;
+        return {v, a.integer && b.integer};
+      }
+      case NodeOp::kMul:
+        return Real(Eval(n.a).v * Eval(n.b).v);
+      case NodeOp::kDiv: {
+        Value a = Eval(n.a), b = Eval(n.b);
+        if (b.v == 0) Fail(n.col, "division by zero");
+        return Real(a.v / b.v);
+      }
+      case NodeOp::kOr:
+      case NodeOp::kAnd:
+      case NodeOp::kEor: {
+        int64_t a = Trunc(Eval(n.a).v, n.col), b = Trunc(Eval(n.b).v, n.col);
+        int64_t r = n.op == NodeOp::kOr ? (a | b) : n.op == NodeOp::kAnd ? (a & b) : (a ^ b);
+        return Int(static_cast<double>(r));
+      }
+      case NodeOp::kLt:
+      case NodeOp::kLe:
+      case NodeOp::kEq:
+      case NodeOp::kNe:
+      case NodeOp::kGt:
+      case NodeOp::kGe: {
+        double a = Eval(n.a).v, b = Eval(n.b).v;
+        // Values written to 8 digits compare equal when they agree to the 8th digit (0.1+0.2 EQ 0.3).
+        const double tol = 1e-9 * std::max({1.0, std::fabs(a), std::fabs(b)});
+        bool eq = std::fabs(a - b) <= tol;
+        bool r = false;
+        switch (n.op) {
+          case NodeOp::kLt:
+            r = a < b && !eq;
+            break;
+          case NodeOp::kLe:
+            r = a < b || eq;
+            break;
+          case NodeOp::kEq:
+            r = eq;
+            break;
+          case NodeOp::kNe:
+            r = !eq;
+            break;
+          case NodeOp::kGt:
+            r = a > b && !eq;
+            break;
+          default:
+            r = a > b || eq;
+            break;
+        }
+        return Int(r ? 1 : 0);
+      }
+      case NodeOp::kFn:
+        return Function(n);
+    }
+    return {};
+  }
+
+ private:
+  double Angle(const Value& a) const { return (vars_.MicronUnits() && a.integer) ? a.v / 1000.0 : a.v; }
+  double AngleOut(double deg) const { return vars_.MicronUnits() ? deg * 1000.0 : deg; }
+
+  Value Function(const Node& n) {
+    Value a = Eval(n.a);
+    const double unit = vars_.SettingUnit();
+    switch (n.fn) {
+      case Fn::kSin:
+        return Real(std::sin(Angle(a) * kDeg));
+      case Fn::kCos:
+        return Real(std::cos(Angle(a) * kDeg));
+      case Fn::kTan: {
+        double c = std::cos(Angle(a) * kDeg);
+        if (std::fabs(c) < 1e-12) Fail(n.col, "TAN of 90 degrees");
+        return Real(std::sin(Angle(a) * kDeg) / c);
+      }
+      case Fn::kAtan:
+        return Real(AngleOut(std::atan(a.v) / kDeg));
+      case Fn::kAtan2: {
+        Value b = Eval(n.b);
+        if (a.v == 0 && b.v == 0) Fail(n.col, "ATAN2[0,0] is undefined");
+        return Real(AngleOut(std::atan2(a.v, b.v) / kDeg));
+      }
+      case Fn::kSqrt:
+        if (a.v < 0) Fail(n.col, "SQRT of a negative value");
+        return Real(std::sqrt(a.v));
+      case Fn::kAbs:
+        return Real(std::fabs(a.v));
+      case Fn::kBin:
+        return Int(static_cast<double>(Bcd2Bin(Trunc(a.v, n.col), n.col)));
+      case Fn::kBcd:
+        return Int(static_cast<double>(Bin2Bcd(Trunc(a.v, n.col), n.col)));
+      case Fn::kRound:
+        return Int(RoundAway(a.v));
+      case Fn::kFix:
+        return Int(TruncSnap(a.v));
+      case Fn::kFup:
+        return Int(RaiseAway(a.v));
+      case Fn::kDround:
+        return Real(RoundAway(a.v / unit) * unit);
+      case Fn::kDfix:
+        return Real(TruncSnap(a.v / unit) * unit);
+      case Fn::kDfup:
+        return Real(RaiseAway(a.v / unit) * unit);
+      case Fn::kMod: {
+        Value b = Eval(n.b);
+        if (b.v == 0) Fail(n.col, "MOD by zero");
+        double r = a.v - TruncSnap(a.v / b.v) * b.v;
+        return {r, a.integer && b.integer};
+      }
+    }
+    return {};
+  }
+
+  const std::vector<Node>& pool_;
+  VarReader& vars_;
+};
+
+}  // namespace
+
+Value Evaluate(const std::vector<Node>& pool, int32_t root, VarReader& vars) {
+  Evaluator e(pool, vars);
+  Value v = e.Eval(root);
+  if (!std::isfinite(v.v)) Fail(pool[static_cast<size_t>(root)].col, "the expression has no finite value");
+  return v;
+}
+
+}  // namespace cell::interp::okuma

@@ -1,0 +1,155 @@
+// Okuma User Task expressions (manual SECTION 13, seed ln 582-617, 7924-7950, 8280-8474): constants (integer,
+// real, $hex), common variables V1-V200, local variables, system variables with a [suffix], + - * /, the
+// comparisons LT LE EQ NE GT GE, the boolean operators OR AND EOR NOT, the functions SIN ... MOD, and [ ]
+// grouping. A block's expressions are parsed once into a small tree (a pool of nodes per block) and
+// evaluated each time the block runs.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace cell::interp::okuma {
+
+// A program error at a column of the current block; `alarm` is the manual's alarm number where it has one.
+struct RunError {
+  std::string alarm;
+  std::string text;
+  int col = 1;
+};
+
+[[noreturn]] inline void Fail(int col, const std::string& text, const std::string& alarm = "") {
+  throw RunError{alarm, text, col};
+}
+
+// Names (variables, system variables) packed into one integer: up to 8 upper-case characters.
+uint64_t PackName(std::string_view name);
+std::string UnpackName(uint64_t packed);
+
+// The manual's data types (ln 8343-8446): integers stay integers through + and -, everything else is real;
+// comparisons give a logical 0/1 (held as an integer).
+struct Value {
+  double v = 0;
+  bool integer = false;
+};
+
+enum class Fn : uint8_t {
+  kSin,
+  kCos,
+  kTan,
+  kAtan,
+  kAtan2,
+  kSqrt,
+  kAbs,
+  kBin,
+  kBcd,
+  kRound,
+  kFix,
+  kFup,
+  kDround,
+  kDfix,
+  kDfup,
+  kMod,
+};
+
+enum class NodeOp : uint8_t {
+  kNum,
+  kCommon,  // V1-V200 (num = the number)
+  kLocal,   // name
+  kSystem,  // name, a = suffix expression or -1
+  kNeg,
+  kNot,
+  kAdd,
+  kSub,
+  kMul,
+  kDiv,
+  kOr,
+  kAnd,
+  kEor,
+  kLt,
+  kLe,
+  kEq,
+  kNe,
+  kGt,
+  kGe,
+  kFn,  // fn, a (and b for ATAN2 and MOD)
+};
+
+struct Node {
+  NodeOp op = NodeOp::kNum;
+  Fn fn = Fn::kSin;
+  bool integer = false;  // kNum: written without a decimal point
+  int32_t a = -1, b = -1;
+  double num = 0;
+  uint64_t name = 0;
+  int col = 1;  // 1-based column in the block
+};
+
+// Where an expression reads its variables. Every call may throw RunError (undefined local variable, ...).
+class VarReader {
+ public:
+  virtual ~VarReader() = default;
+  virtual double Common(int n, int col) = 0;
+  virtual double Local(uint64_t name, int col) = 0;
+  virtual Value System(uint64_t name, const Value* index, int col) = 0;
+  // 1 um unit system: trigonometric arguments written as integers are 1/1000 degree, ATAN results x1000.
+  virtual bool MicronUnits() const { return false; }
+  // DROUND/DFIX/DFUP's setting unit (0.001 mm, 0.0001 inch).
+  virtual double SettingUnit() const { return 0.001; }
+};
+
+// Known system variable names (appendix "Table of System Variables", seed ln 9882-10087, plus the I/O
+// variables VDIN VDOUT VIRD VORD).
+bool IsSystemVariable(std::string_view name);
+// Function names, comparison and boolean operators and extended addresses: names a local variable may not
+// take (ln 7593-7603).
+bool IsReservedName(std::string_view name);
+// A legal local variable name: a letter, a letter, up to two letters or digits, not starting with O, N or V
+// (ln 7586-7590).
+bool IsLocalName(std::string_view name);
+
+// Parses one expression of the block text `s` starting at `pos` (1-based column of s[0] is `col0`). The
+// expression ends where the block's next item begins: at a blank (outside brackets) that is not followed by
+// an operator, at a comment, or at the end of the text. Nodes are appended to `pool`; returns the root.
+class ExprParser {
+ public:
+  ExprParser(std::string_view s, size_t pos, std::vector<Node>& pool, int col0 = 1)
+      : s_(s), pos_(pos), pool_(pool), col0_(col0) {}
+  int32_t Parse();
+  size_t pos() const { return pos_; }
+
+ private:
+  int32_t Or();
+  int32_t And();
+  int32_t Compare();
+  int32_t Sum();
+  int32_t Product();
+  int32_t Unary();
+  int32_t Primary();
+  int32_t Add(Node n);
+  void SkipBlanks();
+  bool AtOperatorAfterBlanks();
+  std::string_view PeekWord() const;
+  bool AcceptWord(std::string_view w);
+  int Col() const { return static_cast<int>(pos_) + col0_; }
+  [[noreturn]] void Error(const std::string& text) const;
+
+  std::string_view s_;
+  size_t pos_;
+  std::vector<Node>& pool_;
+  int col0_;
+  int depth_ = 0;  // bracket depth: blanks inside brackets never end the expression
+};
+
+Value Evaluate(const std::vector<Node>& pool, int32_t root, VarReader& vars);
+
+// The manual's integer conversions (ln 611-617, 8448-8474): ROUND rounds half away from zero, FIX
+// truncates, FUP raises away from zero; DROUND/DFIX/DFUP do the same to `unit`.
+// Values within 1e-9 (relative) of a whole number are that number (0.3/0.1 is 3, not 2.999...).
+double Snap(double v);
+double RoundAway(double v);
+double RaiseAway(double v);
+double TruncSnap(double v);
+
+}  // namespace cell::interp::okuma

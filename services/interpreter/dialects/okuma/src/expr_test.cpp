@@ -1,0 +1,104 @@
+// Okuma User Task expressions: the manual's own sample values (seed ln 582-617, 8297-8314).
+#include "expr.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <map>
+
+namespace cell::interp::okuma {
+namespace {
+
+class Vars : public VarReader {
+ public:
+  std::map<int, double> common;
+  std::map<std::string, double> locals;
+  double Common(int n, int) override { return common[n]; }
+  double Local(uint64_t name, int col) override {
+    auto it = locals.find(UnpackName(name));
+    if (it == locals.end()) Fail(col, "local variable " + UnpackName(name) + " is not defined");
+    return it->second;
+  }
+  Value System(uint64_t name, const Value*, int col) override {
+    if (UnpackName(name) == "VPAI") return {3.14159265358979323846, false};
+    Fail(col, "no system variables here");
+  }
+};
+
+double Eval(const std::string& text, Vars& v) {
+  std::vector<Node> pool;
+  ExprParser p(text, 0, pool);
+  int32_t root = p.Parse();
+  EXPECT_EQ(p.pos(), text.size()) << text;
+  return Evaluate(pool, root, v).v;
+}
+
+TEST(OkumaExpr, ManualSampleValues) {
+  Vars v;
+  // ln 582-617: the table of operations and functions.
+  EXPECT_EQ(Eval("$A EOR $C", v), 6);                       // 1010 EOR 1100 = 0110
+  EXPECT_EQ(Eval("$A OR $C", v), 14);                       // 1110
+  EXPECT_EQ(Eval("$A AND $C", v), 8);                       // 1000
+  EXPECT_EQ(static_cast<int>(Eval("NOT 5", v)) & 0xf, 10);  // NOT 0101 = 1010 (low 4 bits)
+  EXPECT_EQ(Eval("5+3", v), 8);
+  EXPECT_EQ(Eval("5-3", v), 2);
+  EXPECT_EQ(Eval("5*3", v), 15);
+  EXPECT_EQ(Eval("15/5", v), 3);
+  EXPECT_NEAR(Eval("SIN[30]", v), 0.5, 1e-12);
+  EXPECT_NEAR(Eval("COS[60]", v), 0.5, 1e-12);
+  EXPECT_NEAR(Eval("TAN[45]", v), 1, 1e-12);
+  EXPECT_NEAR(Eval("ATAN[1]", v), 45, 1e-12);
+  EXPECT_NEAR(Eval("ATAN2[1,SQRT[3]]", v), 30, 1e-9);
+  EXPECT_EQ(Eval("SQRT[16]", v), 4);
+  EXPECT_EQ(Eval("ABS[-3]", v), 3);
+  EXPECT_EQ(Eval("BIN[$25]", v), 25);
+  EXPECT_EQ(Eval("BCD[25]", v), 0x25);
+  EXPECT_EQ(Eval("ROUND[127.63]", v), 128);
+  EXPECT_EQ(Eval("FIX[127.63]", v), 127);
+  EXPECT_EQ(Eval("FUP[127.63]", v), 128);
+  EXPECT_NEAR(Eval("DROUND[13.26462]", v), 13.265, 1e-12);
+  EXPECT_NEAR(Eval("DFIX[13.26462]", v), 13.264, 1e-12);
+  EXPECT_NEAR(Eval("DFUP[13.26462]", v), 13.265, 1e-12);
+  EXPECT_EQ(Eval("MOD[17,5]", v), 2);
+}
+
+TEST(OkumaExpr, PrecedenceBracketsAndVariables) {
+  Vars v;
+  v.common = {{2, 1}, {3, 2}, {4, 3}, {5, 10}, {6, 4}, {7, 2}, {8, 1}};
+  // ln 8322-8333: V1 = [V2+V3]*V4+[V5-V6]/V7+V8 = 3*3 + 6/2 + 1 = 13
+  EXPECT_EQ(Eval("[V2+V3]*V4+[V5-V6]/V7+V8", v), 13);
+  v.locals["XP2"] = 35;
+  EXPECT_EQ(Eval("100+XP2", v), 135);  // ln 7440
+  EXPECT_EQ(Eval("[V5 EQ 10]", v), 1);
+  EXPECT_EQ(Eval("[V5 LT 5]", v), 0);
+  EXPECT_NEAR(Eval("VPAI", v), 3.14159265, 1e-8);
+}
+
+TEST(OkumaExpr, ExpressionEndsAtABlankUnlessAnOperatorFollows) {
+  std::vector<Node> pool;
+  std::string s = "XD1 Z=5";
+  ExprParser p(s, 0, pool);
+  p.Parse();
+  EXPECT_EQ(p.pos(), 3u);
+  std::string t = "- [XH1*2] -0.2 F0.05";
+  pool.clear();
+  ExprParser q(t, 0, pool);
+  q.Parse();
+  EXPECT_EQ(t.substr(q.pos()), " F0.05");
+}
+
+TEST(OkumaExpr, Errors) {
+  Vars v;
+  EXPECT_THROW(Eval("ABC+1", v), RunError);  // undefined local
+  EXPECT_THROW(Eval("1/0", v), RunError);
+  std::vector<Node> pool;
+  std::string bad = "COS(V10)";
+  EXPECT_THROW(ExprParser(bad, 0, pool).Parse(), RunError);
+  std::string v0 = "V201";
+  EXPECT_THROW(ExprParser(v0, 0, pool).Parse(), RunError);
+  std::string sys = "VFOO";
+  EXPECT_THROW(ExprParser(sys, 0, pool).Parse(), RunError);
+}
+
+}  // namespace
+}  // namespace cell::interp::okuma

@@ -1,0 +1,640 @@
+// Okuma NC blocks (manual SECTIONS 3-6, seed ln 1625-2175, 9246-9880): G codes and their modal groups, the
+// T word (nose-R number, turret station, offset number), S with G96/G97/G50, M codes, F and E, and the order
+// in which a block acts: T and S first, spindle and other M codes before the axes (ln 1854, 1918, 9114),
+// then the motion or cycle, then M00/M01/M02/M30, then the MODIN subprograms.
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "interp_internal.h"
+
+namespace cell::interp::okuma {
+namespace {
+
+constexpr Addr kExt[13] = {MakeAddr('S', 'A'), MakeAddr('S', 'B'), MakeAddr('Q', 'A'), MakeAddr('D', 'A'),
+                           MakeAddr('D', 'B'), MakeAddr('F', 'A'), MakeAddr('F', 'B'), MakeAddr('X', 'A'),
+                           MakeAddr('X', 'B'), MakeAddr('Z', 'A'), MakeAddr('Z', 'B'), MakeAddr('P', 'Z'),
+                           MakeAddr('P', 'W')};
+
+bool IsLengthAddress(char a) {
+  return a == 'X' || a == 'Z' || a == 'I' || a == 'K' || a == 'D' || a == 'H' || a == 'L' || a == 'U' ||
+         a == 'W' || a == 'R' || a == 'Y';
+}
+bool IsAngleAddress(char a) {
+  return a == 'A' || a == 'B' || a == 'C';
+}
+
+// What the G codes the cell does not run are, for the alarm text (appendix ln 9246-9482).
+const char* UnsupportedG(int g) {
+  switch (g) {
+    case 17:
+    case 19:
+    case 119:
+      return "cutter radius compensation plane for C-axis contour milling";
+    case 20:
+    case 21:
+      return "home position return";
+    case 22:
+      return "torque skip";
+    case 30:
+      return "skip cycle";
+    case 36:
+    case 37:
+      return "M-tool synchronized feed";
+    case 62:
+      return "mirror image designation";
+    case 100:
+      return "turret priority designation";
+    case 101:
+    case 102:
+    case 103:
+    case 132:
+    case 133:
+    case 312:
+    case 313:
+      return "contour generation (C-axis milling)";
+    case 107:
+    case 108:
+      return "spindle-synchronized tapping";
+    case 112:
+    case 113:
+      return "circular thread cutting";
+    case 122:
+    case 123:
+      return "W-axis command for the sub spindle";
+    case 137:
+    case 138:
+      return "coordinate system conversion / Y-axis mode";
+    case 140:
+    case 141:
+    case 142:
+    case 143:
+      return "machining mode selection";
+    case 152:
+      return "programmable tailstock positioning";
+    default:
+      if (g >= 161 && g <= 171) return "G code macro";
+      if (g >= 205 && g <= 214) return "G code macro";
+      if (g >= 178 && g <= 191) return "M-tool compound fixed cycle";
+      return nullptr;
+  }
+}
+
+bool KnownG(int g) {
+  static constexpr int kKnown[] = {0,  1,  2,  3,  4,  13, 14, 18, 28, 29, 31, 32, 33,  34,  35, 40,
+                                   41, 42, 50, 64, 65, 71, 72, 73, 74, 75, 76, 77, 78,  80,  81, 82,
+                                   83, 84, 85, 86, 87, 88, 90, 91, 94, 95, 96, 97, 110, 111, 136};
+  return std::find(std::begin(kKnown), std::end(kKnown), g) != std::end(kKnown);
+}
+
+bool IsMotionG(int g) {
+  return g == 0 || g == 1 || g == 2 || g == 3 || (g >= 31 && g <= 35);
+}
+
+}  // namespace
+
+int ExtIndex(Addr a) {
+  for (int i = 0; i < 13; ++i) {
+    if (kExt[i] == a) return i;
+  }
+  return -1;
+}
+
+bool BlockWords::HasG(int code) const {
+  return FindG(code) != nullptr;
+}
+const BlockWords::Code* BlockWords::FindG(int code) const {
+  for (const auto& c : g) {
+    if (c.code == code) return &c;
+  }
+  return nullptr;
+}
+bool BlockWords::HasM(int code) const {
+  return std::any_of(m.begin(), m.end(), [code](const Code& c) { return c.code == code; });
+}
+
+double OkRun::ScaleLength(double v) const {
+  switch (units_) {
+    case UnitSystem::k10um:
+      return v * 0.01;
+    case UnitSystem::k1um:
+      return v * 0.001;
+    case UnitSystem::kInch:
+      return v * 25.4;
+    case UnitSystem::k10000thInch:
+      return v * 0.00254;
+    default:
+      return v;
+  }
+}
+
+// F and E (ln 1048-1059): feed per revolution like a length, feed per minute and time by their own rows.
+double OkRun::Scale(char addr, double v, bool feed_per_rev) const {
+  if (addr == 'T') {  // time (G04 F, dwell E)
+    switch (units_) {
+      case UnitSystem::k10um:
+        return v * 0.1;
+      case UnitSystem::k1um:
+      case UnitSystem::k10000thInch:
+        return v * 0.01;
+      default:
+        return v;
+    }
+  }
+  if (feed_per_rev) return ScaleLength(v);
+  switch (units_) {
+    case UnitSystem::k1um:
+      return v * 0.1;
+    case UnitSystem::kInch:
+      return v * 25.4;
+    case UnitSystem::k10000thInch:
+      return v * 0.254;
+    default:
+      return v;
+  }
+}
+
+void OkRun::CollectWords(const Block& b, BlockWords& w) {
+  const double angle_unit = units_ == UnitSystem::k1um || units_ == UnitSystem::k10000thInch ? 0.001
+                            : units_ == UnitSystem::k10um                                    ? 0.01
+                                                                                             : 1.0;
+  for (const Item& it : b.items) {
+    if (it.assign) {
+      Assignment(b.assigns[it.i], b, false);
+      continue;
+    }
+    const Word& wd = b.words[it.i];
+    double v = wd.expr ? Evaluate(b.pool, wd.node, *this).v : wd.num;
+    const char a = static_cast<char>(wd.addr & 0xff);
+    if (wd.addr >> 8) {
+      int i = ExtIndex(wd.addr);
+      if (w.HasExt(i)) Fail(wd.col, fmt::format("address {} given twice in one block", AddrName(wd.addr)));
+      const char a2 = static_cast<char>(wd.addr >> 8);
+      const bool length = (a == 'D' || a == 'X' || a == 'Z') && (a2 == 'A' || a2 == 'B');
+      w.ext[static_cast<size_t>(i)] = length ? ScaleLength(v) : v;
+      w.ext_col[static_cast<size_t>(i)] = wd.col;
+      w.ext_has = static_cast<uint16_t>(w.ext_has | (1u << i));
+      continue;
+    }
+    if (a == 'G' || a == 'M') {
+      const int hi = a == 'G' ? 999 : 511;
+      if (v != std::floor(v) || v < 0 || v > hi) Fail(wd.col, fmt::format("{}{}: not a {} code", a, v, a));
+      auto& list = a == 'G' ? w.g : w.m;
+      if (a == 'M' && w.m.size() >= 8) Fail(wd.col, "more than 8 M codes in one block");
+      list.push_back({static_cast<int>(v), wd.col});
+      continue;
+    }
+    if (w.Has(a)) Fail(wd.col, fmt::format("address {} given twice in one block", a));
+    if (IsLengthAddress(a)) v = ScaleLength(v);
+    if (IsAngleAddress(a)) v *= angle_unit;
+    const size_t k = static_cast<size_t>(a - 'A');
+    w.v[k] = v;
+    w.col[k] = wd.col;
+    w.has |= 1u << k;
+    if (a == 'T') w.t_digits = wd.digits;
+  }
+}
+
+void OkRun::ExecNc(const Block& b) {
+  BlockWords& w = words_;
+  w.Clear();
+  CollectWords(b, w);
+  const bool xz = w.Has('X') || w.Has('Z');
+  const bool contour_start = w.HasG(81) || w.HasG(82) || w.HasG(83);
+  if (contour_start && !b.seq.empty()) {
+    if (lap_.active || lap_.finish) {
+      LapBlock(b, w);
+    } else {
+      SkipContourDefinition(b);
+    }
+    return;
+  }
+  if (contour_start)
+    Fail(w.FindG(81) ? w.FindG(81)->col : 1, "G81/G82/G83 must carry the contour's sequence name");
+  if (w.has == 0 && w.ext_has == 0 && w.g.empty() && w.m.empty() && b.label.empty() && !b.calrg) {
+    EndBlockStages(false);
+    return;
+  }
+
+  // G codes: modal groups, one-shots, and the codes the cell does not run.
+  int motion_g = -1, motion_col = 1, comp_g = 0;
+  bool dwell = false, g50 = false, g90 = false, g91 = false, g13 = false, g14 = false, g80 = false;
+  int chamfer = 0, cycle = 0, lap = 0, cycle_col = 1;
+  for (const auto& g : w.g) {
+    if (!KnownG(g.code)) {
+      if (const char* what = UnsupportedG(g.code)) {
+        Fail(g.col, fmt::format("G{} ({}) is not supported by the cell's OSP-E100L dialect", g.code, what));
+      }
+      Fail(g.col, fmt::format("G{} is not an OSP-E100L G code", g.code));
+    }
+    if (IsMotionG(g.code)) {
+      if (motion_g >= 0 && motion_g != g.code) Fail(g.col, "two motion G codes in one block");
+      motion_g = g.code;
+      motion_col = g.col;
+      continue;
+    }
+    switch (g.code) {
+      case 4:
+        dwell = true;
+        break;
+      case 13:
+        g13 = true;
+        break;
+      case 14:
+        g14 = true;
+        break;
+      case 18:
+      case 28:
+      case 29:
+      case 136:
+        break;  // the turning plane; torque limit (no torque model: accepted, no effect); G136 (G137 unused)
+      case 40:
+      case 41:
+      case 42:
+        if (comp_g && comp_g != g.code) Fail(g.col, "two of G40/G41/G42 in one block");
+        comp_g = g.code;
+        break;
+      case 50:
+        g50 = true;
+        break;
+      case 64:
+      case 65:
+        modal_.droop = g.code == 65;
+        break;
+      case 71:
+      case 72:
+      case 73:
+      case 74:
+      case 77:
+      case 78:
+        if (cycle) Fail(g.col, "two cycle G codes in one block");
+        cycle = g.code;
+        cycle_col = g.col;
+        break;
+      case 75:
+      case 76:
+        chamfer = g.code;
+        break;
+      case 80:
+        g80 = true;
+        break;
+      case 84:
+        break;  // change of rough turning conditions: read by G85
+      case 85:
+      case 86:
+      case 87:
+      case 88:
+        lap = g.code;
+        cycle_col = g.col;
+        break;
+      case 90:
+        g90 = true;
+        break;
+      case 91:
+        g91 = true;
+        break;
+      case 94:
+      case 95:
+        if (lap_.active || lap_.finish) Fail(g.col, "G94/G95 cannot change inside a LAP contour");
+        modal_.per_rev = g.code == 95;
+        break;
+      case 96:
+      case 97:
+        if (lap_.active || lap_.finish) Fail(g.col, "G96/G97 cannot change inside a LAP contour");
+        if (!w.Has('S')) Fail(g.col, fmt::format("a G{} block must contain S", g.code));
+        break;
+      case 110:
+      case 111:
+        modal_.css_turret_b = g.code == 111;
+        break;
+      default:
+        break;
+    }
+  }
+  if (g90 && g91) Fail(w.FindG(91)->col, "G90 and G91 in one block");
+  if (g90) modal_.incremental = false;
+  if (g91) modal_.incremental = true;
+  if (g13 || g14) {
+    // Turret selection (ln 7156-7361): alone in its block; refused during G41/G42, G91, LAP and G96.
+    const bool b_turret = g14;
+    if (b_turret != modal_.turret_b) {
+      const int col = w.FindG(g14 ? 14 : 13)->col;
+      if (modal_.comp != 40 || modal_.incremental || lap_.active || lap_.finish || modal_.css) {
+        Fail(col, "ALARM-B change timing G13/G14 (turret selection during G41/G42, G91, LAP or G96)");
+      }
+      modal_.turret_b = b_turret;
+    }
+    EndBlockStages(false);
+    return;
+  }
+  if (!b.label.empty() && !lap) Fail(b.label_col, "a sequence name argument is taken only by G85-G88");
+  if (lap && b.label.empty()) Fail(cycle_col, fmt::format("G{} needs the contour's sequence name", lap));
+  if (motion_g >= 0) {
+    if (motion_g == 0 && (lap_.active || lap_.finish) && lap_.first_block_seen && !lap_.blank) {
+      Fail(motion_col, "G00 is allowed only in the first block of a LAP contour");
+    }
+    if (lap_.active && lap_.blank &&
+        (motion_g == 0 || (!lap_.first_block_seen && (motion_g == 2 || motion_g == 3)))) {
+      Fail(motion_col, motion_g == 0 ? "G00 cannot define a blank shape (G83)"
+                                     : "the first block of a blank shape (G83) cannot be G02/G03");
+    }
+    modal_.motion = motion_g;
+    if (!(motion_g >= 31 && motion_g <= 35)) chain_.active = false;
+  }
+  if (cycle && modal_.comp != 40 && (cycle == 71 || cycle == 72)) {
+    Fail(cycle_col, "thread cycles are not allowed in nose radius compensation mode");
+  }
+
+  // T, then S and the M codes that act before the axes.
+  // T: in G73/G74 the offset number of the last groove (read by the cycle), else the turret and offsets.
+  if (w.Has('T') && cycle != 73 && cycle != 74) ToolWord(w);
+  SpindleAndM(w, true);
+  if (w.Has('F') && !dwell) {
+    double f = Scale('F', w.Get('F'), modal_.per_rev);
+    if (f < 0) Fail(w.Col('F'), "F must not be negative");
+    f_ = f;
+  }
+  const bool thread_block = cycle == 71 || cycle == 72 || (modal_.motion >= 31 && modal_.motion <= 35 && xz);
+  if (w.Has('E') && !thread_block && !dwell && cycle == 0) {
+    e_ = Scale('F', w.Get('E'), modal_.per_rev);
+  }
+
+  // Nose radius compensation codes act on this block's move.
+  CompCodes(w, motion_col, xz);
+
+  if (dwell) {
+    Dwell(w, w.FindG(4)->col);
+  } else if (g50) {
+    ZeroShift(w, w.FindG(50)->col);
+  } else if (lap) {
+    LapCall(w, b, lap, cycle_col);
+  } else if (cycle == 71 || cycle == 72) {
+    CompoundThread(w, cycle, cycle_col);
+  } else if (cycle == 73 || cycle == 74) {
+    Grooving(w, cycle, cycle_col);
+  } else if (cycle == 77 || cycle == 78) {
+    Tapping(w, cycle, cycle_col);
+  } else {
+    if (chamfer && modal_.motion != 1) {
+      Fail(w.FindG(chamfer)->col, fmt::format("G{} is effective only in G01 mode", chamfer));
+    }
+    Motion(w, b, motion_col);
+    if ((lap_.active || lap_.finish) && xz) lap_.first_block_seen = true;
+  }
+  if (g80) {
+    if (!lap_.active && !lap_.finish) Fail(w.FindG(80)->col, "G80 without a LAP contour definition");
+    EndBlockStages(xz);
+    LapEndCapture(w.FindG(80)->col);
+    StopAndEnd(w);
+    return;
+  }
+  const bool motion_block = xz && IsMotionG(modal_.motion) && !dwell && !g50 && !lap && cycle == 0;
+  EndBlockStages(xz);
+  StopAndEnd(w);
+  if (!ended_ && motion_block) TriggerModin();
+}
+
+// T nntt oo / tt oo (ln 1885-1922, 2249-2274): nose-R number, turret station, offset number, right-aligned.
+void OkRun::ToolWord(const BlockWords& w) {
+  const double v = w.Get('T');
+  const int col = w.Col('T');
+  if (v < 0 || v > 999999 || v != std::floor(v))
+    Fail(col, "T is up to 6 digits: nose-R number, tool, offset");
+  const int t = static_cast<int>(v);
+  const int nose = t / 10000, tool = (t / 100) % 100, offset = t % 100;
+  if (nose > 96 || offset > 96) Fail(col, "tool offset and nose radius numbers are 00-96");
+  if (lap_.active || lap_.finish) Fail(col, "turret change inside a LAP contour");
+  if (tool != 0 && tool != tool_ && modal_.comp != 40) {
+    Fail(col, "turret change during nose radius compensation (G41/G42): cancel with G40 first");
+  }
+  if (tool != 0) tool_ = tool;
+  offset_no_ = offset;
+  nose_no_ = nose;
+  nose_r_ = tools_.NoseRadius(nose);
+  tip_ = tools_.Tip(nose);
+  if (tool != 0) {
+    ToolChangeOp& c = Out<ToolChangeOp>();
+    c.tool = std::to_string(tool);
+    c.offset = offset;
+    c.tip = tip_;
+  }
+  if (modal_.comp != 40) {
+    // A new nose-R set while compensating (T110111, ln 2261-2274); an offset number alone cancels the radius.
+    if (staged_) Commit();
+    Staged m;
+    m.kind = Staged::kCompOn;
+    m.side = (modal_.comp == 41) != modal_.turret_b ? geom::kLeft : geom::kRight;
+    m.radius = nose_r_;
+    m.tip = TipVector(tip_);
+    m.from = pos_;
+    Sink(std::move(m));
+  }
+}
+
+void OkRun::SpindleAndM(const BlockWords& w, bool before_motion) {
+  (void)before_motion;
+  const auto* g96 = w.FindG(96);
+  const auto* g97 = w.FindG(97);
+  const bool g50 = w.HasG(50);
+  bool speed_change = false;
+  if (w.Has('S')) {
+    double s = w.Get('S');
+    if (s < 0 || s > 65535) Fail(w.Col('S'), "S is 0-65535");
+    if (g50) {
+      max_rpm_ = s;  // G50 S: the spindle speed limit (ln 1708-1722)
+    } else if (g96 || (modal_.css && !g97)) {
+      css_ = inch_ ? s * 0.3048 : s;
+    } else {
+      s_ = s;
+    }
+    speed_change = true;
+  }
+  if (g96) modal_.css = true;
+  if (g97) modal_.css = false;
+  // M codes: spindle first, then the others (M00/M01/M02/M30 wait for the motion).
+  bool spindle_m = false;
+  for (const auto& m : w.m) {
+    switch (m.code) {
+      case 3:
+      case 4: {
+        bool cw = m.code == 3;
+        if (modal_.turret_b) cw = !cw;  // turret B runs the spindle mirrored (ln 7193-7212)
+        modal_.spindle = cw ? SpindleDir::kCw : SpindleDir::kCcw;
+        spindle_m = true;
+        break;
+      }
+      case 5:
+        modal_.spindle = SpindleDir::kStop;
+        spindle_m = true;
+        break;
+      case 19:
+        modal_.spindle = SpindleDir::kOrient;
+        spindle_m = true;
+        break;
+      default:
+        break;
+    }
+  }
+  const bool running = modal_.spindle == SpindleDir::kCw || modal_.spindle == SpindleDir::kCcw;
+  if (spindle_m || ((speed_change || g96 || g97) && running)) {
+    SpindleOp& sp = Out<SpindleOp>();
+    sp.dir = modal_.spindle;
+    sp.rpm = s_;
+    sp.css = modal_.css ? css_ : 0;
+    sp.max_rpm = max_rpm_;
+  }
+  for (const auto& m : w.m) {
+    const int c = m.code;
+    switch (c) {
+      case 0:
+      case 1:
+      case 2:
+      case 30:
+      case 3:
+      case 4:
+      case 5:
+      case 19:
+        break;
+      case 8:
+      case 9: {
+        modal_.coolant = c == 8;
+        CoolantOp& co = Out<CoolantOp>();
+        co.m = c;
+        co.mode = c == 8 ? CoolantMode::kFlood : CoolantMode::kOff;
+        break;
+      }
+      case 13:
+      case 14:
+        if (!modal_.c_joined && !modal_.mtool_release) {
+          Fail(m.col, fmt::format("M{}: the M-tool spindle needs the C axis joined (M110) or M153", c));
+        }
+        Out<AuxOp>().m = c;
+        break;
+      case 15:
+      case 16:
+        modal_.c_negative = c == 16;
+        break;
+      case 22:
+      case 23:
+        modal_.thread_chamfer = c == 23;
+        break;
+      case 26:
+      case 27:
+      case 85:
+      case 60:
+      case 61:
+      case 63:
+        break;  // read by the blocks that use them
+      case 32:
+      case 33:
+      case 34:
+        modal_.thread_mode = c;
+        break;
+      case 73:
+      case 74:
+      case 75:
+        modal_.infeed = c;
+        break;
+      case 109:
+      case 110:
+        if (c == 110 && (w.has != 0 || w.g.size() + w.m.size() > 1)) {
+          Fail(m.col, "M110 must be alone in its block");
+        }
+        modal_.c_joined = c == 110;
+        Out<AuxOp>().m = c;
+        break;
+      case 146:
+      case 147:
+        modal_.c_clamped = c == 147;
+        Out<AuxOp>().m = c;
+        break;
+      case 152:
+      case 153:
+        modal_.mtool_release = c == 153;
+        break;
+      case 193:
+      case 195:
+      case 196:
+        if (w.has != 0 || w.g.size() + w.m.size() > 1)
+          Fail(m.col, fmt::format("M{} must be alone in its block", c));
+        Out<AuxOp>().m = c;
+        break;
+      default:
+        Out<AuxOp>().m = c;
+        break;
+    }
+  }
+}
+
+void OkRun::StopAndEnd(const BlockWords& w) {
+  for (const auto& m : w.m) {
+    if (m.code == 0 || (m.code == 1 && optional_stop_)) {
+      StopOp& s = Out<StopOp>();
+      s.m = m.code;
+      s.optional = m.code == 1;
+    }
+  }
+  for (const auto& m : w.m) {
+    if (m.code == 2 || m.code == 30) {
+      if (lap_.active || lap_.finish) Fail(m.col, fmt::format("M{} inside a LAP contour", m.code));
+      EndOp& e = Out<EndOp>();
+      e.m = m.code;
+      e.shuttle = false;
+      ResetProgramState();
+      Finish();
+      return;
+    }
+  }
+}
+
+void OkRun::CompCodes(const BlockWords& w, int motion_col, bool has_xz) {
+  (void)motion_col;
+  (void)has_xz;
+  int code = 0, col = 1;
+  for (const auto& g : w.g) {
+    if (g.code >= 40 && g.code <= 42) {
+      code = g.code;
+      col = g.col;
+    }
+  }
+  if (!code) return;
+  if (modal_.motion != 0 && modal_.motion != 1) {
+    Fail(col, fmt::format("G{} must be given in G00 or G01 mode", code));
+  }
+  if (code != 40 && lap_.active && lap_.blank)
+    Fail(col, "nose radius compensation cannot start in a blank shape");
+  if (code == 40 && modal_.comp == 40) return;
+  if (staged_) Commit();
+  Staged m;
+  m.from = pos_;
+  m.has_ik = w.Has('I') || w.Has('K');
+  if (m.has_ik) {
+    double i = w.Has('I') ? w.Get('I') : 0;
+    if (modal_.turret_b) i = -i;
+    m.ik = {w.Has('K') ? w.Get('K') : 0, i};
+  }
+  if (code == 40) {
+    m.kind = Staged::kCompOff;
+  } else {
+    m.kind = Staged::kCompOn;
+    m.side = (code == 41) != modal_.turret_b ? geom::kLeft : geom::kRight;
+    m.radius = nose_r_;
+    m.tip = TipVector(tip_);
+  }
+  modal_.comp = code;
+  Sink(std::move(m));
+}
+
+// The cell's numbering of the nose R pattern (the manual keeps the pattern in the tool data without numbering
+// it, ln 3167): the direction from the nose-R centre to the imaginary tool tip, +Z to the right, +X up.
+geom::Vec2 OkRun::TipVector(int tip) const {
+  static constexpr double kDir[10][2] = {{0, 0}, {1, 1}, {-1, 1}, {-1, -1}, {1, -1},
+                                         {1, 0}, {0, 1}, {-1, 0}, {0, -1},  {0, 0}};
+  const int t = (tip >= 0 && tip <= 9) ? tip : 0;
+  double dx = kDir[t][1];
+  if (modal_.turret_b) dx = -dx;
+  return {kDir[t][0] * nose_r_, dx * nose_r_};
+}
+
+}  // namespace cell::interp::okuma

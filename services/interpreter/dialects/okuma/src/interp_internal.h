@@ -1,0 +1,365 @@
+// The Okuma OSP-E100L executor's internals, shared by its files (split by concern as LinuxCNC splits its
+// interpreter):
+//   interp_read.cpp      the tape format: blocks, sequence names, words, assignments, statements (block.h)
+//   expr.cpp             User Task expressions (expr.h)
+//   interp_flow.cpp      block stepping, continuation lines, program and sequence search, GOTO, IF, CALL/RTS,
+//                        MODIN/MODOUT, the run's life cycle
+//   interp_vars.cpp      common, local, system and I/O variables, user alarms, READ/WRITE/GET/PUT
+//   interp_convert.cpp   NC blocks: G/M/S/T/F, modal state, the order of a block's actions
+//   interp_motion.cpp    coordinates and offsets, G00/G01 with taper angles, G50, C axis, G04
+//   interp_arc.cpp       G02/G03 with I/K or the radius L (CALRG), on the core's arc geometry
+//   contour_stage.cpp    automatic chamfering and rounding G75/G76 and angle-only lines (one-move look-ahead)
+//   nose_comp.cpp        tool-nose radius compensation G40/G41/G42 on the core's offset geometry
+//   interp_thread.cpp    thread cutting G31-G35 and the compound thread cycles G71/G72
+//   interp_cycles.cpp    grooving G73/G74, tapping G77/G78
+//   lap.cpp              LAP tool paths (AP modes I-V) from a captured contour
+//   interp_lap.cpp       the executor's side of LAP: contour capture, G84-G88 calls, modal restore
+//   tool_data.cpp        Okuma tool data (tool offsets, nose radius) in the manual's variables
+#pragma once
+
+#include <array>
+#include <bitset>
+#include <cstdint>
+#include <deque>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "block.h"
+#include "cell/interp/call_stack.h"
+#include "cell/interp/canon.h"
+#include "cell/interp/geometry/arc.h"
+#include "cell/interp/geometry/offset_path.h"
+#include "cell/interp/okuma.h"
+#include "cell/interp/parse_cache.h"
+#include "cell/interp/run_base.h"
+#include "expr.h"
+#include "lap.h"
+#include "staged.h"
+#include "tool_data.h"
+
+namespace cell::interp::okuma {
+
+constexpr double kPi = 3.14159265358979323846;
+
+// The unit systems of numeric input (ln 1033-1093): what the number "1" means.
+enum class UnitSystem { k1mm, k10um, k1um, kInch, k10000thInch };
+
+// What Okuma keeps per frame besides the text position.
+struct FrameData {
+  enum Kind : uint8_t { kMain, kSub, kModin, kLap } kind = kMain;
+  int modin_limit = 0;       // MODIN subprograms [0, limit) follow this frame's motion blocks
+  size_t program_begin = 0;  // where this program's text starts (sequence search)
+  int program_begin_line = 1;
+  bool seen_block = false;          // a block ran in this frame ('$' before it is a tape header)
+  JumpTargets<std::string> labels;  // sequence names found by GOTO / IF / LAP
+};
+using Frames = CallStack<FrameData>;
+
+// A program found by name: its text and where its first block is.
+struct ProgramRef {
+  std::shared_ptr<const ProgramText> text;
+  size_t begin = 0;
+  int line = 1;
+  bool own = true;  // reports its own lines (in PROGRAM itself) or the calling block's
+};
+
+// A MODIN in force (ln 8048-8073).
+struct Modin {
+  std::string name;
+  ProgramRef program;
+};
+
+// Values of a block's words by address, evaluated and scaled to mm / deg / s.
+struct BlockWords {
+  std::array<double, 26> v{};
+  std::array<int, 26> col{};
+  uint32_t has = 0;
+  // Extended addresses (SA SB QA DA DB FA FB XA XB ZA ZB PZ PW).
+  std::array<double, 13> ext{};
+  std::array<int, 13> ext_col{};
+  uint16_t ext_has = 0;
+  struct Code {
+    int code = 0;
+    int col = 1;
+  };
+  std::vector<Code> g, m;
+  int t_digits = 0;  // digits written in the T word (4 or 6)
+
+  bool Has(char a) const { return (has >> (a - 'A')) & 1u; }
+  double Get(char a) const { return v[static_cast<size_t>(a - 'A')]; }
+  int Col(char a) const { return col[static_cast<size_t>(a - 'A')]; }
+  bool HasExt(int i) const { return (ext_has >> i) & 1u; }
+  bool HasG(int code) const;
+  const Code* FindG(int code) const;
+  bool HasM(int code) const;
+  void Clear() {
+    has = 0;
+    ext_has = 0;
+    g.clear();
+    m.clear();
+    t_digits = 0;
+  }
+};
+int ExtIndex(Addr a);  // index into BlockWords::ext, -1 if not an extended address
+
+// Modal state by meaning (the codes that set it in the comments).
+struct Modal {
+  int motion = 0;                          // G00 G01 G02 G03 G31 G32 G33 G34 G35 (their numbers)
+  bool incremental = false;                // G91 (G90 at reset)
+  bool per_rev = true;                     // G95 (power-on and reset) / G94
+  bool css = false;                        // G96 / G97
+  bool css_turret_b = false;               // G111 / G110
+  bool turret_b = false;                   // G14 / G13 (reset)
+  bool droop = false;                      // G65 / G64
+  int comp = 40;                           // G40 / G41 / G42 as programmed
+  SpindleDir spindle = SpindleDir::kStop;  // M03 M04 M05 M19 (as the spindle turns, after G14's mirror)
+  bool coolant = false;                    // M08 / M09
+  bool c_joined = false;                   // M110 / M109
+  bool c_clamped = false;                  // M147 / M146 (power-on)
+  bool c_negative = false;                 // M16 / M15 (reset)
+  bool thread_chamfer = false;             // M23 / M22
+  int thread_mode = 32;                    // M32 M33 M34
+  int infeed = 73;                         // M73 M74 M75
+  bool mtool_release = false;              // M153 / M152
+};
+
+// The thread chain in progress (repeated G31/G32/G33 blocks, G34/G35 chains).
+struct ThreadChain {
+  bool active = false;
+  int g = 0;
+  double start_angle = 0;  // C of the first block
+  AxisArray start{};       // G31-G33: the cycle start point (machine)
+  bool cycle = false;      // G31-G33: a pass ran; the next blocks repeat it with new X (Z)
+  double last_x = 0, last_z = 0, taper = 0, shift = 0;
+};
+
+class OkRun final : public RunBase, public VarReader {
+ public:
+  explicit OkRun(const RunOptions& o);
+
+  std::map<std::string, double> Variables() const override;
+  tooltable::ToolTable Tools() const override { return tools_.table(); }
+
+  // VarReader
+  double Common(int n, int col) override;
+  double Local(uint64_t name, int col) override;
+  Value System(uint64_t name, const Value* index, int col) override;
+  bool MicronUnits() const override { return units_ == UnitSystem::k1um; }
+  double SettingUnit() const override { return inch_ ? 0.0001 : 0.001; }
+
+ private:
+  // Life cycle and output (interp_flow.cpp)
+  void StepOnce() override;
+  void Finish();
+  void ReportError(const RunError& e, int first_line);
+  template <class T>
+  T& Out();
+  void Commit();
+  void Sink(Staged&& s);
+  void EndBlockStages(bool xz);
+  bool StagesEngaged() const;
+  void EmitUnitsOnce();
+
+  // Blocks and control flow (interp_flow.cpp)
+  const Block* ReadBlock(int* first_line);
+  void ExecBlock(const Block& b);
+  void ExecStatement(const Block& b);
+  bool ProgramEnds(const Block& b);
+  std::optional<ProgramRef> FindProgram(const std::string& name);
+  std::optional<ProgramRef> ProgramIn(const std::shared_ptr<const ProgramText>& text, const std::string& name,
+                                      bool own);
+  void CallProgram(const ProgramRef& p, const std::string& name, FrameData::Kind kind, int modin_limit,
+                   const Block* args);
+  void Return(int col);
+  std::optional<TextPos> FindSequence(const std::string& name, bool from_start);
+  void Jump(const std::string& label, int col);
+  void SkipContourDefinition(const Block& b);
+  void TriggerModin();
+  void ResetProgramState();
+
+  // Variables (interp_vars.cpp)
+  void Assignment(const Assign& a, const Block& b, bool call_arg);
+  void SetLocal(uint64_t name, double v, bool new_entry, int col);
+  void SetSystem(uint64_t name, const Value* index, double v, int col);
+  double ScaleSystemInput(const Value& v) const;
+  void RaiseUserAlarm(int which, double code, int col);
+  void PopLocals(int level);
+  std::optional<double> EnvValue(const std::string& name);
+  void ExecIo(const Block& b);
+
+  // NC blocks (interp_convert.cpp)
+  void ExecNc(const Block& b);
+  double WordValue(const Block& b, const Word& w);
+  void CollectWords(const Block& b, BlockWords& w);
+  void ApplyModalG(const BlockWords& w, bool* motion_code, int* motion_col);
+  void ToolWord(const BlockWords& w);
+  void SpindleAndM(const BlockWords& w, bool before_motion);
+  void StopAndEnd(const BlockWords& w);
+  double Scale(char addr, double v, bool feed_per_rev) const;
+  double ScaleLength(double v) const;
+
+  // Motion (interp_motion.cpp, interp_arc.cpp)
+  double Offset(int axis) const;
+  double ToMachine(int axis, double prog) const;
+  double ToProgram(int axis, double machine) const;
+  void Motion(const BlockWords& w, const Block& b, int motion_col);
+  void LineMotion(const BlockWords& w, const Block& b, bool rapid, int motion_col);
+  bool TargetOf(const BlockWords& w, AxisArray& target, uint32_t* moved, int motion_col);
+  void CTarget(const BlockWords& w, AxisArray& target, AxisArray& travel, uint32_t* travel_mask);
+  void EmitMove(const AxisArray& target, uint32_t moved, bool rapid, double feed, FeedMode fm,
+                const AxisArray& travel, uint32_t travel_mask, const CornerSpec* spec);
+  void Arc(const BlockWords& w, const Block& b, bool cw, int col);
+  void Dwell(const BlockWords& w, int col);
+  void ZeroShift(const BlockWords& w, int col);
+  void CheckLimits(AxisArray& target, int col);
+  double Feed() const { return f_; }
+  FeedMode FeedModeNow() const { return modal_.per_rev ? FeedMode::kPerRev : FeedMode::kPerMinute; }
+
+  // Nose radius compensation (interp_convert.cpp side)
+  void CompCodes(const BlockWords& w, int motion_col, bool has_xz);
+  geom::Vec2 TipVector(int tip) const;
+
+  // Threads (interp_thread.cpp)
+  void ThreadBlock(const BlockWords& w, int g, int col);
+  void RunThreadPass(const AxisArray& cycle_start, const AxisArray& pass_start, const AxisArray& pass_end,
+                     double lead, double lead_change, double start_angle, bool face, double chamfer);
+  void EmitThread(const AxisArray& to, double lead, double lead_change, double start_angle,
+                  bool lead_along_x);
+  void ThreadCycle(const BlockWords& w, int g, int col);
+  void CompoundThread(const BlockWords& w, int g, int col);
+  std::vector<double> InfeedDepths(double d, double h, double u, int pattern, int mode, bool has_u, int col);
+
+  // Cycles (interp_cycles.cpp)
+  void Grooving(const BlockWords& w, int g, int col);
+  void Tapping(const BlockWords& w, int g, int col);
+
+  // LAP (interp_lap.cpp)
+  void LapCall(const BlockWords& w, const Block& b, int g, int col);
+  void LapBlock(const Block& b, const BlockWords& w);
+  void LapEndCapture(int col);
+  void LapRestore();
+  void LapCapture(Staged& s);
+
+  // Options, environment, text.
+  RunOptions opt_;
+  Environment default_env_;
+  Environment* env_;
+  std::unique_ptr<Frames> frames_;
+  ParseCache<Block> cache_;
+  Block fresh_;
+  std::string joined_;
+  std::map<std::string, std::shared_ptr<const ProgramText>> files_;  // library texts by file name
+  std::map<std::string, ProgramRef> programs_;                       // programs by O name
+  std::vector<Modin> modins_;
+  int cur_line_ = 1;
+  bool cur_own_ = true;
+  const Block* cur_block_ = nullptr;
+  const Block* parsing_ = nullptr;  // the block being read or run (diagnostic lines of continuation lines)
+  std::vector<Segment> segments_;
+  bool main_started_ = false;  // the main program's name block has been read
+  BlockWords words_;
+  bool units_emitted_ = false;
+  long idle_ = 0;
+  long max_idle_ = 1000000;
+  bool ended_ = false;
+
+  // Settings.
+  UnitSystem units_ = UnitSystem::k1mm;
+  bool inch_ = false;
+  bool block_delete_ = false;
+  bool optional_stop_ = false;
+  double arc_tolerance_ = 0.01;     // OTHER FUNCTION 1 No. 6, mm
+  double peck_retract_ = 0.5;       // long word No. 7, mm
+  double lap_relief_ = 0.1;         // LAP bar turning relief, mm
+  double lap_clearance_ = 2.0;      // LAP4 clearance Lc, mm
+  double thread_chamfer_feed_ = 0;  // OTHER FUNCTION 1, unused offline
+  int m75_pattern_ = 3;
+
+  // Modal state and positions (machine coordinates, X a diameter).
+  Modal modal_;
+  AxisArray pos_{};
+  uint32_t used_ = 0;
+  bool open_line_ = false;  // the last line was given by an angle only: its end comes with the next block
+  std::array<double, kAxisCount> zero_offset_{};  // VZOF*
+  std::array<double, kAxisCount> zero_shift_{};   // VZSH* (G50; cleared by reset)
+  double f_ = 0;                                  // F (mm/rev or mm/min)
+  double e_ = 0;                                  // E: LAP roughing feed along the contour
+  double s_ = 0;                                  // S as last programmed (rpm)
+  double css_ = 0;                                // G96 S (m/min)
+  double max_rpm_ = 0;                            // G50 S
+  ThreadChain chain_;
+  std::array<double, kAxisCount> pos_limit_{}, neg_limit_{};  // VPVL*, VNVL* (machine); set flags below
+  uint32_t pos_limit_set_ = 0, neg_limit_set_ = 0;
+
+  // Tools.
+  ToolData tools_;
+  int tool_ = 0, offset_no_ = 0, nose_no_ = 0;
+  double nose_r_ = 0;
+  int tip_ = 0;
+
+  // Variables.
+  std::array<double, 201> common_{};
+  std::bitset<201> common_set_;
+  struct LocalVar {
+    uint64_t name;
+    double v;
+    int level;
+  };
+  std::vector<LocalVar> locals_;
+  std::map<std::pair<uint64_t, int>, double> system_;  // other system variables by (name, index)
+  std::array<char, 17> vuacm_{};
+  std::map<int, double> vdout_;
+  std::string read_area_, write_area_;
+  size_t rrp_ = 0;
+
+  // Stages: G75/G76 and angle-only lines, then nose radius compensation; the last one's output goes to the
+  // command queue or, while a LAP contour is captured, to the capture.
+  ContourStage corner_;
+  NoseComp comp_;
+  Staged stage_;
+  bool staged_ = false;
+  bool force_stage_ = false;  // the next command goes through the stages (it starts a look-ahead)
+  double tip_at_comp_ = 0;
+
+  // LAP.
+  struct LapState {
+    bool active = false;  // a rough cycle is capturing its contour
+    bool finish = false;  // G87: the contour runs as written
+    int g = 0;
+    int call_line = 0;
+    size_t depth = 0;    // the capture frame's depth
+    bool blank = false;  // between G83 and G81/G82
+    bool have_contour = false;
+    bool transverse = false;
+    bool first_block_seen = false;  // a motion block of the current shape ran
+    bool first_rapid = true;        // the finish contour's first block is G00
+    bool capture_started = false;   // the current shape's start point is known
+    geom::Vec2 capture_at;
+    LapParams params;
+    std::vector<LapElement> contour, blank_shape;
+    AxisArray start{};  // the AP start point (machine)
+    Modal modal;
+    double f = 0, e = 0, s = 0;
+    uint32_t used = 0;
+  } lap_;
+};
+
+template <class T>
+T& OkRun::Out() {
+  EmitUnitsOnce();
+  idle_ = 0;
+  if (!StagesEngaged()) [[likely]]
+    return out_.Emplace<T>(cur_line_);
+  if (staged_) Commit();
+  stage_.kind = Staged::kOp;
+  stage_.c.line = cur_line_;
+  stage_.corner = CornerSpec();
+  stage_.efeed = e_;
+  staged_ = true;
+  return stage_.c.Set<T>();
+}
+
+}  // namespace cell::interp::okuma
