@@ -62,12 +62,15 @@ void OkRun::Grooving(const BlockWords& w, int g, int col) {
     t[static_cast<size_t>(axis)] = v;
     EmitMove(t, 1u << axis, rapid, rapid ? 0 : f_, fm, {}, 0, nullptr);
   };
+  long moves_left = 200000;
   auto groove = [&](double u, double in_off) {
     move(sh_axis, u, true);
     const double bottom = in_target + in_off;
     const double top = v0 + in_off;
     move(in_axis, top, true);
     double cur = top, since_return = 0;
+    moves_left -= static_cast<long>(std::fabs(bottom - top) / depth) + 1;
+    if (moves_left < 0) Fail(col, "more than 200000 pecks in the cycle: D is too small");
     const double dir = Sign(bottom - top) != 0 ? Sign(bottom - top) : in_dir;
     while ((bottom - cur) * dir > 1e-9) {
       const double next = (bottom - (cur + dir * depth)) * dir > 0 ? cur + dir * depth : bottom;
@@ -96,7 +99,7 @@ void OkRun::Grooving(const BlockWords& w, int g, int col) {
     while ((final_u - u) * sh_dir > 1e-9) {
       groove(u, 0);
       u += sh_dir * shift;
-      if (++n > 100000) Fail(col, "too many grooves");
+      if (++n > 10000) Fail(col, "more than 10000 grooves: the shift is too small");
     }
     groove(final_u, last_in_off);
   }

@@ -135,7 +135,7 @@ OkRun::OkRun(const RunOptions& o) : env_(o.env ? o.env : &default_env_) {
     f.at = {p->begin, p->line};
     f.data.program_begin = p->begin;
     f.data.program_begin_line = p->line;
-    f.data.seen_block = true;
+    f.data.tape_started = true;
     main_started_ = true;
   }
 }
@@ -276,17 +276,25 @@ const Block* OkRun::ReadBlock(int* first_line) {
     cur_own_ = top.report_own;
     cur_line_ = top.report_own ? line->number : top.call_line;
     *first_line = line->number;
-    if (s.empty() || s == "%") continue;                // empty lines and the tape's start / end character
-    if (s[0] == '$' && !top.data.seen_block) continue;  // "$NAME.MIN" tape header before the first block
+    if (s.empty()) continue;
+    if (s == "%") {  // the tape's start (or end) character
+      top.data.tape_started = true;
+      continue;
+    }
+    if (s[0] == '$' && !top.data.tape_started) continue;  // "$NAME.MIN" tape header before the tape starts
     if (t.size() > kMaxBlockChars) {
       Fail(static_cast<int>(kMaxBlockChars) + 1,
            fmt::format("block longer than {} characters", kMaxBlockChars));
     }
     if (s[0] == '$') Fail(1, "'$' continuation line without a block before it");
-    // Continuation lines ('$' at their start) belong to this block (ln 5158-5167).
+    // Continuation lines ('$' at their start) belong to this block (ln 5158-5167); before the tape starts,
+    // a '$' line after a comment is the tape header.
+    const bool comment_only = s.front() == '(' && s.back() == ')' && s.find(')') == s.size() - 1;
+    if (!comment_only) top.data.tape_started = true;
     const size_t start = line->start;
     bool continued = false;
     for (;;) {
+      if (comment_only && !top.data.tape_started) break;
       TextPos save = top.at;
       std::optional<Line> next = fr.NextLine();
       if (!next || !IsContinuation(next->text)) {
@@ -349,9 +357,7 @@ bool OkRun::ProgramEnds(const Block& b) {
 
 void OkRun::ExecBlock(const Block& b) {
   cur_block_ = &b;
-  auto& top = frames_->top();
   if (b.deleted && block_delete_) return;
-  top.data.seen_block = true;
   switch (b.stmt) {
     case Stmt::kProgramName:
       if (ProgramEnds(b)) Finish();
@@ -502,7 +508,7 @@ void OkRun::CallProgram(const ProgramRef& p, const std::string& name, FrameData:
   f.data.modin_limit = modin_limit;
   f.data.program_begin = p.begin;
   f.data.program_begin_line = p.line;
-  f.data.seen_block = true;
+  f.data.tape_started = true;
   // Variables set in the CALL block are registered as new entries of the subprogram, in the order written, so
   // that a later one may use an earlier one (ln 7634-7666, E-98 ln 8627).
   if (args) {

@@ -53,7 +53,7 @@ struct FrameData {
   int modin_limit = 0;       // MODIN subprograms [0, limit) follow this frame's motion blocks
   size_t program_begin = 0;  // where this program's text starts (sequence search)
   int program_begin_line = 1;
-  bool seen_block = false;          // a block ran in this frame ('$' before it is a tape header)
+  bool tape_started = false;  // a "%" or a block other than a comment: a "$" line is no longer a tape header
   JumpTargets<std::string> labels;  // sequence names found by GOTO / IF / LAP
 };
 using Frames = CallStack<FrameData>;
@@ -133,7 +133,7 @@ struct ThreadChain {
   double start_angle = 0;  // C of the first block
   AxisArray start{};       // G31-G33: the cycle start point (machine)
   bool cycle = false;      // G31-G33: a pass ran; the next blocks repeat it with new X (Z)
-  double last_x = 0, last_z = 0, taper = 0, shift = 0;
+  double last_x = 0, last_z = 0, taper = 0, shift = 0, lead_change = 0;
 };
 
 class OkRun final : public RunBase, public VarReader {

@@ -34,7 +34,7 @@ void OkRun::LapCall(const BlockWords& w, const Block& b, int g, int col) {
     if (w.Get('F') <= 0) Fail(w.Col('F'), "the LAP feed F must be positive");
   }
   p.f = f_;
-  if (p.f <= 0 && g != 87) Fail(col, "no feedrate for the rough cycle (F)");
+  if (p.f <= 0 && (g == 85 || g == 86)) Fail(col, "no feedrate for the rough cycle (F)");
   for (char a : {'U', 'W'}) {
     if (w.Has(a) && w.Get(a) < 0) Fail(w.Col(a), fmt::format("{} must not be negative", a));
   }
@@ -94,7 +94,7 @@ void OkRun::LapCall(const BlockWords& w, const Block& b, int g, int col) {
   f.data.modin_limit = modin_limit;
   f.data.program_begin = begin;
   f.data.program_begin_line = begin_line;
-  f.data.seen_block = true;
+  f.data.tape_started = true;
   lap_.depth = frames_->depth();
 }
 

@@ -60,7 +60,12 @@ void OkRun::Motion(const BlockWords& w, const Block& b, int motion_col) {
     case 31:
     case 32:
     case 33:
-      if (w.Has('X') || w.Has('Z')) ThreadCycle(w, mode, motion_col);
+      // In a LAP contour a thread block is one element of the thread path (AP mode III, ln 5600-5628).
+      if ((lap_.active || lap_.finish) && axes) {
+        ThreadBlock(w, 34, motion_col);
+      } else if (w.Has('X') || w.Has('Z')) {
+        ThreadCycle(w, mode, motion_col);
+      }
       return;
     case 34:
     case 35:
@@ -177,7 +182,10 @@ void OkRun::LineMotion(const BlockWords& w, const Block& b, bool rapid, int moti
     spec.dir = AngleDir(w.Get('A'), modal_.turret_b);
     open_line_ = true;
   }
-  if (w.Has('C')) CTarget(w, target, travel, &tmask);
+  if (w.Has('C')) {
+    CTarget(w, target, travel, &tmask);
+    moved |= kCBit;
+  }
   const auto* g75 = w.FindG(75);
   const auto* g76 = w.FindG(76);
   if (g75 || g76) {
@@ -214,7 +222,7 @@ void OkRun::LineMotion(const BlockWords& w, const Block& b, bool rapid, int moti
       }
     }
   }
-  CheckLimits(target, motion_col);
+  CheckLimits(target, w.Has('X') ? w.Col('X') : (w.Has('Z') ? w.Col('Z') : motion_col));
   EmitMove(target, moved, rapid, feed, fm, travel, tmask, spec.any() ? &spec : nullptr);
 }
 

@@ -383,6 +383,8 @@ class Lexer {
   }
 
   void Items() {
+    Blanks();
+    first_item_ = i_;
     while (!AtEnd()) {
       const size_t at = i_;
       const char c = Up(s_[i_]);
@@ -416,10 +418,17 @@ class Lexer {
           continue;
         }
         if (!assign) {
-          if (name == "GOTO" || name == "IF" || name == "CALL" || name == "RTS" || name == "MODIN" ||
-              name == "MODOUT" || name == "READ" || name == "WRITE" || name == "GET" || name == "PUT") {
-            ErrorAt(at, fmt::format("{} must be at the start of the block or right after its sequence name",
-                                    name));
+          static constexpr std::string_view kStatements[] = {"GOTO", "IF",   "CALL", "RTS", "MODIN", "MODOUT",
+                                                             "READ", "WRITE", "GET", "PUT", "PSELECT", "VSET"};
+          for (std::string_view kw : kStatements) {
+            if (name == kw) {
+              ErrorAt(at, fmt::format("{} must be at the start of the block or right after its sequence name",
+                                      name));
+            }
+            if (name.size() > kw.size() && name.compare(0, kw.size(), kw) == 0 && kw.size() > 2 &&
+                at == first_item_) {
+              ErrorAt(at, fmt::format("{} must be followed by a space or tab", kw));
+            }
           }
           ErrorAt(at, fmt::format("unknown word {}", name));
         }
@@ -508,6 +517,7 @@ class Lexer {
   std::string_view s_;
   Block& b_;
   size_t i_ = 0;
+  size_t first_item_ = 0;  // where a control statement would stand
 };
 
 }  // namespace

@@ -62,7 +62,9 @@ void OkRun::ThreadCycle(const BlockWords& w, int g, int col) {
   if (f_ <= 0) Fail(col, "thread cutting needs the lead F");
   const double lead = f_ / j;
   if (lead < 0.001 || lead > 1000) Fail(col, "the thread lead is 0.001-1000 mm");
-  const double e = w.Has('E') ? Scale('F', w.Get('E'), true) : 0;
+  // E (lead variation) of the first block holds for the repeated passes, like its lead.
+  const double e = w.Has('E') ? Scale('F', w.Get('E'), true) : (chain_.cycle ? chain_.lead_change : 0);
+  chain_.lead_change = e;
   const AxisArray s = chain_.start;
   auto prog = [&](int axis, char a) {
     const double cur = ToProgram(axis, s[static_cast<size_t>(axis)]);
@@ -225,6 +227,7 @@ std::vector<double> OkRun::InfeedDepths(double d, double h, double u, int patter
   const double target = has_u ? h - u : h;
   if (target <= 0) Fail(col, "the thread height H must be larger than the finishing allowance");
   constexpr double kEps = 1e-9;
+  if (target / d > 10000) Fail(col, "more than 10000 thread passes: D is too small");
   if (pattern == 73) {
     if (target < d - kEps) Fail(col, "M73 needs H - U >= D");
     double depth = 0;
@@ -313,6 +316,9 @@ void OkRun::CompoundThread(const BlockWords& w, int g, int col) {
   } else if (w.Has('A')) {
     const double len = std::fabs(s[lead_axis] - (face ? x_root : z_end)) / (face ? 2 : 1);
     taper = len * std::tan(w.Get('A') * kPi / 180.0);
+  }
+  if (depths.size() * static_cast<size_t>(starts) > 100000) {
+    Fail(col, "more than 100000 thread passes (passes x starts Q)");
   }
   const double tan_half = std::tan(b / 2 * kPi / 180.0);
   const bool chamfer = modal_.thread_chamfer;

@@ -458,7 +458,7 @@ std::vector<LapMove> BarTurning(const LapParams& p, const Setup& st, bool lap4) 
   double prev = top;
   int guard = 0;
   while (v > lowest + kEps) {
-    if (++guard > 100000) Fail(1, "LAP: too many levels");
+    if (++guard > 10000) Fail(1, "LAP: more than 10000 levels: the depth of cut D is too small");
     const std::vector<Cross> xs = LevelCrossings(c, v);
     // Intervals at this level: from the start side (when the contour starts below the level) to the first
     // rising crossing, then from each descending crossing to the next rising one.
@@ -521,11 +521,14 @@ std::vector<LapMove> BarTurning(const LapParams& p, const Setup& st, bool lap4) 
         b.Feed({left.x, v}, f);
       }
       // Up the contour to the previous level, relief, and back (ln 5390-5400).
-      Vec2 up = left;
+      Vec2 up = b.at();
       if (!iv.open_left) up = FollowUp(b, c, iv.left.e, iv.left.t, prev);
       b.Rapid({up.x + st.du, up.y + st.dv});
-      const double back = iv.from_start ? u_start(v) : iv.right.at.x;
-      b.Rapid({std::max(back, b.at().x), b.at().y});
+      if (&iv == &ivs.back()) {
+        // Back along the cut axis to where this level began, then on to the next level (ln 5397-5400).
+        const double back = ivs.front().from_start ? u_start(v) : ivs.front().right.at.x;
+        b.Rapid({std::max(back, b.at().x), b.at().y});
+      }
     }
     prev = v;
     LevelConditions(p, st.fr, v, &d, &f);
@@ -542,7 +545,7 @@ std::vector<LapMove> CopyTurning(const LapParams& p, const Setup& st) {
   double f = p.f, d = p.d;
   int guard = 0;
   for (int n = 1;; ++n) {
-    if (++guard > 100000) Fail(1, "LAP: too many passes");
+    if (++guard > 10000) Fail(1, "LAP: more than 10000 passes: the depth of cut D is too small");
     LevelConditions(p, st.fr, st.s.y - (n - 1) * d, &d, &f);
     const double vp = st.s.y - n * d;
     if (vp <= st.a.y + kEps) break;
@@ -598,7 +601,7 @@ std::vector<LapMove> BarCopying(const LapParams& p, const Setup& st) {
   };
   int guard = 0;
   for (int n = 1;; ++n) {
-    if (++guard > 100000) Fail(1, "LAP: too many passes");
+    if (++guard > 10000) Fail(1, "LAP: more than 10000 passes: the depth of cut D is too small");
     LevelConditions(p, st.fr, blank_top - (n - 1) * d, &d, &f);
     const double shift = n * d;
     if (blank_top - shift <= contour_low + kEps) break;
@@ -694,6 +697,8 @@ std::vector<LapMove> LapThread(const LapParams& p, Vec2 start, const std::vector
       }
       if (e.thread) {
         b.Thread(z, e.lead, e.lead_change, e.lead_along_x);
+      } else if (e.rapid) {
+        b.Rapid(z);
       } else {
         b.Feed(z, e.f > 0 ? e.f : p.f);
       }
