@@ -1,52 +1,138 @@
-// Okuma runs through the dialect: order of actions, variables in and out, diagnostics.
+// Okuma runs through the dialect: what goes in and out of a run (variables, tools, the environment),
+// tape details the conformance corpus cannot show (CR-only tapes, columns on continuation lines), loops over
+// the parse cache, and detection.
 #include <gtest/gtest.h>
+
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
 
 #include "cell/interp/okuma.h"
 
 namespace cell::interp {
 namespace {
 
-std::vector<std::string> RunLines(const std::string& text, std::map<std::string, double> vars = {},
-                                  Run** keep = nullptr, std::string* diag = nullptr) {
+struct Result {
+  std::vector<std::string> ops;
+  std::string diag;
+  std::unique_ptr<Run> run;
+};
+
+Result RunText(const std::string& text, std::map<std::string, double> vars = {}, tooltable::ToolTable tools = {},
+               Environment* env = nullptr) {
   RunOptions o;
   o.program_name = "T.MIN";
   o.program_text = text;
   o.variables = std::move(vars);
-  static std::unique_ptr<Run> run;
-  run = OkumaDialect().StartRun(o);
-  std::vector<std::string> out;
+  o.tools = std::move(tools);
+  o.env = env;
+  Result r;
+  r.run = OkumaDialect().StartRun(o);
   for (;;) {
-    Step s = run->Next();
+    Step s = r.run->Next();
     if (s.kind == Step::kCanon) {
-      out.push_back(ToJsonLine(s.canon));
+      r.ops.push_back(ToJsonLine(s.canon));
       continue;
     }
-    if (s.kind == Step::kError && diag) *diag = s.diag.Format();
-    if (s.kind == Step::kError && !diag) ADD_FAILURE() << s.diag.Format();
+    if (s.kind == Step::kError) r.diag = s.diag.Format();
     break;
   }
-  if (keep) *keep = run.get();
-  return out;
+  return r;
 }
 
 TEST(OkumaRun, UnitsFirstDiameterModeAndAMove) {
-  auto out = RunLines("O100\nN1 G00 X100 Z50\nN2 G01 X80 F0.2\nN3 M02\n");
-  ASSERT_GE(out.size(), 4u);
-  EXPECT_EQ(out[0], R"({"op":"units","line":2,"length":"mm","x_mode":"diameter"})");
+  auto r = RunText("O100\nN1 G00 X100 Z50\nN2 G01 X80 F0.2\nN3 M02\n");
+  ASSERT_EQ(r.diag, "");
+  ASSERT_EQ(r.ops.size(), 4u);
+  EXPECT_EQ(r.ops[0], R"({"op":"units","line":2,"length":"mm","x_mode":"diameter"})");
+  EXPECT_EQ(r.ops[3], R"({"op":"end","line":4,"m":2,"shuttle":false})");
 }
 
 TEST(OkumaRun, CommonVariablesComeInAndGoOut) {
-  cell::interp::Run* run = nullptr;
-  RunLines("N1 V1=V1+1 V5=10\nM02\n", {{"V1", 19}}, &run);
-  auto v = run->Variables();
-  EXPECT_EQ(v["V1"], 20);
-  EXPECT_EQ(v["V5"], 10);
+  auto r = RunText("N1 V1=V1+1 V5=10\nM02\n", {{"V1", 19}, {"V7", 3}, {"L1500", 1}});
+  EXPECT_EQ(r.run->Variables(), (std::map<std::string, double>{{"V1", 20}, {"V5", 10}, {"V7", 3}}));
+  for (const auto& [name, value] : r.run->Variables()) EXPECT_EQ(OkumaDialect().CheckVariable(name, value), "");
+}
+
+TEST(OkumaRun, KeptVariablesAreTheCommonVariables) {
+  const Dialect& ok = OkumaDialect();
+  EXPECT_EQ(ok.CheckVariable("V1", 20), "");
+  EXPECT_EQ(ok.CheckVariable("V200", -1.5), "");
+  for (const char* bad : {"V0", "V201", "V01", "v1", "L1500", "DIA1", "VTOFX", ""}) {
+    EXPECT_NE(ok.CheckVariable(bad, 1).find("V1..V200"), std::string::npos) << bad;
+  }
+  EXPECT_NE(ok.CheckVariable("V1", 1e9).find("range"), std::string::npos);
+}
+
+TEST(OkumaRun, ToolDataWritesChangeTheTable) {
+  tooltable::ToolEntry t1;
+  t1.tool = "1";
+  t1.socket = 1;
+  auto r = RunText("VTOFZ[1]=2.5 VNSRX[3]=0.4\nM02\n", {}, tooltable::ToolTable({t1}));
+  auto tools = r.run->Tools();
+  ASSERT_NE(tools.Find("1"), nullptr);
+  EXPECT_DOUBLE_EQ(tools.Find("1")->z_offset, 2.5);
+  ASSERT_NE(tools.Find("3"), nullptr);
+  EXPECT_DOUBLE_EQ(tools.Find("3")->nose_radius, 0.4);
+  EXPECT_EQ(tools.Find("3")->socket, 3);
 }
 
 TEST(OkumaRun, UserAlarmStopsTheRunWithTheManualsNumber) {
-  std::string diag;
-  RunLines("N101 VUACM[1]='PART'\nN102 VUACM[5]='=GEAR'\nN103 VDOUT[992]=1000\nM02\n", {}, nullptr, &diag);
-  EXPECT_EQ(diag, "T.MIN:3:6: error: [2288] Alarm B User reserve code 1000 PART=GEAR");
+  auto r = RunText("N101 VUACM[1]='PART'\nN102 VUACM[5]='=GEAR'\nN103 VDOUT[992]=1000\nM02\n");
+  EXPECT_EQ(r.diag, "T.MIN:3:6: error: [2288] Alarm B User reserve code 1000 PART=GEAR");  // E-90, ln 7857-7871
+}
+
+TEST(OkumaRun, CarriageReturnEndsABlockAndColumnsFollowContinuationLines) {
+  auto r = RunText("N1 G00 X10 Z5\rN2 G01 X20 F0.1\rN3 M02\r");
+  ASSERT_EQ(r.diag, "");
+  EXPECT_EQ(r.ops.size(), 4u);
+  EXPECT_NE(r.ops[2].find(R"("line":2)"), std::string::npos);
+  // An error on a continuation line names that line and its column.
+  auto e = RunText("N1 CALL O1000 XP1=1\n$ ZP1=[2\nM02\n");
+  EXPECT_EQ(e.diag.rfind("T.MIN:2:", 0), 0u) << e.diag;
+}
+
+TEST(OkumaRun, LoopsRunFromTheParseCacheWithFreshValues) {
+  auto r = RunText("V1=0\nN10 V1=V1+1\nG00 X=V1*10 Z0\nIF [V1 LT 300] N10\nM02\n");
+  ASSERT_EQ(r.diag, "");
+  EXPECT_EQ(r.ops.size(), 302u);  // units, 300 moves, end
+  EXPECT_NE(r.ops[300].find(R"("x":3000.0000)"), std::string::npos) << r.ops[300];
+}
+
+TEST(OkumaRun, EnvironmentAnswersSystemAndInputVariables) {
+  struct Env : Environment {
+    std::optional<double> SystemVariable(const std::string& name) override {
+      if (name == "VDIN[11]") return 1;
+      if (name == "VSKPZ") return 42.5;
+      return std::nullopt;
+    }
+  } env;
+  auto r = RunText("IF [VDIN[11] EQ 1] N5\nG00 X999\nN5 G00 X10 Z=VSKPZ\nM02\n", {}, {}, &env);
+  ASSERT_EQ(r.diag, "");
+  ASSERT_EQ(r.ops.size(), 3u);
+  EXPECT_NE(r.ops[1].find(R"("z":42.5000)"), std::string::npos) << r.ops[1];
+}
+
+TEST(OkumaRun, EndlessLoopWithoutOutputIsBounded) {
+  RunOptions o;
+  o.program_name = "LOOP";
+  o.program_text = "N1 V1=V1+1\nGOTO N1\n";
+  o.params["MAX_IDLE_BLOCKS"] = "1000";
+  auto run = OkumaDialect().StartRun(o);
+  Step s = run->Next();
+  while (s.kind == Step::kCanon) s = run->Next();
+  ASSERT_EQ(s.kind, Step::kError);
+  EXPECT_NE(s.diag.text.find("endless loop"), std::string::npos);
+}
+
+TEST(OkumaDialect, KindsAndEvidence) {
+  const Dialect& ok = OkumaDialect();
+  EXPECT_EQ(ok.Classify("VTOFX[1]=0.5 VTOFZ[1]=0\n(tools)\n"), FileKind::kToolTable);
+  EXPECT_EQ(ok.Classify("PSELECT A.MIN,O100,,Q=2\nEND\n"), FileKind::kSchedule);
+  EXPECT_EQ(ok.Classify("O1000\nG00 X10\nRTS\n"), FileKind::kLibrary);
+  EXPECT_EQ(ok.Classify("O100\nG00 X10\nM02\n"), FileKind::kPartProgram);
+  EXPECT_TRUE(ok.implemented());
 }
 
 }  // namespace
