@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 
 #include "cell/error/error.h"
 #include "cell/interp/okuma.h"
@@ -156,6 +157,21 @@ class Okuma final : public Dialect {
   tooltable::ToolTable ParseToolTable(std::string_view text, std::string_view source,
                                       const tooltable::ToolTable& base) const override {
     return okuma::ParseToolDataText(text, source, base);
+  }
+
+  // A station keeps the common variables V1-V200 (ln 7553-7576: they survive reset and power-off);
+  // the manual gives them no range of their own: the tape's 8 digits bound them (judgement call 39).
+  std::string CheckVariable(std::string_view name, double value) const override {
+    bool digits = name.size() >= 2 && name.size() <= 4 && name[0] == 'V' && name[1] != '0' &&
+                  std::all_of(name.begin() + 1, name.end(), IsDigit);
+    int n = digits ? std::stoi(std::string(name.substr(1))) : 0;
+    if (n < 1 || n > 200) {
+      return fmt::format("'{}' is not a variable an Okuma station keeps (the common variables V1..V200)",
+                         name);
+    }
+    if (!std::isfinite(value) || std::fabs(value) > 99999999.0)
+      return fmt::format("{} = {} is outside the range -99999999 .. 99999999", name, value);
+    return "";
   }
 
   // Program name block: "O" + 1-4 digits, or "O" + a letter + up to 3 letters/digits; nothing else but a

@@ -418,8 +418,9 @@ class Lexer {
           continue;
         }
         if (!assign) {
-          static constexpr std::string_view kStatements[] = {"GOTO", "IF",   "CALL", "RTS", "MODIN", "MODOUT",
-                                                             "READ", "WRITE", "GET", "PUT", "PSELECT", "VSET"};
+          static constexpr std::string_view kStatements[] = {"GOTO",  "IF",     "CALL",    "RTS",
+                                                             "MODIN", "MODOUT", "READ",    "WRITE",
+                                                             "GET",   "PUT",    "PSELECT", "VSET"};
           for (std::string_view kw : kStatements) {
             if (name == kw) {
               ErrorAt(at, fmt::format("{} must be at the start of the block or right after its sequence name",

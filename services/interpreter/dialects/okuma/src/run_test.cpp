@@ -19,8 +19,8 @@ struct Result {
   std::unique_ptr<Run> run;
 };
 
-Result RunText(const std::string& text, std::map<std::string, double> vars = {}, tooltable::ToolTable tools = {},
-               Environment* env = nullptr) {
+Result RunText(const std::string& text, std::map<std::string, double> vars = {},
+               tooltable::ToolTable tools = {}, Environment* env = nullptr) {
   RunOptions o;
   o.program_name = "T.MIN";
   o.program_text = text;
@@ -52,7 +52,8 @@ TEST(OkumaRun, UnitsFirstDiameterModeAndAMove) {
 TEST(OkumaRun, CommonVariablesComeInAndGoOut) {
   auto r = RunText("N1 V1=V1+1 V5=10\nM02\n", {{"V1", 19}, {"V7", 3}, {"L1500", 1}});
   EXPECT_EQ(r.run->Variables(), (std::map<std::string, double>{{"V1", 20}, {"V5", 10}, {"V7", 3}}));
-  for (const auto& [name, value] : r.run->Variables()) EXPECT_EQ(OkumaDialect().CheckVariable(name, value), "");
+  for (const auto& [name, value] : r.run->Variables())
+    EXPECT_EQ(OkumaDialect().CheckVariable(name, value), "");
 }
 
 TEST(OkumaRun, KeptVariablesAreTheCommonVariables) {
@@ -80,7 +81,8 @@ TEST(OkumaRun, ToolDataWritesChangeTheTable) {
 
 TEST(OkumaRun, UserAlarmStopsTheRunWithTheManualsNumber) {
   auto r = RunText("N101 VUACM[1]='PART'\nN102 VUACM[5]='=GEAR'\nN103 VDOUT[992]=1000\nM02\n");
-  EXPECT_EQ(r.diag, "T.MIN:3:6: error: [2288] Alarm B User reserve code 1000 PART=GEAR");  // E-90, ln 7857-7871
+  EXPECT_EQ(r.diag,
+            "T.MIN:3:6: error: [2288] Alarm B User reserve code 1000 PART=GEAR");  // E-90, ln 7857-7871
 }
 
 TEST(OkumaRun, CarriageReturnEndsABlockAndColumnsFollowContinuationLines) {
