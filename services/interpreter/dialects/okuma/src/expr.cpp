@@ -14,19 +14,6 @@ namespace {
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kDeg = kPi / 180.0;
 
-bool IsLetter(char c) {
-  return (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z');
-}
-bool IsDigitC(char c) {
-  return c >= '0' && c <= '9';
-}
-bool IsAlnumC(char c) {
-  return IsLetter(c) || IsDigitC(c);
-}
-char Up(char c) {
-  return (c >= 'a' && c <= 'z') ? static_cast<char>(c - 'a' + 'A') : c;
-}
-
 struct FnName {
   std::string_view name;
   Fn fn;
@@ -214,6 +201,15 @@ int32_t ExprParser::Parse() {
   return Or();
 }
 
+int32_t ExprParser::Binary(NodeOp op, int32_t a, int32_t b, int col) {
+  Node n;
+  n.op = op;
+  n.a = a;
+  n.b = b;
+  n.col = col;
+  return Add(n);
+}
+
 int32_t ExprParser::Or() {
   int32_t l = And();
   for (;;) {
@@ -226,13 +222,7 @@ int32_t ExprParser::Or() {
     } else {
       return l;
     }
-    int32_t r = And();
-    Node n;
-    n.op = op;
-    n.a = l;
-    n.b = r;
-    n.col = col;
-    l = Add(n);
+    l = Binary(op, l, And(), col);
   }
 }
 
@@ -241,13 +231,7 @@ int32_t ExprParser::And() {
   for (;;) {
     int col = Col();
     if (!AcceptWord("AND")) return l;
-    int32_t r = Compare();
-    Node n;
-    n.op = NodeOp::kAnd;
-    n.a = l;
-    n.b = r;
-    n.col = col;
-    l = Add(n);
+    l = Binary(NodeOp::kAnd, l, Compare(), col);
   }
 }
 
@@ -264,13 +248,7 @@ int32_t ExprParser::Compare() {
     bool found = false;
     for (const auto& [w, op] : kOps) {
       if (AcceptWord(w)) {
-        int32_t r = Sum();
-        Node n;
-        n.op = op;
-        n.a = l;
-        n.b = r;
-        n.col = col;
-        l = Add(n);
+        l = Binary(op, l, Sum(), col);
         found = true;
         break;
       }
@@ -280,48 +258,30 @@ int32_t ExprParser::Compare() {
 }
 
 int32_t ExprParser::Sum() {
-  int32_t l = Product();
-  for (;;) {
-    if (!AtOperatorAfterBlanks()) return l;
-    size_t save = pos_;
-    SkipBlanks();
-    if (pos_ >= s_.size() || (s_[pos_] != '+' && s_[pos_] != '-')) {
-      pos_ = save;
-      return l;
-    }
-    int col = Col();
-    NodeOp op = s_[pos_] == '+' ? NodeOp::kAdd : NodeOp::kSub;
-    ++pos_;
-    int32_t r = Product();
-    Node n;
-    n.op = op;
-    n.a = l;
-    n.b = r;
-    n.col = col;
-    l = Add(n);
-  }
+  return LeftAssociative('+', NodeOp::kAdd, '-', NodeOp::kSub, &ExprParser::Product);
 }
 
 int32_t ExprParser::Product() {
-  int32_t l = Unary();
+  return LeftAssociative('*', NodeOp::kMul, '/', NodeOp::kDiv, &ExprParser::Unary);
+}
+
+// One precedence level of two left-associative operators over `operand`; an operator counts only where
+// AtOperatorAfterBlanks says the expression goes on (ln 6601: a blank ends it otherwise).
+int32_t ExprParser::LeftAssociative(char c1, NodeOp op1, char c2, NodeOp op2,
+                                    int32_t (ExprParser::*operand)()) {
+  int32_t l = (this->*operand)();
   for (;;) {
     if (!AtOperatorAfterBlanks()) return l;
     size_t save = pos_;
     SkipBlanks();
-    if (pos_ >= s_.size() || (s_[pos_] != '*' && s_[pos_] != '/')) {
+    if (pos_ >= s_.size() || (s_[pos_] != c1 && s_[pos_] != c2)) {
       pos_ = save;
       return l;
     }
-    int col = Col();
-    NodeOp op = s_[pos_] == '*' ? NodeOp::kMul : NodeOp::kDiv;
+    const int col = Col();
+    const NodeOp op = s_[pos_] == c1 ? op1 : op2;
     ++pos_;
-    int32_t r = Unary();
-    Node n;
-    n.op = op;
-    n.a = l;
-    n.b = r;
-    n.col = col;
-    l = Add(n);
+    l = Binary(op, l, (this->*operand)(), col);
   }
 }
 

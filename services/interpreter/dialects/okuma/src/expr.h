@@ -23,6 +23,20 @@ struct RunError {
   throw RunError{alarm, text, col};
 }
 
+// Character classes of the tape (ASCII; lower case is read as upper case, ln 540-715).
+inline bool IsLetter(char c) {
+  return (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z');
+}
+inline bool IsDigitC(char c) {
+  return c >= '0' && c <= '9';
+}
+inline bool IsAlnumC(char c) {
+  return IsLetter(c) || IsDigitC(c);
+}
+inline char Up(char c) {
+  return (c >= 'a' && c <= 'z') ? static_cast<char>(c - 'a' + 'A') : c;
+}
+
 // Names (variables, system variables) packed into one integer: up to 8 upper-case characters.
 uint64_t PackName(std::string_view name);
 std::string UnpackName(uint64_t packed);
@@ -125,6 +139,8 @@ class ExprParser {
   int32_t Compare();
   int32_t Sum();
   int32_t Product();
+  int32_t Binary(NodeOp op, int32_t a, int32_t b, int col);  // adds the node a op b
+  int32_t LeftAssociative(char c1, NodeOp op1, char c2, NodeOp op2, int32_t (ExprParser::*operand)());
   int32_t Unary();
   int32_t Primary();
   int32_t Add(Node n);

@@ -435,17 +435,24 @@ void OkRun::ExecStatement(const Block& b) {
 // ---------------------------------------------------------------------------------------------------------
 // Programs and sequence names
 
+// A scan of a program text longer than this gives the pages it read back to the kernel.
+constexpr std::size_t kReleaseAfterScan = std::size_t{1} << 20;
+
 std::optional<ProgramRef> OkRun::ProgramIn(const std::shared_ptr<const ProgramText>& text,
                                            const std::string& name, bool own) {
   TextSpan all{text, 0, text->view().size(), 1, true};
   TextPos p{0, 1};
-  while (p.pos < all.end) {
+  std::optional<ProgramRef> found;
+  while (p.pos < all.end && !found) {
     Line l = ReadLine(all, p);
     std::string_view s = TrimBlanks(l.text);
     if (s.empty() || (s[0] != 'O' && s[0] != 'o')) continue;
-    if (ProgramNameOf(s) == name) return ProgramRef{text, p.pos, p.line, own};
+    if (ProgramNameOf(s) == name) found = ProgramRef{text, p.pos, p.line, own};
   }
-  return std::nullopt;
+  // The scan read the file up to here: give the pages back, so resident memory does not grow with the length
+  // of a mapped main program (the run faults back in what it reads next).
+  if (p.pos >= kReleaseAfterScan) text->Release(0, p.pos);
+  return found;
 }
 
 std::optional<ProgramRef> OkRun::FindProgram(const std::string& name) {
@@ -536,18 +543,21 @@ std::optional<TextPos> OkRun::FindSequence(const std::string& name, bool from_st
   if (auto known = f.data.labels.Find(name)) return known;
   auto scan_range = [&](TextPos from, bool stop_at_program) -> std::optional<TextPos> {
     TextPos p = from;
-    while (p.pos < f.span.end) {
+    std::optional<TextPos> hit;
+    while (p.pos < f.span.end && !hit) {
       TextPos here = p;
       Line l = ReadLine(f.span, p);
-      if (StartsWithLabel(l.text, name)) return here;
-      if (stop_at_program) {
+      if (StartsWithLabel(l.text, name)) {
+        hit = here;
+      } else if (stop_at_program) {
         std::string_view s = TrimBlanks(l.text);
         if (!s.empty() && (s[0] == 'O' || s[0] == 'o') && !ProgramNameOf(s).empty() &&
             here.pos > f.data.program_begin)
-          return std::nullopt;
+          break;
       }
     }
-    return std::nullopt;
+    if (p.pos - from.pos >= kReleaseAfterScan) f.span.text->Release(from.pos, p.pos);  // as in ProgramIn
+    return hit;
   };
   std::optional<TextPos> hit;
   if (!from_start) hit = scan_range(f.at, true);

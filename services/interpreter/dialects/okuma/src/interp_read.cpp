@@ -10,20 +10,8 @@
 namespace cell::interp::okuma {
 namespace {
 
-bool IsLetter(char c) {
-  return (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z');
-}
-bool IsDigitC(char c) {
-  return c >= '0' && c <= '9';
-}
-bool IsAlnumC(char c) {
-  return IsLetter(c) || IsDigitC(c);
-}
 bool IsBlank(char c) {
   return c == ' ' || c == '\t';
-}
-char Up(char c) {
-  return (c >= 'a' && c <= 'z') ? static_cast<char>(c - 'a' + 'A') : c;
 }
 
 // Extended addresses that take a value (ln 537, 1537, 1871, 2075, 3933, 4234, 5121, 1612).

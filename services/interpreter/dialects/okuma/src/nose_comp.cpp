@@ -199,17 +199,7 @@ void NoseComp::Op(Staged&& s) {
     // The G40 move (ln 2825-2943): the last element ends where the nose touches its end point (or, with I/K,
     // the imaginary line of the exit vector), then the tool goes to the uncompensated point.
     if (p.arc) Fail(1, "G40 must be given in G00 or G01 mode");
-    if (pend_) {
-      Vec2 end = OwnEnd(pend_->e);
-      if (plan_ik_ && geom::Norm(plan_ikv_) > kTiny) {
-        const Vec2 pe = pend_->e.path.end;
-        geom::Path imag;
-        imag.start = pe;
-        imag.end = pe + plan_ikv_;
-        end = Corner(pend_->e, Elem{imag, pend_->e.side});
-      }
-      Release(end);
-    }
+    ReleaseAtCancel();
     Out(std::move(s));
     state_ = kOff;
     plan_ = kNoPlan;
@@ -244,21 +234,26 @@ void NoseComp::Op(Staged&& s) {
   quiet_blocks_ = 0;
 }
 
+// At G40 (with or without motion): the last element ends where the nose touches its end point or, with I/K,
+// the imaginary line of the exit vector (ln 2825-2943).
+void NoseComp::ReleaseAtCancel() {
+  if (!pend_) return;
+  Vec2 end = OwnEnd(pend_->e);
+  if (plan_ik_ && geom::Norm(plan_ikv_) > kTiny) {
+    const Vec2 pe = pend_->e.path.end;
+    geom::Path imag;
+    imag.start = pe;
+    imag.end = pe + plan_ikv_;
+    end = Corner(pend_->e, Elem{imag, pend_->e.side});
+  }
+  Release(end);
+}
+
 void NoseComp::BlockEnd(bool xz) {
   if (state_ == kOn) {
     if (plan_ == kPlanCancel) {
       // G40 alone (ln 2920-2943): the nose goes to touch the last programmed point and stays there.
-      if (pend_) {
-        Vec2 end = OwnEnd(pend_->e);
-        if (plan_ik_ && geom::Norm(plan_ikv_) > kTiny) {
-          const Vec2 pe = pend_->e.path.end;
-          geom::Path imag;
-          imag.start = pe;
-          imag.end = pe + plan_ikv_;
-          end = Corner(pend_->e, Elem{imag, pend_->e.side});
-        }
-        Release(end);
-      }
+      ReleaseAtCancel();
       state_ = geom::Norm(centre_ + tip_ - prog_) > kTiny ? kResidual : kOff;
       plan_ = kNoPlan;
     } else if (!block_motion_ && !xz) {

@@ -116,6 +116,7 @@ class NoseComp {
   Vec2 Corner(const Elem& a, const Elem& b) const;
   Vec2 OwnEnd(const Elem& a) const { return geom::OffsetEnd(a.path, r_, a.side); }
   void Release(Vec2 end_centre);
+  void ReleaseAtCancel();
   void Out(Staged&& s);
   void CheckInsideArc(const Elem& e) const;
 
