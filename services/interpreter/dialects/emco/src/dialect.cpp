@@ -1,16 +1,20 @@
-// EMCOTRONIC TM02 as the host sees it: file names and kinds, detection evidence, program numbers
-// (../shared/reference/seed-emco.md). The executor is built by its own issue.
+// EMCOTRONIC TM02 as the cell sees it: the Dialect the registry lists (file names and kinds, detection
+// evidence, program numbers, runs, the X/Z/R/L tool data file, the manual's listing style;
+// ../shared/reference/seed-emco.md).
 #include <fmt/format.h>
 
 #include "cell/interp/emco.h"
 #include "cell/interp/scan.h"
+#include "interp_internal.h"
+#include "listing.h"
+#include "tool_table.h"
 
 namespace cell::interp {
 namespace {
 
 using namespace scan;
 
-class Emco final : public UnimplementedRuns {
+class Emco final : public Dialect {
  public:
   std::string_view name() const override { return "emco"; }
   std::string_view title() const override { return "EMCOTRONIC TM02"; }
@@ -116,6 +120,17 @@ class Emco final : public UnimplementedRuns {
     }
     return h;
   }
+
+  std::unique_ptr<Run> StartRun(const RunOptions& options) const override {
+    return std::make_unique<emco::EmRun>(options);
+  }
+
+  tooltable::ToolTable ParseToolTable(std::string_view text, std::string_view source,
+                                      const tooltable::ToolTable& base) const override {
+    return emco::ParseToolData(text, source, base);
+  }
+
+  std::string ImportListing(std::string_view text) const override { return emco::ImportListing(text); }
 };
 
 }  // namespace
