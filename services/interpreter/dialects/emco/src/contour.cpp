@@ -110,7 +110,7 @@ geom::Path NoseComp::PathOf(const Move& m, Vec2 start) const {
 }
 
 void NoseComp::Check570(bool ok) {
-  if (!ok && !suppress_570_) Alarm(570, 1);
+  if (!ok && !suppress_570_) Alarm(570, col_);
 }
 
 void NoseComp::Emit(const Move& m, Vec2 end, const Vec2* center, double sweep) {
@@ -163,6 +163,7 @@ void NoseComp::Take(Item&& it) {
     return;
   }
   Move& m = it.m;
+  col_ = m.col;
   geom::Path b = PathOf(m, prog_);
   if (!b.arc && geom::Norm(b.end - b.start) < geom::kTiny) return;      // no travel in the plane
   if (b.arc) Check570(geom::OffsetRadiusAtStart(b, r_, side_) > 1e-9);  // an arc smaller than the nose

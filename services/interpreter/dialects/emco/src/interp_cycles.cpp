@@ -160,9 +160,17 @@ void EmRun::G84(const BlockWords& bw, Vec2 k, const Feed& feed) {
       double t = geom::Cross(wall_a - start, wall_d) / den;
       end = start + t * d;
     }
+    // A shallow pass under a steep floor taper can leave the part (reach the start point's level) before it
+    // meets the wall: it ends there, and goes back without following the wall.
+    bool leaves = (Get(end, f) - sf) * Sign(depth) < -eps;
+    if (leaves) {
+      double df = Get(at_k, f) - Get(start, f);
+      double u = std::fabs(df) < eps ? 0 : (sf - Get(start, f)) / df;
+      end = start + u * (at_k - start);
+    }
     CycleMove(Move::kRapid, start, nullptr);
     CycleMove(Move::kLinear, end, &feed);
-    CycleMove(Move::kLinear, wall_b, &feed);
+    if (!leaves) CycleMove(Move::kLinear, wall_b, &feed);
     CycleMove(Move::kRapid, s, nullptr);
   }
 }

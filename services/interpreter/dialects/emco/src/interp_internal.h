@@ -200,7 +200,8 @@ class NoseComp {
   double r_ = 0;
   Vec2 tip_;
   bool suppress_570_ = false;
-  Vec2 prog_;  // programmed position at the end of the moves taken so far
+  int col_ = 1;  // the column alarms point at: the first position word of the block being taken
+  Vec2 prog_;    // programmed position at the end of the moves taken so far
   bool has_held_ = false;
   Held held_;
   std::deque<Item> after_;  // other commands after the held move

@@ -72,8 +72,6 @@ void EmRun::G85(const BlockWords& bw, Vec2 k) {
   double root_k = Get(k, f) + (nominal ? dir_f * depth : 0);
   double surf_k = root_k - dir_f * depth;
   double surf_s = surf_k - (taper.set ? taper.v : 0);
-  if ((surf_k - sf) * dir_f < -1e-9)
-    Alarm(200, bw.d[6].col, "the thread surface lies beyond the start point");
   if ((surf_s - sf) * dir_f < -1e-9)
     Alarm(210, taper.col, "the taper puts the thread's start end beyond the start point");
   double kc = Get(k, c);
