@@ -287,34 +287,63 @@ bool EmRun::LastBlock() const {
 
 namespace {
 
-// Where a program numbered `number` starts in `text` (after its header line), if it is there.
-std::optional<TextSpan> FindProgram(const std::shared_ptr<const ProgramText>& text, int number,
-                                    bool whole_if_none) {
+// The programs in `text` by number: where each one's blocks start (after its header) and end (at the next
+// header). A text without any header is one program: `whole` gets it.
+std::map<int, TextSpan> IndexPrograms(const std::shared_ptr<const ProgramText>& text,
+                                      std::optional<TextSpan>* whole) {
+  std::map<int, TextSpan> out;
   TextSpan all{text, 0, text->view().size(), 1};
   TextPos p;
-  std::optional<TextSpan> found;
+  TextSpan* open = nullptr;
   bool any_header = false;
+  std::size_t released = 0;
   while (p.pos < all.end) {
     Line l = ReadLine(all, p);
+    if (p.pos - released >= (1u << 20)) {  // memory stays flat however long the text (a mapped file)
+      text->Release(released, p.pos);
+      released = p.pos;
+    }
     if (!IsHeaderLine(l.text)) continue;
     any_header = true;
-    if (found) {
-      found->end = l.start;
-      return found;
-    }
+    if (open) open->end = l.start;
+    open = nullptr;
     Block b;
     try {
       ParseBlock(l.text, b);
     } catch (const RunError&) {
       continue;
     }
-    if (b.program == number) found = TextSpan{text, p.pos, all.end, p.line};
+    if (b.program >= 0 && !out.count(b.program))
+      open = &(out[b.program] = TextSpan{text, p.pos, all.end, p.line});
   }
-  if (!found && whole_if_none && !any_header) found = all;
-  return found;
+  if (whole && !any_header) *whole = all;
+  return out;
 }
 
 }  // namespace
+
+// A subroutine's text: the program's own file first (several programs may follow each other, ln 5635), then
+// the library (--lib, the station's store). Found programs are kept: a loop calls them again.
+std::optional<EmRun::Subroutine> EmRun::FindSubroutine(int number) {
+  if (!own_indexed_) {
+    own_indexed_ = true;
+    const auto& text = (*frames_)[0].span.text;
+    for (auto& [n, span] : IndexPrograms(text, nullptr)) subs_[n] = {span, true};
+  }
+  if (auto it = subs_.find(number); it != subs_.end()) return it->second;
+  if (!library_) return std::nullopt;
+  for (const std::string& n :
+       {fmt::format("O{:04d}", number), fmt::format("O{}", number), std::to_string(number)}) {
+    if (std::optional<std::string> body = library_(n)) {
+      std::optional<TextSpan> whole;
+      std::map<int, TextSpan> in = IndexPrograms(ProgramText::FromString(std::move(*body)), &whole);
+      std::optional<TextSpan> span = in.count(number) ? std::optional<TextSpan>(in.at(number)) : whole;
+      if (!span) continue;
+      return subs_[number] = {*span, false};
+    }
+  }
+  return std::nullopt;
+}
 
 // G25 L<number><runs> (ln 2179-2273): the subroutine O<number> runs <runs> times (1-99), then the program
 // goes on after the G25 block. The subroutine is looked up in the program's own file first (several
@@ -332,17 +361,10 @@ void EmRun::CallSubroutine(const BlockWords& bw, int col) {
   if (static_cast<int>(fr.depth()) - 1 >= kMaxNesting) Alarm(300, col);
   if (LastBlock()) Alarm(340, col);
   std::string name = fmt::format("O{:04d}", number);
-  std::optional<TextSpan> span = FindProgram(fr[0].span.text, number, false);
-  bool own = span.has_value();
-  if (!span && library_) {
-    for (const std::string& n : {name, fmt::format("O{}", number), std::to_string(number)}) {
-      if (std::optional<std::string> text = library_(n)) {
-        span = FindProgram(ProgramText::FromString(std::move(*text)), number, true);
-        if (span) break;
-      }
-    }
-  }
-  if (!span) Alarm(310, bw.l.col, name);
+  std::optional<Subroutine> sub = FindSubroutine(number);
+  if (!sub) Alarm(310, bw.l.col, name);
+  const TextSpan* span = &sub->span;
+  bool own = sub->own;
   // Empty: no block in it (ALARM 310 "does not include any blocks").
   {
     TextPos p{span->begin, span->begin_line};
@@ -353,15 +375,16 @@ void EmRun::CallSubroutine(const BlockWords& bw, int col) {
     }
     if (!any) Alarm(310, bw.l.col, name + " has no blocks");
   }
+  TextSpan body = *span;
   int call_line = cur_line_;
   bool caller_own = fr.top().report_own;
-  auto& f = fr.Push(*span, name);
+  auto& f = fr.Push(body, name);
   f.report_own = own && caller_own;
   f.call_line = call_line;
   f.data.number = number;
   f.data.runs_left = runs;
-  f.data.body_begin = span->begin;
-  f.data.body_line = span->begin_line;
+  f.data.body_begin = body.begin;
+  f.data.body_line = body.begin_line;
 }
 
 // M17 (ln 4977-4981): back to the caller after the last run.

@@ -268,6 +268,11 @@ class EmRun final : public RunBase {
   void ExecLine(const Line& line);
   void FindMainProgram();
   bool LastBlock() const;
+  struct Subroutine {
+    TextSpan span;
+    bool own = false;  // in the program's own file: it reports its own lines
+  };
+  std::optional<Subroutine> FindSubroutine(int number);
   void CallSubroutine(const BlockWords& bw, int col);
   void ReturnFromSubroutine(int col);
   void Jump(const BlockWords& bw, int col);
@@ -325,6 +330,8 @@ class EmRun final : public RunBase {
   // Stepping.
   std::unique_ptr<Frames> frames_;
   ParseCache<Block> cache_;
+  std::map<int, Subroutine> subs_;  // subroutines found so far, by number
+  bool own_indexed_ = false;
   Block scratch_;
   int cur_line_ = 1;
   bool cur_own_ = true;
