@@ -330,6 +330,36 @@ StationConfig LoadStationFile(const fs::path& file) {
       Fail(file, c, fmt::format("[station] coded_pallets must be true or false, not {}", TypeName(*c)));
     cfg.coded_pallets = *c->value<bool>();
   }
+  if (const toml::node* pn = root.get("params")) {
+    // The dialect's machine settings (interp::RunOptions::params), by the dialect's own names: EMCO's
+    // operator monitor (O11 = 9, S01 = 2), ... Values are given to every run as text.
+    const toml::table* pt = pn->as_table();
+    if (pt == nullptr) Fail(file, pn, "params must be a table [params] of NAME = value");
+    for (auto&& [k, v] : *pt) {
+      std::string_view key = k.str();
+      bool ok_key = !key.empty() && key.size() <= 32 && std::all_of(key.begin(), key.end(), [](char c) {
+        return (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '_' ||
+               c == '.' || c == '-';
+      });
+      if (!ok_key) {
+        Fail(file, &v, fmt::format("[params]: '{}': names are 1-32 letters, digits, '_', '.' or '-'", key));
+      }
+      std::string value;
+      if (v.is_string()) {
+        value = std::string(*v.value<std::string_view>());
+      } else if (v.is_integer()) {
+        value = fmt::format("{}", *v.value<int64_t>());
+      } else if (v.is_floating_point()) {
+        value = fmt::format("{}", *v.value<double>());
+      } else if (v.is_boolean()) {
+        value = *v.value<bool>() ? "1" : "0";
+      } else {
+        Fail(file, &v,
+             fmt::format("[params] {}: must be a string, number or boolean, not {}", key, TypeName(v)));
+      }
+      cfg.params[std::string(key)] = std::move(value);
+    }
+  }
   if (const toml::node* tn = root.get("tools")) {
     const toml::array* arr = tn->as_array();
     if (arr == nullptr) Fail(file, tn, "tools must be an array of tables [[tools]]");

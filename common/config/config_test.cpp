@@ -114,6 +114,22 @@ TEST_F(ConfigTest, OptionalFieldsDefault) {
   EXPECT_TRUE(s.tools.empty());
 }
 
+// [params]: the dialect's machine settings as text, by its own names (EMCO's operator monitor).
+TEST_F(ConfigTest, ParamsAsText) {
+  Write("EM05",
+        "[station]\nid = \"EM05\"\ndialect = \"emco\"\n[params]\nO11 = 9\nS02 = 500\nSKIP = true\n"
+        "\"PSO1.Z\" = 90.5\nUNITS = \"mm\"\n");
+  auto s = LoadStation("EM05");
+  EXPECT_EQ(s.params, (std::map<std::string, std::string>{
+                          {"O11", "9"}, {"S02", "500"}, {"SKIP", "1"}, {"PSO1.Z", "90.5"}, {"UNITS", "mm"}}));
+  Write("EM06", "[station]\nid = \"EM06\"\ndialect = \"emco\"\n[params]\nO11 = [1, 2]\n");
+  EXPECT_NE(LoadError("EM06").find("[params] O11: must be a string, number or boolean, not an array"),
+            std::string::npos);
+  Write("EM07", "[station]\nid = \"EM07\"\ndialect = \"emco\"\n[params]\n\"a b\" = 1\n");
+  EXPECT_NE(LoadError("EM07").find("[params]: 'a b': names are 1-32 letters, digits, '_', '.' or '-'"),
+            std::string::npos);
+}
+
 TEST_F(ConfigTest, ListStationsSortedTomlOnly) {
   Write("KT02", kGood);
   Write("KT01", kGood);
@@ -276,7 +292,7 @@ TEST(ShippedStations, LoadAndOverlap) {
   ASSERT_NE(src, nullptr) << "run under ctest (CELL_SOURCE_DIR)";
   setenv("CELL_CONFIG_DIR", (fs::path(src) / "deploy").c_str(), 1);
   auto ids = cell::config::ListStations();
-  for (const char* want : {"KT01", "KT02", "KT03", "KT04", "OK01"}) {
+  for (const char* want : {"KT01", "KT02", "KT03", "KT04", "OK01", "EM01"}) {
     EXPECT_NE(std::find(ids.begin(), ids.end(), want), ids.end()) << want;
   }
   auto has = [](const cell::config::StationConfig& s, const std::string& tool) {
@@ -291,6 +307,8 @@ TEST(ShippedStations, LoadAndOverlap) {
   auto kt01 = LoadStation("KT01"), kt02 = LoadStation("KT02");
   EXPECT_EQ(kt01.dialect, "ktapl");
   EXPECT_EQ(LoadStation("OK01").dialect, "okuma");
+  EXPECT_EQ(LoadStation("EM01").dialect, "emco");
+  EXPECT_EQ(LoadStation("EM01").params.at("O11"), "9");
   for (const char* t : {"1001", "1002", "1003"}) {
     EXPECT_TRUE(has(kt01, t) && has(kt02, t)) << t;
   }

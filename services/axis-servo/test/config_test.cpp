@@ -28,6 +28,11 @@ TEST(Config, ShippedStationsLoad) {
   EXPECT_EQ(ok.kind, "lathe");
   EXPECT_TRUE(ok.axes[kX].diameter);
   EXPECT_FALSE(ok.axes[kY].present);
+  MachineConfig em = LoadMachineConfig(kStations + "EM01.toml");  // its [params] belong to the interpreter
+  EXPECT_EQ(em.dialect, "emco");
+  EXPECT_EQ(em.kind, "lathe");
+  EXPECT_TRUE(em.axes[kX].diameter);
+  EXPECT_EQ(em.magazine_sockets, 8);
 }
 
 const char* kMinimal = R"(

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <filesystem>
+#include <map>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -50,6 +51,10 @@ inline constexpr int kMaxDomain = 232;
 //   x_offset, z_offset       # lathes: mm, signed (optional)
 //   nose_radius, tip         # lathes: mm >= 0, tip position code 0..9 (optional)
 //
+//   [params]                 # optional: the dialect's machine settings, given to every run as
+//   O11 = 9                  # interp::RunOptions::params (EMCO's operator monitor, docs/dialects/emco.md);
+//   S01 = 2                  # values are strings, numbers or booleans (1/0); names 1-32 of A-Z a-z 0-9 _ . -
+//
 // Unknown keys inside [station] and [[tools]] are errors (typos must not pass silently); other tables
 // ([machine], [axes.x], [magazine], ...) belong to other readers and are ignored here.
 struct StationConfig {
@@ -58,7 +63,8 @@ struct StationConfig {
   std::string description;
   bool coded_pallets = false;
   std::vector<tooltable::ToolEntry> tools;
-  std::filesystem::path file;  // the file it was read from
+  std::map<std::string, std::string> params;  // [params]
+  std::filesystem::path file;                 // the file it was read from
 };
 
 // Station ids (file stems of <ConfigDir()>/stations/*.toml), sorted. Throws cell::Error(kNotFound) when

@@ -371,13 +371,13 @@ void EmRun::Execute(const Block& b) {
     g[8] = 40;
     gcol[8] = mcol[2];
   }
-  if (g[8] >= 0) CompCode(g[8], gcol[8]);
-
-  // Before the motion: tool, feed mode, spindle, coolant and the other switching functions.
+  // Before the motion: tool (before G41/G42 of the same block, which take its nose radius), feed mode,
+  // spindle, coolant and the other switching functions.
   if (bw.t.set) {
     if (corner_block && static_cast<int>(bw.t.raw) != t_) Alarm(387, bw.t.col);
     ToolWord(bw);
   }
+  if (g[8] >= 0) CompCode(g[8], gcol[8]);
   if (g[2] >= 0) mode_.per_min = g[2] == 94;
   if (bw.f.set) {
     if (Threading(motion) && !g04) {
@@ -478,7 +478,16 @@ void EmRun::ToolWord(const BlockWords& bw) {
   Canon op;
   op.line = cur_line_;
   auto& k = op.Set<ToolChangeOp>();
+  // The tool in turret position TT: the table's entry at that socket (its own number when a correction
+  // carries it, as T0303; else the correction filed there), so the servo's turret finds it; TT itself when
+  // the table has none (offline without tool data).
   k.tool = std::to_string(tt);
+  const tooltable::ToolEntry* at = nullptr;
+  for (const auto& e : tools_.entries()) {
+    if (e.socket != tt) continue;
+    if (at == nullptr || e.tool == k.tool) at = &e;
+  }
+  if (at != nullptr) k.tool = at->tool;
   k.offset = cc;
   k.tip = c.tip;
   EmitOther(std::move(op));

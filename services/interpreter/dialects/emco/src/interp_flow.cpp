@@ -225,7 +225,7 @@ void EmRun::StepOnce() {
       if (fr.depth() == 1) {
         FinishRun();
       } else {
-        fr.Pop();  // a subroutine without M17: back to the caller
+        EndOfSubroutine();  // a subroutine without M17 ends as if it had one
       }
       return;
     }
@@ -259,11 +259,11 @@ void EmRun::ExecLine(const Line& line) {
     b = repeats ? &cache_.Put(f.span.text, line.start, Block(scratch_)) : &scratch_;
   }
   if (b->header) {
-    // The next program of the file begins: this one has ended (its M30 missing).
+    // The next program of the file begins: this one has ended (its M30 or M17 missing).
     if (fr.depth() == 1) {
       FinishRun();
     } else {
-      fr.Pop();
+      EndOfSubroutine();
     }
     return;
   }
@@ -395,6 +395,13 @@ void EmRun::ReturnFromSubroutine(int col) {
   if (f.data.number < mon_.o22 || f.data.number > 255) {
     Alarm(630, col, fmt::format("O{:04d} is outside O{:04d}-O0255 (monitor O22)", f.data.number, mon_.o22));
   }
+  EndOfSubroutine();
+}
+
+// The end of one run of a subroutine: the next run, or back to the caller.
+void EmRun::EndOfSubroutine() {
+  Frames& fr = *frames_;
+  auto& f = fr.top();
   if (--f.data.runs_left > 0) {
     f.at = {f.data.body_begin, f.data.body_line};
     f.jumped = true;  // its blocks run again (parse cache)

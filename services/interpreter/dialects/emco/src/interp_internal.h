@@ -275,6 +275,7 @@ class EmRun final : public RunBase {
   std::optional<Subroutine> FindSubroutine(int number);
   void CallSubroutine(const BlockWords& bw, int col);
   void ReturnFromSubroutine(int col);
+  void EndOfSubroutine();
   void Jump(const BlockWords& bw, int col);
   void EndOfProgram(int col);
   void FinishRun();
