@@ -16,6 +16,9 @@ BLOCKS="${CELL_INTERP_BENCH_BLOCKS:-1000000}"
 
 work="$(mktemp -d "${TMPDIR:-/tmp}/cell-interp-bench.XXXXXX")"
 trap 'rm -rf "$work"' EXIT
+BENCH=40-interpreter
+# shellcheck source=lib/interp-bench.sh
+source "$ROOT/deploy/bench.d/lib/interp-bench.sh"
 
 # gen KTAPL|NGC BLOCKS > file: groups of 7 KT-APL blocks (the NGC loop takes 3 lines where KT-APL's
 # CLS run count takes one, so the NGC file has a few more lines for the same toolpath; o-word loop labels
@@ -71,18 +74,6 @@ gen() {
   }'
 }
 
-# measure LABEL cmd...: CPU seconds (user+sys), wall seconds and peak RSS (kB) via /usr/bin/time -v.
-# Throughput uses CPU time: the bench machine is shared, and wall time under load says little.
-measure() {
-  local tlog="$work/time.$1"; shift
-  /usr/bin/time -v "$@" >/dev/null 2>"$tlog" || { echo "40-interpreter: failed: $*" >&2; tail -5 "$tlog" >&2; return 1; }
-  local wall cpu rss
-  wall=$(awk -F': ' '/Elapsed \(wall clock\)/ {n=split($2,a,":"); s=0; for(i=1;i<=n;i++) s=s*60+a[i]; print s}' "$tlog")
-  cpu=$(awk -F': ' '/User time|System time/ {s+=$2} END {print s}' "$tlog")
-  rss=$(awk -F': ' '/Maximum resident set size/ {print $2}' "$tlog")
-  echo "$cpu $wall $rss"
-}
-
 small=$((BLOCKS / 10))
 gen KTAPL "$BLOCKS" >"$work/bench.ktapl"
 gen KTAPL "$small" >"$work/small.ktapl"
@@ -104,29 +95,11 @@ rc=0
 [ "$kt_rss" -le $((small_rss + 2048)) ] || echo "40-interpreter: TARGET MISSED: peak RSS grows with program length"
 
 # LinuxCNC rs274 (Debian linuxcnc-uspace).
-if ! command -v rs274 >/dev/null; then
-  cand=$(apt-cache policy linuxcnc-uspace 2>/dev/null | awk '/Candidate:/ {print $2}')
-  if [ -n "$cand" ] && [ "$cand" != "(none)" ]; then
-    echo "installing linuxcnc-uspace $cand for the baseline"
-    SUDO=""; [ "$(id -u)" -ne 0 ] && SUDO="sudo"
-    DEBIAN_FRONTEND=noninteractive $SUDO apt-get -o DPkg::Lock::Timeout=600 -y -q install \
-      --no-install-recommends linuxcnc-uspace >"$work/apt.log" 2>&1 || tail -5 "$work/apt.log"
-  fi
-fi
-if ! command -v rs274 >/dev/null; then
-  echo "LinuxCNC rs274 NOT AVAILABLE (apt has no linuxcnc-uspace here): only our own figures are reported"
-  exit $rc
-fi
-# rs274 reads its tool table and parameter file from the current directory; give it empty ones.
-(
-  cd "$work"
-  : >tool.tbl
-  : >rs274ngc.var
-  read -r ngc_cpu ngc_wall ngc_rss < <(measure ngc rs274 -g -t tool.tbl -v rs274ngc.var bench.ngc /dev/null)
-  ngc_bps=$(awk -v b="$ngc_blocks" -v s="$ngc_cpu" 'BEGIN {printf "%.0f", b / (s > 0 ? s : 0.001)}')
-  echo "rs274 (LinuxCNC $(dpkg-query -W -f='${Version}' linuxcnc-uspace 2>/dev/null)): $ngc_blocks NGC lines, same toolpath, in ${ngc_cpu} s CPU (${ngc_wall} s wall) = $ngc_bps blocks/s, peak RSS $((ngc_rss / 1024)) MB"
-  ratio=$(awk -v a="$ngc_cpu" -v b="$kt_cpu" 'BEGIN {printf "%.1f", a / (b > 0 ? b : 0.001)}')
-  echo "ratio: cell-interp is ${ratio}x rs274 on the same toolpath (target >= 12x)"
-  awk -v r="$ratio" 'BEGIN {exit !(r >= 12)}' || echo "40-interpreter: TARGET MISSED: ratio ${ratio}x < 12x"
-)
+have_rs274 || exit $rc
+read -r ngc_cpu ngc_wall ngc_rss < <(measure_rs274 "$work/bench.ngc")
+ngc_bps=$(awk -v b="$ngc_blocks" -v s="$ngc_cpu" 'BEGIN {printf "%.0f", b / (s > 0 ? s : 0.001)}')
+echo "rs274 (LinuxCNC $(rs274_version)): $ngc_blocks NGC lines, same toolpath, in ${ngc_cpu} s CPU (${ngc_wall} s wall) = $ngc_bps blocks/s, peak RSS $((ngc_rss / 1024)) MB"
+ratio=$(awk -v a="$ngc_cpu" -v b="$kt_cpu" 'BEGIN {printf "%.1f", a / (b > 0 ? b : 0.001)}')
+echo "ratio: cell-interp is ${ratio}x rs274 on the same toolpath (target >= 12x)"
+awk -v r="$ratio" 'BEGIN {exit !(r >= 12)}' || echo "40-interpreter: TARGET MISSED: ratio ${ratio}x < 12x"
 exit $rc

@@ -6,7 +6,7 @@
 # Both write their canonical output to /dev/null. Figures: blocks/s of each (CPU time), the ratio (target
 # >= 10x), and peak RSS of cell-interp for 100,000 and 1,000,000 blocks (flat: at most 2 MB more for ten
 # times the blocks). Missed targets are printed as TARGET MISSED; the script fails only when a run fails.
-# linuxcnc-uspace is installed by 40-interpreter.sh when apt has it; nothing of LinuxCNC is kept in the tree.
+# linuxcnc-uspace is installed when apt has it (lib/interp-bench.sh); nothing of LinuxCNC is kept in the tree.
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 BIN="${CELL_BUILD_DIR:-$ROOT/build}/bin"
@@ -17,6 +17,9 @@ BLOCKS="${CELL_INTERP_BENCH_BLOCKS:-1000000}"
 
 work="$(mktemp -d "${TMPDIR:-/tmp}/cell-emco-bench.XXXXXX")"
 trap 'rm -rf "$work"' EXIT
+BENCH=42-emco
+# shellcheck source=lib/interp-bench.sh
+source "$ROOT/deploy/bench.d/lib/interp-bench.sh"
 
 # gen EMCO|NGC BLOCKS > file: groups of 6 blocks in both main programs (EMCO X is a diameter, NGC X a radius;
 # EMCO's I is already a radius, as NGC's G18 I). The subroutine follows the main program in the EMCO file
@@ -64,17 +67,6 @@ gen() {
   }'
 }
 
-# measure LABEL cmd...: CPU seconds (user+sys), wall seconds and peak RSS (kB) via /usr/bin/time -v.
-measure() {
-  local tlog="$work/time.$1"; shift
-  /usr/bin/time -v "$@" >/dev/null 2>"$tlog" || { echo "42-emco: failed: $*" >&2; tail -5 "$tlog" >&2; return 1; }
-  local wall cpu rss
-  wall=$(awk -F': ' '/Elapsed \(wall clock\)/ {n=split($2,a,":"); s=0; for(i=1;i<=n;i++) s=s*60+a[i]; print s}' "$tlog")
-  cpu=$(awk -F': ' '/User time|System time/ {s+=$2} END {print s}' "$tlog")
-  rss=$(awk -F': ' '/Maximum resident set size/ {print $2}' "$tlog")
-  echo "$cpu $wall $rss"
-}
-
 small=$((BLOCKS / 10))
 gen EMCO "$BLOCKS" >"$work/bench.emco"
 gen EMCO "$small" >"$work/small.emco"
@@ -90,18 +82,10 @@ echo "cell-interp: $em_blocks EMCO blocks ($moves moves) in ${em_cpu} s CPU (${e
 echo "cell-interp peak RSS: $((em_rss / 1024)) MB at $em_blocks blocks, $((small_rss / 1024)) MB at $((small_rss > 0 ? $(wc -l <"$work/small.emco") - 5 : 0)) blocks (flat: at most 2 MB more)"
 [ "$em_rss" -le $((small_rss + 2048)) ] || echo "42-emco: TARGET MISSED: peak RSS grows with program length"
 
-if ! command -v rs274 >/dev/null; then
-  echo "LinuxCNC rs274 NOT AVAILABLE (40-interpreter.sh installs linuxcnc-uspace when apt has it): only our own figures are reported"
-  exit 0
-fi
-(
-  cd "$work"
-  : >tool.tbl
-  : >rs274ngc.var
-  read -r ngc_cpu ngc_wall ngc_rss < <(measure ngc rs274 -g -t tool.tbl -v rs274ngc.var bench.ngc /dev/null)
-  ngc_bps=$(awk -v b="$ngc_blocks" -v s="$ngc_cpu" 'BEGIN {printf "%.0f", b / (s > 0 ? s : 0.001)}')
-  echo "rs274 (LinuxCNC $(dpkg-query -W -f='${Version}' linuxcnc-uspace 2>/dev/null)): $ngc_blocks NGC blocks, same toolpath, in ${ngc_cpu} s CPU (${ngc_wall} s wall) = $ngc_bps blocks/s, peak RSS $((ngc_rss / 1024)) MB"
-  ratio=$(awk -v a="$ngc_cpu" -v b="$em_cpu" 'BEGIN {printf "%.1f", a / (b > 0 ? b : 0.001)}')
-  echo "ratio: cell-interp (EMCO) is ${ratio}x rs274 on the same toolpath (target >= 10x)"
-  awk -v r="$ratio" 'BEGIN {exit !(r >= 10)}' || echo "42-emco: TARGET MISSED: ratio ${ratio}x < 10x"
-)
+have_rs274 || exit 0
+read -r ngc_cpu ngc_wall ngc_rss < <(measure_rs274 "$work/bench.ngc")
+ngc_bps=$(awk -v b="$ngc_blocks" -v s="$ngc_cpu" 'BEGIN {printf "%.0f", b / (s > 0 ? s : 0.001)}')
+echo "rs274 (LinuxCNC $(rs274_version)): $ngc_blocks NGC blocks, same toolpath, in ${ngc_cpu} s CPU (${ngc_wall} s wall) = $ngc_bps blocks/s, peak RSS $((ngc_rss / 1024)) MB"
+ratio=$(awk -v a="$ngc_cpu" -v b="$em_cpu" 'BEGIN {printf "%.1f", a / (b > 0 ? b : 0.001)}')
+echo "ratio: cell-interp (EMCO) is ${ratio}x rs274 on the same toolpath (target >= 10x)"
+awk -v r="$ratio" 'BEGIN {exit !(r >= 10)}' || echo "42-emco: TARGET MISSED: ratio ${ratio}x < 10x"

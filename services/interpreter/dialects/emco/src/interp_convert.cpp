@@ -388,15 +388,7 @@ void EmRun::Execute(const Block& b) {
   }
   SpindleWords(bw, m[0], g[1] == 96, g[1] == 97, g92);
   if (m[1] >= 0) mode_.exact_stop = m[1] == 38;
-  if (m[3] == 8 && !mode_.coolant) {
-    mode_.coolant = true;
-    Canon c;
-    c.line = cur_line_;
-    auto& k = c.Set<CoolantOp>();
-    k.m = 8;
-    k.mode = CoolantMode::kFlood;
-    EmitOther(std::move(c));
-  }
+  if (m[3] == 8) Coolant(true);
   for (int grp : {5, 6, 7, 8, 9, 10}) {
     if (m[grp] >= 0) AuxBefore(m[grp], mcol[grp]);
   }
@@ -420,15 +412,7 @@ void EmRun::Execute(const Block& b) {
   } else if (m[0] == 5) {
     mode_.spindle = 5;
   }
-  if (m[3] == 9 && mode_.coolant) {
-    mode_.coolant = false;
-    Canon c;
-    c.line = cur_line_;
-    auto& k = c.Set<CoolantOp>();
-    k.m = 9;
-    k.mode = CoolantMode::kOff;
-    EmitOther(std::move(c));
-  }
+  if (m[3] == 9) Coolant(false);
   if (g04) {
     int tenths = static_cast<int>(bw.d[4].raw);
     if (tenths < 1 || tenths > 10000) Alarm(200, bw.d[4].col, "G04 D4 is 1-10000 (0.1-1000 s)");
@@ -548,6 +532,18 @@ void EmRun::SpindleOp(int line) {
     k.rpm = speed_;
   }
   k.max_rpm = speed_limit_;
+  EmitOther(std::move(c));
+}
+
+// M08 (before the motion) / M09 (after it, and at M30): flood coolant on or off when it changes.
+void EmRun::Coolant(bool on) {
+  if (mode_.coolant == on) return;
+  mode_.coolant = on;
+  Canon c;
+  c.line = cur_line_;
+  auto& k = c.Set<CoolantOp>();
+  k.m = on ? 8 : 9;
+  k.mode = on ? CoolantMode::kFlood : CoolantMode::kOff;
   EmitOther(std::move(c));
 }
 

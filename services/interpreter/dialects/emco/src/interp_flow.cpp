@@ -456,15 +456,7 @@ void EmRun::EndOfProgram(int col) {
     mode_.spindle = 5;
     SpindleOp(cur_line_);
   }
-  if (mode_.coolant) {
-    mode_.coolant = false;
-    Canon c;
-    c.line = cur_line_;
-    auto& k = c.Set<CoolantOp>();
-    k.m = 9;
-    k.mode = CoolantMode::kOff;
-    EmitOther(std::move(c));
-  }
+  Coolant(false);
   if (mode_.catcher == 24) {
     mode_.catcher = 23;
     Canon c;

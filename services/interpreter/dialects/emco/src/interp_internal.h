@@ -290,6 +290,7 @@ class EmRun final : public RunBase {
   void SpindleWords(const BlockWords& bw, int spindle_m, bool g96, bool g97, bool g92);
   void SpindleOp(int line);
   void AuxBefore(int m, int col);
+  void Coolant(bool on);
   bool ZeroShifts(const BlockWords& bw, int g3, int g5, bool g92, int col3, int col5);
   void Scaling(const BlockWords& bw, int g, int col);
   void CompCode(int g, int col);

@@ -1,0 +1,48 @@
+# Shared by the interpreter benchmarks (40-interpreter.sh, 42-emco.sh; sourced, not run): whole-process
+# timing and the LinuxCNC rs274 baseline. The caller sets $work (a scratch directory) and $BENCH (its name,
+# for messages).
+
+# measure LABEL cmd...: CPU seconds (user+sys), wall seconds and peak RSS (kB) via /usr/bin/time -v.
+# Throughput uses CPU time: the bench machine is shared, and wall time under load says little.
+measure() {
+  local tlog="$work/time.$1"; shift
+  /usr/bin/time -v "$@" >/dev/null 2>"$tlog" || { echo "$BENCH: failed: $*" >&2; tail -5 "$tlog" >&2; return 1; }
+  local wall cpu rss
+  wall=$(awk -F': ' '/Elapsed \(wall clock\)/ {n=split($2,a,":"); s=0; for(i=1;i<=n;i++) s=s*60+a[i]; print s}' "$tlog")
+  cpu=$(awk -F': ' '/User time|System time/ {s+=$2} END {print s}' "$tlog")
+  rss=$(awk -F': ' '/Maximum resident set size/ {print $2}' "$tlog")
+  echo "$cpu $wall $rss"
+}
+
+# have_rs274: LinuxCNC's rs274 (Debian linuxcnc-uspace) is installed, or installed now when apt has it.
+have_rs274() {
+  if ! command -v rs274 >/dev/null; then
+    local cand
+    cand=$(apt-cache policy linuxcnc-uspace 2>/dev/null | awk '/Candidate:/ {print $2}')
+    if [ -n "$cand" ] && [ "$cand" != "(none)" ]; then
+      echo "installing linuxcnc-uspace $cand for the baseline"
+      local sudo=""; [ "$(id -u)" -ne 0 ] && sudo="sudo"
+      DEBIAN_FRONTEND=noninteractive $sudo apt-get -o DPkg::Lock::Timeout=600 -y -q install \
+        --no-install-recommends linuxcnc-uspace >"$work/apt.log" 2>&1 || tail -5 "$work/apt.log"
+    fi
+  fi
+  if ! command -v rs274 >/dev/null; then
+    echo "LinuxCNC rs274 NOT AVAILABLE (apt has no linuxcnc-uspace here): only our own figures are reported"
+    return 1
+  fi
+}
+
+# measure_rs274 NGC_FILE: measure's figures for rs274 on the file, with the empty tool table and parameter
+# file it reads from the current directory.
+measure_rs274() {
+  (
+    cd "$work"
+    : >tool.tbl
+    : >rs274ngc.var
+    measure ngc rs274 -g -t tool.tbl -v rs274ngc.var "$1" /dev/null
+  )
+}
+
+rs274_version() {
+  dpkg-query -W -f='${Version}' linuxcnc-uspace 2>/dev/null
+}
