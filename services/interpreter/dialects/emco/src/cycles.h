@@ -22,11 +22,15 @@ inline double Sign(double v) {
   return v < 0 ? -1.0 : 1.0;
 }
 
+// More cuts than this in one cycle block are refused (ALARM 240): the moves of a cycle are produced at once.
+constexpr int kMaxCuts = 10000;
+
 // Equal cuts of at most `max` over `total` (ln 3263-3281, 4746-4761: 7 mm by 2 mm is 4 cuts of 1.75).
 inline int EqualCuts(double total, double max) {
   if (max <= 0) return 1;
-  int n = static_cast<int>(std::ceil(std::fabs(total) / max - 1e-9));
-  return n < 1 ? 1 : n;
+  double n = std::ceil(std::fabs(total) / max - 1e-9);
+  if (n > kMaxCuts) return kMaxCuts + 1;
+  return n < 1 ? 1 : static_cast<int>(n);
 }
 
 // Cumulative thread depths (mm) of G85 (ln 3877-3917): D3 the first depth or the number of cuts (`count`),

@@ -25,7 +25,8 @@ std::vector<double> ThreadDepths(double depth, double d3, bool count, bool const
   if (depth <= 0) return out;
   int n = count ? std::max(1, static_cast<int>(d3)) : 0;
   double prev = 0;
-  for (int k = 1; prev < depth - 1e-9 && k <= 10000; ++k) {
+  if (min <= 0) min = 1e-3;  // one increment at least: the depths must get there
+  for (int k = 1; prev < depth - 1e-9 && k <= kMaxCuts + 1; ++k) {
     double c;
     if (count) {
       c = constant ? depth * k / n : depth * std::sqrt(static_cast<double>(k) / n);
@@ -51,17 +52,17 @@ std::vector<double> DrillPecks(double total, double first, double percent, doubl
     out.assign(n, total / n);
     return out;
   }
+  if (min <= 0) min = 1e-3;  // one increment: a reduction to nothing would never get there
   double done = 0, d = first;
-  while (done + d < total - 1e-9 && d >= min - 1e-9) {
+  while (done + d < total - 1e-9 && d >= min - 1e-9 && out.size() <= kMaxCuts) {
     out.push_back(d);
     done += d;
     d *= percent / 100.0;
-    if (percent >= 100 && out.size() > 10000) break;
   }
   double rest = total - done;
   if (rest > 1e-9) {
-    int n = EqualCuts(rest, std::max(min, 1e-3));
-    for (int i = 0; i < n; ++i) out.push_back(rest / n);
+    int n = EqualCuts(rest, min);
+    for (int i = 0; i < n && out.size() <= kMaxCuts; ++i) out.push_back(rest / n);
   }
   return out;
 }
@@ -142,6 +143,7 @@ void EmRun::G84(const BlockWords& bw, Vec2 k, const Feed& feed) {
   double sf = Get(s, f), sc = Get(s, c);
   double depth = kf - sf;
   int n = bw.d[3].set ? cyc::EqualCuts(depth, DLen(bw, 3, 0)) : 1;
+  if (n > cyc::kMaxCuts) Alarm(240, bw.d[3].col, "more than 10000 cuts");
   // The wall: from K' to (sf, kc + tc).
   Vec2 wall_a = At(f, kf, kc), wall_b = At(f, sf, kc + tc);
   Vec2 wall_d = wall_b - wall_a;
@@ -200,6 +202,7 @@ void EmRun::G86(const BlockWords& bw, Vec2 k, const Feed& feed) {
   double first = from_hi ? hi : lo + w, last = from_hi ? lo + w : hi;
   int extra = std::fabs(last - first) < 1e-9 ? 0 : cyc::EqualCuts(last - first, w - 0.1);
   int pecks = bw.d[3].set ? cyc::EqualCuts(depth, DLen(bw, 3, 0)) : 1;
+  if ((extra + 1) * pecks > cyc::kMaxCuts) Alarm(240, bw.pos_col(), "more than 10000 plunges");
   double retract = mon_.s02 * (mode_.metric ? 0.001 : 0.0001 * kInch);
   for (int j = 0; j <= extra; ++j) {
     double p = extra == 0 ? first : first + (last - first) * j / extra;
@@ -239,6 +242,7 @@ void EmRun::G87(const BlockWords& bw, Vec2 k, const Feed& feed, bool redraw) {
   double min = bw.d[6].set ? DLen(bw, 6, 0) : mon_.s00 * unit;
   std::vector<double> pecks =
       cyc::DrillPecks(std::fabs(total), bw.d[3].set ? DLen(bw, 3, 0) : 0, bw.d[5].set ? bw.d[5].raw : 0, min);
+  if (pecks.size() > cyc::kMaxCuts) Alarm(240, bw.pos_col(), "more than 10000 pecks");
   double dir = Sign(total), retract = mon_.s02 * unit;
   double done = 0;
   for (std::size_t i = 0; i < pecks.size(); ++i) {

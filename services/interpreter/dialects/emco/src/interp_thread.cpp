@@ -80,6 +80,7 @@ void EmRun::G85(const BlockWords& bw, Vec2 k) {
 
   std::vector<double> cuts =
       cyc::ThreadDepths(depth, count ? bw.d[3].raw : DLen(bw, 3, 0), count, constant, mon_.s00 * unit);
+  if (cuts.size() > cyc::kMaxCuts) Alarm(240, bw.d[3].col, "more than 10000 cuts");
   for (int i = 0; i < d4; ++i) cuts.push_back(depth);  // idle passes at the full depth
   for (double cum : cuts) {
     double fs = surf_s + dir_f * cum, fk = surf_k + dir_f * cum;
