@@ -112,10 +112,7 @@ std::string ImportListing(std::string_view text) {
   for (std::size_t n = 0; n < lines.size(); ++n) {
     std::string_view raw = lines[n];
     std::string_view t = scan::Trim(raw);
-    if (t.empty()) {
-      open = false;
-      continue;
-    }
+    if (t.empty()) continue;  // the manual's listings put blank lines inside blocks (ln 3249-3251)
     char first = Up(t[0]);
     bool starts_blank = raw[0] == ' ' || raw[0] == '\t';
     bool new_block = first == 'N' || first == '%' || first == 'O' || first == '(';

@@ -9,9 +9,9 @@
 // decimal point; blanks inside a word go ("F 120", "Z + 10,000", "P0 = - 3.000"); a D value's '.' or ','
 // before three digits is the German thousands separator ("D3 = 2.000" is 2000 um, ln 3241-3249); "K=00,000"
 // loses its '='; placeholder words of dots only ("N.....", "F.....") are dropped, so the modal value
-// stays; a line that continues the block above (it follows a line ending in "/" or starts with a blank, and
-// is not a new N, O or % line) is joined to it and leaves an empty line, so line numbers stay those of the
-// listing.
+// stays; a line that continues the block above (it follows a line ending in "/", blank lines between, or
+// starts with a blank, and is not a new N, O or % line) is joined to it and leaves an empty line, so line
+// numbers stay those of the listing.
 #pragma once
 
 #include <string>

@@ -19,6 +19,8 @@ TEST(Listing, ParametersPlaceholdersAndContinuations) {
   // above and leaves its line empty.
   EXPECT_EQ(ImportListing("N...../G84/X26.000/Z-40.000/\n       D3 = 2.000/F.....\nN0100/M30\n"),
             "G84 X26.000 Z-40.000 D3=2000\n\nN0100 M30\n");
+  EXPECT_EQ(ImportListing("N...../G84/X26.000/Z-40.000/\n\nD3 = 2.000/F.....\n"),
+            "G84 X26.000 Z-40.000 D3=2000\n\n\n");  // ln 3249-3251, a blank line inside the block
   EXPECT_EQ(ImportListing("N.../G02/X40,000/Z-40,000/I10,000\n K=00,000/F....\n"),
             "G02 X40.000 Z-40.000 I10.000 K00.000\n\n");                      // ln 2118-2119
   EXPECT_EQ(ImportListing("N0100/G04/D420/M03\n"), "N0100 G04 D4=20 M03\n");  // ln 2171
