@@ -146,7 +146,8 @@ void AddFmsVerbs(CLI::App& app, Context& ctx) {
   });
 
   auto* tools = app.add_subcommand("tools", "tool data")->require_subcommand(1);
-  auto* load = tools->add_subcommand("load", "send a file of KT-APL TLD statements to station ID");
+  auto* load =
+      tools->add_subcommand("load", "send the station's tool data file (its dialect's form) to station ID");
   load->add_option("ID", o->station)->required();
   load->add_option("FILE", o->file)->required();
   load->callback([o, &ctx] {
@@ -156,7 +157,14 @@ void AddFmsVerbs(CLI::App& app, Context& ctx) {
     std::string text = ReadLocalFile(o->file);
     if (text.size() > 65536) throw Exit{1, o->file + " is larger than 64 KiB"};
     req.text(text);
-    ctx.StationCommand(o->station, req);
+    try {
+      ctx.StationCommand(o->station, req);
+    } catch (const cell::Error& e) {
+      // The station reads the text as "tools"; the user's diagnostic names the file they gave.
+      std::string what = e.what();
+      if (what.rfind("tools:", 0) == 0) what = o->file + what.substr(5);
+      throw cell::Error(e.code(), what);
+    }
   });
 }
 

@@ -640,6 +640,7 @@ void Station::RunProgram(const Dispatch& d, const std::string& name, std::stop_t
   opt.library = [this, node = d.node](const std::string& lib) {
     return programs_.GetWithFallback(node, lib);
   };
+  opt.params = cfg_.params;  // the station config's [params]: the dialect's machine settings (EMCO's monitor)
   opt.params["PALLET"] = std::to_string(d.pallet);
   {
     std::lock_guard lk(db_mu_);

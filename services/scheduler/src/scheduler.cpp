@@ -237,7 +237,9 @@ struct Scheduler::Impl {
         if (!meta) {
           problem = fmt::format("program '{}' not found", name);
           if (strict) throw Error(Errc::kNotFound, fmt::format("{}: {}", where, problem));
-        } else if (require_ucy && !meta->ucy_s) {
+        } else if (require_ucy && !meta->ucy_s && (meta->dialect.empty() || meta->dialect == "ktapl")) {
+          // UCY is the KT/FMS heading (DESIGN §5); the other dialects' programs have none, and their
+          // operations add nothing to the backlog.
           problem = fmt::format(
               "program '{}' has no (UCY,seconds): UCY is required in every KT/FMS part program (KT-APL "
               "manual, "

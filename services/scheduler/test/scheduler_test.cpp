@@ -60,6 +60,17 @@ TEST(DefineRoute, MissingProgramOrUcyIsAClearError) {
   EXPECT_EQ(CodeOf([&] { c.Route("R", {"KT01,KT01:OK"}); }), Errc::kInvalidArgument);
 }
 
+// UCY belongs to KT-APL: a program of another dialect (an EMCO lathe program has no heading statements) is
+// a route operation without a cycle time, adding nothing to the station's backlog.
+TEST(DefineRoute, OtherDialectsNeedNoUcy) {
+  FakeCell c;
+  c.programs.Put("THREAD", "%\nN0010 G00 X50. Z10.\nN0020 M30\n", "emco");
+  RouteView r = c.Route("R", {"EM01:THREAD"});
+  ASSERT_EQ(r.ops.size(), 1u);
+  EXPECT_TRUE(r.valid);
+  EXPECT_EQ(r.ops[0].ucy_s, (std::vector<std::int64_t>{0}));
+}
+
 // "If two or more stations are eligible ... the station with the shortest backlog is allocated" (seed
 // 4132-4134) and "the UCY is extracted from each part program to be executed, summed and added to the
 // backlog" (4130).
