@@ -3,9 +3,11 @@
 // M17, G27 jumps to a block number, what carries into the next program (Variables), the operator monitor
 // parameters (params), the part counter and work presetting.
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <algorithm>
 #include <cmath>
+#include <vector>
 
 #include "cell/error/error.h"
 #include "cell/interp/scan.h"
@@ -45,7 +47,44 @@ int PsoKey(const std::string& key, char* axis) {
   return key[3] - '0';
 }
 
+// The modal codes a station keeps (ln 1304-1314: the STATUS screen's groups), with the codes each takes.
+struct KeptCodes {
+  const char* name;
+  std::vector<int> codes;
+};
+const KeptCodes kKeptCodes[] = {{"G.1", {96, 97}},         {"G.2", {94, 95}}, {"G.3", {53, 54, 55}},
+                                {"G.5", {56, 57, 58, 59}}, {"G.7", {70, 71}}, {"G.8", {40, 41, 42}},
+                                {"M.0", {3, 4, 5, 19}},    {"M.1", {38, 39}}, {"M.3", {8, 9}},
+                                {"M.5", {25, 26}},         {"M.6", {20, 21}}, {"M.7", {23, 24}},
+                                {"M.8", {50, 51}},         {"M.9", {52, 53}}};
+
 }  // namespace
+
+// One rule for what a station keeps (Variables() reports exactly these; RestoreVariables takes only these).
+std::string CheckKeptVariable(std::string_view name, double value) {
+  if (!std::isfinite(value)) return fmt::format("{} = {} is not a number", name, value);
+  const bool whole = value == std::floor(value);
+  for (const auto& k : kKeptCodes) {
+    if (name != k.name) continue;
+    if (whole && std::find(k.codes.begin(), k.codes.end(), static_cast<int>(value)) != k.codes.end())
+      return "";
+    return fmt::format("{} = {} is not one of the group's codes {}", name, value, fmt::join(k.codes, " "));
+  }
+  auto range = [&](double lo, double hi, bool integer) -> std::string {
+    if ((!integer || whole) && value >= lo && value <= hi) return "";
+    return fmt::format("{} = {} is outside {}{}..{}", name, value, integer ? "the whole numbers " : "", lo,
+                       hi);
+  };
+  if (name == "ACT.F" || name == "ACT.S" || name == "G92.S") return range(0, 9999, false);  // F4, S4
+  if (name == "ACT.T") return range(0, 9999, true);                                         // T4: TTCC
+  if (name == "D03") return range(0, 32767, true);  // the part counter wraps above 32767 (ln 5368-5378)
+  char axis = 0;
+  if (PsoKey(std::string(name), &axis) > 0) return range(-9999.999, 9999.999, false);  // +-43 (ln 1118)
+  return fmt::format(
+      "'{}' is not a variable an EMCO station keeps (G.1-G.8 and M.0-M.9 modal codes, ACT.F ACT.S ACT.T, "
+      "G92.S, D03, PSO1.X..PSO5.Z)",
+      name);
+}
 
 EmRun::EmRun(const RunOptions& o)
     : program_name_(o.program_name),
@@ -113,42 +152,37 @@ void EmRun::ReadParams(const RunOptions& o) {
 // What carries from program to program (ln 1212-1292): the self-holding G codes of groups 1-8 and the M
 // codes, F, S, T; what the station keeps: the PSO registers, the part counter, the G92 spindle limit.
 void EmRun::RestoreVariables(const std::map<std::string, double>& vars) {
-  auto get = [&](const char* name, auto ok) -> std::optional<int> {
+  auto get = [&](const char* name) -> std::optional<double> {
     auto it = vars.find(name);
-    if (it == vars.end() || !std::isfinite(it->second)) return std::nullopt;
-    int v = static_cast<int>(std::lround(it->second));
-    if (!ok(v)) return std::nullopt;
-    return v;
+    if (it == vars.end() || !CheckKeptVariable(name, it->second).empty()) return std::nullopt;
+    return it->second;
   };
-  auto one_of = [](std::initializer_list<int> l) {
-    return [l](int v) { return std::find(l.begin(), l.end(), v) != l.end(); };
+  auto code = [&](const char* name) -> std::optional<int> {
+    if (auto v = get(name)) return static_cast<int>(*v);
+    return std::nullopt;
   };
-  if (auto v = get("G.1", one_of({96, 97}))) mode_.css = *v == 96;
-  if (auto v = get("G.2", one_of({94, 95}))) mode_.per_min = *v == 94;
-  if (auto v = get("G.3", one_of({53, 54, 55}))) mode_.shift_a = *v == 53 ? 0 : *v - 53;
-  if (auto v = get("G.5", one_of({56, 57, 58, 59}))) mode_.shift_b = *v == 56 ? 0 : *v - 54;
-  if (auto v = get("G.7", one_of({70, 71}))) mode_.metric = *v == 71;
-  if (auto v = get("M.0", one_of({3, 4, 5, 19}))) mode_.spindle = *v;
-  if (auto v = get("M.1", one_of({38, 39}))) mode_.exact_stop = *v == 38;
-  if (auto v = get("M.3", one_of({8, 9}))) mode_.coolant = *v == 8;
-  if (auto v = get("M.5", one_of({25, 26}))) mode_.chuck = *v;
-  if (auto v = get("M.6", one_of({20, 21}))) mode_.tailstock = *v;
-  if (auto v = get("M.7", one_of({23, 24}))) mode_.catcher = *v;
-  if (auto v = get("M.8", one_of({50, 51}))) mode_.turret_logic = *v;
-  if (auto v = get("M.9", one_of({52, 53}))) mode_.door = *v;
-  if (auto v = get("ACT.T", [](int t) { return t >= 0 && t <= 9999; })) t_ = *v;
-  if (auto v = get("D03", [](int n) { return n >= 0 && n <= 32767; })) parts_ = *v;
-  auto num = [&](const char* name, double& dst, double lo, double hi) {
-    auto it = vars.find(name);
-    if (it != vars.end() && std::isfinite(it->second) && it->second >= lo && it->second <= hi)
-      dst = it->second;
-  };
-  num("ACT.F", feed_, 0, 9999);
-  num("ACT.S", speed_, 0, 9999);
-  num("G92.S", speed_limit_, 0, 9999);
+  if (auto v = code("G.1")) mode_.css = *v == 96;
+  if (auto v = code("G.2")) mode_.per_min = *v == 94;
+  if (auto v = code("G.3")) mode_.shift_a = *v - 53;
+  if (auto v = code("G.5")) mode_.shift_b = *v == 56 ? 0 : *v - 54;
+  if (auto v = code("G.7")) mode_.metric = *v == 71;
+  if (auto v = code("M.0")) mode_.spindle = *v;
+  if (auto v = code("M.1")) mode_.exact_stop = *v == 38;
+  if (auto v = code("M.3")) mode_.coolant = *v == 8;
+  if (auto v = code("M.5")) mode_.chuck = *v;
+  if (auto v = code("M.6")) mode_.tailstock = *v;
+  if (auto v = code("M.7")) mode_.catcher = *v;
+  if (auto v = code("M.8")) mode_.turret_logic = *v;
+  if (auto v = code("M.9")) mode_.door = *v;
+  if (auto v = code("ACT.T")) t_ = *v;
+  if (auto v = code("D03")) parts_ = *v;
+  if (auto v = get("ACT.F")) feed_ = *v;
+  if (auto v = get("ACT.S")) speed_ = *v;
+  if (auto v = get("G92.S")) speed_limit_ = *v;
   for (const auto& [k, v] : vars) {
     char axis = 0;
-    if (int r = PsoKey(k, &axis); r > 0 && std::isfinite(v)) (axis == 'X' ? pso_[r].y : pso_[r].x) = v;
+    if (int r = PsoKey(k, &axis); r > 0 && CheckKeptVariable(k, v).empty())
+      (axis == 'X' ? pso_[r].y : pso_[r].x) = v;
   }
 }
 

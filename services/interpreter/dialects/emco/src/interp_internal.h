@@ -212,6 +212,9 @@ class NoseComp {
 
 enum class Motion : uint8_t { kNone, kRapid, kLinear, kCw, kCcw, kThread, kG84, kG85, kG86, kG87, kG88 };
 
+// "" when a station keeps `name` (what EmRun::Variables() reports) with this value; else a one-line reason.
+std::string CheckKeptVariable(std::string_view name, double value);
+
 struct Modal {
   Motion motion = Motion::kNone;  // group 0 (no start-up state: ln 1304)
   bool css = false;               // G96 (G97)

@@ -13,6 +13,7 @@
 
 #include "cell/error/error.h"
 #include "cell/interp/emco.h"
+#include "interp_internal.h"
 
 namespace cell::interp {
 namespace {
@@ -82,6 +83,29 @@ TEST(EmcoRun, SelfHoldingStateCarriesIntoTheNextProgram) {
   EXPECT_EQ(
       c.diag,
       "t.emco:2:7: error: [400] NO G-CODE FOR GIVEN PARAMETER ACTIVE (no G00-G03, G33 or cycle is active)");
+}
+
+// One rule for what a station keeps: every name and value a run reports passes it, and a value the rule
+// refuses is not taken back (the start-up state stays).
+TEST(EmcoRun, WhatAStationKeepsIsWhatVariablesReport) {
+  Result a = RunText("O10\nN0000 G54 G58 G94 G96 M38 M08 M21\nN0010 G92 S2500\nN0015 F150 S200\nN0020 M30\n",
+                     {{"O40", "16"}, {"PSO1.Z", "90"}});
+  ASSERT_EQ(a.end, Step::kEnd) << a.diag;
+  EXPECT_EQ(a.vars.size(), 29u);
+  for (const auto& [name, value] : a.vars) EXPECT_EQ(emco::CheckKeptVariable(name, value), "") << name;
+  EXPECT_EQ(emco::CheckKeptVariable("G.5", 60), "G.5 = 60 is not one of the group's codes 56 57 58 59");
+  EXPECT_EQ(emco::CheckKeptVariable("ACT.T", 101.5), "ACT.T = 101.5 is outside the whole numbers 0..9999");
+  EXPECT_EQ(emco::CheckKeptVariable("D03", 32768), "D03 = 32768 is outside the whole numbers 0..32767");
+  EXPECT_EQ(emco::CheckKeptVariable("PSO3.X", 1e4), "PSO3.X = 10000 is outside -9999.999..9999.999");
+  EXPECT_EQ(emco::CheckKeptVariable("PSO6.X", 1).rfind("'PSO6.X' is not a variable an EMCO station keeps", 0),
+            0u);
+  for (const char* bad : {"V1", "L1500", "G.4", "M.2", "g.1", ""}) {
+    EXPECT_NE(emco::CheckKeptVariable(bad, 1), "") << bad;
+  }
+  Result b = RunText("%\nN0010 M30\n", {}, {{"G.2", 93}, {"M.1", 38}, {"D03", -1}});
+  EXPECT_EQ(b.vars.at("G.2"), 95);  // refused: the start-up G95 stays
+  EXPECT_EQ(b.vars.at("M.1"), 38);
+  EXPECT_EQ(b.vars.at("D03"), 0);
 }
 
 TEST(EmcoRun, G92WritesPsoFiveAndTheStationKeepsIt) {
