@@ -131,6 +131,12 @@ class Emco final : public Dialect {
   }
 
   std::string ImportListing(std::string_view text) const override { return emco::ImportListing(text); }
+
+  // What carries from program to program on the control (ln 1212-1292) and what it keeps (the registers,
+  // the part counter): exactly what EmRun::Variables() reports (docs/dialects/emco.md).
+  std::string CheckVariable(std::string_view name, double value) const override {
+    return emco::CheckKeptVariable(name, value);
+  }
 };
 
 }  // namespace

@@ -92,7 +92,7 @@ TEST(EmcoRun, WhatAStationKeepsIsWhatVariablesReport) {
                      {{"O40", "16"}, {"PSO1.Z", "90"}});
   ASSERT_EQ(a.end, Step::kEnd) << a.diag;
   EXPECT_EQ(a.vars.size(), 29u);
-  for (const auto& [name, value] : a.vars) EXPECT_EQ(emco::CheckKeptVariable(name, value), "") << name;
+  for (const auto& [name, value] : a.vars) EXPECT_EQ(EmcoDialect().CheckVariable(name, value), "") << name;
   EXPECT_EQ(emco::CheckKeptVariable("G.5", 60), "G.5 = 60 is not one of the group's codes 56 57 58 59");
   EXPECT_EQ(emco::CheckKeptVariable("ACT.T", 101.5), "ACT.T = 101.5 is outside the whole numbers 0..9999");
   EXPECT_EQ(emco::CheckKeptVariable("D03", 32768), "D03 = 32768 is outside the whole numbers 0..32767");
