@@ -1,12 +1,15 @@
-// Balt-System NC-110/210 as the host sees it: file names and kinds, detection evidence, %:NAME program
-// headers (../shared/reference/seed-balt.md). The executor is built by its own issue.
+// Balt-System NC-110/210 as the cell sees it: file names and kinds, detection evidence, %:NAME program
+// headers, runs, and the tool table in the form of the offsets file FI1COR
+// (../shared/reference/seed-balt.md).
 #include <fmt/format.h>
 
 #include <algorithm>
 #include <array>
 
+#include "cell/error/error.h"
 #include "cell/interp/balt.h"
 #include "cell/interp/scan.h"
+#include "interp_internal.h"
 
 namespace cell::interp {
 namespace {
@@ -20,7 +23,7 @@ constexpr auto kBaltOnly = std::to_array<std::string_view>(
      "BGT", "DLO", "UIO", "SCF", "DSA", "DPT", "BLT", "ASC", "BNC", "INP", "DSC", "UCG", "CTL",
      "BNE", "DLY", "SND", "RQP", "EXE", "DTL", "GTL", "EPT", "BGE", "BLE", "BGR", "BLS", "TCA"});
 
-class Balt final : public UnimplementedRuns {
+class Balt final : public Dialect {
  public:
   std::string_view name() const override { return "balt"; }
   std::string_view title() const override { return "Balt-System NC-110/210"; }
@@ -38,9 +41,15 @@ class Balt final : public UnimplementedRuns {
     CheckPlainName(name, "Balt-System");
   }
 
+  // An offsets file (records "n Z.. K..") is a tool table; anything else a part program (subroutines are
+  // programs too: CLS calls a program by name).
   FileKind Classify(std::string_view text) const override {
-    (void)text;
-    return FileKind::kPartProgram;
+    try {
+      (void)balt::ParseOffsets(text, {}, true);
+      return FileKind::kToolTable;
+    } catch (const balt::FileError&) {
+      return FileKind::kPartProgram;
+    }
   }
 
   void FindEvidence(std::string_view text, std::vector<Evidence>& out) const override {
@@ -81,6 +90,21 @@ class Balt final : public UnimplementedRuns {
       if (!names.Add(name, ln, "%:")) continue;
     }
     return h;
+  }
+
+  std::unique_ptr<Run> StartRun(const RunOptions& options) const override {
+    return std::make_unique<balt::BaltRun>(options);
+  }
+
+  // The offsets file FI1COR (§6.4.1, §6.5.2): records "n Z.. K.." applied on top of `base`.
+  tooltable::ToolTable ParseToolTable(std::string_view text, std::string_view source,
+                                      const tooltable::ToolTable& base) const override {
+    try {
+      return balt::ParseOffsets(text, base, true);
+    } catch (const balt::FileError& e) {
+      throw Error(Errc::kInvalidArgument, fmt::format("{}:{}:{}: error: [FILMS4 {:02}] {}: {}", source, e.line, e.col,
+                                                      e.code, balt::FilmsText(e.code), e.text));
+    }
   }
 };
 
