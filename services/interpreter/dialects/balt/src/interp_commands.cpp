@@ -170,7 +170,6 @@ void BaltRun::CmdErp(const Command& c) {
   Repeat& r = f.data.repeats.back();
   if (--r.left > 0) {
     f.at = r.body;
-    f.jumped = true;
   } else {
     f.data.repeats.erase(f.data.repeats.end() - 1, f.data.repeats.end());
   }

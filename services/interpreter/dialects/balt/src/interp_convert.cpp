@@ -573,7 +573,7 @@ void BaltRun::ExecIso(const ParsedBlock& pb) {
   if (s) SpeedWord(*s);
   if (t) ToolWord(*t);
   const bool motion_words = axes != 0 || pb.elem.kind || ij > 0 || pb.s2;
-  AuxBefore(pb, motion_words);
+  if (ms || hs) AuxBefore(pb, motion_words);
 
   if (g.probe) {
     Probe(pb, g, ReadTargets(pb, mode_.incremental, false));
@@ -606,7 +606,7 @@ void BaltRun::ExecIso(const ParsedBlock& pb) {
     if (tg.mask || (arc && ij > 0)) Move(pb, g, tg);
   }
   if (g.dwell) EmitDwell(tmr_);  // G04: TMR seconds at the end of the block (ln 3635)
-  AuxAfter(pb);
+  if (ms) AuxAfter(pb);
   hold_next_ = false;
 }
 

@@ -218,7 +218,8 @@ void BaltRun::ExecLine(const Line& line) {
   const std::size_t li = frames_->depth() - 1;
   ParsedBlock fresh;
   const ParsedBlock* cached = nullptr;
-  const bool repeats = li > 0 || f.jumped;
+  // Blocks that may run again: in subroutines and EPP ranges, inside an open repeat, after a branch.
+  const bool repeats = li > 0 || f.jumped || !f.data.repeats.empty();
   if (repeats) cached = cache_.Find(f.span.text.get(), line.start);
   if (!cached) {
     fresh = ParseBlock(text);

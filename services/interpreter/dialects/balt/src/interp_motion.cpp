@@ -329,11 +329,14 @@ void BaltRun::EmitMotion(Op op, const AxisArray& mach_in, std::uint32_t moved, c
   EmitUnitsOnce();
   idle_ = 0;
   AxisArray out = mach;
-  for (int a : {kA, kB, kC}) {
-    double v = std::fmod(out[a], 360.0);
-    if (v < 0) v += 360.0;
-    if (v >= 360.0 - 1e-9) v = 0;
-    out[a] = v;
+  constexpr std::uint32_t kRotary = (1u << kA) | (1u << kB) | (1u << kC);
+  if (used_ & kRotary) [[unlikely]] {
+    for (int a : {kA, kB, kC}) {
+      double v = std::fmod(out[a], 360.0);
+      if (v < 0) v += 360.0;
+      if (v >= 360.0 - 1e-9) v = 0;
+      out[a] = v;
+    }
   }
   Target* to = nullptr;
   Canon routed;

@@ -1,0 +1,157 @@
+// The contour on hand-made paths: corners, corner words, start and exit moves, with the values worked out
+// in the comments.
+#include "contour.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace cell::interp::balt {
+namespace {
+
+using geom::Path;
+using geom::Vec2;
+
+Canon Line(double x, double y, int line) {
+  Canon c;
+  c.line = line;
+  LinearOp& l = c.Set<LinearOp>();
+  l.to.pos[kX] = x;
+  l.to.pos[kY] = y;
+  l.to.used = 3;
+  l.feed.rate = 100;
+  return c;
+}
+
+Path Seg(Vec2 a, Vec2 b) {
+  Path p;
+  p.start = a;
+  p.end = b;
+  return p;
+}
+
+struct Fixture {
+  Contour k;
+  std::vector<Canon> out;
+  void Drain() {
+    for (auto& c : k.Ready()) out.push_back(std::move(c));
+    k.Ready().clear();
+  }
+  void Move(Vec2 a, Vec2 b, int line, bool hold = false) {
+    Path p = Seg(a, b);
+    k.Take(Line(b.x, b.y, line), &p, hold);
+    Drain();
+  }
+  Vec2 At(std::size_t i) const { return {out[i].target()->pos[kX], out[i].target()->pos[kY]}; }
+};
+
+// ISO radius corner (ln 3172-3185): (0,0) -> (100,0) -> (100,100) with r5 between: the line ends at
+// (95,0), a 90 degree CCW arc about (95,5) to (100,5), then the second line.
+TEST(Contour, RadiusCornerWordWithoutCompensation) {
+  Fixture f;
+  f.k.Sync({});
+  f.Move({0, 0}, {100, 0}, 1, true);
+  f.k.Corner('r', 5, 2);
+  f.Move({100, 0}, {100, 100}, 3);
+  f.k.Release();
+  f.Drain();
+  ASSERT_EQ(f.out.size(), 3u);
+  EXPECT_NEAR(f.At(0).x, 95, 1e-9);
+  const ArcOp& a = f.out[1].As<ArcOp>();
+  EXPECT_EQ(f.out[1].line, 2);
+  EXPECT_FALSE(a.cw);
+  EXPECT_NEAR(a.center[0], 95, 1e-9);
+  EXPECT_NEAR(a.center[1], 5, 1e-9);
+  EXPECT_NEAR(a.angle, 90, 1e-9);
+  EXPECT_NEAR(f.At(2).y, 100, 1e-9);
+}
+
+// Bevel b5 (ln 3190-3200) between (50,0)->(150,50) and (150,50)->(100,50): 5 back along the first from the
+// corner, 5 along the second.
+TEST(Contour, Bevel) {
+  Fixture f;
+  f.k.Sync({});
+  f.Move({0, 0}, {50, 0}, 1);
+  f.Move({50, 0}, {150, 50}, 2, true);
+  f.k.Corner('b', 5, 3);
+  f.Move({150, 50}, {100, 50}, 4);
+  f.k.Release();
+  f.Drain();
+  ASSERT_EQ(f.out.size(), 4u);
+  double len = std::hypot(100.0, 50.0);
+  EXPECT_NEAR(f.At(1).x, 150 - 5 * 100 / len, 1e-9);
+  EXPECT_NEAR(f.At(1).y, 50 - 5 * 50 / len, 1e-9);
+  EXPECT_NEAR(f.At(2).x, 145, 1e-9);
+  EXPECT_NEAR(f.At(2).y, 50, 1e-9);
+}
+
+// G41 radius 5 round a square corner, (0,0) start: start move to (10,5) at 90 degrees to the first line
+// (10,0)->(50,0) (left of +X is +Y), the inside corner with (50,0)->(50,40) at (45,5), the G40 exit move
+// from the second line's offset end (45,40) to the programmed (50,60).
+TEST(Contour, StartCornerAndExit) {
+  Fixture f;
+  f.k.Sync({});
+  f.k.Start(geom::kLeft, 5, 41);
+  f.Move({0, 0}, {10, 0}, 1);
+  f.Move({10, 0}, {50, 0}, 2);
+  f.Move({50, 0}, {50, 40}, 3);
+  f.k.Stop();
+  f.Move({50, 40}, {50, 60}, 4);
+  f.Drain();
+  ASSERT_EQ(f.out.size(), 4u);
+  EXPECT_NEAR(f.At(0).x, 10, 1e-9);
+  EXPECT_NEAR(f.At(0).y, 5, 1e-9);
+  EXPECT_NEAR(f.At(1).x, 45, 1e-9);
+  EXPECT_NEAR(f.At(1).y, 5, 1e-9);
+  EXPECT_NEAR(f.At(2).x, 45, 1e-9);
+  EXPECT_NEAR(f.At(2).y, 40, 1e-9);
+  EXPECT_NEAR(f.At(3).x, 50, 1e-9);
+  EXPECT_NEAR(f.At(3).y, 60, 1e-9);
+  EXPECT_FALSE(f.k.engaged());
+}
+
+// An outside corner meets at the intersection of the offset lines; r0 rolls round it instead (ln 3186).
+TEST(Contour, OutsideCornerIntersectionOrRoll) {
+  for (bool roll : {false, true}) {
+    Fixture f;
+    f.k.Sync({});
+    f.k.Start(geom::kRight, 5, 42);
+    f.Move({0, 0}, {10, 0}, 1);
+    f.Move({10, 0}, {50, 0}, 2);
+    if (roll) f.k.Corner('r', 0, 3);
+    f.Move({50, 0}, {50, 40}, 4);
+    f.k.Release();
+    f.Drain();
+    if (!roll) {
+      ASSERT_EQ(f.out.size(), 3u);
+      EXPECT_NEAR(f.At(1).x, 55, 1e-9);  // right of +X is -Y, right of +Y is +X: (55,-5)
+      EXPECT_NEAR(f.At(1).y, -5, 1e-9);
+    } else {
+      ASSERT_EQ(f.out.size(), 4u);
+      EXPECT_NEAR(f.At(1).x, 50, 1e-9);  // (50,-5), a 90 degree arc about (50,0) to (55,0)
+      EXPECT_NEAR(f.At(1).y, -5, 1e-9);
+      EXPECT_NEAR(f.out[2].As<ArcOp>().angle, 90, 1e-9);
+      EXPECT_NEAR(f.At(2).x, 55, 1e-9);
+      EXPECT_NEAR(f.At(2).y, 0, 1e-9);
+    }
+  }
+}
+
+TEST(Contour, InsideArcSmallerThanTheCutterIsAnError) {
+  Fixture f;
+  f.k.Sync({});
+  f.k.Start(geom::kLeft, 5, 41);
+  f.Move({0, 0}, {10, 0}, 1);
+  Path arc;
+  arc.arc = true;
+  arc.start = {10, 0};
+  arc.end = {10, 6};
+  arc.center = {10, 3};
+  arc.cw = false;  // CCW with the cutter on the left: inside, radius 3 < 5
+  arc.sweep = 180;
+  Canon c = Line(10, 6, 2);
+  EXPECT_THROW(f.k.Take(std::move(c), &arc, false), ContourError);
+}
+
+}  // namespace
+}  // namespace cell::interp::balt

@@ -1,0 +1,117 @@
+// Runs through the library: what the CLI corpus cannot see (variables in and out, files saved for the
+// station, library look-ups, the environment's probe answers).
+#include <gtest/gtest.h>
+
+#include <map>
+
+#include "cell/interp/balt.h"
+
+namespace cell::interp {
+namespace {
+
+std::vector<Canon> RunAll(RunOptions opt, std::unique_ptr<cell::interp::Run>* keep = nullptr, std::string* error = nullptr) {
+  opt.program_name = "test";
+  auto run = BaltDialect().StartRun(opt);
+  std::vector<Canon> out;
+  for (;;) {
+    Step s = run->Next();
+    if (s.kind == Step::kCanon) {
+      out.push_back(s.canon);
+      continue;
+    }
+    if (s.kind == Step::kError && error) *error = s.diag.Format();
+    break;
+  }
+  if (keep) *keep = std::move(run);
+  return out;
+}
+
+// E parameters come in by their names and go out changed (DESIGN §6 station vars).
+TEST(BaltRun, VariablesInAndOut) {
+  RunOptions opt;
+  opt.variables = {{"E30", 2.5}, {"E1", 7}, {"L5", 1}};
+  opt.program_text = "E31=E30*2\nE2=E1+0.6\nE25=0.1\n";
+  std::unique_ptr<cell::interp::Run> run;
+  RunAll(opt, &run);
+  auto v = run->Variables();
+  EXPECT_DOUBLE_EQ(v["E30"], 2.5);
+  EXPECT_DOUBLE_EQ(v["E31"], 5);
+  EXPECT_DOUBLE_EQ(v["E2"], 8);  // a byte: 7.6 rounds to 8
+  EXPECT_DOUBLE_EQ(v["E25"], static_cast<double>(0.1f));  // RE keeps 7 digits
+  EXPECT_EQ(v.count("L5"), 0u);
+}
+
+// RQO changes the origin file, TOF the tool life file: both are handed to `save` for the station's memory.
+TEST(BaltRun, SavesTheFilesItChanges) {
+  std::map<std::string, std::string> lib = {
+      {"FILEOR", "0 X0 Y0 Z0\n3 X10\n"},
+      {"GE1TOL", "VTU,13,T14,[TOOL COMP]14,t60,t2,t60,B\nVTU,14,T14,[TOOL COMP]14,t60,t2,t60,B\n"}};
+  std::map<std::string, std::string> saved;
+  RunOptions opt;
+  opt.library = [&](const std::string& n) -> std::optional<std::string> {
+    auto it = lib.find(n);
+    return it == lib.end() ? std::nullopt : std::optional<std::string>(it->second);
+  };
+  opt.save = [&](const std::string& n, const std::string& text) { saved[n] = text; };
+  opt.program_text = "E31=0.25\n(RQO,3,XE31)\nT13.13 M6\n(TOF,13)\nM30\n";
+  std::string err;
+  RunAll(opt, nullptr, &err);
+  EXPECT_EQ(err, "");
+  EXPECT_NE(saved["FILEOR"].find("3 X+10.250"), std::string::npos) << saved["FILEOR"];
+  EXPECT_NE(saved["GE1TOL"].find("VTU,13,T14,[TOOL COMP]14,t60,t2,t60,A"), std::string::npos) << saved["GE1TOL"];
+}
+
+// RQU changes the tool table the run hands back (Run::Tools) and says so in a tool_data op.
+TEST(BaltRun, RequalificationChangesTheToolTable) {
+  RunOptions opt;
+  opt.tools = BaltDialect().ParseToolTable("10 Z100 K20\n", "t", {});
+  opt.program_text = "(RQU,10,10,Z0.2,K-0.1)\n";
+  std::unique_ptr<cell::interp::Run> run;
+  auto out = RunAll(opt, &run);
+  ASSERT_FALSE(out.empty());
+  EXPECT_EQ(out.back().op(), Op::kToolData);
+  auto t = run->Tools();
+  EXPECT_NEAR(t.Find("10")->length, 100.2, 1e-9);
+  EXPECT_NEAR(t.Find("10")->diameter, 19.9, 1e-9);
+}
+
+// A probe contact from the environment: G72 stores the touching point, probe-radius compensated.
+class Wall : public Environment {
+ public:
+  ProbeResult Probe(bool contact, const AxisArray& from, const AxisArray& to) override {
+    (void)contact;
+    ProbeResult r;
+    if ((from[kX] - 50) * (to[kX] - 50) <= 0) {
+      r.event = true;
+      r.at = from;
+      r.at[kX] = 50;
+    }
+    return r;
+  }
+};
+
+TEST(BaltRun, ProbeThroughTheEnvironment) {
+  Wall wall;
+  RunOptions opt;
+  opt.env = &wall;
+  opt.tools = BaltDialect().ParseToolTable("30 Z0 K6\n", "t", {});
+  opt.program_text = "T30.30 M6\n(DPT,10,5,500)\nG72 X50 Y0 E40\n";
+  std::unique_ptr<cell::interp::Run> run;
+  std::string err;
+  RunAll(opt, &run, &err);
+  EXPECT_EQ(err, "");
+  EXPECT_NEAR(run->Variables()["E40"], 50, 1e-9);
+  EXPECT_NEAR(run->Variables()["E41"], 0, 1e-9);
+}
+
+TEST(BaltRun, ReportsTheFirstErrorWithItsAlarm) {
+  RunOptions opt;
+  opt.program_text = "G1 X10 F100\n(BNC,NOWHR)\n";
+  std::string err;
+  auto out = RunAll(opt, nullptr, &err);
+  EXPECT_EQ(err, "test:2:6: error: [FILMS4 34] UNDEFINED LABEL: \"NOWHR\"");
+  EXPECT_EQ(out.size(), 2u);  // units and the move before the error
+}
+
+}  // namespace
+}  // namespace cell::interp
