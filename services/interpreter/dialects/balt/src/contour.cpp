@@ -412,6 +412,18 @@ void Contour::Take(Canon&& c, const Path* path, bool hold) {
   }
 
   // Compensation on.
+  if (plan_ == kStopPlan && !path->arc) {
+    // The exit move (ln 3130): the held element ends at 90 degrees at its end, then straight to the
+    // programmed end point.
+    if (corner_) Undefined("a radius or bevel before the G40 move");
+    if (held_) EmitHeld(hold_.kind == kRamp ? hold_.path.end + r_ * SideNormal(EndTangent(hold_.path), side_)
+                                            : OffsetEnd(hold_.path, r_, side_),
+                        0);
+    plan_ = kNoPlan;
+    on_ = false;
+    Out(std::move(next.c));
+    return;
+  }
   if (!held_) {
     next.start = OffsetStart(next.path, r_, side_);
     if (Norm(next.start - actual_) >= kTiny) Out(Straight(next.c, next.start));
@@ -422,17 +434,14 @@ void Contour::Take(Canon&& c, const Path* path, bool hold) {
   if (plan_ == kStopPlan) {
     plan_ = kNoPlan;
     on_ = false;
-    if (!path->arc) {
-      Out(std::move(next.c));  // the exit move: from the offset point to the programmed end (ln 3130)
-      return;
-    }
     // An arc in the G40 block (ln 3141-3155): cut compensated, then straight to its programmed end point.
     Vec2 e = OffsetEnd(next.path, r_, side_);
     hold_ = std::move(next);
     held_ = true;
     Canon exit = Straight(hold_.c, hold_.path.end);
+    const bool away = Norm(e - hold_.path.end) >= kTiny;
     EmitHeld(e, 0);
-    Out(std::move(exit));
+    if (away) Out(std::move(exit));
     return;
   }
   hold_ = std::move(next);

@@ -122,7 +122,7 @@ void BaltRun::ArcMove(const ParsedBlock& pb, const BlockG& g, const Targets& t_i
   mach[p1] = end.x;
   mach[p2] = end.y;
   EmitMotion(Op::kArc, mach, moved, feed, path, {}, 0, turns);
-  prog_ = t_in.prog;
+  prog_ = t.prog;  // paraxial factors included: axes left out of the next block stay where they are
   if (full) {
     prog_[p1] = start_prog[p1];
     prog_[p2] = start_prog[p2];

@@ -212,9 +212,9 @@ void BaltRun::ExecLine(const Line& line) {
     f.data.started = true;
     return;
   }
-  f.data.started = true;
   if (text.size() > kMaxBlockChars) Fail(128, 16, "a block has fewer than 128 characters");
   if (t[0] == ';') return;  // comment block
+  f.data.started = true;
   const std::size_t li = frames_->depth() - 1;
   ParsedBlock fresh;
   const ParsedBlock* cached = nullptr;

@@ -204,7 +204,7 @@ void BaltRun::LinearMove(const ParsedBlock& pb, const BlockG& g, const Targets& 
     moved &= ~index_mask;
   }
   EmitMotion(rapid || index_mask == moved ? Op::kRapid : Op::kLinear, mach, moved, feed, path, travel, travel_mask, 0);
-  prog_ = t_in.prog;
+  prog_ = t.prog;  // paraxial factors included: axes left out of the next block stay where they are
   prog_valid_ = !g.g79;
 }
 

@@ -50,6 +50,7 @@ const tooltable::ToolEntry* BaltRun::FindOffset(int n) const {
 void BaltRun::ToolChange(int col) {
   if (next_tool_ < 0) Fail(col, 49, "M06 without T");
   int tool = next_tool_, offset = next_offset_;
+  const int requested = tool;
   if (life_ && tool > 0) {
     auto it = life_->tools.find(tool);
     if (it == life_->tools.end()) Fail(next_tool_col_, 82, fmt::format("tool {} is not in the tool life file", tool));
@@ -66,7 +67,7 @@ void BaltRun::ToolChange(int col) {
       // ln 8480-8493: the alternative; a tool alternative to itself ends in FILMS4 72, to T0 in the
       // machine logic's message.
       if (t.alt_tool == 0) Fail(next_tool_col_, 56, fmt::format("tool {} is out of use and has no alternative", t.tool));
-      if (seen.count(t.alt_tool)) Fail(next_tool_col_, 72, fmt::format("tool {} and its alternatives", tool));
+      if (seen.count(t.alt_tool)) Fail(next_tool_col_, 72, fmt::format("tool {} and its alternatives", requested));
       seen.insert(t.alt_tool);
       offset = t.alt_offset;
       it = life_->tools.find(t.alt_tool);

@@ -1,0 +1,131 @@
+"""The negative corpus: the manual's machining messages FILMS4 nn (Table 8.6, ln 9794-9914; conditions
+ln 9916-10221). A run stops at its first error; what it produced before stays (DESIGN §4)."""
+from corpus import Case
+
+
+def neg(name, program, line, col, code, text, cite, ops=(), **files):
+    c = Case(name, program, cite, **files)
+    for o in ops:
+        o(c)
+    c.error(line, col, code, text)
+    return c
+
+
+def units(line):
+    return lambda c: c.units(line)
+
+
+# FILMS4 11 SYNTAX ERROR (ln 9950-9956): illegal character, a G after other words (ln 2595), a missing
+# closing bracket.
+neg("neg_syntax_illegal_character", "; ln 9950\nG1 X10 ? F100\n", 2, 8, 11, "SYNTAX ERROR: illegal character '?'", "L9950")
+neg("neg_syntax_g_after_words", "; ln 2595\nX10 G1 F100\n", 2, 5, 11,
+    "SYNTAX ERROR: G functions must come before the other words of the block", "L2595")
+neg("neg_syntax_bracket_missing", "; ln 9956\n(URT,45\n", 2, 1, 11, "SYNTAX ERROR: closing bracket missing", "L9956")
+# FILMS4 12 DATA MISSING: a circle with neither I J nor R.
+neg("neg_arc_without_centre", "; ln 2750\nG2 X10 Y10 F100\n", 2, 1, 12,
+    "DATA MISSING: a circle needs I and J (or R)", "L2750")
+# FILMS4 13 FORMAT ERROR: a byte parameter out of 0-255 (Table 5.8).
+neg("neg_byte_parameter_overflow", "; ln 5417 E0-E9 are bytes\nE1=300\n", 2, 1, 13,
+    "FORMAT ERROR: E1 is a byte (0 to 255): 300", "L5417")
+# FILMS4 16 a block of 128 characters or more (ln 2326).
+neg("neg_block_too_long", "; ln 2326\nG1 X10 Y10 F100" + " " * 120 + "\n", 2, 128, 16,
+    "STRING TOO LONG: a block has fewer than 128 characters", "L2326")
+# FILMS4 17 a G code that does not exist (ln 2593), a function that does not exist.
+neg("neg_nonexistent_g", "; ln 2593\nG45 X10\n", 2, 1, 17, "NON EXISTENT FUNCTION: G45 does not exist on this control", "L2593")
+neg("neg_nonexistent_function", "; ln 5437-5466\nE30=SINH(1)\n", 2, 5, 17,
+    "NON EXISTENT FUNCTION: SINH is not a function", "L5437")
+# FILMS4 19 PARAMETER OVERFLOW: division by zero (ln 9975).
+neg("neg_division_by_zero", "; ln 9975\nE31=0\nE30=10/E31\n", 3, 7, 19, "PARAMETER OVERFLOW: division by zero", "L9975")
+# FILMS4 21 more than 8 G functions (ln 9979).
+neg("neg_too_many_g", "; ln 9979\nG1 G90 G94 G97 G17 G27 G71 G40 G80\n", 2, 32, 21,
+    "ILLEGAL NUMBER OF OPERATORS: more than 8 G functions in the block", "L9979")
+# FILMS4 23: more than 3 axes (ln 2699), more than 4 M (ln 9992).
+neg("neg_four_axes", "; ln 2699\nG X10 Y10 Z10 A5\n", 2, 15, 23,
+    "ILLEGAL NUMBER OF OPERANDS: more than 3 axes in a block", "L2699")
+neg("neg_five_m", "; ln 2706, 9992\nS100 M3 M7 M8 M10 M11\n", 2, 19, 23,
+    "ILLEGAL NUMBER OF OPERANDS: more than 4 M functions in a block", "L9992")
+# FILMS4 25 BLOCK DOES NOT MATCH: G17 not alone (ln 2956), G00 with G01 (Table 5.5), a second cycle
+# without G80 (ln 3331), a fixed cycle with compensation (ln 3208), the start of compensation on an arc
+# (ln 3088), GTL in G91 (ln 4369).
+neg("neg_g17_not_alone", "; ln 2956\nG17 X10\n", 2, 1, 25, "BLOCK DOES NOT MATCH: G17 must be alone in its block", "L2956")
+neg("neg_g00_with_g01", "; Table 5.5 ln 2620\nG0 G1 X10\n", 2, 4, 25,
+    "BLOCK DOES NOT MATCH: G00 and G01 in one block (Table 5.5)", "L2620")
+neg("neg_cycle_without_g80", "; ln 3331\nG81 R2 Z-10 F100\nG82 R2 Z-5\n", 3, 1, 25,
+    "BLOCK DOES NOT MATCH: G81 is active: close it with G80 first (ln 3331)", "L3331")
+neg("neg_cycle_with_compensation", "; ln 3208\nG1 G41 X10 Y0 F100\nG81 R2 Z-10\n", 3, 1, 25,
+    "BLOCK DOES NOT MATCH: fixed cycles with cutter compensation on", "L3208", ops=(units(2),))
+neg("neg_compensation_starts_on_arc", "; ln 3088\nG41\nG2 X20 Y0 I10 J0 F100\n", 3, 1, 25,
+    "BLOCK DOES NOT MATCH: the G41 start move must be linear (G00/G01)", "L3088", ops=(units(3),))
+neg("neg_gtl_incremental", "; ln 4369\nl1=X0 Y0,a0\nG91 F100\nG21 l1\n", 4, 1, 25,
+    "BLOCK DOES NOT MATCH: GTL works in G90 only (ln 4369)", "L4369")
+# FILMS4 30 probing without DPT (ln 7520).
+neg("neg_probe_without_dpt", "; ln 7520\nG72 Z-10 E30\n", 2, 1, 30,
+    "PROBING PARAMETERS UNDEFINED: program (DPT,Qa,Qs,Vm) first", "L7520")
+# FILMS4 08 no contact within Qs with ERR=0 (ln 7528): the probe move is out, then the error.
+c = neg("neg_probe_no_contact", "; ln 7528, 9941\n(DPT,10,5,500)\nG72 Z-10 E30\n", 3, 1, 8,
+        "MEASUREMENT MISMATCH: no contact within the safety distance Qs", "L7528")
+c.units(3)
+c.rapid(3, z=0)
+c.ops.pop()
+c.touch("z")
+c.probe(3, 72, 500, "none", z=-15)
+c.rapid(3, z=0)
+# FILMS4 31 ERP without RPT, a fourth RPT level (ln 5930).
+neg("neg_erp_without_rpt", "; ln 10029\n(ERP)\n", 2, 1, 31, "RPT NEST >3 OR ERP WITHOUT RPT: ERP without RPT", "L10029")
+neg("neg_rpt_four_levels", "; ln 5930\n(RPT,2)\n(RPT,2)\n(RPT,2)\n(RPT,2)\n", 5, 1, 31,
+    "RPT NEST >3 OR ERP WITHOUT RPT: a fourth RPT level", "L5930")
+# FILMS4 32 a third call level (ln 5944): MAIN -> A -> B -> C.
+neg("neg_subroutine_third_level", "; ln 5944\n(CLS,SUBA)\n", 2, 1, 32,
+    "SUBROUTINE NEST >2: (CLS,SUBC) is a third call level (in SUBB line 1)", "L5944",
+    **{"lib/SUBA": "(CLS,SUBB)\n", "lib/SUBB": "(CLS,SUBC)\n", "lib/SUBC": "G X1\n"})
+# FILMS4 33 EPP inside EPP (ln 6082).
+neg("neg_epp_nested", '; ln 6082\n"A" N1\n(EPP,C,D)\n"B" N3\n"C" N4\n"D" N5\n(EPP,A,B)\n', 3, 1, 33,
+    "EPP NEST >1: EPP inside EPP", "L6082")
+# FILMS4 34 / 37 labels (ln 10035-10049).
+neg("neg_undefined_label", "; ln 10035\n(BNC,LAB9)\n", 2, 6, 34, 'UNDEFINED LABEL: "LAB9"', "L10035")
+neg("neg_duplicated_label", '; ln 10043\n"L1" N1\n"L1" N2\n(BNC,L1)\n', 4, 6, 37, 'DUPLICATED LABEL: "L1"', "L10043")
+# FILMS4 35 RPT not closed at the end (ln 10038).
+neg("neg_rpt_not_closed", "; ln 10038\n(RPT,2)\nG X1\n", 3, 1, 35,
+    "RPT OR EPP CYCLE NOT CLOSED: RPT without ERP at the end of the program", "L10038",
+    ops=(units(3), lambda c: c.rapid(3, x=1)))
+# FILMS4 36 a subroutine that does not exist (ln 10040).
+neg("neg_subroutine_missing", "; ln 10040\n(CLS,NOSUB)\n", 2, 6, 36, "WRONG DATA SET: program NOSUB not found", "L10040")
+# FILMS4 44 an offset not in the offsets file (ln 10058).
+neg("neg_offset_not_in_file", "; ln 10058\nT5.5 M6\n", 2, 1, 44, "OFFSET NON EXISTENT: offset 5 is not in FI1COR", "L10058",
+    ops=(units(2), lambda c: c.op("tool_select", 2, tool="5")), tools="1 Z100 K10\n")
+# FILMS4 48 spindle on without S; FILMS4 49 M06 without T (ln 10064-10069).
+neg("neg_spindle_without_s", "; ln 10064\nM3\n", 2, 1, 48, "S NOT DEFINED: M03 without S", "L10064")
+neg("neg_m06_without_t", "; ln 10069\nM6\n", 2, 1, 49, "T NOT DEFINED: M06 without T", "L10069")
+# FILMS4 59 a keyboard-only variable in a program (Table 4.3).
+neg("neg_keyboard_only_variable", "; ln 2171 UAS is keyboard only\nUAS=1\n", 2, 1, 59,
+    "BLOCK NOT ALLOWED: UAS is set from the keyboard only", "L2171")
+# FILMS4 72 mutually alternative tools (ln 10115), FILMS4 82 a tool not in the tool life file (ln 10142).
+neg("neg_tool_monitoring_loop", "; ln 10115\nT1.1 M6\n", 2, 1, 72, "TOOL MONITORING LOOP: tool 1 and its alternatives", "L10115",
+    ops=(units(2), lambda c: c.op("tool_select", 2, tool="1")),
+    **{"lib/GE1TOL": "VTU,1,T2,[TOOL COMP]2,t60,t2,t0,D\nVTU,2,T1,[TOOL COMP]1,t60,t2,t0,D\n"})
+neg("neg_tool_not_allowed", "; ln 10142\nT3.3 M6\n", 2, 1, 82, "T NOT ALLOWED: tool 3 is not in the tool life file", "L10142",
+    ops=(units(2), lambda c: c.op("tool_select", 2, tool="3")),
+    **{"lib/GE1TOL": "VTU,1,T1,[TOOL COMP]1,t60,t2,t60,B\n"})
+# FILMS4 03 beyond the DLO limits, FILMS4 84 into a protected area: refused before the move (ln 6633-6664,
+# 6874-6914).
+neg("neg_dlo_limit", "; ln 6652\n(DLO,X300 X-300)\nG X200\nG X350\n", 4, 3, 3, "OUT OF OPERATING LIMITS: X outside -300.000 .. 300.000 (DLO)",
+    "L6652", ops=(units(3), lambda c: c.rapid(3, x=200)))
+neg("neg_protected_area", "; ln 6900-6911\nN1 (DSA,1,X-300 X-100,Y-100 Y100)\nN3 (ASC,1)\nG X-50 Y0\nG X-400\n", 5, 3, 84,
+    "VIOLATION OF PROTECTED AREA: the move enters protected area 1", "L6900",
+    ops=(units(4), lambda c: c.rapid(4, x=-50, y=0)))
+# FILMS4 77 UNDEFINED PROFILE: GTL elements that do not meet; a radius larger than an inside arc with
+# compensation (ln 3211).
+neg("neg_gtl_no_intersection", "; ln 10125\nl1=X0 Y0,a0\nl2=X0 Y10,a0\np1=l1,l2\n", 4, 4, 77,
+    "UNDEFINED PROFILE: the elements do not intersect", "L10125")
+# FILMS4 86 a feed move without F (ln 10150); FILMS4 88 a cycle on an axis that is not a spindle
+# (ln 10154); FILMS4 94 the end of the text with a cycle open (ln 10168); FILMS4 96 a helix without its
+# axis (ln 10171).
+neg("neg_feed_not_programmed", "; ln 10150\nG1 X10\n", 2, 4, 86, "FEEDRATE NOT PROGRAMMED: no F programmed", "L10150")
+neg("neg_cycle_axis", "; ln 10154\nG81 R2 U-10 F100\n", 2, 8, 88, "UNDEFINED CANNED CYCLE: U is not a spindle axis", "L10154")
+neg("neg_incomplete_program", "; ln 10168\nG81 R2 Z-10 F100\n", 2, 1, 94,
+    "INCOMPLETE PROGRAM: fixed cycle G81 still active (G80 missing)", "L10168")
+neg("neg_helix_without_axis", "; ln 10171\nG3 X10 Y0 I5 J0 K2 F100\n", 2, 17, 96,
+    "AXIS NOT BELONGING TO WORK PLANE: a helix needs the axis perpendicular to the plane", "L10171")
+# FILMS4 103 the lathe configuration (CTL,T) (ln 6666-6679), virtual axes (UAV).
+neg("neg_lathe_configuration", "; ln 6673\n(CTL,T)\n", 2, 1, 103,
+    "FUNCTION NOT CONFIGURED: the lathe configuration (CTL,T) is not characterized here", "L6673")
