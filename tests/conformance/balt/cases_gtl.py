@@ -51,12 +51,15 @@ def meet_lines(a, b):
 
 
 def line_circle(l, c):
-    """The points of line l on circle c in the line's direction."""
+    """The points of line l on circle c in the line's direction (none when they do not meet)."""
     _, p, d = l
     _, cc, rr = c
+    rr = abs(rr)
     t0 = dot(sub(cc, p), d)
     foot = add(p, d, t0)
     h = math.hypot(*sub(cc, foot))
+    if h > rr + 1e-6:
+        return []
     s = math.sqrt(max(0.0, rr * rr - h * h))
     return [add(foot, d, -s), add(foot, d, s)]
 
@@ -65,6 +68,8 @@ def circle_circle(a, b):
     """Left, then right of the line from a's centre to b's."""
     c1, r1, c2, r2 = a[1], abs(a[2]), b[1], abs(b[2])
     d = math.hypot(*sub(c2, c1))
+    if d > r1 + r2 + 1e-6 or d < abs(r1 - r2) - 1e-6:
+        return []
     u = unit(sub(c2, c1))
     x = (r1 * r1 - r2 * r2 + d * d) / (2 * d)
     h = math.sqrt(max(0.0, r1 * r1 - x * x))
@@ -80,7 +85,9 @@ def tangent_at(e, pt):
 
 
 def touch(circ, e):
-    """Where circle circ touches element e."""
+    """Where circle circ touches element e (a point: the point)."""
+    if e[0] == "p":
+        return e[1]
     if e[0] == "l":
         _, p, d = e
         t = dot(sub(circ[1], p), d)
@@ -101,6 +108,8 @@ def fillet(a, b, rr):
     def locus(e):
         if e[0] == "l":
             return ("l", add(e[1], left(e[2]), rr), e[2])
+        if e[0] == "p":
+            return ("c", e[1], abs(rr))
         return ("c", e[1], abs(e[2] - rr))
     la, lb = locus(a), locus(b)
     if la[0] == "l" and lb[0] == "l":
@@ -113,6 +122,12 @@ def fillet(a, b, rr):
         cands = circle_circle(la, lb)
     best = min(cands, key=lambda cc: ccw_angle(cc, touch(C(cc, rr), a), touch(C(cc, rr), b), rr < 0))
     return C(best, rr)
+
+
+def tangent_line(circ, ang):
+    """l = c, a..: touching the circle where it runs at angle `ang` (its centre r to the line's left)."""
+    d = (math.cos(math.radians(ang)), math.sin(math.radians(ang)))
+    return ("l", add(circ[1], left(d), -circ[2]), d)
 
 
 def crossings(a, b):
@@ -403,3 +418,176 @@ for stock in (2.0, 0.0):
 c.rapid("N31", z=20)
 c.rapid("N32", x=0, y=0)
 c.op("end", "N32", m=30, shuttle=False)
+
+
+# ln 5276-5313 (Fig 5.92) GTL Example 2 (scan fixes: G21G42l7, l6 = X0Y0,X-10Y-20, l7 = X-50Y0,a90,
+# G20G40l1): a closed profile re-using l1, l2 and l4; "c2 s2" and "c3 s2" leave the circles at their second
+# crossings along the lines; no cutter radius.
+e2 = {
+    "l1": L((-50, 10), q=(30, 50)), "l2": L((30, 50), q=(70, 10)), "l3": L((70, 0), -90),
+    "l4": L((0, -20), 180), "l5": L((10, -20), q=(0, 0)), "l6": L((0, 0), q=(-10, -20)),
+    "l7": L((-50, 0), 90), "c1": C((-10, 40), 18), "c2": C((50, 30), -14), "c3": C((40, -20), 10),
+}
+start = meet_lines(e2["l7"], e2["l1"])
+f1 = radius_between(e2["l1"], e2["c1"], -8)
+f2 = radius_between(e2["c1"], e2["l1"], -8)
+f3 = radius_between(e2["l3"], e2["l4"], -10)
+f4 = radius_between(e2["l4"], e2["l5"], -8)
+f5 = radius_between(e2["l6"], e2["l4"], -8)
+f6 = radius_between(e2["l4"], e2["l7"], -10)
+x12 = meet_lines(e2["l1"], e2["l2"])
+lc2 = line_circle(e2["l2"], e2["c2"])
+x23 = meet_lines(e2["l2"], e2["l3"])
+lc3 = line_circle(e2["l4"], e2["c3"])
+x56 = meet_lines(e2["l5"], e2["l6"])
+c = Case("gtl_example_2", """
+; ln 5276-5313 (Fig 5.92) GTL Example 2
+N2 l1=X-50Y10,X30Y50
+N3 l2=X30Y50,X70Y10
+N4 l3=X70Y0,a-90
+N5 l4=X0Y-20,a180
+N6 l5=X10Y-20,X0Y0
+N7 l6=X0Y0,X-10Y-20
+N8 l7=X-50Y0,a90
+N9 c1=I-10J40r18
+N10 c2=I50J30r-14
+N11 c3=I40J-20r10
+N12 S100 M3 T3.3 M6 F300
+N13 G0X-30Y0
+N14 Z-10
+N15 G21G42l7
+N16 l1
+N17 r-8
+N18 c1
+N19 r-8
+N20 l1
+N21 l2
+N22 c2s2
+N23 l2
+N24 l3
+N25 r-10
+N26 l4
+N27 c3s2
+N28 l4
+N29 r-8
+N30 l5
+N31 l6
+N32 r-8
+N33 l4
+N34 r-10
+N35 l7
+N36 G20G40l1
+N37 G0Z0
+""", "L5276")
+c.units("N12")
+c.op("tool_select", "N12", tool="3")
+c.spindle("N12", "cw", 100)
+c.op("tool_change", "N12", tool="3", offset=3)
+c.rapid("N13", x=-30, y=0)
+c.rapid("N14", z=-10)
+c.lin("N15", 300, x=start[0], y=start[1])
+pr = Profile(c, 300)
+g = e2
+chain = [("N16", g["l1"], start, touch(f1, g["l1"])), ("N17", f1, touch(f1, g["l1"]), touch(f1, g["c1"])),
+         ("N18", g["c1"], touch(f1, g["c1"]), touch(f2, g["c1"])), ("N19", f2, touch(f2, g["c1"]), touch(f2, g["l1"])),
+         ("N20", g["l1"], touch(f2, g["l1"]), x12), ("N21", g["l2"], x12, lc2[0]), ("N22", g["c2"], lc2[0], lc2[1]),
+         ("N23", g["l2"], lc2[1], x23), ("N24", g["l3"], x23, touch(f3, g["l3"])),
+         ("N25", f3, touch(f3, g["l3"]), touch(f3, g["l4"])), ("N26", g["l4"], touch(f3, g["l4"]), lc3[0]),
+         ("N27", g["c3"], lc3[0], lc3[1]), ("N28", g["l4"], lc3[1], touch(f4, g["l4"])),
+         ("N29", f4, touch(f4, g["l4"]), touch(f4, g["l5"])), ("N30", g["l5"], touch(f4, g["l5"]), x56),
+         ("N31", g["l6"], x56, touch(f5, g["l6"])), ("N32", f5, touch(f5, g["l6"]), touch(f5, g["l4"])),
+         ("N33", g["l4"], touch(f5, g["l4"]), touch(f6, g["l4"])), ("N34", f6, touch(f6, g["l4"]), touch(f6, g["l7"])),
+         ("N35", g["l7"], touch(f6, g["l7"]), start)]
+for ln, e, a, b in chain:
+    pr.seg(ln, e, a, b)
+c.rapid("N37", z=0)
+
+# ln 5322-5362 (Fig 5.93) GTL Example 3: origin o1, tangent lines l3 l4 of c6 (they touch it: the profile
+# passes from l3 onto c6 and off to l4 at the tangency points), p2 the left crossing of c3 and c4, c2 the
+# radius 40 through p3 touching c1; the radius 40 joins l7 and c1, which do not meet; N23 "r5" at a right
+# turn is taken as r-5 (a judgement call); no cutter radius.
+o1 = ((20, 21), 45)
+c6 = C(add(o1[0], rot(-38, -35, 45)), 10)
+e3 = {
+    "l1": L((0, -60), 180), "l2": L((50, 0), 90), "c6": c6, "l3": tangent_line(c6, 135), "l4": tangent_line(c6, -45),
+    "l5": L((0, -50), 180), "l6": L((-50, -65), 60), "l7": L((-25, 0), 90), "c3": C((-65, 0), 55),
+    "c4": C((0, 80), 55), "c5": C((55, 80), 13), "l8": L((70, 0), -90),
+}
+p2 = circle_circle(e3["c3"], e3["c4"])[0]
+e3["c1"] = C(p2, -15)
+e3["c2"] = fillet(e3["c1"], ("p", (40, 80)), 40)
+start = meet_lines(e3["l8"], e3["l1"])
+g = e3
+fa = radius_between(g["l1"], g["l2"], 5)
+fb = radius_between(g["l2"], g["l3"], 12)
+fc = radius_between(g["l7"], g["c1"], 40)
+fd = radius_between(g["c2"], g["c5"], -5)
+fe = radius_between(g["c5"], g["l8"], -5)
+t3 = touch(g["c6"], g["l3"])
+t4 = touch(g["c6"], g["l4"])
+x45 = meet_lines(g["l4"], g["l5"])
+x56 = meet_lines(g["l5"], g["l6"])
+x67 = meet_lines(g["l6"], g["l7"])
+x12c = circle_circle(g["c1"], g["c2"])[0]
+c = Case("gtl_example_3", """
+; ln 5322-5362 (Fig 5.93) GTL Example 3
+N2 S100 F200 T1.1 M6
+N3 o1 = X20 Y21 a45
+N4 l1 = X0 Y-60a180
+N5 l2 = X50 Y0,a90
+N6 c6 = o1 I-38 J-35 r10
+N7 l3 = c6,a135
+N8 l4 = c6,a-45
+N9 l5 = X0 Y-50,a180
+N10 l6 = X-50 Y-65,a60
+N11 l7 = X-25 Y0,a90
+N12 c3 = I-65 J0 r55
+N13 c4 = I0 J80 r55
+N14 p2 = c3,c4
+N15 c1 = p2,r-15
+N16 p3 = X40 Y80
+N17 c2 = c1,p3,r40
+N18 c5 = I55 J80 r13
+N19 l8 = X70 Y0,a-90
+N20 G21 G42 l8
+N21 Z-10
+N22 l1
+N23 r5
+N24 l2
+N25 r12
+N26 l3
+N27 c6
+N28 l4
+N29 l5
+N30 l6
+N31 l7
+N32 r40
+N33 c1
+N34 c2
+N35 r-5
+N36 c5
+N37 r-5
+N38 l8
+N39 G20 G40 l1
+N40 G Z
+N41 X0 Y0 M30
+""", "L5322")
+c.units("N2")
+c.op("tool_select", "N2", tool="1")
+c.op("tool_change", "N2", tool="1", offset=1)
+c.lin("N20", 200, x=start[0], y=start[1])
+c.lin("N21", 200, z=-10)
+pr = Profile(c, 200)
+chain = [("N22", g["l1"], start, touch(fa, g["l1"])), ("N23", fa, touch(fa, g["l1"]), touch(fa, g["l2"])),
+         ("N24", g["l2"], touch(fa, g["l2"]), touch(fb, g["l2"])), ("N25", fb, touch(fb, g["l2"]), touch(fb, g["l3"])),
+         ("N26", g["l3"], touch(fb, g["l3"]), t3), ("N27", g["c6"], t3, t4), ("N28", g["l4"], t4, x45),
+         ("N29", g["l5"], x45, x56), ("N30", g["l6"], x56, x67), ("N31", g["l7"], x67, touch(fc, g["l7"])),
+         ("N32", fc, touch(fc, g["l7"]), touch(fc, g["c1"])), ("N33", g["c1"], touch(fc, g["c1"]), x12c),
+         ("N34", g["c2"], x12c, touch(fd, g["c2"])), ("N35", fd, touch(fd, g["c2"]), touch(fd, g["c5"])),
+         ("N36", g["c5"], touch(fd, g["c5"]), touch(fe, g["c5"])), ("N37", fe, touch(fe, g["c5"]), touch(fe, g["l8"])),
+         ("N38", g["l8"], touch(fe, g["l8"]), start)]
+for ln, e, a, b in chain:
+    pr.seg(ln, e, a, b)
+c.rapid("N40", z=0)
+c.rapid("N41", x=0, y=0)
+c.op("end", "N41", m=30, shuttle=False)

@@ -390,3 +390,100 @@ c.op("message", 15, text="E41=22")
 c.op("message", 16, text="E42=16")
 c.op("message", 17, text="E17=10")
 c.op("message", 18, text="E25=30")
+
+# ln 2936-2956 G18 (abscissa Z, ordinate X) with I J as the plane's abscissa and ordinate (ln 2454): from
+# (X0 Z0) CW about (Z20, X0) to (Z20, X20): 90 degrees. G19 (Y, Z): from (Y0 Z20) CCW about (Y0 Z30) to
+# (Y10 Z30): 90 degrees. DPI makes another pair the plane (ln 6578-6604): (DPI,X,Z), from (X20 Z30) CW
+# about (X20 Z10), radius 20, to (X40 Z10): in the (abscissa, ordinate) frame from 90 to 0 degrees, 90 swept.
+c = Case("p5_08_planes", """
+; ln 2936-2956 G18 / G19 and DPI planes; I J are the plane's abscissa and ordinate
+G1 X0 Y0 Z0 F100
+G18
+G2 Z20 X20 I20 J0
+G19
+G3 Y10 Z30 I0 J30
+G17
+(DPI,X,Z)
+G2 X40 Z10 I20 J10
+(DPI,X,Y)
+""", "L2936")
+c.units(4)
+c.touch("x", "y", "z")
+c.arc(4, 100, (0, 0, 20), True, 90, plane="zx", x=20, z=20)
+c.arc(6, 100, (20, 0, 30), False, 90, plane="yz", y=10, z=30)
+c.arc(9, 100, (20, 10, 10), True, 90, plane="xz", x=40, z=10)
+
+# ln 5730-5765 SCF: factor 2 on every axis, then 3 on X only (the others unscaled), then none.
+c = Case("p5_17_scale", """
+; ln 5730-5765 scale factors SCF
+(SCF,2)
+G1 X10 Y10 F100
+(SCF,3,X)
+X10 Y10
+(SCF)
+X10 Y10
+""", "L5730")
+c.units(3)
+c.lin(3, 100, x=20, y=20)
+c.lin(5, 100, x=30, y=10)
+c.lin(7, 100, x=10, y=10)
+
+# ln 2326-2333, 2165: a slashed block is a comment while USB=0 (the default), executed with USB=1.
+c = Case("p5_04_slashed_blocks", """
+; ln 2326-2333 slashed blocks and USB
+/N100 G00 X100
+USB=1
+/N101 G00 X50
+""", "L2326")
+c.units(4)
+c.rapid(4, x=50)
+
+# ln 2560, 2168 M01 is a stop only with USO=1 (a judgement call: Table 2.1 says the opposite).
+c = Case("p5_07_optional_stop", """
+; ln 2560, 2168 M01 and USO
+M01
+USO=1
+M01
+M60
+S100 M3 M10
+""", "L2560")
+c.units(4)
+c.op("stop", 4, m=1, optional=True)
+c.op("pallet", 5, m=60)
+c.spindle(6, "cw", 100)
+c.op("aux", 6, m=10)
+
+# ln 7647-7667: a tape may hold several programs, each "%:NAME" ... "%": the first runs; CLS finds the
+# others by name (a judgement call, docs/dialects/balt.md).
+c = Case("p5_04_programs_in_one_file", """
+; ln 7647-7667 %:NAME programs in one file; CLS finds SUBA in it
+%:MAIN
+G X10
+(CLS,SUBA)
+G X0
+M30
+%
+%:SUBA
+G Y10
+%
+""", "L7647")
+c.units(3)
+c.rapid(3, x=10)
+c.rapid(4, y=10)
+c.rapid(5, x=0)
+c.op("end", 6, m=30, shuttle=False)
+
+# ln 2490-2496, 3940-3949: G95 feed per revolution; a rotary axis alone in G94 moves in degrees per minute;
+# G96 S is a cutting speed in m/min.
+c = Case("p5_07_feed_modes", """
+; ln 2490-2496, 3940-3949 feed per revolution, rotary feed in degrees per minute, constant cutting speed
+S500 M3
+G95 G1 X10 F0.2
+G94 B90 F100
+G96 S120
+""", "L2490")
+c.units(2)
+c.spindle(2, "cw", 500)
+c.lin(3, 0.2, mode="per_rev", x=10)
+c.lin(4, 100, mode="deg_per_min", travel={"b": 90}, b=90)
+c.spindle(5, "cw", 0, css=120)

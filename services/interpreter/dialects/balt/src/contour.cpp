@@ -191,7 +191,8 @@ Canon Contour::Straight(const Canon& like, Vec2 to) const {
   return c;
 }
 
-Canon Contour::FillIn(const geom::Corner& k, Vec2 corner, int line, const Feed* feed, std::uint32_t used) const {
+Canon Contour::FillIn(const geom::Corner& k, Vec2 corner, int line, const Feed* feed,
+                      std::uint32_t used) const {
   // About the programmed corner, at the position of every other axis after the element before it.
   Target to;
   to.pos = last_;
@@ -257,9 +258,11 @@ void Contour::ApplyCorner(Pending& next) {
   // The radius or bevel must lie within both elements.
   double along_a = Along(a.path, t1), along_b = Along(next.path, t2);
   if (along_a < -1e-6 || along_a > Extent(a.path) - a.trim_start + 1e-6 ||
-      (next.path.arc ? along_b > next.path.sweep + 1e-6 : along_b > Norm(next.path.end - next.path.start) + 1e-6) ||
+      (next.path.arc ? along_b > next.path.sweep + 1e-6
+                     : along_b > Norm(next.path.end - next.path.start) + 1e-6) ||
       along_b < -1e-6) {
-    Undefined(fmt::format("the {} {} does not fit between the elements", corner_kind_ == 'b' ? "bevel" : "radius", v));
+    Undefined(fmt::format("the {} {} does not fit between the elements",
+                          corner_kind_ == 'b' ? "bevel" : "radius", v));
   }
   CutEnd(a.path, t1);
   CutStart(next.path, t2);
@@ -416,9 +419,10 @@ void Contour::Take(Canon&& c, const Path* path, bool hold) {
     // The exit move (ln 3130): the held element ends at 90 degrees at its end, then straight to the
     // programmed end point.
     if (corner_) Undefined("a radius or bevel before the G40 move");
-    if (held_) EmitHeld(hold_.kind == kRamp ? hold_.path.end + r_ * SideNormal(EndTangent(hold_.path), side_)
-                                            : OffsetEnd(hold_.path, r_, side_),
-                        0);
+    if (held_)
+      EmitHeld(hold_.kind == kRamp ? hold_.path.end + r_ * SideNormal(EndTangent(hold_.path), side_)
+                                   : OffsetEnd(hold_.path, r_, side_),
+               0);
     plan_ = kNoPlan;
     on_ = false;
     Out(std::move(next.c));

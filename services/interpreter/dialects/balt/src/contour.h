@@ -11,10 +11,10 @@
 //
 // The rules (ln 3080-3216): the start move (the G41/G42 block, or the first move in the plane after it) is
 // linear and ends with the cutter at 90 degrees to the next element; corners join at the intersection of the
-// offset elements (a fill-in arc about the corner only where they do not meet, or with r0); a G40 block's move
-// leaves the last element at 90 degrees and goes to its programmed end point (an arc in a G40 block is cut
-// compensated and left straight to its end point); G40 without a move leaves the cutter at the offset point
-// until the next move in the plane.
+// offset elements (a fill-in arc about the corner only where they do not meet, or with r0); a G40 block's
+// move leaves the last element at 90 degrees and goes to its programmed end point (an arc in a G40 block is
+// cut compensated and left straight to its end point); G40 without a move leaves the cutter at the offset
+// point until the next move in the plane.
 #pragma once
 
 #include <deque>
@@ -94,7 +94,8 @@ class Contour {
   void EmitHeld(geom::Vec2 end, double trim_end);
   void Join(Pending& next);
   void ApplyCorner(Pending& next);
-  Canon FillIn(const geom::Corner& k, geom::Vec2 corner, int line, const Feed* feed, std::uint32_t used) const;
+  Canon FillIn(const geom::Corner& k, geom::Vec2 corner, int line, const Feed* feed,
+               std::uint32_t used) const;
   Canon Straight(const Canon& like, geom::Vec2 to) const;
 
   std::vector<Canon> ready_;

@@ -102,8 +102,9 @@ class Balt final : public Dialect {
     try {
       return balt::ParseOffsets(text, base, true);
     } catch (const balt::FileError& e) {
-      throw Error(Errc::kInvalidArgument, fmt::format("{}:{}:{}: error: [FILMS4 {:02}] {}: {}", source, e.line, e.col,
-                                                      e.code, balt::FilmsText(e.code), e.text));
+      throw Error(Errc::kInvalidArgument,
+                  fmt::format("{}:{}:{}: error: [FILMS4 {:02}] {}: {}", source, e.line, e.col, e.code,
+                              balt::FilmsText(e.code), e.text));
     }
   }
 };

@@ -89,7 +89,8 @@ int CircleCircle(Vec2 c1, double r1, Vec2 c2, double r2, Vec2 out[2]) {
   double h2 = r1 * r1 - a * a;
   Vec2 u{dc.x / d, dc.y / d};
   Vec2 base = c1 + a * u;
-  if (h2 <= kTol * kTol * 4 || std::fabs(d - (r1 + r2)) <= kTol || std::fabs(d - std::fabs(r1 - r2)) <= kTol) {
+  if (h2 <= kTol * kTol * 4 || std::fabs(d - (r1 + r2)) <= kTol ||
+      std::fabs(d - std::fabs(r1 - r2)) <= kTol) {
     out[0] = base;
     return 1;
   }
@@ -241,11 +242,11 @@ Element Define(char kind, const std::vector<Operand>& ops) {
   bool s2 = !ops.empty() && ops.back().kind == K::kS2;
   std::vector<Operand> o(ops.begin(), ops.end() - (s2 ? 1 : 0));
   auto bad = [&]() -> Element {
-    throw GeomError{11, fmt::format("no GTL form for this {} definition (Table 5.7)",
-                                    kind == 'p'   ? "point"
-                                    : kind == 'l' ? "line"
-                                    : kind == 'c' ? "circle"
-                                                  : "origin")};
+    throw GeomError{11,
+                    fmt::format("no GTL form for this {} definition (Table 5.7)", kind == 'p'   ? "point"
+                                                                                  : kind == 'l' ? "line"
+                                                                                  : kind == 'c' ? "circle"
+                                                                                                : "origin")};
   };
   if (s2 && !(kind == 'p' || kind == 'c')) return bad();
   switch (kind) {
@@ -293,7 +294,8 @@ Element Define(char kind, const std::vector<Operand>& ops) {
         const Element& c2 = o[1].e;
         Vec2 D = c2.p - c1.p;
         double dist = Norm(D);
-        if (dist < kTol || std::fabs(c2.r - c1.r) > dist + kTol) Undefined("no common tangent of the circles");
+        if (dist < kTol || std::fabs(c2.r - c1.r) > dist + kTol)
+          Undefined("no common tangent of the circles");
         double alpha = std::acos(std::clamp((c2.r - c1.r) / dist, -1.0, 1.0));
         double an = std::atan2(D.y, D.x) + alpha;
         Vec2 n{std::cos(an), std::sin(an)};

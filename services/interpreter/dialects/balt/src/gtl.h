@@ -39,8 +39,8 @@ struct GeomError {
 struct Operand {
   enum Kind : unsigned char { kPoint, kLine, kCircle, kAngle, kDistance, kRadius, kS2 };
   Kind kind = kPoint;
-  Element e;       // kPoint, kLine, kCircle (already in absolute plane coordinates)
-  double v = 0;    // kAngle (degrees), kDistance, kRadius
+  Element e;             // kPoint, kLine, kCircle (already in absolute plane coordinates)
+  double v = 0;          // kAngle (degrees), kDistance, kRadius
   bool literal = false;  // written as coordinates (X.. Y.., I.. J.. r..), not as an element name
 };
 

@@ -33,7 +33,8 @@ Operand Num(Operand::Kind k, double v) {
 }
 Operand Ref(const Element& e) {
   Operand o;
-  o.kind = e.kind == Element::kLine ? Operand::kLine : (e.kind == Element::kCircle ? Operand::kCircle : Operand::kPoint);
+  o.kind = e.kind == Element::kLine ? Operand::kLine
+                                    : (e.kind == Element::kCircle ? Operand::kCircle : Operand::kPoint);
   o.e = e;
   return o;
 }

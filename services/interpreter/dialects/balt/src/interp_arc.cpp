@@ -42,7 +42,8 @@ void BaltRun::ArcMove(const ParsedBlock& pb, const BlockG& g, const Targets& t_i
     if (w.letter == 'K') wk = &w;
     int a = AxisOfLetter(w.letter);
     if (a >= 0 && a != p1 && a != p2 && a != pn) {
-      Fail(w.col, 24, fmt::format("{} is not an axis of the {}{} plane", w.letter, LetterOfAxis(p1), LetterOfAxis(p2)));
+      Fail(w.col, 24,
+           fmt::format("{} is not an axis of the {}{} plane", w.letter, LetterOfAxis(p1), LetterOfAxis(p2)));
     }
   }
   if (g.g79) Fail(col, 25, "G79 with a circle");
@@ -91,14 +92,16 @@ void BaltRun::ArcMove(const ParsedBlock& pb, const BlockG& g, const Targets& t_i
     sol = geom::ArcFromCenter(start, end, {cm[p1], cm[p2]}, cw, 0.0001, 0.01);
     if (sol.error == geom::ArcError::kBelowMinimum) Fail(wi->col, 77, "the centre is the start point");
     if (sol.error == geom::ArcError::kRadiiDiffer) {
-      Fail(col, 77, fmt::format("start and end are not on one circle (radius {:.4f} / {:.4f})", sol.radius_start / unit,
-                                sol.radius_end / unit));
+      Fail(col, 77,
+           fmt::format("start and end are not on one circle (radius {:.4f} / {:.4f})",
+                       sol.radius_start / unit, sol.radius_end / unit));
     }
   }
   // Helix (ln 2790-2836): the plane's third axis moves along; K is the pitch (omitted below one turn).
   double turns = 0;
   if (wk) {
-    if (pn < 0 || !(t.mask & (1u << pn))) Fail(wk->col, 96, "a helix needs the axis perpendicular to the plane");
+    if (pn < 0 || !(t.mask & (1u << pn)))
+      Fail(wk->col, 96, "a helix needs the axis perpendicular to the plane");
     double pitch = ValueOf(wk->v, wk->col) * unit;
     if (pitch <= 0) Fail(wk->col, 13, "the helix pitch K is positive");
     double depth = std::fabs(mach[pn] - pos_[pn]);

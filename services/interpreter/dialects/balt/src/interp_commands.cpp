@@ -13,22 +13,22 @@ namespace cell::interp::balt {
 
 const std::map<std::string_view, BaltRun::CommandFn>& BaltRun::CommandTable() {
   static const std::map<std::string_view, CommandFn> kTable = {
-      {"BNC", &BaltRun::CmdBranch},     {"BGT", &BaltRun::CmdBranch},    {"BLT", &BaltRun::CmdBranch},
-      {"BEQ", &BaltRun::CmdBranch},     {"BNE", &BaltRun::CmdBranch},    {"BGE", &BaltRun::CmdBranch},
-      {"BLE", &BaltRun::CmdBranch},     {"RPT", &BaltRun::CmdRpt},       {"ERP", &BaltRun::CmdErp},
-      {"CLS", &BaltRun::CmdCls},        {"EPP", &BaltRun::CmdEpp},       {"DIS", &BaltRun::CmdDis},
-      {"DLY", &BaltRun::CmdDly},        {"DPI", &BaltRun::CmdDpi},       {"DTL", &BaltRun::CmdDtl},
-      {"DLO", &BaltRun::CmdDlo},        {"DSA", &BaltRun::CmdDsa},       {"ASC", &BaltRun::CmdAreaSwitch},
-      {"DSC", &BaltRun::CmdAreaSwitch}, {"CTL", &BaltRun::CmdCtl},       {"UCG", &BaltRun::CmdIgnored},
-      {"CLG", &BaltRun::CmdIgnored},    {"DCG", &BaltRun::CmdIgnored},   {"INP", &BaltRun::CmdInp},
-      {"WAI", &BaltRun::CmdProcess},    {"SND", &BaltRun::CmdProcess},   {"EXE", &BaltRun::CmdUnsupported},
+      {"BNC", &BaltRun::CmdBranch},      {"BGT", &BaltRun::CmdBranch},      {"BLT", &BaltRun::CmdBranch},
+      {"BEQ", &BaltRun::CmdBranch},      {"BNE", &BaltRun::CmdBranch},      {"BGE", &BaltRun::CmdBranch},
+      {"BLE", &BaltRun::CmdBranch},      {"RPT", &BaltRun::CmdRpt},         {"ERP", &BaltRun::CmdErp},
+      {"CLS", &BaltRun::CmdCls},         {"EPP", &BaltRun::CmdEpp},         {"DIS", &BaltRun::CmdDis},
+      {"DLY", &BaltRun::CmdDly},         {"DPI", &BaltRun::CmdDpi},         {"DTL", &BaltRun::CmdDtl},
+      {"DLO", &BaltRun::CmdDlo},         {"DSA", &BaltRun::CmdDsa},         {"ASC", &BaltRun::CmdAreaSwitch},
+      {"DSC", &BaltRun::CmdAreaSwitch},  {"CTL", &BaltRun::CmdCtl},         {"UCG", &BaltRun::CmdIgnored},
+      {"CLG", &BaltRun::CmdIgnored},     {"DCG", &BaltRun::CmdIgnored},     {"INP", &BaltRun::CmdInp},
+      {"WAI", &BaltRun::CmdProcess},     {"SND", &BaltRun::CmdProcess},     {"EXE", &BaltRun::CmdUnsupported},
       {"UAV", &BaltRun::CmdUnsupported}, {"SCR", &BaltRun::CmdUnsupported}, {"DEF", &BaltRun::CmdUnsupported},
       {"OUT", &BaltRun::CmdUnsupported}, {"OPN", &BaltRun::CmdUnsupported}, {"DER", &BaltRun::CmdUnsupported},
       {"RED", &BaltRun::CmdUnsupported}, {"WRT", &BaltRun::CmdUnsupported}, {"CLO", &BaltRun::CmdUnsupported},
       {"CRE", &BaltRun::CmdUnsupported}, {"CAN", &BaltRun::CmdUnsupported}, {"UAO", &BaltRun::CmdUao},
-      {"UOT", &BaltRun::CmdUot},        {"UIO", &BaltRun::CmdUio},       {"MIR", &BaltRun::CmdMir},
-      {"URT", &BaltRun::CmdUrt},        {"SCF", &BaltRun::CmdScf},       {"RQO", &BaltRun::CmdRqo},
-      {"RQU", &BaltRun::CmdRqu},        {"RQP", &BaltRun::CmdRqu},       {"TOF", &BaltRun::CmdTof},
+      {"UOT", &BaltRun::CmdUot},         {"UIO", &BaltRun::CmdUio},         {"MIR", &BaltRun::CmdMir},
+      {"URT", &BaltRun::CmdUrt},         {"SCF", &BaltRun::CmdScf},         {"RQO", &BaltRun::CmdRqo},
+      {"RQU", &BaltRun::CmdRqu},         {"RQP", &BaltRun::CmdRqu},         {"TOF", &BaltRun::CmdTof},
       {"DPT", &BaltRun::CmdDpt},
   };
   return kTable;
@@ -42,7 +42,8 @@ bool BaltRun::IsFlowCommand(std::string_view m) {
 void BaltRun::ExecCommand(const Command& c) {
   const auto& table = CommandTable();
   auto it = table.find(c.mnemonic);
-  if (it == table.end()) Fail(c.col, 17, fmt::format("({},...) is not a command of this control", c.mnemonic));
+  if (it == table.end())
+    Fail(c.col, 17, fmt::format("({},...) is not a command of this control", c.mnemonic));
   (this->*(it->second))(c);
 }
 
@@ -159,7 +160,8 @@ void BaltRun::CmdRpt(const Command& c) {
   CheckOperands(c, 1, 1);
   int n = OperandInt(c.ops[0], 1, 99);
   auto& f = frames_->top();
-  if (f.data.repeats.size() >= static_cast<std::size_t>(kMaxRepeatLevels)) Fail(c.col, 31, "a fourth RPT level");
+  if (f.data.repeats.size() >= static_cast<std::size_t>(kMaxRepeatLevels))
+    Fail(c.col, 31, "a fourth RPT level");
   f.data.repeats.push_back({f.at, n});
 }
 
@@ -273,10 +275,12 @@ void BaltRun::CmdDpi(const Command& c) {
   FrameChanged();
 }
 
-// (DTL,X.1,Y.05): positioning tolerances; accepted (the servo keeps its own) after the checks of ln 6606-6631.
+// (DTL,X.1,Y.05): positioning tolerances; accepted (the servo keeps its own) after the checks of ln
+// 6606-6631.
 void BaltRun::CmdDtl(const Command& c) {
   CheckOperands(c, 1, 3);
-  if (gtl_profile_ || contour_.on()) Fail(c.col, 25, "DTL is not allowed in a GTL profile or with compensation");
+  if (gtl_profile_ || contour_.on())
+    Fail(c.col, 25, "DTL is not allowed in a GTL profile or with compensation");
   std::uint32_t seen = 0;
   for (const Operand& o : c.ops) {
     AxisValue a = OperandAxis(o.text, o.col, true);
@@ -333,7 +337,9 @@ void BaltRun::CmdDsa(const Command& c) {
     AxisValue b = OperandAxis(q, o.col + static_cast<int>(q.data() - o.text.data()), true);
     if (a.axis != b.axis) Fail(o.col, 24, "both limits of a pair name the same axis");
     int want = k == 0 ? mode_.p1 : mode_.p2;
-    if (a.axis != want) Fail(o.col, 24, fmt::format("the {} of the plane is {}", k == 0 ? "abscissa" : "ordinate", LetterOfAxis(want)));
+    if (a.axis != want)
+      Fail(o.col, 24,
+           fmt::format("the {} of the plane is {}", k == 0 ? "abscissa" : "ordinate", LetterOfAxis(want)));
     double lo = std::min(a.v, b.v) * UnitFactor() + origin_[a.axis];
     double hi = std::max(a.v, b.v) * UnitFactor() + origin_[a.axis];
     (k == 0 ? area.lo1 : area.lo2) = lo;
@@ -368,7 +374,8 @@ void BaltRun::CmdIgnored(const Command& c) {
 // (INP,"prompt",Evar): an operator input; offline it is recorded and the variable keeps its value.
 void BaltRun::CmdInp(const Command& c) {
   CheckOperands(c, 2, 2);
-  if (c.ops[1].text.empty() || c.ops[1].text[0] != 'E') Fail(c.ops[1].col, 24, "INP stores into an E parameter");
+  if (c.ops[1].text.empty() || c.ops[1].text[0] != 'E')
+    Fail(c.ops[1].col, 24, "INP stores into an E parameter");
   Out<WaitInputOp>().spec = fmt::format("INP,{},{}", c.ops[0].text, c.ops[1].text);
 }
 
@@ -380,7 +387,8 @@ void BaltRun::CmdProcess(const Command& c) {
 }
 
 void BaltRun::CmdUnsupported(const Command& c) {
-  Fail(c.col, 103, fmt::format("({}) is not characterized on this control (see docs/dialects/balt.md)", c.mnemonic));
+  Fail(c.col, 103,
+       fmt::format("({}) is not characterized on this control (see docs/dialects/balt.md)", c.mnemonic));
 }
 
 }  // namespace cell::interp::balt

@@ -56,7 +56,8 @@ void BaltRun::Paraxial(const ParsedBlock& pb, Targets& t) {
   for (const Word& w : pb.words) {
     int axis = w.letter == 'u' ? kX : w.letter == 'v' ? kY : w.letter == 'w' ? kZ : -1;
     if (axis < 0) continue;
-    if (contour_.on() || mode_.comp != 40 || gtl_profile_) Fail(w.col, 25, "paraxial factors with G41/G42 or GTL");
+    if (contour_.on() || mode_.comp != 40 || gtl_profile_)
+      Fail(w.col, 25, "paraxial factors with G41/G42 or GTL");
     if (!(t.mask & (1u << axis))) {
       Fail(w.col, 24, fmt::format("{} goes with the {} coordinate", w.letter, LetterOfAxis(axis)));
     }

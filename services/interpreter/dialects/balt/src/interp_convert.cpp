@@ -264,11 +264,11 @@ BlockG BaltRun::ReadGCodes(const ParsedBlock& pb) {
     switch (GroupOf(code)) {
       case 'a':
         g.any_motion = true;
-        g.motion = code == 0    ? Motion::kRapid
-                   : code == 1  ? Motion::kLinear
-                   : code == 2  ? Motion::kCw
-                   : code == 3  ? Motion::kCcw
-                                : Motion::kThread;
+        g.motion = code == 0   ? Motion::kRapid
+                   : code == 1 ? Motion::kLinear
+                   : code == 2 ? Motion::kCw
+                   : code == 3 ? Motion::kCcw
+                               : Motion::kThread;
         break;
       case 'b':
         g.plane = code;
@@ -327,7 +327,8 @@ void BaltRun::CheckCompatibility(const ParsedBlock& pb, const InlineVec<GCode, 1
   // G17-G19 stand alone (ln 2956).
   for (const GCode& gc : codes) {
     const int code = gc.code, col = gc.col;
-    if (code >= 17 && code <= 19 && (pb.words.size() > 1 || pb.elem.kind || pb.result_e >= 0 || !pb.commands.empty())) {
+    if (code >= 17 && code <= 19 &&
+        (pb.words.size() > 1 || pb.elem.kind || pb.result_e >= 0 || !pb.commands.empty())) {
       Fail(col, 25, fmt::format("G{} must be alone in its block", code));
     }
   }
@@ -345,7 +346,8 @@ void BaltRun::ApplyModal(const BlockG& g, const ParsedBlock& pb) {
   }
   if (g.absinc) mode_.incremental = g.absinc == 91;
   if (g.plane) {
-    if (contour_.engaged() || gtl_profile_) Fail(g.first_col, 25, "the plane cannot change with compensation or in a GTL profile");
+    if (contour_.engaged() || gtl_profile_)
+      Fail(g.first_col, 25, "the plane cannot change with compensation or in a GTL profile");
     static constexpr int kAxes[3][2] = {{kX, kY}, {kZ, kX}, {kY, kZ}};
     mode_.p1 = kAxes[g.plane - 17][0];
     mode_.p2 = kAxes[g.plane - 17][1];
@@ -363,7 +365,7 @@ void BaltRun::ApplyModal(const BlockG& g, const ParsedBlock& pb) {
     bool css = g.speed == 96;
     if (css != mode_.css) {
       mode_.css = css;
-      if (spindle_ == SpindleDir::kCw || spindle_ == SpindleDir::kCcw) EmitSpindle(spindle_);
+      spindle_changed_ = true;  // told after the block's S word
     }
   }
   if (g.any_motion) {
@@ -383,10 +385,9 @@ void BaltRun::EmitSpindle(SpindleDir dir) {
 void BaltRun::SpeedWord(const Word& w) {
   double s = ValueOf(w.v, w.col);
   if (s < 0.01 || s > 99999.99) Fail(w.col, 13, "S is 0.01-99999.99");
-  bool changed = !speed_set_ || s != speed_;
+  if (!speed_set_ || s != speed_) spindle_changed_ = true;
   speed_ = s;
   speed_set_ = true;
-  if (changed && (spindle_ == SpindleDir::kCw || spindle_ == SpindleDir::kCcw)) EmitSpindle(spindle_);
 }
 
 // M functions active at the start of the motion (Table 5.3): spindle, coolant, orientation, axis locks,
@@ -396,7 +397,8 @@ void BaltRun::AuxBefore(const ParsedBlock& pb, bool moves) {
   for (const Word& w : pb.words) {
     if (w.letter == 'H') {
       double h = ValueOf(w.v, w.col);
-      if (h < 0 || h > 99 || h != std::floor(h)) Fail(w.col, 18, fmt::format("H{:g} (H codes are H00-H99)", h));
+      if (h < 0 || h > 99 || h != std::floor(h))
+        Fail(w.col, 18, fmt::format("H{:g} (H codes are H00-H99)", h));
       Out<OutputOp>().spec = fmt::format("H{:02}", static_cast<int>(h));
       continue;
     }
@@ -571,6 +573,11 @@ void BaltRun::ExecIso(const ParsedBlock& pb) {
     }
   }
   if (s) SpeedWord(*s);
+  if (spindle_changed_) {
+    // A new speed or speed mode while the spindle turns (docs/canonical-commands.md: spindle).
+    spindle_changed_ = false;
+    if (spindle_ == SpindleDir::kCw || spindle_ == SpindleDir::kCcw) EmitSpindle(spindle_);
+  }
   if (t) ToolWord(*t);
   const bool motion_words = axes != 0 || pb.elem.kind || ij > 0 || pb.s2;
   if (ms || hs) AuxBefore(pb, motion_words);

@@ -14,8 +14,10 @@ namespace cell::interp::balt {
 
 void BaltRun::DeclareCycle(const ParsedBlock& pb, const BlockG& g) {
   int col = g.first_col;
-  if (mode_.cycle != 80) Fail(col, 25, fmt::format("G{} is active: close it with G80 first (ln 3331)", mode_.cycle));
-  if (contour_.engaged() || gtl_profile_) Fail(col, 25, "fixed cycles are not allowed with compensation or in GTL");
+  if (mode_.cycle != 80)
+    Fail(col, 25, fmt::format("G{} is active: close it with G80 first (ln 3331)", mode_.cycle));
+  if (contour_.engaged() || gtl_profile_)
+    Fail(col, 25, "fixed cycles are not allowed with compensation or in GTL");
   if ((g.cycle == 86 || g.cycle == 89) && mode_.feed == FeedCode::kG95) {
     Fail(col, 98, fmt::format("G{} in G95", g.cycle));
   }
@@ -98,7 +100,8 @@ void BaltRun::DrillHole(int col) {
     // ln 3484-3496: with a transducer F = K x rpm.
     feed = c.k * UnitFactor() * speed_;
   }
-  if ((c.g == 84 || c.g == 86) && (!speed_set_ || spindle_ == SpindleDir::kStop || spindle_ == SpindleDir::kOrient)) {
+  if ((c.g == 84 || c.g == 86) &&
+      (!speed_set_ || spindle_ == SpindleDir::kStop || spindle_ == SpindleDir::kOrient)) {
     Fail(col, 10, fmt::format("G{}: the spindle is not turning", c.g));
   }
   const double ret = c.has_r2 ? c.r2 : c.r1;
@@ -176,8 +179,10 @@ void BaltRun::DrillHole(int col) {
 }
 
 void BaltRun::CycleBlock(const ParsedBlock& pb, const BlockG& g, const Targets& t) {
-  if (contour_.engaged() || gtl_profile_) Fail(g.first_col, 25, "fixed cycles are not allowed with compensation or in GTL");
-  if (g.any_motion && (mode_.motion == Motion::kCw || mode_.motion == Motion::kCcw || mode_.motion == Motion::kThread)) {
+  if (contour_.engaged() || gtl_profile_)
+    Fail(g.first_col, 25, "fixed cycles are not allowed with compensation or in GTL");
+  if (g.any_motion &&
+      (mode_.motion == Motion::kCw || mode_.motion == Motion::kCcw || mode_.motion == Motion::kThread)) {
     Fail(g.first_col, 25, "G02/G03/G33 in a fixed cycle");
   }
   int col = g.first_col;

@@ -386,7 +386,8 @@ std::optional<std::string> BaltRun::FindProgram(const std::string& name) {
       // To the next '%' line.
       while (end < text.size()) {
         std::size_t nl = text.find('\n', end);
-        std::string_view l = TrimBlanks(text.substr(end, (nl == std::string_view::npos ? text.size() : nl) - end));
+        std::string_view l =
+            TrimBlanks(text.substr(end, (nl == std::string_view::npos ? text.size() : nl) - end));
         if (!l.empty() && l[0] == '%') break;
         end = nl == std::string_view::npos ? text.size() : nl + 1;
       }
@@ -408,7 +409,8 @@ void BaltRun::Call(std::string_view target, int col) {
   // ln 5954: up to 6 letters and digits, the first a letter, capitals; a device of 2-3 characters.
   bool ok = !name.empty() && name.size() <= 6 && IsUpper(name[0]) &&
             std::all_of(name.begin(), name.end(), [](char c) { return IsUpper(c) || IsDigit(c); });
-  if (!ok) Fail(col, 24, fmt::format("'{}' is not a program name (1-6 capitals and digits, first a letter)", name));
+  if (!ok)
+    Fail(col, 24, fmt::format("'{}' is not a program name (1-6 capitals and digits, first a letter)", name));
   if (!device.empty() && (device.size() < 2 || device.size() > 3 || !IsUpper(device[0]))) {
     Fail(col, 36, fmt::format("'{}' is not a device", device));
   }

@@ -119,7 +119,9 @@ void BaltRun::DefineElement(const Assignment& a) {
       continue;
     }
     if (IsUpper(c)) {
-      Fail(t.col, 24, fmt::format("'{}' is not a coordinate of the {}{} plane", c, LetterOfAxis(mode_.p1), LetterOfAxis(mode_.p2)));
+      Fail(t.col, 24,
+           fmt::format("'{}' is not a coordinate of the {}{} plane", c, LetterOfAxis(mode_.p1),
+                       LetterOfAxis(mode_.p2)));
     }
     Fail(t.col, 11, fmt::format("'{}' in a GTL definition", c));
   }
@@ -135,9 +137,7 @@ void BaltRun::DefineElement(const Assignment& a) {
     bool hx = false, hy = false, hr = false, ha = false;
     std::optional<gtl::Element> o;
   } g;
-  auto place = [&](Vec2 v, const std::optional<gtl::Element>& o) {
-    return o ? o->p + Rotate(v, o->a) : v;
-  };
+  auto place = [&](Vec2 v, const std::optional<gtl::Element>& o) { return o ? o->p + Rotate(v, o->a) : v; };
   auto close = [&]() {
     if (!g.kind) return;
     gtl::Operand op;
@@ -147,7 +147,8 @@ void BaltRun::DefineElement(const Assignment& a) {
       op.e.kind = gtl::Element::kPoint;
       op.e.p = place({g.x, g.y}, g.o);
     } else {
-      Vec2 c = g.kind == 'C' ? Vec2{g.x, g.y} : Vec2{g.m * std::cos(g.an * kDeg), g.m * std::sin(g.an * kDeg)};
+      Vec2 c =
+          g.kind == 'C' ? Vec2{g.x, g.y} : Vec2{g.m * std::cos(g.an * kDeg), g.m * std::sin(g.an * kDeg)};
       bool circle = g.kind == 'C' || g.hr;
       if (g.kind == 'C' && !g.hr) Fail(a.rhs_col, 12, "a circle needs its radius r");
       op.kind = circle ? gtl::Operand::kCircle : gtl::Operand::kPoint;
@@ -176,7 +177,8 @@ void BaltRun::DefineElement(const Assignment& a) {
       }
       gtl::Operand op;
       op.e = ResolveRef(ElemRef{t.letter, t.neg, t.v, t.col});
-      op.kind = t.letter == 'p' ? gtl::Operand::kPoint : (t.letter == 'l' ? gtl::Operand::kLine : gtl::Operand::kCircle);
+      op.kind = t.letter == 'p' ? gtl::Operand::kPoint
+                                : (t.letter == 'l' ? gtl::Operand::kLine : gtl::Operand::kCircle);
       ops.push_back(op);
       continue;
     }
@@ -269,7 +271,8 @@ std::string BaltRun::DisplayElement(char kind, int index, int col) {
   };
   switch (kind) {
     case 'p':
-      return fmt::format("{}{} {}{}", LetterOfAxis(mode_.p1), n(e->p.x / u), LetterOfAxis(mode_.p2), n(e->p.y / u));
+      return fmt::format("{}{} {}{}", LetterOfAxis(mode_.p1), n(e->p.x / u), LetterOfAxis(mode_.p2),
+                         n(e->p.y / u));
     case 'l':  // distance from the origin and angle (ln 6708-6710)
       return fmt::format("d{} a{}", n(std::fabs(Cross(e->d, e->p)) / u), n(e->AngleDeg()));
     default:
@@ -416,8 +419,8 @@ void BaltRun::GtlBlock(const ParsedBlock& pb, const BlockG& g, const Targets& t)
   if (mode_.incremental) Fail(col, 25, "GTL works in G90 only (ln 4369)");
   if (mode_.feed == FeedCode::kG93) Fail(col, 25, "G93 in a GTL profile");
   // Only G27, G28, G04, G41, G42 inside a profile (ln 5060), and G20 G40 to close it.
-  if (gtl_profile_ && (g.any_motion || g.plane || g.cycle || g.g79 || g.probe || g.absinc || g.unit || g.feed ||
-                       g.speed || g.dyn == 29 || g.gtl == 21 || (g.comp == 40 && g.gtl != 20))) {
+  if (gtl_profile_ && (g.any_motion || g.plane || g.cycle || g.g79 || g.probe || g.absinc || g.unit ||
+                       g.feed || g.speed || g.dyn == 29 || g.gtl == 21 || (g.comp == 40 && g.gtl != 20))) {
     Fail(col, 25, "only G27, G28, G04, G41, G42 inside a GTL profile");
   }
   std::uint32_t plane_bits = (1u << mode_.p1) | (1u << mode_.p2);
@@ -426,7 +429,8 @@ void BaltRun::GtlBlock(const ParsedBlock& pb, const BlockG& g, const Targets& t)
   for (const Word& w : pb.words) {
     if (w.letter == 'r' || w.letter == 'b') corner = &w;
     if (w.letter == 'u' || w.letter == 'v' || w.letter == 'w') Fail(w.col, 25, "paraxial factors in GTL");
-    if (w.letter == 'I' || w.letter == 'J' || w.letter == 'R' || w.letter == 'K') Fail(w.col, 24, "in a GTL profile block");
+    if (w.letter == 'I' || w.letter == 'J' || w.letter == 'R' || w.letter == 'K')
+      Fail(w.col, 24, "in a GTL profile block");
   }
   if (!gtl_profile_) {
     if (g.gtl != 21) {
@@ -440,6 +444,7 @@ void BaltRun::GtlBlock(const ParsedBlock& pb, const BlockG& g, const Targets& t)
     gtl_profile_ = true;
     profile_ = Profile();
     profile_.g21_pos = pos_;
+    profile_.g21_used = used_;
     if (e.kind == gtl::Element::kPoint) {
       // Open profile: to the first point at the feed (the start move when compensated).
       profile_.start = e.p;
@@ -481,7 +486,8 @@ void BaltRun::GtlBlock(const ParsedBlock& pb, const BlockG& g, const Targets& t)
       GtlCheckOn(profile_.elem, e.p, pb.elem.col);
       GtlSegment(profile_.elem, profile_.start, e.p, profile_.line);
     } else {
-      if (e.kind == gtl::Element::kPoint) Fail(pb.elem.col, 77, "a closed profile ends with its first element");
+      if (e.kind == gtl::Element::kPoint)
+        Fail(pb.elem.col, 77, "a closed profile ends with its first element");
       Vec2 x = GtlConnect(profile_.elem, e, profile_.s2);
       GtlSegment(profile_.elem, profile_.start, x, profile_.line);
       try {
@@ -531,8 +537,8 @@ void BaltRun::GtlBlock(const ParsedBlock& pb, const BlockG& g, const Targets& t)
 
 // The element being traversed ends where it meets `next` (ln 5168-5215): at their intersection; or an
 // automatic radius r (a circle of that radius and direction tangent to both, the shorter way round, as the
-// definition "c = a, b, r" gives it: the elements need not intersect); or a bevel b between two lines; r0 rolls
-// the compensated cutter round the intersection.
+// definition "c = a, b, r" gives it: the elements need not intersect); or a bevel b between two lines; r0
+// rolls the compensated cutter round the intersection.
 void BaltRun::GtlJoin(const gtl::Element& next, int col) {
   const gtl::Element& a = profile_.elem;
   const char kind = profile_.pending_corner ? profile_.corner : 0;
@@ -576,7 +582,8 @@ void BaltRun::GtlJoin(const gtl::Element& next, int col) {
     GtlSegment(fillet, t1, t2, profile_.corner_line);
     profile_.start = t2;
   } else if (kind == 'b') {
-    if (a.kind != gtl::Element::kLine || next.kind != gtl::Element::kLine) Fail(col, 77, "a bevel joins two lines");
+    if (a.kind != gtl::Element::kLine || next.kind != gtl::Element::kLine)
+      Fail(col, 77, "a bevel joins two lines");
     Vec2 x = GtlConnect(a, next, profile_.s2);
     Vec2 t1 = x + (-v) * a.d, t2 = x + v * next.d;
     ahead(t1);
@@ -606,7 +613,7 @@ void BaltRun::GtlJoin(const gtl::Element& next, int col) {
 
 void BaltRun::GtlCheckOn(const gtl::Element& e, Vec2 p, int col) {
   double off = e.kind == gtl::Element::kLine ? std::fabs(Cross(e.d, p - e.p))
-                                              : std::fabs(geom::Norm(p - e.p) - std::fabs(e.r));
+                                             : std::fabs(geom::Norm(p - e.p) - std::fabs(e.r));
   if (off > 0.01) Fail(col, 77, "the profile's point is not on its element");
 }
 
@@ -633,7 +640,7 @@ void BaltRun::GtlApproach(Vec2 p) {
   LinearOp& l = c.Set<LinearOp>();
   l.feed = f;
   l.to.pos = target;
-  l.to.used = used_;
+  l.to.used = profile_.g21_used | (1u << mode_.p1) | (1u << mode_.p2);
   if (!contour_.engaged()) contour_.Sync(pos_);
   try {
     contour_.Take(std::move(c), &path, true);

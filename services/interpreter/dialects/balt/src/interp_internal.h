@@ -125,8 +125,8 @@ struct Assignment {
   int index = 0;          // kParam: E index; kIndirect: the E parameter holding the index
   std::string_view name;  // kGlobal: "TMR", "SA", "SYVAR", "TIM", ...; kGeometry: "o", "p", "l", "c"
   bool has_index = false;
-  Val gindex;             // kGlobal: SA12 -> 12; kGeometry: the element index
-  std::string_view fmt;   // kGlobal: the access format after '.', e.g. "BY", "3CH"
+  Val gindex;            // kGlobal: SA12 -> 12; kGeometry: the element index
+  std::string_view fmt;  // kGlobal: the access format after '.', e.g. "BY", "3CH"
   std::string_view rhs;
   int rhs_col = 1;
   int col = 1;
@@ -222,12 +222,12 @@ struct BlockG {
   Motion motion = Motion::kRapid;
   bool dwell = false, decel = false;  // G04, G09
   bool g79 = false;
-  int probe = 0;  // 72, 73, 74
-  int cycle = 0;  // 80-89
-  int gtl = 0;    // 20, 21
-  int comp = 0;   // 40, 41, 42
-  int plane = 0;  // 17, 18, 19
-  int unit = 0;   // 70, 71
+  int probe = 0;   // 72, 73, 74
+  int cycle = 0;   // 80-89
+  int gtl = 0;     // 20, 21
+  int comp = 0;    // 40, 41, 42
+  int plane = 0;   // 17, 18, 19
+  int unit = 0;    // 70, 71
   int absinc = 0;  // 90, 91
   int dyn = 0;     // 27, 28, 29
   int feed = 0;    // 93, 94, 95
@@ -472,10 +472,11 @@ class BaltRun final : public RunBase {
   double block_feed_ = 0;       // G93: the F of this block
   double speed_ = 0;
   bool speed_set_ = false;
+  bool spindle_changed_ = false;
   SpindleDir spindle_ = SpindleDir::kStop;
   CoolantMode coolant_ = CoolantMode::kOff;
   bool flood_with_spindle_ = false;  // M13 / M14 turned the coolant on: M05 turns it off
-  AxisArray pos_{};  // machine position of the programmed point (mm / deg)
+  AxisArray pos_{};                  // machine position of the programmed point (mm / deg)
   std::uint32_t used_ = 0;
   AxisArray prog_{};
   bool prog_valid_ = false;
@@ -529,12 +530,12 @@ class BaltRun final : public RunBase {
   bool gtl_block_ = false;  // reading a G21 block's words
   struct Profile {
     bool closed = false;
-    bool started = false;    // the approach to the start point is out
-    bool has_elem = false;   // the element being traversed is known
-    gtl::Element elem;       // the element being traversed
-    geom::Vec2 start;        // where it started (program plane coordinates)
-    bool s2 = false;         // its connection with the next element takes the second solution
-    gtl::Element last;       // closed profile: the last element, named in the G21 block
+    bool started = false;   // the approach to the start point is out
+    bool has_elem = false;  // the element being traversed is known
+    gtl::Element elem;      // the element being traversed
+    geom::Vec2 start;       // where it started (program plane coordinates)
+    bool s2 = false;        // its connection with the next element takes the second solution
+    gtl::Element last;      // closed profile: the last element, named in the G21 block
     bool last_s2 = false;
     bool pending_corner = false;
     char corner = 0;  // 'r' or 'b'
@@ -544,6 +545,7 @@ class BaltRun final : public RunBase {
     int line = 0;                 // the block of the element being traversed
     int g21_line = 0;
     AxisArray g21_pos{};  // where the other axes were at G21 (the approach happens there)
+    std::uint32_t g21_used = 0;
   } profile_;
 };
 

@@ -22,7 +22,8 @@ BaltRun::Targets BaltRun::ReadTargets(const ParsedBlock& pb, bool incremental, b
     if (IsRotaryAxis(a)) {
       if (index_step_[a] > 0) {
         // An indexing table takes a number of indexes (ln 3909-3938).
-        if (v != std::floor(v) || std::fabs(v) > 99999) Fail(w.col, 13, "an indexing axis takes a whole number of indexes");
+        if (v != std::floor(v) || std::fabs(v) > 99999)
+          Fail(w.col, 13, "an indexing axis takes a whole number of indexes");
         v *= index_step_[a];
       }
     } else {
@@ -34,7 +35,8 @@ BaltRun::Targets BaltRun::ReadTargets(const ParsedBlock& pb, bool incremental, b
     t.mask |= 1u << a;
   }
   if (pb.elem.kind && !(gtl_profile_ || gtl_block_)) {
-    if (pb.elem.kind != 'p' || !allow_point) Fail(pb.elem.col, 25, "a GTL element here needs G21 (a GTL profile)");
+    if (pb.elem.kind != 'p' || !allow_point)
+      Fail(pb.elem.col, 25, "a GTL element here needs G21 (a GTL profile)");
     // ln 2701: a stored point gives the plane's abscissa and ordinate (always absolute).
     gtl::Element p = ResolveRef(pb.elem);
     if ((t.mask & ((1u << mode_.p1) | (1u << mode_.p2))) != 0) {
@@ -99,7 +101,8 @@ void BaltRun::RotaryTargets(const Targets& t, AxisArray& mach, AxisArray& travel
 
 // The feed of a feed move (ln 2490-2496, 3685-3725, 3982-3984): mm/min (G94; F = length / t with a t word),
 // inverse time (G93, F in every block), per revolution (G95); deg/min when only rotary axes move.
-double BaltRun::BlockFeed(const ParsedBlock& pb, double length_mm, bool rotary_only, FeedMode* mode, int col) {
+double BaltRun::BlockFeed(const ParsedBlock& pb, double length_mm, bool rotary_only, FeedMode* mode,
+                          int col) {
   const Word* t = nullptr;
   for (const Word& w : pb.words) {
     if (w.letter == 't') t = &w;
@@ -161,7 +164,8 @@ void BaltRun::LinearMove(const ParsedBlock& pb, const BlockG& g, const Targets& 
   std::uint32_t travel_mask = 0;
   RotaryTargets(t, mach, travel, travel_mask, g.g79);
   std::uint32_t moved = t.mask;
-  if (!identity_ && (t.mask & ((1u << mode_.p1) | (1u << mode_.p2)))) moved |= (1u << mode_.p1) | (1u << mode_.p2);
+  if (!identity_ && (t.mask & ((1u << mode_.p1) | (1u << mode_.p2))))
+    moved |= (1u << mode_.p1) | (1u << mode_.p2);
   // Indexing axes turn before the other axes of the block (ln 3918).
   std::uint32_t index_mask = 0;
   for (int a : {kA, kB, kC}) {
@@ -183,7 +187,8 @@ void BaltRun::LinearMove(const ParsedBlock& pb, const BlockG& g, const Targets& 
   if (!rapid) {
     double rot = 0;
     for (int a : {kA, kB, kC}) rot += travel[a] * travel[a];
-    feed.rate = BlockFeed(pb, linear_moves ? len : std::sqrt(rot), !linear_moves && travel_mask != 0, &feed.mode, col);
+    feed.rate = BlockFeed(pb, linear_moves ? len : std::sqrt(rot), !linear_moves && travel_mask != 0,
+                          &feed.mode, col);
     feed.exact_stop = mode_.dynamic == Dynamic::kG29 || g.decel;
   }
   if (!g.g79) CheckLimits(pos_, mach, nullptr, col);
@@ -203,7 +208,8 @@ void BaltRun::LinearMove(const ParsedBlock& pb, const BlockG& g, const Targets& 
     travel_mask &= ~index_mask;
     moved &= ~index_mask;
   }
-  EmitMotion(rapid || index_mask == moved ? Op::kRapid : Op::kLinear, mach, moved, feed, path, travel, travel_mask, 0);
+  EmitMotion(rapid || index_mask == moved ? Op::kRapid : Op::kLinear, mach, moved, feed, path, travel,
+             travel_mask, 0);
   prog_ = t.prog;  // paraxial factors included: axes left out of the next block stay where they are
   prog_valid_ = !g.g79;
 }
@@ -265,7 +271,8 @@ void BaltRun::CheckLimits(const AxisArray& from, const AxisArray& to, const geom
       const bool first = a == mode_.p1;
       double rad = Norm(arc->start - arc->center);
       for (int q = 0; q < 4; ++q) {
-        geom::Vec2 p = arc->center + rad * geom::Vec2{q == 0 ? 1.0 : (q == 2 ? -1.0 : 0.0), q == 1 ? 1.0 : (q == 3 ? -1.0 : 0.0)};
+        geom::Vec2 p = arc->center + rad * geom::Vec2{q == 0 ? 1.0 : (q == 2 ? -1.0 : 0.0),
+                                                      q == 1 ? 1.0 : (q == 3 ? -1.0 : 0.0)};
         if (geom::Sweep(arc->start, p, arc->center, arc->cw) <= arc->sweep + 1e-9) {
           lo = std::min(lo, first ? p.x : p.y);
           hi = std::max(hi, first ? p.x : p.y);
@@ -273,8 +280,9 @@ void BaltRun::CheckLimits(const AxisArray& from, const AxisArray& to, const geom
       }
     }
     if (lo < lim_lo_[a] - 1e-6 || hi > lim_hi_[a] + 1e-6) {
-      Fail(col, 3, fmt::format("{} outside {:.3f} .. {:.3f} (DLO)", LetterOfAxis(a), lim_lo_[a] - origin_[a],
-                               lim_hi_[a] - origin_[a]));
+      Fail(col, 3,
+           fmt::format("{} outside {:.3f} .. {:.3f} (DLO)", LetterOfAxis(a), lim_lo_[a] - origin_[a],
+                       lim_hi_[a] - origin_[a]));
     }
   }
 }

@@ -329,13 +329,20 @@ Access ParseFormat(std::string_view name, std::string_view f, int col) {
     return a;
   }
   if (k != 0) Fail(col, 13, fmt::format("'.{}': a count goes only before CH", f));
-  if (t == "BL") a = {'L', 1, 1};
-  else if (t == "BY") a = {'B', 1, 1};
-  else if (t == "IN") a = {'I', 1, 2};
-  else if (t == "LI") a = {'J', 1, 4};
-  else if (t == "RE") a = {'R', 1, 4};
-  else if (t == "LR") a = {'D', 1, 8};
-  else Fail(col, 13, fmt::format("'.{}' is not a format (BL BY IN LI RE LR CH)", f));
+  if (t == "BL")
+    a = {'L', 1, 1};
+  else if (t == "BY")
+    a = {'B', 1, 1};
+  else if (t == "IN")
+    a = {'I', 1, 2};
+  else if (t == "LI")
+    a = {'J', 1, 4};
+  else if (t == "RE")
+    a = {'R', 1, 4};
+  else if (t == "LR")
+    a = {'D', 1, 8};
+  else
+    Fail(col, 13, fmt::format("'.{}' is not a format (BL BY IN LI RE LR CH)", f));
   return a;
 }
 
@@ -360,8 +367,10 @@ double BaltRun::ReadBuffer(std::string_view name, int index, std::string_view f,
     // The A buffer holds the machine's signals: the station answers for them (offline: the buffer).
     if (auto v = env_->SystemVariable(fmt::format("SA{}{}{}", index, f.empty() ? "" : ".", f))) return *v;
   }
-  std::size_t byte = a.kind == 'L' ? static_cast<std::size_t>(index) / 8 : static_cast<std::size_t>(index) * a.size;
-  if (index < 0 || byte + a.size > buf.size()) Fail(col, 18, fmt::format("{}{} is outside the area", name, index));
+  std::size_t byte =
+      a.kind == 'L' ? static_cast<std::size_t>(index) / 8 : static_cast<std::size_t>(index) * a.size;
+  if (index < 0 || byte + a.size > buf.size())
+    Fail(col, 18, fmt::format("{}{} is outside the area", name, index));
   const unsigned char* p = buf.data() + byte;
   switch (a.kind) {
     case 'L':
@@ -395,8 +404,10 @@ void BaltRun::WriteBuffer(std::string_view name, int index, std::string_view f, 
   std::vector<unsigned char>& buf = Buffer(name, col);
   Access a = ParseFormat(name, f, col);
   if (a.kind == 'C') Fail(col, 24, "a character variable takes a string");
-  std::size_t byte = a.kind == 'L' ? static_cast<std::size_t>(index) / 8 : static_cast<std::size_t>(index) * a.size;
-  if (index < 0 || byte + a.size > buf.size()) Fail(col, 18, fmt::format("{}{} is outside the area", name, index));
+  std::size_t byte =
+      a.kind == 'L' ? static_cast<std::size_t>(index) / 8 : static_cast<std::size_t>(index) * a.size;
+  if (index < 0 || byte + a.size > buf.size())
+    Fail(col, 18, fmt::format("{}{} is outside the area", name, index));
   unsigned char* p = buf.data() + byte;
   auto whole = [&](double lo, double hi) {
     double r = std::round(v);
@@ -432,11 +443,13 @@ void BaltRun::WriteBuffer(std::string_view name, int index, std::string_view f, 
   }
   if (name != "SYVAR") {
     // The A and K buffers are the machine logic's: the write goes out as an output.
-    Out<OutputOp>().spec = fmt::format("{}{}{}{}={}", name, index, f.empty() ? "" : ".", f, fmt::format("{:g}", v));
+    Out<OutputOp>().spec =
+        fmt::format("{}{}{}{}={}", name, index, f.empty() ? "" : ".", f, fmt::format("{:g}", v));
   }
 }
 
-void BaltRun::WriteBufferString(std::string_view name, int index, std::string_view f, std::string_view s, int col) {
+void BaltRun::WriteBufferString(std::string_view name, int index, std::string_view f, std::string_view s,
+                                int col) {
   std::vector<unsigned char>& buf = Buffer(name, col);
   Access a;
   if (f.empty()) {
@@ -519,7 +532,8 @@ void BaltRun::AssignGlobal(const Assignment& a) {
   if (name == "TIM" || name == "TOT") {
     if (!a.fmt.empty()) Fail(col, 11, fmt::format("{} takes no format", name));
     if (index < 0 || index > 6) Fail(col, 18, fmt::format("{}{} (0-6)", name, index));
-    if (name == "TIM" && index == 0) Fail(col, 24, "TIM0 is the system clock (set with PTM from the keyboard)");
+    if (name == "TIM" && index == 0)
+      Fail(col, 24, "TIM0 is the system clock (set with PTM from the keyboard)");
     // RE format (ln 4245-4315).
     double v = static_cast<float>(Eval(a.rhs, a.rhs_col));
     (name == "TIM" ? tim_ : tot_)[static_cast<std::size_t>(index)] = v;

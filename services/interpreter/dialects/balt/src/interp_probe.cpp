@@ -97,7 +97,8 @@ void BaltRun::ProbeFailed(int code, int col) {
     iosta_ = code == 8 ? 1 : 2;  // ln 7451-7461
     return;
   }
-  Fail(col, code, code == 8 ? "no contact within the safety distance Qs" : "the probe was touching at the start");
+  Fail(col, code,
+       code == 8 ? "no contact within the safety distance Qs" : "the probe was touching at the start");
 }
 
 // One probe move: `from` to `to` (machine coordinates of the point that touches); true with `hit` set on
@@ -134,7 +135,7 @@ void BaltRun::Probe(const ParsedBlock& pb, const BlockG& g, const Targets& t) {
   if (mode_.cycle != 80) Fail(col, 25, "probing in a fixed cycle");
   if (!dpt_) Fail(col, 30, "program (DPT,Qa,Qs,Vm) first");
   if (pb.result_e < 0) Fail(col, 12, fmt::format("G{} needs the E parameter for its results", g.probe));
-  const double out_unit = basic_metric_ ? 1.0 : kInch;  // results in the characterized unit (ln 3281)
+  const double out_unit = basic_metric_ ? 1.0 : kInch;    // results in the characterized unit (ln 3281)
   const double rb = g.probe == 74 ? 0.0 : tool_dia_ / 2;  // the probe ball (the offset's K)
   const AxisArray start = pos_;
   const AxisArray start_prog = Prog();

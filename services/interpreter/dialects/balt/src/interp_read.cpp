@@ -339,7 +339,8 @@ ParsedBlock ParseBlock(std::string_view s) {
     r.Skip();
     pb.exec = r.Rest();
     pb.exec_col = r.Col();
-    if (std::size_t semi = pb.exec.find(';'); semi != std::string_view::npos) pb.exec = pb.exec.substr(0, semi);
+    if (std::size_t semi = pb.exec.find(';'); semi != std::string_view::npos)
+      pb.exec = pb.exec.substr(0, semi);
     while (!pb.exec.empty() && (pb.exec.back() == ' ' || pb.exec.back() == '\t')) pb.exec.remove_suffix(1);
     return pb;
   }
@@ -360,11 +361,13 @@ ParsedBlock ParseBlock(std::string_view s) {
           Fail(body_col, 11, "no variable before '='");
         }
         std::string_view rhs = body.substr(i + 1);
-        if (std::size_t semi = rhs.find(';'); semi != std::string_view::npos && rhs.find('"') == std::string_view::npos) {
+        if (std::size_t semi = rhs.find(';');
+            semi != std::string_view::npos && rhs.find('"') == std::string_view::npos) {
           rhs = rhs.substr(0, semi);
         }
         std::size_t b = rhs.find_first_not_of(" \t");
-        if (b == std::string_view::npos) Fail(body_col + static_cast<int>(i) + 1, 12, "value missing after '='");
+        if (b == std::string_view::npos)
+          Fail(body_col + static_cast<int>(i) + 1, 12, "value missing after '='");
         std::size_t e = rhs.find_last_not_of(" \t");
         pb.assign.rhs = rhs.substr(b, e - b + 1);
         pb.assign.rhs_col = body_col + static_cast<int>(i + 1 + b);
@@ -393,7 +396,8 @@ ParsedBlock ParseBlock(std::string_view s) {
       pb.elem.col = col;
       r.Advance();
       pb.elem.index = r.Value();
-      if (pb.elem.index.kind == Val::kNone || pb.elem.index.neg) Fail(col, 11, "a GTL element needs an index");
+      if (pb.elem.index.kind == Val::kNone || pb.elem.index.neg)
+        Fail(col, 11, "a GTL element needs an index");
       non_g = true;
       continue;
     }
@@ -405,7 +409,8 @@ ParsedBlock ParseBlock(std::string_view s) {
         pb.elem.col = col;
         r.Advance();
         pb.elem.index = r.Value();
-        if (pb.elem.index.kind == Val::kNone || pb.elem.index.neg) Fail(col, 11, "a GTL element needs an index");
+        if (pb.elem.index.kind == Val::kNone || pb.elem.index.neg)
+          Fail(col, 11, "a GTL element needs an index");
         continue;
       }
       if (c == 's') {

@@ -47,7 +47,8 @@ std::uint32_t Axes(const std::string& key, const std::string& v, bool rotary_onl
   for (char c : v) {
     if (c == ',' || c == ' ') continue;
     int a = AxisOfLetter(c);
-    if (a < 0 || (rotary_only && !IsRotaryAxis(a))) BadSetting(key, fmt::format("'{}' is not {}", c, rotary_only ? "a rotary axis (A B C)" : "an axis"));
+    if (a < 0 || (rotary_only && !IsRotaryAxis(a)))
+      BadSetting(key, fmt::format("'{}' is not {}", c, rotary_only ? "a rotary axis (A B C)" : "an axis"));
     m |= 1u << a;
   }
   return m;
@@ -134,7 +135,8 @@ BaltRun::BaltRun(const RunOptions& o) : env_(o.env ? o.env : &default_env_) {
   };
   for (const auto& [k, v] : o.variables) {
     std::string key = Upper(Trim(k));
-    if (key.size() > 1 && key[0] == 'E' && std::all_of(key.begin() + 1, key.end(), IsDigit) && key.size() < 7) {
+    if (key.size() > 1 && key[0] == 'E' && std::all_of(key.begin() + 1, key.end(), IsDigit) &&
+        key.size() < 7) {
       put(std::stoi(key.substr(1)), v);
     }
   }

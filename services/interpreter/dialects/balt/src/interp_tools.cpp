@@ -53,7 +53,8 @@ void BaltRun::ToolChange(int col) {
   const int requested = tool;
   if (life_ && tool > 0) {
     auto it = life_->tools.find(tool);
-    if (it == life_->tools.end()) Fail(next_tool_col_, 82, fmt::format("tool {} is not in the tool life file", tool));
+    if (it == life_->tools.end())
+      Fail(next_tool_col_, 82, fmt::format("tool {} is not in the tool life file", tool));
     std::set<int> seen{tool};
     for (;;) {
       ToolLife& t = it->second;
@@ -66,8 +67,10 @@ void BaltRun::ToolChange(int col) {
       }
       // ln 8480-8493: the alternative; a tool alternative to itself ends in FILMS4 72, to T0 in the
       // machine logic's message.
-      if (t.alt_tool == 0) Fail(next_tool_col_, 56, fmt::format("tool {} is out of use and has no alternative", t.tool));
-      if (seen.count(t.alt_tool)) Fail(next_tool_col_, 72, fmt::format("tool {} and its alternatives", requested));
+      if (t.alt_tool == 0)
+        Fail(next_tool_col_, 56, fmt::format("tool {} is out of use and has no alternative", t.tool));
+      if (seen.count(t.alt_tool))
+        Fail(next_tool_col_, 72, fmt::format("tool {} and its alternatives", requested));
       seen.insert(t.alt_tool);
       offset = t.alt_offset;
       it = life_->tools.find(t.alt_tool);
@@ -81,7 +84,8 @@ void BaltRun::ToolChange(int col) {
   active_offset_ = offset;
   if (offset > 0) {
     const tooltable::ToolEntry* e = FindOffset(offset);
-    if (!e && !tools_.entries().empty()) Fail(next_tool_col_, 44, fmt::format("offset {} is not in FI1COR", offset));
+    if (!e && !tools_.entries().empty())
+      Fail(next_tool_col_, 44, fmt::format("offset {} is not in FI1COR", offset));
     if (e) {
       tool_len_ = e->length;
       tool_dia_ = e->diameter;
@@ -101,8 +105,8 @@ void BaltRun::LoadToolLife() {
   try {
     life_ = ParseToolLife(*text);
   } catch (const FileError& e) {
-    throw Error(Errc::kInvalidArgument,
-                fmt::format("GE1TOL:{}:{}: error: [FILMS4 {:02}] {}: {}", e.line, e.col, e.code, FilmsText(e.code), e.text));
+    throw Error(Errc::kInvalidArgument, fmt::format("GE1TOL:{}:{}: error: [FILMS4 {:02}] {}: {}", e.line,
+                                                    e.col, e.code, FilmsText(e.code), e.text));
   }
 }
 
@@ -120,7 +124,8 @@ void BaltRun::CmdRqu(const Command& c) {
   int offset = OperandInt(c.ops[1], 1, 9999);
   if (life_) {
     auto it = life_->tools.find(tool);
-    if (it == life_->tools.end()) Fail(c.ops[0].col, 82, fmt::format("tool {} is not in the tool life file", tool));
+    if (it == life_->tools.end())
+      Fail(c.ops[0].col, 82, fmt::format("tool {} is not in the tool life file", tool));
     std::set<int> seen{tool};
     while (it != life_->tools.end() && it->second.status != 'E' && it->second.status != 'F') {
       int alt = it->second.alt_tool;
@@ -170,7 +175,8 @@ void BaltRun::CmdTof(const Command& c) {
   int tool = OperandInt(c.ops[0], 1, 9999);
   if (life_) {
     auto it = life_->tools.find(tool);
-    if (it == life_->tools.end()) Fail(c.ops[0].col, 82, fmt::format("tool {} is not in the tool life file", tool));
+    if (it == life_->tools.end())
+      Fail(c.ops[0].col, 82, fmt::format("tool {} is not in the tool life file", tool));
     std::set<int> seen{tool};
     auto target = it;
     while (it != life_->tools.end()) {

@@ -1,7 +1,7 @@
 // Balt-System reference systems (manual §5.17.1, ln 5533-5794): absolute origins 0-99 from the origin file
 // FILEOR (UAO), temporary (UOT) and incremental (UIO) origins, permanent requalification (RQO), the plane
-// rotation URT (applied first) and mirroring MIR (second), scale factors SCF, and the tool length on its axis.
-// Program coordinates map to machine coordinates as: scale, rotate, mirror, + origin, + tool length.
+// rotation URT (applied first) and mirroring MIR (second), scale factors SCF, and the tool length on its
+// axis. Program coordinates map to machine coordinates as: scale, rotate, mirror, + origin, + tool length.
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -85,8 +85,8 @@ void BaltRun::LoadOrigins() {
     try {
       origins_ = ParseOrigins(*text, basic_metric_);
     } catch (const FileError& e) {
-      throw Error(Errc::kInvalidArgument,
-                  fmt::format("FILEOR:{}:{}: error: [FILMS4 {:02}] {}: {}", e.line, e.col, e.code, FilmsText(e.code), e.text));
+      throw Error(Errc::kInvalidArgument, fmt::format("FILEOR:{}:{}: error: [FILMS4 {:02}] {}: {}", e.line,
+                                                      e.col, e.code, FilmsText(e.code), e.text));
     }
     origin_file_ = true;
   }
@@ -133,7 +133,8 @@ void BaltRun::SelectOrigin(int n, std::uint32_t axes, int col) {
   const OriginRecord& o = it->second;
   for (int a = 0; a < kAxisCount; ++a) {
     bool listed = axes & (1u << a);
-    if (listed && !(o.axes & (1u << a))) Fail(col, 29, fmt::format("origin {} has no {} value", n, LetterOfAxis(a)));
+    if (listed && !(o.axes & (1u << a)))
+      Fail(col, 29, fmt::format("origin {} has no {} value", n, LetterOfAxis(a)));
     if (listed || (axes == 0 && (o.axes & (1u << a)))) {
       origin_[a] = o.v[a];
       origin_no_[a] = n;
@@ -164,7 +165,8 @@ void BaltRun::CmdUot(const Command& c) {
   CheckOperands(c, 2, 4);
   int n = OperandInt(c.ops[0], 0, 99);
   auto it = origins_.find(n);
-  if (it == origins_.end() && origin_file_ && n != 0) Fail(c.ops[0].col, 27, fmt::format("origin {} is not in the origin file", n));
+  if (it == origins_.end() && origin_file_ && n != 0)
+    Fail(c.ops[0].col, 27, fmt::format("origin {} is not in the origin file", n));
   std::uint32_t seen = 0;
   for (std::size_t k = 1; k < c.ops.size(); ++k) {
     AxisValue a = OperandAxis(c.ops[k].text, c.ops[k].col, true);
@@ -251,7 +253,8 @@ void BaltRun::CmdRqo(const Command& c) {
   CheckOperands(c, 2, 4);
   int n = OperandInt(c.ops[0], 0, 99);
   auto it = origins_.find(n);
-  if (it == origins_.end() && origin_file_) Fail(c.ops[0].col, 27, fmt::format("origin {} is not in the origin file", n));
+  if (it == origins_.end() && origin_file_)
+    Fail(c.ops[0].col, 27, fmt::format("origin {} is not in the origin file", n));
   OriginRecord& rec = origins_[n];
   std::uint32_t seen = 0;
   for (std::size_t k = 1; k < c.ops.size(); ++k) {

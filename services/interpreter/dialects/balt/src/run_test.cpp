@@ -9,7 +9,8 @@
 namespace cell::interp {
 namespace {
 
-std::vector<Canon> RunAll(RunOptions opt, std::unique_ptr<cell::interp::Run>* keep = nullptr, std::string* error = nullptr) {
+std::vector<Canon> RunAll(RunOptions opt, std::unique_ptr<cell::interp::Run>* keep = nullptr,
+                          std::string* error = nullptr) {
   opt.program_name = "test";
   auto run = BaltDialect().StartRun(opt);
   std::vector<Canon> out;
@@ -36,7 +37,7 @@ TEST(BaltRun, VariablesInAndOut) {
   auto v = run->Variables();
   EXPECT_DOUBLE_EQ(v["E30"], 2.5);
   EXPECT_DOUBLE_EQ(v["E31"], 5);
-  EXPECT_DOUBLE_EQ(v["E2"], 8);  // a byte: 7.6 rounds to 8
+  EXPECT_DOUBLE_EQ(v["E2"], 8);                           // a byte: 7.6 rounds to 8
   EXPECT_DOUBLE_EQ(v["E25"], static_cast<double>(0.1f));  // RE keeps 7 digits
   EXPECT_EQ(v.count("L5"), 0u);
 }
@@ -58,7 +59,8 @@ TEST(BaltRun, SavesTheFilesItChanges) {
   RunAll(opt, nullptr, &err);
   EXPECT_EQ(err, "");
   EXPECT_NE(saved["FILEOR"].find("3 X+10.250"), std::string::npos) << saved["FILEOR"];
-  EXPECT_NE(saved["GE1TOL"].find("VTU,13,T14,[TOOL COMP]14,t60,t2,t60,A"), std::string::npos) << saved["GE1TOL"];
+  EXPECT_NE(saved["GE1TOL"].find("VTU,13,T14,[TOOL COMP]14,t60,t2,t60,A"), std::string::npos)
+      << saved["GE1TOL"];
 }
 
 // RQU changes the tool table the run hands back (Run::Tools) and says so in a tool_data op.

@@ -107,7 +107,8 @@ std::vector<Record> ReadRecords(std::string_view text, int max_n) {
     r.col = s.Col();
     auto n = s.Number();
     if (!n) Bad(s, fmt::format("a record starts with its number, not '{}'", s.Peek()));
-    if (*n != std::floor(*n) || std::fabs(*n) > max_n) Bad(s, fmt::format("record number {} out of range", *n));
+    if (*n != std::floor(*n) || std::fabs(*n) > max_n)
+      Bad(s, fmt::format("record number {} out of range", *n));
     r.alt = *n < 0;
     r.n = static_cast<int>(std::fabs(*n));
     for (;;) {
@@ -137,7 +138,8 @@ std::string Num3(double v) {
 
 }  // namespace
 
-tooltable::ToolTable ParseOffsets(std::string_view text, const tooltable::ToolTable& base, bool metric_machine) {
+tooltable::ToolTable ParseOffsets(std::string_view text, const tooltable::ToolTable& base,
+                                  bool metric_machine) {
   tooltable::ToolTable table = base;  // all or nothing
   std::vector<Record> records = ReadRecords(text, 9999);
   if (records.empty()) throw FileError{1, 1, 71, "no offset record (\"n Z.. K..\") found"};
@@ -166,12 +168,14 @@ tooltable::ToolTable ParseOffsets(std::string_view text, const tooltable::ToolTa
           break;
         case 'c':
         case 'm':
-          if (++wear > 4) throw FileError{r.line, r.col, 71, fmt::format("offset {}: more than c.. m.. c.. m..", r.n)};
+          if (++wear > 4)
+            throw FileError{r.line, r.col, 71, fmt::format("offset {}: more than c.. m.. c.. m..", r.n)};
           break;
         default:
-          throw FileError{r.line, r.col, 71,
-                          fmt::format("offset {}: '{}' is not an offset field (Z, X or Y length, K diameter, c, m)",
-                                      r.n, letter)};
+          throw FileError{
+              r.line, r.col, 71,
+              fmt::format("offset {}: '{}' is not an offset field (Z, X or Y length, K diameter, c, m)", r.n,
+                          letter)};
       }
     }
     // ln 8284: the length and K must both be written, even when 0.
@@ -198,7 +202,8 @@ ToolLifeFile ParseToolLife(std::string_view text) {
   std::size_t start = 0;
   while (start <= text.size()) {
     std::size_t nl = text.find('\n', start);
-    std::string_view line = text.substr(start, nl == std::string_view::npos ? text.size() - start : nl - start);
+    std::string_view line =
+        text.substr(start, nl == std::string_view::npos ? text.size() - start : nl - start);
     start = nl == std::string_view::npos ? text.size() + 1 : nl + 1;
     ++line_no;
     // Fields: VTU, tool, T<alt>, [TOOL COMP]<offset>, t<max>, t<min>, t<left>, status.
@@ -228,7 +233,8 @@ ToolLifeFile ParseToolLife(std::string_view text) {
       throw FileError{line_no, col, 71, why};
     };
     if (fields[0].first != "VTU") bad(0, "a tool life record starts with VTU");
-    if (fields.size() != 8) bad(0, "VTU,tool,T<alternative>,[TOOL COMP]<offset>,t<max>,t<min>,t<left>,<status>");
+    if (fields.size() != 8)
+      bad(0, "VTU,tool,T<alternative>,[TOOL COMP]<offset>,t<max>,t<min>,t<left>,<status>");
     auto number = [&](std::size_t k, std::string_view prefix) -> double {
       std::string s = fields[k].first;
       if (!prefix.empty()) {
@@ -306,11 +312,13 @@ OriginFile ParseOrigins(std::string_view text, bool metric_machine) {
         default:
           throw FileError{r.line, r.col, 71, fmt::format("origin {}: '{}' is not an axis", r.n, letter)};
       }
-      if (o.axes & (1u << axis)) throw FileError{r.line, r.col, 71, fmt::format("origin {}: axis {} twice", r.n, letter)};
+      if (o.axes & (1u << axis))
+        throw FileError{r.line, r.col, 71, fmt::format("origin {}: axis {} twice", r.n, letter)};
       o.axes |= 1u << axis;
       o.v[axis] = (axis >= kA && axis <= kC) ? v : v * unit;
     }
-    if (std::popcount(o.axes) > 3) throw FileError{r.line, r.col, 69, fmt::format("origin {} names more than 3 axes", r.n)};
+    if (std::popcount(o.axes) > 3)
+      throw FileError{r.line, r.col, 69, fmt::format("origin {} names more than 3 axes", r.n)};
     f[r.n] = o;
   }
   return f;
@@ -321,7 +329,8 @@ std::string FormatOrigins(const OriginFile& file) {
   for (const auto& [n, o] : file) {
     out += std::to_string(n);
     for (int a = 0; a < kAxisCount; ++a) {
-      if (o.axes & (1u << a)) out += fmt::format(" {}{}", static_cast<char>(AxisName(a)[0] - 'a' + 'A'), Num3(o.v[a]));
+      if (o.axes & (1u << a))
+        out += fmt::format(" {}{}", static_cast<char>(AxisName(a)[0] - 'a' + 'A'), Num3(o.v[a]));
     }
     out += '\n';
   }

@@ -27,7 +27,8 @@ struct FileError {
 // diameter; optional current/maximum wear values c.. m.. c.. m.. are read and not kept. '%' tape
 // delimiters, ';' comments, commas, "/" record separators and a "[TOOL COMP]" key prefix are accepted.
 // Each record becomes the tool-table entry whose tool is the offset number ("12"). Throws FileError.
-tooltable::ToolTable ParseOffsets(std::string_view text, const tooltable::ToolTable& base, bool metric_machine);
+tooltable::ToolTable ParseOffsets(std::string_view text, const tooltable::ToolTable& base,
+                                  bool metric_machine);
 // The same records written back (what RQU / RQP leave in the file).
 std::string FormatOffsets(const tooltable::ToolTable& table);
 
