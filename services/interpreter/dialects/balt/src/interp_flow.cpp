@@ -370,30 +370,50 @@ int BaltRun::CallLevels() const {
   return n;
 }
 
+namespace {
+
+// The next "%:NAME" header line at or after `pos`, searched a MiB at a time: a mapped main file gives each
+// searched window back (it faults in again when the run reaches it), so resident memory stays flat however
+// long the program is.
+std::size_t FindHeaderLine(const ProgramText& main, std::string_view header, std::size_t pos) {
+  constexpr std::size_t kWindow = std::size_t{1} << 20;
+  std::string_view text = main.view();
+  while (pos < text.size()) {
+    std::size_t end = std::min(text.size(), pos + kWindow);
+    std::size_t hit = text.substr(0, std::min(text.size(), end + header.size())).find(header, pos);
+    main.Release(pos, end);
+    if (hit == std::string_view::npos || hit >= end) {
+      pos = end;
+      continue;
+    }
+    std::size_t after = hit + header.size();
+    bool line_start = hit == 0 || text[hit - 1] == '\n';
+    bool name_end = after >= text.size() || text[after] == '\n' || text[after] == '\r' || text[after] == ' ';
+    if (line_start && name_end) return hit;
+    pos = hit + 1;
+  }
+  return std::string_view::npos;
+}
+
+}  // namespace
+
 // A program by name: a %:NAME program of the main file, then the library (--lib, the store).
 std::optional<std::string> BaltRun::FindProgram(const std::string& name) {
-  std::string_view text = (*frames_)[0].span.text->view();
-  std::size_t pos = 0;
-  const std::string header = "%:" + name;
-  while ((pos = text.find(header, pos)) != std::string_view::npos) {
-    bool line_start = pos == 0 || text[pos - 1] == '\n';
-    std::size_t after = pos + header.size();
-    bool name_end = after >= text.size() || text[after] == '\n' || text[after] == '\r' || text[after] == ' ';
-    if (line_start && name_end) {
-      std::size_t body = text.find('\n', pos);
-      body = body == std::string_view::npos ? text.size() : body + 1;
-      std::size_t end = body;
-      // To the next '%' line.
-      while (end < text.size()) {
-        std::size_t nl = text.find('\n', end);
-        std::string_view l =
-            TrimBlanks(text.substr(end, (nl == std::string_view::npos ? text.size() : nl) - end));
-        if (!l.empty() && l[0] == '%') break;
-        end = nl == std::string_view::npos ? text.size() : nl + 1;
-      }
-      return std::string(text.substr(body, end - body));
+  const ProgramText& main = *(*frames_)[0].span.text;
+  std::string_view text = main.view();
+  if (std::size_t pos = FindHeaderLine(main, "%:" + name, 0); pos != std::string_view::npos) {
+    std::size_t body = text.find('\n', pos);
+    body = body == std::string_view::npos ? text.size() : body + 1;
+    std::size_t end = body;
+    // To the next '%' line.
+    while (end < text.size()) {
+      std::size_t nl = text.find('\n', end);
+      std::string_view l =
+          TrimBlanks(text.substr(end, (nl == std::string_view::npos ? text.size() : nl) - end));
+      if (!l.empty() && l[0] == '%') break;
+      end = nl == std::string_view::npos ? text.size() : nl + 1;
     }
-    pos = after;
+    return std::string(text.substr(body, end - body));
   }
   if (!opt_.library) return std::nullopt;
   return opt_.library(name);

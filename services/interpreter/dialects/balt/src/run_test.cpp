@@ -115,5 +115,28 @@ TEST(BaltRun, ReportsTheFirstErrorWithItsAlarm) {
   EXPECT_EQ(out.size(), 2u);  // units and the move before the error
 }
 
+// CLS finds a %:NAME program of the main file wherever it is: the search goes a MiB at a time (a mapped file
+// gives the searched pages back), so headers across, at and past window boundaries must all be found, and a
+// name that only starts like the header ("%:SUBAX") or is not at a line start is not it.
+TEST(BaltRun, ClsFindsProgramsOfTheMainFileFarAway) {
+  for (std::size_t filler : {std::size_t{0}, (std::size_t{1} << 20) - 40, (std::size_t{1} << 20) + 3,
+                             (std::size_t{3} << 20) + 17}) {
+    RunOptions opt;
+    std::string text = "%:MAIN\n(CLS,SUBA)\nM30\n%\n%:SUBAX\nG X99\n%\n; %:SUBA\n";
+    while (text.size() < filler) text += "; filler filler filler filler filler\n";
+    text += "%:SUBA\nG X7\n%\n";
+    opt.program_text = text;
+    std::string error;
+    auto out = RunAll(opt, nullptr, &error);
+    ASSERT_EQ(error, "") << filler;
+    ASSERT_FALSE(out.empty()) << filler;
+    bool moved = false;
+    for (const Canon& c : out) {
+      if (const auto* r = c.If<RapidOp>()) moved = moved || r->to.pos[0] == 7;
+    }
+    EXPECT_TRUE(moved) << filler;
+  }
+}
+
 }  // namespace
 }  // namespace cell::interp
