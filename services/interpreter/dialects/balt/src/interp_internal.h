@@ -27,6 +27,7 @@
 #include <string_view>
 #include <vector>
 
+#include "cell/interp/axis_letters.h"
 #include "cell/interp/balt.h"
 #include "cell/interp/call_stack.h"
 #include "cell/interp/canon.h"
@@ -71,10 +72,7 @@ inline bool IsUpper(char c) {
 inline bool IsLower(char c) {
   return c >= 'a' && c <= 'z';
 }
-// Canonical axis of an address letter (X..W), or -1 (P, Q, D are not configured here).
-int AxisOfLetter(char c);
-// The upper-case address letter of an axis.
-char LetterOfAxis(int axis);
+// AxisOfLetter, LetterOfAxis: cell/interp/axis_letters.h (P, Q, D are not configured here).
 
 // ---------------------------------------------------------------------------------------------------------
 // The tape format (interp_read.cpp)

@@ -8,36 +8,6 @@
 
 namespace cell::interp::balt {
 
-int AxisOfLetter(char c) {
-  switch (c) {
-    case 'X':
-      return kX;
-    case 'Y':
-      return kY;
-    case 'Z':
-      return kZ;
-    case 'A':
-      return kA;
-    case 'B':
-      return kB;
-    case 'C':
-      return kC;
-    case 'U':
-      return kU;
-    case 'V':
-      return kV;
-    case 'W':
-      return kW;
-    default:
-      return -1;
-  }
-}
-
-char LetterOfAxis(int axis) {
-  static constexpr char kLetters[kAxisCount] = {'X', 'Y', 'Z', 'A', 'B', 'C', 'U', 'V', 'W'};
-  return axis >= 0 && axis < kAxisCount ? kLetters[axis] : '?';
-}
-
 namespace {
 
 bool IsAlnum(char c) {

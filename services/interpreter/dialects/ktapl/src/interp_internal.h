@@ -20,6 +20,7 @@
 #include <string_view>
 #include <vector>
 
+#include "cell/interp/axis_letters.h"
 #include "cell/interp/call_stack.h"
 #include "cell/interp/canon.h"
 #include "cell/interp/geometry/arc.h"
@@ -56,8 +57,7 @@ inline bool IsDigit(char c) {
 inline bool IsAlpha(char c) {
   return (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z');
 }
-// Axis index of an address letter (X..W), or -1.
-int AxisOfLetter(char c);
+// AxisOfLetter: cell/interp/axis_letters.h.
 
 // ---------------------------------------------------------------------------------------------------------
 // The tape format (interp_read.cpp)

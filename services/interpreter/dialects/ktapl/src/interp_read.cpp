@@ -6,31 +6,6 @@
 
 namespace cell::interp::ktapl {
 
-int AxisOfLetter(char c) {
-  switch (c) {
-    case 'X':
-      return kX;
-    case 'Y':
-      return kY;
-    case 'Z':
-      return kZ;
-    case 'A':
-      return kA;
-    case 'B':
-      return kB;
-    case 'C':
-      return kC;
-    case 'U':
-      return kU;
-    case 'V':
-      return kV;
-    case 'W':
-      return kW;
-    default:
-      return -1;
-  }
-}
-
 // Implied decimals of a letter when written without a point.
 int ImpliedDecimals(char letter, bool metric, bool dwell, bool passing) {
   switch (letter) {
