@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 
 #include "cell/error/error.h"
 #include "cell/interp/balt.h"
@@ -94,6 +95,38 @@ class Balt final : public Dialect {
 
   std::unique_ptr<Run> StartRun(const RunOptions& options) const override {
     return std::make_unique<balt::BaltRun>(options);
+  }
+
+  // ln 5497: "E parameters normally remain stored after a power down": a station keeps every E parameter
+  // (E0..E9999, the most a configuration has: E_PARAMETERS), each within its format of Table 5.8
+  // (ln 5414-5419); a whole format takes whole numbers only (the run reports them converted).
+  std::string CheckVariable(std::string_view name, double value) const override {
+    bool digits = name.size() >= 2 && name.size() <= 5 && name[0] == 'E' &&
+                  (name[1] != '0' || name.size() == 2) && std::all_of(name.begin() + 1, name.end(), IsDigit);
+    if (!digits)
+      return fmt::format("'{}' is not a variable a Balt-System station keeps (the E parameters E0..E9999)",
+                         name);
+    int n = std::stoi(std::string(name.substr(1)));
+    struct Format {
+      int last;
+      double lo, hi;
+      bool whole;
+      const char* text;
+    };
+    static constexpr Format kFormats[] = {
+        {9, 0, 255, true, "a byte, 0 .. 255"},
+        {19, -32768, 32767, true, "an integer, -32768 .. 32767"},
+        {24, -2147483647.0, 2147483647.0, true, "a long integer, -2147483647 .. 2147483647"},
+        {29, -9999999.0, 9999999.0, false, "a real of 7 digits"},
+        {9999, -9999999999999.0, 9999999999999.0, false, "a long real of 13 whole digits"},
+    };
+    for (const Format& f : kFormats) {
+      if (n > f.last) continue;
+      if (!std::isfinite(value) || value < f.lo || value > f.hi || (f.whole && value != std::floor(value)))
+        return fmt::format("{} = {} does not fit {} (Table 5.8)", name, value, f.text);
+      return "";
+    }
+    return "";
   }
 
   // The offsets file FI1COR (§6.4.1, §6.5.2): records "n Z.. K.." applied on top of `base`.

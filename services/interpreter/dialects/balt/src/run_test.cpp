@@ -42,6 +42,25 @@ TEST(BaltRun, VariablesInAndOut) {
   EXPECT_EQ(v.count("L5"), 0u);
 }
 
+// A station keeps every E parameter within its format (ln 5497, Table 5.8); what a run reports is kept.
+TEST(BaltRun, KeptVariables) {
+  const Dialect& b = BaltDialect();
+  EXPECT_EQ(b.CheckVariable("E0", 255), "");
+  EXPECT_EQ(b.CheckVariable("E19", -32768), "");
+  EXPECT_EQ(b.CheckVariable("E999", 1.5e12), "");
+  for (const char* bad : {"E", "E01", "e3", "L1500", "E12345", "E3X", ""})
+    EXPECT_NE(b.CheckVariable(bad, 1).find("E0..E9999"), std::string::npos) << bad;
+  EXPECT_NE(b.CheckVariable("E3", 256).find("byte"), std::string::npos);
+  EXPECT_NE(b.CheckVariable("E12", 1.5).find("integer"), std::string::npos);
+  EXPECT_NE(b.CheckVariable("E40", 1e14).find("long real"), std::string::npos);
+  RunOptions opt;
+  opt.variables = {{"E30", 2.5}};
+  opt.program_text = "E31=E30*2\nE2=E1+0.6\nE25=0.1\nE12=-7\n";
+  std::unique_ptr<cell::interp::Run> run;
+  RunAll(opt, &run);
+  for (const auto& [name, value] : run->Variables()) EXPECT_EQ(b.CheckVariable(name, value), "") << name;
+}
+
 // RQO changes the origin file, TOF the tool life file: both are handed to `save` for the station's memory.
 TEST(BaltRun, SavesTheFilesItChanges) {
   std::map<std::string, std::string> lib = {
