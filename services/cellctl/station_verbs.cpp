@@ -134,7 +134,16 @@ void AddStationVerbs(CLI::App& app, Context& ctx) {
     // DESIGN §6 keys for every entry; the other dialects' fields where they apply (tooltable::EntryJson).
     nlohmann::json arr = nlohmann::json::array();
     const cell::tooltable::ToolTable table = cell::tooltable::FromWire(*t);
-    for (const auto& e : table.entries()) arr.push_back(cell::tooltable::EntryJson(e));
+    for (const auto& e : table.entries()) {
+      nlohmann::json j = cell::tooltable::EntryJson(e);
+      // KT-APL TLD W: this data set's process compensations, per pallet.
+      nlohmann::json process = nlohmann::json::array();
+      for (const auto& c : table.process_comps())
+        if (c.tool == e.tool)
+          process.push_back({{"pallet", c.pallet}, {"length", c.length}, {"diameter", c.diameter}});
+      if (!process.empty()) j["process"] = process;
+      arr.push_back(j);
+    }
     Print(ctx, arr, {"tool", "socket", "length", "diameter", "life_left_min", "worn", "broken"});
   });
 

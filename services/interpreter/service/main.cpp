@@ -6,7 +6,7 @@
 #include "cell/daemon/daemon.h"
 #include "cell/health/health.h"
 #include "cell/log/log.h"
-#include "cell/station/station.h"
+#include "cell/station/service.h"
 
 int main(int argc, char** argv) {
   CLI::App app{"cell-interpreter: the CNC of one station"};
@@ -19,7 +19,7 @@ int main(int argc, char** argv) {
     auto cfg = cell::config::LoadStation(station);
     cell::bus::Participant bus("cell-interpreter/" + station);
     cell::health::Announcer health(bus, "cell-interpreter", station);
-    cell::station::Station st(bus, cfg, cell::config::DataDir());
+    cell::station::Service st(bus, cfg, cell::config::DataDir());
     st.Start();
     health.Set(cell::SERVICE_READY, cfg.dialect);
     daemon.NotifyReady("station " + station + " ready");

@@ -1,7 +1,7 @@
 // Canonical commands to the servo's segments (ToSegment): the lathe ops reach the servo's lathe kind.
 #include <gtest/gtest.h>
 
-#include "cell/station/station.h"
+#include "cell/station/to_segment.h"
 
 namespace cell::station {
 namespace {

@@ -1,0 +1,67 @@
+// cell-interpreter's bus binding: the station core (cell/station/station.h) on DDS. Run requests and station
+// commands are served, servo progress and probe results fed in, the core's publications written to their
+// topics, segments to cell/station/<ID>/segments, and one worker thread runs the dispatches.
+#pragma once
+
+#include <atomic>
+#include <filesystem>
+#include <memory>
+#include <thread>
+
+#include "cell/bus/bus.h"
+#include "cell/config/config.h"
+#include "cell/idl/inspection.h"
+#include "cell/idl/motion.h"
+#include "cell/idl/run.h"
+#include "cell/idl/station.h"
+#include "cell/program_store/client.h"
+#include "cell/station/station.h"
+
+namespace cell::station {
+
+class Service final : public StationIo, public ServoLink {
+ public:
+  Service(bus::Participant& p, config::StationConfig cfg, const std::filesystem::path& data_dir);
+  ~Service() override;
+  void Start();
+  void Stop();
+  // For the watchdog: the worker thread is alive.
+  bool Healthy() const { return worker_alive_.load(); }
+
+  // StationIo
+  void PublishStatus(const cell::StationStatus& s) override { status_w_.Write(s); }
+  void PublishTools(const cell::ToolTable& t) override { tools_w_.Write(t); }
+  void PublishVariables(const cell::StationVariables& v) override { vars_w_.Write(v); }
+  void PublishRun(const cell::RunStatus& r) override { run_w_.Write(r); }
+  void PublishControl(const cell::ServoControl& c) override { control_w_.Write(c); }
+  std::optional<std::string> Program(const std::string& node, const std::string& name) override {
+    return programs_.GetWithFallback(node, name);
+  }
+  bool StoreRecord(const cell::InspectionRequest& request) override;
+  // ServoLink
+  void Write(const cell::MotionSegment& segment) override { seg_w_.Write(segment); }
+  std::size_t Matched() override { return static_cast<std::size_t>(seg_w_.Matched()); }
+  std::uint64_t TotalMatched() override { return seg_w_.TotalMatched(); }
+  bool WaitForServo(Clock::Duration timeout) override;
+
+ private:
+  bus::Participant& bus_;
+  SystemClock clock_;
+  bus::Writer<cell::StationStatus> status_w_;
+  bus::Writer<cell::ToolTable> tools_w_;
+  bus::Writer<cell::StationVariables> vars_w_;
+  bus::Writer<cell::RunStatus> run_w_;
+  bus::Writer<cell::MotionSegment> seg_w_;
+  bus::Writer<cell::ServoControl> control_w_;
+  program_store::Client programs_;
+  bus::Client<cell::InspectionRequest, cell::InspectionReply> inspection_;
+  Station station_;  // after the endpoints it uses, before the readers that feed it
+  bus::Reader<cell::SegmentProgress> progress_r_;
+  bus::Reader<cell::ProbeResult> probe_r_;
+  std::unique_ptr<bus::Server<cell::RunRequest, cell::RunReply>> run_srv_;
+  std::unique_ptr<bus::Server<cell::StationRequest, cell::StationReply>> cmd_srv_;
+  std::atomic<bool> worker_alive_{false};
+  std::jthread worker_;
+};
+
+}  // namespace cell::station

@@ -1,0 +1,62 @@
+#include "cell/station/service.h"
+
+#include "cell/bus/topics.h"
+
+namespace cell::station {
+
+Service::Service(bus::Participant& p, config::StationConfig cfg, const std::filesystem::path& data_dir)
+    : bus_(p),
+      status_w_(p, bus::topics::kStationStatus, bus::QosKind::kState),
+      tools_w_(p, bus::topics::kToolTable, bus::QosKind::kState),
+      vars_w_(p, bus::topics::kVariables, bus::QosKind::kState),
+      run_w_(p, bus::topics::kRunStatus, bus::QosKind::kEvent),
+      seg_w_(p, bus::topics::Segments(cfg.id), bus::QosKind::kStream),
+      control_w_(p, bus::topics::kServoControl, bus::QosKind::kState),
+      programs_(p),
+      inspection_(p, bus::topics::kInspection),
+      station_(cfg, data_dir / ("interpreter-" + cfg.id + ".db"), *this, *this, clock_),
+      progress_r_(p, bus::topics::kProgress, bus::QosKind::kState,
+                  [this](const cell::SegmentProgress& s, const bus::SampleInfo&) { station_.OnProgress(s); }),
+      probe_r_(p, bus::topics::Probe(cfg.id), bus::QosKind::kCommand,
+               [this](const cell::ProbeResult& r, const bus::SampleInfo&) { station_.OnProbe(r); }) {}
+
+Service::~Service() {
+  Stop();
+}
+
+void Service::Start() {
+  station_.Start();
+  const std::string id = station_.Status().station().to_string();
+  run_srv_ = std::make_unique<bus::Server<cell::RunRequest, cell::RunReply>>(
+      bus_, bus::topics::StationRun(id), [this](const cell::RunRequest& r) { return station_.OnRun(r); });
+  cmd_srv_ = std::make_unique<bus::Server<cell::StationRequest, cell::StationReply>>(
+      bus_, bus::topics::StationCommand(id),
+      [this](const cell::StationRequest& r) { return station_.OnCommand(r); });
+  worker_ = std::jthread([this] {
+    worker_alive_ = true;
+    station_.Work();
+    worker_alive_ = false;
+  });
+}
+
+void Service::Stop() {
+  if (worker_.joinable()) {
+    station_.RequestStop();
+    worker_.join();
+  }
+  run_srv_.reset();
+  cmd_srv_.reset();
+}
+
+bool Service::StoreRecord(const cell::InspectionRequest& request) {
+  if (!inspection_.WaitForServer(bus::Millis(0))) return false;
+  bus::ThrowIfError(inspection_.Call(request, std::chrono::seconds(5)));
+  return true;
+}
+
+bool Service::WaitForServo(Clock::Duration timeout) {
+  const auto ms = std::chrono::duration_cast<bus::Millis>(timeout);
+  return seg_w_.WaitForMatched(1, ms) && progress_r_.WaitForMatched(1, ms);
+}
+
+}  // namespace cell::station

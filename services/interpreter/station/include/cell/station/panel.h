@@ -1,0 +1,71 @@
+// What the station shows and what its operator presses.
+//
+// StatusBoard: the station's state (StationStatus, MTConnect vocabulary) with the one rule for the displayed
+// execution: while the servo reports the operator's feed hold in effect it shows FEED_HOLD, otherwise what
+// the run state says (READY, ACTIVE, PROGRAM_COMPLETED, STOPPED).
+//
+// Panel: feed hold, cycle start and overrides (persisted: a held machine stays held when its interpreter
+// restarts) and the abort of a cancelled run (not persisted), published to the servo as ServoControl.
+//
+// Each publishes under its own lock, so samples of one topic never overtake each other.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <mutex>
+#include <string>
+
+#include "cell/idl/motion.h"
+#include "cell/idl/station.h"
+#include "cell/station/clock.h"
+#include "cell/station/station_db.h"
+
+namespace cell::station {
+
+class StatusBoard {
+ public:
+  StatusBoard(const std::string& station, const std::string& dialect, Clock& clock,
+              std::function<void(const cell::StationStatus&)> publish);
+
+  void Queued(int n);  // runs accepted and not yet started
+  void RunStarted(std::int32_t pallet, std::int32_t dispatch_id);
+  void RunEnded(bool completed, int queued);
+  // Where the run is (published with the next Publish: the caller throttles).
+  void Position(const std::string& program, int line, const std::string* tool);
+  void Warning(const std::string& code, const std::string& text);  // a program error: condition WARNING
+  void Reset();                                                    // condition NORMAL, alarm cleared
+  void ServoHeld(bool held);                                       // publishes when it changes the display
+  void Publish();
+  cell::StationStatus Get() const;
+
+ private:
+  void Show();  // the displayed execution (caller holds mu_)
+
+  Clock& clock_;
+  std::function<void(const cell::StationStatus&)> publish_;
+  mutable std::mutex mu_;
+  cell::StationStatus status_;
+  cell::Execution base_ = cell::EXECUTION_READY;  // what the run state alone says
+  bool held_ = false;
+};
+
+class Panel {
+ public:
+  Panel(const std::string& station, StationDb& db, std::function<void(const cell::ServoControl&)> publish);
+
+  // STATION_FEED_HOLD, STATION_CYCLE_START or STATION_OVERRIDE: recorded, persisted, published; returns
+  // the control's revision. Throws cell::Error(kInvalidArgument) for an override out of range.
+  std::uint32_t Press(const cell::StationRequest& r);
+  // The scheduler cancelled the running dispatch: the servo stops it too.
+  void AbortRun(std::int32_t run_id);
+  void Publish();
+  cell::ServoControl Get() const;
+
+ private:
+  StationDb& db_;
+  std::function<void(const cell::ServoControl&)> publish_;
+  mutable std::mutex mu_;
+  cell::ServoControl control_;
+};
+
+}  // namespace cell::station

@@ -1,0 +1,115 @@
+// The station core: one station's CNC without DDS (DESIGN §2, "every service keeps its logic in a library
+// that tests use without DDS"). It owns the run queue, the CNC's memory (tool table and variables), the
+// operator panel and the station's status; it runs each dispatch's programs through the interpreter library
+// and streams the canonical commands to the axis servo as motion segments under the servo's credits.
+//
+// The service (services/interpreter/service) binds it to the bus: requests and samples go in through the
+// On* calls (from any thread), publications and program fetches go out through StationIo, segments through
+// ServoLink, and a worker thread calls Work(). Tests drive it the same way with fakes and a fake Clock.
+#pragma once
+
+#include <atomic>
+#include <condition_variable>
+#include <cstdint>
+#include <filesystem>
+#include <mutex>
+#include <optional>
+#include <string>
+
+#include "cell/config/config.h"
+#include "cell/idl/inspection.h"
+#include "cell/idl/motion.h"
+#include "cell/idl/run.h"
+#include "cell/idl/station.h"
+#include "cell/station/clock.h"
+#include "cell/station/memory.h"
+#include "cell/station/panel.h"
+#include "cell/station/segment_stream.h"
+#include "cell/station/station_db.h"
+
+namespace cell::station {
+
+// Everything the core says or asks outside of the servo link.
+class StationIo {
+ public:
+  virtual ~StationIo() = default;
+  virtual void PublishStatus(const cell::StationStatus& s) = 0;
+  virtual void PublishTools(const cell::ToolTable& t) = 0;
+  virtual void PublishVariables(const cell::StationVariables& v) = 0;
+  virtual void PublishRun(const cell::RunStatus& r) = 0;
+  virtual void PublishControl(const cell::ServoControl& c) = 0;
+  // A program's text from the program store: namespace `node`, then HOST; nullopt when in neither.
+  virtual std::optional<std::string> Program(const std::string& node, const std::string& name) = 0;
+  // Hands a run record to the inspection writer: false when no writer is there (the record stays in the
+  // outbox); throws cell::Error when the writer refused it or did not answer.
+  virtual bool StoreRecord(const cell::InspectionRequest& request) = 0;
+};
+
+struct StationOptions {
+  double probe_feed = 500.0;  // mm/min for probe moves the program does not feed itself
+  Clock::Duration servo_wait = std::chrono::seconds(10);           // for a servo on the bus at a run's start
+  Clock::Duration idle_poll = std::chrono::milliseconds(500);      // outbox retries while idle
+  Clock::Duration status_period = std::chrono::milliseconds(100);  // status while a run goes on
+};
+
+class Station {
+ public:
+  Station(config::StationConfig cfg, const std::filesystem::path& db_file, StationIo& io, ServoLink& link,
+          Clock& clock, StationOptions options = {});
+  Station(const Station&) = delete;
+  Station& operator=(const Station&) = delete;
+
+  // Publishes tools, variables, the panel and the status once (state topics: late joiners get them).
+  void Start();
+
+  // ---- from the bus (any thread) ----
+  // A dispatch (queued once per dispatch id: a re-sent request gets the state it has) or a cancel.
+  cell::RunReply OnRun(const cell::RunRequest& r);
+  // Tool loads, variables, inputs, reset and the panel's buttons. Throws cell::Error for a bad request.
+  cell::StationReply OnCommand(const cell::StationRequest& r);
+  void OnProgress(const cell::SegmentProgress& p);
+  void OnProbe(const cell::ProbeResult& r);
+
+  // ---- the worker ----
+  // Runs that were ACTIVE when the process died did not finish: each is reported FAILED, never silently.
+  void Recover();
+  // Executes the next queued dispatch to its end; false when none is queued.
+  bool RunNext();
+  // Hands stored run records to the inspection writer (until it is missing or refuses one).
+  void FlushOutbox();
+  // Recover(), then runs dispatches as they come and flushes the outbox while idle, until RequestStop().
+  void Work();
+  void RequestStop();
+
+  // ---- views (tests, the service's health) ----
+  MemorySnapshot MemoryState() const { return memory_.Get(); }
+  cell::StationStatus Status() const { return board_.Get(); }
+  cell::ServoControl Control() const { return panel_.Get(); }
+
+ private:
+  struct ActiveRun;
+  class RunEnvironment;
+
+  void Execute(const Dispatch& d);
+  void RunProgram(ActiveRun& run, const std::string& name);
+  void Checkpoint(std::int32_t run_id) const;  // throws when the run was cancelled or the station stops
+  void PublishRun(const ActiveRun& run, cell::RunState state, const std::string& reason = "");
+  void PublishMemory(const MemorySnapshot& now, bool tools, bool variables);
+
+  const config::StationConfig cfg_;
+  const StationOptions options_;
+  StationIo& io_;
+  Clock& clock_;
+  StationDb db_;
+  StatusBoard board_;
+  Panel panel_;
+  Memory memory_;
+  SegmentStream stream_;
+  std::atomic<std::int32_t> cancel_id_{0};
+  std::atomic<bool> stop_{false};
+  std::mutex work_mu_;  // for work_cv_ and work_pending_ only: the queue itself is in db_
+  std::condition_variable work_cv_;
+  bool work_pending_ = false;  // a dispatch was queued since the worker last looked
+};
+
+}  // namespace cell::station

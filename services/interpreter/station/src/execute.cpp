@@ -1,0 +1,187 @@
+// A dispatch's programs through the interpreter library, their motion to the servo, and what they leave in
+// the CNC's memory.
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+#include <nlohmann/json.hpp>
+
+#include "cell/error/error.h"
+#include "cell/interp/interp.h"
+#include "cell/station/station.h"
+#include "cell/station/to_segment.h"
+
+namespace cell::station {
+
+struct Station::ActiveRun {
+  Dispatch d;
+  std::int64_t started_ns = 0;
+  int programs_done = 0;
+  std::string program;
+};
+
+// Queue busters answered by the machine: the run's Next() blocks here until the servo reports.
+class Station::RunEnvironment : public interp::Environment {
+ public:
+  RunEnvironment(SegmentStream& stream, double probe_feed) : stream_(stream), probe_feed_(probe_feed) {}
+  interp::ProbeResult Probe(bool contact, const interp::AxisArray& from,
+                            const interp::AxisArray& to) override {
+    (void)from;
+    cell::MotionSegment seg;
+    for (size_t i = 0; i < to.size(); ++i) seg.target()[i] = to[i];
+    seg.axis_mask(0x3f);
+    seg.exact_stop(true);
+    seg.feed(probe_feed_);
+    const cell::ProbeResult got = stream_.Probe(seg);
+    interp::ProbeResult r;
+    r.event = got.contact() == contact;
+    for (size_t i = 0; i < r.at.size(); ++i) r.at[i] = got.position()[i];
+    return r;
+  }
+
+ private:
+  SegmentStream& stream_;
+  double probe_feed_;
+};
+
+void Station::Execute(const Dispatch& d) {
+  ActiveRun run{d, clock_.WallNs(), 0, ""};
+  db_.MarkActive(d.dispatch_id, run.started_ns);
+  stream_.Begin(d.dispatch_id, [this, id = d.dispatch_id] { Checkpoint(id); });
+  board_.RunStarted(d.pallet, d.dispatch_id);
+  board_.Queued(db_.Count(RunState::kQueued));
+  board_.Publish();  // ACTIVE with its pallet now, not only once the run has made progress
+  spdlog::info("dispatch {}: pallet {} running {} program(s)", d.dispatch_id, d.pallet, d.programs.size());
+  std::string reason;
+  bool ok = true;
+  try {
+    if (!stream_.WaitForServo(options_.servo_wait))
+      throw Error(Errc::kUnavailable, "no axis servo for station " + cfg_.id + " on the bus");
+    for (int rep = 0; rep < d.repeat; ++rep) {
+      for (const std::string& name : d.programs) {
+        run.program = name;
+        PublishRun(run, cell::RUN_ACTIVE);
+        RunProgram(run, name);
+        PublishRun(run, cell::RUN_ACTIVE);  // a program finished: its UCY leaves the backlog
+      }
+    }
+  } catch (const std::exception& e) {
+    ok = false;
+    reason = e.what();
+  }
+  RunProgress end;
+  end.dispatch_id = d.dispatch_id;
+  end.programs_done = run.programs_done;
+  end.end = ok                            ? RunState::kCompleted
+            : cancel_id_ == d.dispatch_id ? RunState::kCancelled
+                                          : RunState::kFailed;
+  end.reason = reason;
+  end.machine_s = stream_.RunMachineSeconds();
+  end.finished_ns = clock_.WallNs();
+  end.record = nlohmann::json{{"dispatch_id", d.dispatch_id},
+                              {"station", cfg_.id},
+                              {"job_id", d.job_id},
+                              {"pallet", d.pallet},
+                              {"programs", d.programs},
+                              {"completed", ok},
+                              {"reason", reason},
+                              {"started_ns", run.started_ns},
+                              {"finished_ns", end.finished_ns},
+                              {"machine_s", end.machine_s}}
+                   .dump();
+  db_.EndRun(end);
+  if (ok) {
+    spdlog::info("dispatch {} completed: {:.3f} machine seconds", d.dispatch_id, end.machine_s);
+  } else {
+    spdlog::error("dispatch {} {}: {}", d.dispatch_id, RunStateName(*end.end), reason);
+  }
+  board_.RunEnded(ok, db_.Count(RunState::kQueued));
+  PublishRun(run,
+             ok                                 ? cell::RUN_COMPLETED
+             : *end.end == RunState::kCancelled ? cell::RUN_CANCELLED
+                                                : cell::RUN_FAILED,
+             reason);
+  board_.Publish();
+  FlushOutbox();
+}
+
+// One program of the dispatch. It starts from the CNC's memory as it stands; what it changed there (machine
+// parameters, TLD, ZTB) is committed after its end (with the servo drained) and at its failure, in one
+// transaction with the run's progress, so the next program starts from it and a kill -9 loses nothing that
+// was committed.
+void Station::RunProgram(ActiveRun& run, const std::string& name) {
+  auto text = io_.Program(run.d.node, name);
+  if (!text) throw Error(Errc::kNotFound, "program '" + name + "' is not in " + run.d.node + " or HOST");
+  const MemorySnapshot start = memory_.Get();
+  interp::RunOptions opt;
+  opt.dialect = cfg_.dialect;
+  opt.program_name = name;
+  opt.program_text = std::move(*text);
+  opt.library = [this, node = run.d.node](const std::string& lib) { return io_.Program(node, lib); };
+  opt.tools = start.image.tools;
+  opt.variables = start.image.variables;
+  opt.params = cfg_.params;  // the station config's [params]: the dialect's machine settings (EMCO's monitor)
+  opt.params["PALLET"] = std::to_string(run.d.pallet);
+  RunEnvironment env(stream_, options_.probe_feed);
+  opt.env = &env;
+  auto program = interp::StartRun(opt);
+  auto commit = [&] {
+    RunProgress progress;
+    progress.dispatch_id = run.d.dispatch_id;
+    progress.programs_done = run.programs_done;
+    memory_.Commit(start.image, program->Tools(), program->Variables(), progress);
+  };
+  try {
+    auto last_status = clock_.Now();
+    interp::Step s;
+    for (;;) {
+      Checkpoint(run.d.dispatch_id);
+      program->NextInto(s);
+      if (s.kind == interp::Step::kEnd) break;
+      if (s.kind == interp::Step::kError) {
+        board_.Warning(s.diag.alarm, s.diag.Format());
+        throw Error(Errc::kInvalidArgument, s.diag.Format());
+      }
+      const interp::Canon& c = s.canon;
+      const auto* change = c.If<interp::ToolChangeOp>();
+      board_.Position(name, c.line, change ? &change->tool : nullptr);
+      if (auto seg = ToSegment(c)) stream_.Send(*seg);
+      if (const auto* m = c.If<interp::MessageOp>()) spdlog::info("{} line {}: {}", name, c.line, m->text);
+      if (clock_.Now() - last_status > options_.status_period) {
+        board_.Publish();
+        last_status = clock_.Now();
+      }
+    }
+    board_.Publish();
+    stream_.WaitDrained();
+  } catch (...) {
+    try {
+      commit();  // what the program changed before it failed stays, as on the control
+    } catch (const std::exception& e) {
+      spdlog::error("dispatch {}: what {} changed could not be committed: {}", run.d.dispatch_id, name,
+                    e.what());
+    }
+    throw;
+  }
+  ++run.programs_done;
+  commit();
+}
+
+void Station::PublishRun(const ActiveRun& run, cell::RunState state, const std::string& reason) {
+  cell::RunStatus s;
+  s.dispatch_id(run.d.dispatch_id);
+  s.station(cfg_.id);
+  s.job_id(run.d.job_id);
+  s.pallet(run.d.pallet);
+  s.state(state);
+  s.program(run.program.substr(0, 64));
+  s.programs_done(run.programs_done);
+  s.program_index(static_cast<int32_t>(
+      run.d.programs.empty() ? 0 : run.programs_done % static_cast<int>(run.d.programs.size())));
+  s.machine_s(stream_.RunMachineSeconds());
+  s.started_ns(run.started_ns);
+  if (state == cell::RUN_COMPLETED || state == cell::RUN_FAILED || state == cell::RUN_CANCELLED)
+    s.finished_ns(clock_.WallNs());
+  s.reason(reason.substr(0, 255));
+  io_.PublishRun(s);
+}
+
+}  // namespace cell::station

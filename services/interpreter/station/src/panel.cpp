@@ -1,0 +1,136 @@
+#include "cell/station/panel.h"
+
+#include <spdlog/spdlog.h>
+
+#include "cell/error/error.h"
+
+namespace cell::station {
+
+StatusBoard::StatusBoard(const std::string& station, const std::string& dialect, Clock& clock,
+                         std::function<void(const cell::StationStatus&)> publish)
+    : clock_(clock), publish_(std::move(publish)) {
+  status_.station(station);
+  status_.dialect(dialect);
+  status_.condition(cell::CONDITION_NORMAL);
+  Show();
+}
+
+void StatusBoard::Show() {
+  status_.execution(held_ ? cell::EXECUTION_FEED_HOLD : base_);
+}
+
+void StatusBoard::Queued(int n) {
+  std::lock_guard lk(mu_);
+  status_.queued(n);
+}
+
+void StatusBoard::RunStarted(std::int32_t pallet, std::int32_t dispatch_id) {
+  std::lock_guard lk(mu_);
+  base_ = cell::EXECUTION_ACTIVE;
+  Show();
+  status_.pallet(pallet);
+  status_.dispatch_id(dispatch_id);
+}
+
+void StatusBoard::RunEnded(bool completed, int queued) {
+  std::lock_guard lk(mu_);
+  base_ = completed ? cell::EXECUTION_PROGRAM_COMPLETED : cell::EXECUTION_STOPPED;
+  Show();
+  status_.part_count(status_.part_count() + (completed ? 1 : 0));
+  status_.dispatch_id(0);
+  status_.queued(queued);
+}
+
+void StatusBoard::Position(const std::string& program, int line, const std::string* tool) {
+  std::lock_guard lk(mu_);
+  status_.program(program.substr(0, 64));
+  status_.line(line);
+  if (tool) status_.tool(tool->substr(0, 16));
+}
+
+void StatusBoard::Warning(const std::string& code, const std::string& text) {
+  std::lock_guard lk(mu_);
+  status_.condition(cell::CONDITION_WARNING);
+  status_.alarm_code(code.substr(0, 16));
+  status_.alarm_text(text.substr(0, 255));
+}
+
+void StatusBoard::Reset() {
+  std::lock_guard lk(mu_);
+  status_.condition(cell::CONDITION_NORMAL);
+  status_.alarm_code("");
+  status_.alarm_text("");
+}
+
+void StatusBoard::ServoHeld(bool held) {
+  std::lock_guard lk(mu_);
+  if (held == held_) return;
+  held_ = held;
+  Show();
+  status_.updated_ns(clock_.WallNs());
+  publish_(status_);
+}
+
+void StatusBoard::Publish() {
+  std::lock_guard lk(mu_);
+  status_.updated_ns(clock_.WallNs());
+  publish_(status_);
+}
+
+cell::StationStatus StatusBoard::Get() const {
+  std::lock_guard lk(mu_);
+  return status_;
+}
+
+Panel::Panel(const std::string& station, StationDb& db,
+             std::function<void(const cell::ServoControl&)> publish)
+    : db_(db), publish_(std::move(publish)) {
+  const PanelState p = db_.LoadPanel();
+  control_.station(station);
+  control_.feed_hold(p.feed_hold);
+  control_.feed_override(p.feed_override);
+  control_.rapid_override(p.rapid_override);
+}
+
+// The servo reports the hold in its progress, which turns the displayed execution to FEED_HOLD and back
+// (StatusBoard::ServoHeld); pressing does not wait for that.
+std::uint32_t Panel::Press(const cell::StationRequest& r) {
+  std::lock_guard lk(mu_);
+  cell::ServoControl c = control_;
+  if (r.op() == cell::STATION_OVERRIDE) {
+    if (r.feed_override() > 2.0 || r.rapid_override() > 1.0)
+      throw Error(Errc::kInvalidArgument, "feed override is 0..200 %, rapid override 0..100 %");
+    if (r.feed_override() >= 0) c.feed_override(r.feed_override());
+    if (r.rapid_override() >= 0) c.rapid_override(r.rapid_override());
+  } else if (r.op() == cell::STATION_FEED_HOLD || r.op() == cell::STATION_CYCLE_START) {
+    c.feed_hold(r.op() == cell::STATION_FEED_HOLD);
+  } else {
+    throw Error(Errc::kInvalidArgument, "not a panel button");
+  }
+  c.revision(c.revision() + 1);
+  db_.SavePanel({c.feed_hold(), c.feed_override(), c.rapid_override()});
+  control_ = c;
+  publish_(control_);
+  spdlog::info("panel: feed hold {}, feed override {:.0f} %, rapid override {:.0f} %",
+               c.feed_hold() ? "on" : "off", c.feed_override() * 100, c.rapid_override() * 100);
+  return c.revision();
+}
+
+void Panel::AbortRun(std::int32_t run_id) {
+  std::lock_guard lk(mu_);
+  control_.abort_run(run_id);
+  control_.revision(control_.revision() + 1);
+  publish_(control_);
+}
+
+void Panel::Publish() {
+  std::lock_guard lk(mu_);
+  publish_(control_);
+}
+
+cell::ServoControl Panel::Get() const {
+  std::lock_guard lk(mu_);
+  return control_;
+}
+
+}  // namespace cell::station

@@ -1,0 +1,183 @@
+#include "cell/station/segment_stream.h"
+
+#include <spdlog/spdlog.h>
+
+#include <vector>
+
+#include "cell/error/error.h"
+
+namespace cell::station {
+
+SegmentStream::SegmentStream(std::string station, Clock& clock, ServoLink& link)
+    : station_(std::move(station)), clock_(clock), link_(link) {}
+
+void SegmentStream::Begin(std::int32_t run_id, std::function<void()> checkpoint) {
+  std::lock_guard lk(mu_);
+  checkpoint_ = std::move(checkpoint);
+  run_id_ = run_id;
+  sent_seq_ = completed_seq_ = received_seq_ = 0;
+  credit_seq_ = kInitialCredit;
+  run_machine_s_ = 0;
+  alarm_ = false;
+  alarm_code_.clear();
+  alarm_text_.clear();
+  servo_restarted_ = false;
+  run_boot_ = 0;
+  unacked_.clear();
+  probes_.clear();
+  matches_ = link_.TotalMatched();
+  last_progress_ = last_report_ = last_resend_ = clock_.Now();
+}
+
+void SegmentStream::Send(cell::MotionSegment seg) {
+  std::unique_lock lk(mu_);
+  seg.station(station_);
+  seg.run_id(run_id_);
+  seg.seq(++sent_seq_);
+  last_progress_ = clock_.Now();
+  WaitCredit(lk, seg.seq());
+  ResendMissing(lk);  // the earlier segments first: the servo takes them in seq order only
+  unacked_.push_back(seg);
+  lk.unlock();
+  link_.Write(seg);
+}
+
+cell::ProbeResult SegmentStream::Probe(cell::MotionSegment seg) {
+  seg.kind(cell::SEGMENT_PROBE);
+  Send(seg);
+  std::unique_lock lk(mu_);
+  const std::uint64_t want = sent_seq_;
+  const auto deadline = clock_.Now() + kProbeTimeout;
+  while (!probes_.count(want)) {
+    Check(lk);  // alarms, a lost servo, and the re-send after it matched again
+    if (clock_.Now() > deadline) throw Error(Errc::kTimeout, "no probe result from the axis servo");
+    clock_.Wait(lk, cv_, kPoll);
+  }
+  cell::ProbeResult r = probes_[want];
+  probes_.erase(want);
+  return r;
+}
+
+void SegmentStream::WaitDrained() {
+  std::unique_lock lk(mu_);
+  while (completed_seq_ < sent_seq_) {
+    Check(lk);
+    clock_.Wait(lk, cv_, kPoll);
+  }
+}
+
+// Credit-based flow control: never more segments in flight than the servo granted.
+void SegmentStream::WaitCredit(std::unique_lock<std::mutex>& lk, std::uint64_t seq) {
+  while (seq > credit_seq_) {
+    Check(lk);
+    clock_.Wait(lk, cv_, kPoll);
+  }
+}
+
+// While waiting on the servo: end the run on a cancel or stop (checkpoint), an alarm, a restarted or vanished
+// servo; re-send what it may have missed when it matched again.
+void SegmentStream::Check(std::unique_lock<std::mutex>& lk) {
+  if (checkpoint_) {
+    lk.unlock();  // the checkpoint may take other locks
+    checkpoint_();
+    lk.lock();
+  }
+  if (alarm_) throw Error(Errc::kFailedPrecondition, "[" + alarm_code_ + "] " + alarm_text_);
+  if (servo_restarted_)
+    throw Error(Errc::kUnavailable, "axis servo of " + station_ + " restarted during the run");
+  const auto now = clock_.Now();
+  if (link_.Matched() == 0 && now - last_progress_ > kServoGone)
+    throw Error(Errc::kUnavailable, "axis servo of " + station_ + " vanished during the run");
+  // Matched on this side but deaf on the other (Fast DDS 2.9 may not re-exchange endpoints after only one
+  // side let the lease run out, docs/operations.md): segments are missing and nothing comes back.
+  if (!unacked_.empty() && received_seq_ < unacked_.back().seq() && now - last_report_ > kServoGone)
+    throw Error(Errc::kUnavailable, "axis servo of " + station_ + " has taken no segment for " +
+                                        std::to_string(kServoGone.count()) + " s");
+  ResendMissing(lk);
+}
+
+// The segment stream is volatile: what is written while the servo is unmatched (its process stopped past the
+// DDS lease, a network cut) never arrives, and a servo that dropped the match on its side may miss samples
+// the writer still thinks delivered. So segments are kept until completed and sent again, in order, from
+// the first one the servo has not reported (received_seq), when the writer matches a servo again or when
+// the servo has been silent for a second with segments missing. The servo drops what it already holds.
+void SegmentStream::ResendMissing(std::unique_lock<std::mutex>& lk) {
+  if (unacked_.empty() || link_.Matched() == 0) return;
+  const auto now = clock_.Now();
+  const std::uint64_t matches = link_.TotalMatched();
+  const bool rematched = matches != matches_;
+  const bool silent = received_seq_ < unacked_.back().seq() && now - last_report_ > kResendAfter &&
+                      now - last_resend_ > kResendAfter;
+  matches_ = matches;
+  if (!rematched && !silent) return;
+  last_resend_ = now;
+  std::vector<cell::MotionSegment> again;
+  for (const auto& seg : unacked_)
+    if (seg.seq() > received_seq_) again.push_back(seg);
+  if (again.empty()) return;
+  spdlog::warn("axis servo of {} {}: re-sending seq {}..{} of run {}", station_,
+               rematched ? "matched again" : "reported nothing for 1 s", again.front().seq(),
+               again.back().seq(), run_id_);
+  lk.unlock();  // never write under the lock: progress arrives on the bus thread and takes it
+  for (const auto& seg : again) link_.Write(seg);
+  lk.lock();
+}
+
+bool SegmentStream::OnProgress(const cell::SegmentProgress& p) {
+  std::lock_guard lk(mu_);
+  const bool held_changed = servo_held_ != p.feed_hold();
+  servo_held_ = p.feed_hold();
+  // Progress from another servo process than the one this run started on: the servo restarted and the
+  // segments it had are gone (it refuses to join a run in the middle).
+  if (run_id_ != 0 && run_boot_ != 0 && p.boot_id() != run_boot_) servo_restarted_ = true;
+  if (p.run_id() == run_id_ && run_id_ != 0) {
+    if (run_boot_ == 0) run_boot_ = p.boot_id();
+    completed_seq_ = std::max(completed_seq_, p.completed_seq());
+    credit_seq_ = std::max(credit_seq_, p.credit_seq());
+    received_seq_ = p.received_seq();
+    last_report_ = last_progress_ = clock_.Now();
+    while (!unacked_.empty() && unacked_.front().seq() <= completed_seq_) unacked_.pop_front();
+    run_machine_s_ = p.run_machine_s();
+    if (p.alarm()) {
+      alarm_ = true;
+      alarm_code_ = p.alarm_code().to_string();
+      alarm_text_ = p.alarm_text().to_string();
+    }
+  }
+  cv_.notify_all();
+  return held_changed;
+}
+
+void SegmentStream::OnProbe(const cell::ProbeResult& r) {
+  std::lock_guard lk(mu_);
+  if (r.run_id() != run_id_ || r.seq() == 0 || r.seq() > sent_seq_) return;
+  probes_[r.seq()] = r;
+  cv_.notify_all();
+}
+
+void SegmentStream::Wake() {
+  std::lock_guard lk(mu_);
+  cv_.notify_all();
+}
+
+double SegmentStream::RunMachineSeconds() const {
+  std::lock_guard lk(mu_);
+  return run_machine_s_;
+}
+
+bool SegmentStream::ServoHeld() const {
+  std::lock_guard lk(mu_);
+  return servo_held_;
+}
+
+std::uint64_t SegmentStream::SentSeq() const {
+  std::lock_guard lk(mu_);
+  return sent_seq_;
+}
+
+std::size_t SegmentStream::Unacknowledged() const {
+  std::lock_guard lk(mu_);
+  return unacked_.size();
+}
+
+}  // namespace cell::station

@@ -1,0 +1,266 @@
+#include "cell/station/station.h"
+
+#include <spdlog/spdlog.h>
+#include <nlohmann/json.hpp>
+
+#include "cell/error/error.h"
+#include "cell/interp/interp.h"
+#include "cell/tooltable/wire.h"
+
+namespace cell::station {
+
+namespace {
+
+cell::RunState ToWire(RunState s) {
+  switch (s) {
+    case RunState::kQueued:
+      return cell::RUN_QUEUED;
+    case RunState::kActive:
+      return cell::RUN_ACTIVE;
+    case RunState::kCompleted:
+      return cell::RUN_COMPLETED;
+    case RunState::kFailed:
+      return cell::RUN_FAILED;
+    case RunState::kCancelled:
+      return cell::RUN_CANCELLED;
+  }
+  return cell::RUN_QUEUED;
+}
+
+cell::StationVariables VariablesToWire(const std::string& station, const std::map<std::string, double>& vars,
+                                       std::uint32_t revision) {
+  cell::StationVariables v;
+  v.station(station);
+  v.revision(revision);
+  for (const auto& [name, value] : vars) {
+    cell::Variable x;
+    x.name(name);
+    x.value(value);
+    v.variables().push_back(x);
+  }
+  return v;
+}
+
+}  // namespace
+
+std::int64_t SystemClock::WallNs() {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(
+             std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
+Station::Station(config::StationConfig cfg, const std::filesystem::path& db_file, StationIo& io,
+                 ServoLink& link, Clock& clock, StationOptions options)
+    : cfg_(std::move(cfg)),
+      options_(options),
+      io_(io),
+      clock_(clock),
+      db_(db_file),
+      board_(cfg_.id, cfg_.dialect, clock_, [this](const cell::StationStatus& s) { io_.PublishStatus(s); }),
+      panel_(cfg_.id, db_, [this](const cell::ServoControl& c) { io_.PublishControl(c); }),
+      memory_(db_, cfg_.dialect, cfg_.tools,
+              [this](const MemorySnapshot& now, bool tools, bool vars) { PublishMemory(now, tools, vars); }),
+      stream_(cfg_.id, clock_, link) {
+  board_.Queued(db_.Count(RunState::kQueued));
+}
+
+void Station::Start() {
+  memory_.Announce();
+  panel_.Publish();
+  board_.Publish();
+}
+
+void Station::PublishMemory(const MemorySnapshot& now, bool tools, bool variables) {
+  if (tools) io_.PublishTools(tooltable::ToWire(now.image.tools, cfg_.id, now.tools_revision));
+  if (variables) io_.PublishVariables(VariablesToWire(cfg_.id, now.image.variables, now.variables_revision));
+}
+
+cell::RunReply Station::OnRun(const cell::RunRequest& r) {
+  cell::RunReply rep;
+  rep.station(cfg_.id);
+  rep.dispatch_id(r.dispatch_id());
+  if (r.station() != cfg_.id)
+    throw Error(Errc::kInvalidArgument, "run request for " + r.station().to_string() + " reached " + cfg_.id);
+  if (r.dispatch_id() <= 0) throw Error(Errc::kInvalidArgument, "dispatch id must be positive");
+  const std::optional<RunState> state = db_.FindRun(r.dispatch_id());
+  if (r.cancel()) {
+    if (state == RunState::kQueued) {
+      RunProgress end;
+      end.dispatch_id = r.dispatch_id();
+      end.end = RunState::kCancelled;
+      end.reason = "cancelled by the scheduler";
+      end.finished_ns = clock_.WallNs();
+      db_.EndRun(end);
+      board_.Queued(db_.Count(RunState::kQueued));
+      board_.Publish();
+    }
+    if (state == RunState::kActive) {
+      cancel_id_ = r.dispatch_id();
+      panel_.AbortRun(r.dispatch_id());  // the machine stops too, not only the sending
+      stream_.Wake();
+    }
+    rep.state(state ? ToWire(*state) : cell::RUN_CANCELLED);
+    return rep;
+  }
+  if (state) {  // a re-sent dispatch (scheduler restart): the station de-duplicates on the id
+    rep.state(ToWire(*state));
+    return rep;
+  }
+  if (r.programs().empty() || r.programs().size() > 75)
+    throw Error(Errc::kInvalidArgument, "a pallet map names 1 to 75 programs");
+  if (r.repeat() < 0 || r.repeat() > 9999)
+    throw Error(Errc::kInvalidArgument, "repeat count must be 1..9999");
+  Dispatch d;
+  d.dispatch_id = r.dispatch_id();
+  d.job_id = r.job_id();
+  d.pallet = r.pallet();
+  d.node = r.node().to_string().empty() ? cfg_.id : r.node().to_string();
+  for (const auto& p : r.programs()) d.programs.push_back(p.to_string());
+  d.repeat = r.repeat() == 0 ? 1 : r.repeat();
+  db_.Enqueue(d, clock_.WallNs());
+  spdlog::info("accepted dispatch {} (job {}, pallet {}, {} program(s))", d.dispatch_id, d.job_id, d.pallet,
+               d.programs.size());
+  board_.Queued(db_.Count(RunState::kQueued));
+  board_.Publish();
+  {
+    std::lock_guard lk(work_mu_);
+    work_pending_ = true;
+    work_cv_.notify_all();
+  }
+  rep.state(cell::RUN_QUEUED);
+  return rep;
+}
+
+cell::StationReply Station::OnCommand(const cell::StationRequest& r) {
+  cell::StationReply rep;
+  rep.station(cfg_.id);
+  switch (r.op()) {
+    case cell::STATION_LOAD_TOOLS: {
+      // The station's own tool-table form (KT-APL: a program of TLD statements), on top of the table.
+      const interp::Dialect& dialect = interp::DialectOrThrow(cfg_.dialect);
+      const std::string text = r.text().to_string();
+      rep.revision(memory_.ChangeTools(
+          [&](tooltable::ToolTable& t) { t = dialect.ParseToolTable(text, "tools", t); }));
+      const auto tools = memory_.Get().image.tools;
+      spdlog::info("tool table loaded: {} tools, {} process compensations", tools.entries().size(),
+                   tools.process_comps().size());
+      return rep;
+    }
+    case cell::STATION_SET_VARIABLES: {
+      std::map<std::string, double> values;
+      for (const auto& v : r.variables()) values[v.name().to_string()] = v.value();
+      if (values.empty()) throw Error(Errc::kInvalidArgument, "no variable to set");
+      rep.revision(memory_.SetVariables(values));
+      return rep;
+    }
+    case cell::STATION_SET_INPUT: {
+      std::map<std::string, double> inputs;
+      for (const auto& v : r.variables()) {
+        const std::string n = v.name().to_string();
+        if (n.size() < 2 || n[0] != 'I') throw Error(Errc::kInvalidArgument, "an input is named I<bit>");
+        inputs[n] = v.value();
+      }
+      db_.SetInputs(inputs);
+      return rep;
+    }
+    case cell::STATION_RESET:
+      board_.Reset();
+      board_.Publish();
+      return rep;
+    case cell::STATION_FEED_HOLD:
+    case cell::STATION_CYCLE_START:
+    case cell::STATION_OVERRIDE:
+      rep.revision(panel_.Press(r));
+      return rep;
+  }
+  throw Error(Errc::kInvalidArgument, "unknown station command");
+}
+
+void Station::OnProgress(const cell::SegmentProgress& p) {
+  if (p.station() != cfg_.id) return;
+  if (stream_.OnProgress(p)) board_.ServoHeld(p.feed_hold());
+}
+
+void Station::OnProbe(const cell::ProbeResult& r) {
+  if (r.station() != cfg_.id) return;
+  stream_.OnProbe(r);
+}
+
+void Station::Recover() {
+  for (const Dispatch& d : db_.Runs(RunState::kActive)) {
+    RunProgress end;
+    end.dispatch_id = d.dispatch_id;
+    end.end = RunState::kFailed;
+    end.reason = "station restarted during the run";
+    end.finished_ns = clock_.WallNs();
+    db_.EndRun(end);
+    cell::RunStatus s;
+    s.dispatch_id(d.dispatch_id);
+    s.station(cfg_.id);
+    s.job_id(d.job_id);
+    s.pallet(d.pallet);
+    s.state(cell::RUN_FAILED);
+    s.finished_ns(end.finished_ns);
+    s.reason(end.reason);
+    io_.PublishRun(s);
+  }
+}
+
+bool Station::RunNext() {
+  auto next = db_.NextQueued();
+  if (!next) return false;
+  Execute(*next);
+  return true;
+}
+
+void Station::FlushOutbox() {
+  for (auto& [id, text] : db_.Outbox(16)) {
+    auto j = nlohmann::json::parse(text);
+    cell::InspectionRequest req;
+    req.op(cell::INSPECTION_STORE_RUN);
+    req.hdr().idempotency_key("run-" + cfg_.id + "-" + std::to_string(id));
+    auto& r = req.run();
+    r.dispatch_id(j["dispatch_id"].get<int32_t>());
+    r.station(cfg_.id);
+    r.job_id(j["job_id"].get<int32_t>());
+    r.pallet(j["pallet"].get<int32_t>());
+    for (auto& p : j["programs"]) r.programs().push_back(p.get<std::string>());
+    r.completed(j["completed"].get<bool>());
+    r.reason(j["reason"].get<std::string>().substr(0, 255));
+    r.started_ns(j["started_ns"].get<int64_t>());
+    r.finished_ns(j["finished_ns"].get<int64_t>());
+    r.machine_s(j["machine_s"].get<double>());
+    try {
+      if (!io_.StoreRecord(req)) return;  // writer down: keep it, retry later
+    } catch (const Error& e) {
+      spdlog::warn("run record {} not yet stored: {}", id, e.what());
+      return;
+    }
+    db_.RemoveFromOutbox(id);
+  }
+}
+
+void Station::Work() {
+  Recover();
+  while (!stop_) {
+    if (RunNext()) continue;
+    FlushOutbox();
+    std::unique_lock lk(work_mu_);
+    if (!work_pending_ && !stop_) clock_.Wait(lk, work_cv_, options_.idle_poll);
+    work_pending_ = false;
+  }
+}
+
+void Station::RequestStop() {
+  stop_ = true;
+  stream_.Wake();
+  std::lock_guard lk(work_mu_);
+  work_cv_.notify_all();
+}
+
+void Station::Checkpoint(std::int32_t run_id) const {
+  if (stop_) throw Error(Errc::kUnavailable, "station stopping");
+  if (cancel_id_ == run_id) throw Error(Errc::kFailedPrecondition, "cancelled");
+}
+
+}  // namespace cell::station

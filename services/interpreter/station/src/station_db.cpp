@@ -1,0 +1,285 @@
+#include "cell/station/station_db.h"
+
+#include <nlohmann/json.hpp>
+
+namespace cell::station {
+
+namespace {
+
+RunState StateFromText(const std::string& s) {
+  if (s == "ACTIVE") return RunState::kActive;
+  if (s == "COMPLETED") return RunState::kCompleted;
+  if (s == "FAILED") return RunState::kFailed;
+  if (s == "CANCELLED") return RunState::kCancelled;
+  return RunState::kQueued;
+}
+
+Dispatch ReadDispatch(store::Statement& q) {
+  Dispatch d;
+  d.dispatch_id = static_cast<std::int32_t>(q.ColumnInt64(0));
+  d.job_id = static_cast<std::int32_t>(q.ColumnInt64(1));
+  d.pallet = static_cast<std::int32_t>(q.ColumnInt64(2));
+  d.node = q.ColumnText(3);
+  for (auto& p : nlohmann::json::parse(q.ColumnText(4))) d.programs.push_back(p.get<std::string>());
+  d.repeat = static_cast<int>(q.ColumnInt64(5));
+  return d;
+}
+
+constexpr const char* kDispatchColumns = "dispatch_id, job_id, pallet, node, programs, repeat";
+
+}  // namespace
+
+std::string_view RunStateName(RunState s) {
+  switch (s) {
+    case RunState::kQueued:
+      return "QUEUED";
+    case RunState::kActive:
+      return "ACTIVE";
+    case RunState::kCompleted:
+      return "COMPLETED";
+    case RunState::kFailed:
+      return "FAILED";
+    case RunState::kCancelled:
+      return "CANCELLED";
+  }
+  return "QUEUED";
+}
+
+std::vector<store::Migration> StationDb::Migrations() {
+  return {
+      store::Migration::Sql(
+          1, "station state",
+          "CREATE TABLE tools(tool TEXT PRIMARY KEY, socket INTEGER, length REAL, diameter REAL,"
+          " life_left_min INTEGER, worn INTEGER, broken INTEGER, ord INTEGER);"
+          "CREATE TABLE variables(name TEXT PRIMARY KEY, value REAL);"
+          "CREATE TABLE runs(dispatch_id INTEGER PRIMARY KEY, job_id INTEGER, pallet INTEGER,"
+          " node TEXT, programs TEXT, repeat INTEGER, state TEXT, reason TEXT,"
+          " machine_s REAL, started_ns INTEGER, finished_ns INTEGER, received_ns INTEGER);"
+          "CREATE TABLE outbox(dispatch_id INTEGER PRIMARY KEY, record TEXT);"),
+      // The operator's panel survives a restart of this process: a held machine must not start moving
+      // because its interpreter was restarted.
+      store::Migration::Sql(2, "operator panel", "CREATE TABLE panel(name TEXT PRIMARY KEY, value REAL);"),
+      // Version 2 kept the tool table in columns without the TLD flags C and M, the horsepower H and the
+      // process compensations (W), and discrete inputs among the variables. From 3 the table is one JSON
+      // document (common/tooltable's stored form: every field of every dialect, no migration per new field);
+      // a database with that row was seeded from the station config. Inputs move to their own table.
+      store::Migration{
+          3, "tool table as one document, inputs, run progress", [](store::Database& db) {
+            db.Exec(
+                "CREATE TABLE tool_table(id INTEGER PRIMARY KEY CHECK (id = 1), json TEXT NOT NULL);"
+                "CREATE TABLE inputs(name TEXT PRIMARY KEY, value REAL);"
+                "INSERT INTO inputs(name, value) SELECT name, value FROM variables"
+                " WHERE name GLOB 'I[0-9]*';"
+                "DELETE FROM variables WHERE name GLOB 'I[0-9]*';"
+                "ALTER TABLE runs ADD COLUMN programs_done INTEGER NOT NULL DEFAULT 0;");
+            // Version 2 seeded the config's tools at every start while it had neither tools
+            // nor runs; either means it was seeded.
+            if (db.QueryInt64("SELECT COUNT(*) FROM tools") + db.QueryInt64("SELECT COUNT(*) FROM runs") >
+                0) {
+              std::vector<tooltable::ToolEntry> entries;
+              auto q = db.Prepare(
+                  "SELECT tool, socket, length, diameter, life_left_min, worn, broken FROM tools"
+                  " ORDER BY ord");
+              while (q.Step()) {
+                tooltable::ToolEntry e;
+                e.tool = q.ColumnText(0);
+                e.socket = static_cast<int>(q.ColumnInt64(1));
+                e.length = q.ColumnDouble(2);
+                e.diameter = q.ColumnDouble(3);
+                e.life_left_min = q.ColumnDouble(4);
+                e.worn = q.ColumnInt64(5) != 0;
+                e.broken = q.ColumnInt64(6) != 0;
+                entries.push_back(e);
+              }
+              auto ins = db.Prepare("INSERT INTO tool_table(id, json) VALUES(1, ?)");
+              ins.BindText(1, tooltable::ToJson(tooltable::ToolTable(std::move(entries))).dump());
+              ins.Run();
+            }
+            db.Exec("DROP TABLE tools;");
+          }}};
+}
+
+StationDb::StationDb(const std::filesystem::path& file) : db_(store::Database::Open(file)) {
+  store::Migrate(db_, Migrations());
+}
+
+int StationDb::SchemaVersion() {
+  std::lock_guard lk(mu_);
+  return store::SchemaVersion(db_);
+}
+
+MemoryImage StationDb::LoadMemory() {
+  std::lock_guard lk(mu_);
+  MemoryImage m;
+  const std::string tools = db_.QueryText("SELECT json FROM tool_table WHERE id=1");
+  if (!tools.empty()) m.tools = tooltable::FromJson(nlohmann::json::parse(tools));
+  auto v = db_.Prepare("SELECT name, value FROM variables");
+  while (v.Step()) m.variables[v.ColumnText(0)] = v.ColumnDouble(1);
+  return m;
+}
+
+bool StationDb::ToolsSeeded() {
+  std::lock_guard lk(mu_);
+  return db_.QueryInt64("SELECT COUNT(*) FROM tool_table") > 0;
+}
+
+void StationDb::SaveMemory(const MemoryImage& m, const RunProgress* run) {
+  const std::string tools = tooltable::ToJson(m.tools).dump();
+  std::lock_guard lk(mu_);
+  store::Transaction tx(db_);
+  auto t = db_.Prepare("INSERT OR REPLACE INTO tool_table(id, json) VALUES(1, ?)");
+  t.BindText(1, tools);
+  t.Run();
+  db_.Exec("DELETE FROM variables;");
+  auto var = db_.Prepare("INSERT INTO variables(name, value) VALUES(?,?)");
+  for (const auto& [name, value] : m.variables) {
+    var.BindText(1, name).BindDouble(2, value);
+    var.Run();
+    var.Reset();
+  }
+  if (run) WriteProgress(*run);
+  tx.Commit();
+}
+
+std::optional<RunState> StationDb::FindRun(std::int32_t dispatch_id) {
+  std::lock_guard lk(mu_);
+  auto q = db_.Prepare("SELECT state FROM runs WHERE dispatch_id=?");
+  q.BindInt64(1, dispatch_id);
+  if (!q.Step()) return std::nullopt;
+  return StateFromText(q.ColumnText(0));
+}
+
+void StationDb::Enqueue(const Dispatch& d, std::int64_t received_ns) {
+  nlohmann::json progs = d.programs;
+  std::lock_guard lk(mu_);
+  auto ins = db_.Prepare(
+      "INSERT INTO runs(dispatch_id, job_id, pallet, node, programs, repeat, state, received_ns) "
+      "VALUES(?,?,?,?,?,?,'QUEUED',?)");
+  ins.BindInt64(1, d.dispatch_id).BindInt64(2, d.job_id).BindInt64(3, d.pallet).BindText(4, d.node);
+  ins.BindText(5, progs.dump()).BindInt64(6, d.repeat).BindInt64(7, received_ns);
+  ins.Run();
+}
+
+std::optional<Dispatch> StationDb::NextQueued() {
+  std::lock_guard lk(mu_);
+  auto q = db_.Prepare(std::string("SELECT ") + kDispatchColumns +
+                       " FROM runs WHERE state='QUEUED' ORDER BY received_ns, dispatch_id LIMIT 1");
+  if (!q.Step()) return std::nullopt;
+  return ReadDispatch(q);
+}
+
+std::vector<Dispatch> StationDb::Runs(RunState state) {
+  std::lock_guard lk(mu_);
+  auto q = db_.Prepare(std::string("SELECT ") + kDispatchColumns +
+                       " FROM runs WHERE state=? ORDER BY received_ns, dispatch_id");
+  q.BindText(1, RunStateName(state));
+  std::vector<Dispatch> out;
+  while (q.Step()) out.push_back(ReadDispatch(q));
+  return out;
+}
+
+int StationDb::Count(RunState state) {
+  std::lock_guard lk(mu_);
+  auto q = db_.Prepare("SELECT COUNT(*) FROM runs WHERE state=?");
+  q.BindText(1, RunStateName(state));
+  q.Step();
+  return static_cast<int>(q.ColumnInt64(0));
+}
+
+void StationDb::MarkActive(std::int32_t dispatch_id, std::int64_t started_ns) {
+  std::lock_guard lk(mu_);
+  auto u = db_.Prepare("UPDATE runs SET state='ACTIVE', started_ns=? WHERE dispatch_id=?");
+  u.BindInt64(1, started_ns).BindInt64(2, dispatch_id);
+  u.Run();
+}
+
+void StationDb::WriteProgress(const RunProgress& run) {
+  if (run.end) {
+    auto u = db_.Prepare(
+        "UPDATE runs SET programs_done=?, state=?, reason=?, machine_s=?, finished_ns=? WHERE dispatch_id=?");
+    u.BindInt64(1, run.programs_done).BindText(2, RunStateName(*run.end)).BindText(3, run.reason);
+    u.BindDouble(4, run.machine_s).BindInt64(5, run.finished_ns).BindInt64(6, run.dispatch_id);
+    u.Run();
+  } else {
+    auto u = db_.Prepare("UPDATE runs SET programs_done=? WHERE dispatch_id=?");
+    u.BindInt64(1, run.programs_done).BindInt64(2, run.dispatch_id);
+    u.Run();
+  }
+  if (!run.record.empty()) {
+    auto o = db_.Prepare("INSERT OR REPLACE INTO outbox(dispatch_id, record) VALUES(?,?)");
+    o.BindInt64(1, run.dispatch_id).BindText(2, run.record);
+    o.Run();
+  }
+}
+
+void StationDb::EndRun(const RunProgress& run) {
+  std::lock_guard lk(mu_);
+  store::Transaction tx(db_);
+  WriteProgress(run);
+  tx.Commit();
+}
+
+std::vector<std::pair<std::int32_t, std::string>> StationDb::Outbox(int limit) {
+  std::lock_guard lk(mu_);
+  auto q = db_.Prepare("SELECT dispatch_id, record FROM outbox ORDER BY dispatch_id LIMIT ?");
+  q.BindInt64(1, limit);
+  std::vector<std::pair<std::int32_t, std::string>> out;
+  while (q.Step()) out.emplace_back(static_cast<std::int32_t>(q.ColumnInt64(0)), q.ColumnText(1));
+  return out;
+}
+
+void StationDb::RemoveFromOutbox(std::int32_t dispatch_id) {
+  std::lock_guard lk(mu_);
+  auto del = db_.Prepare("DELETE FROM outbox WHERE dispatch_id=?");
+  del.BindInt64(1, dispatch_id);
+  del.Run();
+}
+
+PanelState StationDb::LoadPanel() {
+  std::lock_guard lk(mu_);
+  PanelState p;
+  auto q = db_.Prepare("SELECT name, value FROM panel");
+  while (q.Step()) {
+    const std::string n = q.ColumnText(0);
+    if (n == "feed_hold") p.feed_hold = q.ColumnDouble(1) != 0;
+    if (n == "feed_override") p.feed_override = q.ColumnDouble(1);
+    if (n == "rapid_override") p.rapid_override = q.ColumnDouble(1);
+  }
+  return p;
+}
+
+void StationDb::SavePanel(const PanelState& p) {
+  std::lock_guard lk(mu_);
+  store::Transaction tx(db_);
+  auto save = db_.Prepare("INSERT OR REPLACE INTO panel(name, value) VALUES(?,?)");
+  for (auto [n, v] : {std::pair<const char*, double>{"feed_hold", p.feed_hold ? 1.0 : 0.0},
+                      {"feed_override", p.feed_override},
+                      {"rapid_override", p.rapid_override}}) {
+    save.BindText(1, n).BindDouble(2, v);
+    save.Run();
+    save.Reset();
+  }
+  tx.Commit();
+}
+
+void StationDb::SetInputs(const std::map<std::string, double>& inputs) {
+  std::lock_guard lk(mu_);
+  store::Transaction tx(db_);
+  auto save = db_.Prepare("INSERT OR REPLACE INTO inputs(name, value) VALUES(?,?)");
+  for (const auto& [n, v] : inputs) {
+    save.BindText(1, n).BindDouble(2, v);
+    save.Run();
+    save.Reset();
+  }
+  tx.Commit();
+}
+
+std::map<std::string, double> StationDb::LoadInputs() {
+  std::lock_guard lk(mu_);
+  std::map<std::string, double> out;
+  auto q = db_.Prepare("SELECT name, value FROM inputs");
+  while (q.Step()) out[q.ColumnText(0)] = q.ColumnDouble(1);
+  return out;
+}
+
+}  // namespace cell::station

@@ -1,0 +1,205 @@
+// Fakes for driving the station core without DDS: a clock that advances only when the core waits (and lets
+// the fake servo act then), a servo that takes segments in seq order and reports progress and probe results
+// as cell-axis-servo does, and the station's outside world (publications, programs, the inspection writer).
+#pragma once
+
+#include <cstdint>
+#include <deque>
+#include <functional>
+#include <map>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "cell/station/station.h"
+
+namespace cell::station::testing {
+
+class FakeClock final : public Clock {
+ public:
+  TimePoint Now() override { return now_; }
+  std::int64_t WallNs() override {
+    return 1'800'000'000'000'000'000 +
+           std::chrono::duration_cast<std::chrono::nanoseconds>(now_.time_since_epoch()).count();
+  }
+  // The core waits: time passes and the world (the fake servo, the test's script) gets its turn.
+  void Wait(std::unique_lock<std::mutex>& lk, std::condition_variable& cv, Duration d) override {
+    (void)cv;
+    lk.unlock();
+    now_ += std::min<Duration>(d, step_);
+    // A core that waits for ever is a failed test, not a hung one.
+    if (++waits_ > kMaxWaits) throw std::runtime_error("the core waited more than 200000 times");
+    if (on_wait) on_wait();
+    lk.lock();
+  }
+  void Advance(Duration d) { now_ += d; }
+  int waits() const { return waits_; }
+
+  std::function<void()> on_wait;
+
+ private:
+  static constexpr int kMaxWaits = 200000;
+  TimePoint now_{std::chrono::hours(1)};
+  Duration step_ = std::chrono::milliseconds(50);
+  int waits_ = 0;
+};
+
+// The axis servo as seen over the segment stream (docs/axis-servo.md, "Over DDS"): takes only the next seq
+// of its run (a new run only at seq 1), completes `per_wait` segments each time the core waits, grants
+// completed + capacity credits, answers probe moves.
+class FakeServo final : public ServoLink {
+ public:
+  explicit FakeServo(std::uint64_t capacity = 4) : capacity_(capacity) {}
+  void Attach(Station* s) { station_ = s; }
+
+  void Write(const cell::MotionSegment& seg) override {
+    written.push_back(seg);
+    if (seg.run_id() == run_ && seg.seq() > completed_)
+      max_outstanding = std::max<std::uint64_t>(max_outstanding, seg.seq() - completed_);
+    if (drop_writes > 0) {
+      --drop_writes;
+      return;
+    }
+    if (seg.run_id() != run_) {
+      if (seg.seq() != 1) return;
+      run_ = seg.run_id();
+      received_ = completed_ = 0;
+      queue_.clear();
+    }
+    if (seg.seq() != received_ + 1) return;  // duplicates and gaps: the re-send brings them in order
+    received_ = seg.seq();
+    queue_.push_back(seg);
+    dirty_ = true;
+  }
+  std::size_t Matched() override { return matched; }
+  std::uint64_t TotalMatched() override { return total_matched; }
+  bool WaitForServo(Clock::Duration) override { return matched > 0; }
+
+  // One turn of the machine: runs up to per_wait queued segments and reports what changed (as the servo
+  // does: a servo that takes and completes nothing says nothing).
+  void Step() {
+    if (!station_ || silent) return;
+    if (hold != reported_hold_ || boot_id != reported_boot_ || alarm_code != reported_alarm_) dirty_ = true;
+    for (int i = 0; i < per_wait && !queue_.empty() && !hold; ++i) {
+      dirty_ = true;
+      cell::MotionSegment seg = queue_.front();
+      queue_.pop_front();
+      ran.push_back(seg);
+      completed_ = seg.seq();
+      if (seg.kind() == cell::SEGMENT_PROBE) {
+        cell::ProbeResult r;
+        r.station(seg.station());
+        r.run_id(seg.run_id());
+        r.seq(seg.seq());
+        r.contact(probe_contact);
+        for (size_t a = 0; a < 9; ++a) r.position()[a] = seg.target()[a];
+        r.position()[2] = probe_contact_z;
+        station_->OnProbe(r);
+      }
+    }
+    if (dirty_) Report();
+  }
+  void Report() {
+    dirty_ = false;
+    reported_hold_ = hold;
+    reported_boot_ = boot_id;
+    reported_alarm_ = alarm_code;
+    cell::SegmentProgress p;
+    p.station(station_id);
+    p.run_id(run_);
+    p.completed_seq(completed_);
+    p.received_seq(received_);
+    p.credit_seq(completed_ + capacity_);
+    p.run_machine_s(static_cast<double>(completed_));
+    p.feed_hold(hold);
+    p.boot_id(boot_id);
+    if (!alarm_code.empty()) {
+      p.alarm(true);
+      p.alarm_code(alarm_code);
+      p.alarm_text(alarm_text);
+    }
+    station_->OnProgress(p);
+  }
+  // Segments of run `run` that the machine ran, by kind.
+  std::vector<cell::MotionSegment> Ran(std::int32_t run, cell::SegmentKind kind) const {
+    std::vector<cell::MotionSegment> out;
+    for (const auto& s : ran)
+      if (s.run_id() == run && s.kind() == kind) out.push_back(s);
+    return out;
+  }
+
+  std::string station_id = "KT01";
+  std::size_t matched = 1;
+  std::uint64_t total_matched = 1;
+  int per_wait = 2;
+  int drop_writes = 0;  // the next n writes are lost (an unmatched reader)
+  bool silent = false;  // reports nothing
+  bool hold = false;    // the operator's feed hold in effect: nothing completes
+  bool probe_contact = true;
+  double probe_contact_z = 0;
+  std::uint64_t boot_id = 77;
+  std::string alarm_code, alarm_text;
+  std::uint64_t max_outstanding = 0;
+  std::vector<cell::MotionSegment> written, ran;
+
+ private:
+  Station* station_ = nullptr;
+  std::uint64_t capacity_;
+  std::int32_t run_ = 0;
+  std::uint64_t received_ = 0, completed_ = 0;
+  std::deque<cell::MotionSegment> queue_;
+  bool dirty_ = true;
+  bool reported_hold_ = false;
+  std::uint64_t reported_boot_ = 0;
+  std::string reported_alarm_;
+};
+
+class FakeIo final : public StationIo {
+ public:
+  void PublishStatus(const cell::StationStatus& s) override { status.push_back(s); }
+  void PublishTools(const cell::ToolTable& t) override { tools.push_back(t); }
+  void PublishVariables(const cell::StationVariables& v) override { variables.push_back(v); }
+  void PublishRun(const cell::RunStatus& r) override { runs.push_back(r); }
+  void PublishControl(const cell::ServoControl& c) override { control.push_back(c); }
+  std::optional<std::string> Program(const std::string& node, const std::string& name) override {
+    fetched.push_back(name);
+    if (on_fetch) on_fetch(name);
+    for (const std::string& n : {node, std::string("HOST")}) {
+      auto it = programs.find(n + "/" + name);
+      if (it != programs.end()) return it->second;
+    }
+    return std::nullopt;
+  }
+  bool StoreRecord(const cell::InspectionRequest& request) override {
+    if (!writer_up) return false;
+    if (writer_refuses) throw Error(Errc::kUnavailable, "writer busy");
+    records.push_back(request);
+    return true;
+  }
+  // The last run status of a dispatch.
+  std::optional<cell::RunStatus> LastRun(std::int32_t dispatch) const {
+    for (auto it = runs.rbegin(); it != runs.rend(); ++it)
+      if (it->dispatch_id() == dispatch) return *it;
+    return std::nullopt;
+  }
+  std::map<std::string, double> LastVariables() const {
+    std::map<std::string, double> out;
+    if (variables.empty()) return out;
+    for (const auto& v : variables.back().variables()) out[v.name().to_string()] = v.value();
+    return out;
+  }
+
+  std::map<std::string, std::string> programs;  // "NODE/NAME" -> text
+  std::function<void(const std::string&)> on_fetch;
+  bool writer_up = true, writer_refuses = false;
+  std::vector<cell::StationStatus> status;
+  std::vector<cell::ToolTable> tools;
+  std::vector<cell::StationVariables> variables;
+  std::vector<cell::RunStatus> runs;
+  std::vector<cell::ServoControl> control;
+  std::vector<cell::InspectionRequest> records;
+  std::vector<std::string> fetched;
+};
+
+}  // namespace cell::station::testing

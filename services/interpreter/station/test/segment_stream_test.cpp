@@ -1,0 +1,179 @@
+// The segment stream of the station core without DDS (docs/axis-servo.md "Credits", "Re-sends"): credits,
+// re-sends after a lost match or a silent servo, and the ends of a run for want of a servo.
+#include <gtest/gtest.h>
+
+#include "harness.h"
+
+namespace cell::station::testing {
+namespace {
+
+std::string Moves(int n) {
+  std::string p = "G71 G90\nG01 X0 Y0 Z100. F0\n";
+  for (int i = 1; i <= n; ++i) p += "X" + std::to_string(i) + ". F1000.\n";
+  return p + "M30\n";
+}
+
+// The seqs the machine ran for run `run`, in order.
+std::vector<std::uint64_t> RanSeqs(const FakeServo& s, std::int32_t run) {
+  std::vector<std::uint64_t> out;
+  for (const auto& seg : s.ran)
+    if (seg.run_id() == run) out.push_back(seg.seq());
+  return out;
+}
+
+std::vector<std::uint64_t> OneTo(std::uint64_t n) {
+  std::vector<std::uint64_t> v;
+  for (std::uint64_t i = 1; i <= n; ++i) v.push_back(i);
+  return v;
+}
+
+using SegmentStreamTest = StationHarness;
+
+TEST_F(SegmentStreamTest, NeverMoreInFlightThanTheServoGranted) {
+  Put("P", Moves(30));
+  servo_.per_wait = 1;
+  Dispatch(1, {"P"});
+  ASSERT_EQ(RunOne(1).state(), cell::RUN_COMPLETED);
+  const std::uint64_t n = servo_.written.size();
+  EXPECT_EQ(n, 32u);  // the rapid, 30 moves and END (the units op is not a segment)
+  EXPECT_EQ(RanSeqs(servo_, 1), OneTo(n));
+  // Capacity 4 (FakeServo's queue): at most 4 sent and not completed, at any time.
+  EXPECT_LE(servo_.max_outstanding, 4u);
+  EXPECT_GE(servo_.max_outstanding, 4u);
+}
+
+TEST_F(SegmentStreamTest, BeforeTheServoSpeaksOnlyTheInitialWindowLeaves) {
+  Put("P", Moves(10));
+  servo_.silent = true;
+  std::size_t written_while_silent = 0;
+  script_ = [&] {
+    if (clock_.waits() == 5) {
+      written_while_silent = servo_.written.size();
+      servo_.silent = false;
+    }
+  };
+  Dispatch(1, {"P"});
+  ASSERT_EQ(RunOne(1).state(), cell::RUN_COMPLETED);
+  EXPECT_EQ(written_while_silent, SegmentStream::kInitialCredit);
+}
+
+TEST_F(SegmentStreamTest, SegmentsLostWhileUnmatchedAreSentAgainInOrderWhenTheServoMatchesAgain) {
+  Put("P", Moves(12));
+  servo_.per_wait = 1;
+  bool lost = false;
+  script_ = [&] {
+    if (!lost && servo_.ran.size() == 3) {
+      lost = true;
+      servo_.drop_writes = 2;  // the next two writes never arrive (reader unmatched)
+    } else if (lost && servo_.drop_writes == 0 && servo_.total_matched == 1) {
+      servo_.total_matched = 2;  // matched again: TotalMatched() changed
+    }
+  };
+  Dispatch(1, {"P"});
+  ASSERT_EQ(RunOne(1).state(), cell::RUN_COMPLETED);
+  const std::uint64_t n = 14;               // the rapid, 12 moves, END
+  EXPECT_EQ(RanSeqs(servo_, 1), OneTo(n));  // every seq once, in order
+  EXPECT_GT(servo_.written.size(), n);      // some twice
+}
+
+TEST_F(SegmentStreamTest, ASilentServoWithSegmentsMissingGetsThemAgainAfterASecond) {
+  Put("P", Moves(8));
+  bool lost = false;
+  script_ = [&] {
+    if (!lost && servo_.ran.size() >= 2) {
+      lost = true;
+      servo_.drop_writes = 1;  // lost without a change of match (a deaf reader)
+    }
+  };
+  Dispatch(1, {"P"});
+  ASSERT_EQ(RunOne(1).state(), cell::RUN_COMPLETED);
+  EXPECT_EQ(RanSeqs(servo_, 1), OneTo(10));
+  EXPECT_GT(servo_.written.size(), 10u);
+}
+
+TEST_F(SegmentStreamTest, AServoAlarmFailsTheRunWithTheAlarm) {
+  Put("P", Moves(10));
+  servo_.per_wait = 1;
+  script_ = [&] {
+    if (servo_.ran.size() == 4) {
+      servo_.alarm_code = "500";
+      servo_.alarm_text = "segment 5: X+ soft limit: 812.0000 > 800.0000";
+    }
+  };
+  Dispatch(1, {"P"});
+  auto end = RunOne(1);
+  EXPECT_EQ(end.state(), cell::RUN_FAILED);
+  EXPECT_EQ(end.reason(), "[500] segment 5: X+ soft limit: 812.0000 > 800.0000");
+}
+
+TEST_F(SegmentStreamTest, ARestartedServoFailsTheRun) {
+  Put("P", Moves(10));
+  servo_.per_wait = 1;
+  script_ = [&] {
+    if (servo_.ran.size() == 3) servo_.boot_id = 78;
+  };
+  Dispatch(1, {"P"});
+  auto end = RunOne(1);
+  EXPECT_EQ(end.state(), cell::RUN_FAILED);
+  EXPECT_EQ(end.reason(), "axis servo of KT01 restarted during the run");
+}
+
+TEST_F(SegmentStreamTest, AServoThatVanishedFailsTheRunAfterTenSeconds) {
+  Put("P", Moves(10));
+  Clock::TimePoint gone{};
+  servo_.per_wait = 1;
+  script_ = [&] {
+    if (servo_.ran.size() == 3 && servo_.matched == 1) {
+      servo_.matched = 0;
+      servo_.silent = true;
+      gone = clock_.Now();
+    }
+  };
+  Dispatch(1, {"P"});
+  auto end = RunOne(1);
+  EXPECT_EQ(end.state(), cell::RUN_FAILED);
+  EXPECT_EQ(end.reason(), "axis servo of KT01 vanished during the run");
+  EXPECT_GE(clock_.Now() - gone, SegmentStream::kServoGone);
+  EXPECT_LE(clock_.Now() - gone, SegmentStream::kServoGone + std::chrono::seconds(1));
+}
+
+TEST_F(SegmentStreamTest, AServoThatTakesNothingFailsTheRun) {
+  Put("P", Moves(10));
+  servo_.per_wait = 1;
+  script_ = [&] {
+    if (servo_.ran.size() == 3) {
+      servo_.silent = true;
+      servo_.drop_writes = 1000;  // matched, deaf
+    }
+  };
+  Dispatch(1, {"P"});
+  auto end = RunOne(1);
+  EXPECT_EQ(end.state(), cell::RUN_FAILED);
+  EXPECT_EQ(end.reason(), "axis servo of KT01 has taken no segment for 10 s");
+}
+
+TEST_F(SegmentStreamTest, NoServoOnTheBusFailsTheRunAtOnce) {
+  Put("P", Moves(1));
+  servo_.matched = 0;
+  Dispatch(1, {"P"});
+  auto end = RunOne(1);
+  EXPECT_EQ(end.state(), cell::RUN_FAILED);
+  EXPECT_EQ(end.reason(), "no axis servo for station KT01 on the bus");
+  EXPECT_TRUE(servo_.written.empty());
+}
+
+TEST_F(SegmentStreamTest, ProbeMovesWaitForTheServosResult) {
+  // G22 (manual ln 11084): the contact position latches into L3042-L3049; the program reads it back.
+  servo_.probe_contact_z = 53;
+  Put("PRB", "G71 G90\nG01 X10. Y10. Z100. F0\nG22 Z0 F200.\n(PAR,L1500=L3044)\nM30\n");
+  Dispatch(1, {"PRB"});
+  ASSERT_EQ(RunOne(1).state(), cell::RUN_COMPLETED);
+  auto probes = servo_.Ran(1, cell::SEGMENT_PROBE);
+  ASSERT_EQ(probes.size(), 1u);
+  EXPECT_DOUBLE_EQ(probes[0].target()[2], 0.0);
+  EXPECT_DOUBLE_EQ(probes[0].feed(), 500.0);
+  EXPECT_DOUBLE_EQ(station_->MemoryState().image.variables.at("L1500"), 53.0);
+}
+
+}  // namespace
+}  // namespace cell::station::testing

@@ -1,0 +1,401 @@
+// The station core without DDS: queue order, execution, cancel, the panel, and what programs leave in the
+// CNC's memory (KT-APL machine parameters and TLD, manual ln 8513-8525 and 3975-4097), at each step.
+#include <gtest/gtest.h>
+
+#include "cell/store/sqlite.h"
+#include "harness.h"
+
+namespace cell::station::testing {
+namespace {
+
+// Moves on KT01 (metric), ending with M30.
+std::string Moves(int n) {
+  std::string p = "G71 G90\nG01 X0 Y0 Z100. F0\n";
+  for (int i = 1; i <= n; ++i) p += "X" + std::to_string(i) + ". F1000.\n";
+  return p + "M30\n";
+}
+
+double Target(const cell::MotionSegment& s, int axis) {
+  return s.target()[static_cast<size_t>(axis)];
+}
+
+using StationCore = StationHarness;
+
+TEST_F(StationCore, RunsDispatchesInArrivalOrderOnceEach) {
+  Put("P", Moves(2));
+  EXPECT_EQ(Dispatch(30, {"P"}).state(), cell::RUN_QUEUED);
+  clock_.Advance(std::chrono::seconds(1));
+  EXPECT_EQ(Dispatch(10, {"P"}).state(), cell::RUN_QUEUED);
+  clock_.Advance(std::chrono::seconds(1));
+  EXPECT_EQ(Dispatch(20, {"P"}).state(), cell::RUN_QUEUED);
+  // A re-sent request (a restarted scheduler) gets the state the station has; nothing is queued twice.
+  EXPECT_EQ(Dispatch(10, {"P"}).state(), cell::RUN_QUEUED);
+  EXPECT_EQ(station_->Status().queued(), 3);
+
+  std::vector<std::int32_t> order;
+  while (station_->RunNext()) order.push_back(io_.runs.back().dispatch_id());
+  EXPECT_EQ(order, (std::vector<std::int32_t>{30, 10, 20}));
+  for (std::int32_t id : {30, 10, 20}) {
+    EXPECT_EQ(io_.LastRun(id)->state(), cell::RUN_COMPLETED) << id;
+    EXPECT_EQ(servo_.Ran(id, cell::SEGMENT_END).size(), 1u) << id;
+  }
+  EXPECT_EQ(Dispatch(10, {"P"}).state(), cell::RUN_COMPLETED);
+  EXPECT_FALSE(station_->RunNext());
+  EXPECT_EQ(station_->Status().queued(), 0);
+  EXPECT_EQ(station_->Status().part_count(), 3u);
+  EXPECT_EQ(station_->Status().execution(), cell::EXECUTION_PROGRAM_COMPLETED);
+}
+
+TEST_F(StationCore, RefusesMalformedRequests) {
+  auto wrong = Request(1, {"P"});
+  wrong.station("KT02");
+  EXPECT_THROW(station_->OnRun(wrong), Error);
+  EXPECT_THROW(station_->OnRun(Request(0, {"P"})), Error);
+  EXPECT_THROW(station_->OnRun(Request(1, {})), Error);
+  EXPECT_THROW(station_->OnRun(Request(1, {"P"}, 1, 10000)), Error);
+  EXPECT_FALSE(station_->RunNext());
+}
+
+TEST_F(StationCore, RunsEveryProgramOfTheMapRepeatAndReportsProgress) {
+  Put("A", Moves(1));
+  Put("B", Moves(2), "HOST");  // not in KT01's namespace: HOST is next
+  ASSERT_EQ(station_->OnRun(Request(5, {"A", "B"}, 7, 2)).state(), cell::RUN_QUEUED);
+  auto end = RunOne(5);
+  EXPECT_EQ(end.state(), cell::RUN_COMPLETED) << end.reason();
+  EXPECT_EQ(end.programs_done(), 4);
+  EXPECT_EQ(end.pallet(), 7);
+  EXPECT_EQ(io_.fetched, (std::vector<std::string>{"A", "B", "A", "B"}));
+  // A status per program start and end (the scheduler takes UCY off the backlog at each end).
+  std::vector<int> done;
+  for (const auto& r : io_.runs)
+    if (r.state() == cell::RUN_ACTIVE) done.push_back(r.programs_done());
+  EXPECT_EQ(done, (std::vector<int>{0, 1, 1, 2, 2, 3, 3, 4}));
+  ASSERT_EQ(io_.records.size(), 1u);  // the run record went to the inspection writer
+  EXPECT_TRUE(io_.records[0].run().completed());
+  EXPECT_EQ(io_.records[0].run().dispatch_id(), 5);
+}
+
+TEST_F(StationCore, MissingProgramAndProgramErrorFailTheRun) {
+  ASSERT_EQ(Dispatch(1, {"NOPE"}).state(), cell::RUN_QUEUED);
+  auto miss = RunOne(1);
+  EXPECT_EQ(miss.state(), cell::RUN_FAILED);
+  EXPECT_EQ(miss.reason(), "program 'NOPE' is not in KT01 or HOST");
+
+  Put("BAD", "G71\nG01 X10. F1000.\nG31\nM30\n");
+  ASSERT_EQ(Dispatch(2, {"BAD"}).state(), cell::RUN_QUEUED);
+  auto bad = RunOne(2);
+  EXPECT_EQ(bad.state(), cell::RUN_FAILED);
+  EXPECT_NE(bad.reason().to_string().find("BAD:3:"), std::string::npos) << bad.reason();
+  EXPECT_EQ(station_->Status().condition(), cell::CONDITION_WARNING);
+  EXPECT_EQ(station_->Status().execution(), cell::EXECUTION_STOPPED);
+  Command(cell::STATION_RESET);
+  EXPECT_EQ(station_->Status().condition(), cell::CONDITION_NORMAL);
+}
+
+TEST_F(StationCore, CancelOfAQueuedDispatchNeverRunsIt) {
+  Put("P", Moves(1));
+  Dispatch(1, {"P"});
+  Dispatch(2, {"P"});
+  EXPECT_EQ(Cancel(1).state(), cell::RUN_QUEUED);  // the state it had
+  EXPECT_EQ(Cancel(1).state(), cell::RUN_CANCELLED);
+  EXPECT_EQ(Cancel(99).state(), cell::RUN_CANCELLED);  // unknown: nothing to do
+  EXPECT_TRUE(station_->RunNext());
+  EXPECT_FALSE(station_->RunNext());
+  EXPECT_TRUE(servo_.Ran(1, cell::SEGMENT_END).empty());
+  EXPECT_EQ(io_.LastRun(2)->state(), cell::RUN_COMPLETED);
+}
+
+TEST_F(StationCore, CancelOfTheRunningDispatchStopsSendingAndAbortsTheMachine) {
+  Put("LONG", Moves(40));
+  Dispatch(3, {"LONG"});
+  bool cancelled = false;
+  script_ = [&] {
+    if (!cancelled && servo_.ran.size() >= 6) {
+      cancelled = true;
+      EXPECT_EQ(Cancel(3).state(), cell::RUN_ACTIVE);
+    }
+  };
+  auto end = RunOne(3);
+  EXPECT_EQ(end.state(), cell::RUN_CANCELLED);
+  EXPECT_EQ(end.reason(), "cancelled");
+  EXPECT_LT(servo_.written.size(), 20u);  // it stopped sending
+  ASSERT_FALSE(io_.control.empty());
+  EXPECT_EQ(io_.control.back().abort_run(), 3);  // the servo stops the run too
+  ASSERT_EQ(io_.records.size(), 1u);
+  EXPECT_FALSE(io_.records[0].run().completed());
+}
+
+TEST_F(StationCore, PanelHoldIsPersistedAndTheServosReportShowsFeedHold) {
+  EXPECT_FALSE(station_->Control().feed_hold());
+  auto rev = Command(cell::STATION_FEED_HOLD).revision();
+  EXPECT_TRUE(io_.control.back().feed_hold());
+  EXPECT_EQ(io_.control.back().revision(), rev);
+  cell::StationRequest o;
+  o.op(cell::STATION_OVERRIDE);
+  o.feed_override(0.5);
+  o.rapid_override(-1);  // unchanged
+  station_->OnCommand(o);
+  EXPECT_DOUBLE_EQ(io_.control.back().feed_override(), 0.5);
+  EXPECT_DOUBLE_EQ(io_.control.back().rapid_override(), 1.0);
+  o.feed_override(2.5);
+  EXPECT_THROW(station_->OnCommand(o), Error);
+
+  // A restarted interpreter keeps the machine held (the panel is persisted).
+  Make();
+  EXPECT_TRUE(station_->Control().feed_hold());
+  EXPECT_DOUBLE_EQ(station_->Control().feed_override(), 0.5);
+  EXPECT_TRUE(io_.control.back().feed_hold());
+
+  // The display follows the servo's report, not the button: FEED_HOLD while held mid-run, ACTIVE after.
+  Put("P", Moves(6));
+  Dispatch(1, {"P"});
+  std::vector<cell::Execution> shown;
+  servo_.hold = true;
+  script_ = [&] {
+    shown.push_back(station_->Status().execution());
+    if (clock_.waits() == 10) {
+      EXPECT_EQ(station_->Status().execution(), cell::EXECUTION_FEED_HOLD);
+      Command(cell::STATION_CYCLE_START);
+      servo_.hold = false;
+    }
+  };
+  EXPECT_EQ(RunOne(1).state(), cell::RUN_COMPLETED);
+  EXPECT_NE(std::find(shown.begin(), shown.end(), cell::EXECUTION_FEED_HOLD), shown.end());
+  EXPECT_NE(std::find(shown.begin(), shown.end(), cell::EXECUTION_ACTIVE), shown.end());
+  EXPECT_FALSE(station_->Control().feed_hold());
+}
+
+// ---- what programs change, kept ----
+
+// Manual ln 8513-8525 (machine parameters survive the program), 3975-4097 (TLD): a program sets L1500 and
+// loads tool 4001 with a 50 mm length; the next program reads L1500 as its X and uses 4001, whose length
+// offsets Z (programmed Z100. -> 150 mm).
+const char* kSetter = "G71\n(PAR,L1500=7.)\n(TLD,S6T4001P50.D10.L130)\nG90 G01 X0 Y0 Z100. F0\nM30\n";
+const char* kReader = "G71\nT4001 M06\nG90 G01 XL1500 Y0 Z100. F0\nM30\n";
+
+TEST_F(StationCore, MachineParametersAndToolDataSurviveTheProgramAndTheProcess) {
+  Put("SET", kSetter);
+  Put("USE", kReader);
+  Dispatch(1, {"SET"});
+  ASSERT_EQ(RunOne(1).state(), cell::RUN_COMPLETED);
+  EXPECT_EQ(Variables().at("L1500"), 7.0);
+  ASSERT_NE(Tool("4001"), nullptr);
+  EXPECT_DOUBLE_EQ(Tool("4001")->length, 50.0);
+  EXPECT_EQ(Tool("4001")->socket, 6);
+  EXPECT_EQ(Tool("4001")->life_left_min, 90);
+  // Published: the variables by the dialect's own name, the tool table with the new tool.
+  EXPECT_EQ(io_.LastVariables().at("L1500"), 7.0);
+  ASSERT_FALSE(io_.tools.empty());
+  EXPECT_EQ(io_.tools.back().tools().back().tool(), "4001");
+
+  Make();  // a restarted process starts from what was committed
+  EXPECT_EQ(Variables().at("L1500"), 7.0);
+  ASSERT_NE(Tool("4001"), nullptr);
+  EXPECT_EQ(io_.LastVariables().at("L1500"), 7.0);  // announced again at start
+
+  Dispatch(2, {"USE"});
+  ASSERT_EQ(RunOne(2).state(), cell::RUN_COMPLETED);
+  auto moves = servo_.Ran(2, cell::SEGMENT_RAPID);
+  ASSERT_FALSE(moves.empty());
+  EXPECT_NEAR(Target(moves.back(), 0), 7.0, 1e-9);
+  EXPECT_NEAR(Target(moves.back(), 2), 150.0, 1e-9);
+  ASSERT_EQ(servo_.Ran(2, cell::SEGMENT_TOOL_CHANGE).size(), 1u);
+  EXPECT_EQ(servo_.Ran(2, cell::SEGMENT_TOOL_CHANGE)[0].tool(), "4001");
+}
+
+TEST_F(StationCore, TheNextProgramOfTheSameDispatchStartsFromWhatTheFirstCommitted) {
+  Put("SET", kSetter);
+  Put("USE", kReader);
+  // Just before USE is fetched, the first program's changes are on disk: a second connection sees them.
+  std::optional<MemoryImage> on_disk;
+  io_.on_fetch = [&](const std::string& name) {
+    if (name == "USE") on_disk = StationDb(db()).LoadMemory();
+  };
+  Dispatch(1, {"SET", "USE"});
+  ASSERT_EQ(RunOne(1).state(), cell::RUN_COMPLETED);
+  ASSERT_TRUE(on_disk);
+  EXPECT_EQ(on_disk->variables.at("L1500"), 7.0);
+  EXPECT_NE(on_disk->tools.Find("4001"), nullptr);
+  auto moves = servo_.Ran(1, cell::SEGMENT_RAPID);
+  EXPECT_NEAR(Target(moves.back(), 0), 7.0, 1e-9);
+  EXPECT_NEAR(Target(moves.back(), 2), 150.0, 1e-9);
+}
+
+TEST_F(StationCore, AFailingProgramKeepsWhatItChangedBeforeTheError) {
+  Put("FAIL", "G71\n(PAR,L1500=3.,L1501=4.)\n(TLD,T4002P20.)\nG01 X10. F1000.\nG31\nM30\n");
+  Dispatch(1, {"FAIL"});
+  EXPECT_EQ(RunOne(1).state(), cell::RUN_FAILED);
+  Make();
+  EXPECT_EQ(Variables().at("L1500"), 3.0);
+  EXPECT_EQ(Variables().at("L1501"), 4.0);
+  ASSERT_NE(Tool("4002"), nullptr);
+  EXPECT_DOUBLE_EQ(Tool("4002")->length, 20.0);
+}
+
+TEST_F(StationCore, DeletedParametersAndZtbAreKept) {
+  SetVariable("L1500", 1);
+  SetVariable("L1600", 2);
+  SetVariable("V5", 9);  // a schedule variable: not the program's to delete
+  Put("DEL", "G71\n(DLP,L1500)\n(ZTB,T)\n(TLD,T4003P1.)\nM30\n");
+  Dispatch(1, {"DEL"});
+  ASSERT_EQ(RunOne(1).state(), cell::RUN_COMPLETED);
+  auto v = Variables();
+  EXPECT_EQ(v.count("L1500"), 0u);
+  EXPECT_EQ(v.at("L1600"), 2.0);
+  EXPECT_EQ(v.at("V5"), 9.0);
+  auto tools = station_->MemoryState().image.tools;
+  ASSERT_EQ(tools.entries().size(), 1u);  // ZTB,T cleared the table, then one TLD
+  EXPECT_EQ(tools.entries()[0].tool, "4003");
+  Make();
+  EXPECT_EQ(Variables().count("L1500"), 0u);
+  EXPECT_EQ(station_->MemoryState().image.tools.entries().size(), 1u);
+}
+
+TEST_F(StationCore, WhatTheOperatorChangesDuringARunAndTheProgramDoesNotTouchStays) {
+  Put("SET", kSetter);
+  bool loaded = false;
+  script_ = [&] {
+    if (loaded) return;
+    loaded = true;
+    SetVariable("L1700", 5);
+    Command(cell::STATION_LOAD_TOOLS, "(TLD,S7T5001P10.)\n");
+  };
+  Dispatch(1, {"SET"});
+  ASSERT_EQ(RunOne(1).state(), cell::RUN_COMPLETED);
+  EXPECT_EQ(Variables().at("L1700"), 5.0);
+  EXPECT_EQ(Variables().at("L1500"), 7.0);
+  EXPECT_NE(Tool("5001"), nullptr);
+  EXPECT_NE(Tool("4001"), nullptr);
+  EXPECT_NE(Tool("1001"), nullptr);
+}
+
+TEST_F(StationCore, VariablesTheOperatorSetsAreCheckedByTheDialectsRule) {
+  EXPECT_GT(SetVariable("L1500", 7).revision(), 0u);
+  SetVariable("V200", -1.5);
+  EXPECT_THROW(SetVariable("L3000", 1), Error);  // read-only system parameter
+  EXPECT_THROW(SetVariable("L999", 1), Error);   // program parameter: cleared by M30
+  EXPECT_THROW(SetVariable("L1500", 1e10), Error);
+  EXPECT_THROW(SetVariable("V201", 1), Error);
+  EXPECT_THROW(SetVariable("E12", 1), Error);  // Balt-System's, not a KT-APL station's
+  try {
+    SetVariable("L3000", 1);
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("L1000..L2999"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(Variables(), (std::map<std::string, double>{{"L1500", 7}, {"V200", -1.5}}));
+  Make();
+  EXPECT_EQ(Variables(), (std::map<std::string, double>{{"L1500", 7}, {"V200", -1.5}}));
+}
+
+TEST_F(StationCore, ToolLoadsKeepEveryTldFieldAcrossARestart) {
+  // A manual tool has no socket (tooltable's rule); 7001 has one.
+  Command(cell::STATION_LOAD_TOOLS,
+          "G71\n(TLD,T33412.5CMP100.D-6.35L0130H7.5)\n(TLD,T33412.5W38P.5D.1)\n(TLD,S9T7001P80.)\n");
+  Make();
+  auto tools = station_->MemoryState().image.tools;
+  const auto* e = tools.Find("33412.5");
+  ASSERT_NE(e, nullptr);
+  EXPECT_EQ(e->socket, 0);
+  EXPECT_EQ(tools.Find("7001")->socket, 9);
+  EXPECT_TRUE(e->check);
+  EXPECT_TRUE(e->manual);
+  EXPECT_DOUBLE_EQ(e->length, 100.0);
+  EXPECT_DOUBLE_EQ(e->diameter, -6.35);
+  EXPECT_EQ(e->life_left_min, 90);
+  EXPECT_DOUBLE_EQ(e->max_hp, 7.5);
+  ASSERT_EQ(tools.process_comps().size(), 1u);
+  EXPECT_EQ(tools.process_comps()[0].pallet, 38);
+  EXPECT_DOUBLE_EQ(tools.process_comps()[0].length, 0.5);
+  // Published with every field.
+  const auto& wire = io_.tools.back();
+  ASSERT_EQ(wire.process().size(), 1u);
+  EXPECT_EQ(wire.process()[0].pallet(), 38);
+}
+
+TEST_F(StationCore, ProcessCompensationOfThePalletOnTheTableApplies) {
+  // TLD W (manual ln 4060-4080): added to the tool's data while that pallet is on the table.
+  Command(cell::STATION_LOAD_TOOLS, "G71\n(TLD,S6T4001P50.)\n(TLD,T4001W38P2.)\n");
+  Put("USE", "G71\nT4001 M06\nG90 G01 X0 Y0 Z100. F0\nM30\n");
+  Dispatch(1, {"USE"}, 38);
+  ASSERT_EQ(RunOne(1).state(), cell::RUN_COMPLETED);
+  EXPECT_NEAR(Target(servo_.Ran(1, cell::SEGMENT_RAPID).back(), 2), 152.0, 1e-9);
+  Dispatch(2, {"USE"}, 5);
+  ASSERT_EQ(RunOne(2).state(), cell::RUN_COMPLETED);
+  EXPECT_NEAR(Target(servo_.Ran(2, cell::SEGMENT_RAPID).back(), 2), 150.0, 1e-9);
+}
+
+// kill -9 at any moment: a copy of the database files taken at every wait of the core is what a killed
+// process leaves. Each opens, its variables are those before or after a whole program (never half of a
+// program's changes), and a run it shows ACTIVE is reported failed by the next process.
+TEST_F(StationCore, ACopyOfTheDatabaseAtAnyMomentOpensConsistent) {
+  Put("A", "G71\n(PAR,L1500=1.,L1501=1.)\nG01 X1. F1000.\nX2.\nX3.\nX4.\nX5.\nM30\n");
+  Put("B", "G71\n(PAR,L1500=2.,L1501=2.)\n(TLD,S6T4001P50.)\nG01 X4. F1000.\nX5.\nX6.\nX7.\nM30\n");
+  servo_.per_wait = 1;
+  int copies = 0;
+  std::vector<std::filesystem::path> snapshots;
+  script_ = [&] {
+    auto to = dir_ / ("kill-" + std::to_string(copies++));
+    std::filesystem::create_directories(to);
+    for (const char* suffix : {"", "-wal"}) {
+      auto from = db().string() + suffix;
+      if (std::filesystem::exists(from))
+        std::filesystem::copy_file(from, to / ("interpreter-KT01.db" + std::string(suffix)));
+    }
+    snapshots.push_back(to);
+  };
+  Dispatch(1, {"A", "B"});
+  ASSERT_EQ(RunOne(1).state(), cell::RUN_COMPLETED);
+  script_ = nullptr;
+  ASSERT_GT(snapshots.size(), 4u);
+  bool saw_between = false;
+  for (const auto& s : snapshots) {
+    FakeIo io;
+    FakeServo servo;
+    Station restarted(cfg_, s / "interpreter-KT01.db", io, servo, clock_);
+    auto v = restarted.MemoryState().image.variables;
+    const double l1500 = v.count("L1500") ? v["L1500"] : 0;
+    const double l1501 = v.count("L1501") ? v["L1501"] : 0;
+    EXPECT_EQ(l1500, l1501) << s;  // both assignments of a program, or neither
+    const bool has_tool = restarted.MemoryState().image.tools.Find("4001") != nullptr;
+    EXPECT_EQ(has_tool, l1500 == 2.0) << s;
+    saw_between |= l1500 == 1.0;
+    restarted.Recover();
+    auto last = io.LastRun(1);
+    ASSERT_TRUE(last) << s;
+    EXPECT_EQ(last->state(), cell::RUN_FAILED);
+    EXPECT_EQ(last->reason(), "station restarted during the run");
+  }
+  EXPECT_TRUE(saw_between);  // some copy was taken between the programs
+}
+
+TEST_F(StationCore, RecordsWaitInTheOutboxUntilTheWriterTakesThem) {
+  Put("P", Moves(1));
+  io_.writer_up = false;
+  Dispatch(1, {"P"});
+  RunOne(1);
+  io_.writer_refuses = true;
+  io_.writer_up = true;
+  station_->FlushOutbox();
+  EXPECT_TRUE(io_.records.empty());
+  Make();  // kept across a restart
+  io_.writer_refuses = false;
+  station_->FlushOutbox();
+  ASSERT_EQ(io_.records.size(), 1u);
+  EXPECT_EQ(io_.records[0].hdr().idempotency_key(), "run-KT01-1");
+  station_->FlushOutbox();
+  EXPECT_EQ(io_.records.size(), 1u);
+}
+
+TEST_F(StationCore, WorkRunsWhatArrivesAndStops) {
+  Put("P", Moves(1));
+  Dispatch(1, {"P"});
+  int idle = 0;
+  script_ = [&] {
+    if (station_->Status().dispatch_id() == 0 && ++idle == 3) station_->RequestStop();
+  };
+  station_->Work();
+  EXPECT_EQ(io_.LastRun(1)->state(), cell::RUN_COMPLETED);
+}
+
+}  // namespace
+}  // namespace cell::station::testing
