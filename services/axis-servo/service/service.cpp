@@ -1,122 +1,28 @@
 #include "cell/servo/service.h"
 
-#include <spdlog/spdlog.h>
-
 #include "cell/bus/topics.h"
 #include "cell/health/health.h"
-#include "cell/tooltable/wire.h"
 
 namespace cell::servo {
 
-namespace {
-constexpr auto kAxisPeriod = std::chrono::milliseconds(20);  // 50 Hz in wall time, whatever the clock
-// Virtual clock: how long (wall) the machine waits for the producer to refill a look-ahead queue that is
-// less than half full before it runs on with what it has (see LookAheadStarved()).
-constexpr auto kLookAheadWait = std::chrono::milliseconds(5);
-}  // namespace
-
-Segment FromWire(const cell::MotionSegment& m, uint64_t id) {
-  Segment s;
-  s.id = id;
-  switch (m.kind()) {
-    case cell::SEGMENT_RAPID:
-      s.kind = SegmentKind::kRapid;
-      break;
-    case cell::SEGMENT_LINEAR:
-      s.kind = SegmentKind::kLinear;
-      break;
-    case cell::SEGMENT_ARC:
-      s.kind = SegmentKind::kArc;
-      break;
-    case cell::SEGMENT_DWELL:
-      s.kind = SegmentKind::kDwell;
-      break;
-    case cell::SEGMENT_TOOL_CHANGE:
-      s.kind = SegmentKind::kToolChange;
-      break;
-    case cell::SEGMENT_SPINDLE:
-      s.kind = SegmentKind::kSpindle;
-      break;
-    case cell::SEGMENT_COOLANT:
-      s.kind = SegmentKind::kCoolant;
-      break;
-    case cell::SEGMENT_PALLET:
-      s.kind = SegmentKind::kPalletChange;
-      break;
-    case cell::SEGMENT_PROBE:
-      s.kind = SegmentKind::kProbe;
-      break;
-    case cell::SEGMENT_STOP:
-      s.kind = SegmentKind::kDwell;
-      break;  // a program stop holds nothing here
-    case cell::SEGMENT_END:
-      s.kind = SegmentKind::kEnd;
-      break;
-    case cell::SEGMENT_THREAD:
-      s.kind = SegmentKind::kThread;
-      break;
-  }
-  for (int i = 0; i < kNumAxes; ++i) s.end[static_cast<size_t>(i)] = m.target()[static_cast<size_t>(i)];
-  s.axes = static_cast<uint8_t>(m.axis_mask() & 0x3f);
-  s.feed = m.feed();
-  s.feed_mode = m.feed_mode() == 1   ? FeedMode::kPerRevolution
-                : m.feed_mode() == 2 ? FeedMode::kInverseTime
-                                     : FeedMode::kPerMinute;
-  s.exact_stop = m.exact_stop();
-  s.center = {m.center()[0], m.center()[1], m.center()[2]};
-  s.plane = m.plane() == cell::PLANE_ZX   ? ArcPlane::kZX
-            : m.plane() == cell::PLANE_YZ ? ArcPlane::kYZ
-                                          : ArcPlane::kXY;
-  s.direction = m.ccw() ? ArcDirection::kCCW : ArcDirection::kCW;
-  s.turns = static_cast<uint32_t>(std::max(0, m.turns()));
-  s.dwell_s = m.dwell_s();
-  s.tool = m.tool().to_string();
-  s.spindle_rpm = m.spindle_rpm();
-  s.spindle_dir = m.spindle_mode() == 1   ? SpindleDirection::kCW
-                  : m.spindle_mode() == 2 ? SpindleDirection::kCCW
-                  : m.spindle_mode() == 3 ? SpindleDirection::kOrient
-                                          : SpindleDirection::kStop;
-  s.coolant = m.coolant() == 0   ? CoolantMode::kOff
-              : m.coolant() == 2 ? CoolantMode::kMist
-                                 : CoolantMode::kFlood;
-  s.pallet = m.pallet();
-  s.css_surface_speed = m.css_surface_speed();
-  s.spindle_max_rpm = m.spindle_max_rpm();
-  s.thread_lead = m.thread_lead();
-  s.thread_lead_change = m.thread_lead_change();
-  s.thread_start_angle = m.thread_start_angle();
-  return s;
-}
-
 Service::Service(bus::Participant& p, MachineConfig cfg, ClockKind clock)
-    : station_(cfg.station_id),
-      clock_(clock),
-      boot_id_(static_cast<uint64_t>(health::WallNs())),
-      machine_(std::move(cfg), clock),
-      segments_(p, bus::topics::Segments(station_), bus::QosKind::kStream),
-      progress_(p, bus::topics::kProgress, bus::QosKind::kState),
+    : progress_(p, bus::topics::kProgress, bus::QosKind::kState),
       axes_(p, bus::topics::kAxisState, bus::QosKind::kTelemetry),
-      probe_w_(p, bus::topics::Probe(station_), bus::QosKind::kCommand),
+      probe_w_(p, bus::topics::Probe(cfg.station_id), bus::QosKind::kCommand),
+      rx_(cfg, clock, static_cast<uint64_t>(health::WallNs()), *this),
+      segments_(p, bus::topics::Segments(cfg.station_id), bus::QosKind::kStream,
+                [this](const cell::MotionSegment& m, const bus::SampleInfo&) { rx_.OnSegment(m); }),
       tools_r_(p, bus::topics::kToolTable, bus::QosKind::kState,
-               [this](const cell::ToolTable& t, const bus::SampleInfo&) {
-                 if (t.station() != station_) return;
-                 tooltable::ToolTable table = tooltable::FromWire(t);
-                 std::lock_guard lk(tools_mu_);
-                 pending_tools_ = std::move(table);
-               }),
+               [this](const cell::ToolTable& t, const bus::SampleInfo&) { rx_.OnTools(t); }),
       control_r_(p, bus::topics::kServoControl, bus::QosKind::kState,
-                 [this](const cell::ServoControl& c, const bus::SampleInfo&) {
-                   if (c.station() != station_) return;
-                   std::lock_guard lk(tools_mu_);
-                   pending_control_ = c;
-                 }) {}
+                 [this](const cell::ServoControl& c, const bus::SampleInfo&) { rx_.OnControl(c); }) {}
 
 Service::~Service() {
   Stop();
 }
 
 void Service::Start() {
-  PublishProgress();
+  rx_.PublishProgress();
   loop_ = std::jthread([this](std::stop_token st) { Loop(st); });
 }
 
@@ -130,248 +36,15 @@ void Service::Stop() {
 void Service::Loop(std::stop_token st) {
   alive_ = true;
   while (!st.stop_requested()) {
-    {
-      std::lock_guard lk(tools_mu_);
-      if (pending_tools_) {
-        machine_.SetToolTable(*pending_tools_);
-        pending_tools_.reset();
-      }
+    const Receiver::Turn turn = rx_.Tick(std::chrono::steady_clock::now());
+    if (turn.waiting) {
+      rx_.WaitForSegment(std::chrono::milliseconds(1));
+    } else if (!turn.stepped) {
+      // Idle on the virtual clock: yield instead of spinning (the real clock sleeps inside Step()).
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
     }
-    ApplyControl();
-    // Segments in: a new run id starts a new run (its first segment is seq 1).
-    while (auto m = segments_.Take(std::chrono::milliseconds(0))) {
-      inbox_.push_back(std::move(*m));
-      last_segment_at_ = std::chrono::steady_clock::now();
-    }
-    while (!inbox_.empty()) {
-      if (!Accept(inbox_.front())) {
-        inbox_.pop_front();
-        continue;
-      }
-      if (inbox_.front().run_id() != run_id_) {
-        if (!seq_of_.empty() && machine_.alarm().code == AlarmCode::kNone) {
-          // The previous run was abandoned with segments still queued or running (the producer moved
-          // on without an END): abort them (motion decelerates along the path) and hold the new run's
-          // segments until the abort has flushed the old ones, so they neither run nor take its credits.
-          if (!abandoning_) {
-            spdlog::warn("run {} abandoned with {} segments queued: aborting it for run {}", run_id_,
-                         seq_of_.size(), inbox_.front().run_id());
-            machine_.Abort();
-            abandoning_ = true;
-          }
-          break;
-        }
-        const bool aborted = abandoning_;
-        abandoning_ = false;
-        run_id_ = inbox_.front().run_id();
-        received_seq_ = 0;
-        completed_seq_ = 0;
-        seq_of_.clear();
-        probe_.clear();
-        run_start_s_.reset();
-        run_end_s_ = machine_.machine_time();
-        end_received_ = false;
-        // A new run starts clean. After an abort too: Machine::Abort() on a machine that is already at rest
-        // (everything flushed at once) stays "aborting" on the virtual clock, where an idle Step() does not
-        // run, and would refuse to move; Reset() at rest ends it without moving the axes.
-        if (aborted || machine_.alarm().code != AlarmCode::kNone || alarm_.code != AlarmCode::kNone)
-          machine_.Reset();
-        alarm_ = Alarm{};
-        dirty_ = true;
-      }
-      cell::MotionSegment m = std::move(inbox_.front());
-      inbox_.pop_front();
-      received_seq_ = m.seq();
-      dirty_ = true;  // the producer learns what arrived (it re-sends what did not)
-      if (alarm_.code != AlarmCode::kNone || machine_.alarm().code != AlarmCode::kNone) {
-        // The run is stopped by an alarm: later segments of it (sent within their credits before the
-        // producer saw the alarm) are dropped; they must not replace the alarm that stopped the run.
-        spdlog::debug("segment run {} seq {} dropped: alarm active", m.run_id(), m.seq());
-        continue;
-      }
-      uint64_t id = ++next_id_;
-      seq_of_[id] = m.seq();
-      spdlog::debug("segment run {} seq {} kind {} at machine {:.3f} s", m.run_id(), m.seq(),
-                    static_cast<int>(m.kind()), machine_.machine_time());
-      if (m.kind() == cell::SEGMENT_PROBE) probe_[id] = true;
-      if (m.kind() == cell::SEGMENT_END) end_received_ = true;
-      try {
-        machine_.Push(FromWire(m, id));
-      } catch (const Error& e) {
-        seq_of_.erase(id);
-        probe_.erase(id);
-        // A refused segment (no credit, not a finite number) stops the run: running on without it
-        // would join its neighbours with a straight move nobody programmed.
-        machine_.Abort();
-        alarm_ = Alarm{AlarmCode::kInvalidSegment, e.what()};
-        spdlog::error("alarm {}: {}", static_cast<int>(alarm_.code), alarm_.text);
-        dirty_ = true;
-      }
-    }
-    if (LookAheadStarved()) {
-      // Virtual clock only: wait (wall time) for the refill instead of running the machine into a stop
-      // that the segments in flight would have avoided.
-      if (auto m = segments_.Take(std::chrono::milliseconds(1))) {
-        inbox_.push_back(std::move(*m));
-        last_segment_at_ = std::chrono::steady_clock::now();
-      }
-      if (dirty_) PublishProgress();
-      if (std::chrono::steady_clock::now() - last_axes_ >= kAxisPeriod) PublishAxes();
-      continue;
-    }
-    // Every step: a reset (new run, alarm cleared) releases the planner's hold, never the operator's.
-    if (feed_hold_) machine_.FeedHold();
-    bool stepped = machine_.Step();
-    HandleEvents();
-    if (dirty_) PublishProgress();
-    if (std::chrono::steady_clock::now() - last_axes_ >= kAxisPeriod) PublishAxes();
-    // Idle on the virtual clock: yield instead of spinning (the real clock sleeps inside Step()).
-    if (!stepped) std::this_thread::sleep_for(std::chrono::milliseconds(1));
   }
   alive_ = false;
-}
-
-// Segments arrive in order within one DDS match, but a producer that lost the match (this process stopped
-// past the lease, say) re-sends everything not yet completed once it matches again. Taking only the next seq
-// makes that safe: duplicates are dropped, and so is anything after a gap (the re-send fills it in order).
-// A run is only ever joined at its first segment: a servo restarted mid-run never moves a run from the
-// middle (from wherever the axes are to a point the program reached from elsewhere); the producer sees the
-// new boot_id and fails the run.
-bool Service::Accept(const cell::MotionSegment& m) {
-  if (m.run_id() == aborted_run_) return false;  // a cancelled run: nothing more of it runs
-  const bool next = m.run_id() == run_id_ ? m.seq() == received_seq_ + 1 : m.seq() == 1;
-  if (next) return true;
-  if (m.run_id() == run_id_ && m.seq() <= received_seq_) {
-    spdlog::debug("segment run {} seq {} dropped: already received", m.run_id(), m.seq());
-  } else if (m.run_id() == run_id_) {
-    spdlog::warn("segment run {} seq {} dropped: expected seq {} (waiting for the re-send)", m.run_id(),
-                 m.seq(), received_seq_ + 1);
-  } else {
-    spdlog::warn("segment run {} seq {} dropped: this servo did not receive the run's start", m.run_id(),
-                 m.seq());
-  }
-  return false;
-}
-
-// The operator's panel (ServoControl from the station's interpreter): applied between steps.
-void Service::ApplyControl() {
-  std::optional<cell::ServoControl> c;
-  {
-    std::lock_guard lk(tools_mu_);
-    c.swap(pending_control_);
-  }
-  if (!c) return;
-  if (c->abort_run() != 0 && c->abort_run() == run_id_ && aborted_run_ != run_id_) {
-    // The run was cancelled: stop it as the abandon of a run does (decelerate along the path, flush the
-    // rest); the next run resets the machine.
-    aborted_run_ = run_id_;
-    spdlog::warn("run {} cancelled: aborting it with {} segments queued", run_id_, seq_of_.size());
-    if (!seq_of_.empty() && machine_.alarm().code == AlarmCode::kNone) {
-      machine_.Abort();
-      abandoning_ = true;
-    }
-  }
-  if (c->feed_hold() != feed_hold_) {
-    feed_hold_ = c->feed_hold();
-    if (feed_hold_) {
-      machine_.FeedHold();
-    } else {
-      machine_.Resume();
-    }
-    spdlog::info("feed hold {}", feed_hold_ ? "on" : "released");
-  }
-  machine_.SetFeedOverride(c->feed_override());
-  machine_.SetRapidOverride(c->rapid_override());
-  dirty_ = true;
-}
-
-// On the virtual clock the machine runs ~1000x faster than real time, so a look-ahead queue starved by the
-// credit round trip (the producer refills it only after it has seen the progress) would make the planner
-// brake for a stop that a real-time machine never sees, and the cycle time would depend on DDS latency.
-// While a run is under way (no END yet), the queue is less than half full and the producer sent something
-// within the last kLookAheadWait, the machine waits for it. A producer that stops sending (a slow or
-// finished interpreter) costs at most kLookAheadWait of wall time per refill, no machine time.
-bool Service::LookAheadStarved() const {
-  if (clock_ != ClockKind::kVirtual || end_received_ || abandoning_ || seq_of_.empty()) return false;
-  if (alarm_.code != AlarmCode::kNone || machine_.alarm().code != AlarmCode::kNone) return false;
-  if (machine_.credits() <= machine_.capacity() / 2) return false;
-  return std::chrono::steady_clock::now() - last_segment_at_ < kLookAheadWait;
-}
-
-void Service::HandleEvents() {
-  for (const Event& e : machine_.TakeEvents()) {
-    auto it = seq_of_.find(e.segment_id);
-    switch (e.kind) {
-      case EventKind::kStarted:
-        if (!run_start_s_) run_start_s_ = e.machine_time;
-        break;
-      case EventKind::kCompleted:
-        if (it != seq_of_.end()) {
-          completed_seq_ = std::max(completed_seq_, it->second);
-          spdlog::debug("completed seq {} at machine {:.3f} s", it->second, e.machine_time);
-          run_end_s_ = e.machine_time;
-          if (probe_.count(e.segment_id)) {
-            cell::ProbeResult r;
-            r.station(station_);
-            r.run_id(run_id_);
-            r.seq(it->second);
-            r.contact(e.probe.contact);
-            for (int i = 0; i < kNumAxes; ++i) r.position()[static_cast<size_t>(i)] = e.probe.position[i];
-            probe_w_.Write(r);
-          }
-          seq_of_.erase(it);
-          dirty_ = true;
-        }
-        break;
-      case EventKind::kFlushed:
-        if (it != seq_of_.end()) seq_of_.erase(it);
-        break;
-      case EventKind::kAlarm:
-        alarm_ = e.alarm;
-        spdlog::error("alarm {}: {}", static_cast<int>(e.alarm.code), e.alarm.text);
-        dirty_ = true;
-        break;
-    }
-  }
-}
-
-void Service::PublishProgress() {
-  cell::SegmentProgress p;
-  p.station(station_);
-  p.run_id(run_id_);
-  p.completed_seq(completed_seq_);
-  p.received_seq(received_seq_);
-  // One credit per free queue slot: segments in flight or queued never exceed the capacity.
-  p.credit_seq(completed_seq_ + machine_.capacity());
-  p.machine_s(machine_.machine_time());
-  p.run_machine_s(run_start_s_ ? run_end_s_ - *run_start_s_ : 0.0);
-  if (alarm_.code != AlarmCode::kNone) {
-    p.alarm(true);
-    p.alarm_code(std::to_string(static_cast<int>(alarm_.code)));
-    p.alarm_text(alarm_.text.substr(0, 255));
-  }
-  p.feed_hold(feed_hold_);
-  p.boot_id(boot_id_);
-  progress_.Write(p);
-  dirty_ = false;
-}
-
-void Service::PublishAxes() {
-  AxisState s = machine_.State();
-  cell::AxisState a;
-  a.station(station_);
-  for (int i = 0; i < kNumAxes; ++i) {
-    a.commanded()[static_cast<size_t>(i)] = s.commanded[i];
-    a.actual()[static_cast<size_t>(i)] = s.actual[i];
-    a.velocity()[static_cast<size_t>(i)] = s.velocity[i];
-    a.following_error()[static_cast<size_t>(i)] = s.following_error[i];
-  }
-  a.machine_s(s.machine_time);
-  a.wall_ns(health::WallNs());
-  a.spindle_rpm(s.spindle_rpm);
-  a.path_feed(s.path_feed);
-  axes_.Write(a);
-  last_axes_ = std::chrono::steady_clock::now();
 }
 
 }  // namespace cell::servo

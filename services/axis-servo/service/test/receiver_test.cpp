@@ -1,0 +1,198 @@
+// The axis servo's receiving side without DDS (docs/axis-servo.md, "Over DDS"): seq order and re-sends,
+// credits, abandoned and cancelled runs, alarms, the panel's feed hold, probe results, the magazine from the
+// station's tool table, telemetry on the wall clock. KT01's machine on the virtual clock; wall time is
+// injected.
+#include <gtest/gtest.h>
+
+#include <functional>
+
+#include "cell/servo/receiver.h"
+
+namespace cell::servo {
+namespace {
+
+// KT01's in_position (0.025 mm): an exact-stop segment completes within it (the jerk filter still settles).
+constexpr double kInPosition = 0.025;
+
+struct Sink : ReceiverSink {
+  void Progress(const cell::SegmentProgress& p) override { progress.push_back(p); }
+  void Probe(const cell::ProbeResult& r) override { probes.push_back(r); }
+  void Axes(const cell::AxisState& a) override { axes.push_back(a); }
+  std::vector<cell::SegmentProgress> progress;
+  std::vector<cell::ProbeResult> probes;
+  std::vector<cell::AxisState> axes;
+};
+
+cell::MotionSegment Seg(std::int32_t run, std::uint64_t seq, cell::SegmentKind kind, double x = 0,
+                        double y = 0, double z = 100, double feed = 2000) {
+  cell::MotionSegment m;
+  m.station("KT01");
+  m.run_id(run);
+  m.seq(seq);
+  m.kind(kind);
+  m.target()[0] = x;
+  m.target()[1] = y;
+  m.target()[2] = z;
+  m.axis_mask(0x07);
+  m.feed(feed);
+  m.exact_stop(true);
+  return m;
+}
+
+class ReceiverTest : public ::testing::Test {
+ protected:
+  ReceiverTest()
+      : rx_(LoadMachineConfig(std::string(CELL_SOURCE_DIR) + "/deploy/stations/KT01.toml"),
+            ClockKind::kVirtual, 42, sink_) {}
+
+  // Turns of the loop (1 ms of wall time each) until `done` or the limit.
+  bool Turn(const std::function<bool()>& done, int limit = 3'000'000) {
+    for (int i = 0; i < limit; ++i) {
+      now_ += std::chrono::milliseconds(1);
+      rx_.Tick(now_);
+      if (done()) return true;
+    }
+    return false;
+  }
+  const cell::SegmentProgress& Last() const { return sink_.progress.back(); }
+  bool Completed(std::int32_t run, std::uint64_t seq) const {
+    return !sink_.progress.empty() && Last().run_id() == run && Last().completed_seq() >= seq;
+  }
+  void Send(const cell::MotionSegment& m) { rx_.OnSegment(m); }
+
+  Sink sink_;
+  Receiver rx_;
+  Receiver::TimePoint now_{std::chrono::hours(1)};
+};
+
+TEST_F(ReceiverTest, ReSentSegmentsRunOnceInSeqOrder) {
+  rx_.PublishProgress();
+  EXPECT_EQ(Last().run_id(), 0);
+  EXPECT_EQ(Last().boot_id(), 42u);
+  const auto s1 = Seg(1, 1, cell::SEGMENT_LINEAR, 10), s2 = Seg(1, 2, cell::SEGMENT_LINEAR, 20),
+             s3 = Seg(1, 3, cell::SEGMENT_LINEAR, 30), s4 = Seg(1, 4, cell::SEGMENT_END);
+  for (const auto& m : {s1, s2, s1, s4, s2, s3, s4}) Send(m);
+  ASSERT_TRUE(Turn([&] { return Completed(1, 4); }));
+  EXPECT_EQ(Last().received_seq(), 4u);
+  EXPECT_NEAR(rx_.machine().State().commanded[0], 30.0, kInPosition);  // seq 3's target, reached once
+  for (const auto& p : sink_.progress) EXPECT_EQ(p.credit_seq(), p.completed_seq() + 64);
+  EXPECT_FALSE(Last().alarm());
+}
+
+TEST_F(ReceiverTest, ARunIsJoinedOnlyAtItsFirstSegment) {
+  Send(Seg(1, 2, cell::SEGMENT_LINEAR, 20));
+  Send(Seg(1, 3, cell::SEGMENT_END));
+  Turn([] { return false; }, 50);
+  EXPECT_EQ(rx_.run_id(), 0);
+  for (std::uint64_t s = 1; s <= 3; ++s)
+    Send(s == 3 ? Seg(1, 3, cell::SEGMENT_END)
+                : Seg(1, s, cell::SEGMENT_LINEAR, 10.0 * static_cast<double>(s)));
+  ASSERT_TRUE(Turn([&] { return Completed(1, 3); }));
+  EXPECT_NEAR(rx_.machine().State().commanded[0], 20.0, kInPosition);
+}
+
+TEST_F(ReceiverTest, ANewRunAbortsWhatIsLeftOfAnAbandonedOne) {
+  for (std::uint64_t s = 1; s <= 10; ++s)
+    Send(Seg(1, s, cell::SEGMENT_LINEAR, s % 2 ? 700 : 0, 0, 100, 500));  // minutes of motion, no END
+  ASSERT_TRUE(Turn([&] { return Completed(1, 1); }));
+  Send(Seg(2, 1, cell::SEGMENT_LINEAR, 5, 5, 100));
+  Send(Seg(2, 2, cell::SEGMENT_END));
+  ASSERT_TRUE(Turn([&] { return Completed(2, 2); }));
+  EXPECT_LT(sink_.progress.back().machine_s(), 200.0);  // run 1's remaining 9 moves (~13 min) did not run
+  EXPECT_NEAR(rx_.machine().State().commanded[0], 5.0, kInPosition);
+}
+
+TEST_F(ReceiverTest, AnAlarmStopsTheRunAndItsLaterSegmentsCannotReplaceIt) {
+  Send(Seg(1, 1, cell::SEGMENT_LINEAR, 100));
+  Send(Seg(1, 2, cell::SEGMENT_LINEAR, 900));  // KT01: X max 800 -> alarm 500
+  ASSERT_TRUE(Turn([&] { return !sink_.progress.empty() && Last().alarm(); }));
+  EXPECT_EQ(Last().alarm_code(), "500");
+  Send(Seg(1, 3, cell::SEGMENT_LINEAR, 50));
+  Send(Seg(1, 4, cell::SEGMENT_END));
+  Turn([] { return false; }, 100);
+  EXPECT_EQ(Last().alarm_code(), "500");
+  EXPECT_EQ(Last().completed_seq(), 1u);
+  EXPECT_NEAR(rx_.machine().State().commanded[0], 100.0, kInPosition);
+  // The next run starts clean.
+  Send(Seg(2, 1, cell::SEGMENT_LINEAR, 10));
+  Send(Seg(2, 2, cell::SEGMENT_END));
+  ASSERT_TRUE(Turn([&] { return Completed(2, 2); }));
+  EXPECT_FALSE(Last().alarm());
+}
+
+TEST_F(ReceiverTest, ACancelledRunIsAbortedAndItsLaterSegmentsDropped) {
+  for (std::uint64_t s = 1; s <= 6; ++s) Send(Seg(1, s, cell::SEGMENT_LINEAR, s % 2 ? 700 : 0, 0, 100, 500));
+  ASSERT_TRUE(Turn([&] { return rx_.run_id() == 1; }));
+  cell::ServoControl c;
+  c.station("KT01");
+  c.feed_override(1);
+  c.rapid_override(1);
+  c.abort_run(1);
+  rx_.OnControl(c);
+  Turn([] { return false; }, 10);
+  Send(Seg(1, 7, cell::SEGMENT_END));
+  Turn([] { return false; }, 200000);
+  EXPECT_LT(Last().completed_seq(), 6u);
+  Send(Seg(2, 1, cell::SEGMENT_LINEAR, 1, 1, 100));
+  Send(Seg(2, 2, cell::SEGMENT_END));
+  ASSERT_TRUE(Turn([&] { return Completed(2, 2); }));
+}
+
+TEST_F(ReceiverTest, FeedHoldIsReportedAndHoldsTheRun) {
+  cell::ServoControl c;
+  c.station("KT01");
+  c.feed_hold(true);
+  c.feed_override(1);
+  c.rapid_override(1);
+  rx_.OnControl(c);
+  Send(Seg(1, 1, cell::SEGMENT_LINEAR, 100));
+  Send(Seg(1, 2, cell::SEGMENT_END));
+  ASSERT_TRUE(
+      Turn([&] { return !sink_.progress.empty() && Last().feed_hold() && Last().received_seq() == 2; }));
+  Turn([] { return false; }, 5000);
+  EXPECT_EQ(Last().completed_seq(), 0u);
+  c.feed_hold(false);
+  rx_.OnControl(c);
+  ASSERT_TRUE(Turn([&] { return Completed(1, 2); }));
+  EXPECT_FALSE(Last().feed_hold());
+}
+
+TEST_F(ReceiverTest, AProbeMoveReportsItsResult) {
+  Send(Seg(1, 1, cell::SEGMENT_PROBE, 10, 0, 20, 200));  // no part model: no contact, end of travel
+  Send(Seg(1, 2, cell::SEGMENT_END));
+  ASSERT_TRUE(Turn([&] { return Completed(1, 2); }));
+  ASSERT_EQ(sink_.probes.size(), 1u);
+  EXPECT_EQ(sink_.probes[0].run_id(), 1);
+  EXPECT_EQ(sink_.probes[0].seq(), 1u);
+  EXPECT_FALSE(sink_.probes[0].contact());
+  EXPECT_NEAR(sink_.probes[0].position()[2], 20.0, 1e-6);
+}
+
+TEST_F(ReceiverTest, TheMagazineIsTheStationsPublishedToolTable) {
+  auto change = Seg(1, 1, cell::SEGMENT_TOOL_CHANGE);
+  change.tool("4001");
+  Send(change);
+  ASSERT_TRUE(Turn([&] { return !sink_.progress.empty() && Last().alarm(); }));
+  EXPECT_EQ(Last().alarm_code(), "600");
+  cell::ToolTable t;
+  t.station("KT01");
+  cell::ToolEntry e;
+  e.tool("4001");
+  e.socket(6);
+  t.tools().push_back(e);
+  rx_.OnTools(t);
+  change.run_id(2);
+  Send(change);
+  Send(Seg(2, 2, cell::SEGMENT_END));
+  ASSERT_TRUE(Turn([&] { return Completed(2, 2); }));
+  EXPECT_FALSE(Last().alarm());
+}
+
+TEST_F(ReceiverTest, AxisStateIsPublishedOnTheWallClock) {
+  Turn([] { return false; }, 200);  // 200 ms of wall time
+  EXPECT_GE(sink_.axes.size(), 9u);
+  EXPECT_LE(sink_.axes.size(), 11u);
+}
+
+}  // namespace
+}  // namespace cell::servo
