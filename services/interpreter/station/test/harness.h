@@ -12,6 +12,13 @@
 
 namespace cell::station::testing {
 
+// A KT-APL program (metric): a rapid to X0 Y0 Z100, then n feed moves along X, M30: n + 2 segments.
+inline std::string Moves(int n) {
+  std::string p = "G71 G90\nG01 X0 Y0 Z100. F0\n";
+  for (int i = 1; i <= n; ++i) p += "X" + std::to_string(i) + ". F1000.\n";
+  return p + "M30\n";
+}
+
 class StationHarness : public ::testing::Test {
  protected:
   void SetUp() override {

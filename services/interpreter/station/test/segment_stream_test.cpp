@@ -7,12 +7,6 @@
 namespace cell::station::testing {
 namespace {
 
-std::string Moves(int n) {
-  std::string p = "G71 G90\nG01 X0 Y0 Z100. F0\n";
-  for (int i = 1; i <= n; ++i) p += "X" + std::to_string(i) + ". F1000.\n";
-  return p + "M30\n";
-}
-
 // The seqs the machine ran for run `run`, in order.
 std::vector<std::uint64_t> RanSeqs(const FakeServo& s, std::int32_t run) {
   std::vector<std::uint64_t> out;

@@ -8,13 +8,6 @@
 namespace cell::station::testing {
 namespace {
 
-// Moves on KT01 (metric), ending with M30.
-std::string Moves(int n) {
-  std::string p = "G71 G90\nG01 X0 Y0 Z100. F0\n";
-  for (int i = 1; i <= n; ++i) p += "X" + std::to_string(i) + ". F1000.\n";
-  return p + "M30\n";
-}
-
 double Target(const cell::MotionSegment& s, int axis) {
   return s.target()[static_cast<size_t>(axis)];
 }
