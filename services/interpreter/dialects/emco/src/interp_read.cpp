@@ -313,7 +313,7 @@ void ParseBlock(std::string_view text, Block& out) {
     c.SkipBlanks();
     int n = 0, digits = 0;
     while (!c.AtEnd() && IsDigit(c.Peek())) {
-      n = n * 10 + (c.Peek() - '0');
+      if (digits < 9) n = n * 10 + (c.Peek() - '0');  // more digits are an alarm below; no int overflow first
       ++digits;
       ++c.i;
     }
