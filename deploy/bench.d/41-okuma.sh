@@ -16,6 +16,9 @@ BLOCKS="${CELL_INTERP_BENCH_BLOCKS:-1000000}"
 
 work="$(mktemp -d "${TMPDIR:-/tmp}/cell-okuma-bench.XXXXXX")"
 trap 'rm -rf "$work"' EXIT
+BENCH=41-okuma
+# shellcheck source=lib/interp-bench.sh
+source "$ROOT/deploy/bench.d/lib/interp-bench.sh"
 
 # gen OKUMA|NGC BLOCKS DIR: writes DIR/bench.<kind> (and the Okuma subprogram DIR/lib/O1000.SUB). Groups of 8
 # blocks; the subprogram is 7 blocks in both languages. X is a diameter in Okuma and a radius in NGC (G18, no
@@ -78,17 +81,6 @@ gen() {
   }'
 }
 
-# measure LABEL cmd...: CPU seconds (user+sys), wall seconds and peak RSS (kB) via /usr/bin/time -v.
-measure() {
-  local tlog="$work/time.$1"; shift
-  /usr/bin/time -v "$@" >/dev/null 2>"$tlog" || { echo "41-okuma: failed: $*" >&2; tail -5 "$tlog" >&2; return 1; }
-  local wall cpu rss
-  wall=$(awk -F': ' '/Elapsed \(wall clock\)/ {n=split($2,a,":"); s=0; for(i=1;i<=n;i++) s=s*60+a[i]; print s}' "$tlog")
-  cpu=$(awk -F': ' '/User time|System time/ {s+=$2} END {print s}' "$tlog")
-  rss=$(awk -F': ' '/Maximum resident set size/ {print $2}' "$tlog")
-  echo "$cpu $wall $rss"
-}
-
 mkdir -p "$work/big/lib" "$work/small/lib"
 small=$((BLOCKS / 10))
 gen OKUMA "$BLOCKS" "$work/big"
@@ -107,20 +99,12 @@ rc=0
 [ "$ok_rss" -lt $((64 * 1024)) ] || echo "41-okuma: TARGET MISSED: peak RSS >= 64 MB"
 [ "$ok_rss" -le $((small_rss + 2048)) ] || echo "41-okuma: TARGET MISSED: peak RSS grows with program length"
 
-if ! command -v rs274 >/dev/null; then
-  echo "LinuxCNC rs274 NOT AVAILABLE (deploy/bench.d/40-interpreter.sh installs linuxcnc-uspace when apt has it): only our own figures are reported"
-  exit $rc
-fi
-(
-  cd "$work/big"
-  : >tool.tbl
-  : >rs274ngc.var
-  read -r ngc_cpu ngc_wall ngc_rss < <(measure ngc rs274 -g -t tool.tbl -v rs274ngc.var bench.ngc /dev/null)
-  ngc_bps=$(awk -v b="$ngc_blocks" -v s="$ngc_cpu" 'BEGIN {printf "%.0f", b / (s > 0 ? s : 0.001)}')
-  echo "rs274 (LinuxCNC $(dpkg-query -W -f='${Version}' linuxcnc-uspace 2>/dev/null)): $ngc_blocks NGC lines, same toolpath, in ${ngc_cpu} s CPU (${ngc_wall} s wall) = $ngc_bps blocks/s, peak RSS $((ngc_rss / 1024)) MB"
-  ratio=$(awk -v a="$ngc_cpu" -v b="$ok_cpu" -v na="$ngc_blocks" -v nb="$ok_blocks" \
-    'BEGIN {printf "%.1f", (nb / (b > 0 ? b : 0.001)) / (na / (a > 0 ? a : 0.001))}')
-  echo "ratio: cell-interp (Okuma) is ${ratio}x rs274 in blocks/s on the same toolpath (target >= 10x)"
-  awk -v r="$ratio" 'BEGIN {exit !(r >= 10)}' || echo "41-okuma: TARGET MISSED: ratio ${ratio}x < 10x"
-)
+have_rs274 || exit $rc
+read -r ngc_cpu ngc_wall ngc_rss < <(measure_rs274 "$work/big/bench.ngc")
+ngc_bps=$(awk -v b="$ngc_blocks" -v s="$ngc_cpu" 'BEGIN {printf "%.0f", b / (s > 0 ? s : 0.001)}')
+echo "rs274 (LinuxCNC $(rs274_version)): $ngc_blocks NGC lines, same toolpath, in ${ngc_cpu} s CPU (${ngc_wall} s wall) = $ngc_bps blocks/s, peak RSS $((ngc_rss / 1024)) MB"
+ratio=$(awk -v a="$ngc_cpu" -v b="$ok_cpu" -v na="$ngc_blocks" -v nb="$ok_blocks" \
+  'BEGIN {printf "%.1f", (nb / (b > 0 ? b : 0.001)) / (na / (a > 0 ? a : 0.001))}')
+echo "ratio: cell-interp (Okuma) is ${ratio}x rs274 in blocks/s on the same toolpath (target >= 10x)"
+awk -v r="$ratio" 'BEGIN {exit !(r >= 10)}' || echo "41-okuma: TARGET MISSED: ratio ${ratio}x < 10x"
 exit $rc

@@ -16,6 +16,9 @@ BLOCKS="${CELL_INTERP_BENCH_BLOCKS:-1000000}"
 
 work="$(mktemp -d "${TMPDIR:-/tmp}/cell-balt-bench.XXXXXX")"
 trap 'rm -rf "$work"' EXIT
+BENCH=43-balt
+# shellcheck source=lib/interp-bench.sh
+source "$ROOT/deploy/bench.d/lib/interp-bench.sh"
 
 # gen BALT|NGC BLOCKS > file: groups of 10 lines in both languages (the same moves in the same order).
 gen() {
@@ -66,17 +69,6 @@ gen() {
   }'
 }
 
-# measure LABEL cmd...: CPU seconds (user+sys), wall seconds and peak RSS (kB) via /usr/bin/time -v.
-measure() {
-  local tlog="$work/time.$1"; shift
-  /usr/bin/time -v "$@" >/dev/null 2>"$tlog" || { echo "43-balt: failed: $*" >&2; tail -5 "$tlog" >&2; return 1; }
-  local wall cpu rss
-  wall=$(awk -F': ' '/Elapsed \(wall clock\)/ {n=split($2,a,":"); s=0; for(i=1;i<=n;i++) s=s*60+a[i]; print s}' "$tlog")
-  cpu=$(awk -F': ' '/User time|System time/ {s+=$2} END {print s}' "$tlog")
-  rss=$(awk -F': ' '/Maximum resident set size/ {print $2}' "$tlog")
-  echo "$cpu $wall $rss"
-}
-
 mkdir -p "$work/lib"
 printf 'G1 G91 XE35 F800\nYE35\nX-E35\nY-E35\n' >"$work/lib/SQ"
 small=$((BLOCKS / 10))
@@ -96,20 +88,11 @@ rc=0
 [ "$b_rss" -lt $((64 * 1024)) ] || echo "43-balt: TARGET MISSED: peak RSS >= 64 MB"
 [ "$b_rss" -le $((small_rss + 2048)) ] || echo "43-balt: TARGET MISSED: peak RSS grows with program length"
 
-# LinuxCNC rs274 (Debian linuxcnc-uspace; 40-interpreter.sh installs it when apt has it).
-if ! command -v rs274 >/dev/null; then
-  echo "LinuxCNC rs274 NOT AVAILABLE: only our own figures are reported"
-  exit $rc
-fi
-(
-  cd "$work"
-  : >tool.tbl
-  : >rs274ngc.var
-  read -r ngc_cpu ngc_wall ngc_rss < <(measure ngc rs274 -g -t tool.tbl -v rs274ngc.var bench.ngc /dev/null)
-  ngc_bps=$(awk -v b="$ngc_blocks" -v s="$ngc_cpu" 'BEGIN {printf "%.0f", b / (s > 0 ? s : 0.001)}')
-  echo "rs274 (LinuxCNC $(dpkg-query -W -f='${Version}' linuxcnc-uspace 2>/dev/null)): $ngc_blocks NGC lines, same toolpath, in ${ngc_cpu} s CPU (${ngc_wall} s wall) = $ngc_bps blocks/s, peak RSS $((ngc_rss / 1024)) MB"
-  ratio=$(awk -v a="$ngc_cpu" -v b="$b_cpu" 'BEGIN {printf "%.1f", a / (b > 0 ? b : 0.001)}')
-  echo "ratio: cell-interp (Balt-System) is ${ratio}x rs274 on the same toolpath (target >= 10x)"
-  awk -v r="$ratio" 'BEGIN {exit !(r >= 10)}' || echo "43-balt: TARGET MISSED: ratio ${ratio}x < 10x"
-)
+have_rs274 || exit $rc
+read -r ngc_cpu ngc_wall ngc_rss < <(measure_rs274 "$work/bench.ngc")
+ngc_bps=$(awk -v b="$ngc_blocks" -v s="$ngc_cpu" 'BEGIN {printf "%.0f", b / (s > 0 ? s : 0.001)}')
+echo "rs274 (LinuxCNC $(rs274_version)): $ngc_blocks NGC lines, same toolpath, in ${ngc_cpu} s CPU (${ngc_wall} s wall) = $ngc_bps blocks/s, peak RSS $((ngc_rss / 1024)) MB"
+ratio=$(awk -v a="$ngc_cpu" -v b="$b_cpu" 'BEGIN {printf "%.1f", a / (b > 0 ? b : 0.001)}')
+echo "ratio: cell-interp (Balt-System) is ${ratio}x rs274 on the same toolpath (target >= 10x)"
+awk -v r="$ratio" 'BEGIN {exit !(r >= 10)}' || echo "43-balt: TARGET MISSED: ratio ${ratio}x < 10x"
 exit $rc

@@ -1,6 +1,6 @@
-# Shared by the interpreter benchmarks (40-interpreter.sh, 42-emco.sh; sourced, not run): whole-process
-# timing and the LinuxCNC rs274 baseline. The caller sets $work (a scratch directory) and $BENCH (its name,
-# for messages).
+# Shared by the interpreter benchmarks (40-interpreter.sh, 41-okuma.sh, 42-emco.sh, 43-balt.sh; sourced, not
+# run): whole-process timing and the LinuxCNC rs274 baseline. The caller sets $work (a scratch directory) and
+# $BENCH (its name, for messages).
 
 # measure LABEL cmd...: CPU seconds (user+sys), wall seconds and peak RSS (kB) via /usr/bin/time -v.
 # Throughput uses CPU time: the bench machine is shared, and wall time under load says little.
