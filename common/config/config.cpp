@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 #include <pwd.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <toml++/toml.h>
@@ -16,6 +17,7 @@
 
 #include "cell/error/error.h"
 #include "cell/interp/interp.h"
+#include "cell/names/names.h"
 
 #ifndef CELL_CONFIG_SOURCE_DIR
 #error "CELL_CONFIG_SOURCE_DIR must name the source tree (set by common/config/CMakeLists.txt)"
@@ -170,10 +172,7 @@ std::string BaseTool(const std::string& tool) {
 }  // namespace
 
 bool IsValidStationId(std::string_view id) {
-  if (id.empty() || id.size() > 16) return false;
-  return std::all_of(id.begin(), id.end(), [](char c) {
-    return (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '_' || c == '-';
-  });
+  return names::IsStationId(id);
 }
 
 bool IsValidToolNumber(std::string_view tool) {
@@ -220,7 +219,13 @@ fs::path DataDir() {
     dir = fs::path(home) / ".local" / "state" / "cell";
   }
   std::error_code ec;
-  fs::create_directories(dir, ec);
+  // A directory made here is its owner's only (0700): state, databases and logs of a local cell are private.
+  // Under systemd StateDirectory= makes /var/lib/cell (0750, group cell) and this leaves it as it is.
+  if (!fs::exists(dir, ec)) {
+    fs::create_directories(dir.parent_path(), ec);
+    if (mkdir(dir.c_str(), 0700) != 0 && errno != EEXIST)
+      ec = std::error_code(errno, std::generic_category());
+  }
   if (ec || !fs::is_directory(dir)) {
     throw Error(Errc::kIo, fmt::format("cannot create data directory {}: {}", dir.string(),
                                        ec ? ec.message() : "not a directory"));
@@ -260,10 +265,7 @@ std::vector<std::string> ListStations() {
 }
 
 StationConfig LoadStation(std::string_view id) {
-  if (!IsValidStationId(id)) {
-    throw Error(Errc::kInvalidArgument,
-                fmt::format("station id '{}': must be 1-16 characters of A-Z, a-z, 0-9, '_' or '-'", id));
-  }
+  names::CheckStation(id);
   fs::path file = ConfigDir() / "stations" / (std::string(id) + ".toml");
   std::error_code ec;
   if (!fs::exists(file, ec)) {

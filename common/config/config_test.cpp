@@ -256,6 +256,8 @@ TEST_F(ConfigTest, DataDirPrecedenceAndCreation) {
   setenv("CELL_DATA_DIR", (root_ / "data" / "deep").c_str(), 1);
   EXPECT_EQ(cell::config::DataDir(), root_ / "data" / "deep");
   EXPECT_TRUE(fs::is_directory(root_ / "data" / "deep"));
+  // Issue 13: a data directory made here is its owner's only, whatever the umask.
+  EXPECT_EQ(fs::status(root_ / "data" / "deep").permissions() & fs::perms::all, fs::perms::owner_all);
 
   unsetenv("CELL_DATA_DIR");
   setenv("XDG_STATE_HOME", (root_ / "xdg").c_str(), 1);

@@ -1,8 +1,13 @@
 #include "context.h"
 
+#include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <cerrno>
 #include <cstdlib>
+#include <cstring>
 #include <fstream>
 #include <map>
 #include <random>
@@ -11,6 +16,7 @@
 #include <fmt/format.h>
 
 #include "cell/bus/topics.h"
+#include "cell/names/names.h"
 
 namespace cellctl {
 
@@ -58,19 +64,75 @@ cell::StationReply Context::StationCommand(const std::string& station, cell::Sta
   return rep;
 }
 
-std::string Context::IdempotencyKey(const std::string& what) const {
+std::string Context::IdempotencyKey(const std::string& verb) const {
   // CELLCTL_IDEMPOTENCY_KEY lets a supervisor retry a command after a crash without running it twice.
-  if (const char* k = std::getenv("CELLCTL_IDEMPOTENCY_KEY"); k && *k) return std::string(k) + ":" + what;
+  if (const char* k = std::getenv("CELLCTL_IDEMPOTENCY_KEY"); k && *k) return cell::names::WireKey(k, verb);
   std::random_device rd;
-  return fmt::format("cellctl-{}-{:08x}{:08x}:{}", getpid(), rd(), rd(), what);
+  return fmt::format("cellctl-{}-{:08x}{:08x}:{}", getpid(), rd(), rd(), verb);
 }
 
-std::string ReadLocalFile(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw Exit{1, "cannot read " + path};
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
+std::string ReadLocalFile(const std::string& path, std::uint64_t max_bytes, const std::string& what) {
+  auto fail = [&](const std::string& why) { return Exit{1, "cannot read " + path + ": " + why}; };
+  int fd = open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) throw fail(std::strerror(errno));
+  struct Closer {
+    int fd;
+    ~Closer() { close(fd); }
+  } closer{fd};
+  struct stat st {};
+  if (fstat(fd, &st) != 0) throw fail(std::strerror(errno));
+  if (S_ISDIR(st.st_mode)) throw fail("it is a directory");
+  auto too_large = [&](std::uint64_t n, bool at_least) {
+    return Exit{1, fmt::format("{} is {}{} bytes; {} takes at most {} bytes", path,
+                               at_least ? "more than " : "", n, what, max_bytes)};
+  };
+  // From the size alone when the system knows it: nothing is read, nothing is sent.
+  if (S_ISREG(st.st_mode) && static_cast<std::uint64_t>(st.st_size) > max_bytes)
+    throw too_large(static_cast<std::uint64_t>(st.st_size), false);
+  std::string out;
+  char buf[65536];
+  for (;;) {
+    ssize_t n = read(fd, buf, sizeof buf);
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      throw fail(std::strerror(errno));
+    }
+    if (n == 0) break;
+    if (out.size() + static_cast<std::size_t>(n) > max_bytes) throw too_large(max_bytes, true);
+    out.append(buf, static_cast<std::size_t>(n));
+  }
+  if (out.empty()) throw Exit{1, path + " is empty: nothing to send"};
+  return out;
+}
+
+CLI::Validator Decimal() {
+  return CLI::Validator(
+      [](std::string& s) -> std::string {
+        if (s.empty() || s.size() > 9 ||
+            !std::all_of(s.begin(), s.end(), [](char c) { return c >= '0' && c <= '9'; }))
+          return "expected a decimal integer (digits only), got " + cell::names::Shown(s);
+        return "";
+      },
+      "DECIMAL");
+}
+
+CLI::Validator Real() {
+  return CLI::Validator(
+      [](std::string& s) -> std::string {
+        int dots = 0, digits = 0;
+        for (char c : s) {
+          if (c == '.')
+            ++dots;
+          else if (c >= '0' && c <= '9')
+            ++digits;
+          else
+            digits = -1000;
+        }
+        if (digits <= 0 || dots > 1 || s.size() > 16)
+          return "expected a decimal number (digits and at most one '.'), got " + cell::names::Shown(s);
+        return "";
+      },
+      "NUMBER");
 }
 
 void PrintWarnings(const nlohmann::json& reply) {

@@ -1,6 +1,7 @@
 // Shared plumbing of cellctl verbs: the bus (joined only when a verb needs it), clients, output.
 #pragma once
 
+#include <cstdint>
 #include <iostream>
 #include <memory>
 #include <optional>
@@ -36,8 +37,11 @@ class Context {
   std::optional<cell::ToolTable> Tools(const std::string& station, bus::Millis timeout);
   std::optional<cell::StationVariables> Variables(const std::string& station, bus::Millis timeout);
   cell::StationReply StationCommand(const std::string& station, cell::StationRequest req);
-  // A key that makes a retried command idempotent: the same invocation, the same key.
-  std::string IdempotencyKey(const std::string& what) const;
+  // The key on the wire for `verb` ("route-operate", "program-put", ...): CELLCTL_IDEMPOTENCY_KEY with the
+  // verb, so a retried command is recognised and a different command under the same key refused by the
+  // service, which compares the request's arguments; without the variable, a key unique to this invocation.
+  // A key that breaks the rule (docs/operations.md "Names") is an error, never cut.
+  std::string IdempotencyKey(const std::string& verb) const;
 
  private:
   std::unique_ptr<bus::Participant> bus_;
@@ -45,8 +49,15 @@ class Context {
   std::unique_ptr<bus::Client<cell::SchedulerRequest, cell::SchedulerReply>> scheduler_;
 };
 
-// The whole content of a local file; Exit{1, "cannot read PATH"} when it cannot be read.
-std::string ReadLocalFile(const std::string& path);
+// The whole content of a local file. Exit{1, reason} when it cannot be read (a directory, a read error such
+// as /proc/self/mem's), when it is empty, or when it is larger than max_bytes (checked from the file's size
+// before anything is read, and again while reading a file whose size the system does not know).
+std::string ReadLocalFile(const std::string& path, std::uint64_t max_bytes, const std::string& what);
+
+// CLI11 checks for numbers on the command line: decimal digits only (CLI11 itself reads "0x10" as 16 and
+// "010" as 8); Real allows one decimal point, no exponent, no hexadecimal float.
+CLI::Validator Decimal();
+CLI::Validator Real();
 
 void Print(const Context& ctx, const nlohmann::json& j, const std::vector<std::string>& columns);
 // The store's warnings of a put reply ("warnings": [...]), one "warning: " line each on stderr.

@@ -3,6 +3,11 @@
 #include <sstream>
 
 #include "cell/config/config.h"
+#include "cell/interp/interp.h"
+#include "cell/names/names.h"
+#include "cell/program_store/metadata.h"
+#include "cell/scheduler/route.h"
+#include "cell/tooltable/tooltable.h"
 #include "context.h"
 
 namespace cellctl {
@@ -14,14 +19,16 @@ void CheckPallet(int p) {
 }
 
 void CheckStation(const std::string& id) {
+  cell::names::CheckStation(id);
   auto ids = cell::config::ListStations();
   if (std::find(ids.begin(), ids.end(), id) == ids.end()) throw Exit{1, "unknown station '" + id + "'"};
 }
 
-cell::SchedulerRequest Req(cell::SchedulerOp op, Context& ctx, const std::string& what) {
+// A scheduler command; `verb` names it in the idempotency key, its arguments travel in the request.
+cell::SchedulerRequest Req(cell::SchedulerOp op, Context& ctx, const std::string& verb) {
   cell::SchedulerRequest r;
   r.op(op);
-  r.hdr().idempotency_key(ctx.IdempotencyKey(what));
+  cell::names::Assign(r.hdr().idempotency_key(), ctx.IdempotencyKey(verb), "idempotency key");
   return r;
 }
 
@@ -42,18 +49,19 @@ void AddFmsVerbs(CLI::App& app, Context& ctx) {
 
   auto* pallet = app.add_subcommand("pallet", "pallet maps")->require_subcommand(1);
   auto* pset = pallet->add_subcommand("set", "map pallet P to an ordered list of 1-75 programs");
-  pset->add_option("P", o->pallet)->required();
+  pset->add_option("P", o->pallet)->required()->check(Decimal());
   pset->add_option("PROG", o->programs)->required();
   pset->callback([o, &ctx] {
     CheckPallet(o->pallet);
     if (o->programs.size() > 75) throw Exit{2, "a pallet map holds at most 75 programs"};
+    for (auto& p : o->programs) cell::names::CheckProgram(p);
     auto r = Req(cell::SCHED_PALLET_SET, ctx, "pallet-set");
     r.pallet(o->pallet);
-    for (auto& p : o->programs) r.args().push_back(p);
+    for (auto& p : o->programs) cell::names::Append(r.args(), p, "program name");
     ctx.Scheduler(r);
   });
   auto* pshow = pallet->add_subcommand("show", "the programs mapped to pallet P");
-  pshow->add_option("P", o->pallet)->required();
+  pshow->add_option("P", o->pallet)->required()->check(Decimal());
   pshow->add_flag("--json", ctx.json);
   pshow->callback([o, &ctx] {
     CheckPallet(o->pallet);
@@ -64,14 +72,14 @@ void AddFmsVerbs(CLI::App& app, Context& ctx) {
     for (auto& p : j["programs"]) std::cout << p.get<std::string>() << "\n";
   });
   auto* prun = pallet->add_subcommand("run", "run pallet P's map on one station; prints the job id");
-  prun->add_option("P", o->pallet)->required();
+  prun->add_option("P", o->pallet)->required()->check(Decimal());
   prun->add_option("--station", o->station)->required();
   prun->callback([o, &ctx] {
     CheckPallet(o->pallet);
     CheckStation(o->station);
     auto r = Req(cell::SCHED_PALLET_RUN, ctx, "pallet-run");
     r.pallet(o->pallet);
-    r.station(o->station);
+    cell::names::Assign(r.station(), o->station, "station id");
     std::cout << ctx.Scheduler(r).job_id() << "\n";
   });
 
@@ -83,10 +91,16 @@ void AddFmsVerbs(CLI::App& app, Context& ctx) {
   rdef->add_flag("--json", ctx.json);
   rdef->callback([o, &ctx] {
     if (o->ops.empty() && o->file.empty()) throw Exit{2, "route define needs --op or --file"};
+    cell::names::CheckRoute(o->name);
+    for (auto& op : o->ops) cell::scheduler::ParseOpSpec(op);  // station and program names, before sending
     auto r = Req(cell::SCHED_ROUTE_DEFINE, ctx, "route-define");
-    r.name(o->name);
-    for (auto& op : o->ops) r.args().push_back(op);
-    if (!o->file.empty()) r.text(ReadLocalFile(o->file));
+    cell::names::Assign(r.name(), o->name, "route name");
+    for (auto& op : o->ops) cell::names::Append(r.args(), op, "--op");
+    if (!o->file.empty()) {
+      std::string text = ReadLocalFile(o->file, 65536, "a route file");
+      cell::scheduler::ParseRouteFile(text, o->file);
+      cell::names::Assign(r.text(), text, "route file");
+    }
     auto j = Info(ctx.Scheduler(r));
     if (ctx.json) Print(ctx, j, {});
   });
@@ -94,8 +108,9 @@ void AddFmsVerbs(CLI::App& app, Context& ctx) {
   rshow->add_option("NAME", o->name)->required();
   rshow->add_flag("--json", ctx.json);
   rshow->callback([o, &ctx] {
+    cell::names::CheckRoute(o->name);
     auto r = Req(cell::SCHED_ROUTE_SHOW, ctx, "route-show");
-    r.name(o->name);
+    cell::names::Assign(r.name(), o->name, "route name");
     auto j = Info(ctx.Scheduler(r));
     if (ctx.json) return Print(ctx, j, {});
     std::cout << "route " << o->name << "\n";
@@ -108,11 +123,12 @@ void AddFmsVerbs(CLI::App& app, Context& ctx) {
   });
   auto* rop = route->add_subcommand("operate", "start pallet P on route NAME; prints the job id");
   rop->add_option("NAME", o->name)->required();
-  rop->add_option("--pallet", o->pallet)->required();
+  rop->add_option("--pallet", o->pallet)->required()->check(Decimal());
   rop->callback([o, &ctx] {
     CheckPallet(o->pallet);
+    cell::names::CheckRoute(o->name);
     auto r = Req(cell::SCHED_ROUTE_OPERATE, ctx, "route-operate");
-    r.name(o->name);
+    cell::names::Assign(r.name(), o->name, "route name");
     r.pallet(o->pallet);
     std::cout << ctx.Scheduler(r).job_id() << "\n";
   });
@@ -124,23 +140,25 @@ void AddFmsVerbs(CLI::App& app, Context& ctx) {
   srun->callback([o, &ctx] {
     CheckStation(o->station);
     auto r = Req(cell::SCHED_SCHEDULE_RUN, ctx, "schedule-run");
-    r.station(o->station);
-    std::ifstream probe(o->file);
-    if (probe) {
+    cell::names::Assign(r.station(), o->station, "station id");
+    std::error_code ec;
+    if (std::filesystem::exists(o->file, ec)) {
       // DESIGN §6: a local file is stored first in the station's namespace (a new revision when the name is
       // there already), so the job's program can be shown and run again by name.
-      std::string text = ReadLocalFile(o->file);
+      std::string text = ReadLocalFile(o->file, 65536, "a schedule run");
       std::string name = std::filesystem::path(o->file).filename().string();
+      cell::names::CheckProgram(name, "schedule name");
       cell::program_store::Client::PutOptions po;
       po.node = o->station;
       po.force = true;
       po.file_type = "schedule";
-      po.idempotency_key = ctx.IdempotencyKey("schedule-put:" + o->station + ":" + name);
+      po.idempotency_key = ctx.IdempotencyKey("schedule-put");
       PrintWarnings(ctx.Programs().Put(name, text, po));
-      r.text(text);
-      r.name(name);
+      cell::names::Assign(r.text(), text, "schedule text");
+      cell::names::Assign(r.name(), name, "schedule name");
     } else {
-      r.name(o->file);
+      cell::names::CheckProgram(o->file, "schedule name");
+      cell::names::Assign(r.name(), o->file, "schedule name");
     }
     std::cout << ctx.Scheduler(r).job_id() << "\n";
   });
@@ -154,9 +172,24 @@ void AddFmsVerbs(CLI::App& app, Context& ctx) {
     CheckStation(o->station);
     cell::StationRequest req;
     req.op(cell::STATION_LOAD_TOOLS);
-    std::string text = ReadLocalFile(o->file);
-    if (text.size() > 65536) throw Exit{1, o->file + " is larger than 64 KiB"};
-    req.text(text);
+    std::string text = ReadLocalFile(o->file, 65536, "a tool load");
+    // The station's own check, here first with the file's name: text only, in the station dialect's
+    // tool-table form, with at least one entry (KT-APL: "no TLD statement found"). The base is the station
+    // file's initial table (a process compensation needs its tool's data set first); the station checks
+    // against its live one.
+    try {
+      cell::program_store::CheckText(text);
+    } catch (const cell::Error& e) {
+      throw Exit{1, o->file + ": " + e.what()};
+    }
+    try {
+      const auto cfg = cell::config::LoadStation(o->station);
+      cell::interp::DialectOrThrow(cfg.dialect)
+          .ParseToolTable(text, o->file, cell::tooltable::ToolTable(cfg.tools));
+    } catch (const cell::Error& e) {
+      throw Exit{1, e.what()};
+    }
+    cell::names::Assign(req.text(), text, "tool data");
     try {
       ctx.StationCommand(o->station, req);
     } catch (const cell::Error& e) {

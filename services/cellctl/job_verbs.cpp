@@ -3,6 +3,7 @@
 
 #include "cell/bus/topics.h"
 #include "cell/idl/inspection.h"
+#include "cell/names/names.h"
 #include "context.h"
 
 namespace cellctl {
@@ -47,7 +48,7 @@ void AddJobVerbs(CLI::App& app, Context& ctx) {
   });
 
   auto* show = job->add_subcommand("show", "one job with its decision log");
-  show->add_option("ID", o->id)->required();
+  show->add_option("ID", o->id)->required()->check(Decimal());
   show->add_flag("--json", ctx.json);
   show->callback([o, &ctx] {
     auto j = JobInfo(ctx, o->id);
@@ -60,19 +61,19 @@ void AddJobVerbs(CLI::App& app, Context& ctx) {
   });
 
   auto* cancel = job->add_subcommand("cancel", "cancel a job");
-  cancel->add_option("ID", o->id)->required();
+  cancel->add_option("ID", o->id)->required()->check(Decimal());
   cancel->callback([o, &ctx] {
     JobInfo(ctx, o->id);  // unknown id: exit 2
     cell::SchedulerRequest r;
     r.op(cell::SCHED_JOB_CANCEL);
     r.job_id(o->id);
-    r.hdr().idempotency_key(ctx.IdempotencyKey("cancel"));
+    cell::names::Assign(r.hdr().idempotency_key(), ctx.IdempotencyKey("job-cancel"), "idempotency key");
     ctx.Scheduler(r);
   });
 
   auto* wait = job->add_subcommand("wait", "block until COMPLETED (exit 0), FAILED or CANCELLED (exit 1)");
-  wait->add_option("ID", o->id)->required();
-  wait->add_option("--timeout", o->timeout, "wall seconds (exit 3 when reached)");
+  wait->add_option("ID", o->id)->required()->check(Decimal());
+  wait->add_option("--timeout", o->timeout, "wall seconds (exit 3 when reached)")->check(Real());
   wait->callback([o, &ctx] {
     auto start = std::chrono::steady_clock::now();
     auto left = [&]() -> bus::Millis {
@@ -111,7 +112,8 @@ void AddInspectVerbs(CLI::App& app, Context& ctx) {
     bus::Client<cell::InspectionRequest, cell::InspectionReply> c(ctx.Bus(), bus::topics::kInspection);
     cell::InspectionRequest r;
     r.op(op);
-    r.name(n);
+    cell::names::CheckRecord(n);
+    cell::names::Assign(r.name(), n, "record name");
     auto rep = c.Call(r, bus::Millis(10000));
     bus::ThrowIfError(rep);
     return rep.info().to_string();

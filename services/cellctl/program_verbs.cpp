@@ -4,12 +4,26 @@
 #include <sstream>
 
 #include "cell/interp/interp.h"
+#include "cell/names/names.h"
 #include "cell/program_store/metadata.h"
 #include "context.h"
 
 namespace cellctl {
 
 namespace {
+
+void CheckAddress(const std::string& node, const std::string& name) {
+  cell::names::CheckNode(node);
+  cell::names::CheckProgram(name);
+}
+
+// The store's limit per file (StoreOptions::max_file_size): a larger file is refused from its size, before
+// anything is read or streamed.
+constexpr std::uint64_t kMaxProgramBytes = 256ull << 20;
+
+std::string ReadProgram(const std::string& path) {
+  return ReadLocalFile(path, kMaxProgramBytes, "the program store");
+}
 
 void WriteLocalFile(const std::string& path, const std::string& content) {
   std::ofstream out(path, std::ios::binary | std::ios::trunc);
@@ -57,14 +71,17 @@ void AddProgramVerbs(CLI::App& app, Context& ctx) {
   put->callback([o, &ctx, name_opt] {
     // An explicit --name "" is a mistake, not a request for the default name.
     if (name_opt->count() > 0 && o->name.empty()) throw Exit{2, "--name: a program name cannot be empty"};
-    std::string content = ReadLocalFile(o->file);
+    if (!o->name.empty()) cell::names::CheckProgram(o->name);
+    cell::names::CheckNode(o->node);
+    std::string content = ReadProgram(o->file);
     std::string name = o->name.empty() ? NameFor(o->file, content, o->dialect) : o->name;
+    cell::names::CheckProgram(name);
     cell::program_store::Client::PutOptions po;
     po.node = o->node;
     po.force = o->force;
     po.dialect = o->dialect;
     po.file_type = o->type;
-    po.idempotency_key = ctx.IdempotencyKey("put:" + o->node + ":" + name);
+    po.idempotency_key = ctx.IdempotencyKey("program-put");
     auto j = ctx.Programs().Put(name, content, po);
     PrintWarnings(j);
     if (ctx.json) {
@@ -79,9 +96,10 @@ void AddProgramVerbs(CLI::App& app, Context& ctx) {
   auto* get = prog->add_subcommand("get", "print a program (or -o FILE)");
   get->add_option("NAME", o->name)->required();
   get->add_option("--node", o->node);
-  get->add_option("--revision", o->revision, "a past revision (default: latest)");
+  get->add_option("--revision", o->revision, "a past revision (default: latest)")->check(Decimal());
   get->add_option("-o,--output", o->out, "write to FILE instead of stdout");
   get->callback([o, &ctx] {
+    CheckAddress(o->node, o->name);
     auto text = ctx.Programs().Get(o->node, o->name, o->revision);
     if (!text) {
       // The store's own reason (an unknown namespace, a missing revision) says more than "not found".
@@ -100,6 +118,7 @@ void AddProgramVerbs(CLI::App& app, Context& ctx) {
   show->add_option("--node", o->node);
   show->add_flag("--json", ctx.json);
   show->callback([o, &ctx] {
+    CheckAddress(o->node, o->name);
     auto j = ctx.Programs().Show(o->node, o->name);
     if (ctx.json) return Print(ctx, j, {});
     nlohmann::json flat = j;
@@ -115,7 +134,8 @@ void AddProgramVerbs(CLI::App& app, Context& ctx) {
   rm->add_option("NAME", o->name)->required();
   rm->add_option("--node", o->node);
   rm->callback([o, &ctx] {
-    ctx.Programs().Delete(o->node, o->name, ctx.IdempotencyKey("rm:" + o->node + ":" + o->name));
+    CheckAddress(o->node, o->name);
+    ctx.Programs().Delete(o->node, o->name, ctx.IdempotencyKey("program-rm"));
   });
 
   auto* ls = prog->add_subcommand("ls", "list programs matching PATTERN (* and ?)");
@@ -123,6 +143,8 @@ void AddProgramVerbs(CLI::App& app, Context& ctx) {
   ls->add_option("--node", o->node);
   ls->add_flag("--json", ctx.json);
   ls->callback([o, &ctx] {
+    cell::names::CheckNode(o->node);
+    cell::names::CheckPattern(o->pattern);
     Print(ctx, ctx.Programs().List(o->node, o->pattern),
           {"name", "node", "type", "dialect", "revision", "size", "protected"});
   });
@@ -137,12 +159,14 @@ void AddProgramVerbs(CLI::App& app, Context& ctx) {
     if (verb == "cp") c->add_flag("--force", o->force);
     c->callback([o, &ctx, verb] {
       std::string b = o->b.empty() ? o->a : o->b;
-      // The key names the whole request: the same A copied to two places is two commands.
-      std::string what = verb + ":" + o->from + ":" + o->a + ">" + o->to + ":" + b;
+      CheckAddress(o->from, o->a);
+      CheckAddress(o->to, b);
+      // The key names the verb; the store compares the request (both names and namespaces) on a replay.
+      std::string key = ctx.IdempotencyKey("program-" + verb);
       if (verb == "cp")
-        ctx.Programs().Copy(o->from, o->a, o->to, b, o->force, ctx.IdempotencyKey(what));
+        ctx.Programs().Copy(o->from, o->a, o->to, b, o->force, key);
       else
-        ctx.Programs().Rename(o->from, o->a, o->to, b, ctx.IdempotencyKey(what));
+        ctx.Programs().Rename(o->from, o->a, o->to, b, key);
     });
   }
 
@@ -151,7 +175,10 @@ void AddProgramVerbs(CLI::App& app, Context& ctx) {
         prog->add_subcommand(verb, verb == "protect" ? "forbid overwrite and delete" : "allow them again");
     p->add_option("NAME", o->name)->required();
     p->add_option("--node", o->node);
-    p->callback([o, &ctx, verb] { ctx.Programs().Protect(o->node, o->name, verb == "protect"); });
+    p->callback([o, &ctx, verb] {
+      CheckAddress(o->node, o->name);
+      ctx.Programs().Protect(o->node, o->name, verb == "protect");
+    });
   }
 
   auto* imp = prog->add_subcommand("import", "store every file of DIR (names: NAM or file name)");
@@ -159,22 +186,29 @@ void AddProgramVerbs(CLI::App& app, Context& ctx) {
   imp->add_option("--node", o->node);
   imp->add_flag("--force", o->force);
   imp->callback([o, &ctx] {
+    cell::names::CheckNode(o->node);
     int n = 0;
     std::vector<std::filesystem::path> files;
-    for (auto& e : std::filesystem::directory_iterator(o->file))
-      if (e.is_regular_file()) files.push_back(e.path());
+    std::error_code ec;
+    for (auto it = std::filesystem::directory_iterator(o->file, ec);
+         !ec && it != std::filesystem::directory_iterator(); it.increment(ec))
+      if (it->is_regular_file()) files.push_back(it->path());
+    if (ec) throw Exit{1, "cannot read directory " + o->file + ": " + ec.message()};
     std::sort(files.begin(), files.end());
     // A refused file (bad name, not text, protected, exists without --force) is reported and the rest are
     // still imported; a store that cannot be reached stops the import at once.
     int refused = 0;
     for (auto& f : files) {
       try {
-        std::string content = ReadLocalFile(f.string());
+        std::string content = ReadProgram(f.string());
         cell::program_store::Client::PutOptions po;
         po.node = o->node;
         po.force = o->force;
         std::string name = NameFor(f.string(), content, "");
-        po.idempotency_key = ctx.IdempotencyKey("import:" + o->node + ":" + name);
+        cell::names::CheckProgram(name);
+        // One command, one key per file: its place in the sorted listing (the store compares name and
+        // content).
+        po.idempotency_key = ctx.IdempotencyKey("program-import:" + std::to_string(n + refused));
         PrintWarnings(ctx.Programs().Put(name, content, po));
         std::cout << "stored " << o->node << ":" << name << "\n";
         ++n;
@@ -195,6 +229,7 @@ void AddProgramVerbs(CLI::App& app, Context& ctx) {
   exp->add_option("DIR", o->file)->required();
   exp->add_option("--node", o->node);
   exp->callback([o, &ctx] {
+    cell::names::CheckNode(o->node);
     std::filesystem::create_directories(o->file);
     int n = 0;
     for (auto& f : ctx.Programs().List(o->node, "*")) {

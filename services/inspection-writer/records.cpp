@@ -90,6 +90,8 @@ nlohmann::json Records::List(const std::string& pattern) const {
 
 std::optional<std::string> Records::Cat(const std::string& name) const {
   if (name.find("..") != std::string::npos) return std::nullopt;
+  std::error_code ec;
+  if (!fs::is_regular_file(dir_ / name, ec)) return std::nullopt;  // a station's folder is no record
   std::ifstream in(dir_ / name, std::ios::binary);
   if (!in) return std::nullopt;
   std::stringstream ss;

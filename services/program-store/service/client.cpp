@@ -6,6 +6,7 @@
 #include <fmt/format.h>
 
 #include "cell/bus/topics.h"
+#include "cell/names/names.h"
 
 namespace cell::program_store {
 
@@ -18,13 +19,18 @@ nlohmann::json Info(const cell::ProgramReply& r) {
   std::string s = r.info().to_string();
   return s.empty() ? nlohmann::json::object() : nlohmann::json::parse(s, nullptr, false);
 }
-}  // namespace
-
-void CheckWireName(const std::string& node, const std::string& name) {
-  if (node.size() > 16)
-    throw Error(Errc::kInvalidArgument, "namespace '" + node + "' is longer than 16 characters");
-  if (name.size() > 128) throw Error(Errc::kInvalidArgument, "name is longer than 128 characters: " + name);
+// Namespace and name of a request, through the one guarded assignment (a longer value is an error, never
+// cut).
+void Address(cell::ProgramRequest& req, const std::string& node, const std::string& name) {
+  names::Assign(req.node(), node, "namespace");
+  names::Assign(req.name(), name, "program name");
 }
+void Target(cell::ProgramRequest& req, const std::string& node, const std::string& name) {
+  names::Assign(req.to_node(), node, "namespace");
+  names::Assign(req.to_name(), name, "program name");
+}
+
+}  // namespace
 
 Client::Client(bus::Participant& p, bus::Millis timeout)
     : client_(p, bus::topics::kProgramStore), timeout_(timeout) {}
@@ -36,14 +42,12 @@ cell::ProgramReply Client::Call(cell::ProgramRequest req) {
 }
 
 nlohmann::json Client::Put(const std::string& name, const std::string& content, const PutOptions& o) {
-  CheckWireName(o.node, name);
   cell::ProgramRequest req;
-  req.node(o.node);
-  req.name(name);
+  Address(req, o.node, name);
   req.force(o.force);
-  req.dialect(o.dialect);
-  req.file_type(o.file_type);
-  req.hdr().idempotency_key(o.idempotency_key);
+  names::Assign(req.dialect(), o.dialect, "dialect");
+  names::Assign(req.file_type(), o.file_type, "file type");
+  names::Assign(req.hdr().idempotency_key(), o.idempotency_key, "idempotency key");
   if (content.size() <= kChunkBytes) {
     req.op(cell::PROGRAM_PUT);
     req.data().assign(content.begin(), content.end());
@@ -73,11 +77,9 @@ std::optional<std::string> Client::Get(const std::string& node, const std::strin
 
 std::optional<Client::File> Client::Fetch(const std::string& node, const std::string& name,
                                           uint32_t revision) {
-  CheckWireName(node, name);
   cell::ProgramRequest req;
   req.op(cell::PROGRAM_GET);
-  req.node(node);
-  req.name(name);
+  Address(req, node, name);
   req.revision(revision);
   File out;
   uint32_t count = 1;
@@ -116,20 +118,16 @@ std::optional<Client::File> Client::FetchWithFallback(const std::string& node, c
 }
 
 nlohmann::json Client::Show(const std::string& node, const std::string& name) {
-  CheckWireName(node, name);
   cell::ProgramRequest req;
   req.op(cell::PROGRAM_SHOW);
-  req.node(node);
-  req.name(name);
+  Address(req, node, name);
   return Info(Call(req));
 }
 
 nlohmann::json Client::List(const std::string& node, const std::string& pattern) {
-  CheckWireName(node, pattern);
   cell::ProgramRequest req;
   req.op(cell::PROGRAM_LIST);
-  req.node(node);
-  req.name(pattern);
+  Address(req, node, pattern);
   // Paged: the service answers page chunk_index of chunk_count (a reply is bounded to 64 KiB).
   nlohmann::json all = nlohmann::json::array();
   uint32_t pages = 1;
@@ -146,49 +144,37 @@ nlohmann::json Client::List(const std::string& node, const std::string& pattern)
 
 nlohmann::json Client::Copy(const std::string& from_node, const std::string& from, const std::string& to_node,
                             const std::string& to, bool force, const std::string& key) {
-  CheckWireName(from_node, from);
-  CheckWireName(to_node, to);
   cell::ProgramRequest req;
   req.op(cell::PROGRAM_COPY);
-  req.node(from_node);
-  req.name(from);
-  req.to_node(to_node);
-  req.to_name(to);
+  Address(req, from_node, from);
+  Target(req, to_node, to);
   req.force(force);
-  req.hdr().idempotency_key(key);
+  names::Assign(req.hdr().idempotency_key(), key, "idempotency key");
   return Info(Call(req));
 }
 
 nlohmann::json Client::Rename(const std::string& from_node, const std::string& from,
                               const std::string& to_node, const std::string& to, const std::string& key) {
-  CheckWireName(from_node, from);
-  CheckWireName(to_node, to);
   cell::ProgramRequest req;
   req.op(cell::PROGRAM_RENAME);
-  req.node(from_node);
-  req.name(from);
-  req.to_node(to_node);
-  req.to_name(to);
-  req.hdr().idempotency_key(key);
+  Address(req, from_node, from);
+  Target(req, to_node, to);
+  names::Assign(req.hdr().idempotency_key(), key, "idempotency key");
   return Info(Call(req));
 }
 
 nlohmann::json Client::Delete(const std::string& node, const std::string& name, const std::string& key) {
-  CheckWireName(node, name);
   cell::ProgramRequest req;
   req.op(cell::PROGRAM_DELETE);
-  req.node(node);
-  req.name(name);
-  req.hdr().idempotency_key(key);
+  Address(req, node, name);
+  names::Assign(req.hdr().idempotency_key(), key, "idempotency key");
   return Info(Call(req));
 }
 
 nlohmann::json Client::Protect(const std::string& node, const std::string& name, bool on) {
-  CheckWireName(node, name);
   cell::ProgramRequest req;
   req.op(on ? cell::PROGRAM_PROTECT : cell::PROGRAM_UNPROTECT);
-  req.node(node);
-  req.name(name);
+  Address(req, node, name);
   return Info(Call(req));
 }
 

@@ -10,6 +10,7 @@
 #include "cell/config/config.h"
 #include "cell/daemon/daemon.h"
 #include "cell/health/health.h"
+#include "cell/identity/identity.h"
 #include "cell/log/log.h"
 #include "cell/program_store/service.h"
 
@@ -42,9 +43,11 @@ int main() {
     for (const auto& id : opts.namespaces)
       opts.namespace_dialects[id] = cell::program_store::ParseDialect(cell::config::LoadStation(id).dialect);
     const std::chrono::seconds idle = StreamIdle();
-    cell::program_store::ProgramStore store(opts);
     cell::bus::Participant bus("cell-program-store");
     cell::health::Announcer health(bus, "cell-program-store");
+    cell::identity::Claim claim(bus, health);
+    claim.Confirm();  // one program store per cell: before the database is opened (and its scratch emptied)
+    cell::program_store::ProgramStore store(opts);
     cell::program_store::Service service(bus, store, idle);
     health.Set(cell::SERVICE_READY, "serving " + (opts.data_dir / opts.database_file).string());
     daemon.NotifyReady("serving programs");

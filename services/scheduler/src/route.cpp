@@ -3,6 +3,7 @@
 #include <cctype>
 
 #include "cell/error/error.h"
+#include "cell/names/names.h"
 
 namespace cell::scheduler {
 namespace {
@@ -36,6 +37,14 @@ std::vector<std::string> SplitList(std::string_view text, std::size_t base, cons
       i = comma;
     }
     if (item.empty()) throw SpecError{item_col, std::string("empty ") + what + " name"};
+    try {  // the names' own rules (docs/operations.md "Names"), before anything is sent or stored
+      if (std::string_view(what) == "station")
+        names::CheckStation(item, "station");
+      else
+        names::CheckProgram(item, "program");
+    } catch (const Error& e) {
+      throw SpecError{item_col, e.what()};
+    }
     out.push_back(std::move(item));
     if (i >= text.size()) break;
     ++i;  // the comma
@@ -83,7 +92,7 @@ OpSpec ParseOpSpec(std::string_view text) {
     return ParseOp(text);
   } catch (const SpecError& e) {
     throw Error(Errc::kInvalidArgument,
-                "--op \"" + std::string(text) + "\": column " + std::to_string(e.col + 1) + ": " + e.text);
+                "--op " + names::Shown(text, 60) + ": column " + std::to_string(e.col + 1) + ": " + e.text);
   }
 }
 
@@ -110,6 +119,11 @@ std::vector<RouteSpec> ParseRouteFile(std::string_view text, std::string_view so
         std::string_view name = body.substr(5);
         while (!name.empty() && (name.front() == ' ' || name.front() == '\t')) name.remove_prefix(1);
         if (name.empty()) fail(indent + 1, "ROUTE needs a name");
+        try {
+          names::CheckRoute(name);
+        } catch (const Error& e) {
+          fail(indent + 7, e.what());
+        }
         for (const auto& r : routes) {
           if (r.name == name) fail(indent + 7, "route '" + std::string(name) + "' defined twice");
         }

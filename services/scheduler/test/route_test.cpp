@@ -18,9 +18,18 @@ TEST(OpSpec, Errors) {
     ParseOpSpec("KT01,:P");
     FAIL();
   } catch (const Error& e) {
-    EXPECT_STREQ(e.what(), "--op \"KT01,:P\": column 6: empty station name");
+    EXPECT_STREQ(e.what(), "--op 'KT01,:P': column 6: empty station name");
   }
   EXPECT_THROW(ParseOpSpec("KT01:\"P"), Error);
+  // Station and program names follow their rules (docs/operations.md "Names"), with the column of the name.
+  try {
+    ParseOpSpec("KT01:A,../P");
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("column 8: program '../P': no '/'"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(ParseOpSpec("KT 01:P"), Error);
+  EXPECT_THROW(ParseRouteFile("ROUTE ../x\nOP KT01:P\n"), Error);
   std::string many = "KT01:";
   for (int i = 0; i < 76; ++i) many += (i ? ",P" : "P") + std::to_string(i);
   EXPECT_THROW(ParseOpSpec(many), Error);  // KT-APL seed line 842: 1 to 75 programs

@@ -5,6 +5,7 @@
 #include <nlohmann/json.hpp>
 
 #include "cell/error/error.h"
+#include "cell/names/names.h"
 #include "cell/interp/interp.h"
 #include "cell/station/station.h"
 #include "cell/station/to_segment.h"
@@ -172,7 +173,7 @@ void Station::PublishRun(const ActiveRun& run, cell::RunState state, const std::
   s.job_id(run.d.job_id);
   s.pallet(run.d.pallet);
   s.state(state);
-  s.program(run.program.substr(0, 64));
+  names::Assign(s.program(), run.program, "program name");
   s.programs_done(run.programs_done);
   s.program_index(static_cast<int32_t>(
       run.d.programs.empty() ? 0 : run.programs_done % static_cast<int>(run.d.programs.size())));

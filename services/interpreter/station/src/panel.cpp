@@ -3,6 +3,7 @@
 #include <spdlog/spdlog.h>
 
 #include "cell/error/error.h"
+#include "cell/names/names.h"
 
 namespace cell::station {
 
@@ -43,7 +44,7 @@ void StatusBoard::RunEnded(bool completed, int queued) {
 
 void StatusBoard::Position(const std::string& program, int line, const std::string* tool) {
   std::lock_guard lk(mu_);
-  status_.program(program.substr(0, 64));
+  names::Assign(status_.program(), program, "program name");
   status_.line(line);
   if (tool) status_.tool(tool->substr(0, 16));
 }

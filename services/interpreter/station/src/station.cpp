@@ -4,6 +4,7 @@
 #include <nlohmann/json.hpp>
 
 #include "cell/error/error.h"
+#include "cell/names/names.h"
 #include "cell/interp/interp.h"
 #include "cell/tooltable/wire.h"
 
@@ -224,7 +225,7 @@ void Station::FlushOutbox() {
     r.station(cfg_.id);
     r.job_id(j["job_id"].get<int32_t>());
     r.pallet(j["pallet"].get<int32_t>());
-    for (auto& p : j["programs"]) r.programs().push_back(p.get<std::string>());
+    for (auto& p : j["programs"]) names::Append(r.programs(), p.get<std::string>(), "program name");
     r.completed(j["completed"].get<bool>());
     r.reason(j["reason"].get<std::string>().substr(0, 255));
     r.started_ns(j["started_ns"].get<int64_t>());

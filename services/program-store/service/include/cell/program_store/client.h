@@ -59,7 +59,4 @@ class Client {
   bus::Millis timeout_;
 };
 
-// Checks a name and namespace against the wire bounds before they are silently truncated.
-void CheckWireName(const std::string& node, const std::string& name);
-
 }  // namespace cell::program_store
