@@ -4,6 +4,7 @@
 #include "cell/config/config.h"
 #include "cell/daemon/daemon.h"
 #include "cell/health/health.h"
+#include "cell/identity/identity.h"
 #include "cell/log/log.h"
 #include "cell/scheduler/service.h"
 
@@ -13,6 +14,8 @@ int main() {
     cell::daemon::Daemon daemon;
     cell::bus::Participant bus("cell-scheduler");
     cell::health::Announcer health(bus, "cell-scheduler");
+    cell::identity::Claim claim(bus, health);
+    claim.Confirm();  // one scheduler per cell
     cell::scheduler::Service svc(bus, cell::config::DataDir());
     svc.Start();
     health.Set(cell::SERVICE_READY);

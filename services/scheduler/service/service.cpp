@@ -7,6 +7,8 @@
 
 #include "cell/bus/topics.h"
 #include "cell/config/config.h"
+#include "cell/idl/health.h"
+#include "cell/names/names.h"
 #include "cell/scheduler/json.h"
 #include "cell/scheduler/route.h"
 #include "cell/tooltable/wire.h"
@@ -113,7 +115,8 @@ Service::Service(bus::Participant& p, const std::filesystem::path& data_dir)
       live_(p),
       jobs_w_(p, bus::topics::kJobStatus, bus::QosKind::kEvent),
       state_w_(p, bus::topics::kSchedulerState, bus::QosKind::kState),
-      jobinfo_w_(p, bus::topics::kJobState, bus::QosKind::kState) {}
+      jobinfo_w_(p, bus::topics::kJobState, bus::QosKind::kState),
+      alarm_w_(p, bus::topics::kAlarm, bus::QosKind::kEvent) {}
 
 Service::~Service() {
   Stop();
@@ -144,14 +147,15 @@ void Service::Start() {
   }
   // Observations are subscribed only now, with the stations configured and recovery done: samples that
   // arrive at once (state topics are transient-local) are not dropped as coming from unknown stations.
-  status_r_.emplace(
-      bus_, bus::topics::kStationStatus, bus::QosKind::kState,
-      [this](const cell::StationStatus& s, const bus::SampleInfo&) {
-        std::lock_guard lk(mu_);
-        if (!dialect_.count(s.station().to_string())) return;
-        Apply(sched_.StationCondition(s.station().to_string(), s.condition() == cell::CONDITION_FAULT,
-                                      s.alarm_code().to_string(), s.alarm_text().to_string()));
-      });
+  status_r_.emplace(bus_, bus::topics::kStationStatus, bus::QosKind::kState,
+                    [this](const cell::StationStatus& s, const bus::SampleInfo&) {
+                      std::lock_guard lk(mu_);
+                      const std::string id = s.station().to_string();
+                      if (!dialect_.count(id)) return;
+                      reported_[id] = {s.condition() == cell::CONDITION_FAULT, s.alarm_code().to_string(),
+                                       s.alarm_text().to_string()};
+                      UpdateCondition(id);
+                    });
   tools_r_.emplace(bus_, bus::topics::kToolTable, bus::QosKind::kState,
                    [this](const cell::ToolTable& t, const bus::SampleInfo&) {
                      std::lock_guard lk(mu_);
@@ -198,7 +202,53 @@ void Service::Tick() {
       Apply(now ? sched_.StationOnline(id, dialect_[id]) : sched_.StationOffline(id));
     }
   }
+  CheckDuplicates();
   PublishBacklog();
+}
+
+void Service::CheckDuplicates() {
+  std::map<std::string, std::string> now;
+  for (auto& c : live_.Conflicts()) now[c.service_id] = c.Describe();
+  std::lock_guard lk(mu_);
+  if (now == duplicate_) return;
+  std::set<std::string> changed;
+  for (auto& [id, text] : now)
+    if (!duplicate_.count(id) || duplicate_[id] != text) changed.insert(id);
+  for (auto& [id, text] : duplicate_)
+    if (!now.count(id)) changed.insert(id);
+  duplicate_ = now;
+  for (auto& id : changed) {
+    const bool active = now.count(id) > 0;
+    const auto slash = id.find('/');
+    const std::string station = slash == std::string::npos ? "" : id.substr(slash + 1);
+    const std::string text = active ? now[id] : id + " runs in one process again";
+    if (active)
+      spdlog::error("FAULT: {}", text);
+    else
+      spdlog::info("{}", text);
+    cell::Alarm a;
+    names::AssignText(a.station(), station);
+    a.source("cell-scheduler");
+    a.code("DUPLICATE");
+    names::AssignText(a.text(), text);
+    a.active(active);
+    a.time_ns(health::WallNs());
+    alarm_w_.Write(a);
+    if (dialect_.count(station)) UpdateCondition(station);
+  }
+}
+
+void Service::UpdateCondition(const std::string& station) {
+  // A duplicated interpreter or servo of the station outweighs what the station itself reports.
+  for (const char* kind : {"cell-interpreter/", "cell-axis-servo/"}) {
+    auto it = duplicate_.find(kind + station);
+    if (it != duplicate_.end()) {
+      Apply(sched_.StationCondition(station, true, "DUPLICATE", it->second));
+      return;
+    }
+  }
+  const Condition& c = reported_[station];
+  Apply(sched_.StationCondition(station, c.fault, c.code, c.text));
 }
 
 void Service::PublishBacklog() {
@@ -252,7 +302,8 @@ cell::SchedulerReply Service::Handle(const cell::SchedulerRequest& r) {
         auto routes = ParseRouteFile(r.text().to_string(), name);
         auto it =
             std::find_if(routes.begin(), routes.end(), [&](const RouteSpec& s) { return s.name == name; });
-        if (it == routes.end()) throw Error(Errc::kNotFound, "the route file defines no route " + name);
+        if (it == routes.end())
+          throw Error(Errc::kNotFound, "the route file defines no route " + names::Shown(name));
         spec = *it;
       }
       for (auto& a : r.args()) spec.ops.push_back(ParseOpSpec(a.to_string()));
@@ -267,7 +318,7 @@ cell::SchedulerReply Service::Handle(const cell::SchedulerRequest& r) {
     }
     case cell::SCHED_ROUTE_SHOW: {
       auto v = sched_.Route(name);
-      if (!v) throw Error(Errc::kNotFound, "no route " + name);
+      if (!v) throw Error(Errc::kNotFound, "no route " + names::Shown(name));
       info(ToJson(*v));
       break;
     }
@@ -348,11 +399,11 @@ void Service::Apply(const Effects& e) {
     cell::JobStatus s;
     s.job_id(static_cast<int32_t>(c.job_id));
     s.state(Wire(c.state));
-    s.reason(c.reason.substr(0, 511));
+    names::AssignText(s.reason(), c.reason);
     if (v) {
-      s.route(v->route.substr(0, 64));
+      names::Assign(s.route(), v->route, "route name");
       s.pallet(v->pallet);
-      s.station(v->station);
+      names::Assign(s.station(), v->station, "station id");
       s.started_ns(v->started_ms * 1000000);
       s.finished_ns(v->finished_ms * 1000000);
       s.cycle_s(v->cycle_s.value_or(0));
@@ -416,6 +467,16 @@ void Service::Sender(std::stop_token st) {
       continue;
     }
     const bool cancel = o.kind == Outgoing::kCancel;
+    if (!cancel) {
+      // A dispatch revoked while it waited here (its station vanished before taking it, and the pallet went
+      // elsewhere) is never handed out late: that station would run the pallet a second time.
+      std::lock_guard lk(mu_);
+      if (!sched_.DispatchLive(o.d.dispatch_id)) {
+        spdlog::info("dispatch {} to {} dropped: revoked before the station took it", o.d.dispatch_id,
+                     o.d.station);
+        continue;
+      }
+    }
     auto& client = station_clients_[o.d.station];
     if (!client)
       client = std::make_unique<bus::Client<cell::RunRequest, cell::RunReply>>(
@@ -428,7 +489,7 @@ void Service::Sender(std::stop_token st) {
     req.node(o.d.station);
     req.repeat(1);
     req.cancel(cancel);
-    for (auto& p : o.d.programs) req.programs().push_back(p.substr(0, 64));
+    for (auto& p : o.d.programs) names::Append(req.programs(), p, "program name");
     req.hdr().idempotency_key("dispatch-" + std::to_string(o.d.dispatch_id) + (cancel ? "-cancel" : ""));
     try {
       auto rep = client->Call(req, std::chrono::seconds(5));

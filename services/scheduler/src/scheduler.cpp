@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include "cell/error/error.h"
+#include "cell/names/names.h"
 #include "cell/scheduler/allocator.h"
 #include "cell/store/sqlite.h"
 
@@ -53,6 +54,13 @@ std::string IsoTime(std::int64_t ms) {
 }
 
 namespace {
+
+// 64-bit FNV-1a: a stable digest of a schedule's text for its idempotency fingerprint.
+std::uint64_t Fnv1a(std::string_view text) {
+  std::uint64_t h = 14695981039346656037ull;
+  for (unsigned char c : text) h = (h ^ c) * 1099511628211ull;
+  return h;
+}
 
 JobState ParseJobState(std::string_view s) {
   for (JobState st : {JobState::kQueued, JobState::kWaiting, JobState::kDispatched, JobState::kRunning,
@@ -168,7 +176,12 @@ struct Scheduler::Impl {
   std::unordered_map<std::int64_t, DispatchRec> dispatches;
   std::set<std::int64_t> waiting;                      // job ids in WAITING
   std::unordered_map<int, std::int64_t> busy_pallets;  // pallet -> live job
-  std::unordered_map<std::string, std::int64_t> idem;
+  struct Keyed {
+    std::int64_t result = 0;
+    std::string
+        command;  // the command the key was first used for (Fingerprint); "" for keys stored before v3
+  };
+  std::unordered_map<std::string, Keyed> idem;
   std::int64_t next_job = 1, next_dispatch = 1, next_seq = 1;
 
   // Changes of the call in progress, flushed in one transaction.
@@ -177,7 +190,7 @@ struct Scheduler::Impl {
   std::set<int> dirty_stations, dirty_pallets;
   std::set<std::string> dirty_routes;
   std::vector<std::pair<std::int64_t, std::size_t>> new_decisions;  // job, index
-  std::vector<std::pair<std::string, std::int64_t>> new_idem;
+  std::vector<std::pair<std::string, Keyed>> new_idem;
 
   Impl(Options o, ProgramSource& p) : opt(std::move(o)), programs(p) {
     if (!opt.clock) opt.clock = [] { return std::chrono::system_clock::now(); };
@@ -509,13 +522,16 @@ struct Scheduler::Impl {
     }
   }
 
-  // Health policy: a station that vanished or faulted gives up its pallets.
+  // Health policy: a station that vanished or faulted gives up its pallets. The dispatch it was handed is
+  // cancelled on the station too (delivered when it answers again): a station that comes back must not run a
+  // pallet that has been moved on or failed here (the chaos test found a re-queued pallet run twice).
   void Interrupt(int s, const std::string& why) {
     StationRec& st = stations[static_cast<std::size_t>(s)];
     std::vector<std::int64_t> requeue;
     if (st.inflight != 0) {
       DispatchRec& d = dispatches.at(st.inflight);
       JobRec& j = jobs.at(d.job);
+      fx.cancels.push_back(CancelAction{d.id, st.id, j.id});
       if (d.state == DState::kRunning) {
         Detach(d, DState::kFailed);
         const std::string what = d.pallet != 0 ? fmt::format("pallet {}", d.pallet) : d.programs.at(0);
@@ -543,16 +559,25 @@ struct Scheduler::Impl {
   }
 
   // ---- idempotency ----
-  std::optional<std::int64_t> Seen(std::string_view key) const {
+  // A key binds the whole command (`command`, a canonical JSON text of the verb and every argument): the same
+  // command again returns the first outcome; another command under a used key is refused, never taken for a
+  // replay (docs/scheduler.md §8).
+  std::optional<std::int64_t> Seen(std::string_view key, const std::string& command) const {
     if (key.empty()) return std::nullopt;
     auto it = idem.find(std::string(key));
     if (it == idem.end()) return std::nullopt;
-    return it->second;
+    if (!it->second.command.empty() && it->second.command != command) {
+      throw Error(
+          Errc::kFailedPrecondition,
+          fmt::format("idempotency key {} was already used for another command ({}); refusing {}",
+                      names::Shown(key, 64), names::Fit(it->second.command, 150), names::Fit(command, 150)));
+    }
+    return it->second.result;
   }
-  void Remember(std::string_view key, std::int64_t result) {
+  void Remember(std::string_view key, const std::string& command, std::int64_t result) {
     if (key.empty()) return;
-    idem.emplace(std::string(key), result);
-    new_idem.emplace_back(std::string(key), result);
+    idem.emplace(std::string(key), Keyed{result, command});
+    new_idem.emplace_back(std::string(key), Keyed{result, command});
   }
 
   // ---- call framing: commit or roll back, then hand out effects ----
@@ -640,6 +665,9 @@ CREATE INDEX decisions_job ON decisions(job);
 ALTER TABLE stations ADD COLUMN vars TEXT NOT NULL DEFAULT '{}';
 ALTER TABLE jobs ADD COLUMN schedule TEXT NOT NULL DEFAULT '';
 )sql"),
+      store::Migration::Sql(3, "scheduler: the command each idempotency key was used for", R"sql(
+ALTER TABLE idempotency ADD COLUMN command TEXT NOT NULL DEFAULT '';
+)sql"),
   };
   return m;
 }
@@ -705,8 +733,8 @@ void Scheduler::Impl::Load() {
     }
   }
   {
-    auto q = d.Prepare("SELECT key, result FROM idempotency");
-    while (q.Step()) idem.emplace(q.ColumnText(0), q.ColumnInt64(1));
+    auto q = d.Prepare("SELECT key, result, command FROM idempotency");
+    while (q.Step()) idem.emplace(q.ColumnText(0), Keyed{q.ColumnInt64(1), q.ColumnText(2)});
   }
   {
     auto q = d.Prepare(
@@ -887,9 +915,9 @@ void Scheduler::Impl::Flush() {
     }
   }
   if (!new_idem.empty()) {
-    auto q = db->Prepare("INSERT OR IGNORE INTO idempotency(key, result) VALUES (?1, ?2)");
+    auto q = db->Prepare("INSERT OR IGNORE INTO idempotency(key, result, command) VALUES (?1, ?2, ?3)");
     for (const auto& [k, v] : new_idem) {
-      q.BindText(1, k).BindInt64(2, v).Run();
+      q.BindText(1, k).BindInt64(2, v.result).BindText(3, v.command).Run();
       q.Reset();
     }
   }
@@ -1132,36 +1160,35 @@ void Scheduler::ConfigureStation(std::string_view id, std::string_view dialect) 
 
 void Scheduler::SetPalletMap(std::string_view key, int pallet, const std::vector<std::string>& programs) {
   Impl& m = *impl_;
+  const std::string command = json{{"verb", "pallet-set"}, {"pallet", pallet}, {"programs", programs}}.dump();
   m.Call([&] {
-    if (m.Seen(key)) return;
+    if (m.Seen(key, command)) return;
     m.CheckPallet(pallet);
     // KT-APL seed line 842: "A Pallet Map consists of from 1 to 75 standard part programs".
     if (programs.empty() || programs.size() > 75) {
       throw Error(Errc::kInvalidArgument, fmt::format("pallet {}: a pallet map holds 1-75 programs, got {}",
                                                       pallet, programs.size()));
     }
-    for (const auto& p : programs) {
-      if (p.empty())
-        throw Error(Errc::kInvalidArgument, fmt::format("pallet {}: empty program name", pallet));
-    }
+    for (const auto& p : programs) names::CheckProgram(p);
     m.pallet_maps[pallet] = programs;
     m.dirty_pallets.insert(pallet);
-    m.Remember(key, pallet);
+    m.Remember(key, command, pallet);
   });
 }
 
 RouteView Scheduler::DefineRoute(std::string_view key, const RouteSpec& spec) {
   Impl& m = *impl_;
+  const std::string command = json{{"verb", "route-define"}, {"route", SpecToJson(spec)}}.dump();
   return m.Call([&] {
-    if (!m.Seen(key)) {
-      if (spec.name.empty()) throw Error(Errc::kInvalidArgument, "route needs a name");
+    if (!m.Seen(key, command)) {
+      names::CheckRoute(spec.name);
       if (spec.ops.empty()) throw Error(Errc::kInvalidArgument, "route " + spec.name + " has no operation");
       Impl::RouteRec r;
       r.spec = spec;
       r.ops = m.BuildRouteOps(spec, true);
       m.routes[spec.name] = std::move(r);
       m.dirty_routes.insert(spec.name);
-      m.Remember(key, 0);
+      m.Remember(key, command, 0);
     }
     auto it = m.routes.find(spec.name);
     if (it == m.routes.end()) throw Error(Errc::kNotFound, "route " + spec.name + " not defined");
@@ -1172,14 +1199,16 @@ RouteView Scheduler::DefineRoute(std::string_view key, const RouteSpec& spec) {
 JobResult Scheduler::Operate(std::string_view key, std::string_view route, int pallet) {
   Impl& m = *impl_;
   JobResult res;
+  const std::string command = json{{"verb", "route-operate"}, {"route", route}, {"pallet", pallet}}.dump();
   res.job_id = m.Call([&]() -> std::int64_t {
-    if (auto seen = m.Seen(key)) {
+    if (auto seen = m.Seen(key, command)) {
       res.replayed = true;
       return *seen;
     }
     m.CheckPallet(pallet);
     auto it = m.routes.find(route);
-    if (it == m.routes.end()) throw Error(Errc::kNotFound, fmt::format("route {} not defined", route));
+    if (it == m.routes.end())
+      throw Error(Errc::kNotFound, fmt::format("route {} not defined", names::Shown(route)));
     if (!it->second.valid) {
       throw Error(Errc::kFailedPrecondition,
                   fmt::format("route {} is invalid: {}", route, it->second.invalid_reason));
@@ -1198,7 +1227,7 @@ JobResult Scheduler::Operate(std::string_view key, std::string_view route, int p
     m.busy_pallets[pallet] = ref.id;
     m.JobChanged(ref);
     m.Evaluate(ref, "operate");
-    m.Remember(key, ref.id);
+    m.Remember(key, command, ref.id);
     return ref.id;
   });
   res.effects = m.TakeEffects();
@@ -1208,8 +1237,9 @@ JobResult Scheduler::Operate(std::string_view key, std::string_view route, int p
 JobResult Scheduler::RunPallet(std::string_view key, int pallet, std::string_view station) {
   Impl& m = *impl_;
   JobResult res;
+  const std::string command = json{{"verb", "pallet-run"}, {"pallet", pallet}, {"station", station}}.dump();
   res.job_id = m.Call([&]() -> std::int64_t {
-    if (auto seen = m.Seen(key)) {
+    if (auto seen = m.Seen(key, command)) {
       res.replayed = true;
       return *seen;
     }
@@ -1235,7 +1265,7 @@ JobResult Scheduler::RunPallet(std::string_view key, int pallet, std::string_vie
     m.busy_pallets[pallet] = ref.id;
     m.JobChanged(ref);
     m.Evaluate(ref, fmt::format("pallet run on {}", station));
-    m.Remember(key, ref.id);
+    m.Remember(key, command, ref.id);
     return ref.id;
   });
   res.effects = m.TakeEffects();
@@ -1246,8 +1276,14 @@ JobResult Scheduler::RunSchedule(std::string_view key, std::string_view name, st
                                  std::string_view station) {
   Impl& m = *impl_;
   JobResult res;
+  // The schedule's text by length and hash: the command it names, without 64 KiB in every key row.
+  const std::string command = json{{"verb", "schedule-run"},
+                                   {"schedule", name},
+                                   {"station", station},
+                                   {"text", fmt::format("{} bytes, fnv1a {:016x}", text.size(), Fnv1a(text))}}
+                                  .dump();
   res.job_id = m.Call([&]() -> std::int64_t {
-    if (auto seen = m.Seen(key)) {
+    if (auto seen = m.Seen(key, command)) {
       res.replayed = true;
       return *seen;
     }
@@ -1264,7 +1300,7 @@ JobResult Scheduler::RunSchedule(std::string_view key, std::string_view name, st
     auto& ref = m.jobs.emplace(j.id, std::move(j)).first->second;
     m.JobChanged(ref);
     m.StepSchedule(ref, s, fmt::format("schedule {} on {}", name, station));
-    m.Remember(key, ref.id);
+    m.Remember(key, command, ref.id);
     return ref.id;
   });
   res.effects = m.TakeEffects();
@@ -1294,8 +1330,9 @@ std::map<int, double> Scheduler::StationCommonVariables(std::string_view id) con
 
 Effects Scheduler::Cancel(std::string_view key, std::int64_t job_id, std::string_view reason) {
   Impl& m = *impl_;
+  const std::string command = json{{"verb", "job-cancel"}, {"job", job_id}}.dump();
   m.Call([&] {
-    if (m.Seen(key)) return;
+    if (m.Seen(key, command)) return;
     auto it = m.jobs.find(job_id);
     if (it == m.jobs.end()) throw Error(Errc::kNotFound, fmt::format("no job {}", job_id));
     Impl::JobRec& j = it->second;
@@ -1317,7 +1354,7 @@ Effects Scheduler::Cancel(std::string_view key, std::int64_t job_id, std::string
       }
     }
     m.FinishJob(j, JobState::kCancelled, std::string(reason));
-    m.Remember(key, job_id);
+    m.Remember(key, command, job_id);
     if (freed >= 0) m.TrySend(freed);
   });
   return m.TakeEffects();
@@ -1629,6 +1666,11 @@ std::vector<StationView> Scheduler::Stations() const {
     out.push_back(impl_->ViewStation(static_cast<int>(s)));
   std::sort(out.begin(), out.end(), [](const StationView& a, const StationView& b) { return a.id < b.id; });
   return out;
+}
+
+bool Scheduler::DispatchLive(std::int64_t dispatch_id) const {
+  auto it = impl_->dispatches.find(dispatch_id);
+  return it != impl_->dispatches.end() && Live(it->second.state);
 }
 
 std::optional<StationView> Scheduler::Station(std::string_view id) const {

@@ -101,6 +101,26 @@ TEST(Recovery, EverythingSurvivesARestart) {
   EXPECT_EQ(c.Backlog("KT01"), 0);
 }
 
+// The command a key was used for is durable: after a restart the same command replays and another is refused.
+TEST(Recovery, AKeyStillBindsItsCommandAfterARestart) {
+  TempDir tmp;
+  FakeCell c(tmp.db());
+  c.Program("A", {}, 10);
+  c.Online("KT01");
+  c.Route("PUMP", {"KT01:A"});
+  c.Route("VALVE", {"KT01:A"});
+  const auto j = c.Operate("PUMP", 250, "s7:route-operate");
+  c.Restart();
+  EXPECT_EQ(c.sched->Operate("s7:route-operate", "PUMP", 250).job_id, j);
+  try {
+    c.sched->Operate("s7:route-operate", "VALVE", 251);
+    ADD_FAILURE() << "not refused";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), Errc::kFailedPrecondition);
+  }
+  EXPECT_EQ(c.sched->Jobs().size(), 1u);
+}
+
 TEST(Recovery, UnacknowledgedDispatchIsOfferedAgainWithTheSameId) {
   TempDir tmp;
   FakeCell c(tmp.db());

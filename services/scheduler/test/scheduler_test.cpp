@@ -5,6 +5,8 @@
 
 #include <gtest/gtest.h>
 
+#include <functional>
+
 #include "cell/error/error.h"
 #include "cell/scheduler/json.h"
 #include "fake_cell.h"
@@ -303,6 +305,10 @@ TEST(Health, VanishedStationRequeuesQueuedAndFailsRunning) {
   EXPECT_EQ(c.Backlog("KT01"), 0);
   EXPECT_EQ(c.Backlog("KT02"), 300);
   EXPECT_EQ(c.sched->Job(b3)->decisions.back().trigger, "re-queued: station KT01 went offline");
+  // Both dispatches it held are cancelled on the station when it answers again (found by the chaos test: a
+  // re-queued pallet whose first dispatch reached its restarted station ran twice).
+  ASSERT_EQ(c.cancels.size(), 1u);  // the running one: one dispatch in hand at a time
+  EXPECT_EQ(c.cancels[0].dispatch_id, c.received["KT01"][0].dispatch_id);
   // Late reports of the vanished station are ignored.
   const auto stale = c.received["KT01"][0].dispatch_id;
   c.Take(c.sched->RunFinished(stale));
@@ -325,6 +331,10 @@ TEST(Health, FaultInterruptsAndClearingReleases) {
   EXPECT_EQ(c.received["KT01"].size(), 1u);  // handed out, not started
   c.Take(c.sched->StationCondition("KT01", true, "1234", "SPINDLE OVERLOAD"));
   EXPECT_EQ(c.State(j), JobState::kWaiting);
+  // The station is told to drop the dispatch it holds (it must not run the pallet when it recovers).
+  ASSERT_EQ(c.cancels.size(), 1u);
+  EXPECT_EQ(c.cancels[0].dispatch_id, c.received["KT01"][0].dispatch_id);
+  EXPECT_FALSE(c.sched->DispatchLive(c.received["KT01"][0].dispatch_id));
   EXPECT_EQ(c.Reason(j), "no eligible station: KT01 in fault (alarm 1234)");
   EXPECT_EQ(c.Backlog("KT01"), 0);
   c.Take(c.sched->StationCondition("KT01", false));
@@ -377,6 +387,57 @@ TEST(Jobs, IdempotencyKeysAndPalletRules) {
   coded.Route("R", {"KT01:A"});
   EXPECT_EQ(CodeOf([&] { coded.Operate("R", 128); }), Errc::kInvalidArgument);
   EXPECT_NO_THROW(coded.Operate("R", 127));
+}
+
+// Issue 13: a key binds the whole command. The same command under a used key is a replay (the first outcome,
+// nothing new); a different one is refused with kFailedPrecondition naming both, and never runs.
+TEST(Jobs, AnIdempotencyKeyBindsTheWholeCommand) {
+  FakeCell c;
+  c.Program("A", {}, 100);
+  c.Program("B", {}, 50);
+  c.Online("KT01");
+  c.Route("PUMP", {"KT01:A"});
+  c.Route("VALVE", {"KT01:B"});
+  const auto j = c.Operate("PUMP", 250, "s7:route-operate");
+  EXPECT_EQ(c.sched->Operate("s7:route-operate", "PUMP", 250).job_id, j);
+  auto refused = [&](const std::function<void()>& f) {
+    try {
+      f();
+    } catch (const Error& e) {
+      EXPECT_EQ(e.code(), Errc::kFailedPrecondition) << e.what();
+      return std::string(e.what());
+    }
+    ADD_FAILURE() << "a different command under a used key was not refused";
+    return std::string();
+  };
+  std::string why = refused([&] { c.sched->Operate("s7:route-operate", "VALVE", 251); });
+  EXPECT_NE(why.find("'s7:route-operate' was already used for another command"), std::string::npos) << why;
+  EXPECT_NE(why.find("PUMP"), std::string::npos) << why;
+  EXPECT_NE(why.find("VALVE"), std::string::npos) << why;
+  refused([&] { c.sched->Operate("s7:route-operate", "PUMP", 251); });
+  EXPECT_EQ(c.sched->Jobs().size(), 1u);  // pallet 251 was never operated
+  EXPECT_FALSE(c.sched->Job(j + 1));
+
+  RouteSpec spec{"R2", {ParseOpSpec("KT01:A")}};
+  c.sched->DefineRoute("d", spec);
+  EXPECT_NO_THROW(c.sched->DefineRoute("d", spec));
+  refused([&] { c.sched->DefineRoute("d", RouteSpec{"R2", {ParseOpSpec("KT01:B")}}); });
+  refused([&] { c.sched->DefineRoute("d", RouteSpec{"R3", {ParseOpSpec("KT01:A")}}); });
+  EXPECT_EQ(c.sched->Route("R2")->ops[0].programs, std::vector<std::string>{"A"});
+  EXPECT_FALSE(c.sched->Route("R3"));
+
+  c.sched->SetPalletMap("m", 3, {"A", "B"});
+  refused([&] { c.sched->SetPalletMap("m", 3, {"B", "A"}); });
+  EXPECT_EQ(*c.sched->PalletMap(3), (std::vector<std::string>{"A", "B"}));
+  const auto j2 = c.sched->RunPallet("p", 3, "KT01").job_id;
+  EXPECT_EQ(c.sched->RunPallet("p", 3, "KT01").job_id, j2);
+  refused([&] { c.sched->RunPallet("p", 4, "KT01"); });
+
+  const auto j3 = c.Operate("VALVE", 9);
+  c.sched->Cancel("c", j3);
+  EXPECT_NO_THROW(c.sched->Cancel("c", j3));
+  refused([&] { c.sched->Cancel("c", j); });
+  EXPECT_EQ(c.State(j), JobState::kDispatched);
 }
 
 // "A Pallet Map consists of from 1 to 75 standard part programs" (seed line 842).

@@ -51,7 +51,8 @@ struct VariableAction {
   double value = 0;
 };
 
-// Tells a station to drop a dispatch (job cancelled).
+// Tells a station to drop a dispatch (job cancelled, or the dispatch revoked or failed because the station
+// vanished or faulted while holding it).
 struct CancelAction {
   std::int64_t dispatch_id = 0;
   std::string station;
@@ -225,6 +226,8 @@ class Scheduler {
   std::vector<JobView> Jobs(bool with_decisions = false) const;
   std::vector<StationView> Stations() const;
   std::optional<StationView> Station(std::string_view id) const;
+  // False once a dispatch was revoked or ended: the service drops it instead of handing it out late.
+  bool DispatchLive(std::int64_t dispatch_id) const;
   std::optional<tooltable::ToolTable> StationToolTable(std::string_view id) const;
   // The scheduler's view of a station's common variables (published values plus VSET writes).
   std::map<int, double> StationCommonVariables(std::string_view id) const;

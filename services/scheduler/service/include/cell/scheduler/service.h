@@ -42,6 +42,10 @@ class Service {
   void Sender(std::stop_token st);
   void PublishBacklog();
   void PublishJob(std::int64_t id);  // JobInfo on cell/job/state, for viewers
+  // Two live processes under one identity (health::Liveness::Conflicts): a FAULT condition naming both, on
+  // cell/alarm and, for a station's service, on the station (nothing is dispatched to it until one is gone).
+  void CheckDuplicates();
+  void UpdateCondition(const std::string& station);  // with mu_ held
 
   bus::Participant& bus_;
   program_store::Client programs_;
@@ -50,6 +54,12 @@ class Service {
   Scheduler sched_;
   std::map<std::string, std::string> dialect_;  // configured stations
   std::map<std::string, bool> online_;
+  struct Condition {
+    bool fault = false;
+    std::string code, text;
+  };
+  std::map<std::string, Condition> reported_;     // the condition each station publishes
+  std::map<std::string, std::string> duplicate_;  // service id -> Conflict::Describe(), while it lasts
 
   struct Outgoing {
     enum Kind { kDispatch, kCancel, kVariables } kind = kDispatch;
@@ -71,6 +81,7 @@ class Service {
   bus::Writer<cell::JobStatus> jobs_w_;
   bus::Writer<cell::SchedulerState> state_w_;
   bus::Writer<cell::JobInfo> jobinfo_w_;
+  bus::Writer<cell::Alarm> alarm_w_;
   std::chrono::steady_clock::time_point started_;
   // Created by Start(), after the stations are configured and recovery has run.
   std::optional<bus::Reader<cell::StationStatus>> status_r_;
