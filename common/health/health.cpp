@@ -1,6 +1,13 @@
 #include "cell/health/health.h"
 
+#include "cell/names/names.h"
+
 #include <unistd.h>
+
+#include <algorithm>
+#include <random>
+
+#include <fmt/format.h>
 
 namespace cell::health {
 
@@ -10,13 +17,20 @@ int64_t WallNs() {
       .count();
 }
 
+uint64_t NewBootId() {
+  std::random_device rd;
+  uint64_t id = (static_cast<uint64_t>(rd()) << 32) ^ rd() ^ static_cast<uint64_t>(WallNs());
+  return id == 0 ? 1 : id;
+}
+
 Announcer::Announcer(bus::Participant& p, const std::string& kind, const std::string& station)
     : w_(p, bus::topics::kHealth, bus::QosKind::kState), id_(station.empty() ? kind : kind + "/" + station) {
-  h_.service_id(id_);
-  h_.kind(kind);
-  h_.station(station);
+  names::Assign(h_.service_id(), id_, "service id");
+  names::Assign(h_.kind(), kind, "service kind");
+  names::Assign(h_.station(), station, "station id");
   h_.pid(getpid());
   h_.started_ns(WallNs());
+  h_.boot_id(NewBootId());
   h_.state(cell::SERVICE_STARTING);
   Publish();
   beat_ = std::jthread([this](std::stop_token st) {
@@ -41,7 +55,7 @@ void Announcer::Set(cell::ServiceState state, const std::string& detail) {
   {
     std::lock_guard lk(mu_);
     h_.state(state);
-    h_.detail(detail.substr(0, 255));
+    names::AssignText(h_.detail(), detail);
   }
   Publish();
 }
@@ -59,24 +73,73 @@ void Announcer::Publish() {
 Liveness::Liveness(bus::Participant& p)
     : r_(p, bus::topics::kHealth, bus::QosKind::kState,
          [this](const cell::ServiceHealth& h, const bus::SampleInfo&) {
+           const auto now = std::chrono::steady_clock::now();
            std::lock_guard lk(mu_);
-           seen_[h.service_id().to_string()] = {h, std::chrono::steady_clock::now()};
+           auto& boots = seen_[h.service_id().to_string()];
+           auto [it, fresh] = boots.try_emplace(h.boot_id(), Seen{h, now, now});
+           it->second.last = h;
+           it->second.at = now;
+           // Forget processes not heard for a long while (each restart is a new boot id).
+           for (auto b = boots.begin(); b != boots.end();)
+             b = now - b->second.at > std::chrono::minutes(1) ? boots.erase(b) : std::next(b);
          }) {}
+
+namespace {
+constexpr auto kOffline = std::chrono::milliseconds(bus::topics::kOfflineAfterMs);
+}
 
 bool Liveness::Online(const std::string& service_id) const {
   std::lock_guard lk(mu_);
   auto it = seen_.find(service_id);
-  if (it == seen_.end()) return false;
-  auto age = std::chrono::steady_clock::now() - it->second.second;
-  return it->second.first.state() == cell::SERVICE_READY &&
-         age < std::chrono::milliseconds(bus::topics::kOfflineAfterMs);
+  if (it == seen_.end() || it->second.empty()) return false;
+  // The process heard last speaks for the service.
+  auto last = std::max_element(it->second.begin(), it->second.end(),
+                               [](auto& a, auto& b) { return a.second.at < b.second.at; });
+  auto age = std::chrono::steady_clock::now() - last->second.at;
+  return last->second.last.state() == cell::SERVICE_READY && age < kOffline;
 }
 
 std::map<std::string, cell::ServiceHealth> Liveness::Snapshot() const {
   std::lock_guard lk(mu_);
   std::map<std::string, cell::ServiceHealth> out;
-  for (auto& [k, v] : seen_) out[k] = v.first;
+  for (auto& [k, boots] : seen_) {
+    if (boots.empty()) continue;
+    auto last = std::max_element(boots.begin(), boots.end(),
+                                 [](auto& a, auto& b) { return a.second.at < b.second.at; });
+    out[k] = last->second.last;
+  }
   return out;
+}
+
+std::vector<Conflict> Liveness::Conflicts() const {
+  const auto now = std::chrono::steady_clock::now();
+  std::lock_guard lk(mu_);
+  std::vector<Conflict> out;
+  for (auto& [id, boots] : seen_) {
+    std::vector<const Seen*> live;
+    for (auto& [boot, s] : boots)
+      if (s.last.state() == cell::SERVICE_READY && now - s.at < kOffline) live.push_back(&s);
+    if (live.size() < 2) continue;
+    // Both alive at once: each was heard after the other first spoke.
+    auto first =
+        std::max_element(live.begin(), live.end(), [](auto* a, auto* b) { return a->first < b->first; });
+    auto last = std::min_element(live.begin(), live.end(), [](auto* a, auto* b) { return a->at < b->at; });
+    if ((*last)->at <= (*first)->first) continue;
+    Conflict c;
+    c.service_id = id;
+    std::sort(live.begin(), live.end(),
+              [](auto* a, auto* b) { return a->last.started_ns() < b->last.started_ns(); });
+    for (auto* s : live) c.processes.push_back(s->last);
+    out.push_back(std::move(c));
+  }
+  return out;
+}
+
+std::string Conflict::Describe() const {
+  std::string who;
+  for (auto& h : processes)
+    who += fmt::format("{}pid {} (boot {:016x})", who.empty() ? "" : ", ", h.pid(), h.boot_id());
+  return fmt::format("{} runs in {} processes at once: {}", service_id, processes.size(), who);
 }
 
 }  // namespace cell::health

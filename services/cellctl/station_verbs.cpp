@@ -1,4 +1,5 @@
 // cellctl station ls|tools|vars|input|reset|hold|resume|override
+#include <algorithm>
 #include <chrono>
 #include <map>
 #include <thread>
@@ -6,7 +7,9 @@
 #include "cell/bus/topics.h"
 #include "cell/config/config.h"
 #include "cell/dashboard/feed.h"
+#include "cell/idl/health.h"
 #include "cell/idl/scheduler.h"
+#include "cell/names/names.h"
 #include "cell/tooltable/wire.h"
 #include "context.h"
 
@@ -19,6 +22,7 @@ using cell::dashboard::ConditionName;
 using cell::dashboard::ExecutionName;
 
 void RequireConfigured(const std::string& id) {
+  cell::names::CheckStation(id);
   auto ids = cell::config::ListStations();
   if (std::find(ids.begin(), ids.end(), id) == ids.end()) {
     std::string list;
@@ -27,20 +31,20 @@ void RequireConfigured(const std::string& id) {
   }
 }
 
-// name=value with a number on the right.
+// name=value with a decimal number on the right (an optional sign, digits, at most one '.'; no hexadecimal,
+// no exponent, no inf or nan: std::stod alone would take them all).
 std::pair<std::string, double> Assignment(const std::string& text) {
   auto eq = text.find('=');
-  if (eq == std::string::npos || eq == 0) throw Exit{2, "expected NAME=VALUE, got '" + text + "'"};
+  if (eq == std::string::npos || eq == 0)
+    throw Exit{2, "expected NAME=VALUE, got " + cell::names::Shown(text)};
   std::string v = text.substr(eq + 1);
-  size_t used = 0;
-  double d = 0;
-  try {
-    d = std::stod(v, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (used == 0 || used != v.size()) throw Exit{2, "'" + v + "' is not a number in '" + text + "'"};
-  return {text.substr(0, eq), d};
+  std::string digits = !v.empty() && (v[0] == '-' || v[0] == '+') ? v.substr(1) : v;
+  bool ok =
+      !digits.empty() && digits.size() <= 24 && std::count(digits.begin(), digits.end(), '.') <= 1 &&
+      std::any_of(digits.begin(), digits.end(), [](char c) { return c >= '0' && c <= '9'; }) &&
+      std::all_of(digits.begin(), digits.end(), [](char c) { return (c >= '0' && c <= '9') || c == '.'; });
+  if (!ok) throw Exit{2, cell::names::Shown(v) + " is not a decimal number in " + cell::names::Shown(text)};
+  return {text.substr(0, eq), std::stod(v)};
 }
 
 }  // namespace
@@ -62,6 +66,9 @@ void AddStationVerbs(CLI::App& app, Context& ctx) {
     cell::health::Liveness live(ctx.Bus());
     bus::Reader<cell::SchedulerState> sched(ctx.Bus(), bus::topics::kSchedulerState, bus::QosKind::kState);
     bus::Reader<cell::StationStatus> status(ctx.Bus(), bus::topics::kStationStatus, bus::QosKind::kState);
+    // The scheduler's conditions on a station (two processes claiming its interpreter or servo).
+    bus::Reader<cell::Alarm> alarms(ctx.Bus(), bus::topics::kAlarm, bus::QosKind::kEvent);
+    std::map<std::string, cell::Alarm> alarm;  // station -> the latest scheduler alarm
     const auto ids = cell::config::ListStations();
     std::map<std::string, double> backlog;
     std::map<std::string, cell::StationStatus> by_id;
@@ -73,6 +80,10 @@ void AddStationVerbs(CLI::App& app, Context& ctx) {
     const auto t0 = std::chrono::steady_clock::now();
     for (;;) {
       while (auto st = status.Take(bus::Millis(0))) by_id[st->station().to_string()] = *st;
+      while (auto a = alarms.Take(bus::Millis(0))) {
+        auto& last = alarm[a->station().to_string()];
+        if (a->time_ns() >= last.time_ns()) last = *a;
+      }
       while (auto sc = sched.Take(bus::Millis(0))) {
         sched_seen = true;
         backlog.clear();
@@ -118,6 +129,11 @@ void AddStationVerbs(CLI::App& app, Context& ctx) {
         if (!s.program().to_string().empty()) j["program"] = s.program().to_string();
         if (s.line()) j["line"] = s.line();
       }
+      if (auto a = alarm.find(id); a != alarm.end() && a->second.active()) {
+        j["condition"] = "FAULT";
+        j["alarm_code"] = a->second.code().to_string();
+        j["alarm_text"] = a->second.text().to_string();
+      }
       arr.push_back(j);
     }
     Print(ctx, arr,
@@ -160,7 +176,7 @@ void AddStationVerbs(CLI::App& app, Context& ctx) {
       for (auto& s : o->sets) {
         auto [n, v] = Assignment(s);
         cell::Variable var;
-        var.name(n);
+        cell::names::Assign(var.name(), n, "variable name");
         var.value(v);
         req.variables().push_back(var);
       }
@@ -187,7 +203,7 @@ void AddStationVerbs(CLI::App& app, Context& ctx) {
     cell::StationRequest req;
     req.op(cell::STATION_SET_INPUT);
     cell::Variable var;
-    var.name("I" + bit);
+    cell::names::Assign(var.name(), "I" + bit, "input");
     var.value(v);
     req.variables().push_back(var);
     ctx.StationCommand(o->id, req);
@@ -228,8 +244,8 @@ void AddStationVerbs(CLI::App& app, Context& ctx) {
   resume->callback([o, panel] { panel(o->id, false); });
   auto* ovr = st->add_subcommand("override", "feed (0-200 %) and rapid (0-100 %) override");
   ovr->add_option("ID", o->id)->required();
-  ovr->add_option("--feed", o->feed_pct, "feed override, percent")->check(CLI::Range(0.0, 200.0));
-  ovr->add_option("--rapid", o->rapid_pct, "rapid override, percent")->check(CLI::Range(0.0, 100.0));
+  ovr->add_option("--feed", o->feed_pct, "feed override, percent")->check(Real() & CLI::Range(0.0, 200.0));
+  ovr->add_option("--rapid", o->rapid_pct, "rapid override, percent")->check(Real() & CLI::Range(0.0, 100.0));
   ovr->callback([o, &ctx] {
     RequireConfigured(o->id);
     if (o->feed_pct < 0 && o->rapid_pct < 0) throw Exit{2, "give --feed PCT, --rapid PCT or both"};

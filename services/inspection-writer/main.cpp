@@ -6,6 +6,7 @@
 #include "cell/config/config.h"
 #include "cell/daemon/daemon.h"
 #include "cell/health/health.h"
+#include "cell/identity/identity.h"
 #include "cell/idl/inspection.h"
 #include "cell/inspection/records.h"
 #include "cell/log/log.h"
@@ -99,6 +100,8 @@ int main() {
     cell::inspection::Records records(cell::config::DataDir() / "records");
     cell::bus::Participant bus("cell-inspection-writer");
     cell::health::Announcer health(bus, "cell-inspection-writer");
+    cell::identity::Claim claim(bus, health);
+    claim.Confirm();  // one writer per cell
     cell::bus::Writer<cell::InspectionStored> stored(bus, cell::bus::topics::kInspectionStored,
                                                      cell::bus::QosKind::kEvent);
     cell::bus::Server<cell::InspectionRequest, cell::InspectionReply> server(

@@ -7,6 +7,7 @@
 #include "cell/config/config.h"
 #include "cell/daemon/daemon.h"
 #include "cell/health/health.h"
+#include "cell/identity/identity.h"
 #include "cell/log/log.h"
 #include "cell/servo/service.h"
 
@@ -30,6 +31,8 @@ int main(int argc, char** argv) {
     auto machine = cell::servo::LoadMachineConfig(cfg.file);
     cell::bus::Participant bus("cell-axis-servo/" + station);
     cell::health::Announcer health(bus, "cell-axis-servo", station);
+    cell::identity::Claim claim(bus, health);
+    claim.Confirm();  // one machine per station: before it takes a segment
     cell::servo::Service svc(
         bus, machine, clock == "virtual" ? cell::servo::ClockKind::kVirtual : cell::servo::ClockKind::kReal);
     svc.Start();

@@ -5,6 +5,7 @@
 #include "cell/config/config.h"
 #include "cell/daemon/daemon.h"
 #include "cell/health/health.h"
+#include "cell/identity/identity.h"
 #include "cell/log/log.h"
 #include "cell/station/service.h"
 
@@ -19,6 +20,8 @@ int main(int argc, char** argv) {
     auto cfg = cell::config::LoadStation(station);
     cell::bus::Participant bus("cell-interpreter/" + station);
     cell::health::Announcer health(bus, "cell-interpreter", station);
+    cell::identity::Claim claim(bus, health);
+    claim.Confirm();  // one process per station: before the station serves anything
     cell::station::Service st(bus, cfg, cell::config::DataDir());
     st.Start();
     health.Set(cell::SERVICE_READY, cfg.dialect);

@@ -7,6 +7,7 @@
 #include <mutex>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include "cell/bus/bus.h"
 #include "cell/bus/topics.h"
@@ -16,13 +17,18 @@ namespace cell::health {
 
 int64_t WallNs();
 
+// A random id for this process's announcement: two processes under one service id differ in it.
+uint64_t NewBootId();
+
 class Announcer {
  public:
-  // kind: the executable name; station: empty for cell-wide services.
+  // kind: the executable name; station: empty for cell-wide services. Publishes SERVICE_STARTING at once.
   Announcer(bus::Participant& p, const std::string& kind, const std::string& station = "");
   ~Announcer();
   void Set(cell::ServiceState state, const std::string& detail = "");
   const std::string& service_id() const { return id_; }
+  uint64_t boot_id() const { return h_.boot_id(); }
+  int64_t started_ns() const { return h_.started_ns(); }
 
  private:
   void Publish();
@@ -33,18 +39,35 @@ class Announcer {
   std::jthread beat_;
 };
 
-// Tracks every service's last heartbeat.
+// Two live processes announcing one service id (docs/operations.md, "One process per identity").
+struct Conflict {
+  std::string service_id;
+  std::vector<cell::ServiceHealth> processes;  // their last announcements, oldest start first
+  std::string Describe()
+      const;  // "cell-interpreter/KT01 runs in 2 processes: pid 12 (boot 3f..), pid 40 (...)"
+};
+
+// Tracks every service's last heartbeat, per process (boot id).
 class Liveness {
  public:
   explicit Liveness(bus::Participant& p);
   // Online: announced READY and heard from within topics::kOfflineAfterMs.
   bool Online(const std::string& service_id) const;
   bool StationOnline(const std::string& station) const { return Online("cell-interpreter/" + station); }
+  // The last announcement heard for each service id (of whichever process spoke last).
   std::map<std::string, cell::ServiceHealth> Snapshot() const;
+  // Service ids announced READY by two or more processes that are both alive (heard within
+  // topics::kOfflineAfterMs) and each heard again after the other first spoke. A process restarted after a
+  // kill -9 is no conflict: the dead one was last heard before the new one first spoke.
+  std::vector<Conflict> Conflicts() const;
 
  private:
+  struct Seen {
+    cell::ServiceHealth last;
+    std::chrono::steady_clock::time_point first, at;
+  };
   mutable std::mutex mu_;
-  std::map<std::string, std::pair<cell::ServiceHealth, std::chrono::steady_clock::time_point>> seen_;
+  std::map<std::string, std::map<uint64_t, Seen>> seen_;  // service id -> boot id -> what was heard
   bus::Reader<cell::ServiceHealth> r_;
 };
 

@@ -1,0 +1,52 @@
+#include "cell/identity/identity.h"
+
+#include <ctime>
+#include <thread>
+
+#include <fmt/format.h>
+
+#include "cell/bus/topics.h"
+#include "cell/error/error.h"
+
+namespace cell::identity {
+
+Claim::Claim(bus::Participant& p, const health::Announcer& me)
+    : id_(me.service_id()),
+      boot_(me.boot_id()),
+      started_ns_(me.started_ns()),
+      deadline_(std::chrono::steady_clock::now() + kClaimWindow),
+      r_(p, bus::topics::kHealth, bus::QosKind::kState,
+         [this](const cell::ServiceHealth& h, const bus::SampleInfo&) {
+           if (h.service_id() != id_ || h.boot_id() == boot_ || h.state() == cell::SERVICE_STOPPING) return;
+           // The younger of two refuses: a later start, or at the same instant the larger boot id.
+           const bool older =
+               h.started_ns() < started_ns_ || (h.started_ns() == started_ns_ && h.boot_id() < boot_);
+           if (!older) return;
+           std::lock_guard lk(mu_);
+           rival_ = h;
+         }) {}
+
+void Claim::Confirm() {
+  for (;;) {
+    {
+      std::lock_guard lk(mu_);
+      if (rival_) {
+        const auto& h = *rival_;
+        std::time_t t = static_cast<std::time_t>(h.started_ns() / 1000000000);
+        char when[32];
+        std::strftime(when, sizeof when, "%Y-%m-%dT%H:%M:%SZ", std::gmtime(&t));
+        throw Error(
+            Errc::kAlreadyExists,
+            fmt::format("another live process is {}: pid {} (boot {:016x}, started {}); refusing to start a "
+                        "second one (stop it first, or wait for its lease to run out if it was killed)",
+                        id_, h.pid(), h.boot_id(), when));
+      }
+    }
+    auto left = deadline_ - std::chrono::steady_clock::now();
+    if (left <= std::chrono::steady_clock::duration::zero()) return;
+    std::this_thread::sleep_for(
+        std::min<std::chrono::steady_clock::duration>(left, std::chrono::milliseconds(50)));
+  }
+}
+
+}  // namespace cell::identity
