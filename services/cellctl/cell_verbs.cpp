@@ -1,12 +1,13 @@
-// cellctl up|down|watch: a local cell from the systemd units' own command lines.
-#include <fcntl.h>
-#include <signal.h>
+// cellctl up|restart|down|watch: a local cell from the systemd units' own command lines.
 #include <sys/ioctl.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <set>
 #include <sstream>
 #include <thread>
 
@@ -15,21 +16,15 @@
 #include "cell/config/units.h"
 #include "cell/dashboard/feed.h"
 #include "cell/dashboard/text_view.h"
+#include "cell/names/names.h"
 #include "context.h"
+#include "processes.h"
 
 namespace cellctl {
 
 namespace fs = std::filesystem;
 
 namespace {
-
-fs::path PidFile() {
-  return cell::config::DataDir() / "cell-up.json";
-}
-
-bool Alive(pid_t pid) {
-  return pid > 0 && kill(pid, 0) == 0;
-}
 
 // The service id a process announces: "<exe>" or "<exe>/<station>".
 std::string ServiceId(const std::vector<std::string>& argv) {
@@ -47,51 +42,65 @@ std::vector<std::string> Split(const std::string& s) {
   return out;
 }
 
-std::string LastLine(const fs::path& log) {
-  std::ifstream in(log);
-  std::string line, last;
-  while (std::getline(in, line))
-    if (!line.empty()) last = line;
-  return last;
+std::string Env(const CellProcess& p, const std::string& name) {
+  for (auto& e : p.env)
+    if (e.rfind(name + "=", 0) == 0) return e.substr(name.size() + 1);
+  return "";
 }
 
-pid_t Launch(const std::vector<std::string>& argv, const fs::path& log, const std::string& clock) {
-  pid_t pid = fork();
-  if (pid < 0) throw cell::Error(cell::Errc::kInternal, "fork failed");
-  if (pid == 0) {
-    setsid();  // its own session: survives cellctl, stopped by `cellctl down`
-    int fd = open(log.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
-    int null = open("/dev/null", O_RDONLY);
-    if (fd >= 0) {
-      dup2(fd, 1);
-      dup2(fd, 2);
-    }
-    if (null >= 0) dup2(null, 0);
-    setenv("CELL_CLOCK", clock.c_str(), 1);
-    std::vector<char*> args;
-    for (auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
-    args.push_back(nullptr);
-    execv(args[0], args.data());
-    _exit(127);
+// The cell's processes as this invocation would start them.
+std::vector<CellProcess> Planned(const std::vector<std::string>& stations, const std::string& clock) {
+  fs::path bin = fs::read_symlink("/proc/self/exe").parent_path();
+  fs::path logs = cell::config::DataDir() / "logs";
+  std::vector<std::string> env = CurrentEnvironment();
+  env.erase(std::remove_if(env.begin(), env.end(), [](auto& e) { return e.rfind("CELL_CLOCK=", 0) == 0; }),
+            env.end());
+  env.push_back("CELL_CLOCK=" + clock);
+  std::vector<CellProcess> out;
+  for (auto& c :
+       cell::config::CellCommands(cell::config::SourceTreeDir() / "deploy/systemd", stations, bin)) {
+    CellProcess p;
+    p.unit = c.unit;
+    p.service = ServiceId(c.argv);
+    p.argv = c.argv;
+    p.env = env;
+    p.log = (logs / (c.unit + ".log")).string();
+    out.push_back(std::move(p));
   }
-  return pid;
+  return out;
 }
 
-void StopAll(const nlohmann::json& procs) {
-  for (auto& p : procs) {
-    pid_t pid = p["pid"].get<int>();
-    if (Alive(pid)) kill(pid, SIGTERM);
-  }
-  auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(10);
-  for (auto& p : procs) {
-    pid_t pid = p["pid"].get<int>();
-    while (Alive(pid) && std::chrono::steady_clock::now() < deadline) {
-      waitpid(pid, nullptr, WNOHANG);
-      std::this_thread::sleep_for(std::chrono::milliseconds(20));
-    }
-    if (Alive(pid)) kill(pid, SIGKILL);
-    waitpid(pid, nullptr, WNOHANG);
-  }
+// Waits until every process in `procs` has announced itself READY on the bus (its own pid, so an older
+// process's last heartbeat does not count), or one of `started` has exited. Returns what is missing.
+std::vector<std::string> WaitReady(Context& ctx, const std::vector<CellProcess>& procs,
+                                   const std::set<std::string>& started, bus::Millis timeout) {
+  // The bus is joined only now, after every fork: no DDS socket or thread of cellctl's reaches a service.
+  cell::health::Liveness live(ctx.Bus());
+  std::vector<std::string> missing;
+  bus::WaitUntil(
+      [&] {
+        missing.clear();
+        auto seen = live.Snapshot();
+        for (auto& p : procs) {
+          if (started.count(p.service) && !StartTime(p.pid)) {
+            waitpid(p.pid, nullptr, WNOHANG);
+            missing.assign(1, p.unit + " exited: " + LastLine(p.log));
+            return true;  // no point waiting
+          }
+          auto it = seen.find(p.service);
+          if (!live.Online(p.service) || it == seen.end() || it->second.pid() != p.pid)
+            missing.push_back(p.unit);
+        }
+        return missing.empty();
+      },
+      timeout);
+  return missing;
+}
+
+std::string Join(const std::vector<std::string>& v, const std::string& sep) {
+  std::string out;
+  for (auto& s : v) out += (out.empty() ? "" : sep) + s;
+  return out;
 }
 
 }  // namespace
@@ -100,66 +109,70 @@ void AddCellVerbs(CLI::App& app, Context& ctx) {
   struct Opts {
     std::string stations = "KT01,KT02";
     std::string clock = "real";
+    std::string service;
     int count = 0;
   };
   auto o = std::make_shared<Opts>();
 
-  auto* up = app.add_subcommand("up", "start a local cell from the systemd units' command lines");
-  up->add_option("--stations", o->stations, "comma-separated station ids (default KT01,KT02)");
-  up->add_option("--clock", o->clock, "real or virtual machine clock")
-      ->check(CLI::IsMember({"real", "virtual"}));
-  up->callback([o, &ctx] {
+  auto* up = app.add_subcommand("up",
+                                "start a local cell from the systemd units' command lines (or what is "
+                                "missing of one that is partly down)");
+  auto* stations_opt =
+      up->add_option("--stations", o->stations, "comma-separated station ids (default KT01,KT02)");
+  auto* clock_opt = up->add_option("--clock", o->clock, "real or virtual machine clock")
+                        ->check(CLI::IsMember({"real", "virtual"}));
+  up->callback([o, &ctx, stations_opt, clock_opt] {
     auto stations = Split(o->stations);
     if (stations.empty()) throw Exit{2, "--stations names no station"};
     for (auto& s : stations) cell::config::LoadStation(s);  // unknown station: a clear error now
-    if (fs::exists(PidFile())) {
-      std::ifstream in(PidFile());
-      auto old = nlohmann::json::parse(in, nullptr, false);
-      if (old.is_array())
-        for (auto& p : old)
-          if (Alive(p["pid"].get<int>()))
-            throw Exit{1, "a local cell is already running (cellctl down first)"};
+    umask(077);  // the data directory, the record and the logs are the owner's only
+    std::vector<CellProcess> procs;
+    std::set<std::string> started;
+    {
+      RecordLock lock;
+      std::vector<CellProcess> recorded = LoadRecord();
+      const bool partly_up = std::any_of(recorded.begin(), recorded.end(), IsRunning);
+      if (partly_up) {
+        // Bring back what is missing, each exactly as it was started. Other stations or another clock would
+        // be another cell.
+        std::set<std::string> units;
+        for (auto& p : recorded) units.insert(p.unit);
+        std::set<std::string> wanted;
+        for (auto& p : Planned(stations, o->clock)) wanted.insert(p.unit);
+        if ((stations_opt->count() > 0 &&
+             !std::includes(units.begin(), units.end(), wanted.begin(), wanted.end())) ||
+            (clock_opt->count() > 0 && Env(recorded.front(), "CELL_CLOCK") != o->clock))
+          throw Exit{1, "a local cell with other stations or another clock is running (cellctl down first)"};
+        procs = recorded;
+      } else {
+        procs = Planned(stations, o->clock);
+      }
+      fs::create_directories(cell::config::DataDir() / "logs");
+      for (auto& p : procs) {
+        if (partly_up && IsRunning(p)) continue;
+        Launch(p);
+        started.insert(p.service);
+      }
+      SaveRecord(procs);
     }
-    fs::path bin = fs::read_symlink("/proc/self/exe").parent_path();
-    auto commands =
-        cell::config::CellCommands(cell::config::SourceTreeDir() / "deploy/systemd", stations, bin);
-    fs::path logs = cell::config::DataDir() / "logs";
-    fs::create_directories(logs);
-    nlohmann::json procs = nlohmann::json::array();
-    cell::health::Liveness live(ctx.Bus());
-    for (auto& c : commands) {
-      fs::path log = logs / (c.unit + ".log");
-      pid_t pid = Launch(c.argv, log, o->clock);
-      procs.push_back(
-          {{"unit", c.unit}, {"pid", pid}, {"service", ServiceId(c.argv)}, {"log", log.string()}});
-    }
-    std::ofstream(PidFile()) << procs.dump(2);
     // Ready = every process announced itself READY on the bus, within 30 s.
-    std::vector<std::string> missing;
-    bool ok = bus::WaitUntil(
-        [&] {
-          missing.clear();
-          for (auto& p : procs) {
-            if (!Alive(p["pid"].get<int>())) {
-              missing.push_back(p["unit"].get<std::string>() +
-                                " exited: " + LastLine(p["log"].get<std::string>()));
-              return true;  // no point waiting
-            }
-            if (!live.Online(p["service"].get<std::string>()))
-              missing.push_back(p["unit"].get<std::string>());
-          }
-          return missing.empty();
-        },
-        bus::Millis(30000));
-    if (!ok || !missing.empty()) {
-      StopAll(procs);
-      fs::remove(PidFile());
-      std::string what;
-      for (auto& m : missing) what += (what.empty() ? "" : "; ") + m;
-      throw Exit{1, "cell did not come up: " + what};
+    auto missing = WaitReady(ctx, procs, started, bus::Millis(30000));
+    if (!missing.empty()) {
+      std::vector<CellProcess> ours;
+      for (auto& p : procs)
+        if (started.count(p.service)) ours.push_back(p);
+      Stop(ours, std::chrono::seconds(10));
+      {
+        RecordLock lock;
+        auto now = LoadRecord();
+        if (std::none_of(now.begin(), now.end(), IsRunning)) fs::remove(RecordFile());
+      }
+      throw Exit{1, "cell did not come up: " + Join(missing, "; ")};
     }
-    std::cout << "cell up on domain " << ctx.Bus().domain() << ": " << procs.size() << " processes ready ("
-              << o->clock << " clock), logs in " << logs.string() << "\n";
+    std::cout << "cell up on domain " << ctx.Bus().domain() << ": " << procs.size() << " processes ready";
+    if (started.size() != procs.size()) std::cout << ", " << started.size() << " of them started now";
+    std::cout << " (" << Env(procs.front(), "CELL_CLOCK") << " clock), logs in "
+              << (cell::config::DataDir() / "logs").string() << "\n";
     if (std::ifstream url(cell::config::DataDir() / "dashboard.url"); url) {
       std::string u;
       std::getline(url, u);
@@ -167,23 +180,57 @@ void AddCellVerbs(CLI::App& app, Context& ctx) {
     }
   });
 
+  auto* restart = app.add_subcommand("restart", "restart one service of the local cell: SERVICE[/ID]");
+  restart->add_option("SERVICE", o->service, "e.g. cell-scheduler, cell-interpreter/KT01")->required();
+  restart->callback([o, &ctx] {
+    umask(077);
+    std::vector<CellProcess> procs;
+    CellProcess target;
+    {
+      RecordLock lock;
+      procs = LoadRecord();
+      if (procs.empty())
+        throw Exit{1, "no local cell is recorded in " + RecordFile().string() + " (cellctl up)"};
+      auto it = std::find_if(procs.begin(), procs.end(), [&](const CellProcess& p) {
+        return p.service == o->service || p.unit == o->service || p.unit == o->service + ".service";
+      });
+      if (it == procs.end()) {
+        std::vector<std::string> known;
+        for (auto& p : procs) known.push_back(p.service);
+        throw Exit{2, "no service " + cell::names::Shown(o->service) + " in the local cell (" +
+                          Join(known, ", ") + ")"};
+      }
+      if (it->argv.empty())
+        throw Exit{1, it->unit + " was recorded without its command line (cellctl down; up)"};
+      // A process that is still the one started is stopped first; a PID that now belongs to another process
+      // is left alone.
+      Stop({*it}, std::chrono::seconds(10));
+      Launch(*it);
+      target = *it;
+      SaveRecord(procs);
+    }
+    auto missing = WaitReady(ctx, {target}, {target.service}, bus::Millis(30000));
+    if (!missing.empty()) throw Exit{1, target.service + " did not come up: " + Join(missing, "; ")};
+    std::cout << target.service << " restarted: pid " << target.pid << "\n";
+  });
+
   auto* down = app.add_subcommand("down", "stop the local cell (SIGTERM, then SIGKILL after 10 s)");
   down->callback([] {
-    if (!fs::exists(PidFile())) {
+    RecordLock lock;
+    auto procs = LoadRecord();
+    if (procs.empty()) {
       std::cout << "no local cell is running\n";
       return;
     }
-    std::ifstream in(PidFile());
-    auto procs = nlohmann::json::parse(in, nullptr, false);
-    if (!procs.is_array()) throw Exit{1, PidFile().string() + " is not a cellctl process list"};
-    StopAll(procs);
-    fs::remove(PidFile());
+    for (auto& line : Stop(procs, std::chrono::seconds(10))) std::cerr << "cellctl: " << line << "\n";
+    fs::remove(RecordFile());
     std::cout << "cell down: " << procs.size() << " processes stopped\n";
   });
 
   auto* watch =
       app.add_subcommand("watch", "live view of the cell: stations, backlog, waiting pallets, jobs");
-  watch->add_option("--count", o->count, "stop after N frames (0: never; 1: one frame for scripts)");
+  watch->add_option("--count", o->count, "stop after N frames (0: never; 1: one frame for scripts)")
+      ->check(Decimal());
   watch->callback([o, &ctx] {
     // The same view the dashboard serves (services/dashboard), fed from the same topics.
     cell::dashboard::CellView view(cell::dashboard::LoadStationDefs());

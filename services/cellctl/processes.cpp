@@ -1,0 +1,195 @@
+#include "processes.h"
+
+#include <fcntl.h>
+#include <signal.h>
+#include <sys/file.h>
+#include <sys/stat.h>
+#include <sys/syscall.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <climits>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+#include <thread>
+
+#include "cell/config/config.h"
+#include "context.h"
+
+extern char** environ;
+
+namespace cellctl {
+
+namespace fs = std::filesystem;
+
+nlohmann::json ToJson(const CellProcess& p) {
+  return {{"service", p.service}, {"unit", p.unit}, {"pid", p.pid}, {"log", p.log},
+          {"argv", p.argv},       {"env", p.env},   {"exe", p.exe}, {"start_time", p.start_time}};
+}
+
+CellProcess FromJson(const nlohmann::json& j) {
+  CellProcess p;
+  p.service = j.at("service").get<std::string>();
+  p.unit = j.at("unit").get<std::string>();
+  p.pid = j.at("pid").get<pid_t>();
+  p.log = j.value("log", std::string());
+  p.argv = j.value("argv", std::vector<std::string>());
+  p.env = j.value("env", std::vector<std::string>());
+  p.exe = j.value("exe", std::string());
+  p.start_time = j.value("start_time", std::uint64_t{0});
+  return p;
+}
+
+fs::path RecordFile() {
+  return cell::config::DataDir() / "cell-up.json";
+}
+
+std::vector<CellProcess> LoadRecord() {
+  std::ifstream in(RecordFile());
+  if (!in) return {};
+  auto j = nlohmann::json::parse(in, nullptr, false);
+  std::vector<CellProcess> out;
+  try {
+    if (!j.is_array()) throw std::runtime_error("not an array");
+    for (auto& e : j) out.push_back(FromJson(e));
+  } catch (const std::exception&) {
+    throw Exit{1, RecordFile().string() + " is not a cellctl process list"};
+  }
+  return out;
+}
+
+void SaveRecord(const std::vector<CellProcess>& procs) {
+  nlohmann::json j = nlohmann::json::array();
+  for (auto& p : procs) j.push_back(ToJson(p));
+  fs::path file = RecordFile(), tmp = file;
+  tmp += ".tmp";
+  {
+    int fd = open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0600);
+    if (fd < 0) throw Exit{1, "cannot write " + tmp.string() + ": " + std::strerror(errno)};
+    std::string text = j.dump(2) + "\n";
+    bool ok = write(fd, text.data(), text.size()) == static_cast<ssize_t>(text.size());
+    ok = fsync(fd) == 0 && ok;
+    close(fd);
+    if (!ok) throw Exit{1, "cannot write " + tmp.string()};
+  }
+  fs::rename(tmp, file);
+}
+
+RecordLock::RecordLock() {
+  fs::path lock = RecordFile();
+  lock += ".lock";
+  fd_ = open(lock.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0600);
+  if (fd_ >= 0) flock(fd_, LOCK_EX);
+}
+
+RecordLock::~RecordLock() {
+  if (fd_ >= 0) close(fd_);  // releases the lock
+}
+
+std::optional<std::uint64_t> StartTime(pid_t pid) {
+  if (pid <= 0) return std::nullopt;
+  std::ifstream in("/proc/" + std::to_string(pid) + "/stat");
+  std::string text;
+  if (!std::getline(in, text)) return std::nullopt;
+  // "PID (comm) S ppid ...": comm may hold spaces and parentheses, so fields count from the last ')'.
+  auto close = text.rfind(')');
+  if (close == std::string::npos) return std::nullopt;
+  std::istringstream rest(text.substr(close + 1));
+  std::string field;
+  for (int i = 3; i <= 22; ++i) {
+    if (!(rest >> field)) return std::nullopt;
+    if (i == 3 && field == "Z") return std::nullopt;  // a zombie has ended
+  }
+  try {
+    return std::stoull(field);
+  } catch (const std::exception&) {
+    return std::nullopt;
+  }
+}
+
+bool IsRunning(const CellProcess& p) {
+  auto t = StartTime(p.pid);
+  if (!t || (p.start_time != 0 && *t != p.start_time)) return false;
+  if (p.exe.empty()) return true;  // a record written before exe and start_time were kept
+  std::error_code ec;
+  std::string exe = fs::read_symlink("/proc/" + std::to_string(p.pid) + "/exe", ec).string();
+  if (ec) return false;
+  const std::string deleted = " (deleted)";
+  if (exe.size() > deleted.size() && exe.compare(exe.size() - deleted.size(), deleted.size(), deleted) == 0)
+    exe.resize(exe.size() - deleted.size());
+  return exe == p.exe;
+}
+
+std::vector<std::string> CurrentEnvironment() {
+  std::vector<std::string> env;
+  for (char** e = environ; e && *e; ++e) env.emplace_back(*e);
+  return env;
+}
+
+void Launch(CellProcess& p) {
+  std::error_code ec;
+  p.exe = fs::canonical(p.argv.at(0), ec).string();
+  if (ec) throw Exit{1, "cannot start " + p.unit + ": " + p.argv[0] + ": " + ec.message()};
+  // Everything the child needs is prepared before fork(): after it only async-signal-safe calls.
+  std::vector<char*> args, envp;
+  for (auto& a : p.argv) args.push_back(const_cast<char*>(a.c_str()));
+  args.push_back(nullptr);
+  for (auto& e : p.env) envp.push_back(const_cast<char*>(e.c_str()));
+  envp.push_back(nullptr);
+  const std::string log = p.log;
+  pid_t pid = fork();
+  if (pid < 0) throw Exit{1, std::string("fork failed: ") + std::strerror(errno)};
+  if (pid == 0) {
+    setsid();    // its own session: survives cellctl, stopped by `cellctl down`
+    umask(077);  // a local cell's state and logs are its owner's only (the units use UMask=0027)
+    int fd = open(log.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0600);
+    int null = open("/dev/null", O_RDONLY);
+    if (fd >= 0) {
+      dup2(fd, 1);
+      dup2(fd, 2);
+    }
+    if (null >= 0) dup2(null, 0);
+    // Nothing of cellctl's beyond stdin, stdout and stderr reaches the service (a DDS socket nobody reads
+    // would fill its receive queue for ever).
+    syscall(SYS_close_range, 3U, UINT_MAX, 0U);
+    execve(args[0], args.data(), envp.data());
+    _exit(127);
+  }
+  p.pid = pid;
+  p.start_time = StartTime(pid).value_or(0);
+}
+
+std::vector<std::string> Stop(const std::vector<CellProcess>& procs, std::chrono::seconds grace) {
+  std::vector<std::string> foreign;
+  std::vector<const CellProcess*> ours;
+  for (auto& p : procs) {
+    if (IsRunning(p)) {
+      kill(p.pid, SIGTERM);
+      ours.push_back(&p);
+    } else if (p.pid > 0 && kill(p.pid, 0) == 0 && StartTime(p.pid)) {
+      foreign.push_back("pid " + std::to_string(p.pid) + " is no longer " + p.service + ": left alone");
+    }
+  }
+  auto deadline = std::chrono::steady_clock::now() + grace;
+  for (auto* p : ours) {
+    while (IsRunning(*p) && std::chrono::steady_clock::now() < deadline) {
+      waitpid(p->pid, nullptr, WNOHANG);  // our own children (a failed `up`) are reaped here
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+    if (IsRunning(*p)) kill(p->pid, SIGKILL);
+    waitpid(p->pid, nullptr, WNOHANG);
+  }
+  return foreign;
+}
+
+std::string LastLine(const fs::path& log) {
+  std::ifstream in(log);
+  std::string line, last;
+  while (std::getline(in, line))
+    if (!line.empty()) last = line;
+  return last;
+}
+
+}  // namespace cellctl

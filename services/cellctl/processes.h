@@ -1,0 +1,77 @@
+// The processes of a local cell (`cellctl up`, `restart`, `down`): how each is started, the record in
+// $CELL_DATA_DIR/cell-up.json, and whether a recorded PID is still the process that was started.
+#pragma once
+
+#include <sys/types.h>
+
+#include <chrono>
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+namespace cellctl {
+
+// One entry of cell-up.json: {service, unit, pid, log, argv, env, exe, start_time}. DESIGN §6 promises
+// {service, unit, pid, log}; the rest lets `restart` and `up` start a process again exactly as it was
+// started, and `down` check that a PID is still that process.
+struct CellProcess {
+  std::string service;  // the id it announces: "cell-scheduler", "cell-interpreter/KT01"
+  std::string unit;     // "cell-interpreter@KT01.service"
+  pid_t pid = 0;
+  std::string log;
+  std::vector<std::string> argv;  // as started: argv[0] an absolute path
+  std::vector<std::string> env;   // "NAME=value", the whole environment it was started with
+  std::string exe;                // canonical argv[0]
+  std::uint64_t start_time = 0;   // /proc/PID/stat field 22 (clock ticks after boot), read right after fork
+};
+
+nlohmann::json ToJson(const CellProcess& p);
+CellProcess FromJson(const nlohmann::json& j);
+
+// $CELL_DATA_DIR/cell-up.json.
+std::filesystem::path RecordFile();
+// The recorded processes; empty when there is no record. Exit{1} for a file that is not a process list.
+std::vector<CellProcess> LoadRecord();
+// Writes the record atomically (a new file, then rename), owner-only.
+void SaveRecord(const std::vector<CellProcess>& procs);
+
+// An advisory lock on the record (flock of cell-up.json.lock) for one read-modify-write.
+class RecordLock {
+ public:
+  RecordLock();
+  ~RecordLock();
+  RecordLock(const RecordLock&) = delete;
+  RecordLock& operator=(const RecordLock&) = delete;
+
+ private:
+  int fd_ = -1;
+};
+
+// The start time of a process (field 22 of /proc/PID/stat), nullopt when there is no such process or it is a
+// zombie.
+std::optional<std::uint64_t> StartTime(pid_t pid);
+// True while `pid` is still the process that was started: same start time and same executable (a binary
+// replaced by a rebuild reads "PATH (deleted)" and still counts). kill(pid, 0) alone would also say yes for
+// an unrelated process that reused the PID.
+bool IsRunning(const CellProcess& p);
+
+// The environment of this process as "NAME=value" strings.
+std::vector<std::string> CurrentEnvironment();
+
+// Forks and execs p.argv with p.env, stdout and stderr appended to p.log, stdin /dev/null, its own session,
+// umask 077, and no descriptor of ours beyond 0-2 (cellctl must hold no DDS participant when it calls this).
+// Sets p.pid, p.exe and p.start_time.
+void Launch(CellProcess& p);
+
+// SIGTERM to every process that is still ours, SIGKILL after `grace` to those still running. Returns one line
+// per recorded PID that was not ours any more (left alone).
+std::vector<std::string> Stop(const std::vector<CellProcess>& procs, std::chrono::seconds grace);
+
+// The last non-empty line of a log file.
+std::string LastLine(const std::filesystem::path& log);
+
+}  // namespace cellctl
