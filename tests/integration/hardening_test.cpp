@@ -1,0 +1,403 @@
+// Issue 13, each reproduction through the real binaries (domain 71): commands that cannot be confused
+// (idempotency keys bind the whole command), inputs that cannot slip through (names, read errors, empty
+// input, numbers, sizes), one process per station identity, and a local cell's processes (`up` forks with no
+// DDS participant and no descriptor of its own in the services, `restart`, `up` of a partly-down cell, `down`
+// that only stops its own processes, owner-only data).
+#include <signal.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <set>
+#include <thread>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "cell/bus/bus.h"
+#include "cell/bus/topics.h"
+#include "cell/health/health.h"
+#include "cell/idl/health.h"
+#include "cell/testing/local_cell.h"
+
+using namespace cell::testing;
+using namespace std::chrono_literals;
+using nlohmann::json;
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string Program(const std::string& name, int ucy) {
+  return "%\n(NAM," + name + ")\n(UTL,1001)\n(UCY," + std::to_string(ucy) +
+         ")\nN10 G71 G90 G01\nN20 X0 Y0 Z100. F0\nN30 X50. Y20. Z10. F2000.\nN40 M30\n%\n";
+}
+
+std::string FirstLine(const std::string& s) {
+  return s.substr(0, s.find('\n'));
+}
+
+// One line on stderr, and it is short: a bad name is echoed shortened and escaped.
+void ExpectOneShortLine(const RunResult& r, const std::string& what) {
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << what << ": " << r.err;
+  EXPECT_LT(r.err.size(), 400u) << what << ": " << r.err;
+  EXPECT_EQ(r.err.find('\x1b'), std::string::npos) << what << ": a raw escape sequence reached the terminal";
+}
+
+std::map<std::string, std::string> Environ(int pid) {
+  std::map<std::string, std::string> env;
+  std::string text = ReadFile("/proc/" + std::to_string(pid) + "/environ");
+  for (size_t i = 0; i < text.size();) {
+    size_t e = text.find('\0', i);
+    std::string kv = text.substr(i, e - i);
+    if (auto eq = kv.find('='); eq != std::string::npos) env[kv.substr(0, eq)] = kv.substr(eq + 1);
+    i = e == std::string::npos ? text.size() : e + 1;
+  }
+  return env;
+}
+
+std::vector<std::string> Cmdline(int pid) {
+  std::vector<std::string> argv;
+  std::string text = ReadFile("/proc/" + std::to_string(pid) + "/cmdline");
+  for (size_t i = 0; i < text.size();) {
+    size_t e = text.find('\0', i);
+    argv.push_back(text.substr(i, e - i));
+    i = e == std::string::npos ? text.size() : e + 1;
+  }
+  return argv;
+}
+
+json Record(const LocalCell& cell) {
+  return json::parse(ReadFile(cell.data_dir() + "/cell-up.json"));
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// Without a cell: everything here is refused by cellctl itself, before anything is sent (no service runs).
+class Offline : public ::testing::Test {
+ protected:
+  RunResult Ctl(std::vector<std::string> args, std::map<std::string, std::string> env = {}) {
+    args.insert(args.begin(), BinDir() + "/cellctl");
+    env["CELL_DATA_DIR"] = dir_;
+    return RunCommand(args, env, 60s);
+  }
+  void Refused(std::vector<std::string> args, const std::string& needle, int code = -1,
+               std::map<std::string, std::string> env = {}) {
+    std::string what;
+    for (auto& a : args) what += " " + (a.size() > 60 ? a.substr(0, 60) + "..." : a);
+    auto r = Ctl(args, env);
+    if (code >= 0)
+      EXPECT_EQ(r.code, code) << what << ": " << r.err;
+    else
+      EXPECT_NE(r.code, 0) << what;
+    EXPECT_NE(r.err.find(needle), std::string::npos) << what << ": " << r.err;
+    EXPECT_EQ(r.err.find("no cell/"), std::string::npos) << what << ": it went to the bus: " << r.err;
+    ExpectOneShortLine(r, what);
+  }
+  std::string dir_ = MakeTempDir("cell-hardening-offline-");
+  ~Offline() override { fs::remove_all(dir_); }
+};
+
+// Item 3: read errors and empty input are errors.
+TEST_F(Offline, ReadErrorsAndEmptyInputAreErrors) {
+  fs::create_directories(dir_ + "/progs");
+  Refused({"program", "put", dir_ + "/progs"}, "is a directory", 1);
+  Refused({"program", "put", "/proc/self/mem"}, "cannot read /proc/self/mem", 1);
+  std::ofstream(dir_ + "/empty.apl").close();
+  Refused({"program", "put", dir_ + "/empty.apl"}, "is empty", 1);
+  Refused({"program", "put", dir_ + "/missing.apl"}, "No such file", 1);
+  Refused({"tools", "load", "KT01", dir_ + "/progs"}, "is a directory", 1);
+  std::ofstream(dir_ + "/tools.bin", std::ios::binary) << std::string(
+      "\x7f"
+      "ELF\x02\x01\x01\0\0\0",
+      10);
+  Refused({"tools", "load", "KT01", dir_ + "/tools.bin"}, "content is not text", 1);
+  std::ofstream(dir_ + "/notld.apl") << "%\nN10 G71\nN20 M30\n%\n";
+  Refused({"tools", "load", "KT01", dir_ + "/notld.apl"}, "no TLD statement found", 1);
+  Refused({"route", "define", "R", "--file", dir_ + "/progs"}, "is a directory", 1);
+}
+
+// Item 10: integers are decimal; an over-size put is refused from the file's size, before streaming.
+TEST_F(Offline, NumbersAreDecimalAndSizesAreCheckedFirst) {
+  Refused({"route", "operate", "PUMP", "--pallet", "0x10"}, "expected a decimal integer", 2);
+  Refused({"route", "operate", "PUMP", "--pallet", "010x"}, "expected a decimal integer", 2);
+  Refused({"pallet", "run", "1e2", "--station", "KT01"}, "expected a decimal integer", 2);
+  Refused({"job", "show", "-5"}, "", 2);
+  Refused({"job", "wait", "7", "--timeout", "0x10"}, "expected a decimal number", 2);
+  Refused({"station", "override", "KT01", "--feed", "1e2"}, "expected a decimal number", 2);
+  Refused({"station", "vars", "KT01", "--set", "V1=0x10"}, "is not a decimal number", 2);
+  // A 257 MiB sparse file: refused at once from its size (no store runs, nothing is read).
+  const std::string big = dir_ + "/BIG.apl";
+  { std::ofstream(big) << "%\n"; }
+  fs::resize_file(big, (257ull << 20));
+  auto t0 = std::chrono::steady_clock::now();
+  Refused({"program", "put", big}, "is 269484032 bytes; the program store takes at most 268435456 bytes", 1);
+  EXPECT_LT(std::chrono::steady_clock::now() - t0, 10s);
+}
+
+// Item 2: names are checked against their rule before they are sent; never cut, echoed short and escaped.
+TEST_F(Offline, NamesAreCheckedBeforeTheyAreSent) {
+  Refused({"route", "define", "../x", "--op", "KT01:P"}, "route name '../x': must begin with a letter", 2);
+  Refused({"route", "define", "R\x1b[2J", "--op", "KT01:P"}, "'R\\x1b[2J'", 2);
+  Refused({"route", "define", std::string(65, 'R'), "--op", "KT01:P"}, "is 65 characters long; at most 64",
+          2);
+  Refused({"route", "operate", std::string(5000, 'R'), "--pallet", "1"}, "is 5000 characters long", 2);
+  Refused({"route", "define", "R", "--op", "KT01:../P"}, "no '/'", 2);
+  Refused({"route", "define", "R", "--op", "KT 01:P"}, "station 'KT 01'", 2);
+  Refused({"pallet", "set", "1", "A\x07"}, "'A\\x07'", 2);
+  Refused({"program", "get", std::string(129, 'P')}, "at most 128", 2);
+  Refused({"program", "put", "/etc/hostname", "--name", "a/b"}, "no '/'", 2);
+  Refused({"program", "ls", "--node", "../KT01"}, "must be HOST or a station id", 2);
+  Refused({"station", "tools", "KT01\n"}, "'KT01\\x0a'", 2);
+  Refused({"inspect", "cat", "../../etc/passwd"}, "record name", 2);
+  // CELLCTL_IDEMPOTENCY_KEY: refused when over its bound, never cut.
+  Refused({"route", "operate", "PUMP", "--pallet", "1"}, "41 characters long; at most 40", 2,
+          {{"CELLCTL_IDEMPOTENCY_KEY", std::string(41, 'k')}});
+  Refused({"route", "operate", "PUMP", "--pallet", "1"}, "without spaces", 2,
+          {{"CELLCTL_IDEMPOTENCY_KEY", "a key"}});
+}
+
+// ---------------------------------------------------------------------------------------------------------
+class Hardening : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    auto r = cell_.Up("KT01,KT02", "virtual");
+    ASSERT_EQ(r.code, 0) << r.out << r.err;
+  }
+  void TearDown() override {
+    auto r = cell_.Down();
+    EXPECT_EQ(r.code, 0) << r.err;
+  }
+  RunResult Ctl(std::vector<std::string> args, std::map<std::string, std::string> env = {}) {
+    args.insert(args.begin(), BinDir() + "/cellctl");
+    for (auto& [k, v] : cell_.env()) env.emplace(k, v);
+    return RunCommand(args, env, 60s);
+  }
+  void Put(const std::string& name, int ucy = 10) {
+    std::string path = cell_.data_dir() + "/" + name + ".apl";
+    std::ofstream(path) << Program(name, ucy);
+    auto r = Ctl({"program", "put", path});
+    ASSERT_EQ(r.code, 0) << r.err;
+  }
+  int Pid(const std::string& service) { return cell_.Pids().at(service); }
+  LocalCell cell_{"cell-hardening-"};
+};
+
+// Item 1: a key binds the whole command; a different command under a used key is refused with exit 1.
+TEST_F(Hardening, AnIdempotencyKeyBindsTheWholeCommand) {
+  Put("PUMP1");
+  Put("VALVE1");
+  ASSERT_EQ(Ctl({"route", "define", "PUMP", "--op", "KT01:PUMP1"}).code, 0);
+  ASSERT_EQ(Ctl({"route", "define", "VALVE", "--op", "KT02:VALVE1"}).code, 0);
+  const std::map<std::string, std::string> key{{"CELLCTL_IDEMPOTENCY_KEY", "s7"}};
+  auto first = Ctl({"route", "operate", "PUMP", "--pallet", "250"}, key);
+  ASSERT_EQ(first.code, 0) << first.err;
+  auto again = Ctl({"route", "operate", "PUMP", "--pallet", "250"}, key);  // a retry: the same job
+  EXPECT_EQ(again.code, 0) << again.err;
+  EXPECT_EQ(again.out, first.out);
+  auto other = Ctl({"route", "operate", "VALVE", "--pallet", "251"}, key);  // another command: refused
+  EXPECT_EQ(other.code, 1) << other.out;
+  EXPECT_EQ(other.out, "");
+  EXPECT_NE(other.err.find("'s7:route-operate' was already used for another command"), std::string::npos)
+      << other.err;
+  ExpectOneShortLine(other, "route operate VALVE under a used key");
+  auto jobs = cell_.Json({"job", "ls", "--json"});
+  ASSERT_EQ(jobs.size(), 1u) << jobs.dump();  // pallet 251 was never operated
+  EXPECT_EQ(jobs[0]["pallet"], 250);
+
+  // route define and job cancel the same way.
+  const std::map<std::string, std::string> k2{{"CELLCTL_IDEMPOTENCY_KEY", "s8"}};
+  ASSERT_EQ(Ctl({"route", "define", "R2", "--op", "KT01:PUMP1"}, k2).code, 0);
+  EXPECT_EQ(Ctl({"route", "define", "R2", "--op", "KT01:PUMP1"}, k2).code, 0);
+  auto redefine = Ctl({"route", "define", "R2", "--op", "KT02:VALVE1"}, k2);
+  EXPECT_EQ(redefine.code, 1) << redefine.err;
+  EXPECT_EQ(cell_.Json({"route", "show", "R2", "--json"})["ops"][0]["programs"][0], "PUMP1");
+  const std::map<std::string, std::string> k3{{"CELLCTL_IDEMPOTENCY_KEY", "s9"}};
+  ASSERT_EQ(Ctl({"station", "hold", "KT02"}).code, 0);  // keeps the second job live
+  auto j2 = FirstLine(Ctl({"route", "operate", "VALVE", "--pallet", "252"}).out);
+  ASSERT_EQ(Ctl({"job", "cancel", j2}, k3).code, 0);
+  EXPECT_EQ(Ctl({"job", "cancel", j2}, k3).code, 0);
+  auto cancel_other = Ctl({"job", "cancel", FirstLine(first.out)}, k3);
+  EXPECT_EQ(cancel_other.code, 1) << cancel_other.err;
+  EXPECT_NE(cell_.Json({"job", "show", FirstLine(first.out), "--json"})["state"], "CANCELLED");
+  ASSERT_EQ(Ctl({"station", "resume", "KT02"}).code, 0);
+  // A put under a used key with other content: the store refuses it the same way.
+  const std::map<std::string, std::string> k4{{"CELLCTL_IDEMPOTENCY_KEY", "s10"}};
+  std::string a = cell_.data_dir() + "/A.apl", b = cell_.data_dir() + "/B.apl";
+  std::ofstream(a) << Program("KEYA", 1);
+  std::ofstream(b) << Program("KEYB", 1);
+  ASSERT_EQ(Ctl({"program", "put", a}, k4).code, 0);
+  EXPECT_EQ(Ctl({"program", "put", a}, k4).code, 0);
+  EXPECT_EQ(Ctl({"program", "put", b}, k4).code, 1);
+  EXPECT_NE(Ctl({"program", "show", "KEYB"}).code, 0);
+}
+
+// Items 2 and 3 against the services: the names the tests above refuse locally, refused by the scheduler and
+// the station too when they arrive another way, and a route of 64 characters is not a prefix of one of 65.
+TEST_F(Hardening, LongNamesAreNeverCutAndEmptyToolLoadsAreRefused) {
+  Put("PUMP1");
+  const std::string r64(64, 'R');
+  ASSERT_EQ(Ctl({"route", "define", r64, "--op", "KT01:PUMP1"}).code, 0);
+  auto longer = Ctl({"route", "define", r64 + "S", "--op", "KT02:PUMP1"});
+  EXPECT_EQ(longer.code, 2) << longer.err;
+  EXPECT_EQ(cell_.Json({"route", "show", r64, "--json"})["ops"][0]["stations"][0], "KT01");
+  // A route file with a bad route name: refused (cellctl reads it first; the scheduler would too).
+  std::string file = cell_.data_dir() + "/routes.txt";
+  std::ofstream(file) << "ROUTE ../x\nOP KT01 : PUMP1\n";
+  auto bad = Ctl({"route", "define", "../x", "--file", file});
+  EXPECT_EQ(bad.code, 2) << bad.err;
+  ExpectOneShortLine(bad, "route file with ../x");
+  // A TLD load with a statement loads; a file of other blocks is refused by cellctl (before sending).
+  std::string tld = cell_.data_dir() + "/tools.tld";
+  std::ofstream(tld) << "(TLD,S9T4711P100.D10.)\n";
+  EXPECT_EQ(Ctl({"tools", "load", "KT01", tld}).code, 0);
+}
+
+// Item 6: one process per station identity, and the singletons.
+TEST_F(Hardening, OneProcessPerIdentity) {
+  const std::string other = MakeTempDir("cell-hardening-second-");
+  // A second process of every kind, each with another data dir, refuses within 5 s with a clear message.
+  for (auto argv : std::vector<std::vector<std::string>>{{"cell-interpreter", "--station", "KT01"},
+                                                         {"cell-axis-servo", "--station", "KT02"},
+                                                         {"cell-scheduler"},
+                                                         {"cell-program-store"},
+                                                         {"cell-inspection-writer"}}) {
+    argv[0] = BinDir() + "/" + argv[0];
+    auto t0 = std::chrono::steady_clock::now();
+    auto r = RunCommand(argv, {{"CELL_DATA_DIR", other}}, 20s);
+    auto took = std::chrono::steady_clock::now() - t0;
+    EXPECT_EQ(r.code, 1) << argv[0] << ": " << r.err;
+    EXPECT_NE(r.err.find("another live process is "), std::string::npos) << r.err;
+    EXPECT_LT(took, 5s) << argv[0];
+  }
+  fs::remove_all(other);
+  // A kill -9 and a restart at once: the dead process's announcement does not block its successor.
+  const int old = Pid("cell-interpreter/KT01");
+  ASSERT_EQ(kill(old, SIGKILL), 0);
+  auto r = Ctl({"restart", "cell-interpreter/KT01"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(Pid("cell-interpreter/KT01"), old);
+  Put("PUMP1");
+  ASSERT_EQ(Ctl({"route", "define", "PUMP", "--op", "KT01:PUMP1"}).code, 0);
+
+  // Two at once anyway (here a second announcer of KT01's interpreter, as a process that was stopped past its
+  // lease would be): the scheduler raises a FAULT condition naming both, and dispatches nothing to KT01.
+  {
+    cell::bus::Participant bus("hardening-impostor");
+    cell::bus::Writer<cell::ServiceHealth> w(bus, cell::bus::topics::kHealth, cell::bus::QosKind::kState);
+    cell::ServiceHealth h;
+    h.service_id("cell-interpreter/KT01");
+    h.kind("cell-interpreter");
+    h.station("KT01");
+    h.state(cell::SERVICE_READY);
+    h.pid(999999);
+    h.boot_id(0x5eedULL);
+    h.started_ns(cell::health::WallNs());
+    std::atomic<bool> stop{false};
+    std::thread beat([&] {
+      while (!stop) {
+        h.heartbeat_ns(cell::health::WallNs());
+        w.Write(h);
+        std::this_thread::sleep_for(500ms);
+      }
+    });
+    json st;
+    bool fault = cell::bus::WaitUntil(
+        [&] {
+          st = cell_.Json({"station", "ls", "--json"});
+          return st.is_array() && st[0]["condition"] == "FAULT";
+        },
+        20000ms);
+    EXPECT_TRUE(fault) << st.dump();
+    if (fault) {
+      std::string text = st[0]["alarm_text"];
+      EXPECT_NE(text.find("pid 999999"), std::string::npos) << text;
+      EXPECT_NE(text.find("pid " + std::to_string(Pid("cell-interpreter/KT01"))), std::string::npos) << text;
+    }
+    auto job = FirstLine(Ctl({"route", "operate", "PUMP", "--pallet", "5"}).out);
+    auto j = cell_.Json({"job", "show", job, "--json"});
+    EXPECT_EQ(j["state"], "WAITING") << j.dump();
+    stop = true;
+    beat.join();
+    // The impostor falls silent: the fault clears and the waiting pallet runs.
+    auto w2 = Ctl({"job", "wait", job, "--timeout", "60"});
+    EXPECT_EQ(w2.code, 0) << w2.out << w2.err;
+  }
+}
+
+// Items 7, 8, 9: the local cell's processes.
+TEST_F(Hardening, LocalCellProcesses) {
+  auto rec = Record(cell_);
+  // 7: no descriptor of cellctl's reaches a service: no socket is shared between two services (each opens its
+  // own), and none holds more than stdin/stdout/stderr of what it was started with.
+  std::map<std::string, std::string> owner;  // socket inode -> service
+  for (auto& p : rec) {
+    const std::string svc = p["service"];
+    const std::string fd_dir = "/proc/" + std::to_string(p["pid"].get<int>()) + "/fd";
+    for (auto& e : fs::directory_iterator(fd_dir)) {
+      std::error_code ec;
+      std::string target = fs::read_symlink(e.path(), ec).string();
+      if (ec || target.rfind("socket:", 0) != 0) continue;
+      auto [it, fresh] = owner.emplace(target, svc);
+      EXPECT_TRUE(fresh) << target << " is open in both " << it->second << " and " << svc;
+    }
+  }
+  // 9: local data is its owner's only.
+  auto mode = [](const std::string& path) { return fs::status(path).permissions() & fs::perms::all; };
+  EXPECT_EQ(mode(cell_.data_dir()), fs::perms::owner_all) << cell_.data_dir();
+  EXPECT_EQ(mode(cell_.data_dir() + "/logs"), fs::perms::owner_all);
+  for (auto& e : fs::recursive_directory_iterator(cell_.data_dir())) {
+    auto m = fs::status(e.path()).permissions() & (fs::perms::group_all | fs::perms::others_all);
+    EXPECT_EQ(m, fs::perms::none) << e.path() << " is readable by others";
+  }
+
+  // 8: restart starts the service with the same command line and environment, and records its PID. The
+  // marker is in `up`'s environment only, not in restart's.
+  const int sched = Pid("cell-scheduler");
+  const auto argv = Cmdline(sched);
+  const auto env = Environ(sched);
+  ASSERT_EQ(kill(sched, SIGKILL), 0);
+  auto r = Ctl({"restart", "cell-scheduler"}, {{"CELL_LOG_LEVEL", "debug"}});
+  ASSERT_EQ(r.code, 0) << r.err;
+  const int sched2 = Pid("cell-scheduler");
+  EXPECT_NE(sched2, sched);
+  EXPECT_EQ(Cmdline(sched2), argv);
+  EXPECT_EQ(Environ(sched2), env);
+  // A restart of a running service replaces it.
+  ASSERT_EQ(Ctl({"restart", "cell-axis-servo/KT02"}).code, 0);
+  EXPECT_EQ(Ctl({"restart", "cell-nothing"}).code, 2);
+
+  // `up` of a partly-down cell starts only what is missing.
+  const auto before = cell_.Pids();
+  ASSERT_EQ(kill(before.at("cell-program-store"), SIGKILL), 0);
+  ASSERT_EQ(kill(before.at("cell-interpreter/KT02"), SIGKILL), 0);
+  auto up = Ctl({"up"});
+  ASSERT_EQ(up.code, 0) << up.err;
+  const auto after = cell_.Pids();
+  for (auto& [svc, pid] : after) {
+    if (svc == "cell-program-store" || svc == "cell-interpreter/KT02")
+      EXPECT_NE(pid, before.at(svc)) << svc;
+    else
+      EXPECT_EQ(pid, before.at(svc)) << svc;
+  }
+  EXPECT_EQ(Ctl({"program", "ls"}).code, 0);
+
+  // `down` stops only the processes it started: a recorded PID that now belongs to another process (here a
+  // sleep of the test's, put in the record as if the PID had been reused) is left alone.
+  Process bystander({"/bin/sleep", "60"});
+  auto rec2 = Record(cell_);
+  for (auto& p : rec2)
+    if (p["service"] == "cell-inspection-writer") {
+      kill(p["pid"].get<int>(), SIGKILL);
+      p["pid"] = bystander.pid();
+    }
+  std::ofstream(cell_.data_dir() + "/cell-up.json") << rec2.dump(2);
+  auto down = cell_.Down();
+  EXPECT_EQ(down.code, 0) << down.err;
+  EXPECT_NE(down.err.find("is no longer cell-inspection-writer: left alone"), std::string::npos) << down.err;
+  EXPECT_TRUE(bystander.Running());
+  ASSERT_EQ(cell_.Up("KT01,KT02", "virtual").code, 0);  // for TearDown
+}
+
+}  // namespace
