@@ -59,7 +59,8 @@ TEST(Claim, AStoppedProcessDoesNotBlockItsSuccessor) {
   }
 }
 
-// Announcements written by hand, each "process" with its own writer: a process "killed" simply stops speaking.
+// Announcements written by hand, each "process" with its own writer: a process "killed" simply stops
+// speaking.
 class Census : public ::testing::Test {
  protected:
   void Speak(uint64_t boot, int pid, int64_t started) {

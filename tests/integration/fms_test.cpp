@@ -245,25 +245,8 @@ TEST_F(Fms, SchedulerKilledMidRunRestartsAndJobCompletesExactlyOnce) {
   // The scheduler's command line and environment, as `cellctl up` started it.
   pid_t sched = Pid("cell-scheduler");
   ASSERT_GT(sched, 0);
-  std::vector<std::string> argv;
-  {
-    std::string cmd = ReadFile("/proc/" + std::to_string(sched) + "/cmdline");
-    for (size_t i = 0; i < cmd.size();) {
-      size_t e = cmd.find('\0', i);
-      argv.push_back(cmd.substr(i, e - i));
-      i = e == std::string::npos ? cmd.size() : e + 1;
-    }
-  }
-  std::map<std::string, std::string> env;
-  {
-    std::string text = ReadFile("/proc/" + std::to_string(sched) + "/environ");
-    for (size_t i = 0; i < text.size();) {
-      size_t e = text.find('\0', i);
-      std::string kv = text.substr(i, e - i);
-      if (auto eq = kv.find('='); eq != std::string::npos) env[kv.substr(0, eq)] = kv.substr(eq + 1);
-      i = e == std::string::npos ? text.size() : e + 1;
-    }
-  }
+  const std::vector<std::string> argv = ProcessArgv(sched);
+  std::map<std::string, std::string> env = ProcessEnvironment(sched);
   ASSERT_FALSE(argv.empty());
   EXPECT_EQ(std::filesystem::path(argv[0]).filename(), "cell-scheduler");
   EXPECT_EQ(env["CELL_DATA_DIR"], data_);

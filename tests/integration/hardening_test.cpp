@@ -46,29 +46,6 @@ void ExpectOneShortLine(const RunResult& r, const std::string& what) {
   EXPECT_EQ(r.err.find('\x1b'), std::string::npos) << what << ": a raw escape sequence reached the terminal";
 }
 
-std::map<std::string, std::string> Environ(int pid) {
-  std::map<std::string, std::string> env;
-  std::string text = ReadFile("/proc/" + std::to_string(pid) + "/environ");
-  for (size_t i = 0; i < text.size();) {
-    size_t e = text.find('\0', i);
-    std::string kv = text.substr(i, e - i);
-    if (auto eq = kv.find('='); eq != std::string::npos) env[kv.substr(0, eq)] = kv.substr(eq + 1);
-    i = e == std::string::npos ? text.size() : e + 1;
-  }
-  return env;
-}
-
-std::vector<std::string> Cmdline(int pid) {
-  std::vector<std::string> argv;
-  std::string text = ReadFile("/proc/" + std::to_string(pid) + "/cmdline");
-  for (size_t i = 0; i < text.size();) {
-    size_t e = text.find('\0', i);
-    argv.push_back(text.substr(i, e - i));
-    i = e == std::string::npos ? text.size() : e + 1;
-  }
-  return argv;
-}
-
 json Record(const LocalCell& cell) {
   return json::parse(ReadFile(cell.data_dir() + "/cell-up.json"));
 }
@@ -355,15 +332,15 @@ TEST_F(Hardening, LocalCellProcesses) {
   // 8: restart starts the service with the same command line and environment, and records its PID. The
   // marker is in `up`'s environment only, not in restart's.
   const int sched = Pid("cell-scheduler");
-  const auto argv = Cmdline(sched);
-  const auto env = Environ(sched);
+  const auto argv = ProcessArgv(sched);
+  const auto env = ProcessEnvironment(sched);
   ASSERT_EQ(kill(sched, SIGKILL), 0);
   auto r = Ctl({"restart", "cell-scheduler"}, {{"CELL_LOG_LEVEL", "debug"}});
   ASSERT_EQ(r.code, 0) << r.err;
   const int sched2 = Pid("cell-scheduler");
   EXPECT_NE(sched2, sched);
-  EXPECT_EQ(Cmdline(sched2), argv);
-  EXPECT_EQ(Environ(sched2), env);
+  EXPECT_EQ(ProcessArgv(sched2), argv);
+  EXPECT_EQ(ProcessEnvironment(sched2), env);
   // A restart of a running service replaces it.
   ASSERT_EQ(Ctl({"restart", "cell-axis-servo/KT02"}).code, 0);
   EXPECT_EQ(Ctl({"restart", "cell-nothing"}).code, 2);

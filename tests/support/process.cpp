@@ -123,4 +123,29 @@ std::string SourceDir() {
   return v ? v : ".";
 }
 
+namespace {
+// The NUL-separated fields of a /proc file.
+std::vector<std::string> NulFields(const std::string& path) {
+  std::vector<std::string> out;
+  std::string text = ReadFile(path);
+  for (size_t i = 0; i < text.size();) {
+    size_t e = text.find('\0', i);
+    out.push_back(text.substr(i, e - i));
+    i = e == std::string::npos ? text.size() : e + 1;
+  }
+  return out;
+}
+}  // namespace
+
+std::vector<std::string> ProcessArgv(int pid) {
+  return NulFields("/proc/" + std::to_string(pid) + "/cmdline");
+}
+
+std::map<std::string, std::string> ProcessEnvironment(int pid) {
+  std::map<std::string, std::string> env;
+  for (auto& kv : NulFields("/proc/" + std::to_string(pid) + "/environ"))
+    if (auto eq = kv.find('='); eq != std::string::npos) env[kv.substr(0, eq)] = kv.substr(eq + 1);
+  return env;
+}
+
 }  // namespace cell::testing

@@ -45,6 +45,9 @@ RunResult RunCommand(std::vector<std::string> argv, const std::map<std::string, 
                      const std::string& stdin_text = "");
 
 std::string ReadFile(const std::string& path);
+// A running process's command line (/proc/PID/cmdline) and environment (/proc/PID/environ).
+std::vector<std::string> ProcessArgv(int pid);
+std::map<std::string, std::string> ProcessEnvironment(int pid);
 std::string MakeTempDir(const std::string& prefix);
 std::string BinDir();     // CELL_BIN_DIR (set by CTest)
 std::string SourceDir();  // CELL_SOURCE_DIR
