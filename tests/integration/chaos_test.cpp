@@ -169,8 +169,8 @@ TEST_F(Chaos, KillNineAtRandomMomentsWhileRoutesOperate) {
   } joiner{stop_operating, operator_thread};
 
   // The driver: kill -9 one or two services at random moments, restart them with `cellctl restart`.
-  std::vector<std::string> kinds = {"cell-program-store", "cell-scheduler", "cell-inspection-writer",
-                                    "cell-interpreter", "cell-axis-servo"};
+  std::vector<std::string> kinds = {"cell-program-store", "cell-scheduler",  "cell-inspection-writer",
+                                    "cell-interpreter",   "cell-axis-servo", "cell-dashboard"};
   std::map<std::string, int> kills_by_kind;
   int kills = 0, kills_running = 0, puts = 0;
   std::vector<std::string> services;

@@ -239,10 +239,11 @@ TEST_F(Hardening, OneProcessPerIdentity) {
                                                          {"cell-axis-servo", "--station", "KT02"},
                                                          {"cell-scheduler"},
                                                          {"cell-program-store"},
-                                                         {"cell-inspection-writer"}}) {
+                                                         {"cell-inspection-writer"},
+                                                         {"cell-dashboard"}}) {
     argv[0] = BinDir() + "/" + argv[0];
     auto t0 = std::chrono::steady_clock::now();
-    auto r = RunCommand(argv, {{"CELL_DATA_DIR", other}}, 20s);
+    auto r = RunCommand(argv, {{"CELL_DATA_DIR", other}, {"CELL_HTTP", "127.0.0.1:0"}}, 20s);
     auto took = std::chrono::steady_clock::now() - t0;
     EXPECT_EQ(r.code, 1) << argv[0] << ": " << r.err;
     EXPECT_NE(r.err.find("another live process is "), std::string::npos) << r.err;

@@ -12,6 +12,7 @@
 #include "cell/dashboard/feed.h"
 #include "cell/dashboard/server.h"
 #include "cell/health/health.h"
+#include "cell/identity/identity.h"
 #include "cell/log/log.h"
 
 int main() {
@@ -31,6 +32,8 @@ int main() {
     cell::dashboard::CellView view(cell::dashboard::LoadStationDefs(), view_opts);
     cell::bus::Participant bus("cell-dashboard");
     cell::health::Announcer health(bus, "cell-dashboard");
+    cell::identity::Claim claim(bus, health);
+    claim.Confirm();  // one dashboard per cell: before it binds its port and writes dashboard.url
     cell::dashboard::Feed feed(bus, view);
     cell::dashboard::HttpServer http(view, http_opts);
     http.Start();
