@@ -231,6 +231,33 @@ TEST_F(Hardening, LongNamesAreNeverCutAndEmptyToolLoadsAreRefused) {
   EXPECT_EQ(Ctl({"tools", "load", "KT01", tld}).code, 0);
 }
 
+// Item 5 against the services: a KT-APL program sent to the Okuma station OK01 (configured in
+// deploy/stations, not started) is refused by the scheduler at `route define` and at `pallet run`, one line,
+// exit 1, nothing recorded.
+TEST_F(Hardening, ProgramsForTheWrongControllerAreRefused) {
+  Put("PUMP1");
+  auto route = Ctl({"route", "define", "WRONG", "--op", "KT01,OK01:PUMP1"});
+  EXPECT_EQ(route.code, 1) << route.err;
+  EXPECT_NE(
+      route.err.find("route WRONG op 1: program 'PUMP1' is ktapl (Kearney & Trecker KT-APL) but station "
+                     "OK01 runs okuma (Okuma OSP-E100L)"),
+      std::string::npos)
+      << route.err;
+  ExpectOneShortLine(route, "route define WRONG");
+  EXPECT_NE(Ctl({"route", "show", "WRONG"}).code, 0);  // not defined
+  ASSERT_EQ(Ctl({"pallet", "set", "9", "PUMP1"}).code, 0);
+  auto run = Ctl({"pallet", "run", "9", "--station", "OK01"});
+  EXPECT_EQ(run.code, 1) << run.err;
+  EXPECT_EQ(run.out, "");
+  EXPECT_NE(run.err.find("pallet 9: program 'PUMP1' is ktapl"), std::string::npos) << run.err;
+  ExpectOneShortLine(run, "pallet run 9 on OK01");
+  EXPECT_EQ(cell_.Json({"job", "ls", "--json"}).size(), 0u);
+  // The same program on its own controller runs.
+  auto ok = Ctl({"pallet", "run", "9", "--station", "KT01"});
+  EXPECT_EQ(ok.code, 0) << ok.err;
+  EXPECT_EQ(Ctl({"job", "wait", FirstLine(ok.out), "--timeout", "60"}).code, 0);
+}
+
 // Item 6: one process per station identity, and the singletons.
 TEST_F(Hardening, OneProcessPerIdentity) {
   const std::string other = MakeTempDir("cell-hardening-second-");

@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include "cell/error/error.h"
+#include "cell/interp/interp.h"
 #include "cell/names/names.h"
 #include "cell/scheduler/allocator.h"
 #include "cell/store/sqlite.h"
@@ -232,6 +233,24 @@ struct Scheduler::Impl {
   }
 
   // ---- building operations from specs ----
+  // A station runs programs of its own controller language only: the dialect the program store recorded
+  // for the program against each listed station's (its station file's, or what it announced). A station
+  // whose dialect is not known yet (neither configured nor seen) is not judged. "" when all agree.
+  std::string DialectClash(const ProgramMeta& meta, const std::vector<std::string>& station_ids) const {
+    const interp::Dialect* pd = interp::FindDialect(meta.dialect);
+    for (const auto& id : station_ids) {
+      const int s = FindStation(id);
+      if (s < 0) continue;
+      const interp::Dialect* sd = interp::FindDialect(stations[static_cast<std::size_t>(s)].dialect);
+      if (pd == nullptr || sd == nullptr || pd == sd) continue;
+      return fmt::format(
+          "program '{}' is {} ({}) but station {} runs {} ({}); a station runs programs of its "
+          "own dialect only",
+          meta.name, pd->name(), pd->title(), id, sd->name(), sd->title());
+    }
+    return {};
+  }
+
   // Throws when `strict`; otherwise records the problem in Op::blocked.
   Op BuildOp(const OpSpec& spec, bool require_ucy, bool strict, std::string_view where) {
     if (spec.stations.empty())
@@ -250,6 +269,9 @@ struct Scheduler::Impl {
         if (!meta) {
           problem = fmt::format("program '{}' not found", name);
           if (strict) throw Error(Errc::kNotFound, fmt::format("{}: {}", where, problem));
+        } else if (std::string clash = DialectClash(*meta, spec.stations); !clash.empty()) {
+          problem = std::move(clash);
+          if (strict) throw Error(Errc::kFailedPrecondition, fmt::format("{}: {}", where, problem));
         } else if (require_ucy && !meta->ucy_s && (meta->dialect.empty() || meta->dialect == "ktapl")) {
           // UCY is the KT/FMS heading (DESIGN §5); the other dialects' programs have none, and their
           // operations add nothing to the backlog.

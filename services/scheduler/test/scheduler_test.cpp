@@ -471,6 +471,60 @@ TEST(PalletMaps, RunPalletOnAStation) {
   EXPECT_EQ(CodeOf([&] { c.sched->RunPallet("y", 9, "KT09"); }), Errc::kNotFound);
 }
 
+// Issue 13 item 5: a program runs only on a station of its own controller. `route define` and `pallet run`
+// refuse a program whose dialect (the program store's record) differs from a listed station's (its station
+// file, ConfigureStation), with one line naming both, and record nothing; a program re-put in another dialect
+// makes the routes that use it invalid.
+TEST(Dialects, ProgramsRunOnlyOnStationsOfTheirDialect) {
+  FakeCell c;
+  c.Program("PUMP", {}, 100);  // a KT-APL program (FakeCell::Program stores "ktapl")
+  c.programs.Put("SHAFT.MIN", "O100\nG00 X10. Z5.\nM02\n", "okuma");
+  c.Online("KT01");
+  c.sched->ConfigureStation("OK01", "okuma");
+  const std::string why =
+      "program 'PUMP' is ktapl (Kearney & Trecker KT-APL) but station OK01 runs okuma (Okuma OSP-E100L); a "
+      "station runs programs of its own dialect only";
+  for (const char* op : {"OK01:PUMP", "KT01,OK01:PUMP"}) {
+    try {
+      c.Route("R", {op});
+      ADD_FAILURE() << op << ": accepted";
+    } catch (const Error& e) {
+      EXPECT_EQ(e.code(), Errc::kFailedPrecondition);
+      EXPECT_EQ(std::string(e.what()), "route R op 1: " + why);
+    }
+  }
+  EXPECT_FALSE(c.sched->Route("R"));
+  EXPECT_TRUE(c.Route("R", {"KT01:PUMP"}).valid);
+
+  c.sched->SetPalletMap("m", 7, {"PUMP"});
+  try {
+    c.sched->RunPallet("run-ok", 7, "OK01");
+    ADD_FAILURE() << "pallet run accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), Errc::kFailedPrecondition);
+    EXPECT_EQ(std::string(e.what()), "pallet 7: " + why);
+  }
+  EXPECT_TRUE(c.sched->Jobs().empty());  // no job, the pallet is free
+  JobResult kt = c.sched->RunPallet("run-kt", 7, "KT01");
+  c.Take(kt.effects);
+  EXPECT_EQ(c.State(kt.job_id), JobState::kDispatched);
+  c.sched->SetPalletMap("m8", 8, {"SHAFT.MIN"});
+  EXPECT_EQ(CodeOf([&] { c.sched->RunPallet("run-kt8", 8, "KT01"); }), Errc::kFailedPrecondition);
+  c.Take(c.sched->StationOnline("OK01", "okuma"));
+  JobResult ok = c.sched->RunPallet("run-ok8", 8, "OK01");
+  c.Take(ok.effects);
+  EXPECT_EQ(c.State(ok.job_id), JobState::kDispatched);
+
+  // PUMP is put again as an Okuma program: route R no longer qualifies.
+  c.programs.Put("PUMP", "O1\nM02\n", "okuma");
+  c.Take(c.sched->ProgramChanged("PUMP"));
+  auto r = c.sched->Route("R").value();
+  EXPECT_FALSE(r.valid);
+  EXPECT_NE(r.invalid_reason.find("program 'PUMP' is okuma (Okuma OSP-E100L) but station KT01 runs ktapl"),
+            std::string::npos)
+      << r.invalid_reason;
+}
+
 TEST(Routes, RevalidatedWhenAProgramChanges) {
   FakeCell c;
   c.Program("A", {"1"}, 100);
