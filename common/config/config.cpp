@@ -370,6 +370,9 @@ StationConfig LoadStationFile(const fs::path& file) {
     for (size_t i = 0; i < arr->size(); ++i) {
       const toml::node& entry = *arr->get(i);
       tooltable::ToolEntry tool = ParseTool(file, entry, i);
+      // The dialect's own ranges, as its tool-table form (KT-APL TLD) enforces them on every other path.
+      if (std::string why = d->CheckToolEntry(tool); !why.empty())
+        Fail(file, &entry, fmt::format("[[tools]] entry {} (tool {}): {}", i + 1, tool.tool, why));
       if (auto [it, fresh] = by_tool.emplace(tool.tool, i); !fresh) {
         Fail(file, &entry,
              fmt::format("[[tools]] entry {}: tool {} is already listed in entry {}", i + 1, tool.tool,

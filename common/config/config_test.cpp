@@ -197,7 +197,13 @@ TEST_F(ConfigTest, ToolErrors) {
             std::string::npos);
   EXPECT_NE(err("tool = \"1\"\nsocket = 1\nlength_axis = \"Q\"\n").find("length_axis = 'Q'"),
             std::string::npos);
-  EXPECT_EQ(err("tool = \"1\"\nsocket = 1\nx_offset = -1.5\nz_offset = 2\nnose_radius = 0.4\ntip = 3\n"), "");
+  // A lathe's offsets on a lathe station; a KT-APL data set has P and D only (TLD, ln 3975-4097).
+  Write("OK01",
+        "[station]\nid = \"OK01\"\ndialect = \"okuma\"\n[[tools]]\n"
+        "tool = \"1\"\nsocket = 1\nx_offset = -1.5\nz_offset = 2\nnose_radius = 0.4\ntip = 3\n");
+  EXPECT_EQ(LoadError("OK01"), "");
+  EXPECT_NE(err("tool = \"1\"\nsocket = 1\nx_offset = -1.5\n").find("a KT-APL tool has no lathe offsets"),
+            std::string::npos);
   EXPECT_NE(err("tool = \"1\"\nsocket = 1\nlength = 1\ndiameter = \"big\"\nlife_left_min = 1\n")
                 .find("diameter must be a number, not a string"),
             std::string::npos);
@@ -212,6 +218,34 @@ TEST_F(ConfigTest, ToolErrors) {
       err(one + "[[tools]]\n" + "tool = \"8\"\nsocket = 3\nlength = 1\ndiameter = 1\nlife_left_min = 1\n")
           .find("[[tools]] entry 2: socket 3 already holds tool 7"),
       std::string::npos);
+}
+
+// Issue 13 item 4: a station file's tools fit the station dialect's ranges, the same ones its tool-table form
+// enforces (KT-APL TLD, manual ln 4041-4059): an out-of-range entry is refused with the file, the line and
+// the TLD letter; signed compensations are legal (ln 4063, E45: D-.25).
+TEST_F(ConfigTest, ToolsFitTheDialectsRanges) {
+  const std::string head = "[station]\nid = \"KT01\"\ndialect = \"ktapl\"\n[[tools]]\ntool = \"33412\"\n";
+  auto err = [&](const std::string& tool) {
+    Write("KT01", head + tool);
+    return LoadError("KT01");
+  };
+  EXPECT_EQ(err("socket = 12\nlength = 0.508\ndiameter = -6.35\nlife_left_min = 225\n"), "");
+  EXPECT_EQ(err("socket = 999\nlength = -999.999\ndiameter = 999.999\nlife_left_min = 5999\n"), "");
+  EXPECT_NE(err("socket = 1\nlength = 1000.0\n")
+                .find("KT01.toml:4: [[tools]] entry 1 (tool 33412): TLD P VALUE 1000 MM OUTSIDE +-999.999 MM "
+                      "(manual ln 4041-4049)"),
+            std::string::npos)
+      << LoadError("KT01");
+  EXPECT_NE(err("socket = 1\ndiameter = -1000\n").find("TLD D VALUE -1000 MM OUTSIDE +-999.999 MM"),
+            std::string::npos);
+  EXPECT_NE(err("socket = 1000\n").find("(tool 33412): TLD S VALUE 1000 OUTSIDE 1-999"), std::string::npos);
+  EXPECT_NE(err("socket = 1\nlife_left_min = 6000\n").find("TLD L TOOL LIFE 6000 MIN OUTSIDE 0-5999 MIN"),
+            std::string::npos);
+  // A lathe station keeps its own (the default: finite numbers).
+  Write("OK01",
+        "[station]\nid = \"OK01\"\ndialect = \"okuma\"\n[[tools]]\ntool = \"1\"\nsocket = 1\n"
+        "length = 1000\n");
+  EXPECT_EQ(LoadError("OK01"), "");
 }
 
 TEST_F(ConfigTest, UnknownStationListsConfiguredOnes) {

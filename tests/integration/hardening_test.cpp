@@ -258,6 +258,46 @@ TEST_F(Hardening, ProgramsForTheWrongControllerAreRefused) {
   EXPECT_EQ(Ctl({"job", "wait", FirstLine(ok.out), "--timeout", "60"}).code, 0);
 }
 
+// Item 4 against the services: tool data outside the manual's TLD ranges (KT-APL ln 4041-4049: +-999.999 mm)
+// is refused on every path (cellctl tools load, a program's TLD at run time), at the offending letter; the
+// manual's own E45 example with its signed compensations (ln 4063-4097: D-.25, D-.0004) loads.
+TEST_F(Hardening, ToolDataOutsideTheManualsRangesIsRefused) {
+  // E45 loads (signed compensations), one value past the range does not.
+  std::string e45 = cell_.data_dir() + "/e45.tld";
+  std::ofstream(e45) << "G70\nN12 (TLD,S12T33412CP.02D-.25L345H5.9)\nN13(TLD,S12T33412.5CP.02D-.25L345H5.9)\n"
+                        "N14(TLD,T33412.5W12P.0003D-.0004)\n";
+  auto load = Ctl({"tools", "load", "KT01", e45});
+  ASSERT_EQ(load.code, 0) << load.err;
+  bool seen = false;
+  for (const auto& e : cell_.Json({"station", "tools", "KT01", "--json"})) {
+    if (e["tool"] == "33412.5") {
+      seen = true;
+      EXPECT_NEAR(e["diameter"].get<double>(), -0.25 * 25.4, 1e-9);
+    }
+  }
+  EXPECT_TRUE(seen);
+  std::string big = cell_.data_dir() + "/big.tld";
+  std::ofstream(big) << "G71\n(TLD,S9T4711P1000.D10.)\n";
+  auto refused = Ctl({"tools", "load", "KT01", big});
+  EXPECT_EQ(refused.code, 1) << refused.err;
+  EXPECT_NE(refused.err.find("big.tld:2:13: error: TLD P VALUE 1000 OUTSIDE +-999.999"), std::string::npos)
+      << refused.err;
+  ExpectOneShortLine(refused, "tools load P1000.");
+  // A program's TLD at run time: the job fails with the same message at the program's line and column.
+  std::string prog = cell_.data_dir() + "/BIGTLD.apl";
+  std::ofstream(prog) << "%\n(NAM,BIGTLD)\n(UCY,10)\nN10 G71\nN20 (TLD,S9T4711P10.D-1000.)\nN30 M30\n%\n";
+  ASSERT_EQ(Ctl({"program", "put", prog}).code, 0);
+  ASSERT_EQ(Ctl({"pallet", "set", "10", "BIGTLD"}).code, 0);
+  auto job = FirstLine(Ctl({"pallet", "run", "10", "--station", "KT01"}).out);
+  ASSERT_FALSE(job.empty());
+  EXPECT_NE(Ctl({"job", "wait", job, "--timeout", "60"}).code, 0);
+  auto shown = cell_.Json({"job", "show", job, "--json"});
+  EXPECT_EQ(shown["state"], "FAILED") << shown.dump();
+  EXPECT_NE(shown.value("reason", "").find("BIGTLD:5:21: error: TLD D VALUE -1000 OUTSIDE +-999.999"),
+            std::string::npos)
+      << shown.dump();
+}
+
 // Item 6: one process per station identity, and the singletons.
 TEST_F(Hardening, OneProcessPerIdentity) {
   const std::string other = MakeTempDir("cell-hardening-second-");

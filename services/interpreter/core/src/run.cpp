@@ -1,6 +1,7 @@
 // The run API's and the dialect interface's out-of-line parts.
 #include "cell/interp/run.h"
 
+#include <cmath>
 #include <ctime>
 #include <string>
 
@@ -46,6 +47,13 @@ bool ProgramNameCollector::Add(const std::string& name, int line, std::string_vi
   }
   h_.program_names.push_back(name);
   return true;
+}
+
+std::string Dialect::CheckToolEntry(const tooltable::ToolEntry& e) const {
+  for (double v : {e.length, e.diameter, e.life_left_min, e.max_hp, e.x_offset, e.z_offset, e.nose_radius}) {
+    if (!std::isfinite(v)) return "tool " + e.tool + ": a value is not a finite number";
+  }
+  return "";
 }
 
 std::string Dialect::ImportListing(std::string_view text) const {

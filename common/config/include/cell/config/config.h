@@ -55,6 +55,8 @@ inline constexpr int kMaxDomain = 232;
 //   O11 = 9                  # interp::RunOptions::params (EMCO's operator monitor, docs/dialects/emco.md);
 //   S01 = 2                  # values are strings, numbers or booleans (1/0); names 1-32 of A-Z a-z 0-9 _ . -
 //
+// Each [[tools]] entry must also fit the station dialect's own ranges (interp::Dialect::CheckToolEntry;
+// KT-APL: the TLD statement's, socket 1-999, length and diameter +-999.999 mm, life up to 99 h 59 min).
 // Unknown keys inside [station] and [[tools]] are errors (typos must not pass silently); other tables
 // ([machine], [axes.x], [magazine], ...) belong to other readers and are ignored here.
 struct StationConfig {

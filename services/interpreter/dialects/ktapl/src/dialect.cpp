@@ -210,6 +210,11 @@ class Ktapl final : public Dialect {
       return fmt::format("{} = {} is outside the parameter range -99999999. .. 999999999.", name, value);
     return "";
   }
+
+  // A station file's [[tools]] entry against the TLD ranges (tld.cpp holds them, for both paths).
+  std::string CheckToolEntry(const tooltable::ToolEntry& entry) const override {
+    return ktapl::CheckToolEntry(entry);
+  }
 };
 
 }  // namespace

@@ -10,6 +10,24 @@
 namespace cell::interp::ktapl {
 namespace {
 
+// The manual's ranges for tool data (ln 3975-4097), for the TLD parser (in the unit a statement is read in)
+// and for CheckToolEntry (millimetres). Sign is never an error: "Plus (+) is assumed unless a minus (-) is
+// entered" (ln 4039, 4045), and the manual's own example writes D-.25 (ln 4063).
+struct CompLimit {
+  double mm, inch;
+  std::string_view lines;
+};
+constexpr CompLimit kDataSetComp{999.999, 39.37, "ln 4041-4049"};  // P, D of a primary or suffix set
+constexpr CompLimit kProcessComp{9.999, 0.3937, "ln 4091"};        // P, D with W (the NOTE, ln 4019: .3936)
+constexpr int kMaxSocket = 999;                                    // S
+constexpr int kMaxLifeHhmm = 9959;                                 // L, hhmm (ln 4051-4055)
+constexpr double kMaxHp = 99.9;                                    // H (ln 4059)
+
+std::string RangeText(char letter, double v, const CompLimit& lim, bool metric, std::string_view unit) {
+  return fmt::format("TLD {} VALUE {}{} OUTSIDE +-{}{} (manual {})", letter, v, unit,
+                     metric ? lim.mm : lim.inch, unit, lim.lines);
+}
+
 class TldParser {
  public:
   TldParser(std::string_view body, const TldContext& ctx) : b_(body), ctx_(ctx) {}
@@ -20,7 +38,7 @@ class TldParser {
     std::optional<double> length, diameter, hp;
     bool check = false, manual = false, broken = false, worn = false;
     std::string seen;
-    int tool_col = 0, manual_col = 0;
+    int tool_col = 0, manual_col = 0, length_col = 0, diameter_col = 0;
     Blanks();
     if (i_ >= b_.size()) Error(Col(), "TLD NEEDS A T TOOL NUMBER");
     while (i_ < b_.size()) {
@@ -33,7 +51,7 @@ class TldParser {
       Blanks();
       switch (letter) {
         case 'S':
-          socket = Integer(letter, 1, 999);
+          socket = Integer(letter, 1, kMaxSocket);
           break;
         case 'T':
           tool_col = col;
@@ -43,21 +61,23 @@ class TldParser {
           pallet = Integer(letter, 1, ctx_.max_pallet);
           break;
         case 'P':
+          length_col = col;
           length = Offset(letter);
           break;
         case 'D':
+          diameter_col = col;
           diameter = Offset(letter);
           break;
         case 'L': {
           // hhmm right-aligned (ln 4051-4055: "L2241 = 22 Hours and 41 Minutes").
-          const int v = Integer(letter, 0, 9959);
+          const int v = Integer(letter, 0, kMaxLifeHhmm);
           if (v % 100 > 59) Error(col, "TLD TOOL LIFE IS hhmm (MINUTES <= 59)");
           life = (v / 100) * 60 + v % 100;
           break;
         }
         case 'H': {
           const double v = Plain(letter);
-          if (v < 0 || v > 99.9) Error(col, "TLD H HORSEPOWER OUTSIDE 0-99.9");
+          if (v < 0 || v > kMaxHp) Error(col, "TLD H HORSEPOWER OUTSIDE 0-99.9");
           hp = v;
           break;
         }
@@ -90,16 +110,13 @@ class TldParser {
           Error(tool_col, fmt::format("TLD PROCESS COMPENSATION ALLOWS ONLY T, W, P AND D, NOT {}", c));
         }
       }
-      const double lim = ctx_.metric ? 9.999 : 0.3937;
-      Range(length, lim, 'P');
-      Range(diameter, lim, 'D');
+      Range(length, kProcessComp, 'P', length_col);
+      Range(diameter, kProcessComp, 'D', diameter_col);
       st.process = tooltable::ProcessComp{tool, *pallet, length.value_or(0) * mm, diameter.value_or(0) * mm};
       return st;
     }
-    // ln 4039-4045: +-999.999 mm / +-39.37 in.
-    const double lim = ctx_.metric ? 999.999 : 39.37;
-    Range(length, lim, 'P');
-    Range(diameter, lim, 'D');
+    Range(length, kDataSetComp, 'P', length_col);
+    Range(diameter, kDataSetComp, 'D', diameter_col);
     if (socket && manual) Error(manual_col, "TLD MANUAL TOOL (M) CANNOT HAVE A SOCKET (S)");
     tooltable::ToolEntry e;
     e.tool = tool;
@@ -122,10 +139,9 @@ class TldParser {
   void Blanks() {
     while (i_ < b_.size() && (b_[i_] == ' ' || b_[i_] == '\t')) ++i_;
   }
-  void Range(const std::optional<double>& v, double lim, char letter) const {
-    if (v && std::fabs(*v) > lim + 1e-9) {
-      Error(ctx_.col0,
-            fmt::format("TLD {} VALUE {} OUTSIDE +-{}", letter, FormatKtNumber(*v), FormatKtNumber(lim)));
+  void Range(const std::optional<double>& v, const CompLimit& lim, char letter, int col) const {
+    if (v && std::fabs(*v) > (ctx_.metric ? lim.mm : lim.inch) + 1e-9) {
+      Error(col, RangeText(letter, *v, lim, ctx_.metric, ""));
     }
   }
   // Ln (parameter substitution) at the current position: its value, or nullopt.
@@ -216,6 +232,33 @@ class TldParser {
 
 TldStatement ParseTld(std::string_view body, const TldContext& ctx) {
   return TldParser(body, ctx).Parse();
+}
+
+std::string CheckToolEntry(const tooltable::ToolEntry& e) {
+  try {
+    if (tooltable::NormalizeToolNumber(e.tool) != e.tool) return fmt::format("bad tool number '{}'", e.tool);
+  } catch (const cell::Error& err) {
+    return err.what();
+  }
+  if (e.socket < 0 || e.socket > kMaxSocket)
+    return fmt::format("TLD S VALUE {} OUTSIDE 1-{}", e.socket, kMaxSocket);
+  if (e.manual && e.socket != 0) return "TLD MANUAL TOOL (M) CANNOT HAVE A SOCKET (S)";
+  for (auto [letter, v] : {std::pair{'P', e.length}, std::pair{'D', e.diameter}}) {
+    if (!std::isfinite(v) || std::fabs(v) > kDataSetComp.mm + 1e-9)
+      return RangeText(letter, v, kDataSetComp, true, " MM");
+  }
+  // L hhmm: at most 99 hours 59 minutes of tool life.
+  const double max_life_min = (kMaxLifeHhmm / 100) * 60 + kMaxLifeHhmm % 100;
+  if (!std::isfinite(e.life_left_min) || e.life_left_min < 0 || e.life_left_min > max_life_min) {
+    return fmt::format("TLD L TOOL LIFE {} MIN OUTSIDE 0-{} MIN (L{}: 99 HOURS 59 MINUTES, manual ln 4051)",
+                       e.life_left_min, max_life_min, kMaxLifeHhmm);
+  }
+  if (!std::isfinite(e.max_hp) || e.max_hp < 0 || e.max_hp > kMaxHp) return "TLD H HORSEPOWER OUTSIDE 0-99.9";
+  // A KT-APL data set has P and D only: a lathe's offsets have no TLD letter.
+  if (e.x_offset != 0 || e.z_offset != 0 || e.nose_radius != 0 || e.tip != 0) {
+    return "a KT-APL tool has no lathe offsets (x_offset, z_offset, nose_radius, tip): TLD loads P and D";
+  }
+  return "";
 }
 
 }  // namespace cell::interp::ktapl

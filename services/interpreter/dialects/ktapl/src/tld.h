@@ -37,4 +37,9 @@ struct TldStatement {
 // Parses the body of one TLD statement (the text after "TLD,"). Throws TldError.
 TldStatement ParseTld(std::string_view body, const TldContext& ctx);
 
+// The manual's ranges for one data set that did not come through a TLD statement (a station file's
+// [[tools]], in millimetres): the same limits ParseTld applies, in one place. "" when it fits, else the
+// TLD parser's message for the letter concerned ("TLD P VALUE 1000 MM OUTSIDE +-999.999 MM").
+std::string CheckToolEntry(const tooltable::ToolEntry& e);
+
 }  // namespace cell::interp::ktapl

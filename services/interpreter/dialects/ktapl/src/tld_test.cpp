@@ -109,6 +109,60 @@ TEST(Tld, ErrorsCarryFileLineAndColumn) {
   EXPECT_NE(ErrorOf("(TLD,TL5)").find("ONLY ALLOWED IN A PROGRAM"), std::string::npos);
 }
 
+// Issue 13 item 4: the manual's ranges, reported at the letter that breaks them, and the same limits for a
+// data set from a station file (ktapl::CheckToolEntry, millimetres). Sign alone is no error (ln 4039, 4045:
+// "Plus (+) is assumed unless a minus (-) is entered"; ln 4063: D-.25).
+TEST(Tld, RangesOfTheManualInOnePlace) {
+  // ln 4043, 4049: +-.001 to +-999.999 mm (G71), +-.0001 to +-39.37 in (G70); both signs, both ends.
+  auto t = Load("G71\n(TLD,S1T1P-999.999D999.999)\nG70\n(TLD,S2T2P39.37D-39.37)\n");
+  EXPECT_DOUBLE_EQ(t.Find("1")->length, -999.999);
+  EXPECT_DOUBLE_EQ(t.Find("2")->diameter, -39.37 * 25.4);
+  EXPECT_EQ(ErrorOf("G71\n(TLD,S1T1P.1D-1000.)"),
+            "tools.tld:2:13: error: TLD D VALUE -1000 OUTSIDE +-999.999 (manual ln 4041-4049)");
+  EXPECT_EQ(ErrorOf("G70\n(TLD,S1T1P39.371)"),
+            "tools.tld:2:10: error: TLD P VALUE 39.371 OUTSIDE +-39.37 (manual ln 4041-4049)");
+  // ln 4091: process compensations +-9.999 mm / +-.3937 in.
+  EXPECT_EQ(ErrorOf("G71\n(TLD,T1)\n(TLD,T1W3P-9.999D10.)"),
+            "tools.tld:3:17: error: TLD D VALUE 10 OUTSIDE +-9.999 (manual ln 4091)");
+  EXPECT_EQ(Load("G70\n(TLD,T1)\n(TLD,T1W3P-.3937D.3937)").process_comps().size(), 1u);
+  // S 1-999, L up to 9959 (ln 4051), H up to 99.9 (ln 4059).
+  EXPECT_EQ(ErrorOf("(TLD,S1000T1)"), "tools.tld:1:7: error: TLD S VALUE 1000 OUTSIDE 1-999");
+  EXPECT_EQ(ErrorOf("(TLD,S0T1)"), "tools.tld:1:7: error: TLD S VALUE 0 OUTSIDE 1-999");
+  EXPECT_DOUBLE_EQ(Load("(TLD,S999T1L9959H99.9)").entries()[0].life_left_min, 99 * 60 + 59);
+  EXPECT_EQ(ErrorOf("(TLD,T1L10000)"), "tools.tld:1:9: error: TLD L VALUE 10000 OUTSIDE 0-9959");
+  EXPECT_EQ(ErrorOf("(TLD,T1H99.91)"), "tools.tld:1:8: error: TLD H HORSEPOWER OUTSIDE 0-99.9");
+
+  // A data set from elsewhere (a station file), in mm: the same limits.
+  using tooltable::ToolEntry;
+  EXPECT_EQ(ktapl::CheckToolEntry(ToolEntry{.tool = "33412",
+                                            .socket = 12,
+                                            .length = 0.02,
+                                            .diameter = -0.25,
+                                            .life_left_min = 225,
+                                            .max_hp = 5.9}),
+            "");
+  EXPECT_EQ(ktapl::CheckToolEntry(ToolEntry{
+                .tool = "1", .socket = 1, .length = -999.999, .diameter = 999.999, .life_left_min = 5999}),
+            "");
+  EXPECT_EQ(ktapl::CheckToolEntry(ToolEntry{.tool = "1", .socket = 1, .length = 1000}),
+            "TLD P VALUE 1000 MM OUTSIDE +-999.999 MM (manual ln 4041-4049)");
+  EXPECT_EQ(ktapl::CheckToolEntry(ToolEntry{.tool = "1", .socket = 1, .diameter = -1000.5}),
+            "TLD D VALUE -1000.5 MM OUTSIDE +-999.999 MM (manual ln 4041-4049)");
+  EXPECT_EQ(ktapl::CheckToolEntry(ToolEntry{.tool = "1", .socket = 1000}), "TLD S VALUE 1000 OUTSIDE 1-999");
+  EXPECT_EQ(ktapl::CheckToolEntry(ToolEntry{.tool = "1", .socket = 1, .life_left_min = 6000}),
+            "TLD L TOOL LIFE 6000 MIN OUTSIDE 0-5999 MIN (L9959: 99 HOURS 59 MINUTES, manual ln 4051)");
+  EXPECT_EQ(ktapl::CheckToolEntry(ToolEntry{.tool = "1", .socket = 1, .max_hp = 100}),
+            "TLD H HORSEPOWER OUTSIDE 0-99.9");
+  EXPECT_EQ(ktapl::CheckToolEntry(ToolEntry{.tool = "1", .socket = 4, .manual = true}),
+            "TLD MANUAL TOOL (M) CANNOT HAVE A SOCKET (S)");
+  EXPECT_NE(ktapl::CheckToolEntry(ToolEntry{.tool = "1", .socket = 1, .x_offset = 2}).find("lathe offsets"),
+            std::string::npos);
+  EXPECT_NE(ktapl::CheckToolEntry(ToolEntry{.tool = "33412.8", .socket = 1}), "");
+  // Through the dialect interface (what the station config calls).
+  EXPECT_EQ(KtaplDialect().CheckToolEntry(ToolEntry{.tool = "1", .socket = 1, .length = 1000}),
+            ktapl::CheckToolEntry(ToolEntry{.tool = "1", .socket = 1, .length = 1000}));
+}
+
 TEST(Tld, TextWithoutTldIsAnError) {
   EXPECT_NE(ErrorOf("").find("no TLD statement found"), std::string::npos);
   EXPECT_NE(ErrorOf("%\nG0X1.\nM30\n").find("no TLD statement found"), std::string::npos);

@@ -120,6 +120,10 @@ class Dialect {
   // or when the text holds no tool data at all.
   virtual tooltable::ToolTable ParseToolTable(std::string_view text, std::string_view source,
                                               const tooltable::ToolTable& base) const = 0;
+  // One tool data set that did not come through ParseToolTable (a station file's [[tools]]) against the
+  // same ranges and formats the dialect's tool-table form enforces: "" when it fits, else a one-line
+  // reason in the manual's terms. The default asks only for finite numbers.
+  virtual std::string CheckToolEntry(const tooltable::ToolEntry& entry) const;
   // The manual's printed listing style turned into the tape format (EMCO --listing); others throw
   // cell::Error(kInvalidArgument).
   virtual std::string ImportListing(std::string_view text) const;
