@@ -15,6 +15,7 @@
 #include <set>
 #include <system_error>
 
+#include "cell/config/dds.h"
 #include "cell/error/error.h"
 #include "cell/interp/interp.h"
 #include "cell/names/names.h"
@@ -297,9 +298,10 @@ StationConfig LoadStationFile(const fs::path& file) {
   const toml::table* st = sn->as_table();
   if (st == nullptr) Fail(file, sn, "station must be a table [station]");
   for (auto&& [k, v] : *st) {
-    if (k.str() != "id" && k.str() != "dialect" && k.str() != "description" && k.str() != "coded_pallets") {
+    if (k.str() != "id" && k.str() != "dialect" && k.str() != "description" && k.str() != "coded_pallets" &&
+        k.str() != "dds") {
       Fail(file, &v,
-           fmt::format("[station]: unknown key '{}' (allowed: id, dialect, description, coded_pallets)",
+           fmt::format("[station]: unknown key '{}' (allowed: id, dialect, description, coded_pallets, dds)",
                        k.str()));
     }
   }
@@ -331,6 +333,11 @@ StationConfig LoadStationFile(const fs::path& file) {
     if (!c->is_boolean())
       Fail(file, c, fmt::format("[station] coded_pallets must be true or false, not {}", TypeName(*c)));
     cfg.coded_pallets = *c->value<bool>();
+  }
+  if (const toml::node* d = st->get("dds")) {
+    cfg.dds = GetString(file, *d, "[station] dds");
+    if (!IsDdsVendor(cfg.dds))
+      Fail(file, d, fmt::format("[station] dds = '{}': must be one of {}", cfg.dds, DdsVendorList()));
   }
   if (const toml::node* pn = root.get("params")) {
     // The dialect's machine settings (interp::RunOptions::params), by the dialect's own names: EMCO's

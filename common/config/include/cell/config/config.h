@@ -41,6 +41,7 @@ inline constexpr int kMaxDomain = 232;
 //   dialect = "ktapl"        # a dialect of the registry (cell/interp/interp.h): ktapl | okuma | emco | balt
 //   description = "..."      # optional, default ""
 //   coded_pallets = false    # optional, default false (KT-APL coded-pallet FMS module: pallets 1-127)
+//   dds = "cyclonedds"       # optional: the DDS stack of the station's processes (wins over CELL_DDS)
 //
 //   [[tools]]                # optional, any number: the initial tool table (common/tooltable's ToolEntry)
 //   tool = "1001"            # string (or integer); suffix tools as strings: "33412.5"
@@ -64,6 +65,7 @@ struct StationConfig {
   std::string dialect;
   std::string description;
   bool coded_pallets = false;
+  std::string dds;  // "", "fastdds" or "cyclonedds" (cell/config/dds.h: DdsVendor)
   std::vector<tooltable::ToolEntry> tools;
   std::map<std::string, std::string> params;  // [params]
   std::filesystem::path file;                 // the file it was read from

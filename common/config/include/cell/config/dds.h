@@ -1,0 +1,45 @@
+// Which DDS stack a process uses and which participant profile it loads (DESIGN.md §3, docs/operations.md
+// "Mixing vendors" and "Running across hosts"). Every function reads the environment at call time.
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <string_view>
+
+namespace cell::config {
+
+// The DDS stacks a process can run on (CELL_DDS, a station file's `dds`).
+inline constexpr std::string_view kDdsVendors[] = {"fastdds", "cyclonedds"};
+bool IsDdsVendor(std::string_view v);
+std::string DdsVendorList();  // "fastdds, cyclonedds"
+
+struct DdsChoice {
+  std::string vendor;  // one of kDdsVendors
+  std::string source;  // where it came from, for the log: "the station file", "CELL_DDS", "the default"
+};
+
+// The DDS stack of this process: `station_setting` when not empty (the `dds` of a station's file: the
+// stack of that machine's control, for the station's interpreter and servo); else CELL_DDS (the process's
+// environment: cell.env, a unit's drop-in, a shell); else fastdds. A station file is the more specific
+// setting, so it wins over a cell-wide CELL_DDS. Throws cell::Error(kInvalidArgument) naming the setting and
+// the allowed values (a bad CELL_DDS is an error even when the station file decides).
+DdsChoice DdsVendor(std::string_view station_setting = {});
+
+// The participant profile file for `vendor`, from CELL_DDS_PROFILE:
+//   unset or empty         -> empty path: the built-in loopback-only profile;
+//   a path (has a '/')     -> that file, whatever the vendor (one process, one stack);
+//   a name such as "lan"   -> <ConfigDir()>/dds/<name>.<vendor>.xml, so that one setting serves both stacks
+//                             of a mixed cell (deploy/dds/lan.fastdds.xml, deploy/dds/lan.cyclonedds.xml).
+// Throws cell::Error: kInvalidArgument for a malformed name, kNotFound when the file does not exist.
+std::filesystem::path DdsProfile(std::string_view vendor);
+
+// A profile's text with ${NAME} and ${NAME:-default} replaced from the environment (the default is
+// expanded too), so one shipped file serves every host of a cell (CELL_LAN_ADDRESS, CELL_LAN_PEER). `$$` is
+// a literal '$'. Throws cell::Error(kInvalidArgument) naming `what` and the variable when one is unset and
+// has no default, or a reference is not closed.
+std::string ExpandEnvironment(std::string_view text, std::string_view what);
+
+// Reads a profile file and expands it (above). Throws cell::Error(kIo) when it cannot be read.
+std::string LoadDdsProfile(const std::filesystem::path& file);
+
+}  // namespace cell::config
