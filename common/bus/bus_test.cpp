@@ -1,8 +1,12 @@
 // Bus unit tests: two participants in one process on the test's private domain (CELL_DOMAIN,
-// set by CTest). Every wait is for a condition (matched, a sample), never a fixed sleep.
+// set by CTest). Every wait is for a condition (matched, a sample), never a fixed sleep. The tests that
+// exchange samples run for every pair of stacks (Fast DDS and Cyclone DDS, each way round): the backends
+// must give the same semantics, and across vendors.
 #include "cell/bus/bus.h"
 
 #include <cstdlib>
+#include <filesystem>
+#include <optional>
 
 #include <gtest/gtest.h>
 
@@ -15,6 +19,30 @@ namespace {
 
 constexpr Millis kMatch(5000);
 
+// The stacks of participant A and of participant B.
+struct Stacks {
+  const char* a;
+  const char* b;
+};
+
+class BusTest : public ::testing::TestWithParam<Stacks> {
+ protected:
+  static ParticipantOptions A(const std::string& name) { return {name, {}, GetParam().a, {}}; }
+  static ParticipantOptions B(const std::string& name) { return {name, {}, GetParam().b, {}}; }
+};
+
+std::string StacksName(const ::testing::TestParamInfo<Stacks>& info) {
+  auto word = [](const std::string& v) {
+    return v == "fastdds" ? std::string("Fast") : std::string("Cyclone");
+  };
+  return word(info.param.a) + "To" + word(info.param.b);
+}
+
+INSTANTIATE_TEST_SUITE_P(Stacks, BusTest,
+                         ::testing::Values(Stacks{"fastdds", "fastdds"}, Stacks{"cyclonedds", "cyclonedds"},
+                                           Stacks{"fastdds", "cyclonedds"}, Stacks{"cyclonedds", "fastdds"}),
+                         StacksName);
+
 cell::StationStatus Status(const std::string& id, int line) {
   cell::StationStatus s;
   s.station(id);
@@ -23,8 +51,8 @@ cell::StationStatus Status(const std::string& id, int line) {
   return s;
 }
 
-TEST(Bus, PublishSubscribeAcrossParticipants) {
-  Participant a("bus-test-a"), b("bus-test-b");
+TEST_P(BusTest, PublishSubscribeAcrossParticipants) {
+  Participant a(A("bus-test-a")), b(B("bus-test-b"));
   Writer<cell::StationStatus> w(a, "test/pubsub", QosKind::kCommand);
   Reader<cell::StationStatus> r(b, "test/pubsub", QosKind::kCommand);
   ASSERT_TRUE(w.WaitForMatched(1, kMatch));
@@ -37,8 +65,8 @@ TEST(Bus, PublishSubscribeAcrossParticipants) {
   EXPECT_EQ(got->execution(), cell::EXECUTION_ACTIVE);
 }
 
-TEST(Bus, LateJoinerGetsLastSampleOfEveryKey) {
-  Participant a("bus-test-a"), b("bus-test-b");
+TEST_P(BusTest, LateJoinerGetsLastSampleOfEveryKey) {
+  Participant a(A("bus-test-a")), b(B("bus-test-b"));
   Writer<cell::StationStatus> w(a, "test/state", QosKind::kState);
   for (int i = 1; i <= 3; ++i)
     for (const char* id : {"KT01", "KT02", "KT03"}) w.Write(Status(id, i));
@@ -54,8 +82,8 @@ TEST(Bus, LateJoinerGetsLastSampleOfEveryKey) {
   EXPECT_FALSE(r.Take(Millis(200))) << "keep-last 1 per key: no older samples";
 }
 
-TEST(Bus, CallbackRunsOnTheDispatchThread) {
-  Participant a("bus-test-a"), b("bus-test-b");
+TEST_P(BusTest, CallbackRunsOnTheDispatchThread) {
+  Participant a(A("bus-test-a")), b(B("bus-test-b"));
   std::mutex mu;
   std::condition_variable cv;
   std::vector<int> seen;
@@ -100,8 +128,8 @@ TEST(Bus, WriteRejectsSequenceOverItsBound) {
 using Req = cell::StationRequest;
 using Rep = cell::StationReply;
 
-TEST(Bus, RequestReplyCarriesResultAndErrors) {
-  Participant a("bus-test-server"), b("bus-test-client");
+TEST_P(BusTest, RequestReplyCarriesResultAndErrors) {
+  Participant a(A("bus-test-server")), b(B("bus-test-client"));
   int calls = 0;
   Server<Req, Rep> server(a, "test/svc", [&](const Req& r) {
     ++calls;
@@ -135,8 +163,8 @@ TEST(Bus, RequestReplyCarriesResultAndErrors) {
 // A participant that rejoins (what its watch thread does after the process stood still past the lease)
 // keeps every endpoint working: pub/sub both ways, a state reader gets the last sample again, a server and
 // a client answer; TotalMatched counts the lost match.
-TEST(Bus, RejoinKeepsEveryEndpointWorking) {
-  Participant a("bus-test-rejoin"), b("bus-test-peer");
+TEST_P(BusTest, RejoinKeepsEveryEndpointWorking) {
+  Participant a(A("bus-test-rejoin")), b(B("bus-test-peer"));
   Writer<cell::StationStatus> wa(a, "test/rejoin/out", QosKind::kCommand);
   Reader<cell::StationStatus> rb(b, "test/rejoin/out", QosKind::kCommand);
   Writer<cell::StationStatus> wb(b, "test/rejoin/state", QosKind::kState);
@@ -190,8 +218,8 @@ TEST(Bus, CallWithoutServerIsUnavailable) {
   EXPECT_GE(std::chrono::steady_clock::now() - t0, Millis(300));
 }
 
-TEST(Bus, SlowServerTimesOutAndResendIsNotRunTwice) {
-  Participant a("bus-test-server"), b("bus-test-client");
+TEST_P(BusTest, SlowServerTimesOutAndResendIsNotRunTwice) {
+  Participant a(A("bus-test-server")), b(B("bus-test-client"));
   std::atomic<int> calls{0};
   std::mutex mu;
   std::condition_variable cv;
@@ -203,6 +231,9 @@ TEST(Bus, SlowServerTimesOutAndResendIsNotRunTwice) {
     return Rep();
   });
   Client<Req, Rep> client(b, "test/slow");
+  // Discovery first: across vendors it can take a second (DESIGN §3), longer than this call's timeout.
+  ASSERT_TRUE(client.WaitForServer(kMatch));
+  ASSERT_TRUE(WaitUntil([&] { return server.Matched() >= 1; }, kMatch));
   try {
     // Resends every 50 ms while the handler blocks; the server must run it once.
     client.Call(Req(), Millis(600), Millis(50));
@@ -220,8 +251,8 @@ TEST(Bus, SlowServerTimesOutAndResendIsNotRunTwice) {
   EXPECT_EQ(calls.load(), 2);
 }
 
-TEST(Bus, ReplyToVanishedRequesterIsHarmless) {
-  Participant a("bus-test-server");
+TEST_P(BusTest, ReplyToVanishedRequesterIsHarmless) {
+  Participant a(A("bus-test-server"));
   std::atomic<int> calls{0};
   Server<Req, Rep> server(a, "test/vanish", [&](const Req& r) {
     ++calls;
@@ -230,9 +261,12 @@ TEST(Bus, ReplyToVanishedRequesterIsHarmless) {
     return rep;
   });
   {
-    Participant gone("bus-test-gone");
+    Participant gone(B("bus-test-gone"));
     Writer<Req> w(gone, RequestTopic("test/vanish"), QosKind::kCommand);
+    // Both sides matched: a Fast DDS writer matches a Cyclone reader before that reader has discovered it,
+    // and a volatile Cyclone reader drops what was written before (DESIGN §3).
     ASSERT_TRUE(w.WaitForMatched(1, kMatch));
+    ASSERT_TRUE(WaitUntil([&] { return server.Matched() >= 1; }, kMatch));
     Req r;
     r.hdr().client("ghost");
     r.hdr().request_id(1);
@@ -240,7 +274,7 @@ TEST(Bus, ReplyToVanishedRequesterIsHarmless) {
     w.Write(r);
     ASSERT_TRUE(WaitUntil([&] { return calls.load() == 1; }, kMatch));
   }  // the requester is gone before, or while, the reply is written
-  Participant b("bus-test-client");
+  Participant b(B("bus-test-client"));
   Client<Req, Rep> client(b, "test/vanish");
   Req r;
   r.station("KT02");
@@ -256,11 +290,82 @@ TEST(Bus, EnvironmentIsValidated) {
   setenv("CELL_DOMAIN", "233", 1);
   EXPECT_THROW(Participant("x"), Error);
   setenv("CELL_DOMAIN", keep.c_str(), 1);
+  setenv("CELL_DDS", "opendds", 1);
+  try {
+    Participant p("x");
+    FAIL() << "CELL_DDS=opendds accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), Errc::kInvalidArgument);
+    EXPECT_STREQ(e.what(), "CELL_DDS=opendds: expected one of fastdds, cyclonedds");
+  }
+  unsetenv("CELL_DDS");
+  for (const char* v : {"fastdds", "cyclonedds"}) {
+    Participant p(ParticipantOptions{"x", {}, v, {}});
+    EXPECT_EQ(p.vendor(), v);
+    EXPECT_EQ(p.backend().Name(), v);
+  }
+}
+
+// Events (keep last 256, transient-local) reach a late joiner in full on every stack: Cyclone keeps for
+// late joiners what the durability-service history says, which the backend sets to the history.
+TEST_P(BusTest, LateJoinerGetsEveryRecentEvent) {
+  Participant a(A("bus-test-a")), b(B("bus-test-b"));
+  Writer<cell::RunStatus> w(a, "test/events", QosKind::kEvent);
+  for (int id = 1; id <= 5; ++id) {
+    cell::RunStatus s;
+    s.dispatch_id(id);
+    w.Write(s);
+  }
+  Reader<cell::RunStatus> r(b, "test/events", QosKind::kEvent);
+  std::vector<int> got;
+  while (got.size() < 5) {
+    auto s = r.Take(kMatch);
+    ASSERT_TRUE(s) << "late joiner got " << got.size() << " of 5 events";
+    got.push_back(s->dispatch_id());
+  }
+  EXPECT_EQ(got, (std::vector<int>{1, 2, 3, 4, 5}));
+}
+
+// The shipped LAN profiles (deploy/dds/lan.<stack>.xml, CELL_DDS_PROFILE=lan) load on both stacks and
+// interoperate; here on 127.0.0.1 as the "LAN" address (tests/interop/two_host_test runs them across a veth).
+TEST(Bus, ShippedLanProfilesInteroperate) {
+  std::vector<std::pair<std::string, std::optional<std::string>>> saved;
+  for (const char* v : {"CELL_CONFIG_DIR", "CELL_DDS_PROFILE", "CELL_LAN_ADDRESS", "CELL_LAN_PEER"}) {
+    const char* old = std::getenv(v);
+    saved.emplace_back(v, old ? std::optional<std::string>(old) : std::nullopt);
+  }
+  const char* src = std::getenv("CELL_SOURCE_DIR");
+  ASSERT_NE(src, nullptr) << "CELL_SOURCE_DIR is set by CTest";
+  setenv("CELL_CONFIG_DIR", (std::filesystem::path(src) / "deploy").c_str(), 1);
+  setenv("CELL_DDS_PROFILE", "lan", 1);
+  unsetenv("CELL_LAN_PEER");
+  unsetenv("CELL_LAN_ADDRESS");
   try {
     Participant p(ParticipantOptions{"x", {}, "cyclonedds", {}});
-    FAIL();
+    FAIL() << "the LAN profile without CELL_LAN_ADDRESS was accepted";
   } catch (const Error& e) {
-    EXPECT_EQ(e.code(), Errc::kUnimplemented);
+    EXPECT_NE(std::string(e.what()).find("CELL_LAN_ADDRESS is not set"), std::string::npos) << e.what();
+  }
+  setenv("CELL_LAN_ADDRESS", "127.0.0.1", 1);
+  {
+    Participant f(ParticipantOptions{"bus-test-lan-fast", {}, "fastdds", {}});
+    Participant c(ParticipantOptions{"bus-test-lan-cyclone", {}, "cyclonedds", {}});
+    Writer<cell::StationStatus> wf(f, "test/lan/f2c", QosKind::kState);
+    Reader<cell::StationStatus> rc(c, "test/lan/f2c", QosKind::kState);
+    Writer<cell::StationStatus> wc(c, "test/lan/c2f", QosKind::kState);
+    Reader<cell::StationStatus> rf(f, "test/lan/c2f", QosKind::kState);
+    wf.Write(Status("KT01", 1));
+    wc.Write(Status("KT02", 2));
+    auto a = rc.Take(kMatch);
+    auto b = rf.Take(kMatch);
+    EXPECT_TRUE(a && a->station() == "KT01");
+    EXPECT_TRUE(b && b->station() == "KT02");
+  }
+  for (auto& [k, v] : saved) {
+    if (v)
+      setenv(k.c_str(), v->c_str(), 1);
+    else
+      unsetenv(k.c_str());
   }
 }
 

@@ -4,7 +4,9 @@
 // which checks the bytes against the idlc type and bounds; reads take Cyclone's checked copy.
 #include <cstdlib>
 #include <cstring>
+#include <map>
 #include <mutex>
+#include <string>
 
 #include <dds/dds.h>
 #include <dds/ddsi/ddsi_serdata.h>
@@ -67,11 +69,71 @@ CarrierType& Carriers() {
   return *t;
 }
 
+// DESIGN §3: loopback, unicast discovery with peer 127.0.0.1, no multicast, 32 participant indices (the
+// ports Fast DDS probes with maxInitialPeersRange 32), no shared memory (Cyclone uses iceoryx only when
+// configured).
 constexpr const char* kLoopbackXml =
     "<CycloneDDS><Domain Id=\"any\"><General><Interfaces><NetworkInterface address=\"127.0.0.1\"/>"
     "</Interfaces><AllowMulticast>false</AllowMulticast></General><Discovery>"
     "<ParticipantIndex>auto</ParticipantIndex><MaxAutoParticipantIndex>32</MaxAutoParticipantIndex>"
     "<Peers><Peer address=\"127.0.0.1\"/></Peers></Discovery></Domain></CycloneDDS>";
+
+// Appended to every configuration, the built-in one or a profile (Cyclone merges consecutive <CycloneDDS>
+// documents, later ones winning): how much unacknowledged data a writer may hold before dds_write blocks.
+// Cyclone's default (30 kB, growing towards 500 kB) made a writer block, then fail, as soon as one matched
+// reader stopped acknowledging, e.g. a killed or stopped process whose 3 s lease had not run out yet: the
+// program store's replies to every client failed while a killed client still counted as matched. Fast DDS
+// queues instead (asynchronous publishing); 64 MB gives Cyclone the same behaviour for what a cell writes in
+// a lease.
+constexpr const char* kCellXml =
+    "<CycloneDDS><Domain Id=\"any\"><Internal><Watermarks><WhcHighInit>64 MB</WhcHighInit>"
+    "<WhcHigh>64 MB</WhcHigh><WhcAdaptive>false</WhcAdaptive></Watermarks></Internal></Domain></CycloneDDS>";
+
+// Cyclone has one domain (one configuration, one set of sockets) per id per process; the participants of a
+// process share it (two Participants in one test, a rejoin making the backend again while another lives).
+class Domains {
+ public:
+  static dds_entity_t Acquire(int id, const std::string& config, const std::string& what) {
+    std::lock_guard lk(Mu());
+    auto& d = Map()[id];
+    if (d.refs == 0) {
+      dds_entity_t e = dds_create_domain(static_cast<dds_domainid_t>(id), config.c_str());
+      if (e < 0) {
+        Map().erase(id);
+        throw Error(Errc::kInvalidArgument, what + ": Cyclone DDS rejected the configuration (" +
+                                                dds_strretcode(e) + "; its log names the element)");
+      }
+      d.entity = e;
+      d.config = config;
+    } else if (d.config != config) {
+      throw Error(Errc::kInvalidArgument, what + ": a process uses one Cyclone configuration per domain");
+    }
+    ++d.refs;
+    return d.entity;
+  }
+  static void Release(int id) {
+    std::lock_guard lk(Mu());
+    auto it = Map().find(id);
+    if (it == Map().end() || --it->second.refs > 0) return;
+    dds_delete(it->second.entity);
+    Map().erase(it);
+  }
+
+ private:
+  struct Entry {
+    dds_entity_t entity = 0;
+    std::string config;
+    int refs = 0;
+  };
+  static std::mutex& Mu() {
+    static std::mutex m;
+    return m;
+  }
+  static std::map<int, Entry>& Map() {
+    static auto* m = new std::map<int, Entry>();  // outlives static destruction order
+    return *m;
+  }
+};
 
 dds_qos_t* MakeQos(QosKind q) {
   dds_qos_t* qos = dds_create_qos();
@@ -79,18 +141,24 @@ dds_qos_t* MakeQos(QosKind q) {
                        DDS_SECS(1));
   dds_qset_durability(qos, (q == QosKind::kState || q == QosKind::kEvent) ? DDS_DURABILITY_TRANSIENT_LOCAL
                                                                           : DDS_DURABILITY_VOLATILE);
+  int depth = 0;  // keep-all
   switch (q) {
     case QosKind::kState:
     case QosKind::kTelemetry:
-      dds_qset_history(qos, DDS_HISTORY_KEEP_LAST, 1);
+      depth = 1;
       break;
     case QosKind::kEvent:
-      dds_qset_history(qos, DDS_HISTORY_KEEP_LAST, 256);
+      depth = 256;
       break;
     default:
-      dds_qset_history(qos, DDS_HISTORY_KEEP_ALL, 0);
       break;
   }
+  dds_qset_history(qos, depth ? DDS_HISTORY_KEEP_LAST : DDS_HISTORY_KEEP_ALL, depth);
+  // What a transient-local writer keeps for late joiners is its durability-service history (default keep
+  // last 1), not its history: without this an event topic would replay 1 sample, where Fast DDS replays 256.
+  if (q == QosKind::kState || q == QosKind::kEvent)
+    dds_qset_durability_service(qos, 0, DDS_HISTORY_KEEP_LAST, depth, DDS_LENGTH_UNLIMITED,
+                                DDS_LENGTH_UNLIMITED, DDS_LENGTH_UNLIMITED);
   dds_data_representation_id_t xcdr1 = DDS_DATA_REPRESENTATION_XCDR1;  // Fast CDR 1.0 reads XCDR1 only
   dds_qset_data_representation(qos, 1, &xcdr1);
   return qos;
@@ -115,8 +183,10 @@ class CycWriter : public RawWriter {
     d->size = static_cast<uint32_t>(padded);
     d->c.timestamp.v = dds_time();
     dds_return_t rc = dds_writecdr(w_, &d->c);  // takes the reference
-    if (rc < 0)
+    if (rc == DDS_RETCODE_ERROR)                // the bytes do not fit the idlc type or its bounds
       throw Error(Errc::kInvalidArgument, std::string("Cyclone rejected the sample: ") + dds_strretcode(rc));
+    if (rc < 0)  // e.g. a timeout: keep-all history full of samples a stalled reader has not acknowledged
+      throw Error(Errc::kUnavailable, std::string("DDS write failed: ") + dds_strretcode(rc));
   }
   bool WaitForAcked(int timeout_ms) override {
     return dds_wait_for_acks(w_, DDS_MSECS(timeout_ms)) == DDS_RETCODE_OK;
@@ -184,20 +254,28 @@ class CycReader : public RawReader {
 
 class CycloneBackend : public Backend {
  public:
-  explicit CycloneBackend(const BackendOptions& o) {
-    const char* uri = std::getenv("CYCLONEDDS_URI");
-    if (!o.profile_path.empty()) {
-      dom_ = dds_create_domain(static_cast<dds_domainid_t>(o.domain), ("file://" + o.profile_path).c_str());
-    } else if (!uri || !*uri) {
-      dom_ = dds_create_domain(static_cast<dds_domainid_t>(o.domain), kLoopbackXml);
+  explicit CycloneBackend(const BackendOptions& o) : domain_(o.domain) {
+    // Always an explicit configuration: neither CYCLONEDDS_URI nor a file elsewhere can widen the default.
+    const std::string what =
+        o.profile_xml.empty() ? "the built-in loopback profile" : "DDS profile " + o.profile_path;
+    Domains::Acquire(domain_, (o.profile_xml.empty() ? std::string(kLoopbackXml) : o.profile_xml) + kCellXml,
+                     what);
+    // A vanished process is noticed in ~3 s, as with Fast DDS (the participant lease; Cyclone's default is 10
+    // s and it announces itself at 4/5 of the lease).
+    dds_qos_t* qos = dds_create_qos();
+    dds_qset_liveliness(qos, DDS_LIVELINESS_AUTOMATIC, DDS_SECS(3));
+    if (!o.participant_name.empty()) dds_qset_entity_name(qos, o.participant_name.c_str());
+    pp_ = dds_create_participant(static_cast<dds_domainid_t>(domain_), qos, nullptr);
+    dds_delete_qos(qos);
+    if (pp_ < 0) {
+      Domains::Release(domain_);
+      throw Error(Errc::kUnavailable, "cannot create a Cyclone DDS participant on domain " +
+                                          std::to_string(domain_) + ": " + dds_strretcode(pp_));
     }
-    if (dom_ < 0) throw Error(Errc::kInvalidArgument, std::string("Cyclone domain: ") + dds_strretcode(dom_));
-    pp_ = dds_create_participant(static_cast<dds_domainid_t>(o.domain), nullptr, nullptr);
-    if (pp_ < 0) throw Error(Errc::kUnavailable, std::string("Cyclone participant: ") + dds_strretcode(pp_));
   }
   ~CycloneBackend() override {
     dds_delete(pp_);
-    if (dom_ > 0) dds_delete(dom_);
+    Domains::Release(domain_);
   }
   std::string Name() const override { return "cyclonedds"; }
 
@@ -236,7 +314,7 @@ class CycloneBackend : public Backend {
     return t;
   }
   std::mutex mu_;
-  dds_entity_t dom_ = 0;
+  int domain_;
   dds_entity_t pp_ = 0;
 };
 

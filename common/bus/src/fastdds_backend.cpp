@@ -1,8 +1,13 @@
 // Fast DDS 2.9 glue: one generic TopicDataType that carries XCDR1 bytes under the real type
 // name, so Fast DDS matches, keys and hashes exactly as its generated PubSubTypes would.
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
 #include <cstring>
 #include <map>
 #include <mutex>
+#include <random>
 #include <set>
 
 #include <fastdds/rtps/common/Locator.h>
@@ -174,21 +179,21 @@ class FastBackend : public Backend {
   explicit FastBackend(const BackendOptions& o) {
     auto* factory = dds::DomainParticipantFactory::get_instance();
     dds::DomainParticipantQos qos;  // built from scratch: no XML file in the CWD or env can widen it
-    if (!o.profile_path.empty()) {
-      if (factory->load_XML_profiles_file(o.profile_path) !=
-          eprosima::fastrtps::types::ReturnCode_t::RETCODE_OK)
-        throw Error(Errc::kInvalidArgument,
-                    "CELL_DDS_PROFILE=" + o.profile_path + ": not a loadable Fast DDS profile");
-      factory->get_default_participant_qos(qos);
-    } else {
+    if (!o.profile_xml.empty())
+      FromProfile(o, qos);
+    else
       LoopbackOnly(qos);
-    }
     qos.name(o.participant_name.empty() ? "cell" : o.participant_name);
     // A vanished process is noticed in ~3 s, not the 20 s default (station health, DESIGN §5).
     qos.wire_protocol().builtin.discovery_config.leaseDuration = eprosima::fastrtps::Duration_t(3, 0);
     qos.wire_protocol().builtin.discovery_config.leaseDuration_announcementperiod =
         eprosima::fastrtps::Duration_t(1, 0);
+    ChooseSlot(o.domain, qos);
     p_ = factory->create_participant(o.domain, qos);
+    if (!p_ && qos.wire_protocol().participant_id >= 0) {  // lost a race for the slot: let Fast DDS choose
+      qos.wire_protocol().participant_id = -1;
+      p_ = factory->create_participant(o.domain, qos);
+    }
     if (!p_)
       throw Error(Errc::kUnavailable,
                   "cannot create a DDS participant on domain " + std::to_string(o.domain));
@@ -243,6 +248,59 @@ class FastBackend : public Backend {
   }
 
  private:
+  // The participant profile named "cell" of a CELL_DDS_PROFILE file (deploy/dds/*.fastdds.xml). Loaded once
+  // per process: Fast DDS refuses a second profile of the same name (a rejoin makes the backend again).
+  static void FromProfile(const BackendOptions& o, dds::DomainParticipantQos& qos) {
+    static std::mutex mu;
+    static std::string loaded;
+    std::lock_guard lk(mu);
+    auto* factory = dds::DomainParticipantFactory::get_instance();
+    const std::string what = "DDS profile " + o.profile_path;
+    if (loaded.empty()) {
+      if (factory->load_XML_profiles_string(o.profile_xml.c_str(), o.profile_xml.size()) !=
+          eprosima::fastrtps::types::ReturnCode_t::RETCODE_OK)
+        throw Error(Errc::kInvalidArgument, what + ": not a loadable Fast DDS profile");
+      loaded = o.profile_xml;
+    } else if (loaded != o.profile_xml) {
+      throw Error(Errc::kInvalidArgument, what + ": a process loads one Fast DDS profile only");
+    }
+    if (factory->get_participant_qos_from_profile("cell", qos) !=
+        eprosima::fastrtps::types::ReturnCode_t::RETCODE_OK)
+      throw Error(Errc::kInvalidArgument, what + ": defines no <participant profile_name=\"cell\">");
+  }
+
+  // Fast DDS 2.9 numbers the participants of a process 0, 1, 2, ... and never reuses a number, and a
+  // participant's unicast ports follow its number (7410 + 250·domain + 2·n), while peers probe only the first
+  // 32 (maxInitialPeersRange). A process that has rejoined the bus 32 times (a VM paused again and again)
+  // would get ports no peer probes, and two such processes would never find each other; 4x as many
+  // participants in bus_test showed it. So the backend takes the lowest slot whose ports no process (of
+  // either stack: Cyclone uses the same formula) has bound, and a fresh random GUID prefix, because Fast DDS
+  // derives the prefix from the number and a rejoin must look like a stranger to every peer.
+  static void ChooseSlot(int domain, dds::DomainParticipantQos& qos) {
+    for (int slot = 0; slot < 32; ++slot) {
+      const int port = 7400 + 250 * domain + 10 + 2 * slot;  // metatraffic unicast; user unicast is port + 1
+      if (!PortFree(port) || !PortFree(port + 1)) continue;
+      qos.wire_protocol().participant_id = slot;
+      std::random_device rd;
+      auto& prefix = qos.wire_protocol().prefix;
+      prefix.value[0] = 0x01;  // eProsima's vendor id, as Fast DDS writes it
+      prefix.value[1] = 0x0f;
+      for (size_t i = 2; i < prefix.size; ++i) prefix.value[i] = static_cast<rtps::octet>(rd());
+      return;
+    }
+  }
+  static bool PortFree(int port) {
+    int fd = socket(AF_INET, SOCK_DGRAM, 0);
+    if (fd < 0) return false;
+    sockaddr_in a{};
+    a.sin_family = AF_INET;
+    a.sin_port = htons(static_cast<uint16_t>(port));
+    a.sin_addr.s_addr = htonl(INADDR_ANY);  // conflicts with a bind on any address of this port
+    bool free = bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) == 0;
+    close(fd);
+    return free;
+  }
+
   static void LoopbackOnly(dds::DomainParticipantQos& qos) {
     // DESIGN §3: loopback, unicast discovery, no multicast, no shared memory, 32 peers.
     auto udp = std::make_shared<eprosima::fastdds::rtps::UDPv4TransportDescriptor>();

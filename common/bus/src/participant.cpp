@@ -1,6 +1,7 @@
 #include <unistd.h>
 
 #include <cstdlib>
+#include <filesystem>
 #include <random>
 
 #include <fmt/format.h>
@@ -8,6 +9,7 @@
 
 #include "cell/bus/bus.h"
 #include "cell/config/config.h"
+#include "cell/config/dds.h"
 
 namespace cell::bus {
 
@@ -20,38 +22,34 @@ bool WaitUntil(const std::function<bool()>& cond, Millis timeout) {
   return true;
 }
 
-namespace {
-std::string EnvOr(const char* name, const std::string& dflt) {
-  const char* v = std::getenv(name);
-  return v && *v ? std::string(v) : dflt;
-}
-}  // namespace
-
 Participant::Participant(const ParticipantOptions& opts) {
   domain_ = opts.domain ? *opts.domain : cell::config::Domain();
-  std::string backend = opts.backend.empty() ? EnvOr("CELL_DDS", "fastdds") : opts.backend;
-  std::string profile = opts.profile_path.empty() ? EnvOr("CELL_DDS_PROFILE", "") : opts.profile_path;
+  vendor_ = opts.backend.empty() ? cell::config::DdsVendor().vendor : opts.backend;
+  if (!cell::config::IsDdsVendor(vendor_))
+    throw Error(Errc::kInvalidArgument,
+                "DDS backend '" + vendor_ + "': expected one of " + cell::config::DdsVendorList());
+  std::filesystem::path profile = opts.profile_path.empty() ? cell::config::DdsProfile(vendor_)
+                                                            : std::filesystem::path(opts.profile_path);
   char host[64] = {0};
   gethostname(host, sizeof host - 1);
   std::random_device rd;
   id_ = fmt::format("{}@{}/{}/{:x}", opts.name.empty() ? "cell" : opts.name, host, getpid(), rd() & 0xffffff);
   if (id_.size() > 63) id_ = id_.substr(id_.size() - 63);
-  BackendOptions bo{domain_, profile, opts.name};
-  if (backend == "fastdds") {
+  BackendOptions bo{domain_, profile.string(), opts.name, {}};
+  if (!profile.empty()) bo.profile_xml = cell::config::LoadDdsProfile(profile);  // ${VAR}s expanded once
+  if (vendor_ == "fastdds")
     make_backend_ = [bo] { return MakeFastDdsBackend(bo); };
-    backend_ = make_backend_();
-  } else if (backend == "cyclonedds") {
-    throw Error(Errc::kUnimplemented,
-                "CELL_DDS=cyclonedds: the Cyclone DDS backend of the bus is not built yet");
-  } else {
-    throw Error(Errc::kInvalidArgument, "CELL_DDS=" + backend + ": expected fastdds or cyclonedds");
-  }
+  else
+    make_backend_ = [bo] { return MakeCycloneBackend(bo); };
+  backend_ = make_backend_();
+  spdlog::debug("{}: joined DDS domain {} with {} ({})", id_, domain_, vendor_,
+                profile.empty() ? "built-in loopback profile" : profile.string());
   thread_ = std::thread([this] { Run(); });
   watch_ = std::thread([this] { Watch(); });
 }
 
 Participant::Participant(const std::string& name, int domain, std::unique_ptr<Backend> backend)
-    : domain_(domain), backend_(std::move(backend)) {
+    : domain_(domain), vendor_(backend->Name()), backend_(std::move(backend)) {
   char host[64] = {0};
   gethostname(host, sizeof host - 1);
   std::random_device rd;

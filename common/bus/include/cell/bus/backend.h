@@ -74,13 +74,16 @@ class Backend {
 
 struct BackendOptions {
   int domain = 101;
-  std::string profile_path;  // empty: the built-in loopback-only profile
+  std::string profile_path;  // where profile_xml came from (named in messages)
   std::string participant_name;
+  std::string profile_xml;  // empty: the built-in loopback-only profile; else the profile's text with its
+                            // ${VAR}s expanded (config::LoadDdsProfile)
 };
 
-std::unique_ptr<Backend> MakeFastDdsBackend(const BackendOptions& opts);
-// Cyclone DDS 0.10 (approach A of reference/cyclone-rawcdr.md). Used by the interop peer; not
-// yet selectable with CELL_DDS (its own issue makes every service pass on it).
+// Both backends give the same semantics (QoS presets above, a 3 s participant lease, loopback-only by
+// default: UDPv4 on 127.0.0.1, unicast discovery, no multicast, no shared memory).
+std::unique_ptr<Backend> MakeFastDdsBackend(const BackendOptions& opts);  // Fast DDS 2.9
+// Cyclone DDS 0.10 (approach A of reference/cyclone-rawcdr.md).
 std::unique_ptr<Backend> MakeCycloneBackend(const BackendOptions& opts);
 
 }  // namespace cell::bus

@@ -29,8 +29,9 @@ using Millis = std::chrono::milliseconds;
 struct ParticipantOptions {
   std::string name;           // shown in logs and discovery, e.g. "cell-interpreter/KT01"
   std::optional<int> domain;  // default: cell::config::Domain() (CELL_DOMAIN, else 101)
-  std::string backend;        // default: CELL_DDS, else "fastdds"
-  std::string profile_path;   // default: CELL_DDS_PROFILE, else the built-in loopback profile
+  std::string backend;  // "fastdds" | "cyclonedds"; default: CELL_DDS, else "fastdds" (config::DdsVendor)
+  std::string profile_path;  // default: CELL_DDS_PROFILE for this vendor (config::DdsProfile), else the
+                             // built-in loopback profile
 };
 
 // The backend half of a Writer, Reader or Client, made again when the participant rejoins.
@@ -63,6 +64,7 @@ class Participant {
 
   const std::string& id() const { return id_; }  // unique on the domain: name/host/pid/n
   int domain() const { return domain_; }
+  const std::string& vendor() const { return vendor_; }  // "fastdds" or "cyclonedds"
   Backend& backend() { return *backend_; }
   void Post(std::function<void()> fn);
 
@@ -81,6 +83,7 @@ class Participant {
   void Watch();
   std::string id_;
   int domain_;
+  std::string vendor_;
   std::function<std::unique_ptr<Backend>()> make_backend_;  // empty for an injected backend
   std::unique_ptr<Backend> backend_;
   std::shared_mutex ep_mu_;
@@ -356,7 +359,15 @@ class Client : public Rejoinable {
     std::unique_lock lk(state_->mu);
     while (true) {
       lk.unlock();
-      req_.Write(req);
+      try {
+        req_.Write(req);
+      } catch (const Error& e) {  // a request over an IDL bound fails now; a transient failure is re-sent
+        if (e.code() == Errc::kInvalidArgument) {
+          std::lock_guard g(state_->mu);
+          state_->pending.erase(id);
+          throw;
+        }
+      }
       lk.lock();
       auto next = std::min(deadline, std::chrono::steady_clock::now() + resend);
       if (state_->cv.wait_until(lk, next, [&] { return state_->pending[id].has_value(); })) {
@@ -431,12 +442,18 @@ class Server {
     try {
       rep_.Write(rep);  // to a vanished requester this goes nowhere, which is fine
     } catch (const Error& e) {
+      // A transient failure (a writer that could not queue the reply): the requester re-sends and the
+      // cache answers. A reply that can never be sent (over an IDL bound) becomes an error reply.
+      if (e.code() != Errc::kInvalidArgument) return;
       Rep err;
       err.hdr() = rep.hdr();
       err.hdr().code(static_cast<int32_t>(e.code()) + 1);
       err.hdr().error(std::string(e.what()).substr(0, 511));
       cache_[key] = err;
-      rep_.Write(err);
+      try {
+        rep_.Write(err);
+      } catch (const Error&) {  // as above: the re-sent request gets it from the cache
+      }
     }
   }
 
