@@ -109,7 +109,7 @@ int main() {
         [&](const cell::InspectionRequest& r) { return Handle(records, stored, r); });
     health.Set(cell::SERVICE_READY);
     daemon.NotifyReady("writing records");
-    spdlog::info("ready on domain {}", bus.domain());
+    spdlog::info("ready on domain {} with {}", bus.domain(), bus.vendor());
     daemon.RunUntilStop([] { return true; });
     daemon.NotifyStopping();
     return 0;

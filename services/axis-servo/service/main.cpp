@@ -5,6 +5,7 @@
 #include <CLI/CLI.hpp>
 
 #include "cell/config/config.h"
+#include "cell/config/dds.h"
 #include "cell/daemon/daemon.h"
 #include "cell/health/health.h"
 #include "cell/identity/identity.h"
@@ -29,7 +30,8 @@ int main(int argc, char** argv) {
     cell::daemon::Daemon daemon;
     auto cfg = cell::config::LoadStation(station);  // validates the [station] table
     auto machine = cell::servo::LoadMachineConfig(cfg.file);
-    cell::bus::Participant bus("cell-axis-servo/" + station);
+    const auto dds = cell::config::DdsVendor(cfg.dds);  // the station file's dds, else CELL_DDS
+    cell::bus::Participant bus({"cell-axis-servo/" + station, {}, dds.vendor, {}});
     cell::health::Announcer health(bus, "cell-axis-servo", station);
     cell::identity::Claim claim(bus, health);
     claim.Confirm();  // one machine per station: before it takes a segment
@@ -38,7 +40,8 @@ int main(int argc, char** argv) {
     svc.Start();
     health.Set(cell::SERVICE_READY, clock + " clock");
     daemon.NotifyReady("machine " + station + " ready (" + clock + " clock)");
-    spdlog::info("ready on domain {} ({} clock, {} kind)", bus.domain(), clock, machine.kind);
+    spdlog::info("ready on domain {} with {} (from {}) ({} clock, {} kind)", bus.domain(), dds.vendor,
+                 dds.source, clock, machine.kind);
     daemon.RunUntilStop([&] { return svc.Healthy(); });
     daemon.NotifyStopping();
     svc.Stop();

@@ -3,6 +3,7 @@
 #include <CLI/CLI.hpp>
 
 #include "cell/config/config.h"
+#include "cell/config/dds.h"
 #include "cell/daemon/daemon.h"
 #include "cell/health/health.h"
 #include "cell/identity/identity.h"
@@ -18,7 +19,8 @@ int main(int argc, char** argv) {
   try {
     cell::daemon::Daemon daemon;
     auto cfg = cell::config::LoadStation(station);
-    cell::bus::Participant bus("cell-interpreter/" + station);
+    const auto dds = cell::config::DdsVendor(cfg.dds);  // the station file's dds, else CELL_DDS
+    cell::bus::Participant bus({"cell-interpreter/" + station, {}, dds.vendor, {}});
     cell::health::Announcer health(bus, "cell-interpreter", station);
     cell::identity::Claim claim(bus, health);
     claim.Confirm();  // one process per station: before the station serves anything
@@ -26,7 +28,8 @@ int main(int argc, char** argv) {
     st.Start();
     health.Set(cell::SERVICE_READY, cfg.dialect);
     daemon.NotifyReady("station " + station + " ready");
-    spdlog::info("ready on domain {} ({} station)", bus.domain(), cfg.dialect);
+    spdlog::info("ready on domain {} with {} (from {}) ({} station)", bus.domain(), dds.vendor, dds.source,
+                 cfg.dialect);
     daemon.RunUntilStop([&] { return st.Healthy(); });
     daemon.NotifyStopping();
     st.Stop();

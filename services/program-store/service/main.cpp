@@ -51,7 +51,7 @@ int main() {
     cell::program_store::Service service(bus, store, idle);
     health.Set(cell::SERVICE_READY, "serving " + (opts.data_dir / opts.database_file).string());
     daemon.NotifyReady("serving programs");
-    spdlog::info("ready on domain {}, database {}", bus.domain(),
+    spdlog::info("ready on domain {} with {}, database {}", bus.domain(), bus.vendor(),
                  (opts.data_dir / opts.database_file).string());
     // Abandoned uploads are looked for at a quarter of the idle limit (at least every 30 s), whatever the
     // main loop's tick (1 s, or a quarter of the systemd watchdog interval).

@@ -20,7 +20,7 @@ int main() {
     svc.Start();
     health.Set(cell::SERVICE_READY);
     daemon.NotifyReady("scheduling");
-    spdlog::info("ready on domain {}", bus.domain());
+    spdlog::info("ready on domain {} with {}", bus.domain(), bus.vendor());
     while (!daemon.WaitForStop(std::chrono::milliseconds(250))) {
       svc.Tick();
       if (svc.Healthy()) daemon.Tick();
