@@ -34,6 +34,9 @@ class ProgramStoreCrashTest : public ::testing::Test {
     client_ = std::make_unique<ps::Client>(*bus_, cell::bus::Millis(10000));
   }
   void TearDown() override {
+    if (HasFailure())
+      std::fprintf(stderr, "STORE LOG:\n%s\nSTREAM ERR:\n%s\n", StoreLog().c_str(),
+                   cell::testing::ReadFile(dir_ + "/stream.err").c_str());
     client_.reset();
     bus_.reset();
     store_.reset();

@@ -78,9 +78,8 @@ int main(int argc, char** argv) {
   std::setvbuf(stdout, nullptr, _IOLBF, 0);
   const std::string me = argv[1];
   const bool fast = me == "fastdds";
-  const int domain = cell::config::Domain();
-  BackendOptions bo{domain, "", "interop-" + me};
-  Participant p("interop-" + me, domain, fast ? MakeFastDdsBackend(bo) : MakeCycloneBackend(bo));
+  // The stack as every service chooses it (and CELL_DDS_PROFILE for it: the loopback test's control).
+  Participant p(ParticipantOptions{"interop-" + me, {}, me, {}});
   const std::string out = fast ? "f2c" : "c2f", in = fast ? "c2f" : "f2c";
   const long my_seed = fast ? 1 : 2, peer_seed = fast ? 2 : 1;
 

@@ -249,6 +249,9 @@ TEST(Install, DestdirPrefixIdempotentAndVerified) {
               ReadFile(SourceDir() / "deploy/stations" / (std::string(id) + ".toml")));
   }
   EXPECT_TRUE(fs::exists(dest / "etc/cell/cell.env"));
+  for (const char* f : {"lan.fastdds.xml", "lan.cyclonedds.xml", "lan-multicast.fastdds.xml",
+                        "lan-multicast.cyclonedds.xml", "fastdds.env", "cyclonedds.env"})
+    EXPECT_EQ(ReadFile(dest / "etc/cell/dds" / f), ReadFile(SourceDir() / "deploy/dds" / f)) << f;
 
   ShellResult again = Shell(cmd);
   ASSERT_EQ(again.status, 0) << again.output;
@@ -267,6 +270,10 @@ TEST(Install, DestdirPrefixIdempotentAndVerified) {
   fs::create_directories(dest / "usr/lib/systemd");
   ShellResult cp = Shell("cp -a /usr/lib/systemd/system " + Quote((dest / "usr/lib/systemd").string()));
   ASSERT_EQ(cp.status, 0) << cp.output;
+  // One unit on the other DDS stack, as docs/operations.md §8.2 says: a drop-in reading a shipped env file.
+  fs::create_directories(dest / "etc/systemd/system/cell-scheduler.service.d");
+  WriteFile(dest / "etc/systemd/system/cell-scheduler.service.d/dds.conf",
+            "[Service]\nEnvironmentFile=/etc/cell/dds/cyclonedds.env\n");
   std::string names = "cell.target";
   for (const auto& u : kUnits) names += " " + (u.station ? cell::config::UnitName(u.file, "KT03") : u.file);
   ExpectVerifies("--root=" + Quote(dest.string()) + " " + names);

@@ -20,6 +20,9 @@ class LocalCell {
   LocalCell(const LocalCell&) = delete;
   LocalCell& operator=(const LocalCell&) = delete;
 
+  // An environment variable for cellctl and, through `cellctl up`, every process of the cell (CELL_DDS,
+  // CELL_CONFIG_DIR, ...); set before Up().
+  void SetEnv(const std::string& name, const std::string& value) { env_[name] = value; }
   // `cellctl up --stations S --clock C`; the result for the caller to assert on.
   RunResult Up(const std::string& stations = "KT01,KT02", const std::string& clock = "virtual");
   RunResult Down();
