@@ -1,9 +1,10 @@
 // A cell across two hosts (issue 20): two network namespaces joined by a veth pair stand for the cell host
-// (program store, scheduler, inspection writer, cellctl) and a station host (interpreter and axis servo of
-// KT01 and KT02). Every process runs on the shipped LAN profile of its stack (CELL_DDS_PROFILE=lan or
-// lan-multicast, deploy/dds/), the two hosts on different stacks. Pallets run end to end, their run records
-// reach the host's inspection writer, and the kernel's packet counters of both veth ends show the traffic
-// really crossed the link (the built-in loopback profile could never do that: tests/interop/loopback_test).
+// (program store, scheduler, inspection writer, dashboard, cellctl) and a station host (interpreter and axis
+// servo of KT01 and KT02). Every process runs on the shipped LAN profile of its stack (CELL_DDS_PROFILE=lan
+// or lan-multicast, deploy/dds/), the two hosts on different stacks. Pallets run end to end, their run
+// records reach the host's inspection writer, and the kernel's packet counters of both veth ends show the
+// traffic really crossed the link (the built-in loopback profile could never do that:
+// tests/interop/loopback_test).
 //
 // Needs root for the namespaces; elsewhere it says why and is reported skipped (never passed).
 #include <signal.h>
@@ -74,11 +75,10 @@ TEST_P(TwoHosts, PalletsRunEndToEndAcrossTheVeth) {
   std::filesystem::create_directories(dir_ + "/host");
   std::filesystem::create_directories(dir_ + "/station");
   const std::string config = SourceDir() + "/deploy";  // both hosts ship the same station files and profiles
-  const std::map<std::string, std::string> host_env = {{"CELL_DDS", l.host_stack},
-                                                       {"CELL_DDS_PROFILE", l.profile},
-                                                       {"CELL_LAN_ADDRESS", net.Address(0)},
-                                                       {"CELL_CONFIG_DIR", config},
-                                                       {"CELL_DATA_DIR", dir_ + "/host"}};
+  const std::map<std::string, std::string> host_env = {
+      {"CELL_DDS", l.host_stack},           {"CELL_DDS_PROFILE", l.profile},
+      {"CELL_LAN_ADDRESS", net.Address(0)}, {"CELL_CONFIG_DIR", config},
+      {"CELL_DATA_DIR", dir_ + "/host"},    {"CELL_HTTP", "127.0.0.1:0"}};  // the dashboard's port
   const std::map<std::string, std::string> station_env = {{"CELL_DDS", l.station_stack},
                                                           {"CELL_DDS_PROFILE", l.profile},
                                                           {"CELL_LAN_ADDRESS", net.Address(1)},
@@ -93,16 +93,16 @@ TEST_P(TwoHosts, PalletsRunEndToEndAcrossTheVeth) {
 
   const auto t0 = std::chrono::steady_clock::now();
   auto secs = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(); };
-  Start(net, 0, host_env, {"cell-program-store"});
-  Start(net, 0, host_env, {"cell-scheduler"});
-  Start(net, 0, host_env, {"cell-inspection-writer"});
+  for (const char* svc : {"cell-program-store", "cell-scheduler", "cell-inspection-writer", "cell-dashboard"})
+    Start(net, 0, host_env, {svc});
+  const size_t host_processes = procs_.size();
   for (const char* st : {"KT01", "KT02"}) {
     Start(net, 1, station_env, {"cell-interpreter", "--station", st});
     Start(net, 1, station_env, {"cell-axis-servo", "--station", st});
   }
   // Every process joined its stack on its LAN address ("ready on domain N with <stack>").
   for (size_t i = 0; i < logs_.size(); ++i) {
-    const std::string want = "with " + std::string(i < 3 ? l.host_stack : l.station_stack);
+    const std::string want = "with " + std::string(i < host_processes ? l.host_stack : l.station_stack);
     auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
     while (ReadFile(logs_[i]).find(want) == std::string::npos && procs_[i]->Running() &&
            std::chrono::steady_clock::now() < deadline)

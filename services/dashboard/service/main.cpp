@@ -41,7 +41,8 @@ int main() {
     std::ofstream(cell::config::DataDir() / "dashboard.url") << http.url() << "\n";
     health.Set(cell::SERVICE_READY, http.url());
     daemon.NotifyReady("serving " + http.url());
-    spdlog::info("serving {} on domain {} (MTConnect: {}probe)", http.url(), bus.domain(), http.url());
+    spdlog::info("ready on domain {} with {}: serving {} (MTConnect: {}probe)", bus.domain(), bus.vendor(),
+                 http.url(), http.url());
     while (!daemon.WaitForStop(std::chrono::milliseconds(250))) {
       feed.Tick();
       if (http.running()) daemon.Tick();
