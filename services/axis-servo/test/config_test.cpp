@@ -28,6 +28,9 @@ TEST(Config, ShippedStationsLoad) {
   EXPECT_EQ(ok.kind, "lathe");
   EXPECT_TRUE(ok.axes[kX].diameter);
   EXPECT_FALSE(ok.axes[kY].present);
+  EXPECT_EQ(ok.axes[kC].type, AxisType::kRotary);  // the C axis of the M-tool spindle (Okuma ln 745-939)
+  EXPECT_GE(ok.axes[kX].max * 2, 500.0);           // travel admits E-102's X500 Z800 (ln 9148-9163)
+  EXPECT_GE(ok.axes[kZ].max, 800.0);
   MachineConfig em = LoadMachineConfig(kStations + "EM01.toml");  // its [params] belong to the interpreter
   EXPECT_EQ(em.dialect, "emco");
   EXPECT_EQ(em.kind, "lathe");

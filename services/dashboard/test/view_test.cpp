@@ -156,8 +156,9 @@ TEST(StationDefs, AxesComeFromTheStationFiles) {
   };
   EXPECT_EQ(names(by["KT01"]), "XYZB");  // deploy/stations/KT01.toml: [axes.x] [axes.y] [axes.z] [axes.b]
   EXPECT_TRUE(by["KT01"].axes[3].rotary);
-  EXPECT_EQ(names(by["OK01"]), "XZ");  // the lathe: X (diameter) and Z
+  EXPECT_EQ(names(by["OK01"]), "XZC");  // the lathe: X (diameter), Z and the C axis
   EXPECT_TRUE(by["OK01"].axes[0].diameter);
+  EXPECT_TRUE(by["OK01"].axes[2].rotary);
   EXPECT_EQ(by["OK01"].kind, "lathe");
 }
 
