@@ -427,9 +427,9 @@ TEST_F(Fms, BadInput) {
 }
 
 // Okuma schedule program through the scheduler service: VSET goes to the station's common variables before
-// the dispatches, and PSELECT Q=2 runs the main program twice, one run after another. OK01's Okuma dialect is
-// not implemented in the interpreter yet (its runs would fail there), so a KT-APL station runs it here, with
-// a KT-APL program stored under the main program file's name.
+// the dispatches, and PSELECT Q=2 runs the main program twice, one run after another. A KT-APL station runs
+// it here, with a KT-APL program stored under the main program file's name (the scheduler does not tie
+// schedules to a dialect); okuma_cell_test runs the manual's own schedule on OK01.
 TEST_F(Fms, ScheduleProgramSetsVariablesAndRunsPselectRepeats) {
   std::string main_prog = data_ + "/a.apl";
   std::ofstream(main_prog) << Program("AMIN", "1001", 5);

@@ -489,7 +489,11 @@ void Service::Sender(std::stop_token st) {
     req.node(o.d.station);
     req.repeat(1);
     req.cancel(cancel);
-    for (auto& p : o.d.programs) names::Append(req.programs(), p, "program name");
+    if (o.d.schedule_run) {
+      names::Append(req.programs(), schedule::StationEntry(*o.d.schedule_run), "program name");
+    } else {
+      for (auto& p : o.d.programs) names::Append(req.programs(), p, "program name");
+    }
     req.hdr().idempotency_key("dispatch-" + std::to_string(o.d.dispatch_id) + (cancel ? "-cancel" : ""));
     try {
       auto rep = client->Call(req, std::chrono::seconds(5));

@@ -512,4 +512,12 @@ Step Runner::Next(Variables& vars) {
   return step;
 }
 
+std::string StationEntry(const Run& run) {
+  auto bare = [](const std::string& f) { return f.substr(f.find(':') + 1); };
+  std::string entry = bare(run.main_file);
+  if (!run.program.empty() || !run.sub_file.empty()) entry += "," + run.program;
+  if (!run.sub_file.empty()) entry += "," + bare(run.sub_file);
+  return entry;
+}
+
 }  // namespace cell::scheduler::schedule

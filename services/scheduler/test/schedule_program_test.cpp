@@ -104,6 +104,17 @@ TEST(Schedule, PselectDefaults) {
   EXPECT_EQ(RunAll("PSELECT X:PART,,,Q=V5*2\nEND", vars).size(), 4u);
 }
 
+TEST(Schedule, StationEntryCarriesPselectsOperandsWithoutTheDevice) {
+  Vars vars;
+  auto runs =
+      RunAll("PSELECT\nPSELECT B.MIN,O200\nPSELECT C,,MD1:S.SSB\nPSELECT MD2:D.MIN,O4,LIB\nEND", vars);
+  ASSERT_EQ(runs.size(), 4u);
+  EXPECT_EQ(StationEntry(runs[0]), "A.MIN");
+  EXPECT_EQ(StationEntry(runs[1]), "B.MIN,O200");
+  EXPECT_EQ(StationEntry(runs[2]), "C.MIN,,S.SSB");
+  EXPECT_EQ(StationEntry(runs[3]), "D.MIN,O4,LIB.SUB");
+}
+
 TEST(Schedule, ContinuationCommentsAndBlocksAfterEnd) {
   Vars vars;
   const auto runs = RunAll(

@@ -58,7 +58,7 @@ void Station::Execute(const Dispatch& d) {
       throw Error(Errc::kUnavailable, "no axis servo for station " + cfg_.id + " on the bus");
     for (int rep = 0; rep < d.repeat; ++rep) {
       for (const std::string& name : d.programs) {
-        run.program = name;
+        run.program = name.substr(0, name.find(','));  // a schedule run's file, without PSELECT's operands
         PublishRun(run, cell::RUN_ACTIVE);
         RunProgram(run, name);
         PublishRun(run, cell::RUN_ACTIVE);  // a program finished: its UCY leaves the backlog
@@ -108,7 +108,11 @@ void Station::Execute(const Dispatch& d) {
 // parameters, TLD, ZTB) is committed after its end (with the servo drained) and at its failure, in one
 // transaction with the run's progress, so the next program starts from it and a kill -9 loses nothing that
 // was committed.
-void Station::RunProgram(ActiveRun& run, const std::string& name) {
+void Station::RunProgram(ActiveRun& run, const std::string& entry) {
+  // A schedule run names PSELECT's operands, "A.MIN,O100,S.SUB" (docs/scheduler.md §9): the file, the program
+  // in it and the subprogram file, the dialect's PROGRAM and SUB_FILE.
+  const std::size_t comma = entry.find(',');
+  const std::string name = entry.substr(0, comma);
   auto text = io_.Program(run.d.node, name);
   if (!text) throw Error(Errc::kNotFound, "program '" + name + "' is not in " + run.d.node + " or HOST");
   const MemorySnapshot start = memory_.Get();
@@ -121,6 +125,12 @@ void Station::RunProgram(ActiveRun& run, const std::string& name) {
   opt.variables = start.image.variables;
   opt.params = cfg_.params;  // the station config's [params]: the dialect's machine settings (EMCO's monitor)
   opt.params["PALLET"] = std::to_string(run.d.pallet);
+  if (comma != std::string::npos) {
+    const std::string rest = entry.substr(comma + 1);
+    const std::size_t sub = rest.find(',');
+    if (!rest.substr(0, sub).empty()) opt.params["PROGRAM"] = rest.substr(0, sub);
+    if (sub != std::string::npos && sub + 1 < rest.size()) opt.params["SUB_FILE"] = rest.substr(sub + 1);
+  }
   RunEnvironment env(stream_, options_.probe_feed);
   opt.env = &env;
   auto program = interp::StartRun(opt);

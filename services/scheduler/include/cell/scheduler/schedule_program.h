@@ -81,6 +81,11 @@ struct Run {
   int line = 0;
 };
 
+// The run as the station receives it (the dispatch's one program entry): PSELECT's own operands without the
+// device, "A.MIN,O100,S.SUB"; "A.MIN" alone when neither a program nor a subprogram file was given. The
+// station runs program O100 of A.MIN and searches S.SUB for subprograms (docs/scheduler.md §9).
+std::string StationEntry(const Run& run);
+
 struct Step {
   enum class Kind { kRun, kEnd, kAlarm };
   Kind kind = Kind::kEnd;

@@ -91,7 +91,7 @@ class Station {
   class RunEnvironment;
 
   void Execute(const Dispatch& d);
-  void RunProgram(ActiveRun& run, const std::string& name);
+  void RunProgram(ActiveRun& run, const std::string& entry);
   void Checkpoint(std::int32_t run_id) const;  // throws when the run was cancelled or the station stops
   void PublishRun(const ActiveRun& run, cell::RunState state, const std::string& reason = "");
   void PublishMemory(const MemorySnapshot& now, bool tools, bool variables);
