@@ -596,12 +596,21 @@ void BaltRun::ExecIso(const ParsedBlock& pb) {
   } else if (corner && axes == 0 && !pb.elem.kind) {
     if (corner->letter == 'r' && ij == 0) {
       if (!contour_.engaged()) Fail(corner->col, 77, "a radius word needs the move before it");
-      contour_.Corner('r', ValueOf(corner->v, corner->col) * UnitFactor() * PlaneScale(), cur_line_);
+      const double r = ValueOf(corner->v, corner->col) * UnitFactor() * PlaneScale();
+      try {
+        contour_.Corner('r', r, cur_line_);
+      } catch (const ContourError& e) {
+        Fail(corner->col, e.code, e.text);  // "two corner words in a row", a radius after a virtual point
+      }
     } else {
       if (!contour_.engaged()) Fail(corner->col, 77, "a bevel word needs the move before it");
       double v = ValueOf(corner->v, corner->col);
       if (corner->v.neg) Fail(corner->col, 13, "a bevel is written without a sign");
-      contour_.Corner('b', v * UnitFactor() * PlaneScale(), cur_line_);
+      try {
+        contour_.Corner('b', v * UnitFactor() * PlaneScale(), cur_line_);
+      } catch (const ContourError& e) {
+        Fail(corner->col, e.code, e.text);
+      }
     }
   } else {
     if (g.cycle == 80) {

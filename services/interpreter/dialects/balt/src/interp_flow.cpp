@@ -166,15 +166,19 @@ void BaltRun::StepOnce() {
   cur_own_ = top.report_own;
   cur_line_ = !line ? cur_line_ : (top.report_own ? line->number : top.call_line);
   try {
-    if (!line) {
-      EndOfText();
-    } else {
-      if (++idle_ > max_idle_) {
-        Fail(1, 0, fmt::format("PROGRAM RAN {} BLOCKS WITHOUT MOTION OR OUTPUT (ENDLESS LOOP?)", max_idle_));
+    try {
+      if (!line) {
+        EndOfText();
+      } else {
+        if (++idle_ > max_idle_) {
+          Fail(1, 0, fmt::format("PROGRAM RAN {} BLOCKS WITHOUT MOTION OR OUTPUT (ENDLESS LOOP?)", max_idle_));
+        }
+        ExecLine(*line);
       }
-      ExecLine(*line);
+      ContourDrain();
+    } catch (const ContourError& e) {
+      ContourFail(e);  // a contour refusal no nearer handler placed: still this block's alarm, never an escape
     }
-    ContourDrain();
   } catch (const RunError& e) {
     Diagnostic d;
     d.program = opt_.program_name;
