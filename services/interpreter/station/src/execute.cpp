@@ -5,8 +5,8 @@
 #include <nlohmann/json.hpp>
 
 #include "cell/error/error.h"
-#include "cell/names/names.h"
 #include "cell/interp/interp.h"
+#include "cell/names/names.h"
 #include "cell/station/station.h"
 #include "cell/station/to_segment.h"
 

@@ -4,8 +4,8 @@
 #include <nlohmann/json.hpp>
 
 #include "cell/error/error.h"
-#include "cell/names/names.h"
 #include "cell/interp/interp.h"
+#include "cell/names/names.h"
 #include "cell/tooltable/wire.h"
 
 namespace cell::station {

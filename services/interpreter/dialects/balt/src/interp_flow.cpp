@@ -171,13 +171,15 @@ void BaltRun::StepOnce() {
         EndOfText();
       } else {
         if (++idle_ > max_idle_) {
-          Fail(1, 0, fmt::format("PROGRAM RAN {} BLOCKS WITHOUT MOTION OR OUTPUT (ENDLESS LOOP?)", max_idle_));
+          Fail(1, 0,
+               fmt::format("PROGRAM RAN {} BLOCKS WITHOUT MOTION OR OUTPUT (ENDLESS LOOP?)", max_idle_));
         }
         ExecLine(*line);
       }
       ContourDrain();
     } catch (const ContourError& e) {
-      ContourFail(e);  // a contour refusal no nearer handler placed: still this block's alarm, never an escape
+      ContourFail(
+          e);  // a contour refusal no nearer handler placed: still this block's alarm, never an escape
     }
   } catch (const RunError& e) {
     Diagnostic d;
