@@ -1,6 +1,8 @@
 // Okuma through the cell (issue 16): the station OK01 (Okuma dialect, lathe servo kind, virtual clock) runs
 // the manual's worked schedule program from `cellctl schedule run`, and a threading program's cycle time
-// matches the lead and spindle speed computed by hand.
+// matches the lead and spindle speed computed by hand; the schedule survives a kill -9 of the scheduler.
+#include <signal.h>
+
 #include <chrono>
 #include <fstream>
 #include <map>
@@ -99,6 +101,69 @@ TEST_F(OkumaCell, ShaftScheduleMachinesTwentyFifteenAndTwentyFiveParts) {
   std::map<std::string, int> runs;
   for (const auto& p : programs) ++runs[p];
   EXPECT_EQ(runs, (std::map<std::string, int>{{"A.MIN,O100", 20}, {"B.MIN,O200", 15}, {"C.MIN,O300", 25}}));
+}
+
+// The same schedule survives a kill -9 of the scheduler in its middle (issue 16, item 5): the schedule is one
+// job, its runner keeps its place in the scheduler's database, and the restarted scheduler (`cellctl
+// restart`, the recorded command line) goes on from there. No part runs twice and none is lost: V1/V2/V3 end
+// at 20/15/25 and the station holds exactly 60 completed run records, each dispatch once.
+TEST_F(OkumaCell, ScheduleSurvivesSchedulerKillWithoutRunningAPartTwice) {
+  Put("A.MIN", Part("O100", 100, 150, 40));
+  Put("B.MIN", Part("O200", 100, 230, 30));
+  Put("C.MIN", Part("O300", 300, 340, 20));
+  std::string sdf = cell_.data_dir() + "/SHAFT-1.SDF";
+  std::ofstream(sdf) << "N001 VSET V1=0 V2=0 V3=0\n"
+                        "N010 PSELECT A.MIN,O100\nN011 VSET V1=V1+1\nN012 IF [V1 LT 20] N010\n"
+                        "N020 PSELECT B.MIN,O200\nN021 VSET V2=V2+1\nN022 IF [V2 LT 15] N020\n"
+                        "N030 PSELECT C.MIN,O300\nN031 VSET V3=V3+1\nN032 IF [V3 LT 25] N030\n"
+                        "END\n";
+  auto run = Ctl({"schedule", "run", sdf, "--station", "OK01"});
+  ASSERT_EQ(run.code, 0) << run.err;
+  const std::string job = FirstLine(run.out);
+  // Into the schedule: a few parts of A are done.
+  auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  for (;;) {
+    auto vars = CtlJson({"station", "vars", "OK01", "--json"});
+    if (vars.is_object() && vars.contains("V1") && vars["V1"].is_number() && vars["V1"].get<double>() >= 3)
+      break;
+    ASSERT_LT(std::chrono::steady_clock::now(), deadline) << vars;
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  pid_t sched = -1;
+  for (auto& p : json::parse(std::ifstream(cell_.data_dir() + "/cell-up.json")))
+    if (p["service"] == "cell-scheduler") sched = p["pid"].get<pid_t>();
+  ASSERT_GT(sched, 0);
+  ASSERT_EQ(kill(sched, SIGKILL), 0);
+  auto rs = Ctl({"restart", "cell-scheduler"});
+  ASSERT_EQ(rs.code, 0) << rs.out << rs.err;
+
+  auto w = Ctl({"job", "wait", job, "--timeout", "150"});
+  ASSERT_EQ(w.code, 0) << w.out << w.err << CtlJson({"job", "show", job, "--json"}).dump();
+  EXPECT_EQ(w.out, "COMPLETED\n");
+  auto vars = CtlJson({"station", "vars", "OK01", "--json"});
+  EXPECT_EQ(vars["V1"], 20) << vars;
+  EXPECT_EQ(vars["V2"], 15) << vars;
+  EXPECT_EQ(vars["V3"], 25) << vars;
+  std::map<std::string, int> runs;
+  std::map<int, int> dispatches;
+  deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+  for (;;) {
+    runs.clear();
+    dispatches.clear();
+    for (auto& row : CtlJson({"inspect", "ls", "run-OK01-*", "--json"})) {
+      auto r = json::parse(Ctl({"inspect", "cat", row["name"].get<std::string>()}).out, nullptr, false);
+      if (!r.is_object() || r["completed"] != true) continue;
+      ++runs[r["programs"][0].get<std::string>()];
+      ++dispatches[r["dispatch_id"].get<int>()];
+    }
+    int total = 0;
+    for (auto& [p, n] : runs) total += n;
+    if (total >= 60 || std::chrono::steady_clock::now() > deadline) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  }
+  EXPECT_EQ(runs, (std::map<std::string, int>{{"A.MIN,O100", 20}, {"B.MIN,O200", 15}, {"C.MIN,O300", 25}}));
+  EXPECT_EQ(dispatches.size(), 60u);
+  for (auto& [id, n] : dispatches) EXPECT_EQ(n, 1) << "dispatch " << id << " ran " << n << " times";
 }
 
 // A threading program on the virtual clock: G33 cuts one pass of a 100 mm thread at S100 (G97). The manual's
