@@ -23,8 +23,10 @@ constexpr int kMaxSocket = 999;                                    // S
 constexpr int kMaxLifeHhmm = 9959;                                 // L, hhmm (ln 4051-4055)
 constexpr double kMaxHp = 99.9;                                    // H (ln 4059)
 
+// Values are shown as written (10 significant digits drop the binary noise of a converted inch value:
+// 39.371 stays 39.371).
 std::string RangeText(char letter, double v, const CompLimit& lim, bool metric, std::string_view unit) {
-  return fmt::format("TLD {} VALUE {}{} OUTSIDE +-{}{} (manual {})", letter, v, unit,
+  return fmt::format("TLD {} VALUE {:.10g}{} OUTSIDE +-{}{} (manual {})", letter, v, unit,
                      metric ? lim.mm : lim.inch, unit, lim.lines);
 }
 
