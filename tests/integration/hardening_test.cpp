@@ -350,13 +350,15 @@ TEST_F(Hardening, OneProcessPerIdentity) {
     json st;
     bool fault = cell::bus::WaitUntil(
         [&] {
-          st = cell_.Json({"station", "ls", "--json"});
-          return st.is_array() && st[0]["condition"] == "FAULT";
+          st = json::object();
+          for (auto& row : cell_.Json({"station", "ls", "--json"}))
+            if (row["id"] == "KT01") st = row;  // by id: stations are listed in id order (EM01 first)
+          return st["condition"] == "FAULT";
         },
         20000ms);
     EXPECT_TRUE(fault) << st.dump();
     if (fault) {
-      std::string text = st[0]["alarm_text"];
+      std::string text = st["alarm_text"];
       EXPECT_NE(text.find("pid 999999"), std::string::npos) << text;
       EXPECT_NE(text.find("pid " + std::to_string(Pid("cell-interpreter/KT01"))), std::string::npos) << text;
     }

@@ -161,6 +161,11 @@ struct Scheduler::Impl {
     std::int64_t inflight = 0;       // handed out (sent/acked/running)
     std::string program;
     std::map<int, double> vars;  // common variables V1-V200 (published by the station, plus VSET writes)
+    // VSET writes the station has not shown back yet. They survive a restart and are sent again by Recover()
+    // (a kill -9 between the commit and the send would lose them), and a station publication from before
+    // the write does not roll them back. Cleared by a publication with the value, or by a run's end there
+    // (the station had them before that run: writes go out ahead of the dispatch).
+    std::map<int, double> pending_vars;
   };
 
   Options opt;
@@ -464,6 +469,7 @@ struct Scheduler::Impl {
     }
     void Set(int n, double value) override {
       m.stations[static_cast<std::size_t>(s)].vars[n] = value;
+      m.stations[static_cast<std::size_t>(s)].pending_vars[n] = value;
       m.dirty_stations.insert(s);
       m.fx.variables.push_back(VariableAction{m.stations[static_cast<std::size_t>(s)].id, n, value});
     }
@@ -690,6 +696,9 @@ ALTER TABLE jobs ADD COLUMN schedule TEXT NOT NULL DEFAULT '';
       store::Migration::Sql(3, "scheduler: the command each idempotency key was used for", R"sql(
 ALTER TABLE idempotency ADD COLUMN command TEXT NOT NULL DEFAULT '';
 )sql"),
+      store::Migration::Sql(4, "scheduler: VSET writes a station has not shown back yet", R"sql(
+ALTER TABLE stations ADD COLUMN pending_vars TEXT NOT NULL DEFAULT '{}';
+)sql"),
   };
   return m;
 }
@@ -760,7 +769,8 @@ void Scheduler::Impl::Load() {
   }
   {
     auto q = d.Prepare(
-        "SELECT id, dialect, online, fault, alarm_code, alarm_text, tools, program, vars FROM stations "
+        "SELECT id, dialect, online, fault, alarm_code, alarm_text, tools, program, vars, pending_vars FROM "
+        "stations "
         "ORDER BY rowid");
     while (q.Step()) {
       const int s = StationIndex(q.ColumnText(0), true);
@@ -775,6 +785,9 @@ void Scheduler::Impl::Load() {
       const json vars = json::parse(q.ColumnText(8));
       for (auto it = vars.begin(); it != vars.end(); ++it)
         st.vars[std::stoi(it.key())] = it.value().get<double>();
+      const json pending = json::parse(q.ColumnText(9));
+      for (auto it = pending.begin(); it != pending.end(); ++it)
+        st.pending_vars[std::stoi(it.key())] = it.value().get<double>();
       states[static_cast<std::size_t>(s)].SetTools(st.tools, tool_index);
     }
   }
@@ -946,15 +959,20 @@ void Scheduler::Impl::Flush() {
   if (!dirty_stations.empty()) {
     auto q = db->Prepare(
         "INSERT INTO stations(id, dialect, online, fault, alarm_code, alarm_text, backlog_s, tools, program, "
-        "vars) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10) ON CONFLICT(id) DO UPDATE SET "
+        "vars, pending_vars) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11) ON CONFLICT(id) DO UPDATE "
+        "SET "
         "dialect = excluded.dialect, online = excluded.online, fault = excluded.fault, "
         "alarm_code = excluded.alarm_code, alarm_text = excluded.alarm_text, backlog_s = excluded.backlog_s, "
-        "tools = excluded.tools, program = excluded.program, vars = excluded.vars");
+        "tools = excluded.tools, program = excluded.program, vars = excluded.vars, "
+        "pending_vars = excluded.pending_vars");
     for (int s : dirty_stations) {
       const StationRec& st = stations[static_cast<std::size_t>(s)];
       const StationState& ss = states[static_cast<std::size_t>(s)];
       json vars = json::object();
       for (const auto& [n, v] : st.vars) vars[std::to_string(n)] = v;
+      json pending = json::object();
+      for (const auto& [n, v] : st.pending_vars) pending[std::to_string(n)] = v;
+      q.BindText(11, pending.dump());
       q.BindText(1, st.id).BindText(2, st.dialect).BindInt64(3, ss.online).BindInt64(4, ss.fault);
       q.BindText(5, st.alarm_code).BindText(6, st.alarm_text).BindInt64(7, ss.backlog_s);
       q.BindText(10, vars.dump());
@@ -1156,6 +1174,10 @@ Scheduler::~Scheduler() = default;
 Effects Scheduler::Recover() {
   Impl& m = *impl_;
   m.Call([&] {
+    // VSET writes not shown back yet go out again, ahead of the dispatches (Effects order): setting a value
+    // twice is harmless, losing it would run a schedule's loop once more.
+    for (const auto& st : m.stations)
+      for (const auto& [n, v] : st.pending_vars) m.fx.variables.push_back(VariableAction{st.id, n, v});
     for (std::size_t s = 0; s < m.stations.size(); ++s) {
       const auto& st = m.stations[s];
       if (st.inflight == 0) continue;
@@ -1333,11 +1355,15 @@ Effects Scheduler::StationVariables(std::string_view id, const std::map<int, dou
   Impl& m = *impl_;
   m.Call([&] {
     const int s = m.StationIndex(id, true);
-    auto& vars = m.stations[static_cast<std::size_t>(s)].vars;
+    auto& st = m.stations[static_cast<std::size_t>(s)];
     for (const auto& [n, v] : common) {
       if (n < 1 || n > 200)
         throw Error(Errc::kInvalidArgument, fmt::format("V{} is not a common variable", n));
-      vars[n] = v;
+      if (auto p = st.pending_vars.find(n); p != st.pending_vars.end()) {
+        if (p->second != v) continue;  // from before our write: the write wins until the station shows it
+        st.pending_vars.erase(p);
+      }
+      st.vars[n] = v;
     }
     m.dirty_stations.insert(s);
   });
@@ -1556,6 +1582,7 @@ Effects Scheduler::RunFinished(std::int64_t dispatch_id, std::optional<double> c
     if (!d) return;
     MarkRunning(m, *d);
     const int s = d->station;
+    m.stations[static_cast<std::size_t>(s)].pending_vars.clear();  // the station had them before this run
     m.Detach(*d, DState::kDone);
     auto& j = m.jobs.at(d->job);
     if (cycle_s) j.cycle = j.cycle.value_or(0) + *cycle_s;
@@ -1586,6 +1613,7 @@ Effects Scheduler::RunFailed(std::int64_t dispatch_id, std::string_view reason) 
     auto* d = ForReport(m, dispatch_id, "run failure");
     if (!d) return;
     const int s = d->station;
+    m.stations[static_cast<std::size_t>(s)].pending_vars.clear();  // as at a run's end
     m.Detach(*d, DState::kFailed);
     auto& j = m.jobs.at(d->job);
     m.FinishJob(j, JobState::kFailed,

@@ -170,6 +170,40 @@ TEST(Recovery, ScheduleResumesWhereItStopped) {
   EXPECT_EQ(c.sched->StationCommonVariables("OK01").at(1), 6);
 }
 
+// A kill -9 after the commit of a VSET write but before it was sent: the restarted scheduler sends it again
+// ahead of the dispatch, and the station's publication from before the write (V1 still 5) does not roll the
+// count back, so the loop runs Q times and not once more (okuma_cell_test kills the real process).
+TEST(Recovery, AVsetWriteLostInTheKillIsSentAgainAndNotRolledBack) {
+  TempDir tmp;
+  FakeCell c(tmp.db());
+  c.Take(c.sched->StationOnline("OK01", "okuma"));
+  JobResult r = c.sched->RunSchedule(
+      "s", "S.SDF", "N1 VSET V1=5\nN2 PSELECT A.MIN,O1\nVSET V1=V1+1\nIF [V1 LT 7] N2\nEND", "OK01");
+  c.Take(r.effects);
+  c.Take(c.sched->StationVariables("OK01", {{1, 5}}));  // the station shows the first write
+  Effects after_first = c.sched->RunFinished(c.InHand("OK01").dispatch_id, 1.0);
+  ASSERT_EQ(after_first.variables.size(), 1u);  // V1=6, committed; the process dies before sending it
+  EXPECT_EQ(after_first.variables[0].value, 6);
+  c.Restart();
+  Effects fx = c.sched->Recover();
+  ASSERT_EQ(fx.variables.size(), 1u);
+  EXPECT_EQ(fx.variables[0].station, "OK01");
+  EXPECT_EQ(fx.variables[0].number, 1);
+  EXPECT_EQ(fx.variables[0].value, 6);
+  ASSERT_EQ(fx.dispatches.size(), 1u);
+  c.Take(fx);
+  // The station still publishes its old value, then the written one.
+  c.Take(c.sched->StationVariables("OK01", {{1, 5}}));
+  EXPECT_EQ(c.sched->StationCommonVariables("OK01").at(1), 6);
+  c.Take(c.sched->StationVariables("OK01", {{1, 6}}));
+  c.Complete(c.InHand("OK01").dispatch_id);  // second run: V1=7, the loop ends
+  EXPECT_EQ(c.State(r.job_id), JobState::kCompleted);
+  EXPECT_EQ(c.sched->StationCommonVariables("OK01").at(1), 7);
+  // A value the station's own program wrote is taken once no write of ours is pending.
+  c.Take(c.sched->StationVariables("OK01", {{1, 7}, {2, 42}}));
+  EXPECT_EQ(c.sched->StationCommonVariables("OK01").at(2), 42);
+}
+
 TEST(Recovery, AFailedCommitLeavesNoTrace) {
   TempDir tmp;
   FakeCell c(tmp.db());

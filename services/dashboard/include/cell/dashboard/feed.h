@@ -37,6 +37,12 @@ class Feed {
  private:
   bus::Participant& p_;
   CellView& view_;
+  // What the readers' callbacks write: constructed before the readers, whose callbacks run on the bus thread
+  // as soon as each reader exists (a transient-local sample can arrive during the constructor).
+  mutable std::mutex mu_;
+  std::set<std::string> status_seen_;
+  bool backlog_seen_ = false;
+  std::chrono::steady_clock::time_point backlog_at_;
   health::Liveness live_;
   bus::Reader<cell::StationStatus> status_;
   bus::Reader<cell::ToolTable> tools_;
@@ -45,10 +51,6 @@ class Feed {
   bus::Reader<cell::RunStatus> runs_;
   bus::Reader<cell::InspectionStored> stored_;
   std::optional<bus::Reader<cell::AxisState>> axes_;
-  mutable std::mutex mu_;
-  std::set<std::string> status_seen_;
-  bool backlog_seen_ = false;
-  std::chrono::steady_clock::time_point backlog_at_;
 };
 
 // Conversions (exposed for tests).
