@@ -191,8 +191,14 @@ class Reader : public Rejoinable {
       p_.Unregister(this);
       r_.reset();  // no more backend callbacks after this
     }
-    std::lock_guard lk(state_->mu);
-    state_->cb = nullptr;
+    {
+      std::lock_guard lk(state_->mu);
+      state_->cb = nullptr;
+    }
+    // A callback already running on the participant's thread finishes before the reader (and whatever its
+    // owner destroys next) is gone: a service's destructor no longer races its own callbacks. Recursive, so a
+    // callback may destroy its own reader.
+    std::lock_guard call(state_->call_mu);
   }
   Reader(const Reader&) = delete;
   Reader& operator=(const Reader&) = delete;
@@ -233,6 +239,7 @@ class Reader : public Rejoinable {
  private:
   struct State {
     std::mutex mu;
+    std::recursive_mutex call_mu;  // held while the callback runs
     std::condition_variable cv;
     Callback cb;
     std::deque<std::pair<T, SampleInfo>> queue;
@@ -255,6 +262,7 @@ class Reader : public Rejoinable {
       p.Post([weak, v = std::move(v), si] {
         auto st = weak.lock();
         if (!st) return;
+        std::lock_guard call(st->call_mu);
         Callback fn;
         {
           std::lock_guard lk(st->mu);
@@ -386,6 +394,7 @@ class Client : public Rejoinable {
  private:
   struct State {
     std::mutex mu;
+    std::recursive_mutex call_mu;  // held while the callback runs
     std::condition_variable cv;
     std::map<uint64_t, std::optional<Rep>> pending;
     std::atomic<uint64_t> next_id{0};
