@@ -67,8 +67,20 @@ void CheckStation(std::string_view id, std::string_view what) {
   if (!IsStationId(id)) Bad(what, id, "must be 1-16 characters of A-Z, a-z, 0-9, '_' or '-'");
 }
 
+// A station's further program memories (Balt-System MP0, MP2..MP6) are namespaces "ID/MPn"; its default
+// memory MP1 is the station's own namespace "ID" (docs/program-store.md, "Memories").
 void CheckNode(std::string_view node, std::string_view what) {
-  if (node != "HOST" && !IsStationId(node)) Bad(what, node, "must be HOST or a station id");
+  if (node == "HOST" || IsStationId(node)) return;
+  const std::size_t slash = node.find('/');
+  if (slash != std::string_view::npos && IsStationId(node.substr(0, slash))) {
+    std::string_view memory = node.substr(slash + 1);
+    if (memory == "MP1") Bad(what, node, "MP1 is the station's default memory: write the station id alone");
+    if (memory.size() == 3 && memory.substr(0, 2) == "MP" && memory[2] >= '0' && memory[2] <= '6') {
+      if (node.size() > 16) Bad(what, node, "is longer than the 16 characters of a namespace");
+      return;
+    }
+  }
+  Bad(what, node, "must be HOST, a station id or a station's memory ID/MP0, ID/MP2 .. ID/MP6");
 }
 
 void CheckRoute(std::string_view name) {

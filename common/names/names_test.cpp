@@ -68,6 +68,13 @@ TEST(Rules, Stations) {
   for (std::string bad : std::vector<std::string>{"", "KT 01", "../x", "KT01\n", std::string(17, 'K')})
     EXPECT_THROW(CheckStation(bad), Error) << bad;
   EXPECT_THROW(CheckNode("HOST/KT01"), Error);
+  // Balt-System memories (manual ln 1749: MP0-MP6, MP1 the default, which is the station's own namespace).
+  EXPECT_NO_THROW(CheckNode("BS01/MP2"));
+  EXPECT_NO_THROW(CheckNode("BS01/MP0"));
+  EXPECT_THROW(CheckNode("BS01/MP1"), Error);
+  EXPECT_THROW(CheckNode("BS01/MP7"), Error);
+  EXPECT_THROW(CheckNode("BS01/HD"), Error);
+  EXPECT_THROW(CheckNode("STATION-NAME-012/MP2"), Error);  // 20 characters: the node field holds 16
 }
 
 TEST(Rules, Routes) {

@@ -120,6 +120,8 @@ json ToJson(const FileInfo& f) {
           {"head_revision", f.head_revision},
           {"sha256", f.sha256},
           {"protected", f.is_protected},
+          {"selected", f.is_selected},
+          {"hidden", f.is_hidden},
           {"created_at", f.created_at},
           {"metadata", ToJson(f.metadata)}};
 }
@@ -132,6 +134,8 @@ FileInfo FileInfoFromJson(const json& j) {
   f.head_revision = j.at("head_revision").get<std::uint32_t>();
   f.sha256 = j.at("sha256").get<std::string>();
   f.is_protected = j.at("protected").get<bool>();
+  f.is_selected = j.value("selected", false);  // results stored before the flags existed lack them
+  f.is_hidden = j.value("hidden", false);
   f.created_at = j.at("created_at").get<std::string>();
   f.metadata = MetadataFromJson(j.at("metadata"));
   return f;
@@ -188,7 +192,10 @@ FileInfo ReadFileInfo(const Statement& st) {
   f.revision = static_cast<std::uint32_t>(st.ColumnInt64(2));
   f.head_revision = static_cast<std::uint32_t>(st.ColumnInt64(3));
   f.sha256 = st.ColumnText(4);
-  f.is_protected = st.ColumnInt64(5) != 0;
+  const std::int64_t flags = st.ColumnInt64(5);  // the `protected` column holds the FileFlag bits
+  f.is_protected = (flags & static_cast<int>(FileFlag::kProtected)) != 0;
+  f.is_selected = (flags & static_cast<int>(FileFlag::kSelected)) != 0;
+  f.is_hidden = (flags & static_cast<int>(FileFlag::kHidden)) != 0;
   f.created_at = st.ColumnText(6);
   Metadata& md = f.metadata;
   md.size = static_cast<std::uint64_t>(st.ColumnInt64(7));
@@ -393,11 +400,18 @@ ProgramStore::ProgramStore(StoreOptions options) : options_(std::move(options)) 
   if (options_.data_dir.empty()) Fail(Errc::kInvalidArgument, "program store: no data directory given");
   namespaces_.emplace_back(kHostNamespace);
   for (const std::string& ns : options_.namespaces) {
-    if (ns.empty() || ns.size() > 16 || !std::all_of(ns.begin(), ns.end(), [](char c) {
+    // A station id, or a station's further memory "ID/MPn" (Balt-System MP0, MP2..MP6).
+    const std::string_view id = std::string_view(ns).substr(0, ns.find('/'));
+    const std::string_view memory =
+        ns.find('/') == std::string::npos ? "" : std::string_view(ns).substr(id.size() + 1);
+    const bool good_memory = memory.empty() || (memory.size() == 3 && memory.substr(0, 2) == "MP" &&
+                                                memory[2] >= '0' && memory[2] <= '6' && memory[2] != '1');
+    if (id.empty() || ns.size() > 16 || !good_memory || !std::all_of(id.begin(), id.end(), [](char c) {
           return std::isalnum(static_cast<unsigned char>(c));
         })) {
       Fail(Errc::kInvalidArgument,
-           fmt::format("program store: bad namespace '{}' (1-16 letters and digits)", ns));
+           fmt::format("program store: bad namespace '{}' (1-16 letters and digits, or ID/MP0, ID/MP2..MP6)",
+                       ns));
     }
     if (std::find(namespaces_.begin(), namespaces_.end(), ns) == namespaces_.end()) namespaces_.push_back(ns);
   }
@@ -447,7 +461,29 @@ void RequireNamespace(const ProgramStore& store, std::string_view node) {
   }
 }
 
+// What may not change: a protected file (ATT, `program protect`) and a program selected for execution (SPG).
+void RefuseLocked(const FileInfo& f) {
+  if (f.is_protected)
+    Fail(Errc::kPermissionDenied, fmt::format("{} is protected; unprotect it first", Quote(f.node, f.name)));
+  if (f.is_selected) {
+    Fail(Errc::kPermissionDenied,
+         fmt::format("{} is selected for execution (SPG); release it (REL) first", Quote(f.node, f.name)));
+  }
+}
+
 }  // namespace
+
+std::string_view FileFlagName(FileFlag flag) {
+  switch (flag) {
+    case FileFlag::kProtected:
+      return "protected";
+    case FileFlag::kSelected:
+      return "selected";
+    case FileFlag::kHidden:
+      return "hidden";
+  }
+  return "?";
+}
 
 struct ProgramStore::Impl {
   // The put path shared by Put and CommitPut; runs inside the caller's transaction.
@@ -476,10 +512,7 @@ struct ProgramStore::Impl {
     ValidateName(req.name, md.type, md.dialect);
     std::optional<Located> existing = Find(db, req.node, req.name, 0);
     if (existing) {
-      if (existing->info.is_protected) {
-        Fail(Errc::kPermissionDenied,
-             fmt::format("{} is protected; unprotect it first", Quote(req.node, req.name)));
-      }
+      RefuseLocked(existing->info);
       if (!req.force) {
         Fail(Errc::kAlreadyExists,
              fmt::format("{} already exists (revision {}); use --force to store a new revision",
@@ -599,9 +632,7 @@ PutResult ProgramStore::Copy(const CopyRequest& request) {
     ValidateName(to_name, md.type, md.dialect);
     std::optional<Located> existing = Find(db, request.to_node, to_name, 0);
     if (existing) {
-      if (existing->info.is_protected) {
-        Fail(Errc::kPermissionDenied, fmt::format("{} is protected", Quote(request.to_node, to_name)));
-      }
+      RefuseLocked(existing->info);
       if (!request.force) {
         Fail(Errc::kAlreadyExists,
              fmt::format("{} already exists (revision {}); use --force to store a new revision",
@@ -638,10 +669,7 @@ OpResult ProgramStore::Rename(const RenameRequest& request) {
       Fail(Errc::kInvalidArgument, fmt::format("rename of {} onto itself", Quote(to_node, to_name)));
     }
     Located source = MustFind(db, request.node, request.name, 0);
-    if (source.info.is_protected) {
-      Fail(Errc::kPermissionDenied,
-           fmt::format("{} is protected; unprotect it first", Quote(request.node, request.name)));
-    }
+    RefuseLocked(source.info);
     ValidateName(to_name, source.info.metadata.type, source.info.metadata.dialect);
     if (Find(db, to_node, to_name, 0)) {
       Fail(Errc::kAlreadyExists, fmt::format("{} already exists; remove it first (rename never overwrites)",
@@ -671,9 +699,7 @@ OpResult ProgramStore::Delete(std::string_view node, std::string_view name,
     std::string fp = Fingerprint({"delete", node, name});
     if (std::optional<json> previous = Replay(db, idempotency_key, fp)) return OpResultFromJson(*previous);
     Located found = MustFind(db, node, name, 0);
-    if (found.info.is_protected) {
-      Fail(Errc::kPermissionDenied, fmt::format("{} is protected; unprotect it first", Quote(node, name)));
-    }
+    RefuseLocked(found.info);
     std::vector<std::string> hashes;
     Statement h = db.Prepare("SELECT DISTINCT sha256 FROM revisions WHERE file_id = ?");
     h.BindInt64(1, found.file_id);
@@ -695,18 +721,30 @@ OpResult ProgramStore::Delete(std::string_view node, std::string_view name,
 
 OpResult ProgramStore::SetProtected(std::string_view node, std::string_view name, bool is_protected,
                                     std::string_view idempotency_key) {
+  return SetFlag(node, name, FileFlag::kProtected, is_protected, idempotency_key);
+}
+
+OpResult ProgramStore::SetFlag(std::string_view node, std::string_view name, FileFlag flag, bool on,
+                               std::string_view idempotency_key) {
   OpResult result;
   {
     std::lock_guard lock(mutex_);
     Database& db = *db_;
     RequireNamespace(*this, node);
     Transaction tx(db);
-    std::string fp = Fingerprint({is_protected ? "protect" : "unprotect", node, name});
+    // The protect fingerprint is the one older stored keys carry.
+    std::string fp = flag == FileFlag::kProtected
+                         ? Fingerprint({on ? "protect" : "unprotect", node, name})
+                         : Fingerprint({on ? "flag" : "unflag", FileFlagName(flag), node, name});
     if (std::optional<json> previous = Replay(db, idempotency_key, fp)) return OpResultFromJson(*previous);
     Located found = MustFind(db, node, name, 0);
-    if (found.info.is_protected != is_protected) {
+    const std::int64_t bits = (found.info.is_protected ? static_cast<int>(FileFlag::kProtected) : 0) |
+                              (found.info.is_selected ? static_cast<int>(FileFlag::kSelected) : 0) |
+                              (found.info.is_hidden ? static_cast<int>(FileFlag::kHidden) : 0);
+    const std::int64_t want = on ? bits | static_cast<int>(flag) : bits & ~static_cast<std::int64_t>(flag);
+    if (want != bits) {
       Statement up = db.Prepare("UPDATE files SET protected = ? WHERE id = ?");
-      up.BindInt64(1, is_protected ? 1 : 0).BindInt64(2, found.file_id).Run();
+      up.BindInt64(1, want).BindInt64(2, found.file_id).Run();
       result.events.push_back(
           RecordEvent(db, ChangeEvent::Kind::kUpdated, node, name, found.info.head_revision));
     }
@@ -761,10 +799,7 @@ void ProgramStore::BeginPut(const std::string& stream_id, const PutRequest& head
   {
     Transaction tx(db, Transaction::Mode::kDeferred);
     std::optional<Located> existing = Find(db, header.node, header.name, 0);
-    if (existing && existing->info.is_protected) {
-      Fail(Errc::kPermissionDenied,
-           fmt::format("{} is protected; unprotect it first", Quote(header.node, header.name)));
-    }
+    if (existing) RefuseLocked(existing->info);
     if (existing && !header.force) {
       Fail(Errc::kAlreadyExists,
            fmt::format("{} already exists (revision {}); use --force to store a new revision",

@@ -172,9 +172,16 @@ nlohmann::json Client::Delete(const std::string& node, const std::string& name, 
 }
 
 nlohmann::json Client::Protect(const std::string& node, const std::string& name, bool on) {
+  return Flag(node, name, "protected", on);
+}
+
+nlohmann::json Client::Flag(const std::string& node, const std::string& name, const std::string& flag,
+                            bool on, const std::string& key) {
   cell::ProgramRequest req;
   req.op(on ? cell::PROGRAM_PROTECT : cell::PROGRAM_UNPROTECT);
   Address(req, node, name);
+  names::Assign(req.to_name(), flag, "flag");
+  names::Assign(req.hdr().idempotency_key(), key, "idempotency key");
   return Info(Call(req));
 }
 

@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cstdlib>
 #include <string>
+#include <vector>
 
 #include <spdlog/spdlog.h>
 
@@ -38,10 +39,19 @@ int main() {
     cell::daemon::Daemon daemon;
     cell::program_store::StoreOptions opts;
     opts.data_dir = cell::config::DataDir();
-    opts.namespaces = cell::config::ListStations();
-    // A station namespace falls back to the station's dialect for files that do not show theirs.
-    for (const auto& id : opts.namespaces)
-      opts.namespace_dialects[id] = cell::program_store::ParseDialect(cell::config::LoadStation(id).dialect);
+    // A station namespace falls back to the station's dialect for files that do not show theirs. A
+    // Balt-System station also has the memories MP0, MP2..MP6 as "ID/MPn" (MP1, the default, is "ID").
+    for (const auto& id : cell::config::ListStations()) {
+      const std::string dialect = cell::config::LoadStation(id).dialect;
+      std::vector<std::string> spaces = {id};
+      if (dialect == "balt") {
+        for (const char* mp : {"/MP0", "/MP2", "/MP3", "/MP4", "/MP5", "/MP6"}) spaces.push_back(id + mp);
+      }
+      for (const auto& ns : spaces) {
+        opts.namespaces.push_back(ns);
+        opts.namespace_dialects[ns] = cell::program_store::ParseDialect(dialect);
+      }
+    }
     const std::chrono::seconds idle = StreamIdle();
     cell::bus::Participant bus("cell-program-store");
     cell::health::Announcer health(bus, "cell-program-store");

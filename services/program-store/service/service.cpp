@@ -18,6 +18,8 @@ nlohmann::json FileJson(const FileInfo& f) {
                       {"size", m.size},
                       {"lines", m.lines},
                       {"protected", f.is_protected},
+                      {"selected", f.is_selected},
+                      {"hidden", f.is_hidden},
                       {"sha256", f.sha256},
                       {"created_at", f.created_at},
                       {"dialect_detected", m.dialect_detected},
@@ -147,14 +149,17 @@ cell::ProgramReply Service::Handle(const cell::ProgramRequest& r) {
       std::vector<std::string> rows;
       for (auto& f : store_.List(node, name.empty() ? "*" : name)) {
         nlohmann::json j = FileJson(f);
-        rows.push_back(nlohmann::json{{"name", j["name"]},
-                                      {"node", j["node"]},
-                                      {"type", j["type"]},
-                                      {"dialect", j["dialect"]},
-                                      {"revision", j["revision"]},
-                                      {"size", j["size"]},
-                                      {"protected", j["protected"]}}
-                           .dump());
+        rows.push_back(nlohmann::json{
+            {"name", j["name"]},
+            {"node", j["node"]},
+            {"type", j["type"]},
+            {"dialect", j["dialect"]},
+            {"revision", j["revision"]},
+            {"size", j["size"]},
+            {"protected", j["protected"]},
+            {"selected", j["selected"]},
+            {"hidden",
+             j["hidden"]}}.dump());
       }
       std::vector<size_t> page_start = {0};
       size_t bytes = 2;
@@ -210,7 +215,18 @@ cell::ProgramReply Service::Handle(const cell::ProgramRequest& r) {
     }
     case cell::PROGRAM_PROTECT:
     case cell::PROGRAM_UNPROTECT: {
-      OpResult res = store_.SetProtected(node, name, r.op() == cell::PROGRAM_PROTECT);
+      // PROTECT/UNPROTECT set and clear one flag: to_name names it ("" or "protected", "selected" for a
+      // Balt-System SPG/REL, "hidden" for ATT HIDDEN), so the memory commands need no new op on the wire.
+      const std::string flag = r.to_name().to_string();
+      FileFlag f = FileFlag::kProtected;
+      if (flag == "selected") {
+        f = FileFlag::kSelected;
+      } else if (flag == "hidden") {
+        f = FileFlag::kHidden;
+      } else if (!flag.empty() && flag != "protected") {
+        throw Error(Errc::kInvalidArgument, "unknown file flag '" + flag + "' (protected, selected, hidden)");
+      }
+      OpResult res = store_.SetFlag(node, name, f, r.op() == cell::PROGRAM_PROTECT, key);
       SetInfo(rep, FileJson(res.file));
       break;
     }

@@ -59,9 +59,17 @@ struct FileInfo {
   std::uint32_t head_revision = 0;  // the file's latest revision
   std::string sha256;               // of this revision's content
   bool is_protected = false;
-  std::string created_at;  // this revision's time, ISO-8601 UTC
-  Metadata metadata;       // type, dialect, NAM/UTL/UCY, program names, size, lines, warnings
+  bool is_selected = false;  // selected for execution (Balt-System SPG): cannot be changed or deleted
+  bool is_hidden = false;    // Balt-System ATT HIDDEN: a DIR of the memory does not show it
+  std::string created_at;    // this revision's time, ISO-8601 UTC
+  Metadata metadata;         // type, dialect, NAM/UTL/UCY, program names, size, lines, warnings
 };
+
+// A file's flags (kept as bits of the files.protected column). Protected and selected files refuse put,
+// delete, rename and being a copy destination; hidden ones are only marked (the memory commands' DIR leaves
+// them out).
+enum class FileFlag { kProtected = 1, kSelected = 2, kHidden = 4 };
+std::string_view FileFlagName(FileFlag flag);  // "protected", "selected", "hidden"
 
 struct RevisionInfo {
   std::uint32_t revision = 0;
@@ -149,6 +157,8 @@ class ProgramStore {
   OpResult Delete(std::string_view node, std::string_view name, std::string_view idempotency_key = {});
   OpResult SetProtected(std::string_view node, std::string_view name, bool is_protected,
                         std::string_view idempotency_key = {});
+  OpResult SetFlag(std::string_view node, std::string_view name, FileFlag flag, bool on,
+                   std::string_view idempotency_key = {});
 
   // Chunked put for large files. BeginPut checks what it can early (namespace, name, protection, force)
   // and stages nothing visible; PutChunk appends chunk `index` (0, 1, 2, ... in order; re-sending the last

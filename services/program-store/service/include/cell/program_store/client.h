@@ -51,6 +51,9 @@ class Client {
                         const std::string& to, const std::string& key = "");
   nlohmann::json Delete(const std::string& node, const std::string& name, const std::string& key = "");
   nlohmann::json Protect(const std::string& node, const std::string& name, bool on);
+  // Sets or clears a file flag: "protected", "selected" (Balt-System SPG/REL) or "hidden" (ATT HIDDEN).
+  nlohmann::json Flag(const std::string& node, const std::string& name, const std::string& flag, bool on,
+                      const std::string& key = "");
   bool WaitForServer(bus::Millis timeout) const { return client_.WaitForServer(timeout); }
 
  private:
