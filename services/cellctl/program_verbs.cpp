@@ -1,10 +1,12 @@
-// cellctl program put|get|show|rm|ls|cp|mv|protect|unprotect|import|export
+// cellctl program put|get|show|rm|ls|cp|mv|protect|unprotect|import|export|memory
 #include <filesystem>
 #include <fstream>
+#include <iostream>
 #include <sstream>
 
 #include "cell/interp/interp.h"
 #include "cell/names/names.h"
+#include "cell/program_store/memory_commands.h"
 #include "cell/program_store/metadata.h"
 #include "context.h"
 
@@ -44,6 +46,44 @@ std::string NameFor(const std::string& path, const std::string& content, const s
     return std::filesystem::path(path).filename().string();  // the store reports the real problem
   }
 }
+
+// The memory commands' store over the bus (one request per call; every mutating one keyed).
+class ClientMemory : public cell::program_store::MemoryBackend {
+ public:
+  explicit ClientMemory(Context& ctx) : ctx_(ctx) {}
+  std::vector<Entry> List(const std::string& node, const std::string& pattern) override {
+    std::vector<Entry> out;
+    for (const auto& j : ctx_.Programs().List(node, pattern)) {
+      out.push_back({j.value("name", std::string()), j.value("size", std::uint64_t{0}),
+                     j.value("protected", false), j.value("selected", false), j.value("hidden", false)});
+    }
+    return out;
+  }
+  std::optional<std::string> Get(const std::string& node, const std::string& name) override {
+    return ctx_.Programs().Get(node, name);
+  }
+  void Copy(const std::string& from_node, const std::string& from, const std::string& to_node,
+            const std::string& to, bool force) override {
+    ctx_.Programs().Copy(from_node, from, to_node, to, force, Key("cp"));
+  }
+  void Rename(const std::string& node, const std::string& from, const std::string& to) override {
+    ctx_.Programs().Rename(node, from, node, to, Key("mv"));
+  }
+  void Delete(const std::string& node, const std::string& name) override {
+    ctx_.Programs().Delete(node, name, Key("rm"));
+  }
+  void Flag(const std::string& node, const std::string& name, const std::string& flag, bool on) override {
+    ctx_.Programs().Flag(node, name, flag, on, Key(flag));
+  }
+
+ private:
+  // One command may make several calls: each gets its own verb and counter in the key.
+  std::string Key(const std::string& what) {
+    return ctx_.IdempotencyKey("mem-" + what + std::to_string(++n_));
+  }
+  Context& ctx_;
+  int n_ = 0;
+};
 
 }  // namespace
 
@@ -180,6 +220,28 @@ void AddProgramVerbs(CLI::App& app, Context& ctx) {
       ctx.Programs().Protect(o->node, o->name, verb == "protect");
     });
   }
+
+  // Balt-System's memory commands on a station's memories (docs/dialects/balt.md, "Memories").
+  auto* mem = prog->add_subcommand("memory",
+                                   "run a Balt-System memory command (DIR COP REN DEL ATT DIF INI "
+                                   "SPG REL) on STATION's memories, e.g. \"COP,P9/MP2,P2/MP3\"");
+  mem->add_option("STATION", o->node)->required();
+  mem->add_option("COMMAND", o->a)->required();
+  mem->add_flag("--yes", o->force, "answer Y to the control's question (EXISTS DELETE???, DO YOU CONFIRM?)");
+  mem->add_flag("--json", ctx.json);
+  mem->callback([o, &ctx] {
+    cell::names::CheckStation(o->node);
+    ClientMemory backend(ctx);
+    auto r = cell::program_store::RunMemoryCommand(backend, o->node, o->a, o->force);
+    if (ctx.json) {
+      std::cout << nlohmann::json{{"lines", r.lines}, {"message", r.message}, {"differ", r.differ}}.dump(2)
+                << "\n";
+    } else {
+      for (const auto& l : r.lines) std::cout << l << "\n";
+      std::cout << r.message << "\n";
+    }
+    if (r.differ) throw Exit{1, ""};
+  });
 
   auto* imp = prog->add_subcommand("import", "store every file of DIR (names: NAM or file name)");
   imp->add_option("DIR", o->file)->required();
