@@ -73,9 +73,9 @@ class DashboardBrowser : public ::testing::Test {
 TEST_F(DashboardBrowser, ThePageFollowsTheCellLive) {
   Browser b(1600, 1400);
   b.Navigate(url_);
-  // The first GET renders the state: a card per configured station (deploy/stations: EM01, KT01-KT04, OK01),
-  // the two of this cell READY once their CNCs have announced themselves, the others UNAVAILABLE.
-  ASSERT_TRUE(b.WaitTrue("return document.querySelectorAll('.card').length === 6", 10s));
+  // The first GET renders the state: a card per configured station (deploy/stations: BS01, EM01, KT01-KT04,
+  // OK01), the two of this cell READY once their CNCs have announced themselves, the others UNAVAILABLE.
+  ASSERT_TRUE(b.WaitTrue("return document.querySelectorAll('.card').length === 7", 10s));
   EXPECT_EQ(b.Exec("return document.querySelector('#station-KT03').dataset.execution"), "UNAVAILABLE");
   ASSERT_TRUE(b.WaitTrue("return document.querySelector('#station-KT01').dataset.execution === 'READY'", 15s))
       << b.Exec("return document.querySelector('#station-KT01').outerHTML");

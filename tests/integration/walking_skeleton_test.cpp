@@ -40,14 +40,15 @@ class Cell : public ::testing::Test {
 TEST_F(Cell, ProgramPutToCompletedJobThroughAllSixProcesses) {
   auto ls = CtlJson({"station", "ls", "--json"});
   ASSERT_EQ(ls.size(),
-            6u);  // deploy/stations: EM01, KT01-KT04 and OK01 configured, in id order; two announced
-  EXPECT_EQ(ls[0]["id"], "EM01");
-  EXPECT_EQ(ls[1]["id"], "KT01");
-  EXPECT_EQ(ls[1]["online"], true);
-  EXPECT_EQ(ls[1]["execution"], "READY");
-  EXPECT_EQ(ls[3]["id"], "KT03");
-  EXPECT_EQ(ls[3]["online"], false);
-  EXPECT_EQ(ls[3]["execution"], "UNAVAILABLE");
+            7u);  // deploy/stations: BS01, EM01, KT01-KT04 and OK01 configured, in id order; two announced
+  EXPECT_EQ(ls[0]["id"], "BS01");
+  EXPECT_EQ(ls[1]["id"], "EM01");
+  EXPECT_EQ(ls[2]["id"], "KT01");
+  EXPECT_EQ(ls[2]["online"], true);
+  EXPECT_EQ(ls[2]["execution"], "READY");
+  EXPECT_EQ(ls[4]["id"], "KT03");
+  EXPECT_EQ(ls[4]["online"], false);
+  EXPECT_EQ(ls[4]["execution"], "UNAVAILABLE");
 
   auto put = Ctl({"program", "put", prog_});
   ASSERT_EQ(put.code, 0) << put.err;

@@ -244,7 +244,7 @@ TEST(Install, DestdirPrefixIdempotentAndVerified) {
   }
   EXPECT_FALSE(fs::exists(dest / "opt/cell/bin/scheduler_bench"));
   EXPECT_TRUE(fs::exists(dest / "etc/systemd/system/cell.target"));
-  for (const char* id : {"KT01", "KT02", "KT03", "KT04", "OK01"}) {
+  for (const char* id : {"BS01", "EM01", "KT01", "KT02", "KT03", "KT04", "OK01"}) {
     EXPECT_EQ(ReadFile(dest / "etc/cell/stations" / (std::string(id) + ".toml")),
               ReadFile(SourceDir() / "deploy/stations" / (std::string(id) + ".toml")));
   }

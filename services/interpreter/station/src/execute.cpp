@@ -120,7 +120,24 @@ void Station::RunProgram(ActiveRun& run, const std::string& entry) {
   opt.dialect = cfg_.dialect;
   opt.program_name = name;
   opt.program_text = std::move(*text);
-  opt.library = [this, node = run.d.node](const std::string& lib) { return io_.Program(node, lib); };
+  // "NAME/MPn" (a Balt-System CLS or data file naming its memory) is NAME in the station's memory namespace
+  // "ID/MPn" (MP1: the station's own); other names are looked for in the station's namespace, then HOST.
+  auto where = [node = run.d.node](const std::string& lib) {
+    const std::size_t slash = lib.find('/');
+    if (slash == std::string::npos) return std::make_pair(node, lib);
+    const std::string memory = lib.substr(slash + 1);
+    return std::make_pair(memory == "MP1" ? node : node + "/" + memory, lib.substr(0, slash));
+  };
+  opt.library = [this, where](const std::string& lib) {
+    auto [ns, name] = where(lib);
+    return io_.Program(ns, name);
+  };
+  // Files saved into a named memory (Balt-System FILEOR/MP3, GE1TOL/MP3) go back to the store at once.
+  opt.save = [this, where](const std::string& lib, const std::string& text) {
+    if (lib.find('/') == std::string::npos) return;  // KT-APL SAVE: not kept by a station (as before)
+    auto [ns, name] = where(lib);
+    io_.SaveFile(ns, name, text);
+  };
   opt.tools = start.image.tools;
   opt.variables = start.image.variables;
   opt.params = cfg_.params;  // the station config's [params]: the dialect's machine settings (EMCO's monitor)

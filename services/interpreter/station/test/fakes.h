@@ -171,6 +171,9 @@ class FakeIo final : public StationIo {
     }
     return std::nullopt;
   }
+  void SaveFile(const std::string& node, const std::string& name, const std::string& text) override {
+    programs[node + "/" + name] = text;
+  }
   bool StoreRecord(const cell::InspectionRequest& request) override {
     if (!writer_up) return false;
     if (writer_refuses) throw Error(Errc::kUnavailable, "writer busy");

@@ -100,7 +100,9 @@ void BaltRun::ToolChange(int col) {
 }
 
 void BaltRun::LoadToolLife() {
-  auto text = opt_.library ? opt_.library("GE1TOL") : std::nullopt;
+  // On memory MP3 (ln 8172); offline (--lib) under its bare name.
+  auto text = opt_.library ? opt_.library("GE1TOL/MP3") : std::nullopt;
+  if (!text && opt_.library) text = opt_.library("GE1TOL");
   if (!text) return;
   try {
     life_ = ParseToolLife(*text);
@@ -112,7 +114,7 @@ void BaltRun::LoadToolLife() {
 
 void BaltRun::SaveToolLife() {
   life_changed_ = false;
-  if (life_ && opt_.save) opt_.save("GE1TOL", life_->Format());
+  if (life_ && opt_.save) opt_.save("GE1TOL/MP3", life_->Format());
 }
 
 // (RQU,tool,offset,Z..,K..) / (RQP,...) (ln 6820-6872, 7357-7412): increments added to the offset's length

@@ -80,7 +80,9 @@ void BaltRun::UpdateIdentity() {
 // The origin file: the library's FILEOR (offline --lib, on a station its MP3 file) and ORIGINn settings.
 // Without either, every origin is the machine zero (DESIGN §4: machine state starts at zero).
 void BaltRun::LoadOrigins() {
-  auto text = opt_.library ? opt_.library("FILEOR") : std::nullopt;
+  // On memory MP3 (ln 8116-8170); offline (--lib) under its bare name.
+  auto text = opt_.library ? opt_.library("FILEOR/MP3") : std::nullopt;
+  if (!text && opt_.library) text = opt_.library("FILEOR");
   if (text) {
     try {
       origins_ = ParseOrigins(*text, basic_metric_);
@@ -113,7 +115,7 @@ void BaltRun::LoadOrigins() {
 
 void BaltRun::SaveOrigins() {
   origins_changed_ = false;
-  if (opt_.save) opt_.save("FILEOR", FormatOrigins(origins_));
+  if (opt_.save) opt_.save("FILEOR/MP3", FormatOrigins(origins_));
 }
 
 void BaltRun::SelectOrigin(int n, std::uint32_t axes, int col) {

@@ -77,9 +77,9 @@ TEST(BaltRun, SavesTheFilesItChanges) {
   std::string err;
   RunAll(opt, nullptr, &err);
   EXPECT_EQ(err, "");
-  EXPECT_NE(saved["FILEOR"].find("3 X+10.250"), std::string::npos) << saved["FILEOR"];
-  EXPECT_NE(saved["GE1TOL"].find("VTU,13,T14,[TOOL COMP]14,t60,t2,t60,A"), std::string::npos)
-      << saved["GE1TOL"];
+  EXPECT_NE(saved["FILEOR/MP3"].find("3 X+10.250"), std::string::npos) << saved["FILEOR/MP3"];
+  EXPECT_NE(saved["GE1TOL/MP3"].find("VTU,13,T14,[TOOL COMP]14,t60,t2,t60,A"), std::string::npos)
+      << saved["GE1TOL/MP3"];
 }
 
 // RQU changes the tool table the run hands back (Run::Tools) and says so in a tool_data op.

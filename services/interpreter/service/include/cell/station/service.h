@@ -37,6 +37,12 @@ class Service final : public StationIo, public ServoLink {
   std::optional<std::string> Program(const std::string& node, const std::string& name) override {
     return programs_.GetWithFallback(node, name);
   }
+  void SaveFile(const std::string& node, const std::string& name, const std::string& text) override {
+    program_store::Client::PutOptions o;
+    o.node = node;
+    o.force = true;
+    programs_.Put(name, text, o);
+  }
   bool StoreRecord(const cell::InspectionRequest& request) override;
   // ServoLink
   void Write(const cell::MotionSegment& segment) override { seg_w_.Write(segment); }

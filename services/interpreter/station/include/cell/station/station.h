@@ -40,6 +40,9 @@ class StationIo {
   virtual void PublishControl(const cell::ServoControl& c) = 0;
   // A program's text from the program store: namespace `node`, then HOST; nullopt when in neither.
   virtual std::optional<std::string> Program(const std::string& node, const std::string& name) = 0;
+  // Stores a file a program saved (a new revision over an existing one): Balt-System's origins and tool life
+  // files (FILEOR, GE1TOL on MP3). Throws cell::Error when the store refused it or did not answer.
+  virtual void SaveFile(const std::string& node, const std::string& name, const std::string& text) = 0;
   // Hands a run record to the inspection writer: false when no writer is there (the record stays in the
   // outbox); throws cell::Error when the writer refused it or did not answer.
   virtual bool StoreRecord(const cell::InspectionRequest& request) = 0;
