@@ -45,7 +45,7 @@ const char* kProfile =
     "G20 G40 p2\n"
     "G X-30\n";
 
-// MP1's main program: T1.1 (length 100, ln 2478-2482: added to Z), down to Z5, the profile from MP2, up.
+// The main program: T1.1 (length 100, ln 2478-2482: added to Z), down to Z5, the profile from MP2, up.
 const char* kMain =
     "N1 T1.1 M6 S2000 M3\n"
     "N2 G0 X-30 Y25 Z5\n"
@@ -144,15 +144,16 @@ TEST_F(BaltStation, MemoriesSelectionGtlProfileAndProbingThroughCellctl) {
       << del.err;
   auto rm = Ctl({"program", "rm", "PROFIL", "--node", "BS01/MP2"});
   EXPECT_NE(rm.code, 0);
-  EXPECT_NE(rm.err.find("'BS01/MP2:PROFIL' is selected for execution (SPG)"), std::string::npos) << rm.err;
+  EXPECT_NE(rm.err.find("'PROFIL' in BS01/MP2 is selected for execution (SPG)"), std::string::npos) << rm.err;
   json listed = cell_.Json({"program", "ls", "--node", "BS01/MP2", "--json"});
   ASSERT_EQ(listed.size(), 1u) << listed.dump();
   EXPECT_EQ(listed[0]["selected"], true) << listed.dump();
 
-  // MAIN in MP1 calls the profile in MP2. By hand (the path is the corpus's gtl_open_profile, offset by the
+  // MAIN (on the host, where the scheduler finds a pallet's programs; the station looks in MP1, then HOST)
+  // calls the profile in MP2. By hand (the path is the corpus's gtl_open_profile, offset by the
   // 2 mm radius on the right of the travel; its last move is the uncompensated G X-30 at Y25): the machine
   // ends at X-30 Y25 and, after N3, Z 50 + 100 (T1.1's length) = 150.
-  Put(kMain, "MAIN", "BS01");
+  Put(kMain, "MAIN", "HOST");
   cell::bus::Participant bus("balt-station-test");
   cell::bus::Reader<cell::AxisState> axes(bus, cell::bus::topics::kAxisState, cell::bus::QosKind::kTelemetry);
   RunPallet("1", "MAIN");
@@ -170,7 +171,7 @@ TEST_F(BaltStation, MemoriesSelectionGtlProfileAndProbingThroughCellctl) {
   // E31 = 20.100. The G72 results are compensated for the ball (ln 7058-7062): the dialect moves the
   // ball's contact point, so these are the surfaces themselves. Qa = Qs = 5 (DPT, ln 7018-7035) puts both
   // within reach (Z from -15 to -25, X from 25 to 15 for the ball's centre).
-  Put(kProbe, "PROBE", "BS01");
+  Put(kProbe, "PROBE", "HOST");
   RunPallet("2", "PROBE");
   json vars = cell_.Json({"station", "vars", "BS01", "--json"});
   ASSERT_TRUE(vars["E30"].is_number()) << vars.dump();
