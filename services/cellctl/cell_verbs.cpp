@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <set>
@@ -83,8 +84,15 @@ std::vector<std::string> WaitReady(Context& ctx, const std::vector<CellProcess>&
         auto seen = live.Snapshot();
         for (auto& p : procs) {
           if (started.count(p.service) && !StartTime(p.pid)) {
-            waitpid(p.pid, nullptr, WNOHANG);
-            missing.assign(1, p.unit + " exited: " + LastLine(p.log));
+            // Our child: how it ended, with its last log line (a signal leaves no line of its own).
+            int status = 0;
+            std::string how = "exited";
+            if (waitpid(p.pid, &status, WNOHANG) == p.pid) {
+              if (WIFEXITED(status)) how = "exited with status " + std::to_string(WEXITSTATUS(status));
+              if (WIFSIGNALED(status))
+                how = std::string("was killed by signal ") + strsignal(WTERMSIG(status));
+            }
+            missing.assign(1, p.unit + " " + how + ": " + LastLine(p.log));
             return true;  // no point waiting
           }
           auto it = seen.find(p.service);
