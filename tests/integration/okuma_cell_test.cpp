@@ -167,9 +167,36 @@ TEST_F(OkumaCell, ScheduleSurvivesSchedulerKillWithoutRunningAPartTwice) {
   for (auto& [id, n] : dispatches) EXPECT_EQ(n, 1) << "dispatch " << id << " ran " << n << " times";
 }
 
-// Not here yet: a threading program's cycle time against lead and spindle speed (issue 16, item 8). On OK01 a
-// 100 mm G33 pass at S100 took 63.9 s at lead 1 and 32.0 s at lead 2 instead of 60 s and 30 s (a 6 % slower
-// pace, or 6.4 mm more travel, on both), while the servo's own lathe_test finds length / (lead x rpm) at
-// 600 rpm; the cause is open (docs/dialects/okuma.md, "Open").
+// A threading program on the virtual clock: G33 cuts one pass of a 100 mm thread at S100 (G97). The manual's
+// rule for threads (ln 3228-3420): the tool advances one lead per spindle revolution, so the pass takes
+// 100 mm / (lead x 100 rev/min) = 60 s at lead 1 and 30 s at lead 2. The two programs differ only in the
+// lead, and both start from the same turret station (each ends back on tool 1, and a first program puts it
+// there: a run that finds tool 3 already indexed would save the turret's index and change time), so the
+// difference of their cycle times is the thread's alone: 30 s.
+TEST_F(OkumaCell, ThreadCycleTimeFollowsLeadAndSpindleSpeed) {
+  auto thread = [](const std::string& o, const std::string& lead) {
+    return "%\n" + o + "\nN1 G00 X60 Z10 T000303\nN2 G97 S100 M03\nN3 G00 X50 Z5\nN4 G33 X48 Z-95 F" + lead +
+           "\nN5 G00 X100 Z50 M05\nN6 T010101\nN7 M02\n%\n";
+  };
+  Put("TURRET1.MIN", "%\nO9\nN1 G00 X100 Z50 T010101\nN2 M02\n%\n", "HOST");
+  Put("THR1.MIN", thread("O1", "1"), "HOST");
+  Put("THR2.MIN", thread("O2", "2"), "HOST");
+  auto cycle = [&](const std::string& pallet, const std::string& program) {
+    EXPECT_EQ(Ctl({"pallet", "set", pallet, program}).code, 0);
+    auto run = Ctl({"pallet", "run", pallet, "--station", "OK01"});
+    EXPECT_EQ(run.code, 0) << run.err;
+    const std::string job = FirstLine(run.out);
+    auto w = Ctl({"job", "wait", job, "--timeout", "60"});
+    EXPECT_EQ(w.out, "COMPLETED\n") << w.err << CtlJson({"job", "show", job, "--json"}).dump();
+    auto shown = CtlJson({"job", "show", job, "--json"});
+    return shown["cycle_s"].is_number() ? shown["cycle_s"].get<double>() : -1.0;
+  };
+  cycle("3", "TURRET1.MIN");
+  const double lead1 = cycle("1", "THR1.MIN");
+  const double lead2 = cycle("2", "THR2.MIN");
+  EXPECT_NEAR(lead1 - lead2, 30.0, 0.05) << lead1 << " " << lead2;
+  EXPECT_GE(lead1, 60.0);        // the pass itself
+  EXPECT_LT(lead1, 60.0 + 5.0);  // plus the turret index, the spindle start and a few rapids
+}
 
 }  // namespace
