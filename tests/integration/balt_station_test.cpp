@@ -17,7 +17,7 @@
 #include "cell/bus/bus.h"
 #include "cell/bus/topics.h"
 #include "cell/idl/motion.h"
-#include "cell/testing/local_cell.h"
+#include "cell/testing/cell_fixture.h"
 #include "cell/testing/process.h"
 
 using namespace cell::testing;
@@ -74,8 +74,9 @@ const char* kPart =
     "[[plane]]\npoint = [0, 0, 79.5]\nnormal = [0, 0, 1]\n"
     "[[boss]]\nbase = [0, 50, 79.5]\naxis = [0, 0, 1]\ndiameter = 40.2\nheight = 40\n";
 
-class BaltStation : public ::testing::Test {
+class BaltStation : public CellFixture {
  protected:
+  BaltStation() : CellFixture("cell-balt-station-") {}
   void SetUp() override {
     // The shipped stations, with a part model on BS01's table for every pallet the test uses.
     const fs::path etc = fs::path(cell_.data_dir()) / "etc";
@@ -87,16 +88,8 @@ class BaltStation : public ::testing::Test {
         << "parts = [ { pallet = 0, file = \"parts/BS01-part.toml\" }, { pallet = 1, file = "
            "\"parts/BS01-part.toml\" }, { pallet = 2, file = \"parts/BS01-part.toml\" } ]\n";
     cell_.SetEnv("CELL_CONFIG_DIR", etc.string());
-    auto r = cell_.Up("BS01", "virtual");
-    ASSERT_EQ(r.code, 0) << r.out << r.err;
+    Up("BS01");
   }
-  void TearDown() override {
-    if (cell_.is_up()) {
-      auto r = cell_.Down();
-      EXPECT_EQ(r.code, 0) << r.err;
-    }
-  }
-  RunResult Ctl(std::vector<std::string> args) { return cell_.Ctl(std::move(args)); }
   void Put(const std::string& text, const std::string& name, const std::string& node) {
     std::string path = cell_.data_dir() + "/" + name + ".balt";
     std::ofstream(path) << text;
@@ -118,7 +111,6 @@ class BaltStation : public ::testing::Test {
     ASSERT_EQ(wait.code, 0) << wait.out << wait.err << shown.dump();
     EXPECT_EQ(shown["station"], "BS01") << shown.dump();
   }
-  LocalCell cell_{"cell-balt-station-"};
 };
 
 TEST_F(BaltStation, MemoriesSelectionGtlProfileAndProbingThroughCellctl) {

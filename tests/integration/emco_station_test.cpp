@@ -13,7 +13,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "cell/testing/local_cell.h"
+#include "cell/testing/cell_fixture.h"
 
 using namespace cell::testing;
 using nlohmann::json;
@@ -42,19 +42,10 @@ const char* kGroove =
     "N0050 G00 X50. Z10.\n"
     "N0060 M30\n";
 
-class EmcoStation : public ::testing::Test {
+class EmcoStation : public CellFixture {
  protected:
-  void SetUp() override {
-    auto r = cell_.Up("EM01", "virtual");
-    ASSERT_EQ(r.code, 0) << r.out << r.err;
-  }
-  void TearDown() override {
-    if (cell_.is_up()) {
-      auto r = cell_.Down();
-      EXPECT_EQ(r.code, 0) << r.err;
-    }
-  }
-  RunResult Ctl(std::vector<std::string> args) { return cell_.Ctl(std::move(args)); }
+  EmcoStation() : CellFixture("cell-emco-station-") {}
+  void SetUp() override { Up("EM01"); }
   void Put(const std::string& text, const std::string& name) {
     std::string path = cell_.data_dir() + "/" + name + ".emco";
     std::ofstream(path) << text;
@@ -72,7 +63,6 @@ class EmcoStation : public ::testing::Test {
     EXPECT_EQ(shown["station"], "EM01") << shown.dump();
     return shown;
   }
-  LocalCell cell_{"cell-emco-station-"};
 };
 
 // The thread as a route's operation and the groove as a pallet run: EM01 takes both like any station.

@@ -13,7 +13,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "cell/testing/local_cell.h"
+#include "cell/testing/cell_fixture.h"
 
 using namespace cell::testing;
 using nlohmann::json;
@@ -24,31 +24,6 @@ std::string FirstLine(const std::string& s) {
   return s.substr(0, s.find('\n'));
 }
 
-class OkumaCell : public ::testing::Test {
- protected:
-  void SetUp() override {
-    auto r = cell_.Up("OK01", "virtual");
-    ASSERT_EQ(r.code, 0) << r.out << r.err;
-  }
-  void TearDown() override {
-    if (cell_.is_up()) {
-      auto r = cell_.Down();
-      EXPECT_EQ(r.code, 0) << r.err;
-    }
-  }
-  RunResult Ctl(std::vector<std::string> args) { return cell_.Ctl(std::move(args)); }
-  json CtlJson(std::vector<std::string> args) { return cell_.Json(std::move(args)); }
-  // Stores `text` as NAME (an Okuma file) in OK01's namespace, or HOST (where the scheduler looks up a pallet
-  // map's programs; the station looks in its own namespace, then HOST).
-  void Put(const std::string& name, const std::string& text, const std::string& node = "OK01") {
-    std::string path = cell_.data_dir() + "/" + name;
-    std::ofstream(path) << text;
-    auto r = Ctl({"program", "put", path, "--name", name, "--dialect", "okuma", "--node", node});
-    ASSERT_EQ(r.code, 0) << name << ": " << r.out << r.err;
-  }
-  LocalCell cell_{"cell-okuma-"};
-};
-
 // A part program of the schedule: face and turn a shaft end, M02 ends it (manual ln 8926-8962: A.MIN O100
 // N100 ... N150 M02; B.MIN O200; C.MIN O300).
 std::string Part(const std::string& o, int first, int last, double dia) {
@@ -58,31 +33,54 @@ std::string Part(const std::string& o, int first, int last, double dia) {
          std::to_string(last) + " M02\n%\n";
 }
 
-// E-SCH-1 (catalogue §12, manual ln 8926-8962): SHAFT-1.SDF machines 20 of part A (A.MIN, O100), then 15 of
-// B (B.MIN, O200), then 25 of C (C.MIN, O300), counting in V1, V2, V3 with VSET. The listing is lost in the
-// manual; this is the catalogue's reconstruction with IF loops. Expected: 60 runs in that order, V1 = 20,
-// V2 = 15, V3 = 25, and M02 in each main program ends that run only.
-TEST_F(OkumaCell, ShaftScheduleMachinesTwentyFifteenAndTwentyFiveParts) {
-  Put("A.MIN", Part("O100", 100, 150, 40));
-  Put("B.MIN", Part("O200", 100, 230, 30));
-  Put("C.MIN", Part("O300", 300, 340, 20));
-  std::string sdf = cell_.data_dir() + "/SHAFT-1.SDF";
-  std::ofstream(sdf) << "N001 VSET V1=0 V2=0 V3=0\n"
-                        "N010 PSELECT A.MIN,O100\nN011 VSET V1=V1+1\nN012 IF [V1 LT 20] N010\n"
-                        "N020 PSELECT B.MIN,O200\nN021 VSET V2=V2+1\nN022 IF [V2 LT 15] N020\n"
-                        "N030 PSELECT C.MIN,O300\nN031 VSET V3=V3+1\nN032 IF [V3 LT 25] N030\n"
-                        "END\n";
-  auto run = Ctl({"schedule", "run", sdf, "--station", "OK01"});
-  ASSERT_EQ(run.code, 0) << run.err;
-  const std::string job = FirstLine(run.out);
-  auto w = Ctl({"job", "wait", job, "--timeout", "150"});
-  ASSERT_EQ(w.code, 0) << w.out << w.err << CtlJson({"job", "show", job, "--json"}).dump();
-  EXPECT_EQ(w.out, "COMPLETED\n");
+class OkumaCell : public CellFixture {
+ protected:
+  OkumaCell() : CellFixture("cell-okuma-") {}
+  void SetUp() override { Up("OK01"); }
+  // Stores `text` as NAME (an Okuma file) in OK01's namespace, or HOST (where the scheduler looks up a pallet
+  // map's programs; the station looks in its own namespace, then HOST).
+  void Put(const std::string& name, const std::string& text, const std::string& node = "OK01") {
+    std::string path = cell_.data_dir() + "/" + name;
+    std::ofstream(path) << text;
+    auto r = Ctl({"program", "put", path, "--name", name, "--dialect", "okuma", "--node", node});
+    ASSERT_EQ(r.code, 0) << name << ": " << r.out << r.err;
+  }
+  // E-SCH-1 (catalogue §12, manual ln 8926-8962): SHAFT-1.SDF machines 20 of part A (A.MIN, O100), then 15
+  // of B (B.MIN, O200), then 25 of C (C.MIN, O300), counting in V1, V2, V3 with VSET. The listing is lost in
+  // the manual; this is the catalogue's reconstruction with IF loops. Stores the parts, starts the schedule
+  // on OK01 and returns its job id ("" after a test failure).
+  std::string StartShaftSchedule() {
+    Put("A.MIN", Part("O100", 100, 150, 40));
+    Put("B.MIN", Part("O200", 100, 230, 30));
+    Put("C.MIN", Part("O300", 300, 340, 20));
+    std::string sdf = cell_.data_dir() + "/SHAFT-1.SDF";
+    std::ofstream(sdf) << "N001 VSET V1=0 V2=0 V3=0\n"
+                          "N010 PSELECT A.MIN,O100\nN011 VSET V1=V1+1\nN012 IF [V1 LT 20] N010\n"
+                          "N020 PSELECT B.MIN,O200\nN021 VSET V2=V2+1\nN022 IF [V2 LT 15] N020\n"
+                          "N030 PSELECT C.MIN,O300\nN031 VSET V3=V3+1\nN032 IF [V3 LT 25] N030\n"
+                          "END\n";
+    auto run = Ctl({"schedule", "run", sdf, "--station", "OK01"});
+    EXPECT_EQ(run.code, 0) << run.err;
+    return run.code == 0 ? FirstLine(run.out) : std::string();
+  }
+  // The schedule's end: COMPLETED, with the counters at 20, 15 and 25.
+  void ExpectCompletedWithCounts(const std::string& job) {
+    auto w = Ctl({"job", "wait", job, "--timeout", "150"});
+    ASSERT_EQ(w.code, 0) << w.out << w.err << CtlJson({"job", "show", job, "--json"}).dump();
+    EXPECT_EQ(w.out, "COMPLETED\n");
+    auto vars = CtlJson({"station", "vars", "OK01", "--json"});
+    EXPECT_EQ(vars["V1"], 20) << vars;
+    EXPECT_EQ(vars["V2"], 15) << vars;
+    EXPECT_EQ(vars["V3"], 25) << vars;
+  }
+};
 
-  auto vars = CtlJson({"station", "vars", "OK01", "--json"});
-  EXPECT_EQ(vars["V1"], 20) << vars;
-  EXPECT_EQ(vars["V2"], 15) << vars;
-  EXPECT_EQ(vars["V3"], 25) << vars;
+// The worked schedule (StartShaftSchedule): 60 runs in that order, V1 = 20, V2 = 15, V3 = 25, and M02 in each
+// main program ends that run only.
+TEST_F(OkumaCell, ShaftScheduleMachinesTwentyFifteenAndTwentyFiveParts) {
+  const std::string job = StartShaftSchedule();
+  ASSERT_FALSE(job.empty());
+  ExpectCompletedWithCounts(job);
 
   // One run record per part, in the schedule's order (records are stored after each run).
   std::vector<std::string> programs;
@@ -109,18 +107,8 @@ TEST_F(OkumaCell, ShaftScheduleMachinesTwentyFifteenAndTwentyFiveParts) {
 // restart`, the recorded command line) goes on from there. No part runs twice and none is lost: V1/V2/V3 end
 // at 20/15/25 and the station holds exactly 60 completed run records, each dispatch once.
 TEST_F(OkumaCell, ScheduleSurvivesSchedulerKillWithoutRunningAPartTwice) {
-  Put("A.MIN", Part("O100", 100, 150, 40));
-  Put("B.MIN", Part("O200", 100, 230, 30));
-  Put("C.MIN", Part("O300", 300, 340, 20));
-  std::string sdf = cell_.data_dir() + "/SHAFT-1.SDF";
-  std::ofstream(sdf) << "N001 VSET V1=0 V2=0 V3=0\n"
-                        "N010 PSELECT A.MIN,O100\nN011 VSET V1=V1+1\nN012 IF [V1 LT 20] N010\n"
-                        "N020 PSELECT B.MIN,O200\nN021 VSET V2=V2+1\nN022 IF [V2 LT 15] N020\n"
-                        "N030 PSELECT C.MIN,O300\nN031 VSET V3=V3+1\nN032 IF [V3 LT 25] N030\n"
-                        "END\n";
-  auto run = Ctl({"schedule", "run", sdf, "--station", "OK01"});
-  ASSERT_EQ(run.code, 0) << run.err;
-  const std::string job = FirstLine(run.out);
+  const std::string job = StartShaftSchedule();
+  ASSERT_FALSE(job.empty());
   // Into the schedule: a few parts of A are done.
   auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
   for (;;) {
@@ -138,13 +126,7 @@ TEST_F(OkumaCell, ScheduleSurvivesSchedulerKillWithoutRunningAPartTwice) {
   auto rs = Ctl({"restart", "cell-scheduler"});
   ASSERT_EQ(rs.code, 0) << rs.out << rs.err;
 
-  auto w = Ctl({"job", "wait", job, "--timeout", "150"});
-  ASSERT_EQ(w.code, 0) << w.out << w.err << CtlJson({"job", "show", job, "--json"}).dump();
-  EXPECT_EQ(w.out, "COMPLETED\n");
-  auto vars = CtlJson({"station", "vars", "OK01", "--json"});
-  EXPECT_EQ(vars["V1"], 20) << vars;
-  EXPECT_EQ(vars["V2"], 15) << vars;
-  EXPECT_EQ(vars["V3"], 25) << vars;
+  ExpectCompletedWithCounts(job);
   std::map<std::string, int> runs;
   std::map<int, int> dispatches;
   deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);

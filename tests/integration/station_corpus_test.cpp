@@ -10,7 +10,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "cell/testing/local_cell.h"
+#include "cell/testing/cell_fixture.h"
 
 using namespace cell::testing;
 using nlohmann::json;
@@ -19,20 +19,10 @@ namespace {
 
 const std::string kCorpus = "/tests/conformance/ktapl/";
 
-class StationCorpus : public ::testing::Test {
+class StationCorpus : public CellFixture {
  protected:
-  void SetUp() override {
-    auto r = cell_.Up("KT01", "virtual");
-    ASSERT_EQ(r.code, 0) << r.out << r.err;
-  }
-  void TearDown() override {
-    if (cell_.is_up()) {
-      auto r = cell_.Down();
-      EXPECT_EQ(r.code, 0) << r.err;
-    }
-  }
-  RunResult Ctl(std::vector<std::string> args) { return cell_.Ctl(std::move(args)); }
-  json CtlJson(std::vector<std::string> args) { return cell_.Json(std::move(args)); }
+  StationCorpus() : CellFixture("cell-station-corpus-") {}
+  void SetUp() override { Up("KT01"); }
   void Put(const std::string& corpus_case, const std::string& name) {
     auto r = Ctl({"program", "put", SourceDir() + kCorpus + corpus_case + ".ktapl", "--name", name,
                   "--dialect", "ktapl"});
@@ -59,7 +49,6 @@ class StationCorpus : public ::testing::Test {
     EXPECT_EQ(wait.code, expect_wait_code) << wait.out << wait.err;
     return job;
   }
-  LocalCell cell_{"cell-station-corpus-"};
 };
 
 TEST_F(StationCorpus, PositiveProgramsWithMotionComplete) {
