@@ -125,7 +125,7 @@ TEST_F(Offline, NamesAreCheckedBeforeTheyAreSent) {
   Refused({"pallet", "set", "1", "A\x07"}, "'A\\x07'", 2);
   Refused({"program", "get", std::string(129, 'P')}, "at most 128", 2);
   Refused({"program", "put", "/etc/hostname", "--name", "a/b"}, "no '/'", 2);
-  Refused({"program", "ls", "--node", "../KT01"}, "must be HOST or a station id", 2);
+  Refused({"program", "ls", "--node", "../KT01"}, "must be HOST, a station id or a station's memory", 2);
   Refused({"station", "tools", "KT01\n"}, "'KT01\\x0a'", 2);
   Refused({"inspect", "cat", "../../etc/passwd"}, "record name", 2);
   // CELLCTL_IDEMPOTENCY_KEY: refused when over its bound, never cut.
