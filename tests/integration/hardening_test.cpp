@@ -314,7 +314,9 @@ TEST_F(Hardening, OneProcessPerIdentity) {
     auto took = std::chrono::steady_clock::now() - t0;
     EXPECT_EQ(r.code, 1) << argv[0] << ": " << r.err;
     EXPECT_NE(r.err.find("another live process is "), std::string::npos) << r.err;
-    EXPECT_LT(took, 5s) << argv[0];
+    // The claim itself refuses within its 3 s window (common/identity/identity_test times it); here the whole
+    // process, ASan start-up on a loaded machine included, must end well before the 20 s command timeout.
+    EXPECT_LT(took, 15s) << argv[0];
   }
   fs::remove_all(other);
   // A kill -9 and a restart at once: the dead process's announcement does not block its successor.
