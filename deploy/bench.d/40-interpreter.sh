@@ -8,17 +8,10 @@
 # linuxcnc-uspace is installed here (and only here) when apt has it; nothing of LinuxCNC is kept in the tree.
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
-BIN="${CELL_BUILD_DIR:-$ROOT/build}/bin"
-INTERP="$BIN/cell-interp"
-BLOCKS="${CELL_INTERP_BENCH_BLOCKS:-1000000}"
-[ -x "$INTERP" ] || { echo "40-interpreter: $INTERP not built" >&2; exit 1; }
-[ -x /usr/bin/time ] || { echo "40-interpreter: /usr/bin/time missing (apt-get install time)" >&2; exit 1; }
-
-work="$(mktemp -d "${TMPDIR:-/tmp}/cell-interp-bench.XXXXXX")"
-trap 'rm -rf "$work"' EXIT
 BENCH=40-interpreter
 # shellcheck source=lib/interp-bench.sh
 source "$ROOT/deploy/bench.d/lib/interp-bench.sh"
+bench_init
 
 # gen KTAPL|NGC BLOCKS > file: groups of 7 KT-APL blocks (the NGC loop takes 3 lines where KT-APL's
 # CLS run count takes one, so the NGC file has a few more lines for the same toolpath; o-word loop labels
@@ -84,7 +77,7 @@ moves=$("$INTERP" --dialect ktapl "$work/bench.ktapl" | grep -c '"op":"\(linear\
 
 read -r kt_cpu kt_wall kt_rss < <(measure kt "$INTERP" --dialect ktapl "$work/bench.ktapl")
 read -r _ _ small_rss < <(measure small "$INTERP" --dialect ktapl "$work/small.ktapl")
-kt_bps=$(awk -v b="$kt_blocks" -v s="$kt_cpu" 'BEGIN {printf "%.0f", b / (s > 0 ? s : 0.001)}')
+kt_bps=$(per_s "$kt_blocks" "$kt_cpu")
 echo "cell-interp: $kt_blocks KT-APL blocks ($moves moves) in ${kt_cpu} s CPU (${kt_wall} s wall) = $kt_bps blocks/s"
 echo "cell-interp peak RSS: $((kt_rss / 1024)) MB at $kt_blocks blocks, $((small_rss / 1024)) MB at $(wc -l <"$work/small.ktapl") blocks (target < 64 MB, flat)"
 echo "  (the program file is mapped and the pages the run has passed are released: $(($(stat -c %s "$work/bench.ktapl") / 1048576)) MB of text)"
@@ -97,7 +90,7 @@ rc=0
 # LinuxCNC rs274 (Debian linuxcnc-uspace).
 have_rs274 || exit $rc
 read -r ngc_cpu ngc_wall ngc_rss < <(measure_rs274 "$work/bench.ngc")
-ngc_bps=$(awk -v b="$ngc_blocks" -v s="$ngc_cpu" 'BEGIN {printf "%.0f", b / (s > 0 ? s : 0.001)}')
+ngc_bps=$(per_s "$ngc_blocks" "$ngc_cpu")
 echo "rs274 (LinuxCNC $(rs274_version)): $ngc_blocks NGC lines, same toolpath, in ${ngc_cpu} s CPU (${ngc_wall} s wall) = $ngc_bps blocks/s, peak RSS $((ngc_rss / 1024)) MB"
 ratio=$(awk -v a="$ngc_cpu" -v b="$kt_cpu" 'BEGIN {printf "%.1f", a / (b > 0 ? b : 0.001)}')
 echo "ratio: cell-interp is ${ratio}x rs274 on the same toolpath (target >= 12x)"

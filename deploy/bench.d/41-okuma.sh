@@ -8,17 +8,10 @@
 # TARGET MISSED; the script fails only when a run fails. rs274 comes from 40-interpreter.sh's install.
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
-BIN="${CELL_BUILD_DIR:-$ROOT/build}/bin"
-INTERP="$BIN/cell-interp"
-BLOCKS="${CELL_INTERP_BENCH_BLOCKS:-1000000}"
-[ -x "$INTERP" ] || { echo "41-okuma: $INTERP not built" >&2; exit 1; }
-[ -x /usr/bin/time ] || { echo "41-okuma: /usr/bin/time missing (apt-get install time)" >&2; exit 1; }
-
-work="$(mktemp -d "${TMPDIR:-/tmp}/cell-okuma-bench.XXXXXX")"
-trap 'rm -rf "$work"' EXIT
 BENCH=41-okuma
 # shellcheck source=lib/interp-bench.sh
 source "$ROOT/deploy/bench.d/lib/interp-bench.sh"
+bench_init
 
 # gen OKUMA|NGC BLOCKS DIR: writes DIR/bench.<kind> (and the Okuma subprogram DIR/lib/O1000.SUB). Groups of 8
 # blocks; the subprogram is 7 blocks in both languages. X is a diameter in Okuma and a radius in NGC (G18, no
@@ -92,7 +85,7 @@ moves=$("$INTERP" --dialect okuma --lib "$work/big/lib" "$work/big/bench.okuma" 
 
 read -r ok_cpu ok_wall ok_rss < <(measure ok "$INTERP" --dialect okuma --lib "$work/big/lib" "$work/big/bench.okuma")
 read -r _ _ small_rss < <(measure small "$INTERP" --dialect okuma --lib "$work/small/lib" "$work/small/bench.okuma")
-ok_bps=$(awk -v b="$ok_blocks" -v s="$ok_cpu" 'BEGIN {printf "%.0f", b / (s > 0 ? s : 0.001)}')
+ok_bps=$(per_s "$ok_blocks" "$ok_cpu")
 echo "cell-interp: $ok_blocks Okuma blocks ($moves moves) in ${ok_cpu} s CPU (${ok_wall} s wall) = $ok_bps blocks/s"
 echo "cell-interp peak RSS: $((ok_rss / 1024)) MB at $ok_blocks blocks, $((small_rss / 1024)) MB at one tenth (target < 64 MB, flat)"
 rc=0
@@ -101,7 +94,7 @@ rc=0
 
 have_rs274 || exit $rc
 read -r ngc_cpu ngc_wall ngc_rss < <(measure_rs274 "$work/big/bench.ngc")
-ngc_bps=$(awk -v b="$ngc_blocks" -v s="$ngc_cpu" 'BEGIN {printf "%.0f", b / (s > 0 ? s : 0.001)}')
+ngc_bps=$(per_s "$ngc_blocks" "$ngc_cpu")
 echo "rs274 (LinuxCNC $(rs274_version)): $ngc_blocks NGC lines, same toolpath, in ${ngc_cpu} s CPU (${ngc_wall} s wall) = $ngc_bps blocks/s, peak RSS $((ngc_rss / 1024)) MB"
 ratio=$(awk -v a="$ngc_cpu" -v b="$ok_cpu" -v na="$ngc_blocks" -v nb="$ok_blocks" \
   'BEGIN {printf "%.1f", (nb / (b > 0 ? b : 0.001)) / (na / (a > 0 ? a : 0.001))}')

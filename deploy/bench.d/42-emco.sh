@@ -9,17 +9,10 @@
 # linuxcnc-uspace is installed when apt has it (lib/interp-bench.sh); nothing of LinuxCNC is kept in the tree.
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
-BIN="${CELL_BUILD_DIR:-$ROOT/build}/bin"
-INTERP="$BIN/cell-interp"
-BLOCKS="${CELL_INTERP_BENCH_BLOCKS:-1000000}"
-[ -x "$INTERP" ] || { echo "42-emco: $INTERP not built" >&2; exit 1; }
-[ -x /usr/bin/time ] || { echo "42-emco: /usr/bin/time missing (apt-get install time)" >&2; exit 1; }
-
-work="$(mktemp -d "${TMPDIR:-/tmp}/cell-emco-bench.XXXXXX")"
-trap 'rm -rf "$work"' EXIT
 BENCH=42-emco
 # shellcheck source=lib/interp-bench.sh
 source "$ROOT/deploy/bench.d/lib/interp-bench.sh"
+bench_init
 
 # gen EMCO|NGC BLOCKS > file: groups of 6 blocks in both main programs (EMCO X is a diameter, NGC X a radius;
 # EMCO's I is already a radius, as NGC's G18 I). The subroutine follows the main program in the EMCO file
@@ -77,14 +70,14 @@ moves=$("$INTERP" --dialect emco "$work/bench.emco" | grep -c '"op":"\(linear\|a
 
 read -r em_cpu em_wall em_rss < <(measure em "$INTERP" --dialect emco "$work/bench.emco")
 read -r _ _ small_rss < <(measure small "$INTERP" --dialect emco "$work/small.emco")
-em_bps=$(awk -v b="$em_blocks" -v s="$em_cpu" 'BEGIN {printf "%.0f", b / (s > 0 ? s : 0.001)}')
+em_bps=$(per_s "$em_blocks" "$em_cpu")
 echo "cell-interp: $em_blocks EMCO blocks ($moves moves) in ${em_cpu} s CPU (${em_wall} s wall) = $em_bps blocks/s"
 echo "cell-interp peak RSS: $((em_rss / 1024)) MB at $em_blocks blocks, $((small_rss / 1024)) MB at $((small_rss > 0 ? $(wc -l <"$work/small.emco") - 5 : 0)) blocks (flat: at most 2 MB more)"
 [ "$em_rss" -le $((small_rss + 2048)) ] || echo "42-emco: TARGET MISSED: peak RSS grows with program length"
 
 have_rs274 || exit 0
 read -r ngc_cpu ngc_wall ngc_rss < <(measure_rs274 "$work/bench.ngc")
-ngc_bps=$(awk -v b="$ngc_blocks" -v s="$ngc_cpu" 'BEGIN {printf "%.0f", b / (s > 0 ? s : 0.001)}')
+ngc_bps=$(per_s "$ngc_blocks" "$ngc_cpu")
 echo "rs274 (LinuxCNC $(rs274_version)): $ngc_blocks NGC blocks, same toolpath, in ${ngc_cpu} s CPU (${ngc_wall} s wall) = $ngc_bps blocks/s, peak RSS $((ngc_rss / 1024)) MB"
 ratio=$(awk -v a="$ngc_cpu" -v b="$em_cpu" 'BEGIN {printf "%.1f", a / (b > 0 ? b : 0.001)}')
 echo "ratio: cell-interp (EMCO) is ${ratio}x rs274 on the same toolpath (target >= 10x)"

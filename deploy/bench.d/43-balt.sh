@@ -8,17 +8,10 @@
 # targets are printed as TARGET MISSED; the script fails only when a run fails.
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
-BIN="${CELL_BUILD_DIR:-$ROOT/build}/bin"
-INTERP="$BIN/cell-interp"
-BLOCKS="${CELL_INTERP_BENCH_BLOCKS:-1000000}"
-[ -x "$INTERP" ] || { echo "43-balt: $INTERP not built" >&2; exit 1; }
-[ -x /usr/bin/time ] || { echo "43-balt: /usr/bin/time missing (apt-get install time)" >&2; exit 1; }
-
-work="$(mktemp -d "${TMPDIR:-/tmp}/cell-balt-bench.XXXXXX")"
-trap 'rm -rf "$work"' EXIT
 BENCH=43-balt
 # shellcheck source=lib/interp-bench.sh
 source "$ROOT/deploy/bench.d/lib/interp-bench.sh"
+bench_init
 
 # gen BALT|NGC BLOCKS > file: groups of 10 lines in both languages (the same moves in the same order).
 gen() {
@@ -81,7 +74,7 @@ moves=$("$INTERP" --dialect balt --lib "$work/lib" "$work/bench.balt" | grep -c 
 
 read -r b_cpu b_wall b_rss < <(measure balt "$INTERP" --dialect balt --lib "$work/lib" "$work/bench.balt")
 read -r _ _ small_rss < <(measure small "$INTERP" --dialect balt --lib "$work/lib" "$work/small.balt")
-b_bps=$(awk -v b="$balt_blocks" -v s="$b_cpu" 'BEGIN {printf "%.0f", b / (s > 0 ? s : 0.001)}')
+b_bps=$(per_s "$balt_blocks" "$b_cpu")
 echo "cell-interp: $balt_blocks Balt-System blocks ($moves moves) in ${b_cpu} s CPU (${b_wall} s wall) = $b_bps blocks/s"
 echo "cell-interp peak RSS: $((b_rss / 1024)) MB at $balt_blocks blocks, $((small_rss / 1024)) MB at $(wc -l <"$work/small.balt") blocks (target < 64 MB, flat)"
 rc=0
@@ -90,7 +83,7 @@ rc=0
 
 have_rs274 || exit $rc
 read -r ngc_cpu ngc_wall ngc_rss < <(measure_rs274 "$work/bench.ngc")
-ngc_bps=$(awk -v b="$ngc_blocks" -v s="$ngc_cpu" 'BEGIN {printf "%.0f", b / (s > 0 ? s : 0.001)}')
+ngc_bps=$(per_s "$ngc_blocks" "$ngc_cpu")
 echo "rs274 (LinuxCNC $(rs274_version)): $ngc_blocks NGC lines, same toolpath, in ${ngc_cpu} s CPU (${ngc_wall} s wall) = $ngc_bps blocks/s, peak RSS $((ngc_rss / 1024)) MB"
 ratio=$(awk -v a="$ngc_cpu" -v b="$b_cpu" 'BEGIN {printf "%.1f", a / (b > 0 ? b : 0.001)}')
 echo "ratio: cell-interp (Balt-System) is ${ratio}x rs274 on the same toolpath (target >= 10x)"

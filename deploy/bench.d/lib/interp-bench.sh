@@ -1,6 +1,23 @@
 # Shared by the interpreter benchmarks (40-interpreter.sh, 41-okuma.sh, 42-emco.sh, 43-balt.sh; sourced, not
-# run): whole-process timing and the LinuxCNC rs274 baseline. The caller sets $work (a scratch directory) and
-# $BENCH (its name, for messages).
+# run): set-up, whole-process timing and the LinuxCNC rs274 baseline. The caller sets $ROOT and $BENCH (its name,
+# for messages) and calls bench_init.
+
+# bench_init: what every interpreter bench starts with. INTERP (cell-interp of CELL_BUILD_DIR, default build/)
+# and BLOCKS (CELL_INTERP_BENCH_BLOCKS, default 1,000,000), both checked with /usr/bin/time, and $work, a scratch
+# directory removed at exit. The caller sets $ROOT and $BENCH first.
+bench_init() {
+  INTERP="${CELL_BUILD_DIR:-$ROOT/build}/bin/cell-interp"
+  BLOCKS="${CELL_INTERP_BENCH_BLOCKS:-1000000}"
+  [ -x "$INTERP" ] || { echo "$BENCH: $INTERP not built" >&2; exit 1; }
+  [ -x /usr/bin/time ] || { echo "$BENCH: /usr/bin/time missing (apt-get install time)" >&2; exit 1; }
+  work="$(mktemp -d "${TMPDIR:-/tmp}/cell-$BENCH.XXXXXX")"
+  trap 'rm -rf "$work"' EXIT
+}
+
+# per_s COUNT CPU_SECONDS: a whole rate (blocks/s).
+per_s() {
+  awk -v b="$1" -v s="$2" 'BEGIN {printf "%.0f", b / (s > 0 ? s : 0.001)}'
+}
 
 # measure LABEL cmd...: CPU seconds (user+sys), wall seconds and peak RSS (kB) via /usr/bin/time -v.
 # Throughput uses CPU time: the bench machine is shared, and wall time under load says little.
