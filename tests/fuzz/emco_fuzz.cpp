@@ -6,6 +6,7 @@
 
 #include "cell/error/error.h"
 #include "cell/interp/emco.h"
+#include "drain.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   std::string text(reinterpret_cast<const char*>(data), size);
@@ -47,11 +48,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     opt.program_text = text;
     if (form == 1) opt.program_text = emco.ImportListing(text);
     auto run = emco.StartRun(opt);
-    for (int i = 0; i < 2000; ++i) {
-      cell::interp::Step s = run->Next();
-      if (s.kind != cell::interp::Step::kCanon) break;
-      (void)cell::interp::ToJsonLine(s.canon);
-    }
+    cell::fuzz::Drain(*run, 2000);
     (void)run->Variables();
   }
   return 0;

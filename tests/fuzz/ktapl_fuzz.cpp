@@ -6,6 +6,7 @@
 
 #include "cell/error/error.h"
 #include "cell/interp/ktapl.h"
+#include "drain.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   std::string text(reinterpret_cast<const char*>(data), size);
@@ -38,10 +39,6 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     return std::nullopt;
   };
   auto run = ktapl.StartRun(opt);
-  for (int i = 0; i < 2000; ++i) {
-    cell::interp::Step s = run->Next();
-    if (s.kind != cell::interp::Step::kCanon) break;
-    (void)cell::interp::ToJsonLine(s.canon);
-  }
+  cell::fuzz::Drain(*run, 2000);
   return 0;
 }

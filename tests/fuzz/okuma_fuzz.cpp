@@ -6,6 +6,7 @@
 
 #include "cell/error/error.h"
 #include "cell/interp/okuma.h"
+#include "drain.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   std::string text(reinterpret_cast<const char*>(data), size);
@@ -44,11 +45,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     return std::nullopt;
   };
   auto run = okuma.StartRun(opt);
-  for (int i = 0; i < 3000; ++i) {
-    cell::interp::Step s = run->Next();
-    if (s.kind != cell::interp::Step::kCanon) break;
-    (void)cell::interp::ToJsonLine(s.canon);
-  }
+  cell::fuzz::Drain(*run, 3000);
   (void)run->Variables();
   (void)run->Tools();
   return 0;
