@@ -5,7 +5,10 @@
 # time from OPERATE (sent by the bench itself, and `cellctl route operate` started as a process) to the
 # first motion segment of the new run arriving on the station's segment topic (the bench subscribes beside
 # the axis servo), one pallet at a time. Figures: median and p99, and their ratio to the bus round trip.
-# Env: CELL_BUILD_DIR (default build/), CELL_BENCH_DOMAIN (default 97), CELL_BENCH_PALLETS (default 30).
+# Then the supervisor verbs as a user runs them (issue 21): median wall of `station ls` (with five configured
+# stations not running), `job ls`, `job show`, `program ls` against the bare start of `cellctl --help`.
+# Env: CELL_BUILD_DIR (default build/), CELL_BENCH_DOMAIN (default 97), CELL_BENCH_PALLETS (default 30),
+# CELL_BENCH_VERB_RUNS (default 15).
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 BIN="${CELL_BUILD_DIR:-$ROOT/build}/bin"
@@ -42,3 +45,24 @@ APL
 "$BIN/cellctl" program put "$work/lat1.apl" >/dev/null
 "$BIN/cellctl" route define BENCH --op KT01,KT02:LAT1
 "$BIN/dispatch_latency_bench" --route BENCH --cellctl "$BIN/cellctl" --stations KT01,KT02 --pallets "$PALLETS"
+
+# median_ms RUNS CMD...: the median wall time of RUNS runs of CMD, in milliseconds.
+median_ms() {
+  local runs=$1 t0 t1
+  shift
+  for _ in $(seq "$runs"); do
+    t0=$(date +%s%N)
+    "$@" >/dev/null
+    t1=$(date +%s%N)
+    echo $(((t1 - t0) / 1000))
+  done | sort -n | awk '{ v[NR] = $1 } END { printf "%.1f", (NR % 2 ? v[(NR + 1) / 2] : (v[NR / 2] + v[NR / 2 + 1]) / 2) / 1000 }'
+}
+RUNS="${CELL_BENCH_VERB_RUNS:-15}"
+job="$("$BIN/cellctl" job ls --json | sed -n 's/.*"id": *\([0-9]*\).*/\1/p' | head -1)"
+base=$(median_ms "$RUNS" "$BIN/cellctl" --help)
+echo "cellctl --help (bare process start): median ${base} ms over $RUNS runs"
+for verb in "station ls" "job ls" "job show $job" "program ls"; do
+  # shellcheck disable=SC2086
+  m=$(median_ms "$RUNS" "$BIN/cellctl" $verb)
+  awk -v v="$verb" -v m="$m" -v b="$base" 'BEGIN { printf "cellctl %-12s median %7.1f ms  (%.1fx --help)%s\n", v, m, m / b, (m > 150 ? "  TARGET MISSED (150 ms)" : "") }'
+done

@@ -2,6 +2,7 @@
 #include <algorithm>
 #include <chrono>
 #include <map>
+#include <set>
 #include <thread>
 
 #include "cell/bus/topics.h"
@@ -74,12 +75,19 @@ void AddStationVerbs(CLI::App& app, Context& ctx) {
     std::map<std::string, cell::StationStatus> by_id;
     // All three topics are transient-local: each announced service's last sample arrives soon after this
     // process discovers it. Gather until every station that heartbeats has sent its status and a running
-    // scheduler its backlog (discovery is slower on a loaded machine, so no fixed window), with a grace
-    // period for stations not heard at all and an overall bound.
+    // scheduler its backlog (discovery is slower on a loaded machine, so no fixed window). A station not
+    // heard at all is offline at once when a settled scheduler says so (it has watched the heartbeats for
+    // longer than this process could); only without a scheduler does a grace period stand in for
+    // discovery, under an overall bound.
     bool sched_seen = false;
+    std::set<std::string> sched_offline;  // stations a settled scheduler reports without a heartbeat
+    std::set<std::string> status_seen;
     const auto t0 = std::chrono::steady_clock::now();
     for (;;) {
-      while (auto st = status.Take(bus::Millis(0))) by_id[st->station().to_string()] = *st;
+      while (auto st = status.Take(bus::Millis(0))) {
+        status_seen.insert(st->station().to_string());
+        by_id[st->station().to_string()] = *st;
+      }
       while (auto a = alarms.Take(bus::Millis(0))) {
         auto& last = alarm[a->station().to_string()];
         if (a->time_ns() >= last.time_ns()) last = *a;
@@ -88,17 +96,15 @@ void AddStationVerbs(CLI::App& app, Context& ctx) {
         sched_seen = true;
         backlog.clear();
         for (auto& b : sc->backlog()) backlog[b.station().to_string()] = b.backlog_s();
+        sched_offline = cell::dashboard::OfflineBySettledScheduler(*sc);
       }
-      bool all_online = true, waiting = false;
-      for (auto& id : ids) {
-        if (!live.StationOnline(id))
-          all_online = false;
-        else if (!by_id.count(id))
-          waiting = true;
-      }
+      const auto heard = cell::dashboard::HeardStations(ids, live, status_seen, sched_offline);
+      bool waiting = heard == cell::dashboard::Heard::kWaiting;
       if (live.Online("cell-scheduler") && !sched_seen) waiting = true;
       auto waited = std::chrono::steady_clock::now() - t0;
-      if (!waiting && (all_online || waited >= std::chrono::milliseconds(1500))) break;
+      if (!waiting &&
+          (heard == cell::dashboard::Heard::kComplete || waited >= std::chrono::milliseconds(1500)))
+        break;
       if (waited >= std::chrono::milliseconds(4000)) break;
       std::this_thread::sleep_for(std::chrono::milliseconds(20));
     }

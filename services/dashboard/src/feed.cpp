@@ -146,6 +146,7 @@ Feed::Feed(bus::Participant& p, CellView& view, FeedOptions opts)
                  std::lock_guard lk(mu_);
                  if (!backlog_seen_) backlog_at_ = std::chrono::steady_clock::now();
                  backlog_seen_ = true;
+                 sched_offline_ = OfflineBySettledScheduler(s);
                }),
       jobs_(p, topics::kJobState, bus::QosKind::kState,
             [this](const cell::JobInfo& j, const bus::SampleInfo&) { view_.Job(FromWire(j)); }),
@@ -204,20 +205,38 @@ void Feed::Tick() {
 
 bool Feed::Settled(std::chrono::milliseconds waited) const {
   std::lock_guard lk(mu_);
-  bool all_online = true;
-  for (auto& st : view_.model().stations()) {
-    if (!live_.StationOnline(st.id))
-      all_online = false;
-    else if (!status_seen_.count(st.id))
-      return false;
-  }
+  std::vector<std::string> ids;
+  for (auto& st : view_.model().stations()) ids.push_back(st.id);
+  const Heard heard = HeardStations(ids, live_, status_seen_, sched_offline_);
+  if (heard == Heard::kWaiting) return false;
   if (live_.Online("cell-scheduler")) {
     // The scheduler's job states come from another writer of the same process: matched, and the moment
     // its first transient-local samples take to follow the backlog's.
     if (!backlog_seen_ || jobs_.Matched() == 0) return false;
     if (std::chrono::steady_clock::now() - backlog_at_ < std::chrono::milliseconds(200)) return false;
   }
-  return all_online || waited >= std::chrono::milliseconds(1500);
+  return heard == Heard::kComplete || waited >= std::chrono::milliseconds(1500);
+}
+
+Heard HeardStations(const std::vector<std::string>& ids, const health::Liveness& live,
+                    const std::set<std::string>& status_seen, const std::set<std::string>& sched_offline) {
+  Heard heard = Heard::kComplete;
+  for (auto& id : ids) {
+    if (live.StationOnline(id)) {
+      if (!status_seen.count(id)) return Heard::kWaiting;
+    } else if (!sched_offline.count(id)) {
+      heard = Heard::kPartial;
+    }
+  }
+  return heard;
+}
+
+std::set<std::string> OfflineBySettledScheduler(const cell::SchedulerState& s) {
+  std::set<std::string> out;
+  if (!s.settled()) return out;
+  for (auto& b : s.backlog())
+    if (!b.online()) out.insert(b.station().to_string());
+  return out;
 }
 
 }  // namespace cell::dashboard

@@ -260,9 +260,12 @@ void Service::PublishBacklog() {
       cell::StationBacklog b;
       b.station(v.id);
       b.backlog_s(static_cast<double>(v.backlog_s));
+      b.online(v.online);
       s.backlog().push_back(b);
     }
   }
+  s.settled(std::chrono::steady_clock::now() - started_ >=
+            std::chrono::milliseconds(bus::topics::kOfflineAfterMs));
   s.updated_ns(health::WallNs());
   state_w_.Write(s);
 }

@@ -9,6 +9,7 @@
 #include <optional>
 #include <set>
 #include <string>
+#include <vector>
 
 #include "cell/bus/bus.h"
 #include "cell/dashboard/cell_view.h"
@@ -31,7 +32,8 @@ class Feed {
   // Heartbeats: stations and host services going online or offline. Call every 250 ms or so.
   void Tick();
   // The first picture is complete: every station whose heartbeat is heard has sent its status, and a
-  // running scheduler its backlog; stations not heard at all get a grace period (as `station ls` does).
+  // running scheduler its backlog; stations not heard at all are offline by the scheduler's word, or after
+  // a grace period without one (HeardStations, as `station ls` does).
   bool Settled(std::chrono::milliseconds waited) const;
 
  private:
@@ -42,6 +44,7 @@ class Feed {
   mutable std::mutex mu_;
   std::set<std::string> status_seen_;
   bool backlog_seen_ = false;
+  std::set<std::string> sched_offline_;
   std::chrono::steady_clock::time_point backlog_at_;
   health::Liveness live_;
   bus::Reader<cell::StationStatus> status_;
@@ -52,6 +55,17 @@ class Feed {
   bus::Reader<cell::InspectionStored> stored_;
   std::optional<bus::Reader<cell::AxisState>> axes_;
 };
+
+// What a one-shot reader (`station ls`, `watch --count 1`) knows of the configured stations. kWaiting: an
+// announced station's status has not arrived yet; kPartial: some station is neither heard nor reported
+// offline by a settled scheduler (only discovery time, or a grace period without a scheduler, tells);
+// kComplete: every station is known, so an absent one is offline without waiting for discovery.
+enum class Heard { kWaiting, kPartial, kComplete };
+Heard HeardStations(const std::vector<std::string>& ids, const health::Liveness& live,
+                    const std::set<std::string>& status_seen, const std::set<std::string>& sched_offline);
+// The stations a settled scheduler reports without a heartbeat (SchedulerState.settled: it has watched
+// longer than its discovery window).
+std::set<std::string> OfflineBySettledScheduler(const cell::SchedulerState& s);
 
 // Conversions (exposed for tests).
 const char* ExecutionName(cell::Execution e);
