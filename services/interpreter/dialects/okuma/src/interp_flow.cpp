@@ -36,6 +36,16 @@ bool StartsWithLabel(std::string_view line, const std::string& label) {
          s[label.size()] == '(';
 }
 
+// Whether the line at `at` may be a '$' continuation: its first character after blanks is '$'. A cheap
+// look ahead, so that most blocks are not followed by a second split of the next line.
+bool NextStartsContinuation(const TextSpan& span, const TextPos& at) {
+  std::string_view text = span.text->view();
+  for (std::size_t i = at.pos; i < span.end; ++i) {
+    if (text[i] != ' ' && text[i] != '\t') return text[i] == '$';
+  }
+  return false;
+}
+
 bool IsContinuation(std::string_view line) {
   std::string_view s = TrimBlanks(line);
   return !s.empty() && s[0] == '$';
@@ -295,6 +305,7 @@ const Block* OkRun::ReadBlock(int* first_line) {
     bool continued = false;
     for (;;) {
       if (comment_only && !top.data.tape_started) break;
+      if (!NextStartsContinuation(top.span, top.at)) break;  // the common case: no second read of the line
       TextPos save = top.at;
       std::optional<Line> next = fr.NextLine();
       if (!next || !IsContinuation(next->text)) {
@@ -443,15 +454,20 @@ std::optional<ProgramRef> OkRun::ProgramIn(const std::shared_ptr<const ProgramTe
   TextSpan all{text, 0, text->view().size(), 1, true};
   TextPos p{0, 1};
   std::optional<ProgramRef> found;
+  std::size_t released = 0;
   while (p.pos < all.end && !found) {
     Line l = ReadLine(all, p);
+    // The pages read so far go back to the kernel as the scan goes, so resident memory does not grow with
+    // the length of a mapped main program (the run faults back in what it reads next).
+    if (p.pos - released >= kReleaseAfterScan) {
+      text->Release(released, p.pos);
+      released = p.pos;
+    }
     std::string_view s = TrimBlanks(l.text);
     if (s.empty() || (s[0] != 'O' && s[0] != 'o')) continue;
     if (ProgramNameOf(s) == name) found = ProgramRef{text, p.pos, p.line, own};
   }
-  // The scan read the file up to here: give the pages back, so resident memory does not grow with the length
-  // of a mapped main program (the run faults back in what it reads next).
-  if (p.pos >= kReleaseAfterScan) text->Release(0, p.pos);
+  if (p.pos > released && p.pos >= kReleaseAfterScan) text->Release(released, p.pos);
   return found;
 }
 
