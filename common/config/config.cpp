@@ -166,6 +166,92 @@ tooltable::ToolEntry ParseTool(const fs::path& file, const toml::node& entry, si
   return tool;
 }
 
+// An M code key of an [[io.aux]] entry: absent -1, else an integer 0..999.
+int AuxMCode(const fs::path& file, const toml::table& t, std::string_view key, const std::string& where) {
+  const toml::node* n = t.get(key);
+  if (n == nullptr) return -1;
+  if (!n->is_integer() || *n->value<int64_t>() < 0 || *n->value<int64_t>() > 999)
+    Fail(file, n, fmt::format("{}: {} must be an M code, an integer in 0..999", where, key));
+  return static_cast<int>(*n->value<int64_t>());
+}
+
+config::AuxOutput ParseAux(const fs::path& file, const toml::node& entry, size_t index) {
+  const std::string where = fmt::format("[[io.aux]] entry {}", index + 1);
+  const toml::table* t = entry.as_table();
+  if (t == nullptr) Fail(file, &entry, fmt::format("{} must be a table", where));
+  static const std::set<std::string, std::less<>> kKeys = {
+      "name", "output", "m_on", "m_off", "interlock", "interlock_on", "interlock_off", "note"};
+  for (auto&& [k, v] : *t) {
+    if (!kKeys.contains(k.str())) {
+      Fail(file, &v,
+           fmt::format("{}: unknown key '{}' (allowed: name, output, m_on, m_off, interlock, interlock_on, "
+                       "interlock_off, note)",
+                       where, k.str()));
+    }
+  }
+  config::AuxOutput a;
+  const toml::node* name = t->get("name");
+  if (name == nullptr) Fail(file, &entry, fmt::format("{}: missing key 'name'", where));
+  a.name = GetString(file, *name, where + ": name");
+  if (a.name.empty() || a.name.size() > 32)
+    Fail(file, name, fmt::format("{}: name is 1-32 characters", where));
+  const toml::node* out = t->get("output");
+  if (out == nullptr) Fail(file, &entry, fmt::format("{} ({}): missing key 'output'", where, a.name));
+  a.output = GetString(file, *out, where + ": output");
+  if (!IsValidIoName(a.output)) {
+    Fail(file, out,
+         fmt::format("{} ({}): output = '{}': must be 1-16 of A-Z, 0-9, '_', '.', '[', ']' starting with a "
+                     "letter",
+                     where, a.name, a.output));
+  }
+  a.m_on = AuxMCode(file, *t, "m_on", where);
+  a.m_off = AuxMCode(file, *t, "m_off", where);
+  if (a.m_on < 0 && a.m_off < 0)
+    Fail(file, &entry, fmt::format("{} ({}): give m_on, m_off or both", where, a.name));
+  if (const toml::node* n = t->get("interlock")) {
+    if (!n->is_boolean()) Fail(file, n, fmt::format("{}: interlock must be true or false", where));
+    a.interlock = *n->value<bool>();
+  }
+  if (const toml::node* n = t->get("note")) {
+    a.note = GetString(file, *n, where + ": note");
+    if (a.note.size() > 80)
+      Fail(file, n, fmt::format("{} ({}): note is at most 80 characters", where, a.name));
+  }
+  a.interlock_on = AuxMCode(file, *t, "interlock_on", where);
+  a.interlock_off = AuxMCode(file, *t, "interlock_off", where);
+  if (!a.interlock && (a.interlock_on >= 0 || a.interlock_off >= 0))
+    Fail(file, &entry,
+         fmt::format("{} ({}): interlock_on / interlock_off need interlock = true", where, a.name));
+  return a;
+}
+
+// [io]: only [[io.aux]]; each M code means one thing across the entries.
+std::vector<config::AuxOutput> ParseIo(const fs::path& file, const toml::node& io) {
+  const toml::table* t = io.as_table();
+  if (t == nullptr) Fail(file, &io, "io must be a table [io]");
+  for (auto&& [k, v] : *t)
+    if (k.str() != "aux") Fail(file, &v, fmt::format("[io]: unknown key '{}' (allowed: aux)", k.str()));
+  std::vector<config::AuxOutput> out;
+  const toml::node* an = t->get("aux");
+  if (an == nullptr) return out;
+  const toml::array* arr = an->as_array();
+  if (arr == nullptr) Fail(file, an, "io.aux must be an array of tables [[io.aux]]");
+  std::map<int, std::string> used;  // M code -> the entry's name
+  for (size_t i = 0; i < arr->size(); ++i) {
+    const toml::node& entry = *arr->get(i);
+    config::AuxOutput a = ParseAux(file, entry, i);
+    for (int m : {a.m_on, a.m_off, a.interlock_on, a.interlock_off}) {
+      if (m < 0) continue;
+      if (auto [it, fresh] = used.emplace(m, a.name); !fresh)
+        Fail(
+            file, &entry,
+            fmt::format("[[io.aux]] entry {} ({}): M{} is already used by {}", i + 1, a.name, m, it->second));
+    }
+    out.push_back(std::move(a));
+  }
+  return out;
+}
+
 std::string BaseTool(const std::string& tool) {
   return tool.substr(0, tool.find('.'));
 }
@@ -174,6 +260,13 @@ std::string BaseTool(const std::string& tool) {
 
 bool IsValidStationId(std::string_view id) {
   return names::IsStationId(id);
+}
+
+bool IsValidIoName(std::string_view name) {
+  if (name.empty() || name.size() > 16 || name[0] < 'A' || name[0] > 'Z') return false;
+  return std::all_of(name.begin(), name.end(), [](char c) {
+    return (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_' || c == '.' || c == '[' || c == ']';
+  });
 }
 
 bool IsValidToolNumber(std::string_view tool) {
@@ -369,6 +462,7 @@ StationConfig LoadStationFile(const fs::path& file) {
       cfg.params[std::string(key)] = std::move(value);
     }
   }
+  if (const toml::node* io = root.get("io")) cfg.aux = ParseIo(file, *io);
   if (const toml::node* tn = root.get("tools")) {
     const toml::array* arr = tn->as_array();
     if (arr == nullptr) Fail(file, tn, "tools must be an array of tables [[tools]]");

@@ -468,3 +468,63 @@ TEST_F(ConfigTest, DdsLoadsAndExpandsAProfileFile) {
 }
 
 }  // namespace
+
+namespace {
+
+// [[io.aux]]: a device M codes drive through one output, optionally interlocked against spindle rotation.
+TEST_F(ConfigTest, IoAuxEntries) {
+  Write("OK05", R"([station]
+id = "OK05"
+dialect = "okuma"
+[[io.aux]]
+name = "chuck"
+output = "CHUCK"
+m_on = 83
+m_off = 84
+interlock = true
+interlock_on = 184
+interlock_off = 185
+note = "ln 2015"
+[[io.aux]]
+name = "air blow"
+output = "O10.2"
+m_on = 51
+)");
+  auto s = LoadStation("OK05");
+  ASSERT_EQ(s.aux.size(), 2u);
+  EXPECT_EQ(s.aux[0], (cell::config::AuxOutput{"chuck", "CHUCK", 83, 84, true, 184, 185, "ln 2015"}));
+  EXPECT_EQ(s.aux[1], (cell::config::AuxOutput{"air blow", "O10.2", 51, -1, false, -1, -1, ""}));
+}
+
+TEST_F(ConfigTest, IoAuxRefusals) {
+  const std::string head = "[station]\nid = \"OK05\"\ndialect = \"okuma\"\n[[io.aux]]\nname = \"chuck\"\n";
+  auto error = [&](const std::string& rest) {
+    Write("OK05", head + rest);
+    return LoadError("OK05");
+  };
+  EXPECT_NE(error("output = \"CHUCK\"\nm_on = 83\nm_of = 84\n").find("unknown key 'm_of'"),
+            std::string::npos);
+  EXPECT_NE(error("output = \"chuck\"\nm_on = 83\n").find("output = 'chuck'"), std::string::npos);
+  EXPECT_NE(error("output = \"CHUCK\"\n").find("give m_on, m_off or both"), std::string::npos);
+  EXPECT_NE(error("output = \"CHUCK\"\nm_on = 1000\n").find("m_on must be an M code"), std::string::npos);
+  EXPECT_NE(error("output = \"CHUCK\"\nm_on = 83\ninterlock_on = 184\n").find("need interlock = true"),
+            std::string::npos);
+  EXPECT_NE(error("output = \"CHUCK\"\nm_on = 83\n[[io.aux]]\nname = \"x\"\noutput = \"X\"\nm_on = 83\n")
+                .find("M83 is already used by chuck"),
+            std::string::npos);
+}
+
+// OK01 ships the chuck and the tailstock of the OSP-E100L manual (ln 1969-1978, 2008-2023).
+TEST(ShippedStations, Ok01ChuckAndTailstock) {
+  const char* src = getenv("CELL_SOURCE_DIR");
+  ASSERT_NE(src, nullptr) << "run under ctest (CELL_SOURCE_DIR)";
+  setenv("CELL_CONFIG_DIR", (fs::path(src) / "deploy").c_str(), 1);
+  auto s = LoadStation("OK01");
+  ASSERT_EQ(s.aux.size(), 2u);
+  EXPECT_EQ(s.aux[0], (cell::config::AuxOutput{"chuck", "CHUCK", 83, 84, true, 184, 185,
+                                               "OSP-E100L manual ln 2015-2023"}));
+  EXPECT_EQ(s.aux[1], (cell::config::AuxOutput{"tailstock", "TAILSTOCK", 56, 55, true, 166, 167,
+                                               "OSP-E100L manual ln 2008-2013"}));
+}
+
+}  // namespace

@@ -1,4 +1,4 @@
-// cellctl station ls|tools|vars|input|reset|hold|resume|override
+// cellctl station ls|tools|vars|input|io|reset|hold|resume|override
 #include <algorithm>
 #include <chrono>
 #include <map>
@@ -124,7 +124,8 @@ void AddStationVerbs(CLI::App& app, Context& ctx) {
                           {"backlog_s", backlog.count(id) ? backlog[id] : 0.0},
                           {"pallet", nullptr},
                           {"program", nullptr},
-                          {"line", nullptr}};
+                          {"line", nullptr},
+                          {"status_text", nullptr}};
       if (online && by_id.count(id)) {
         auto& s = by_id[id];
         j["execution"] = ExecutionName(s.execution());
@@ -134,6 +135,7 @@ void AddStationVerbs(CLI::App& app, Context& ctx) {
         if (s.pallet()) j["pallet"] = s.pallet();
         if (!s.program().to_string().empty()) j["program"] = s.program().to_string();
         if (s.line()) j["line"] = s.line();
+        if (!s.status_text().to_string().empty()) j["status_text"] = s.status_text().to_string();
       }
       if (auto a = alarm.find(id); a != alarm.end() && a->second.active()) {
         j["condition"] = "FAULT";
@@ -143,7 +145,8 @@ void AddStationVerbs(CLI::App& app, Context& ctx) {
       arr.push_back(j);
     }
     Print(ctx, arr,
-          {"id", "dialect", "online", "execution", "condition", "backlog_s", "pallet", "program", "line"});
+          {"id", "dialect", "online", "execution", "condition", "backlog_s", "pallet", "program", "line",
+           "status_text"});
   });
 
   auto* tools = st->add_subcommand("tools", "the station's tool table as it publishes it");
@@ -199,20 +202,51 @@ void AddStationVerbs(CLI::App& app, Context& ctx) {
     for (auto& [k, val] : j.items()) std::cout << k << " = " << val << "\n";
   });
 
-  auto* input = st->add_subcommand("input", "set a discrete input (for WAI): BIT=VALUE");
+  auto* input =
+      st->add_subcommand("input", "set a discrete input (for KT-APL WAI): I<word>.<bit>=0|1, e.g. I04D.1=1");
   input->add_option("ID", o->id)->required();
   input->add_option("BIT=VALUE", o->input)->required();
   input->callback([o, &ctx] {
     RequireConfigured(o->id);
     auto [bit, v] = Assignment(o->input);
     if (v != 0 && v != 1) throw Exit{2, "an input is 0 or 1"};
+    // The old form named a bare bit number ("3=1"); inputs are KT-APL word bits now (docs/station.md).
+    if (!bit.empty() && std::all_of(bit.begin(), bit.end(), [](char c) { return c >= '0' && c <= '9'; }))
+      throw Exit{2, "an input is named I<word>.<bit>, e.g. I04D.1 (word address in hexadecimal, bit 0-15)"};
     cell::StationRequest req;
     req.op(cell::STATION_SET_INPUT);
     cell::Variable var;
-    cell::names::Assign(var.name(), "I" + bit, "input");
+    cell::names::Assign(var.name(), bit, "input");
     var.value(v);
     req.variables().push_back(var);
-    ctx.StationCommand(o->id, req);
+    const uint32_t rev = ctx.StationCommand(o->id, req).revision();
+    // Returns once the station publishes the change, so a following `station io` shows it.
+    bus::Reader<cell::StationIoState> r(ctx.Bus(), bus::topics::kStationIo, bus::QosKind::kState);
+    if (!r.WaitFor([&](const cell::StationIoState& x) { return x.station() == o->id && x.revision() >= rev; },
+                   bus::Millis(3000)))
+      throw Exit{1, "input set, but station " + o->id + " has not published it within 3 s"};
+  });
+
+  auto* io = st->add_subcommand("io", "the station's discrete inputs and outputs");
+  io->add_option("ID", o->id)->required();
+  io->add_flag("--json", ctx.json);
+  io->callback([o, &ctx] {
+    RequireConfigured(o->id);
+    bus::Reader<cell::StationIoState> r(ctx.Bus(), bus::topics::kStationIo, bus::QosKind::kState);
+    auto s =
+        r.WaitFor([&](const cell::StationIoState& x) { return x.station() == o->id; }, bus::Millis(3000));
+    if (!s) throw Exit{1, "station " + o->id + " has not published its I/O (is it online?)"};
+    // One row per point: inputs first, then outputs with their power-up state (KT-APL (SET)).
+    nlohmann::json arr = nlohmann::json::array();
+    for (auto& p : s->inputs())
+      arr.push_back(
+          {{"name", p.name().to_string()}, {"kind", "input"}, {"value", p.value()}, {"power_up", nullptr}});
+    for (auto& p : s->outputs())
+      arr.push_back({{"name", p.name().to_string()},
+                     {"kind", "output"},
+                     {"value", p.value()},
+                     {"power_up", p.power_up()}});
+    Print(ctx, arr, {"kind", "name", "value", "power_up"});
   });
 
   auto* reset = st->add_subcommand("reset", "clear the station's alarm condition");

@@ -19,10 +19,13 @@ struct Station::ActiveRun {
   std::string program;
 };
 
-// Queue busters answered by the machine: the run's Next() blocks here until the servo reports.
+// Queue busters answered by the machine: the run's Next() blocks here until the servo reports (a probe) or
+// the inputs match (WAI).
 class Station::RunEnvironment : public interp::Environment {
  public:
-  RunEnvironment(SegmentStream& stream, double probe_feed) : stream_(stream), probe_feed_(probe_feed) {}
+  RunEnvironment(Station& station, SegmentStream& stream, double probe_feed)
+      : station_(station), stream_(stream), probe_feed_(probe_feed) {}
+  void WaitInputs(const std::string& spec) override { station_.WaitInputs(spec); }
   interp::ProbeResult Probe(bool contact, const interp::AxisArray& from,
                             const interp::AxisArray& to) override {
     (void)from;
@@ -39,6 +42,7 @@ class Station::RunEnvironment : public interp::Environment {
   }
 
  private:
+  Station& station_;
   SegmentStream& stream_;
   double probe_feed_;
 };
@@ -148,7 +152,8 @@ void Station::RunProgram(ActiveRun& run, const std::string& entry) {
     if (!rest.substr(0, sub).empty()) opt.params["PROGRAM"] = rest.substr(0, sub);
     if (sub != std::string::npos && sub + 1 < rest.size()) opt.params["SUB_FILE"] = rest.substr(sub + 1);
   }
-  RunEnvironment env(stream_, options_.probe_feed);
+  RunEnvironment env(*this, stream_, options_.probe_feed);
+  AuxIo aux(cfg_.aux);  // interlocks ON and the spindle stopped: each program starts from the reset state
   opt.env = &env;
   auto program = interp::StartRun(opt);
   auto commit = [&] {
@@ -172,6 +177,7 @@ void Station::RunProgram(ActiveRun& run, const std::string& entry) {
       const auto* change = c.If<interp::ToolChangeOp>();
       board_.Position(name, c.line, change ? &change->tool : nullptr);
       if (auto seg = ToSegment(c)) stream_.Send(*seg);
+      ExecuteIo(name, c, aux);
       if (const auto* m = c.If<interp::MessageOp>()) spdlog::info("{} line {}: {}", name, c.line, m->text);
       if (clock_.Now() - last_status > options_.status_period) {
         board_.Publish();
@@ -191,6 +197,65 @@ void Station::RunProgram(ActiveRun& run, const std::string& entry) {
   }
   ++run.programs_done;
   commit();
+}
+
+void Station::WaitInputs(const std::string& spec) {
+  const auto want = ParseWaitSpec(spec);
+  if (!want) {  // EMCO M65 and the like: no input model of theirs (docs/station.md, "Discrete I/O")
+    spdlog::warn("input wait '{}' is not a discrete input the station models: not waited for", spec);
+    return;
+  }
+  // The block goes active after the motion before it (read-ahead stops here), as SET's outputs do.
+  stream_.WaitDrained();
+  if (dio_.Satisfied(*want)) return;
+  const std::string text = "waiting for " + Describe(*want);
+  spdlog::info("{}", text);
+  board_.Waiting(text);
+  board_.Publish();
+  try {
+    stream_.WaitUntil([&] { return dio_.Satisfied(*want); });
+  } catch (...) {
+    board_.Waiting("");  // the run ends (cancel, stop, servo): no longer WAIT
+    throw;
+  }
+  spdlog::info("inputs {} present: the run goes on", Describe(*want));
+  board_.Waiting("");
+  board_.Publish();
+}
+
+// Outputs change when their block goes active (KT-APL manual ln 3958-3959), so after the motion before it.
+void Station::ExecuteIo(const std::string& program, const interp::Canon& c, AuxIo& aux) {
+  // What the I/O model refuses stops the run like a program error, at the block that asked.
+  auto checked = [&](auto&& f) {
+    try {
+      return f();
+    } catch (const Error& e) {
+      const std::string text = fmt::format("{}:{}: error: {}", program, c.line, e.what());
+      board_.Warning("", text);
+      throw Error(e.code(), text);
+    }
+  };
+  if (const auto* sp = c.If<interp::SpindleOp>()) {
+    aux.Spindle(*sp);
+  } else if (const auto* o = c.If<interp::OutputOp>()) {
+    const auto spec = checked([&] { return ParseOutputSpec(o->spec); });
+    if (!spec) {
+      spdlog::debug("output '{}' is not a discrete output the station models", o->spec);
+      return;
+    }
+    stream_.WaitDrained();
+    if (spec->save) {
+      dio_.SavePowerUp();
+    } else {
+      checked([&] { dio_.SetOutputs(spec->bits); });
+    }
+  } else if (const auto* a = c.If<interp::AuxOp>()) {
+    const auto bit = checked([&] { return aux.Aux(a->m); });
+    if (!bit) return;
+    stream_.WaitDrained();
+    checked([&] { dio_.SetOutputs({*bit}); });
+    spdlog::info("M{}: {}={}", a->m, bit->name, bit->value);
+  }
 }
 
 void Station::PublishRun(const ActiveRun& run, cell::RunState state, const std::string& reason) {

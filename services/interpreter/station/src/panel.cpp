@@ -37,6 +37,7 @@ void StatusBoard::RunEnded(bool completed, int queued) {
   std::lock_guard lk(mu_);
   base_ = completed ? cell::EXECUTION_PROGRAM_COMPLETED : cell::EXECUTION_STOPPED;
   Show();
+  status_.status_text("");
   status_.part_count(status_.part_count() + (completed ? 1 : 0));
   status_.dispatch_id(0);
   status_.queued(queued);
@@ -47,6 +48,13 @@ void StatusBoard::Position(const std::string& program, int line, const std::stri
   names::Assign(status_.program(), program, "program name");
   status_.line(line);
   if (tool) status_.tool(tool->substr(0, 16));
+}
+
+void StatusBoard::Waiting(const std::string& text) {
+  std::lock_guard lk(mu_);
+  base_ = text.empty() ? cell::EXECUTION_ACTIVE : cell::EXECUTION_WAIT;
+  Show();
+  status_.status_text(text.substr(0, 255));
 }
 
 void StatusBoard::Warning(const std::string& code, const std::string& text) {

@@ -66,6 +66,18 @@ void SegmentStream::WaitDrained() {
   }
 }
 
+void SegmentStream::WaitUntil(const std::function<bool()>& ready) {
+  std::unique_lock lk(mu_);
+  for (;;) {
+    Check(lk);
+    lk.unlock();
+    const bool done = ready();
+    lk.lock();
+    if (done) return;
+    clock_.Wait(lk, cv_, kPoll);
+  }
+}
+
 // Credit-based flow control: never more segments in flight than the servo granted.
 void SegmentStream::WaitCredit(std::unique_lock<std::mutex>& lk, std::uint64_t seq) {
   while (seq > credit_seq_) {

@@ -42,6 +42,23 @@ cell::StationVariables VariablesToWire(const std::string& station, const std::ma
   return v;
 }
 
+cell::StationIoState IoToWire(const std::string& station, const IoState& io) {
+  cell::StationIoState s;
+  s.station(station);
+  s.revision(io.revision);
+  auto point = [&](const std::string& name, int value) {
+    cell::IoPoint p;
+    p.name(name);
+    p.value(value);
+    auto it = io.power_up.find(name);
+    p.power_up(it == io.power_up.end() ? 0 : it->second);
+    return p;
+  };
+  for (const auto& [n, v] : io.inputs) s.inputs().push_back(point(n, v));
+  for (const auto& [n, v] : io.outputs) s.outputs().push_back(point(n, v));
+  return s;
+}
+
 }  // namespace
 
 std::int64_t SystemClock::WallNs() {
@@ -61,12 +78,14 @@ Station::Station(config::StationConfig cfg, const std::filesystem::path& db_file
       panel_(cfg_.id, db_, [this](const cell::ServoControl& c) { io_.PublishControl(c); }),
       memory_(db_, cfg_.dialect, cfg_.tools,
               [this](const MemorySnapshot& now, bool tools, bool vars) { PublishMemory(now, tools, vars); }),
+      dio_(db_, cfg_.aux, [this](const IoState& s) { io_.PublishIo(IoToWire(cfg_.id, s)); }),
       stream_(cfg_.id, clock_, link) {
   board_.Queued(db_.Count(RunState::kQueued));
 }
 
 void Station::Start() {
   memory_.Announce();
+  dio_.Announce();
   panel_.Publish();
   board_.Publish();
 }
@@ -155,13 +174,13 @@ cell::StationReply Station::OnCommand(const cell::StationRequest& r) {
       return rep;
     }
     case cell::STATION_SET_INPUT: {
-      std::map<std::string, double> inputs;
+      std::vector<IoBit> bits;
       for (const auto& v : r.variables()) {
-        const std::string n = v.name().to_string();
-        if (n.size() < 2 || n[0] != 'I') throw Error(Errc::kInvalidArgument, "an input is named I<bit>");
-        inputs[n] = v.value();
+        if (v.value() != 0 && v.value() != 1) throw Error(Errc::kInvalidArgument, "an input is 0 or 1");
+        bits.push_back({v.name().to_string(), v.value() == 1 ? 1 : 0});
       }
-      db_.SetInputs(inputs);
+      rep.revision(dio_.SetInputs(bits));
+      stream_.Wake();  // a run waiting in WAI looks again now
       return rep;
     }
     case cell::STATION_RESET:

@@ -64,7 +64,8 @@ std::vector<store::Migration> StationDb::Migrations() {
       // document (common/tooltable's stored form: every field of every dialect, no migration per new field);
       // a database with that row was seeded from the station config. Inputs move to their own table.
       store::Migration{
-          3, "tool table as one document, inputs, run progress", [](store::Database& db) {
+          3, "tool table as one document, inputs, run progress",
+          [](store::Database& db) {
             db.Exec(
                 "CREATE TABLE tool_table(id INTEGER PRIMARY KEY CHECK (id = 1), json TEXT NOT NULL);"
                 "CREATE TABLE inputs(name TEXT PRIMARY KEY, value REAL);"
@@ -96,7 +97,12 @@ std::vector<store::Migration> StationDb::Migrations() {
               ins.Run();
             }
             db.Exec("DROP TABLE tools;");
-          }}};
+          }},
+      // Discrete outputs the programs set (KT-APL SET, Okuma VDOUT, the station file's M codes) and their
+      // power-up states (KT-APL `(SET)`); inputs stay in `inputs`.
+      store::Migration::Sql(4, "discrete outputs",
+                            "CREATE TABLE outputs(name TEXT PRIMARY KEY, value INTEGER NOT NULL,"
+                            " power_up INTEGER NOT NULL DEFAULT 0);")};
 }
 
 StationDb::StationDb(const std::filesystem::path& file) : db_(store::Database::Open(file)) {
@@ -280,6 +286,33 @@ std::map<std::string, double> StationDb::LoadInputs() {
   auto q = db_.Prepare("SELECT name, value FROM inputs");
   while (q.Step()) out[q.ColumnText(0)] = q.ColumnDouble(1);
   return out;
+}
+
+void StationDb::SetOutputs(const std::map<std::string, int>& outputs) {
+  std::lock_guard lk(mu_);
+  store::Transaction tx(db_);
+  auto save = db_.Prepare(
+      "INSERT INTO outputs(name, value) VALUES(?,?) ON CONFLICT(name) DO UPDATE SET value=excluded.value");
+  for (const auto& [n, v] : outputs) {
+    save.BindText(1, n).BindInt64(2, v);
+    save.Run();
+    save.Reset();
+  }
+  tx.Commit();
+}
+
+std::map<std::string, std::pair<int, int>> StationDb::LoadOutputs() {
+  std::lock_guard lk(mu_);
+  std::map<std::string, std::pair<int, int>> out;
+  auto q = db_.Prepare("SELECT name, value, power_up FROM outputs");
+  while (q.Step())
+    out[q.ColumnText(0)] = {static_cast<int>(q.ColumnInt64(1)), static_cast<int>(q.ColumnInt64(2))};
+  return out;
+}
+
+void StationDb::SavePowerUp() {
+  std::lock_guard lk(mu_);
+  db_.Exec("UPDATE outputs SET power_up = value;");
 }
 
 }  // namespace cell::station

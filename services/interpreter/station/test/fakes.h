@@ -160,6 +160,7 @@ class FakeIo final : public StationIo {
   void PublishStatus(const cell::StationStatus& s) override { status.push_back(s); }
   void PublishTools(const cell::ToolTable& t) override { tools.push_back(t); }
   void PublishVariables(const cell::StationVariables& v) override { variables.push_back(v); }
+  void PublishIo(const cell::StationIoState& s) override { io.push_back(s); }
   void PublishRun(const cell::RunStatus& r) override { runs.push_back(r); }
   void PublishControl(const cell::ServoControl& c) override { control.push_back(c); }
   std::optional<std::string> Program(const std::string& node, const std::string& name) override {
@@ -199,6 +200,7 @@ class FakeIo final : public StationIo {
   std::vector<cell::StationStatus> status;
   std::vector<cell::ToolTable> tools;
   std::vector<cell::StationVariables> variables;
+  std::vector<cell::StationIoState> io;
   std::vector<cell::RunStatus> runs;
   std::vector<cell::ServoControl> control;
   std::vector<cell::InspectionRequest> records;

@@ -26,8 +26,10 @@ class StationDbFixture : public StationHarness {
 TEST_F(StationDbFixture, AVersion2DatabaseMigratesWithEverythingItHeld) {
   {
     StationDb raw(db());
-    EXPECT_EQ(raw.SchemaVersion(), 3);
+    EXPECT_EQ(raw.SchemaVersion(), 4);
+    // The old release's input name stays as it was (no KT-APL word of its own); version 4 adds outputs.
     EXPECT_EQ(raw.LoadInputs(), (std::map<std::string, double>{{"I3", 1.0}}));
+    EXPECT_TRUE(raw.LoadOutputs().empty());
     EXPECT_EQ(raw.Count(RunState::kCompleted), 2);
     EXPECT_EQ(raw.Count(RunState::kActive), 1);
     EXPECT_EQ(raw.LoadPanel(), (PanelState{true, 0.5, 1.0}));

@@ -56,10 +56,34 @@ inline constexpr int kMaxDomain = 232;
 //   O11 = 9                  # interp::RunOptions::params (EMCO's operator monitor, docs/dialects/emco.md);
 //   S01 = 2                  # values are strings, numbers or booleans (1/0); names 1-32 of A-Z a-z 0-9 _ . -
 //
+//   [[io.aux]]               # optional, any number: a device the M codes drive through one discrete output
+//   name = "chuck"           # what it is, in messages (1-32 characters)
+//   output = "CHUCK"         # the output it drives (IsValidIoName); `cellctl station io` shows it
+//   m_on = 83                # M code setting the output to 1 (optional; 0..999)
+//   m_off = 84               # M code setting it to 0 (optional; at least one of m_on and m_off)
+//   interlock = true         # optional, default false: m_on / m_off are refused while the spindle rotates
+//   interlock_on = 184       # optional (needs interlock): M codes switching that interlock ON and OFF; it is
+//   interlock_off = 185      #   ON again at every program start (the control's reset state)
+//   note = "OSP-E100L ln 2015-2023"  # optional (up to 80 characters): the source, quoted in the refusal
+//
 // Each [[tools]] entry must also fit the station dialect's own ranges (interp::Dialect::CheckToolEntry;
 // KT-APL: the TLD statement's, socket 1-999, length and diameter +-999.999 mm, life up to 99 h 59 min).
-// Unknown keys inside [station] and [[tools]] are errors (typos must not pass silently); other tables
-// ([machine], [axes.x], [magazine], ...) belong to other readers and are ignored here.
+// Unknown keys inside [station], [[tools]] and [[io.aux]] are errors (typos must not pass silently); other
+// tables ([machine], [axes.x], [magazine], ...) belong to other readers and are ignored here.
+
+// One [[io.aux]] entry; an absent M code is -1.
+struct AuxOutput {
+  std::string name;
+  std::string output;
+  int m_on = -1;
+  int m_off = -1;
+  bool interlock = false;
+  int interlock_on = -1;
+  int interlock_off = -1;
+  std::string note;
+  bool operator==(const AuxOutput&) const = default;
+};
+
 struct StationConfig {
   std::string id;
   std::string dialect;
@@ -68,6 +92,7 @@ struct StationConfig {
   std::string dds;  // "", "fastdds" or "cyclonedds" (cell/config/dds.h: DdsVendor)
   std::vector<tooltable::ToolEntry> tools;
   std::map<std::string, std::string> params;  // [params]
+  std::vector<AuxOutput> aux;                 // [[io.aux]]
   std::filesystem::path file;                 // the file it was read from
 };
 
@@ -85,6 +110,10 @@ StationConfig LoadStationFile(const std::filesystem::path& file);
 
 // True for a well-formed station id: 1-16 characters of A-Z, a-z, 0-9, '_' or '-'.
 bool IsValidStationId(std::string_view id);
+
+// True for a well-formed discrete input or output name: 1-16 characters of A-Z, 0-9, '_', '.', '[' or
+// ']', starting with a letter ("O83D.0", "I04D.1", "VDOUT[5]", "CHUCK").
+bool IsValidIoName(std::string_view name);
 
 // True for a well-formed tool number: 1-7 digits, optionally ".1" to ".7".
 bool IsValidToolNumber(std::string_view tool);

@@ -2,7 +2,7 @@
 //
 // StatusBoard: the station's state (StationStatus, MTConnect vocabulary) with the one rule for the displayed
 // execution: while the servo reports the operator's feed hold in effect it shows FEED_HOLD, otherwise what
-// the run state says (READY, ACTIVE, PROGRAM_COMPLETED, STOPPED).
+// the run state says (READY, ACTIVE, WAIT, PROGRAM_COMPLETED, STOPPED).
 //
 // Panel: feed hold, cycle start and overrides (persisted: a held machine stays held when its interpreter
 // restarts) and the abort of a cancelled run (not persisted), published to the servo as ServoControl.
@@ -32,6 +32,9 @@ class StatusBoard {
   void RunEnded(bool completed, int queued);
   // Where the run is (published with the next Publish: the caller throttles).
   void Position(const std::string& program, int line, const std::string* tool);
+  // The run waits for inputs (KT-APL WAI): execution WAIT with `text` ("waiting for I04D.1=1") as the status
+  // text; "" when the wait is over (ACTIVE again).
+  void Waiting(const std::string& text);
   void Warning(const std::string& code, const std::string& text);  // a program error: condition WARNING
   void Reset();                                                    // condition NORMAL, alarm cleared
   void ServoHeld(bool held);                                       // publishes when it changes the display

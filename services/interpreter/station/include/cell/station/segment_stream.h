@@ -56,6 +56,9 @@ class SegmentStream {
   cell::ProbeResult Probe(cell::MotionSegment segment);
   // Waits until the servo has completed every segment sent.
   void WaitDrained();
+  // Waits, with every check of the run (cancel, stop, servo alarm, lost servo), until `ready()` holds:
+  // KT-APL WAI. `ready` runs without the stream's lock; whoever changes its answer calls Wake().
+  void WaitUntil(const std::function<bool()>& ready);
 
   // From the servo. OnProgress returns true when the servo's report of the operator's feed hold changed.
   bool OnProgress(const cell::SegmentProgress& p);

@@ -22,6 +22,7 @@
 #include "cell/idl/run.h"
 #include "cell/idl/station.h"
 #include "cell/station/clock.h"
+#include "cell/station/io.h"
 #include "cell/station/memory.h"
 #include "cell/station/panel.h"
 #include "cell/station/segment_stream.h"
@@ -36,6 +37,7 @@ class StationIo {
   virtual void PublishStatus(const cell::StationStatus& s) = 0;
   virtual void PublishTools(const cell::ToolTable& t) = 0;
   virtual void PublishVariables(const cell::StationVariables& v) = 0;
+  virtual void PublishIo(const cell::StationIoState& s) = 0;
   virtual void PublishRun(const cell::RunStatus& r) = 0;
   virtual void PublishControl(const cell::ServoControl& c) = 0;
   // A program's text from the program store: namespace `node`, then HOST; nullopt when in neither.
@@ -62,13 +64,14 @@ class Station {
   Station(const Station&) = delete;
   Station& operator=(const Station&) = delete;
 
-  // Publishes tools, variables, the panel and the status once (state topics: late joiners get them).
+  // Publishes tools, variables, the I/O, the panel and the status once (state topics: late joiners get them).
   void Start();
 
   // ---- from the bus (any thread) ----
   // A dispatch (queued once per dispatch id: a re-sent request gets the state it has) or a cancel.
   cell::RunReply OnRun(const cell::RunRequest& r);
-  // Tool loads, variables, inputs, reset and the panel's buttons. Throws cell::Error for a bad request.
+  // Tool loads, variables, inputs (a run waiting for them goes on), reset and the panel's buttons. Throws
+  // cell::Error for a bad request.
   cell::StationReply OnCommand(const cell::StationRequest& r);
   void OnProgress(const cell::SegmentProgress& p);
   void OnProbe(const cell::ProbeResult& r);
@@ -86,6 +89,7 @@ class Station {
 
   // ---- views (tests, the service's health) ----
   MemorySnapshot MemoryState() const { return memory_.Get(); }
+  IoState Io() const { return dio_.Get(); }
   cell::StationStatus Status() const { return board_.Get(); }
   cell::ServoControl Control() const { return panel_.Get(); }
 
@@ -95,6 +99,10 @@ class Station {
 
   void Execute(const Dispatch& d);
   void RunProgram(ActiveRun& run, const std::string& entry);
+  // KT-APL WAI (interp::Environment::WaitInputs): after the motion before it, until the inputs match.
+  void WaitInputs(const std::string& spec);
+  // OutputOp and the station file's M codes; throws cell::Error to stop the run.
+  void ExecuteIo(const std::string& program, const interp::Canon& c, AuxIo& aux);
   void Checkpoint(std::int32_t run_id) const;  // throws when the run was cancelled or the station stops
   void PublishRun(const ActiveRun& run, cell::RunState state, const std::string& reason = "");
   void PublishMemory(const MemorySnapshot& now, bool tools, bool variables);
@@ -107,6 +115,7 @@ class Station {
   StatusBoard board_;
   Panel panel_;
   Memory memory_;
+  DiscreteIo dio_;
   SegmentStream stream_;
   std::atomic<std::int32_t> cancel_id_{0};
   std::atomic<bool> stop_{false};

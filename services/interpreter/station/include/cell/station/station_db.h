@@ -1,6 +1,6 @@
 // The station's SQLite database (DESIGN §7): the run queue, the CNC's memory (tool table and the variables
-// it keeps between programs), the operator panel, discrete inputs and the outbox of run records for the
-// inspection writer. Schema and stepwise migrations from every released version live here.
+// it keeps between programs), the operator panel, discrete inputs and outputs and the outbox of run records
+// for the inspection writer. Schema and stepwise migrations from every released version live here.
 //
 // Thread-safe: one connection, every call (and every transaction) under one mutex.
 #pragma once
@@ -66,7 +66,7 @@ class StationDb {
   explicit StationDb(const std::filesystem::path& file);
 
   // Every schema step since the first release (1: state, 2: panel, 3: the tool table as one document,
-  // inputs, run progress).
+  // inputs, run progress, 4: discrete outputs).
   static std::vector<store::Migration> Migrations();
   int SchemaVersion();
 
@@ -99,6 +99,11 @@ class StationDb {
   void SavePanel(const PanelState& p);
   void SetInputs(const std::map<std::string, double>& inputs);
   std::map<std::string, double> LoadInputs();
+  // Discrete outputs: name -> (value, power-up value). SetOutputs keeps each output's power-up value;
+  // SavePowerUp makes every output's value its power-up value (KT-APL `(SET)`).
+  void SetOutputs(const std::map<std::string, int>& outputs);
+  std::map<std::string, std::pair<int, int>> LoadOutputs();
+  void SavePowerUp();
 
  private:
   void WriteProgress(const RunProgress& run);  // caller holds mu_ inside a transaction
