@@ -81,13 +81,9 @@ void AddStationVerbs(CLI::App& app, Context& ctx) {
     // discovery, under an overall bound.
     bool sched_seen = false;
     std::set<std::string> sched_offline;  // stations a settled scheduler reports without a heartbeat
-    std::set<std::string> status_seen;
     const auto t0 = std::chrono::steady_clock::now();
     for (;;) {
-      while (auto st = status.Take(bus::Millis(0))) {
-        status_seen.insert(st->station().to_string());
-        by_id[st->station().to_string()] = *st;
-      }
+      while (auto st = status.Take(bus::Millis(0))) by_id[st->station().to_string()] = *st;
       while (auto a = alarms.Take(bus::Millis(0))) {
         auto& last = alarm[a->station().to_string()];
         if (a->time_ns() >= last.time_ns()) last = *a;
@@ -98,7 +94,8 @@ void AddStationVerbs(CLI::App& app, Context& ctx) {
         for (auto& b : sc->backlog()) backlog[b.station().to_string()] = b.backlog_s();
         sched_offline = cell::dashboard::OfflineBySettledScheduler(*sc);
       }
-      const auto heard = cell::dashboard::HeardStations(ids, live, status_seen, sched_offline);
+      const auto heard = cell::dashboard::HeardStations(
+          ids, live, [&](const std::string& id) { return by_id.count(id) > 0; }, sched_offline);
       bool waiting = heard == cell::dashboard::Heard::kWaiting;
       if (live.Online("cell-scheduler") && !sched_seen) waiting = true;
       auto waited = std::chrono::steady_clock::now() - t0;

@@ -207,7 +207,8 @@ bool Feed::Settled(std::chrono::milliseconds waited) const {
   std::lock_guard lk(mu_);
   std::vector<std::string> ids;
   for (auto& st : view_.model().stations()) ids.push_back(st.id);
-  const Heard heard = HeardStations(ids, live_, status_seen_, sched_offline_);
+  const Heard heard = HeardStations(
+      ids, live_, [this](const std::string& id) { return status_seen_.count(id) > 0; }, sched_offline_);
   if (heard == Heard::kWaiting) return false;
   if (live_.Online("cell-scheduler")) {
     // The scheduler's job states come from another writer of the same process: matched, and the moment
@@ -219,11 +220,12 @@ bool Feed::Settled(std::chrono::milliseconds waited) const {
 }
 
 Heard HeardStations(const std::vector<std::string>& ids, const health::Liveness& live,
-                    const std::set<std::string>& status_seen, const std::set<std::string>& sched_offline) {
+                    const std::function<bool(const std::string&)>& has_status,
+                    const std::set<std::string>& sched_offline) {
   Heard heard = Heard::kComplete;
   for (auto& id : ids) {
     if (live.StationOnline(id)) {
-      if (!status_seen.count(id)) return Heard::kWaiting;
+      if (!has_status(id)) return Heard::kWaiting;
     } else if (!sched_offline.count(id)) {
       heard = Heard::kPartial;
     }

@@ -79,9 +79,17 @@ class StationHarness : public ::testing::Test {
     return station_->OnCommand(r);
   }
   cell::StationReply SetVariable(const std::string& name, double value) {
+    return Assign(cell::STATION_SET_VARIABLES, name, value);
+  }
+  // The operator's discrete input (`cellctl station input`).
+  cell::StationReply SetInput(const std::string& name, double value) {
+    return Assign(cell::STATION_SET_INPUT, name, value);
+  }
+  // A command carrying one name=value.
+  cell::StationReply Assign(cell::StationOp op, const std::string& name, double value) {
     cell::StationRequest r;
     r.station("KT01");
-    r.op(cell::STATION_SET_VARIABLES);
+    r.op(op);
     cell::Variable v;
     v.name(name);
     v.value(value);

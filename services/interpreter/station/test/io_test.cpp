@@ -56,17 +56,6 @@ TEST(IoSpec, BitNames) {
 
 using StationIoTest = StationHarness;
 
-cell::StationRequest Input(const std::string& name, double value) {
-  cell::StationRequest r;
-  r.station("KT01");
-  r.op(cell::STATION_SET_INPUT);
-  cell::Variable v;
-  v.name(name);
-  v.value(value);
-  r.variables().push_back(v);
-  return r;
-}
-
 TEST_F(StationIoTest, SetChangesOutputsAfterTheMotionBeforeItAndSurvivesARestart) {
   Put("SET", "G71 G90\nG01 X0 Y0 Z100. F0\nX10. F1000.\n(SET,O83D,0=1,O83E,3=0)\nX20.\nM30\n");
   Dispatch(1, {"SET"});
@@ -84,7 +73,7 @@ TEST_F(StationIoTest, SetChangesOutputsAfterTheMotionBeforeItAndSurvivesARestart
   EXPECT_EQ(io_.io.back().outputs()[0].name().to_string(), "O83D.0");
   EXPECT_EQ(io_.io.back().outputs()[0].value(), 1);
 
-  station_->OnCommand(Input("I04D.1", 1));
+  SetInput("I04D.1", 1);
   Make();  // a restarted interpreter: outputs and inputs are where they were
   EXPECT_EQ(station_->Io().outputs, io.outputs);
   EXPECT_EQ(station_->Io().inputs, (std::map<std::string, int>{{"I04D.1", 1}}));
@@ -107,7 +96,7 @@ TEST_F(StationIoTest, SetWithoutArgumentsSavesThePowerUpState) {
 TEST_F(StationIoTest, WaiBlocksTheRunInWaitUntilTheInputsMatch) {
   // ln 4357: N40(WAI,I04D,1=1, I03D,3=0). Two moves before it, one after.
   Put("WAI", "G71 G90\nG01 X0 Y0 Z100. F0\nX10. F1000.\n(WAI,I04D,1=1, I03D,3=0)\nX20.\nM30\n");
-  station_->OnCommand(Input("I03D.3", 1));  // not yet: bit 3 must be 0
+  SetInput("I03D.3", 1);  // not yet: bit 3 must be 0
   Dispatch(1, {"WAI"});
   int waits_in_wait = 0;
   std::uint64_t sent_while_waiting = 0;
@@ -119,8 +108,8 @@ TEST_F(StationIoTest, WaiBlocksTheRunInWaitUntilTheInputsMatch) {
     // Nothing after the WAI is streamed while it waits; the two moves before it have completed.
     EXPECT_EQ(servo_.written.size(), sent_while_waiting);
     EXPECT_EQ(servo_.ran.size(), sent_while_waiting);
-    if (waits_in_wait == 20) station_->OnCommand(Input("I04D.1", 1));  // one of two: still waiting
-    if (waits_in_wait == 40) station_->OnCommand(Input("I03D.3", 0));  // both: it goes on
+    if (waits_in_wait == 20) SetInput("I04D.1", 1);  // one of two: still waiting
+    if (waits_in_wait == 40) SetInput("I03D.3", 0);  // both: it goes on
   };
   auto end = RunOne(1);
   EXPECT_EQ(end.state(), cell::RUN_COMPLETED) << end.reason();
@@ -138,7 +127,7 @@ TEST_F(StationIoTest, WaiBlocksTheRunInWaitUntilTheInputsMatch) {
 
 TEST_F(StationIoTest, WaiAlreadySatisfiedDoesNotWait) {
   Put("WAI", "G71\n(WAI,I04D,1=1)\nM30\n");
-  station_->OnCommand(Input("I04D.1", 1));
+  SetInput("I04D.1", 1);
   Dispatch(1, {"WAI"});
   script_ = [&] { EXPECT_NE(station_->Status().execution(), cell::EXECUTION_WAIT); };
   EXPECT_EQ(RunOne(1).state(), cell::RUN_COMPLETED);
@@ -168,10 +157,10 @@ TEST_F(StationIoTest, FeedHoldShowsOverTheWaitAndCancelEndsIt) {
 }
 
 TEST_F(StationIoTest, InputsAreKtAplBitsOfZeroOrOne) {
-  EXPECT_EQ(station_->OnCommand(Input("I04D.1", 1)).revision(), 1u);
-  EXPECT_THROW(station_->OnCommand(Input("I3", 1)), Error);  // the old release's bare bit number
-  EXPECT_THROW(station_->OnCommand(Input("O83D.0", 1)), Error);
-  EXPECT_THROW(station_->OnCommand(Input("I04D.1", 2)), Error);
+  EXPECT_EQ(SetInput("I04D.1", 1).revision(), 1u);
+  EXPECT_THROW(SetInput("I3", 1), Error);  // the old release's bare bit number
+  EXPECT_THROW(SetInput("O83D.0", 1), Error);
+  EXPECT_THROW(SetInput("I04D.1", 2), Error);
   EXPECT_EQ(station_->Io().inputs, (std::map<std::string, int>{{"I04D.1", 1}}));
 }
 

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <chrono>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -62,7 +63,8 @@ class Feed {
 // kComplete: every station is known, so an absent one is offline without waiting for discovery.
 enum class Heard { kWaiting, kPartial, kComplete };
 Heard HeardStations(const std::vector<std::string>& ids, const health::Liveness& live,
-                    const std::set<std::string>& status_seen, const std::set<std::string>& sched_offline);
+                    const std::function<bool(const std::string&)>& has_status,
+                    const std::set<std::string>& sched_offline);
 // The stations a settled scheduler reports without a heartbeat (SchedulerState.settled: it has watched
 // longer than its discovery window).
 std::set<std::string> OfflineBySettledScheduler(const cell::SchedulerState& s);

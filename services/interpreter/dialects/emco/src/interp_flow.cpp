@@ -330,13 +330,10 @@ std::map<int, TextSpan> IndexPrograms(const std::shared_ptr<const ProgramText>& 
   TextPos p;
   TextSpan* open = nullptr;
   bool any_header = false;
-  std::size_t released = 0;
+  ReleaseBehind release;  // memory stays flat however long the text (a mapped file)
   while (p.pos < all.end) {
     Line l = ReadLine(all, p);
-    if (p.pos - released >= (1u << 20)) {  // memory stays flat however long the text (a mapped file)
-      text->Release(released, p.pos);
-      released = p.pos;
-    }
+    release.At(*text, p.pos);
     if (!IsHeaderLine(l.text)) continue;
     any_header = true;
     if (open) open->end = l.start;

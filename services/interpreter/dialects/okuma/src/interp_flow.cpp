@@ -446,28 +446,20 @@ void OkRun::ExecStatement(const Block& b) {
 // ---------------------------------------------------------------------------------------------------------
 // Programs and sequence names
 
-// A scan of a program text longer than this gives the pages it read back to the kernel.
-constexpr std::size_t kReleaseAfterScan = std::size_t{1} << 20;
-
 std::optional<ProgramRef> OkRun::ProgramIn(const std::shared_ptr<const ProgramText>& text,
                                            const std::string& name, bool own) {
   TextSpan all{text, 0, text->view().size(), 1, true};
   TextPos p{0, 1};
   std::optional<ProgramRef> found;
-  std::size_t released = 0;
+  ReleaseBehind release;  // a long main program's pages go back as the scan passes them
   while (p.pos < all.end && !found) {
     Line l = ReadLine(all, p);
-    // The pages read so far go back to the kernel as the scan goes, so resident memory does not grow with
-    // the length of a mapped main program (the run faults back in what it reads next).
-    if (p.pos - released >= kReleaseAfterScan) {
-      text->Release(released, p.pos);
-      released = p.pos;
-    }
+    release.At(*text, p.pos);
     std::string_view s = TrimBlanks(l.text);
     if (s.empty() || (s[0] != 'O' && s[0] != 'o')) continue;
     if (ProgramNameOf(s) == name) found = ProgramRef{text, p.pos, p.line, own};
   }
-  if (p.pos > released && p.pos >= kReleaseAfterScan) text->Release(released, p.pos);
+  release.Done(*text, p.pos);
   return found;
 }
 
@@ -560,9 +552,11 @@ std::optional<TextPos> OkRun::FindSequence(const std::string& name, bool from_st
   auto scan_range = [&](TextPos from, bool stop_at_program) -> std::optional<TextPos> {
     TextPos p = from;
     std::optional<TextPos> hit;
+    ReleaseBehind release(from.pos);  // as in ProgramIn
     while (p.pos < f.span.end && !hit) {
       TextPos here = p;
       Line l = ReadLine(f.span, p);
+      release.At(*f.span.text, p.pos);
       if (StartsWithLabel(l.text, name)) {
         hit = here;
       } else if (stop_at_program) {
@@ -572,7 +566,7 @@ std::optional<TextPos> OkRun::FindSequence(const std::string& name, bool from_st
           break;
       }
     }
-    if (p.pos - from.pos >= kReleaseAfterScan) f.span.text->Release(from.pos, p.pos);  // as in ProgramIn
+    release.Done(*f.span.text, p.pos);
     return hit;
   };
   std::optional<TextPos> hit;

@@ -122,17 +122,13 @@ class CallStack {
     FrameT& f = frames_.back();
     if (f.at.pos >= f.span.end) return std::nullopt;
     Line l = ReadLine(f.span, f.at);
-    if (frames_.size() == 1 && f.at.pos - released_ >= kReleaseStep) {
-      f.span.text->Release(released_, f.at.pos);
-      released_ = f.at.pos;
-    }
+    if (frames_.size() == 1) released_.At(*f.span.text, f.at.pos);
     return l;
   }
 
  private:
-  static constexpr std::size_t kReleaseStep = 1 << 20;
   std::vector<FrameT> frames_;
-  std::size_t released_ = 0;
+  ReleaseBehind released_;
 };
 
 inline Line ReadLine(const TextSpan& span, TextPos& at) {

@@ -34,4 +34,27 @@ class ProgramText {
   std::string_view view_;
 };
 
+// Gives back the pages a forward pass over a text has read, a step (1 MiB) at a time, so resident memory
+// stays flat however long a mapped program is (a later jump back faults them in again). One rule for the
+// run itself (CallStack) and for the dialects' scans for a program or a sequence name.
+class ReleaseBehind {
+ public:
+  static constexpr std::size_t kStep = std::size_t{1} << 20;
+  explicit ReleaseBehind(std::size_t from = 0) : start_(from), released_(from) {}
+  // The pass has reached `pos`.
+  void At(const ProgramText& text, std::size_t pos) {
+    if (pos - released_ < kStep) return;
+    text.Release(released_, pos);
+    released_ = pos;
+  }
+  // The pass ended at `pos`: what is left behind goes back too when the pass was a long one.
+  void Done(const ProgramText& text, std::size_t pos) {
+    if (pos - start_ >= kStep && pos > released_) text.Release(released_, pos);
+  }
+
+ private:
+  std::size_t start_;
+  std::size_t released_;
+};
+
 }  // namespace cell::interp
