@@ -11,11 +11,16 @@
 //   - every program put (before or during the chaos) reads back byte for byte;
 //   - the cell still works: one more pallet per route completes.
 // CELL_CHAOS_SEED fixes the random choices (the seed is printed either way).
+// The test is the cell's child subreaper, so it learns how every service process ended: one that ends without
+// the test killing it fails the test with its wait status and the tail of its log.
 #include <signal.h>
+#include <sys/prctl.h>
+#include <sys/wait.h>
 
 #include <atomic>
 #include <chrono>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -52,9 +57,77 @@ std::string Program(const std::string& name, int moves, int variant) {
   return s + fmt::format("N{} G00 X0 Y0 Z100. F0\nN{} M30\n%\n", n, n + 10);
 }
 
+std::string Lines(const std::vector<std::string>& v) {
+  std::string out;
+  for (auto& s : v) out += s + "\n";
+  return out;
+}
+
 std::string FirstLine(const std::string& s) {
   return s.substr(0, s.find('\n'));
 }
+
+// Reaps the cell's service processes: `cellctl` starts them in their own session and exits, so (with
+// PR_SET_CHILD_SUBREAPER on this process) they become this process's children. Only the pids in the cell's
+// record are waited for, one by one (waitpid(-1) would take RunCommand's children from it).
+class Reaper {
+ public:
+  explicit Reaper(const LocalCell& cell) : cell_(cell) {
+    prctl(PR_SET_CHILD_SUBREAPER, 1);
+    thread_ = std::thread([this] {
+      while (!stop_) {
+        Poll();
+        std::this_thread::sleep_for(50ms);
+      }
+    });
+  }
+  ~Reaper() {
+    stop_ = true;
+    thread_.join();
+  }
+  // This test kills pid (so its end is expected).
+  void Killing(int pid) {
+    std::lock_guard lk(mu_);
+    killed_.insert(pid);
+  }
+  // Every service process that ended without Killing(): service, pid, how it ended, its log's last lines.
+  std::vector<std::string> Unexpected() {
+    Poll();
+    std::lock_guard lk(mu_);
+    return unexpected_;
+  }
+
+ private:
+  void Poll() {
+    std::lock_guard lk(mu_);
+    for (auto& p : cell_.Record()) known_.emplace(p.pid, p);
+    for (auto it = known_.begin(); it != known_.end();) {
+      siginfo_t info{};
+      if (waitid(P_PID, static_cast<id_t>(it->first), &info, WEXITED | WNOHANG) != 0 || info.si_pid == 0) {
+        ++it;  // running, or not (yet) our child: cellctl has not exited
+        continue;
+      }
+      if (!killed_.count(it->first)) {
+        const std::string how =
+            info.si_code == CLD_EXITED
+                ? fmt::format("exited with status {}", info.si_status)
+                : fmt::format("ended by signal {} ({})", info.si_status, strsignal(info.si_status));
+        std::string tail = ReadFile(it->second.log);
+        if (tail.size() > 1500) tail = "..." + tail.substr(tail.size() - 1500);
+        unexpected_.push_back(fmt::format("{} (pid {}) {} without this test killing it; its log ends:\n{}",
+                                          it->second.service, it->first, how, tail));
+      }
+      it = known_.erase(it);
+    }
+  }
+  const LocalCell& cell_;
+  std::mutex mu_;
+  std::map<int, RecordedProcess> known_;  // not reaped yet
+  std::set<int> killed_;
+  std::vector<std::string> unexpected_;
+  std::atomic<bool> stop_{false};
+  std::thread thread_;
+};
 
 struct Route {
   std::string name;
@@ -94,6 +167,7 @@ class Chaos : public ::testing::Test {
   }
 
   LocalCell cell_{"cell-chaos-"};
+  Reaper reaper_{cell_};  // after cell_: gone before `cellctl down` ends the services
   std::mutex mu_;
   std::map<std::string, std::string> programs_;  // name -> content, every program put
   std::map<int, std::string> pallet_job_;        // pallet -> job id, as `route operate` printed it
@@ -197,7 +271,8 @@ TEST_F(Chaos, KillNineAtRandomMomentsWhileRoutesOperate) {
     }
     const auto pids = cell_.Pids();
     for (auto& v : victims) {
-      ASSERT_EQ(kill(pids.at(v), SIGKILL), 0) << v;
+      reaper_.Killing(pids.at(v));
+      ASSERT_EQ(kill(pids.at(v), SIGKILL), 0) << v << ": " << Lines(reaper_.Unexpected());
       ++kills;
       ++kills_by_kind[kind_of(v)];
       if (running_seen_) ++kills_running;
@@ -219,6 +294,7 @@ TEST_F(Chaos, KillNineAtRandomMomentsWhileRoutesOperate) {
   }
   stop_operating = true;
   operator_thread.join();
+  for (auto& e : reaper_.Unexpected()) ADD_FAILURE() << e;
   const auto t_chaos = std::chrono::steady_clock::now();
 
   // Every job ends: none is stuck after the chaos (bounded).
@@ -310,6 +386,7 @@ TEST_F(Chaos, KillNineAtRandomMomentsWhileRoutesOperate) {
       kills, kills_running, by_kind.c_str(), pallet_job_.size(), completed, failed, puts,
       static_cast<long long>(secs(t_chaos - t_start)),
       static_cast<long long>(secs(std::chrono::steady_clock::now() - t_start)));
+  for (auto& e : reaper_.Unexpected()) ADD_FAILURE() << e;
   EXPECT_GE(kills, kMinKills);
   EXPECT_GE(kills_running, kMinKills / 2);
   EXPECT_GT(completed, 0);

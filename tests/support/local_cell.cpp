@@ -1,6 +1,4 @@
 #include "cell/testing/local_cell.h"
-#include <cstdio>
-#include <cstdlib>
 
 #include <signal.h>
 
@@ -19,7 +17,10 @@ LocalCell::LocalCell(const std::string& prefix)
 
 LocalCell::~LocalCell() {
   if (up_) Down();
-  for (auto& [id, pid] : Pids()) kill(pid, SIGKILL);  // whatever `down` could not stop
+  // Whatever `down` could not stop, if the pid is still the process `cellctl` started: a pid whose process
+  // ended may already belong to another test's cell.
+  for (auto& p : Record())
+    if (p.start_time != 0 && StartTime(p.pid) == p.start_time) kill(p.pid, SIGKILL);
   if (const char* keep = std::getenv("CELL_TEST_KEEP");
       keep && *keep) {  // logs and databases, for a post-mortem
     std::fprintf(stderr, "CELL_TEST_KEEP: kept %s\n", data_.c_str());
@@ -56,13 +57,21 @@ nlohmann::json LocalCell::Json(std::vector<std::string> args) const {
   return j;
 }
 
-std::map<std::string, int> LocalCell::Pids() const {
-  std::map<std::string, int> out;
+std::vector<RecordedProcess> LocalCell::Record() const {
+  std::vector<RecordedProcess> out;
   std::ifstream in(data_ + "/cell-up.json");
   if (!in) return out;
   auto j = nlohmann::json::parse(in, nullptr, false);
   if (!j.is_array()) return out;
-  for (auto& p : j) out[p["service"].get<std::string>()] = p["pid"].get<int>();
+  for (auto& p : j)
+    out.push_back({p["service"].get<std::string>(), p["pid"].get<int>(),
+                   p.value("start_time", std::uint64_t{0}), p.value("log", std::string())});
+  return out;
+}
+
+std::map<std::string, int> LocalCell::Pids() const {
+  std::map<std::string, int> out;
+  for (auto& p : Record()) out[p.service] = p.pid;
   return out;
 }
 

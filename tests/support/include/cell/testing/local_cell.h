@@ -2,6 +2,7 @@
 // with a private data dir, `cellctl` calls, and `cellctl down` (plus a kill of leftovers) at the end.
 #pragma once
 
+#include <cstdint>
 #include <map>
 #include <string>
 #include <vector>
@@ -11,6 +12,14 @@
 #include "cell/testing/process.h"
 
 namespace cell::testing {
+
+// One process as `cellctl up` recorded it (cell-up.json).
+struct RecordedProcess {
+  std::string service;  // "cell-scheduler", "cell-interpreter/KT01"
+  int pid = 0;
+  std::uint64_t start_time = 0;  // as StartTime(pid) read it at the start; 0 if not recorded
+  std::string log;               // its stdout and stderr
+};
 
 class LocalCell {
  public:
@@ -35,6 +44,7 @@ class LocalCell {
   const std::map<std::string, std::string>& env() const { return env_; }
   // The pids `cellctl up` recorded, by service id ("cell-scheduler", "cell-interpreter/KT01").
   std::map<std::string, int> Pids() const;
+  std::vector<RecordedProcess> Record() const;
 
  private:
   std::string data_;
