@@ -1,0 +1,58 @@
+#!/usr/bin/env bash
+# What the bus adds to raw DDS (issue 21, item 1): round trips between two processes on loopback, the same
+# exchange three ways on each vendor, in one run: raw (the vendor's own API: Fast DDS's DataWriter and
+# DataReader, Cyclone's C API), the bus's pub/sub (a Writer and a Reader per direction) and the bus's
+# request/reply (Client and Server). Same transport (UDPv4 on 127.0.0.1, no shared memory), same QoS
+# (reliable, volatile, keep-all), same type (cell::ProgramRequest, its octet sequence the payload; 61,440 B is
+# the largest it holds). Each cell: the median over CELL_BENCH_RUNS runs of each run's median (and the
+# largest p99), and its ratio to raw on the same vendor. Interleaved, so load on a shared machine falls on
+# all three alike. Env: CELL_BUILD_DIR (default build/), CELL_BENCH_DOMAIN (default 93), CELL_BENCH_RUNS
+# (default 3).
+set -euo pipefail
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
+BIN="${CELL_BUILD_DIR:-$ROOT/build}/bin"
+[ -x "$BIN/bus_pingpong_bench" ] || { echo "45-bus-overhead: $BIN/bus_pingpong_bench not built" >&2; exit 1; }
+export CELL_DOMAIN="${CELL_BENCH_DOMAIN:-93}"
+RUNS="${CELL_BENCH_RUNS:-3}"
+out="$(mktemp "${TMPDIR:-/tmp}/cell-bus-overhead.XXXXXX")"
+trap 'rm -f "$out"' EXIT
+
+one() {  # IMPL SIZE COUNT
+  "$BIN/bus_pingpong_bench" pong "$1" &
+  local pong=$!
+  if ! timeout 120 "$BIN/bus_pingpong_bench" ping "$1" "$2" "$3" >>"$out"; then
+    kill "$pong" 2>/dev/null || true
+    echo "45-bus-overhead: $1 $2 B failed" >&2
+    wait "$pong" 2>/dev/null || true
+    return 1
+  fi
+  wait "$pong" || true
+}
+
+for _ in $(seq "$RUNS"); do
+  for vendor in fastdds cyclonedds; do
+    for size in 64 4096 61440; do
+      count=1000
+      [ "$size" -gt 4096 ] && count=300
+      for kind in raw bus rpc; do one "$kind-$vendor" "$size" "$count"; done
+    done
+  done
+done
+
+echo "bus over raw DDS: round trip on loopback, median (largest p99) in us; x = median / raw median, same vendor"
+awk '
+  $1 == "RESULT" { key = $2 " " $3; n[key]++; med[key, n[key]] = $4; if ($5 > p99[key]) p99[key] = $5 }
+  function median(key,   i, j, t, m, a) {
+    m = n[key]; for (i = 1; i <= m; i++) a[i] = med[key, i]
+    for (i = 1; i <= m; i++) for (j = i + 1; j <= m; j++) if (a[j] < a[i]) { t = a[i]; a[i] = a[j]; a[j] = t }
+    return a[int((m + 1) / 2)]
+  }
+  END {
+    printf "%-11s %7s %20s %26s %26s\n", "vendor", "bytes", "raw", "bus pub/sub", "bus request/reply"
+    split("fastdds cyclonedds", vs, " "); split("64 4096 61440", ss, " ")
+    for (v = 1; v <= 2; v++) for (s = 1; s <= 3; s++) {
+      r = median("raw-" vs[v] " " ss[s]); b = median("bus-" vs[v] " " ss[s]); q = median("rpc-" vs[v] " " ss[s])
+      printf "%-11s %7d %9.1f (%8.1f) %9.1f (%8.1f) %5.2fx %9.1f (%8.1f) %5.2fx\n", vs[v], ss[s],
+        r, p99["raw-" vs[v] " " ss[s]], b, p99["bus-" vs[v] " " ss[s]], b / r, q, p99["rpc-" vs[v] " " ss[s]], q / r
+    }
+  }' "$out"
