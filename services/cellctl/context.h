@@ -70,5 +70,6 @@ void AddFmsVerbs(CLI::App& app, Context& ctx);  // pallet, route, schedule, tool
 void AddJobVerbs(CLI::App& app, Context& ctx);
 void AddInspectVerbs(CLI::App& app, Context& ctx);
 void AddCellVerbs(CLI::App& app, Context& ctx);  // up, down, watch
+void AddPkiVerbs(CLI::App& app, Context& ctx);   // pki init
 
 }  // namespace cellctl

@@ -13,6 +13,7 @@ int main(int argc, char** argv) {
   cellctl::AddJobVerbs(app, ctx);
   cellctl::AddInspectVerbs(app, ctx);
   cellctl::AddCellVerbs(app, ctx);
+  cellctl::AddPkiVerbs(app, ctx);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
