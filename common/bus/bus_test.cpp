@@ -300,7 +300,7 @@ TEST(Bus, EnvironmentIsValidated) {
   }
   unsetenv("CELL_DDS");
   for (const char* v : {"fastdds", "cyclonedds"}) {
-    Participant p(ParticipantOptions{"x", {}, v, {}});
+    Participant p(Named("x", v));
     EXPECT_EQ(p.vendor(), v);
     EXPECT_EQ(p.backend().Name(), v);
   }
@@ -341,15 +341,15 @@ TEST(Bus, ShippedLanProfilesInteroperate) {
   unsetenv("CELL_LAN_PEER");
   unsetenv("CELL_LAN_ADDRESS");
   try {
-    Participant p(ParticipantOptions{"x", {}, "cyclonedds", {}});
+    Participant p(Named("x", "cyclonedds"));
     FAIL() << "the LAN profile without CELL_LAN_ADDRESS was accepted";
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("CELL_LAN_ADDRESS is not set"), std::string::npos) << e.what();
   }
   setenv("CELL_LAN_ADDRESS", "127.0.0.1", 1);
   {
-    Participant f(ParticipantOptions{"bus-test-lan-fast", {}, "fastdds", {}});
-    Participant c(ParticipantOptions{"bus-test-lan-cyclone", {}, "cyclonedds", {}});
+    Participant f(Named("bus-test-lan-fast", "fastdds"));
+    Participant c(Named("bus-test-lan-cyclone", "cyclonedds"));
     Writer<cell::StationStatus> wf(f, "test/lan/f2c", QosKind::kState);
     Reader<cell::StationStatus> rc(c, "test/lan/f2c", QosKind::kState);
     Writer<cell::StationStatus> wc(c, "test/lan/c2f", QosKind::kState);

@@ -340,6 +340,18 @@ int Domain() {
   return d;
 }
 
+bool SecurityOn() {
+  const std::string v = Env("CELL_SECURITY");
+  if (v.empty() || v == "off") return false;
+  if (v == "on") return true;
+  throw Error(Errc::kInvalidArgument, fmt::format("CELL_SECURITY='{}': expected on or off (default off)",
+                                                  cell::names::Shown(v, 20, false)));
+}
+
+std::string IdentityOverride() {
+  return Env("CELL_IDENTITY");
+}
+
 std::vector<std::string> ListStations() {
   fs::path dir = ConfigDir() / "stations";
   std::error_code ec;

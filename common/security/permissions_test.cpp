@@ -178,7 +178,7 @@ TEST(Documents, PermissionsGrantTheTableAndDenyTheRest) {
   EXPECT_NE(x.find("<subject_name>CN=interpreter-KT01,O=cell</subject_name>"), std::string::npos);
   EXPECT_NE(x.find("<not_before>2026-01-01T00:00:00</not_before>"), std::string::npos);
   EXPECT_NE(x.find("<default>DENY</default>"), std::string::npos);
-  EXPECT_NE(x.find("<max>232</max>"), std::string::npos);
+  EXPECT_NE(x.find("<max>230</max>"), std::string::npos);  // Cyclone 0.10 refuses more
   const auto pub = x.find("<publish>"), sub = x.find("<subscribe>");
   ASSERT_NE(pub, std::string::npos);
   ASSERT_NE(sub, std::string::npos);

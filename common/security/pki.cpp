@@ -310,4 +310,30 @@ IdentityFiles FindIdentityFiles(const fs::path& dir, std::string_view name) {
   return f;
 }
 
+std::string DiagnoseIdentity(const fs::path& ca, const fs::path& governance, const fs::path& certificate,
+                             const fs::path& permissions) {
+  fs::path openssl;
+  try {
+    openssl = detail::FindProgram("openssl");
+  } catch (const Error&) {
+    return "";
+  }
+  try {
+    detail::RunOpenssl(openssl, {"verify", "-CAfile", ca.string(), certificate.string()});
+  } catch (const Error&) {
+    return certificate.filename().string() + " (" + certificate.parent_path().filename().string() +
+           "): not a certificate issued by " + ca.string();
+  }
+  for (const fs::path& doc : {governance, permissions}) {
+    try {
+      detail::RunOpenssl(openssl, {"smime", "-verify", "-text", "-in", doc.string(), "-CAfile", ca.string(),
+                                   "-out", "/dev/null"});
+    } catch (const Error&) {
+      return doc.string() + ": its signature does not verify against " + ca.string() +
+             " (a changed or foreign document: sign it again with `cellctl pki init`)";
+    }
+  }
+  return "";
+}
+
 }  // namespace cell::security

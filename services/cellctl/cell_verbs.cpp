@@ -14,10 +14,12 @@
 
 #include "cell/bus/topics.h"
 #include "cell/config/config.h"
+#include "cell/config/dds.h"
 #include "cell/config/units.h"
 #include "cell/dashboard/feed.h"
 #include "cell/dashboard/text_view.h"
 #include "cell/names/names.h"
+#include "cell/security/pki.h"
 #include "context.h"
 #include "processes.h"
 
@@ -71,6 +73,27 @@ std::vector<CellProcess> Planned(const std::vector<std::string>& stations, const
   return out;
 }
 
+// `up --secure`: refuses a cell that mixes DDS stacks (a secured Fast DDS 2.9.1 and a secured Cyclone 0.10
+// never complete the handshake: bus_security_test), makes what is missing of the PKI in
+// $CELL_DATA_DIR/security, and turns security on for this cellctl and, through its environment, every
+// process it starts.
+void Secure(const std::vector<std::string>& stations) {
+  const std::string cell_vendor = cell::config::DdsVendor().vendor;
+  for (auto& s : stations) {
+    const std::string v = cell::config::DdsVendor(cell::config::LoadStation(s).dds).vendor;
+    if (v != cell_vendor)
+      throw Exit{1, "a secured cell uses one DDS stack: station " + s + " runs " + v + ", the cell " +
+                        cell_vendor +
+                        " (Fast DDS 2.9.1 and Cyclone DDS 0.10 do not complete a secure handshake; "
+                        "docs/security.md)"};
+  }
+  cell::security::PkiOptions po;
+  po.dir = cell::config::DataDir() / "security";
+  po.identities = cell::security::CellIdentities(stations);
+  cell::security::InitPki(po);
+  setenv("CELL_SECURITY", "on", 1);
+}
+
 // Waits until every process in `procs` has announced itself READY on the bus (its own pid, so an older
 // process's last heartbeat does not count), or one of `started` has exited. Returns what is missing.
 std::vector<std::string> WaitReady(Context& ctx, const std::vector<CellProcess>& procs,
@@ -94,6 +117,11 @@ std::vector<std::string> WaitReady(Context& ctx, const std::vector<CellProcess>&
             }
             missing.assign(1, p.unit + " " + how + ": " + LastLine(p.log));
             return true;  // no point waiting
+          }
+          if (p.service == "cell-dashboard" && Env(p, "CELL_SECURITY") == "on") {
+            // Secured, the dashboard is a viewer and announces nothing: ready once it serves its page.
+            if (!fs::exists(cell::config::DataDir() / "dashboard.url")) missing.push_back(p.unit);
+            continue;
           }
           auto it = seen.find(p.service);
           if (!live.Online(p.service) || it == seen.end() || it->second.pid() != p.pid)
@@ -119,6 +147,7 @@ void AddCellVerbs(CLI::App& app, Context& ctx) {
     std::string clock = "real";
     std::string service;
     int count = 0;
+    bool secure = false;
   };
   auto o = std::make_shared<Opts>();
 
@@ -129,11 +158,15 @@ void AddCellVerbs(CLI::App& app, Context& ctx) {
       up->add_option("--stations", o->stations, "comma-separated station ids (default KT01,KT02)");
   auto* clock_opt = up->add_option("--clock", o->clock, "real or virtual machine clock")
                         ->check(CLI::IsMember({"real", "virtual"}));
+  up->add_flag("--secure", o->secure,
+               "DDS Security: a PKI in $CELL_DATA_DIR/security (made if missing), every process with "
+               "CELL_SECURITY=on (docs/security.md)");
   up->callback([o, &ctx, stations_opt, clock_opt] {
     auto stations = Split(o->stations);
     if (stations.empty()) throw Exit{2, "--stations names no station"};
     for (auto& s : stations) cell::config::LoadStation(s);  // unknown station: a clear error now
     umask(077);  // the data directory, the record and the logs are the owner's only
+    if (o->secure) Secure(stations);
     std::vector<CellProcess> procs;
     std::set<std::string> started;
     {
@@ -152,6 +185,8 @@ void AddCellVerbs(CLI::App& app, Context& ctx) {
             (clock_opt->count() > 0 && Env(recorded.front(), "CELL_CLOCK") != o->clock))
           throw Exit{1, "a local cell with other stations or another clock is running (cellctl down first)"};
         procs = recorded;
+        // A secured cell is watched through a secured participant (its PKI is in the data directory).
+        if (Env(recorded.front(), "CELL_SECURITY") == "on") setenv("CELL_SECURITY", "on", 1);
       } else {
         procs = Planned(stations, o->clock);
       }
@@ -213,6 +248,7 @@ void AddCellVerbs(CLI::App& app, Context& ctx) {
       // A process that is still the one started is stopped first; a PID that now belongs to another process
       // is left alone.
       Stop({*it}, std::chrono::seconds(10));
+      if (Env(*it, "CELL_SECURITY") == "on") setenv("CELL_SECURITY", "on", 1);
       Launch(*it);
       target = *it;
       SaveRecord(procs);

@@ -79,7 +79,7 @@ int main(int argc, char** argv) {
   const std::string me = argv[1];
   const bool fast = me == "fastdds";
   // The stack as every service chooses it (and CELL_DDS_PROFILE for it: the loopback test's control).
-  Participant p(ParticipantOptions{"interop-" + me, {}, me, {}});
+  Participant p(Named("interop-" + me, me));
   const std::string out = fast ? "f2c" : "c2f", in = fast ? "c2f" : "f2c";
   const long my_seed = fast ? 1 : 2, peer_seed = fast ? 2 : 1;
 

@@ -30,8 +30,11 @@ LocalCell::~LocalCell() {
   std::filesystem::remove_all(data_, ec);
 }
 
-RunResult LocalCell::Up(const std::string& stations, const std::string& clock) {
-  RunResult r = Ctl({"up", "--stations", stations, "--clock", clock});
+RunResult LocalCell::Up(const std::string& stations, const std::string& clock,
+                        const std::vector<std::string>& more) {
+  std::vector<std::string> args{"up", "--stations", stations, "--clock", clock};
+  args.insert(args.end(), more.begin(), more.end());
+  RunResult r = Ctl(args);
   up_ = r.code == 0;
   return r;
 }

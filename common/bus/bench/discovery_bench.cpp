@@ -36,7 +36,7 @@ double MsSinceStart() {
 }
 
 int Serve(const std::string& stack) {
-  bus::Participant p(bus::ParticipantOptions{"discovery-bench-server", {}, stack, {}});
+  bus::Participant p(bus::Named("discovery-bench-server", stack));
   bus::Writer<cell::StationStatus> w(p, "bench/discovery/" + stack, bus::QosKind::kState);
   cell::StationStatus s;
   s.station("BENCH");
@@ -54,7 +54,7 @@ int Serve(const std::string& stack) {
 }
 
 int Probe(const std::string& stack, const std::string& server) {
-  bus::Participant p(bus::ParticipantOptions{"discovery-bench-probe", {}, stack, {}});
+  bus::Participant p(bus::Named("discovery-bench-probe", stack));
   bus::Client<cell::StationRequest, cell::StationReply> client(p, "bench/discovery/" + server + "/svc");
   bus::Reader<cell::StationStatus> r(p, "bench/discovery/" + server, bus::QosKind::kState);
   double sample = -1, reply = -1;

@@ -33,11 +33,17 @@ namespace {
 constexpr uint32_t kStop = 0xffffffffu;
 constexpr int kWarmUp = 50;
 
+bus::ParticipantOptions Options(const std::string& name, int domain, const std::string& vendor) {
+  auto o = bus::Named(name, vendor);
+  o.domain = domain;
+  return o;
+}
+
 // A bus Writer and Reader per direction: the bus's pub/sub path against the vendor's.
 class BusPingPong : public PingPong {
  public:
   BusPingPong(bool pinger, int domain, const std::string& vendor, OnReceive on_receive)
-      : p_(bus::ParticipantOptions{pinger ? "pingpong-ping" : "pingpong-pong", domain, vendor, {}}),
+      : p_(Options(pinger ? "pingpong-ping" : "pingpong-pong", domain, vendor)),
         w_(p_, pinger ? kPingTopic : kPongTopic, bus::QosKind::kCommand),
         r_(p_, pinger ? kPongTopic : kPingTopic, bus::QosKind::kCommand,
            [cb = std::move(on_receive)](const cell::ProgramRequest& m, const bus::SampleInfo&) {
@@ -67,7 +73,7 @@ void Report(const std::string& impl, size_t size, std::vector<double> us) {
 }
 
 int PingRpc(const std::string& vendor, int domain, size_t size, int count) {
-  bus::Participant p(bus::ParticipantOptions{"pingpong-ping", domain, vendor, {}});
+  bus::Participant p(Options("pingpong-ping", domain, vendor));
   bus::Client<cell::ProgramRequest, cell::ProgramReply> client(p, "bench/rpc");
   if (!client.WaitForServer(bus::Millis(10000))) {
     std::fprintf(stderr, "pingpong: no rpc server\n");
@@ -95,7 +101,7 @@ int PingRpc(const std::string& vendor, int domain, size_t size, int count) {
 }
 
 int PongRpc(const std::string& vendor, int domain) {
-  bus::Participant p(bus::ParticipantOptions{"pingpong-pong", domain, vendor, {}});
+  bus::Participant p(Options("pingpong-pong", domain, vendor));
   std::atomic<bool> done{false};
   bus::Server<cell::ProgramRequest, cell::ProgramReply> server(p, "bench/rpc",
                                                                [&](const cell::ProgramRequest& r) {

@@ -2,8 +2,11 @@
 // descriptors of the same IDL, samples travel as the Fast CDR bytes of the generated C++
 // types. Writes hand Cyclone a "carrier" serdata that it converts to the writer's own type,
 // which checks the bytes against the idlc type and bounds; reads take Cyclone's checked copy.
+#include <dlfcn.h>
+
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <map>
 #include <mutex>
 #include <string>
@@ -252,6 +255,37 @@ class CycReader : public RawReader {
   std::mutex mu_;
 };
 
+// Where Cyclone's DDS Security plugins are: beside libddsc, or (Debian) in its libddsc0debian/ directory.
+std::string SecurityPlugin(const char* name) {
+  Dl_info info{};
+  std::filesystem::path dir = "/usr/lib/x86_64-linux-gnu";
+  if (dladdr(reinterpret_cast<void*>(&dds_create_participant), &info) && info.dli_fname)
+    dir = std::filesystem::path(info.dli_fname).parent_path();
+  for (const auto& p : {dir / "libddsc0debian" / name, dir / name})
+    if (std::filesystem::exists(p)) return p.string();
+  return name;  // left to the loader's search path
+}
+
+// DDS Security 1.1 builtin plugins as participant properties (docs/security.md).
+void Secure(const SecurityFiles& f, dds_qos_t* qos) {
+  auto file = [](const std::string& path) { return "file:" + path; };
+  dds_qset_prop(qos, "dds.sec.auth.library.path", SecurityPlugin("libdds_security_auth.so").c_str());
+  dds_qset_prop(qos, "dds.sec.auth.library.init", "init_authentication");
+  dds_qset_prop(qos, "dds.sec.auth.library.finalize", "finalize_authentication");
+  dds_qset_prop(qos, "dds.sec.crypto.library.path", SecurityPlugin("libdds_security_crypto.so").c_str());
+  dds_qset_prop(qos, "dds.sec.crypto.library.init", "init_crypto");
+  dds_qset_prop(qos, "dds.sec.crypto.library.finalize", "finalize_crypto");
+  dds_qset_prop(qos, "dds.sec.access.library.path", SecurityPlugin("libdds_security_ac.so").c_str());
+  dds_qset_prop(qos, "dds.sec.access.library.init", "init_access_control");
+  dds_qset_prop(qos, "dds.sec.access.library.finalize", "finalize_access_control");
+  dds_qset_prop(qos, "dds.sec.auth.identity_ca", file(f.ca).c_str());
+  dds_qset_prop(qos, "dds.sec.auth.identity_certificate", file(f.certificate).c_str());
+  dds_qset_prop(qos, "dds.sec.auth.private_key", file(f.key).c_str());
+  dds_qset_prop(qos, "dds.sec.access.permissions_ca", file(f.ca).c_str());
+  dds_qset_prop(qos, "dds.sec.access.governance", file(f.governance).c_str());
+  dds_qset_prop(qos, "dds.sec.access.permissions", file(f.permissions).c_str());
+}
+
 class CycloneBackend : public Backend {
  public:
   explicit CycloneBackend(const BackendOptions& o) : domain_(o.domain) {
@@ -265,12 +299,16 @@ class CycloneBackend : public Backend {
     dds_qos_t* qos = dds_create_qos();
     dds_qset_liveliness(qos, DDS_LIVELINESS_AUTOMATIC, DDS_SECS(3));
     if (!o.participant_name.empty()) dds_qset_entity_name(qos, o.participant_name.c_str());
+    identity_ = o.security.identity;
+    if (!identity_.empty()) Secure(o.security, qos);
     pp_ = dds_create_participant(static_cast<dds_domainid_t>(domain_), qos, nullptr);
     dds_delete_qos(qos);
     if (pp_ < 0) {
       Domains::Release(domain_);
-      throw Error(Errc::kUnavailable, "cannot create a Cyclone DDS participant on domain " +
-                                          std::to_string(domain_) + ": " + dds_strretcode(pp_));
+      throw Error(Errc::kUnavailable,
+                  "cannot create a Cyclone DDS participant on domain " + std::to_string(domain_) +
+                      (identity_.empty() ? "" : " as security identity '" + identity_ + "'") + ": " +
+                      dds_strretcode(pp_));
     }
   }
   ~CycloneBackend() override {
@@ -285,6 +323,9 @@ class CycloneBackend : public Backend {
     dds_qos_t* qos = MakeQos(q);
     dds_entity_t w = dds_create_writer(pp_, t, qos, nullptr);
     dds_delete_qos(qos);
+    if (w == DDS_RETCODE_NOT_ALLOWED_BY_SECURITY)
+      throw Error(Errc::kPermissionDenied,
+                  "security identity '" + identity_ + "' may not publish " + topic + " (docs/security.md)");
     Check(w, "Cyclone writer for " + topic);
     return std::make_unique<CycWriter>(w);
   }
@@ -299,6 +340,9 @@ class CycloneBackend : public Backend {
     dds_entity_t r = dds_create_reader(pp_, t, qos, l);
     dds_delete_listener(l);
     dds_delete_qos(qos);
+    if (r == DDS_RETCODE_NOT_ALLOWED_BY_SECURITY)
+      throw Error(Errc::kPermissionDenied, "security identity '" + identity_ + "' may not subscribe to " +
+                                               topic + " (docs/security.md)");
     Check(r, "Cyclone reader for " + topic);
     reader->Attach(r);
     return reader;
@@ -310,12 +354,16 @@ class CycloneBackend : public Backend {
     const dds_topic_descriptor_t* desc = cell_cyclone_descriptor(type.name.c_str());
     if (!desc) throw Error(Errc::kInvalidArgument, "no idlc descriptor for " + type.name);
     dds_entity_t t = dds_create_topic(pp_, desc, name.c_str(), nullptr, nullptr);
+    if (t == DDS_RETCODE_NOT_ALLOWED_BY_SECURITY)
+      throw Error(Errc::kPermissionDenied,
+                  "security identity '" + identity_ + "' may not use topic " + name + " (docs/security.md)");
     Check(t, "Cyclone topic " + name);
     return t;
   }
   std::mutex mu_;
   int domain_;
   dds_entity_t pp_ = 0;
+  std::string identity_;  // DDS Security identity; empty: unsecured
 };
 
 }  // namespace

@@ -188,6 +188,8 @@ class FastBackend : public Backend {
     qos.wire_protocol().builtin.discovery_config.leaseDuration = eprosima::fastrtps::Duration_t(3, 0);
     qos.wire_protocol().builtin.discovery_config.leaseDuration_announcementperiod =
         eprosima::fastrtps::Duration_t(1, 0);
+    if (!o.security.identity.empty()) Secure(o.security, qos);
+    identity_ = o.security.identity;
     ChooseSlot(o.domain, qos);
     p_ = factory->create_participant(o.domain, qos);
     if (!p_ && qos.wire_protocol().participant_id >= 0) {  // lost a race for the slot: let Fast DDS choose
@@ -195,8 +197,11 @@ class FastBackend : public Backend {
       p_ = factory->create_participant(o.domain, qos);
     }
     if (!p_)
-      throw Error(Errc::kUnavailable,
-                  "cannot create a DDS participant on domain " + std::to_string(o.domain));
+      throw Error(
+          Errc::kUnavailable,
+          "cannot create a DDS participant on domain " + std::to_string(o.domain) +
+              (identity_.empty() ? ""
+                                 : " as security identity '" + identity_ + "' (Fast DDS's log says why)"));
     pub_ = p_->create_publisher(dds::PUBLISHER_QOS_DEFAULT);
     sub_ = p_->create_subscriber(dds::SUBSCRIBER_QOS_DEFAULT);
   }
@@ -224,6 +229,9 @@ class FastBackend : public Backend {
       wq.resource_limits().max_samples = 4096 * wq.history().depth;
     }
     auto* w = pub_->create_datawriter(t, wq);
+    if (!w && !identity_.empty())  // access control: the only reason a valid QoS is refused here
+      throw Error(Errc::kPermissionDenied,
+                  "security identity '" + identity_ + "' may not publish " + topic + " (docs/security.md)");
     if (!w) throw Error(Errc::kInternal, "cannot create a DDS writer for " + topic);
     return std::make_unique<FastWriter>(pub_, w);
   }
@@ -242,6 +250,9 @@ class FastBackend : public Backend {
     }
     auto reader = std::make_unique<FastReader>(sub_, std::move(cb));
     auto* r = sub_->create_datareader(t, rq, reader.get(), dds::StatusMask::data_available());
+    if (!r && !identity_.empty())
+      throw Error(Errc::kPermissionDenied, "security identity '" + identity_ + "' may not subscribe to " +
+                                               topic + " (docs/security.md)");
     if (!r) throw Error(Errc::kInternal, "cannot create a DDS reader for " + topic);
     reader->Attach(r);
     return reader;
@@ -301,6 +312,21 @@ class FastBackend : public Backend {
     return free;
   }
 
+  // DDS Security 1.1 builtin plugins (docs/security.md); the governance and permissions are the signed .p7s.
+  static void Secure(const SecurityFiles& f, dds::DomainParticipantQos& qos) {
+    auto& props = qos.properties().properties();
+    auto file = [](const std::string& path) { return "file://" + path; };
+    props.emplace_back("dds.sec.auth.plugin", "builtin.PKI-DH");
+    props.emplace_back("dds.sec.auth.builtin.PKI-DH.identity_ca", file(f.ca));
+    props.emplace_back("dds.sec.auth.builtin.PKI-DH.identity_certificate", file(f.certificate));
+    props.emplace_back("dds.sec.auth.builtin.PKI-DH.private_key", file(f.key));
+    props.emplace_back("dds.sec.access.plugin", "builtin.Access-Permissions");
+    props.emplace_back("dds.sec.access.builtin.Access-Permissions.permissions_ca", file(f.ca));
+    props.emplace_back("dds.sec.access.builtin.Access-Permissions.governance", file(f.governance));
+    props.emplace_back("dds.sec.access.builtin.Access-Permissions.permissions", file(f.permissions));
+    props.emplace_back("dds.sec.crypto.plugin", "builtin.AES-GCM-GMAC");
+  }
+
   static void LoopbackOnly(dds::DomainParticipantQos& qos) {
     // DESIGN §3: loopback, unicast discovery, no multicast, no shared memory, 32 peers.
     auto udp = std::make_shared<eprosima::fastdds::rtps::UDPv4TransportDescriptor>();
@@ -338,6 +364,7 @@ class FastBackend : public Backend {
 
   std::mutex mu_;
   dds::DomainParticipant* p_ = nullptr;
+  std::string identity_;  // DDS Security identity; empty: unsecured
   dds::Publisher* pub_ = nullptr;
   dds::Subscriber* sub_ = nullptr;
   std::map<std::string, dds::Topic*> topics_;

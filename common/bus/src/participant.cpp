@@ -10,8 +10,39 @@
 #include "cell/bus/bus.h"
 #include "cell/config/config.h"
 #include "cell/config/dds.h"
+#include "cell/security/pki.h"
 
 namespace cell::bus {
+
+std::string DefaultIdentity(const std::string& name) {
+  if (name == "cellctl") return "operator";
+  if (name == "cell-dashboard") return "viewer";
+  std::string id = name.rfind("cell-", 0) == 0 ? name.substr(5) : name;
+  if (auto slash = id.find('/'); slash != std::string::npos) id[slash] = '-';
+  return id;
+}
+
+namespace {
+
+// With CELL_SECURITY=on, the files of the identity this participant claims; throws cell::Error with a
+// one-line reason (the missing file, or a name that is no identity).
+SecurityFiles SecurityFor(const ParticipantOptions& opts) {
+  if (!cell::config::SecurityOn()) return {};
+  std::string identity = opts.identity;
+  if (identity.empty()) identity = cell::config::IdentityOverride();
+  if (identity.empty()) identity = DefaultIdentity(opts.name);
+  const std::filesystem::path dir =
+      opts.security_dir.empty() ? cell::security::SecurityDir() : std::filesystem::path(opts.security_dir);
+  try {
+    const auto f = cell::security::FindIdentityFiles(dir, identity);
+    return {identity,       f.ca.string(),         f.governance.string(), f.certificate.string(),
+            f.key.string(), f.permissions.string()};
+  } catch (const Error& e) {
+    throw Error(e.code(), "CELL_SECURITY=on: " + std::string(e.what()));
+  }
+}
+
+}  // namespace
 
 bool WaitUntil(const std::function<bool()>& cond, Millis timeout) {
   auto deadline = std::chrono::steady_clock::now() + timeout;
@@ -35,15 +66,28 @@ Participant::Participant(const ParticipantOptions& opts) {
   std::random_device rd;
   id_ = fmt::format("{}@{}/{}/{:x}", opts.name.empty() ? "cell" : opts.name, host, getpid(), rd() & 0xffffff);
   if (id_.size() > 63) id_ = id_.substr(id_.size() - 63);
-  BackendOptions bo{domain_, profile.string(), opts.name, {}};
+  BackendOptions bo{domain_, profile.string(), opts.name, {}, SecurityFor(opts)};
+  identity_ = bo.security.identity;
   if (!profile.empty()) bo.profile_xml = cell::config::LoadDdsProfile(profile);  // ${VAR}s expanded once
   if (vendor_ == "fastdds")
     make_backend_ = [bo] { return MakeFastDdsBackend(bo); };
   else
     make_backend_ = [bo] { return MakeCycloneBackend(bo); };
-  backend_ = make_backend_();
-  spdlog::debug("{}: joined DDS domain {} with {} ({})", id_, domain_, vendor_,
-                profile.empty() ? "built-in loopback profile" : profile.string());
+  try {
+    backend_ = make_backend_();
+  } catch (const Error& e) {
+    if (bo.security.identity.empty()) throw;
+    // The stack says little (Fast DDS logs, Cyclone returns an error code): check the documents ourselves.
+    const std::string why = cell::security::DiagnoseIdentity(
+        bo.security.ca, bo.security.governance, bo.security.certificate, bo.security.permissions);
+    throw Error(Errc::kPermissionDenied,
+                fmt::format("DDS Security refused identity '{}' ({}): {}", bo.security.identity,
+                            std::filesystem::path(bo.security.ca).parent_path().string(),
+                            why.empty() ? std::string(e.what()) : why));
+  }
+  spdlog::debug("{}: joined DDS domain {} with {} ({}{})", id_, domain_, vendor_,
+                profile.empty() ? "built-in loopback profile" : profile.string(),
+                identity_.empty() ? "" : ", secured as " + identity_);
   thread_ = std::thread([this] { Run(); });
   watch_ = std::thread([this] { Watch(); });
 }

@@ -31,7 +31,7 @@ int main(int argc, char** argv) {
     auto cfg = cell::config::LoadStation(station);  // validates the [station] table
     auto machine = cell::servo::LoadMachineConfig(cfg.file);
     const auto dds = cell::config::DdsVendor(cfg.dds);  // the station file's dds, else CELL_DDS
-    cell::bus::Participant bus({"cell-axis-servo/" + station, {}, dds.vendor, {}});
+    cell::bus::Participant bus(cell::bus::Named("cell-axis-servo/" + station, dds.vendor));
     cell::health::Announcer health(bus, "cell-axis-servo", station);
     cell::identity::Claim claim(bus, health);
     claim.Confirm();  // one machine per station: before it takes a segment

@@ -5,6 +5,7 @@
 
 #include <cstdlib>
 #include <fstream>
+#include <optional>
 
 #include "cell/bus/bus.h"
 #include "cell/config/config.h"
@@ -31,15 +32,20 @@ int main() {
     }
     cell::dashboard::CellView view(cell::dashboard::LoadStationDefs(), view_opts);
     cell::bus::Participant bus("cell-dashboard");
-    cell::health::Announcer health(bus, "cell-dashboard");
-    cell::identity::Claim claim(bus, health);
-    claim.Confirm();  // one dashboard per cell: before it binds its port and writes dashboard.url
+    // Secured, the dashboard is the read-only viewer (docs/security.md): it publishes nothing, so it neither
+    // announces itself on cell/health nor claims its service id.
+    std::optional<cell::health::Announcer> health;
+    if (bus.identity() != "viewer") {
+      health.emplace(bus, "cell-dashboard");
+      cell::identity::Claim claim(bus, *health);
+      claim.Confirm();  // one dashboard per cell: before it binds its port and writes dashboard.url
+    }
     cell::dashboard::Feed feed(bus, view);
     cell::dashboard::HttpServer http(view, http_opts);
     http.Start();
     // Where a local cell's tools (cellctl up, ./cell demo, tests) find the page when the port was 0.
     std::ofstream(cell::config::DataDir() / "dashboard.url") << http.url() << "\n";
-    health.Set(cell::SERVICE_READY, http.url());
+    if (health) health->Set(cell::SERVICE_READY, http.url());
     daemon.NotifyReady("serving " + http.url());
     spdlog::info("ready on domain {} with {}: serving {} (MTConnect: {}probe)", bus.domain(), bus.vendor(),
                  http.url(), http.url());

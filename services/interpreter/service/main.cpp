@@ -20,7 +20,7 @@ int main(int argc, char** argv) {
     cell::daemon::Daemon daemon;
     auto cfg = cell::config::LoadStation(station);
     const auto dds = cell::config::DdsVendor(cfg.dds);  // the station file's dds, else CELL_DDS
-    cell::bus::Participant bus({"cell-interpreter/" + station, {}, dds.vendor, {}});
+    cell::bus::Participant bus(cell::bus::Named("cell-interpreter/" + station, dds.vendor));
     cell::health::Announcer health(bus, "cell-interpreter", station);
     cell::identity::Claim claim(bus, health);
     claim.Confirm();  // one process per station: before the station serves anything

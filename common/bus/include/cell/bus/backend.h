@@ -72,12 +72,21 @@ class Backend {
                                                   QosKind qos, RawCallback cb) = 0;
 };
 
+// DDS Security (the builtin PKI-DH, Access-Permissions and AES-GCM-GMAC plugins): the identity's files as
+// absolute paths (cell/security/pki.h finds them). Empty identity: an unsecured participant.
+struct SecurityFiles {
+  std::string identity;  // "scheduler", "interpreter-KT01": named in messages
+  std::string ca;        // identity CA and permissions CA
+  std::string governance, certificate, key, permissions;  // signed documents: *.p7s
+};
+
 struct BackendOptions {
   int domain = 101;
   std::string profile_path;  // where profile_xml came from (named in messages)
   std::string participant_name;
   std::string profile_xml;  // empty: the built-in loopback-only profile; else the profile's text with its
                             // ${VAR}s expanded (config::LoadDdsProfile)
+  SecurityFiles security;
 };
 
 // Both backends give the same semantics (QoS presets above, a 3 s participant lease, loopback-only by

@@ -32,7 +32,24 @@ struct ParticipantOptions {
   std::string backend;  // "fastdds" | "cyclonedds"; default: CELL_DDS, else "fastdds" (config::DdsVendor)
   std::string profile_path;  // default: CELL_DDS_PROFILE for this vendor (config::DdsProfile), else the
                              // built-in loopback profile
+  // With CELL_SECURITY=on: the security identity (docs/security.md). Default: CELL_IDENTITY, else derived
+  // from the name ("cell-scheduler" -> scheduler, "cell-interpreter/KT01" -> interpreter-KT01, "cellctl" ->
+  // operator, "cell-dashboard" -> viewer).
+  std::string identity;
+  std::string security_dir;  // default: cell::security::SecurityDir()
 };
+
+// Options naming the participant (and its vendor), everything else by default. (GCC 12 warns about the
+// members a designated initializer leaves out.)
+inline ParticipantOptions Named(std::string name, std::string backend = {}) {
+  ParticipantOptions o;
+  o.name = std::move(name);
+  o.backend = std::move(backend);
+  return o;
+}
+
+// The security identity a participant named `name` claims by default (above).
+std::string DefaultIdentity(const std::string& name);
 
 // The backend half of a Writer, Reader or Client, made again when the participant rejoins.
 class Rejoinable {
@@ -55,7 +72,7 @@ class Rejoinable {
 class Participant {
  public:
   explicit Participant(const ParticipantOptions& opts);
-  explicit Participant(const std::string& name) : Participant(ParticipantOptions{name, {}, {}, {}}) {}
+  explicit Participant(const std::string& name) : Participant(Named(name)) {}
   // With an explicit backend (the interop peer runs the typed bus over Cyclone this way).
   Participant(const std::string& name, int domain, std::unique_ptr<Backend> backend);
   ~Participant();
@@ -63,6 +80,8 @@ class Participant {
   Participant& operator=(const Participant&) = delete;
 
   const std::string& id() const { return id_; }  // unique on the domain: name/host/pid/n
+  // The DDS Security identity it joined as; empty when unsecured (CELL_SECURITY off).
+  const std::string& identity() const { return identity_; }
   int domain() const { return domain_; }
   const std::string& vendor() const { return vendor_; }  // "fastdds" or "cyclonedds"
   Backend& backend() { return *backend_; }
@@ -82,6 +101,7 @@ class Participant {
   void Run();
   void Watch();
   std::string id_;
+  std::string identity_;
   int domain_;
   std::string vendor_;
   std::function<std::unique_ptr<Backend>()> make_backend_;  // empty for an injected backend

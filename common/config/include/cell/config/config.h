@@ -34,6 +34,14 @@ int Domain();
 inline constexpr int kDefaultDomain = 101;
 inline constexpr int kMaxDomain = 232;
 
+// CELL_SECURITY: "on" or "off" (unset or empty: off). On, every participant of the process joins with DDS
+// Security under its identity (docs/security.md). Throws cell::Error(kInvalidArgument) naming the variable
+// and the value for anything else.
+bool SecurityOn();
+// CELL_IDENTITY: the security identity the process claims instead of its default (cellctl's is "operator";
+// "viewer" for read-only); empty when unset.
+std::string IdentityOverride();
+
 // A station file `<ConfigDir()>/stations/<ID>.toml`:
 //
 //   [station]

@@ -70,4 +70,11 @@ struct IdentityFiles {
 // name that is no identity (ParseIdentity), kNotFound naming the first missing file.
 IdentityFiles FindIdentityFiles(const std::filesystem::path& dir, std::string_view name);
 
+// Why a DDS stack may have refused these files, checked with openssl: "" when the certificate verifies
+// against the CA and both documents carry a valid signature by it, else a one-line reason naming the file
+// ("permissions.p7s: its signature does not verify against ca.pem"). "" too when openssl cannot be run.
+std::string DiagnoseIdentity(const std::filesystem::path& ca, const std::filesystem::path& governance,
+                             const std::filesystem::path& certificate,
+                             const std::filesystem::path& permissions);
+
 }  // namespace cell::security

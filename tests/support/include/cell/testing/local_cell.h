@@ -33,7 +33,8 @@ class LocalCell {
   // CELL_CONFIG_DIR, ...); set before Up().
   void SetEnv(const std::string& name, const std::string& value) { env_[name] = value; }
   // `cellctl up --stations S --clock C`; the result for the caller to assert on.
-  RunResult Up(const std::string& stations = "KT01,KT02", const std::string& clock = "virtual");
+  RunResult Up(const std::string& stations = "KT01,KT02", const std::string& clock = "virtual",
+               const std::vector<std::string>& more = {});
   RunResult Down();
   bool is_up() const { return up_; }  // Up succeeded and Down was not called
   RunResult Ctl(std::vector<std::string> args, std::chrono::seconds timeout = std::chrono::seconds(60)) const;

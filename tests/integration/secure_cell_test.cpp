@@ -1,0 +1,117 @@
+// A secured cell (issue 22; docs/security.md): `cellctl up --secure` makes the PKI in the data directory and
+// starts every process with CELL_SECURITY=on. Pallets run end to end through the secured bus; the refusals
+// are checked against their positive controls: the operator puts a program where the viewer is refused (and
+// the viewer still reads), and an unsecured cellctl finds nobody where the secured one is answered.
+#include <filesystem>
+#include <fstream>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "cell/testing/local_cell.h"
+
+using namespace cell::testing;
+using nlohmann::json;
+
+namespace {
+
+class SecureCell : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    auto r = cell_.Up("KT01", "virtual", {"--secure"});
+    ASSERT_EQ(r.code, 0) << r.out << r.err;
+    cell_.SetEnv("CELL_SECURITY", "on");  // cellctl: the operator identity of the cell's PKI
+  }
+  void TearDown() override {
+    auto r = cell_.Down();
+    EXPECT_EQ(r.code, 0) << r.err;
+  }
+  RunResult As(const std::string& identity, std::vector<std::string> args,
+               const std::string& security = "on") {
+    args.insert(args.begin(), BinDir() + "/cellctl");
+    auto env = cell_.env();
+    env["CELL_SECURITY"] = security;
+    if (!identity.empty()) env["CELL_IDENTITY"] = identity;
+    return RunCommand(args, env, std::chrono::seconds(60));
+  }
+  std::string Program(const std::string& name) {
+    const std::string path = cell_.data_dir() + "/" + name + ".apl";
+    std::ofstream(path) << "%\n(NAM," << name << ")\n(UCY,30)\nN10 G71 G90 G01\nN20 X0 Y0 Z100. F0\n"
+                        << "N30 X100. Y50. Z0 F1000.\nN40 G00 X0 Y0 Z100. F0\nN50 M30\n%\n";
+    return path;
+  }
+  LocalCell cell_{"cell-secure-"};
+};
+
+TEST_F(SecureCell, PalletsRunEndToEndThroughTheSecuredBus) {
+  // The PKI is where DESIGN says, private keys the owner's only.
+  const std::filesystem::path sec = cell_.data_dir() + "/security";
+  ASSERT_TRUE(std::filesystem::exists(sec / "identities" / "interpreter-KT01" / "key.pem"));
+  EXPECT_EQ(std::filesystem::status(sec / "ca.key").permissions() & std::filesystem::perms::group_all,
+            std::filesystem::perms::none);
+
+  auto put = cell_.Ctl({"program", "put", Program("SECURE1")});
+  ASSERT_EQ(put.code, 0) << put.err;
+  ASSERT_EQ(cell_.Ctl({"route", "define", "RS", "--op", "KT01:SECURE1"}).code, 0);
+  auto op = cell_.Ctl({"route", "operate", "RS", "--pallet", "4"});
+  ASSERT_EQ(op.code, 0) << op.err;
+  const std::string job = op.out.substr(0, op.out.find('\n'));
+  auto wait = cell_.Ctl({"job", "wait", job, "--timeout", "90"});
+  EXPECT_EQ(wait.code, 0) << wait.out << wait.err;
+  EXPECT_EQ(wait.out, "COMPLETED\n");
+}
+
+TEST_F(SecureCell, TheViewerReadsButCannotWrite) {
+  // Control: the operator's put is accepted.
+  auto ok = As("", {"program", "put", Program("BYOPER")});
+  EXPECT_EQ(ok.code, 0) << ok.err;
+  auto refused = As("viewer", {"program", "put", Program("BYVIEWER")});
+  EXPECT_NE(refused.code, 0);
+  EXPECT_NE(refused.err.find("may not publish cell/program_store/request"), std::string::npos) << refused.err;
+  EXPECT_EQ(refused.err.find('\n'), refused.err.size() - 1) << "one line: " << refused.err;
+  // The viewer's read works: it sees the station the cell runs.
+  auto ls = As("viewer", {"station", "ls", "--json"});
+  ASSERT_EQ(ls.code, 0) << ls.err;
+  bool kt01_online = false;
+  for (auto& s : json::parse(ls.out))
+    if (s["id"] == "KT01") kt01_online = s["online"].get<bool>();
+  EXPECT_TRUE(kt01_online) << ls.out;
+  // The viewer's put never reached the store.
+  EXPECT_NE(As("", {"program", "get", "BYVIEWER"}).code, 0);
+}
+
+TEST_F(SecureCell, AnUnsecuredCellctlFindsNobody) {
+  auto secured = As("", {"job", "ls", "--json"});
+  EXPECT_EQ(secured.code, 0) << secured.err;  // control
+  auto plain = As("", {"job", "ls", "--json"}, "off");
+  EXPECT_NE(plain.code, 0) << plain.out;
+  auto missing = As("nobody", {"job", "ls"});
+  EXPECT_NE(missing.code, 0);
+  EXPECT_NE(missing.err.find("nobody"), std::string::npos) << missing.err;
+}
+
+TEST(SecureCellMixed, ASecuredCellThatMixesDdsStacksIsRefusedAtStart) {
+  // The cell on Cyclone (CELL_DDS), KT01's station file (a copy of deploy/'s) naming Fast DDS.
+  LocalCell cell("cell-secure-mixed-");
+  cell.SetEnv("CELL_DDS", "cyclonedds");
+  const std::string config = cell.data_dir() + "/config";
+  std::filesystem::copy(SourceDir() + "/deploy", config, std::filesystem::copy_options::recursive);
+  std::string text;
+  {
+    std::ifstream in(config + "/stations/KT01.toml");
+    text.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  const auto at = text.find("[station]\n");
+  ASSERT_NE(at, std::string::npos);
+  text.insert(at + 10, "dds = \"fastdds\"\n");
+  std::ofstream(config + "/stations/KT01.toml", std::ios::trunc) << text;
+  cell.SetEnv("CELL_CONFIG_DIR", config);
+  auto r = cell.Up("KT01", "virtual", {"--secure"});
+  EXPECT_EQ(r.code, 1) << r.out;
+  EXPECT_NE(r.err.find("a secured cell uses one DDS stack: station KT01 runs fastdds, the cell cyclonedds"),
+            std::string::npos)
+      << r.err;
+  EXPECT_FALSE(std::filesystem::exists(cell.data_dir() + "/cell-up.json")) << "nothing was started";
+}
+
+}  // namespace
