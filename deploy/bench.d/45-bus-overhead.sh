@@ -6,16 +6,25 @@
 # (reliable, volatile, keep-all), same type (cell::ProgramRequest, its octet sequence the payload; 61,440 B is
 # the largest it holds). Each cell: the median over CELL_BENCH_RUNS runs of each run's median (and the
 # largest p99), and its ratio to raw on the same vendor. Interleaved, so load on a shared machine falls on
-# all three alike. Env: CELL_BUILD_DIR (default build/), CELL_BENCH_DOMAIN (default 93), CELL_BENCH_RUNS
-# (default 3).
+# all three alike. Then DDS Security (issue 22): the request/reply on the program store's own topics,
+# operator to program-store, secured against unsecured (target: at most 2x at 4 KiB), and the start-up of a
+# one-station local cell (`cellctl up`) secured against unsecured.
+# Env: CELL_BUILD_DIR (default build/), CELL_BENCH_DOMAIN (default 93), CELL_BENCH_RUNS (default 3).
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 BIN="${CELL_BUILD_DIR:-$ROOT/build}/bin"
-[ -x "$BIN/bus_pingpong_bench" ] || { echo "45-bus-overhead: $BIN/bus_pingpong_bench not built" >&2; exit 1; }
+for exe in bus_pingpong_bench cellctl; do
+  [ -x "$BIN/$exe" ] || { echo "45-bus-overhead: $BIN/$exe not built" >&2; exit 1; }
+done
 export CELL_DOMAIN="${CELL_BENCH_DOMAIN:-93}"
 RUNS="${CELL_BENCH_RUNS:-3}"
-out="$(mktemp "${TMPDIR:-/tmp}/cell-bus-overhead.XXXXXX")"
-trap 'rm -f "$out"' EXIT
+work="$(mktemp -d "${TMPDIR:-/tmp}/cell-bus-overhead.XXXXXX")"
+out="$work/results"
+cleanup() {
+  for d in "$work"/cell-*; do [ -d "$d" ] && CELL_DATA_DIR="$d" "$BIN/cellctl" down >/dev/null 2>&1; done
+  rm -rf "$work"
+}
+trap cleanup EXIT
 
 one() {  # IMPL SIZE COUNT
   "$BIN/bus_pingpong_bench" pong "$1" &
@@ -56,3 +65,48 @@ awk '
         r, p99["raw-" vs[v] " " ss[s]], b, p99["bus-" vs[v] " " ss[s]], b / r, q, p99["rpc-" vs[v] " " ss[s]], q / r
     }
   }' "$out"
+
+# DDS Security: the same request/reply on cell/program_store, unsecured (rpc-) and secured (srpc-).
+"$BIN/cellctl" pki init --dir "$work/pki" --station KT01 >/dev/null
+: >"$out"
+for _ in $(seq "$RUNS"); do
+  for vendor in fastdds cyclonedds; do
+    for size in 64 4096; do
+      for kind in rpc srpc; do CELL_BENCH_PKI="$work/pki" one "$kind-$vendor" "$size" 1000; done
+    done
+  done
+done
+echo
+echo "DDS Security: request/reply operator -> program-store, median (largest p99) in us; x = secured / unsecured"
+awk '
+  $1 == "RESULT" { key = $2 " " $3; n[key]++; med[key, n[key]] = $4; if ($5 > p99[key]) p99[key] = $5 }
+  function median(key,   i, j, t, m, a) {
+    m = n[key]; for (i = 1; i <= m; i++) a[i] = med[key, i]
+    for (i = 1; i <= m; i++) for (j = i + 1; j <= m; j++) if (a[j] < a[i]) { t = a[i]; a[i] = a[j]; a[j] = t }
+    return a[int((m + 1) / 2)]
+  }
+  END {
+    printf "%-11s %7s %20s %26s\n", "vendor", "bytes", "unsecured", "secured"
+    split("fastdds cyclonedds", vs, " "); split("64 4096", ss, " ")
+    for (v = 1; v <= 2; v++) for (s = 1; s <= 2; s++) {
+      u = median("rpc-" vs[v] " " ss[s]); q = median("srpc-" vs[v] " " ss[s])
+      printf "%-11s %7d %9.1f (%8.1f) %9.1f (%8.1f) %5.2fx%s\n", vs[v], ss[s], u, p99["rpc-" vs[v] " " ss[s]],
+        q, p99["srpc-" vs[v] " " ss[s]], q / u, (ss[s] == 4096 ? (q / u <= 2 ? "  (target <= 2x: met)" : "  (target <= 2x: MISSED)") : "")
+    }
+  }' "$out"
+
+# Start-up of a one-station local cell (virtual clock) until `cellctl up` reports every process ready.
+now() { date +%s.%N; }
+up_time() {  # DATA_DIR [--secure]
+  local t0 t1
+  t0=$(now)
+  CELL_DATA_DIR="$1" CELL_HTTP=127.0.0.1:0 "$BIN/cellctl" up --stations KT01 --clock virtual "${@:2}" >/dev/null
+  t1=$(now)
+  CELL_DATA_DIR="$1" "$BIN/cellctl" down >/dev/null
+  echo "$t1 - $t0" | bc -l
+}
+plain=$(up_time "$work/cell-plain")
+fresh=$(up_time "$work/cell-secure" --secure)
+again=$(up_time "$work/cell-secure" --secure)
+printf 'cellctl up (KT01, 7 processes): unsecured %.2f s; secured %.2f s with a new PKI, %.2f s with the PKI kept (%.2fx)\n' \
+  "$plain" "$fresh" "$again" "$(echo "$again / $plain" | bc -l)"

@@ -8,6 +8,10 @@
 // waits until both directions match, warms up, then times COUNT round trips of SIZE payload bytes and prints
 //   RESULT IMPL SIZE MEDIAN_US P99_US
 // The domain is CELL_DOMAIN. Each process has one participant and one vendor, as every cell process.
+// IMPL srpc-fastdds or srpc-cyclonedds: the request/reply secured (DDS Security, docs/security.md) on the
+// program store's own service topics, ping as `operator`, pong as `program-store`, with the PKI in
+// CELL_BENCH_PKI (`cellctl pki init --dir`); rpc-* uses the same topic names unsecured when CELL_BENCH_PKI is
+// set, so the two differ only in security.
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -72,9 +76,24 @@ void Report(const std::string& impl, size_t size, std::vector<double> us) {
   std::printf("RESULT %s %zu %.1f %.1f\n", impl.c_str(), size, median, p99);
 }
 
-int PingRpc(const std::string& vendor, int domain, size_t size, int count) {
-  bus::Participant p(Options("pingpong-ping", domain, vendor));
-  bus::Client<cell::ProgramRequest, cell::ProgramReply> client(p, "bench/rpc");
+// The service name, and (secured) the identity and PKI of one side.
+std::string RpcService() {
+  return std::getenv("CELL_BENCH_PKI") ? "cell/program_store" : "bench/rpc";
+}
+bus::ParticipantOptions RpcOptions(const std::string& name, int domain, const std::string& vendor,
+                                   bool secure, const std::string& identity) {
+  auto o = Options(name, domain, vendor);
+  setenv("CELL_SECURITY", secure ? "on" : "off", 1);
+  if (secure) {
+    o.identity = identity;
+    o.security_dir = std::getenv("CELL_BENCH_PKI");
+  }
+  return o;
+}
+
+int PingRpc(const std::string& vendor, bool secure, int domain, size_t size, int count) {
+  bus::Participant p(RpcOptions("pingpong-ping", domain, vendor, secure, "operator"));
+  bus::Client<cell::ProgramRequest, cell::ProgramReply> client(p, RpcService());
   if (!client.WaitForServer(bus::Millis(10000))) {
     std::fprintf(stderr, "pingpong: no rpc server\n");
     return 1;
@@ -93,17 +112,17 @@ int PingRpc(const std::string& vendor, int domain, size_t size, int count) {
     }
     if (i >= kWarmUp) us.push_back(std::chrono::duration<double, std::micro>(t1 - t0).count());
   }
-  Report("rpc-" + vendor, size, us);
+  Report((secure ? "srpc-" : "rpc-") + vendor, size, us);
   req.chunk_index(kStop);
   req.data().clear();
   client.Call(req, bus::Millis(5000));
   return 0;
 }
 
-int PongRpc(const std::string& vendor, int domain) {
-  bus::Participant p(Options("pingpong-pong", domain, vendor));
+int PongRpc(const std::string& vendor, bool secure, int domain) {
+  bus::Participant p(RpcOptions("pingpong-pong", domain, vendor, secure, "program-store"));
   std::atomic<bool> done{false};
-  bus::Server<cell::ProgramRequest, cell::ProgramReply> server(p, "bench/rpc",
+  bus::Server<cell::ProgramRequest, cell::ProgramReply> server(p, RpcService(),
                                                                [&](const cell::ProgramRequest& r) {
                                                                  if (r.chunk_index() == kStop) done = true;
                                                                  cell::ProgramReply rep;
@@ -197,10 +216,16 @@ int main(int argc, char** argv) {
   const std::string role = argv[1], impl = argv[2];
   const int domain = cell::config::Domain();
   try {
-    if (impl.rfind("rpc-", 0) == 0) {
-      const std::string vendor = impl.substr(4);
-      if (role == "pong") return PongRpc(vendor, domain);
-      return PingRpc(vendor, domain, std::stoul(argv[3]), std::stoi(argv[4]));
+    if (impl.rfind("rpc-", 0) == 0 || impl.rfind("srpc-", 0) == 0) {
+      const bool secure = impl[0] == 's';
+      if (secure && !std::getenv("CELL_BENCH_PKI")) {
+        std::fprintf(stderr, "pingpong: %s needs CELL_BENCH_PKI (a `cellctl pki init --dir` directory)\n",
+                     impl.c_str());
+        return 2;
+      }
+      const std::string vendor = impl.substr(impl.find('-') + 1);
+      if (role == "pong") return PongRpc(vendor, secure, domain);
+      return PingRpc(vendor, secure, domain, std::stoul(argv[3]), std::stoi(argv[4]));
     }
     if (role == "pong") return Pong(impl, domain);
     return Ping(impl, domain, std::stoul(argv[3]), std::stoi(argv[4]));
