@@ -1,8 +1,10 @@
-// cellctl job ls|show|cancel|wait, inspect ls|cat
+// cellctl job ls|show|cancel|wait, inspect ls|cat|export
 #include <chrono>
+#include <fstream>
 
 #include "cell/bus/topics.h"
 #include "cell/idl/inspection.h"
+#include "cell/inspection/inspection_file.h"
 #include "cell/names/names.h"
 #include "context.h"
 
@@ -128,6 +130,41 @@ void AddInspectVerbs(CLI::App& app, Context& ctx) {
   auto* cat = ins->add_subcommand("cat", "print one record or file");
   cat->add_option("NAME", *name)->required();
   cat->callback([name, call] { std::cout << call(cell::INSPECTION_CAT, *name); });
+
+  struct ExportOpts {
+    std::string format = "text", output, units = "inch";
+  };
+  auto e = std::make_shared<ExportOpts>();
+  auto* exp = ins->add_subcommand("export", "a stored KT-APL inspection file as text, CSV or QIF 3.0");
+  exp->add_option("NAME", *name, "as `inspect ls` names it, e.g. KT01/PUMP341")->required();
+  exp->add_option("--format", e->format, "text (the file as the control writes it), csv or qif")
+      ->check(CLI::IsMember({"text", "csv", "qif"}));
+  exp->add_option("-o,--output", e->output, "write to FILE instead of stdout");
+  // The file does not say its unit: positions are in the program's G70/G71 units, inch unless it said G71.
+  exp->add_option("--units", e->units, "the program's linear unit: inch (default) or mm")
+      ->check(CLI::IsMember({"inch", "mm"}));
+  exp->callback([name, e, call] {
+    namespace ins = cell::inspection;
+    const std::string text = call(cell::INSPECTION_CAT, *name);
+    ins::InspectionFile file;
+    try {
+      file = ins::Parse(text);
+    } catch (const ins::ParseError& err) {
+      throw Exit{1, *name + ":" + err.what()};
+    }
+    const auto unit = e->units == "mm" ? ins::LinearUnit::kMillimetre : ins::LinearUnit::kInch;
+    const std::string out = e->format == "csv"   ? ins::ToCsv(file, unit)
+                            : e->format == "qif" ? ins::ToQif(file, unit, *name)
+                                                 : ins::Format(file);
+    if (e->output.empty()) {
+      std::cout << out;
+      return;
+    }
+    std::ofstream f(e->output, std::ios::binary | std::ios::trunc);
+    f << out;
+    f.close();
+    if (!f) throw Exit{1, "cannot write " + e->output};
+  });
 }
 
 }  // namespace cellctl

@@ -1,0 +1,108 @@
+// QIF exports validated against the QIF 3.0 schema (DESIGN §6: `xmllint --noout --nonet --schema
+// reference/qif3/QIFApplications/QIFDocument.xsd`), with a broken document as the negative control so the
+// check can fail. The schema is the shared reference beside the repository (as the MTConnect test finds
+// its schemas); without it the tests skip.
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+
+#include "cell/inspection/inspection_file.h"
+#include "cell/testing/process.h"
+
+namespace cell::inspection {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string SchemaDir() {
+  if (const char* d = std::getenv("CELL_QIF_SCHEMAS"); d && *d) return d;
+  // ../shared/reference/qif3 beside the clone (CI), or beside the worktrees' folder (here).
+  fs::path p = CELL_SOURCE_DIR;
+  for (int up = 0; up < 4; ++up, p = p.parent_path()) {
+    fs::path c = p.parent_path() / "shared/reference/qif3";
+    if (fs::exists(c / "QIFApplications/QIFDocument.xsd")) return c.string();
+  }
+  return "";
+}
+
+// "" when the document validates, else xmllint's complaint.
+std::string Validate(const std::string& xml) {
+  static int n = 0;
+  const std::string file = "/tmp/cell-qif-" + std::to_string(getpid()) + "-" + std::to_string(n++) + ".qif";
+  std::ofstream(file) << xml;
+  auto r = cell::testing::RunCommand(
+      {"xmllint", "--noout", "--nonet", "--schema", SchemaDir() + "/QIFApplications/QIFDocument.xsd", file});
+  fs::remove(file);
+  return r.code == 0 ? "" : r.err + r.out + "(exit " + std::to_string(r.code) + ")";
+}
+
+class QifSchema : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    if (SchemaDir().empty())
+      GTEST_SKIP() << "QIF 3.0 schema not found (shared/reference/qif3 beside the repository)";
+  }
+};
+
+InspectionFile EveryKind() {
+  InspectionFile f;
+  f.header = {"345879", "PUMP<341>&\"X\"", 12, {2026, 11, 24, 9, 5}};
+  f.body = {Surface(1300, Quantity::kZSurface, -2.5),
+            SurfaceXY(1301, 6., -.0004),
+            TextLine{"FIRST BORE"},
+            CentreXY(1310, 2.1358, 5., 4.0002),
+            Centre(std::nullopt, 'X', 1.25, -3.),
+            Centre(1311, 'Y', 1.5, 3.),
+            Tolerance(1320, 'R', 2.1358, 2.135, .0015),
+            Alignment(1340, 'A', -.5),
+            Alignment(1341, 'B', 359.99),
+            Alignment(1342, 'C', 0),
+            ProbeLength(std::nullopt, 8.1234),
+            ToleranceXY(1350, 4.0003, 4., 5.9999, 6., .001),
+            Tolerance(1360, 'Z', -1.0021, -1., .002),
+            Tolerance(1370, 'B', 90.001, 90., .01),
+            Surface(1380, Quantity::kXSurface, -.00000001)};
+  return f;
+}
+
+TEST_F(QifSchema, EveryCycleKindValidatesInInchAndMillimetres) {
+  EXPECT_EQ(Validate(ToQif(EveryKind(), LinearUnit::kInch, "KT01/PUMP341")), "");
+  EXPECT_EQ(Validate(ToQif(EveryKind(), LinearUnit::kMillimetre, "KT01/<odd & name>")), "");
+}
+
+TEST_F(QifSchema, AFileWithoutMeasurementsValidates) {
+  InspectionFile f = EveryKind();
+  f.body = {TextLine{"NOTHING MEASURED"}};
+  EXPECT_EQ(Validate(ToQif(f, LinearUnit::kInch, "EMPTY")), "");
+  f.body.clear();
+  EXPECT_EQ(Validate(ToQif(f, LinearUnit::kInch, "EMPTY")), "");
+}
+
+TEST_F(QifSchema, ParsedFileExportsValidate) {
+  const std::string text = Format(EveryKind());
+  EXPECT_EQ(Validate(ToQif(Parse(text), LinearUnit::kInch, "KT01/PUMP341")), "");
+}
+
+// The negative control: the same check refuses a document the schema does not allow.
+TEST_F(QifSchema, BrokenDocumentsFail) {
+  std::string q = ToQif(EveryKind(), LinearUnit::kInch, "KT01/PUMP341");
+  std::string no_id = q;
+  no_id.erase(no_id.find("  <QPId>"), no_id.find("</QPId>\n") + 8 - no_id.find("  <QPId>"));
+  EXPECT_NE(Validate(no_id), "");
+  std::string exponent = q;
+  auto at = exponent.find("<Value>-2.5</Value>");
+  ASSERT_NE(at, std::string::npos);
+  exponent.replace(at, 19, "<Value>-2.5e0</Value>");  // xs:decimal has no exponent
+  EXPECT_NE(Validate(exponent), "");
+  std::string dangling = q;
+  at = dangling.find("<CharacteristicItemId>");
+  dangling.replace(at, 22, "<CharacteristicItemId>9999");  // an id no item has
+  EXPECT_NE(Validate(dangling), "");
+}
+
+}  // namespace
+}  // namespace cell::inspection
