@@ -283,9 +283,9 @@ INSTANTIATE_TEST_SUITE_P(Vendors, BusSecurity, ::testing::Values("fastdds"),
                          [](const auto& info) { return info.param; });
 
 // One identity in a process of its own (it ends with _exit: a DDS stack torn down by exit() under its own
-// running threads may crash, and the parent reads the exit status) (this binary, running the disabled Peer test): CELL_SEC_PEER is
-// "MODE IDENTITY DIR SECONDS", MODE write (pumps KT01's segments), read (prints how many it took) or
-// try-write (exit 0 if the writer was made, 3 if refused); IDENTITY "-" is unsecured.
+// running threads may crash, and the parent reads the exit status) (this binary, running the disabled Peer
+// test): CELL_SEC_PEER is "MODE IDENTITY DIR SECONDS", MODE write (pumps KT01's segments), read (prints how
+// many it took) or try-write (exit 0 if the writer was made, 3 if refused); IDENTITY "-" is unsecured.
 TEST(BusSecurityPeer, DISABLED_Peer) {
   std::istringstream in(std::getenv("CELL_SEC_PEER"));
   std::string mode, identity, dir;

@@ -82,8 +82,8 @@ std::string SubjectName(const std::string& identity_name);
 std::string OpensslSubject(const std::string& identity_name);
 
 // The DDS domain ids the documents cover. Cyclone 0.10's parser refuses a domain id above 230 (the whole
-// document, "Can not parse governance file"), so a secured cell uses domains 0-230 although config::kMaxDomain
-// is 232.
+// document, "Can not parse governance file"), so a secured cell uses domains 0-230 although
+// config::kMaxDomain is 232.
 inline constexpr int kFirstDomain = 0;
 inline constexpr int kLastDomain = 230;
 
