@@ -108,5 +108,5 @@ up_time() {  # DATA_DIR [--secure]
 plain=$(up_time "$work/cell-plain")
 fresh=$(up_time "$work/cell-secure" --secure)
 again=$(up_time "$work/cell-secure" --secure)
-printf 'cellctl up (KT01, 7 processes): unsecured %.2f s; secured %.2f s with a new PKI, %.2f s with the PKI kept (%.2fx)\n' \
+printf 'cellctl up (one station, virtual clock): unsecured %.2f s; secured %.2f s with a new PKI, %.2f s with the PKI kept (%.2fx)\n' \
   "$plain" "$fresh" "$again" "$(echo "$again / $plain" | bc -l)"
