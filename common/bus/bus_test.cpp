@@ -27,8 +27,8 @@ struct Stacks {
 
 class BusTest : public ::testing::TestWithParam<Stacks> {
  protected:
-  static ParticipantOptions A(const std::string& name) { return {name, {}, GetParam().a, {}}; }
-  static ParticipantOptions B(const std::string& name) { return {name, {}, GetParam().b, {}}; }
+  static ParticipantOptions A(const std::string& name) { return Named(name, GetParam().a); }
+  static ParticipantOptions B(const std::string& name) { return Named(name, GetParam().b); }
 };
 
 std::string StacksName(const ::testing::TestParamInfo<Stacks>& info) {
