@@ -16,6 +16,17 @@ function(cell_executable name)
   target_link_libraries(${name} PRIVATE cell_warnings ${A_LIBS})
 endfunction()
 
+# cell_bench(NAME SOURCES ... LIBS ...): a benchmark (deploy/bench.d). Not built by default in the
+# sanitizer configuration: no test runs one, and `./cell test` builds only what its tests need.
+function(cell_bench name)
+  cmake_parse_arguments(A "" "" "SOURCES;LIBS" ${ARGN})
+  add_executable(${name} ${A_SOURCES})
+  target_link_libraries(${name} PRIVATE cell_warnings ${A_LIBS})
+  if(CELL_SANITIZE)
+    set_target_properties(${name} PROPERTIES EXCLUDE_FROM_ALL ON)
+  endif()
+endfunction()
+
 # cell_test(NAME SOURCES ... LIBS ... [DOMAIN n] [CYCLONE_DOMAIN m [CYCLONE_FILTER pattern]] [LABELS ...]
 #           [TIMEOUT s] [SKIPPABLE])
 #   A GoogleTest binary registered with CTest. DOMAIN gives a test that talks DDS its own
