@@ -13,6 +13,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "cell/proc/proc.h"
+
 namespace cellctl {
 
 // One entry of cell-up.json: {service, unit, pid, log, argv, env, exe, start_time}. DESIGN §6 promises
@@ -51,9 +53,7 @@ class RecordLock {
   int fd_ = -1;
 };
 
-// The start time of a process (field 22 of /proc/PID/stat), nullopt when there is no such process or it is a
-// zombie.
-std::optional<std::uint64_t> StartTime(pid_t pid);
+using cell::proc::StartTime;
 // True while `pid` is still the process that was started: same start time and same executable (a binary
 // replaced by a rebuild reads "PATH (deleted)" and still counts). kill(pid, 0) alone would also say yes for
 // an unrelated process that reused the PID.

@@ -9,6 +9,8 @@
 
 #include <gtest/gtest.h>
 
+#include "cell/proc/proc.h"
+
 namespace cell::testing {
 
 LocalCell::LocalCell(const std::string& prefix)
@@ -20,7 +22,7 @@ LocalCell::~LocalCell() {
   // Whatever `down` could not stop, if the pid is still the process `cellctl` started: a pid whose process
   // ended may already belong to another test's cell.
   for (auto& p : Record())
-    if (p.start_time != 0 && StartTime(p.pid) == p.start_time) kill(p.pid, SIGKILL);
+    if (p.start_time != 0 && cell::proc::StartTime(p.pid) == p.start_time) kill(p.pid, SIGKILL);
   if (const char* keep = std::getenv("CELL_TEST_KEEP");
       keep && *keep) {  // logs and databases, for a post-mortem
     std::fprintf(stderr, "CELL_TEST_KEEP: kept %s\n", data_.c_str());

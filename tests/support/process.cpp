@@ -137,25 +137,6 @@ std::vector<std::string> NulFields(const std::string& path) {
 }
 }  // namespace
 
-std::optional<std::uint64_t> StartTime(int pid) {
-  if (pid <= 0) return std::nullopt;
-  std::string text = ReadFile("/proc/" + std::to_string(pid) + "/stat");
-  // "PID (comm) S ppid ...": comm may hold spaces and parentheses, so fields count from the last ')'.
-  auto close = text.rfind(')');
-  if (close == std::string::npos) return std::nullopt;
-  std::istringstream rest(text.substr(close + 1));
-  std::string field;
-  for (int i = 3; i <= 22; ++i) {
-    if (!(rest >> field)) return std::nullopt;
-    if (i == 3 && field == "Z") return std::nullopt;
-  }
-  try {
-    return std::stoull(field);
-  } catch (const std::exception&) {
-    return std::nullopt;
-  }
-}
-
 std::vector<std::string> ProcessArgv(int pid) {
   return NulFields("/proc/" + std::to_string(pid) + "/cmdline");
 }

@@ -17,7 +17,7 @@ namespace cell::testing {
 struct RecordedProcess {
   std::string service;  // "cell-scheduler", "cell-interpreter/KT01"
   int pid = 0;
-  std::uint64_t start_time = 0;  // as StartTime(pid) read it at the start; 0 if not recorded
+  std::uint64_t start_time = 0;  // as cell::proc::StartTime(pid) read it at the start; 0 if not recorded
   std::string log;               // its stdout and stderr
 };
 

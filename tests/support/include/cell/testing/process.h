@@ -47,10 +47,6 @@ RunResult RunCommand(std::vector<std::string> argv, const std::map<std::string, 
 
 std::string ReadFile(const std::string& path);
 // A running process's command line (/proc/PID/cmdline) and environment (/proc/PID/environ).
-// A live process's start time (field 22 of /proc/PID/stat, clock ticks since boot); nullopt for no process or
-// a zombie. With the pid it names one process: a pid alone may since belong to another (pids wrap round fast
-// when a suite forks thousands of processes and threads).
-std::optional<std::uint64_t> StartTime(int pid);
 std::vector<std::string> ProcessArgv(int pid);
 std::map<std::string, std::string> ProcessEnvironment(int pid);
 std::string MakeTempDir(const std::string& prefix);

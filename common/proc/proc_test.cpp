@@ -1,0 +1,26 @@
+#include "cell/proc/proc.h"
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <gtest/gtest.h>
+
+namespace {
+
+TEST(StartTime, OfALiveProcessAndNotOfAZombieOrNobody) {
+  auto me = cell::proc::StartTime(getpid());
+  ASSERT_TRUE(me.has_value());
+  EXPECT_EQ(cell::proc::StartTime(getpid()), me);  // the same process, the same start time
+  const pid_t child = fork();
+  if (child == 0) _exit(0);
+  ASSERT_GT(child, 0);
+  siginfo_t info{};
+  ASSERT_EQ(waitid(P_PID, static_cast<id_t>(child), &info, WEXITED | WNOWAIT), 0);  // ended, not reaped
+  EXPECT_FALSE(cell::proc::StartTime(child).has_value()) << "a zombie has ended";
+  waitpid(child, nullptr, 0);
+  EXPECT_FALSE(cell::proc::StartTime(child).has_value());
+  EXPECT_FALSE(cell::proc::StartTime(0).has_value());
+  EXPECT_FALSE(cell::proc::StartTime(-1).has_value());
+}
+
+}  // namespace
