@@ -18,6 +18,7 @@
 #include "cell/bus/backend.h"
 #include "cell/error/error.h"
 #include "cell_cyclone_registry.h"
+#include "refused.h"
 
 namespace cell::bus {
 namespace {
@@ -323,9 +324,7 @@ class CycloneBackend : public Backend {
     dds_qos_t* qos = MakeQos(q);
     dds_entity_t w = dds_create_writer(pp_, t, qos, nullptr);
     dds_delete_qos(qos);
-    if (w == DDS_RETCODE_NOT_ALLOWED_BY_SECURITY)
-      throw Error(Errc::kPermissionDenied,
-                  "security identity '" + identity_ + "' may not publish " + topic + " (docs/security.md)");
+    if (w == DDS_RETCODE_NOT_ALLOWED_BY_SECURITY) throw Refused(identity_, "publish", topic);
     Check(w, "Cyclone writer for " + topic);
     return std::make_unique<CycWriter>(w);
   }
@@ -340,9 +339,7 @@ class CycloneBackend : public Backend {
     dds_entity_t r = dds_create_reader(pp_, t, qos, l);
     dds_delete_listener(l);
     dds_delete_qos(qos);
-    if (r == DDS_RETCODE_NOT_ALLOWED_BY_SECURITY)
-      throw Error(Errc::kPermissionDenied, "security identity '" + identity_ + "' may not subscribe to " +
-                                               topic + " (docs/security.md)");
+    if (r == DDS_RETCODE_NOT_ALLOWED_BY_SECURITY) throw Refused(identity_, "subscribe to", topic);
     Check(r, "Cyclone reader for " + topic);
     reader->Attach(r);
     return reader;
@@ -354,9 +351,7 @@ class CycloneBackend : public Backend {
     const dds_topic_descriptor_t* desc = cell_cyclone_descriptor(type.name.c_str());
     if (!desc) throw Error(Errc::kInvalidArgument, "no idlc descriptor for " + type.name);
     dds_entity_t t = dds_create_topic(pp_, desc, name.c_str(), nullptr, nullptr);
-    if (t == DDS_RETCODE_NOT_ALLOWED_BY_SECURITY)
-      throw Error(Errc::kPermissionDenied,
-                  "security identity '" + identity_ + "' may not use topic " + name + " (docs/security.md)");
+    if (t == DDS_RETCODE_NOT_ALLOWED_BY_SECURITY) throw Refused(identity_, "use topic", name);
     Check(t, "Cyclone topic " + name);
     return t;
   }

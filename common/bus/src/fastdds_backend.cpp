@@ -30,6 +30,7 @@
 
 #include "cell/bus/backend.h"
 #include "cell/error/error.h"
+#include "refused.h"
 
 namespace cell::bus {
 namespace {
@@ -230,8 +231,7 @@ class FastBackend : public Backend {
     }
     auto* w = pub_->create_datawriter(t, wq);
     if (!w && !identity_.empty())  // access control: the only reason a valid QoS is refused here
-      throw Error(Errc::kPermissionDenied,
-                  "security identity '" + identity_ + "' may not publish " + topic + " (docs/security.md)");
+      throw Refused(identity_, "publish", topic);
     if (!w) throw Error(Errc::kInternal, "cannot create a DDS writer for " + topic);
     return std::make_unique<FastWriter>(pub_, w);
   }
@@ -250,9 +250,7 @@ class FastBackend : public Backend {
     }
     auto reader = std::make_unique<FastReader>(sub_, std::move(cb));
     auto* r = sub_->create_datareader(t, rq, reader.get(), dds::StatusMask::data_available());
-    if (!r && !identity_.empty())
-      throw Error(Errc::kPermissionDenied, "security identity '" + identity_ + "' may not subscribe to " +
-                                               topic + " (docs/security.md)");
+    if (!r && !identity_.empty()) throw Refused(identity_, "subscribe to", topic);
     if (!r) throw Error(Errc::kInternal, "cannot create a DDS reader for " + topic);
     reader->Attach(r);
     return reader;
