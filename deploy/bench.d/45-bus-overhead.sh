@@ -26,6 +26,16 @@ cleanup() {
 }
 trap cleanup EXIT
 
+# The RESULT lines of bus_pingpong_bench per "IMPL SIZE": median(key) is the median of the runs' medians,
+# p99[key] the largest p99; the tables below add their END blocks.
+RESULTS_AWK='
+  $1 == "RESULT" { key = $2 " " $3; n[key]++; med[key, n[key]] = $4; if ($5 > p99[key]) p99[key] = $5 }
+  function median(key,   i, j, t, m, a) {
+    m = n[key]; for (i = 1; i <= m; i++) a[i] = med[key, i]
+    for (i = 1; i <= m; i++) for (j = i + 1; j <= m; j++) if (a[j] < a[i]) { t = a[i]; a[i] = a[j]; a[j] = t }
+    return a[int((m + 1) / 2)]
+  }'
+
 one() {  # IMPL SIZE COUNT
   "$BIN/bus_pingpong_bench" pong "$1" &
   local pong=$!
@@ -49,13 +59,7 @@ for _ in $(seq "$RUNS"); do
 done
 
 echo "bus over raw DDS: round trip on loopback, median (largest p99) in us; x = median / raw median, same vendor"
-awk '
-  $1 == "RESULT" { key = $2 " " $3; n[key]++; med[key, n[key]] = $4; if ($5 > p99[key]) p99[key] = $5 }
-  function median(key,   i, j, t, m, a) {
-    m = n[key]; for (i = 1; i <= m; i++) a[i] = med[key, i]
-    for (i = 1; i <= m; i++) for (j = i + 1; j <= m; j++) if (a[j] < a[i]) { t = a[i]; a[i] = a[j]; a[j] = t }
-    return a[int((m + 1) / 2)]
-  }
+awk "$RESULTS_AWK"'
   END {
     printf "%-11s %7s %20s %26s %26s\n", "vendor", "bytes", "raw", "bus pub/sub", "bus request/reply"
     split("fastdds cyclonedds", vs, " "); split("64 4096 61440", ss, " ")
@@ -78,13 +82,7 @@ for _ in $(seq "$RUNS"); do
 done
 echo
 echo "DDS Security: request/reply operator -> program-store, median (largest p99) in us; x = secured / unsecured"
-awk '
-  $1 == "RESULT" { key = $2 " " $3; n[key]++; med[key, n[key]] = $4; if ($5 > p99[key]) p99[key] = $5 }
-  function median(key,   i, j, t, m, a) {
-    m = n[key]; for (i = 1; i <= m; i++) a[i] = med[key, i]
-    for (i = 1; i <= m; i++) for (j = i + 1; j <= m; j++) if (a[j] < a[i]) { t = a[i]; a[i] = a[j]; a[j] = t }
-    return a[int((m + 1) / 2)]
-  }
+awk "$RESULTS_AWK"'
   END {
     printf "%-11s %7s %20s %26s\n", "vendor", "bytes", "unsecured", "secured"
     split("fastdds cyclonedds", vs, " "); split("64 4096", ss, " ")
