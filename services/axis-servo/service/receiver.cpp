@@ -37,6 +37,8 @@ Segment FromWire(const cell::MotionSegment& m, uint64_t id) {
       break;
     case cell::SEGMENT_PROBE:
       s.kind = SegmentKind::kProbe;
+      s.probe_break = m.probe_break();
+      s.probe_length = m.probe_length();
       break;
     case cell::SEGMENT_STOP:
       s.kind = SegmentKind::kDwell;
@@ -302,6 +304,7 @@ void Receiver::HandleEvents() {
             r.run_id(run_id_);
             r.seq(it->second);
             r.contact(e.probe.contact);
+            r.already(e.probe.already);
             for (int i = 0; i < kNumAxes; ++i) r.position()[static_cast<size_t>(i)] = e.probe.position[i];
             sink_.Probe(r);
             probe_.erase(e.segment_id);

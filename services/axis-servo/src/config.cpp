@@ -261,6 +261,7 @@ MachineConfig ParseMachineConfig(std::string_view text, const std::string& sourc
   TableReader probe(source, "probe.", root["probe"].as_table());
   m.probe_ball_diameter = probe.Number("ball_diameter", 0, 50, 6.0, "mm");
   m.probe_max_feed = probe.Number("max_feed", 0, 1e5, 2000.0, "mm/min", true);
+  m.probe_overtravel = probe.Number("overtravel", 0, 50, 5.0, "mm", true);
   probe.Mark("parts");
   probe.Done();
   if (const toml::node* parts = root["probe"]["parts"].node()) {

@@ -112,7 +112,7 @@ Machine::Machine(MachineConfig config, ClockKind clock)
   spindle_.Configure(cfg_.spindle_max_rpm, cfg_.spindle_accel_rpm_s);
   prev_cmd_ = home;
   SetToolTable(cfg_.tools);
-  for (const auto& ref : cfg_.part_models) parts_[ref.pallet] = LoadPartModel(ref.file);
+  for (const auto& ref : cfg_.part_models) parts_[ref.pallet] = partmodel::LoadPartModel(ref.file);
   events_.reserve(64);
 }
 
@@ -124,7 +124,7 @@ void Machine::SetToolTable(const tooltable::ToolTable& table) {
   }
 }
 
-void Machine::SetPartModel(int pallet, PartModel model) {
+void Machine::SetPartModel(int pallet, partmodel::PartModel model) {
   parts_[pallet] = std::move(model);
 }
 void Machine::SetPallets(int on_table, int on_shuttle) {
@@ -459,11 +459,26 @@ bool Machine::StartBarrier(Entry& e) {
         RaiseAlarm(AlarmCode::kInvalidSegment, fmt::format("segment {}: probe feed is zero", s.id), s.id);
         return false;
       }
+      probe_break_ = s.probe_break;
+      probe_length_ = s.probe_length;
+      probe_prev_ = actual();
+      const partmodel::PartModel* part = PartOnTable();
+      const double ball = 0.5 * cfg_.probe_ball_diameter;
+      // Already in the requested state (touching for G22, clear for G23): no motion, nothing latched.
+      const bool touching = part && part->Distance(PoseOf(probe_prev_)) <= ball;
+      if (touching != probe_break_) {
+        ProbeResult r;
+        r.already = true;
+        r.position = ToSegmentUnits(probe_prev_);
+        const std::uint64_t seg = s.id;
+        op_ = Op{};
+        Complete(seg, &r);
+        return true;
+      }
       planner_.AddLine(end, f, false, true, s.id, true);
       op_.phase = OpPhase::kMotion;
       probing_ = true;
       probe_tripped_ = false;
-      probe_prev_ = actual();
       break;
     }
     default: {  // path motion with a B index move
@@ -628,17 +643,40 @@ void Machine::StepOp() {
   }
 }
 
-void Machine::ProbeCheck() {
-  if (!probing_ || probe_tripped_) return;
-  const AxisVector now = actual();
+const partmodel::PartModel* Machine::PartOnTable() const {
   auto it = parts_.find(pallet_table_);
-  if (it != parts_.end()) {
-    const double t =
-        it->second.FirstContact(probe_prev_.head<3>(), now.head<3>(), 0.5 * cfg_.probe_ball_diameter);
-    if (t >= 0) {
-      probe_trip_ = probe_prev_ + t * (now - probe_prev_);
+  return it == parts_.end() || it->second.empty() ? nullptr : &it->second;
+}
+
+partmodel::Pose Machine::PoseOf(const AxisVector& v) const {
+  return {v[kX], v[kY], v[kZ] - probe_length_, v[kA], v[kB], v[kC]};
+}
+
+// Each tick: did the probe trip between the last actual position and this one? The trip point is latched
+// on that step (the part model's bisection), the move then decelerates at the element's limit; the stylus
+// deflects meanwhile, and a deflection past probe.overtravel is alarm 602.
+void Machine::ProbeCheck() {
+  if (!probing_) return;
+  const AxisVector now = actual();
+  const partmodel::PartModel* part = PartOnTable();
+  const double ball = 0.5 * cfg_.probe_ball_diameter;
+  if (!probe_tripped_ && part) {
+    const partmodel::Trip t = part->Probe(!probe_break_, PoseOf(probe_prev_), PoseOf(now), ball);
+    if (t.kind != partmodel::Trip::kNone) {
+      probe_trip_ = probe_prev_ + t.t * (now - probe_prev_);
       probe_tripped_ = true;
       planner_.StopOnCurrent();
+    }
+  }
+  if (probe_tripped_ && !probe_break_ && part) {
+    const double depth = ball - part->Distance(PoseOf(now));
+    if (depth > cfg_.probe_overtravel) {
+      probing_ = false;
+      RaiseAlarm(AlarmCode::kProbeOvertravel,
+                 fmt::format("segment {}: probe overtravel: stylus deflected {:.3f} mm > {:.3f} mm", op_.seg,
+                             depth, cfg_.probe_overtravel),
+                 op_.seg);
+      return;
     }
   }
   probe_prev_ = now;

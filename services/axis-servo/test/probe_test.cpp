@@ -40,7 +40,7 @@ struct Hit {
 
 Hit Probe(const AxisVector& from, const AxisVector& to, double feed = 600) {
   Machine m(DefaultMachineConfig("hmc"), ClockKind::kVirtual);
-  m.SetPartModel(1, ParsePartModel(kPart, "part.toml"));
+  m.SetPartModel(1, partmodel::ParsePartModel(kPart, "part.toml"));
   m.SetPallets(1, 0);
   m.Push(Rapid(1, from[0], from[1], from[2]));
   Segment p;
@@ -112,19 +112,74 @@ TEST(Probe, NoPartModelMeansNoContact) {
   EXPECT_FALSE(Find(ev, EventKind::kCompleted, 1)->probe.contact);
 }
 
-TEST(PartModel, DistanceAndErrors) {
-  PartModel m = ParsePartModel(kPart, "part.toml");
-  EXPECT_NEAR(m.Distance({0, 0, 60}), 10, 1e-12);
-  EXPECT_NEAR(m.Distance({200, 200, 40}), 20, 1e-9);  // centre of the bore: 20 to the wall
-  EXPECT_LT(m.Distance({0, 0, 40}), 0);
-  try {
-    ParsePartModel("[[bore]]\ntop = [0,0,0]\naxis = [0,0,1]\ndepth = 5\n", "p.toml");
-    FAIL();
-  } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find("p.toml: bore[0].diameter: missing"), std::string::npos) << e.what();
-  }
-  EXPECT_THROW(ParsePartModel("[[cone]]\n", "p.toml"), Error);
-  EXPECT_THROW(ParsePartModel("[[sphere]]\ncenter = [0,0]\ndiameter = 3\n", "p.toml"), Error);
+// G22 down onto the face, then G23 back up and G22 again: the break latches where the ball leaves the face
+// (centre 3 mm above z = 50, the same point the make latched), and a G22 that starts touching is "already".
+Segment ProbeSeg(std::uint64_t id, double z, bool brk, double feed = 600) {
+  Segment p;
+  p.id = id;
+  p.kind = SegmentKind::kProbe;
+  p.end = {100, 100, z, 0, 0, 0};
+  p.axes = 0x07;
+  p.feed = feed;
+  p.probe_break = brk;
+  return p;
+}
+
+TEST(Probe, BreakLatchesWhereContactIsLostAndAlreadyMeansNoMotion) {
+  Machine m(DefaultMachineConfig("ktapl"), ClockKind::kVirtual);
+  m.SetPartModel(1, partmodel::ParsePartModel(kPart, "part.toml"));
+  m.SetPallets(1, 0);
+  m.Push(Rapid(1, 100, 100, 100));
+  m.Push(ProbeSeg(2, 0, false));
+  m.RunUntilIdle(120);
+  auto ev = m.TakeEvents();
+  ASSERT_NE(Find(ev, EventKind::kCompleted, 2), nullptr);
+  EXPECT_TRUE(Find(ev, EventKind::kCompleted, 2)->probe.contact);
+  // Overtravel: the slide stops below the trip point (the stylus deflects).
+  const double stopped = m.actual()[kZ];
+  EXPECT_LT(stopped, 53.0);
+
+  m.Push(ProbeSeg(3, 0, false));  // G22 while touching: already, nothing moves
+  m.RunUntilIdle(120);
+  ev = m.TakeEvents();
+  const Event* again = Find(ev, EventKind::kCompleted, 3);
+  ASSERT_NE(again, nullptr);
+  EXPECT_TRUE(again->probe.already);
+  EXPECT_FALSE(again->probe.contact);
+  EXPECT_NEAR(m.actual()[kZ], stopped, 1e-3);
+
+  m.Push(ProbeSeg(4, 100, true));  // G23 up: contact is lost at 53
+  m.RunUntilIdle(120);
+  ev = m.TakeEvents();
+  const Event* brk = Find(ev, EventKind::kCompleted, 4);
+  ASSERT_NE(brk, nullptr);
+  EXPECT_TRUE(brk->probe.contact);
+  EXPECT_FALSE(brk->probe.already);
+  EXPECT_NEAR(brk->probe.position[kZ], 53.0, 1e-4);
+
+  m.Push(ProbeSeg(5, 100, true));  // G23 while clear: already
+  m.RunUntilIdle(120);
+  ev = m.TakeEvents();
+  ASSERT_NE(Find(ev, EventKind::kCompleted, 5), nullptr);
+  EXPECT_TRUE(Find(ev, EventKind::kCompleted, 5)->probe.already);
+}
+
+TEST(Probe, DrivingTheStylusPastItsOvertravelIsAlarm602) {
+  MachineConfig cfg = DefaultMachineConfig("ktapl");
+  cfg.probe_overtravel = 0.01;  // far less than the stopping distance at 600 mm/min
+  Machine m(cfg, ClockKind::kVirtual);
+  m.SetPartModel(1, partmodel::ParsePartModel(kPart, "part.toml"));
+  m.SetPallets(1, 0);
+  m.Push(Rapid(1, 100, 100, 100));
+  m.Push(ProbeSeg(2, 0, false));
+  m.RunUntilIdle(120);
+  auto ev = m.TakeEvents();
+  bool alarm = false;
+  for (const Event& e : ev)
+    alarm = alarm || (e.kind == EventKind::kAlarm && e.alarm.code == AlarmCode::kProbeOvertravel);
+  EXPECT_TRUE(alarm);
+  EXPECT_EQ(m.alarm().code, AlarmCode::kProbeOvertravel);
+  // With the default 5 mm the same move ends normally (see the test above).
 }
 
 }  // namespace

@@ -13,7 +13,7 @@
 
 #include "cell/error/error.h"
 #include "cell/interp/interp.h"
-#include "probe_model.h"
+#include "offline_environment.h"
 
 namespace {
 
@@ -136,11 +136,16 @@ int main(int argc, char** argv) {
       return std::nullopt;
     };
   }
-  cell::interp::ProbeModelEnvironment env;
+  cell::interp::OfflineEnvironment env;
+  if (std::string why = env.Configure(opt.params); !why.empty()) return Usage(params + ": " + why);
   if (!probe_model.empty()) {
-    std::string text, err;
+    std::string text;
     if (!ReadFile(probe_model, text)) return Usage("cannot read " + probe_model);
-    if (!env.Load(text, &err)) return Usage("bad probe model " + probe_model + ": " + err);
+    try {
+      env.SetPartModel(cell::partmodel::ParsePartModel(text, probe_model));
+    } catch (const cell::Error& e) {
+      return Usage("bad probe model: " + std::string(e.what()));
+    }
   }
   opt.env = &env;
 

@@ -17,11 +17,9 @@ std::string Diagnostic::Format() const {
   return out;
 }
 
-ProbeResult Environment::Probe(bool contact, const AxisArray& from, const AxisArray& to) {
-  (void)contact;
-  (void)from;
+ProbeResult Environment::Probe(const ProbeMove& move) {
   ProbeResult r;
-  r.at = to;
+  r.at = move.to;
   return r;
 }
 

@@ -26,17 +26,18 @@ class Station::RunEnvironment : public interp::Environment {
   RunEnvironment(Station& station, SegmentStream& stream, double probe_feed)
       : station_(station), stream_(stream), probe_feed_(probe_feed) {}
   void WaitInputs(const std::string& spec) override { station_.WaitInputs(spec); }
-  interp::ProbeResult Probe(bool contact, const interp::AxisArray& from,
-                            const interp::AxisArray& to) override {
-    (void)from;
+  interp::ProbeResult Probe(const interp::ProbeMove& m) override {
     cell::MotionSegment seg;
-    for (size_t i = 0; i < to.size(); ++i) seg.target()[i] = to[i];
+    for (size_t i = 0; i < m.to.size(); ++i) seg.target()[i] = m.to[i];
     seg.axis_mask(0x3f);
     seg.exact_stop(true);
-    seg.feed(probe_feed_);
+    seg.feed(m.feed > 0 ? m.feed : probe_feed_);
+    seg.probe_break(!m.make);
+    seg.probe_length(m.length);
     const cell::ProbeResult got = stream_.Probe(seg);
     interp::ProbeResult r;
-    r.event = got.contact() == contact;
+    r.event = got.contact();
+    r.already = got.already();
     for (size_t i = 0; i < r.at.size(); ++i) r.at[i] = got.position()[i];
     return r;
   }

@@ -77,6 +77,7 @@ struct MachineConfig {
   // Probe
   double probe_ball_diameter = 6.0;  // mm
   double probe_max_feed = 2000.0;    // mm/min
+  double probe_overtravel = 5.0;     // mm the stylus may deflect past a contact before alarm 602
   std::vector<PartModelRef> part_models;
 };
 

@@ -13,8 +13,8 @@
 #include <string>
 #include <vector>
 
+#include "cell/partmodel/part_model.h"
 #include "cell/servo/config.h"
-#include "cell/servo/part_model.h"
 #include "cell/servo/planner.h"
 #include "cell/servo/segment.h"
 #include "cell/servo/servo.h"
@@ -93,7 +93,7 @@ class Machine {
 
   // ---- Devices and probing.
   void SetToolTable(const tooltable::ToolTable& table);  // magazine contents: the station table's sockets
-  void SetPartModel(int pallet, PartModel model);
+  void SetPartModel(int pallet, partmodel::PartModel model);
   void SetPallets(int on_table, int on_shuttle);
 
   // ---- Observation.
@@ -148,6 +148,9 @@ class Machine {
             const ProbeResult* probe = nullptr);
   AxisVector ToSegmentUnits(AxisVector v) const;
   void ProbeCheck();
+  const partmodel::PartModel* PartOnTable() const;
+  // The stylus ball's centre in the part model's frame: the machine position less the probe's length.
+  partmodel::Pose PoseOf(const AxisVector& v) const;
 
   MachineConfig cfg_;
   ClockKind clock_kind_;
@@ -184,10 +187,11 @@ class Machine {
   int magazine_at_ = 1;
   int pallet_table_ = 0, pallet_shuttle_ = 0;
   bool b_clamped_ = true;
-  std::map<int, PartModel> parts_;
+  std::map<int, partmodel::PartModel> parts_;
 
   // Probe
-  bool probing_ = false, probe_tripped_ = false;
+  bool probing_ = false, probe_tripped_ = false, probe_break_ = false;
+  double probe_length_ = 0;
   std::uint64_t probe_seg_ = 0;
   AxisVector probe_prev_ = AxisVector::Zero(), probe_trip_ = AxisVector::Zero();
 };

@@ -25,7 +25,8 @@ enum class SegmentKind : std::uint8_t {
   kSpindle,       // `spindle_dir` (stop, cw, ccw, orient) at `spindle_rpm`, or at constant surface speed
   kCoolant,       // `coolant` on/off
   kPalletChange,  // shuttle `pallet` onto the table (0: swap table and shuttle)
-  kProbe,         // straight move towards `end` at `feed`, stops at first contact with the part model
+  kProbe,         // straight move towards `end` at `feed`, stops where the probe makes contact with the part
+                  // model (G22) or, with `probe_break`, loses it (G23)
   kEnd,           // program end: completes once all motion is in position
   kThread,        // spindle-synchronised straight move to `end`: `thread_lead` mm per spindle revolution
 };
@@ -72,12 +73,15 @@ struct Segment {
   double thread_lead_change = 0.0;
   double thread_start_angle = 0.0;
   CoolantMode coolant = CoolantMode::kOff;  // kCoolant
-  int pallet = 0;                           // kPalletChange
+  bool probe_break = false;                 // kProbe: trip when contact is lost (G23), not made (G22)
+  double probe_length = 0.0;  // kProbe: the probe's length compensation in Z (mm); the ball is at Z - it
+  int pallet = 0;             // kPalletChange
 };
 
-// A probe move's result: the latched axis positions at the trip, or the end of travel without contact.
+// A probe move's result: the latched axis positions at the trip, or the end of travel without a trip.
 struct ProbeResult {
-  bool contact = false;
+  bool contact = false;  // the probe tripped: contact made (G22) or, for a probe_break move, lost (G23)
+  bool already = false;  // the probe was in that state at the start: no motion, nothing latched
   AxisVector position = AxisVector::Zero();  // segment convention (lathe X as a diameter)
 };
 
@@ -86,7 +90,8 @@ enum class AlarmCode : std::uint16_t {
   kSoftLimit = 500,       // a segment would leave the travel limits: no motion
   kFollowingError = 410,  // "DIFF over": following error above the axis limit
   kToolNotInMagazine = 600,
-  kInvalidSegment = 601,  // arc radii disagree, index position off the increment, bad feed, ...
+  kInvalidSegment = 601,   // arc radii disagree, index position off the increment, bad feed, ...
+  kProbeOvertravel = 602,  // the stylus was driven past its overtravel after a trip
 };
 
 struct Alarm {

@@ -48,7 +48,7 @@ void KtRun::ConvertGCodes(const GWords& gs, bool pass800, BlockCodes& k) {
   bool plane_set = false, b20 = false, b21 = false;
   for (auto [g, col] : gs) {
     if (pass800 && !(g == 77 || g == 78 || g == 70 || g == 71 || g == 80 || g == 800 ||
-                     (g >= 801 && g <= 899) || (g >= 81 && g <= 89))) {
+                     (g >= 801 && g <= 899) || (g >= 81 && g <= 89) || (g >= 24 && g <= 27))) {
       k.passed.push_back({g, col});
       continue;
     }
@@ -105,7 +105,7 @@ void KtRun::ConvertGCodes(const GWords& gs, bool pass800, BlockCodes& k) {
         mode_.inspection_recording = true;
         break;
       case 37:
-        CloseInspectionFile();
+        CloseOpenFile(col, true);
         mode_.inspection_recording = false;
         break;
       case 38: {
@@ -175,6 +175,7 @@ void KtRun::ConvertGCodes(const GWords& gs, bool pass800, BlockCodes& k) {
         break;
       case 80:
       case 800:
+        k.cancel = true;
         mode_.cycle = 0;
         for (auto it = program_.lower_bound(800); it != program_.end() && it->first <= 899;) {
           it = program_.erase(it);
@@ -446,7 +447,11 @@ void KtRun::ExecTypeI(BlockCtx& bc, const ParsedBlock* pb) {
     if ((g >= 81 && g <= 89) || (g >= 801 && g <= 899)) new_cycle = g;
   }
   const bool g77 = std::any_of(gs.begin(), gs.end(), [](GWord g) { return g.code == 77; });
-  const bool pass800 = !running_cycle && !g77 && new_cycle >= 801;
+  // A probe cycle (G24-G27) takes the block's other G codes as L807 and its letters as L801-L826, as the
+  // G800-series cycles do (App. E checks that there are none: "NO OTHER M OR G CODES ALLOWED").
+  const bool probe_block =
+      std::any_of(gs.begin(), gs.end(), [](GWord g) { return g.code >= 24 && g.code <= 27; });
+  const bool pass800 = (!running_cycle && !g77 && new_cycle >= 801) || probe_block;
 
   BlockCodes k;
   k.dwell = std::any_of(gs.begin(), gs.end(), [](GWord g) { return g.code == 4; });
@@ -477,6 +482,21 @@ void KtRun::ExecTypeI(BlockCtx& bc, const ParsedBlock* pb) {
   }
   if (comp_codes_.any || comp_.engaged()) [[unlikely]] {
     CompPrepare(words, motion_col, running_cycle, k.probe || k.probe_cycle != 0, k.g92);
+  }
+
+  if (k.probe_cycle) {
+    if (running_cycle) Fail(1, "PROBE CYCLES CANNOT BE CALLED FROM A CYCLE");
+    for (const auto& rw : raw) {
+      if (rw.letter == 'G') continue;
+      bool dropped;
+      Word w = EvalWord(rw, false, true, drop_undefined, dropped);
+      if (!dropped) SetParam(800 + (rw.letter - 'A') + 1, w.v, rw.col);
+    }
+    if (!k.passed.empty()) SetParam(807, k.passed.back().code, k.passed.back().col);
+    // The block's N number, passed as X.4: the cycles write it back as N<L814*10000> (App. E).
+    if (pb && pb->has_n) SetParam(814, ScaleLiteral('N', pb->n, metric_, false, true), 1);
+    CallCycle(k.probe_cycle);
+    return;
   }
 
   // Cycle parameter passing (manual ch. 8: letters A-Z -> L801-L826). M25 / M06 blocks move in machine
@@ -515,18 +535,6 @@ void KtRun::ExecTypeI(BlockCtx& bc, const ParsedBlock* pb) {
     CallCycle(mode_.cycle);
     return;
   }
-  if (k.probe_cycle) {
-    if (running_cycle) Fail(1, "PROBE CYCLES CANNOT BE CALLED FROM A CYCLE");
-    for (const auto& rw : raw) {
-      if (rw.letter == 'G') continue;
-      bool dropped;
-      Word w = EvalWord(rw, false, true, drop_undefined, dropped);
-      if (!dropped) SetParam(800 + (rw.letter - 'A') + 1, w.v, rw.col);
-    }
-    CallCycle(k.probe_cycle);
-    return;
-  }
-
   // H word: fixture offsets.
   if (const Word* h = Find(words, 'H')) {
     int hv = static_cast<int>(h->v);
@@ -539,8 +547,15 @@ void KtRun::ExecTypeI(BlockCtx& bc, const ParsedBlock* pb) {
   Motion(words, k, mc, axis_mask, motion_col, f, block_feed);
   AfterMCode(mc);
   if (mc.m99 && mc.after == 0) {
-    Fail(1, "M99 alarm - see MAIN display (program stopped by M99 M00)", "M99");
+    // In cycle and library code the operator cannot see the block: its comment is the message (App. E
+    // puts each error's text there: "! ERROR: PROBE DID NOT MAKE CONTACT WITH SURFACE").
+    std::string text = "M99 alarm - see MAIN display (program stopped by M99 M00)";
+    if (!cur_own_ && !block_comment_.empty()) text += ": " + block_comment_;
+    Fail(1, text, "M99");
   }
+  // A cycle body that cancels the cycle has finished: App. E's probe cycles leave each branch with
+  // GL843G800 ("restoring G90/G91 and cancelling the cycle") and the next branch follows in the text.
+  if (k.cancel && running_cycle) bc.cycle_return = true;
 }
 
 void KtRun::AfterMCode(const BlockMCodes& mc) {

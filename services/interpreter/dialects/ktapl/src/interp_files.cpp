@@ -1,6 +1,12 @@
-// Files a KT-APL program writes (manual ch. 7, part 2 ch. 9): inspection files (G36 + OIF or MSG,NAM, G37 /
-// CLF), OPF/FWR/CLF data and NC files, and the file operations CPY, DLF, PRT, RCP, USF, ULF with their
-// completion flags L1050-L1054.
+// Files a KT-APL program writes (manual ch. 7 ln 7886-8395, part 2 ch. 9): inspection files (G36 + OIF or
+// MSG,NAM with the control's header; G37 / CLF), OPF/FWR/CLF data and NC files, and the file operations
+// CPY, DLF, PRT, RCP, USF, ULF with their completion flags L1050-L1054.
+//
+// Every effect goes through Environment::FileOperation with the op as it is output (file_open, file_write,
+// file_close, file_op): on a station that is the inspection writer and the program store, which answer once
+// the operation is durable; the flag of an operation is set only then. A device error stops the run with
+// the device's message unless CER covers its device class (MAS disk, SEQ printer, REM remote), in which
+// case the run goes on with a warning message.
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -10,24 +16,85 @@
 
 namespace cell::interp::ktapl {
 
-void KtRun::OpenInspectionFile(std::string name) {
-  OpenFile(name, "AS", false, 1);
-  file_open_ = true;
+namespace {
+
+// The device class of a file operation (CER/SER, ln 8358-8395).
+int DeviceOf(const std::string& what) {
+  if (what == "PRT") return kDeviceSeq;
+  if (what == "RCP") return kDeviceRem;
+  return kDeviceMas;
+}
+
+}  // namespace
+
+std::string InspectionHeader(const std::string& serial, const std::string& part_number,
+                             const std::array<int, 6>& now) {
+  // Ch. 7 ln 7898-7908: three entries, then the dashed delimiter (its length is lost in the scan).
+  return fmt::format(
+      "CONTROL SERIAL NUMBER = {}\nPALLET CODE/PART NUMBER = {}\n{:02d}:{:02d}:{:02d} {:02d}:{:02d}\n{}\n",
+      serial, part_number, now[0] % 100, now[1], now[2], now[3], now[4], kInspectionDelimiter);
+}
+
+bool KtRun::FileDevice(const Canon& op, int device, int col) {
+  FileResult r = env_->FileOperation(op);
+  if (r.error.empty()) return r.done;
+  if (cer_ & device) {
+    // CER: the warning is displayed, no alarm, the program continues (ln 8364-8370).
+    Out<MessageOp>().text = r.error;
+    return false;
+  }
+  Fail(col, r.error);
+}
+
+void KtRun::OpenInspectionFile(std::string name, int col) {
+  if (open_file_ == Upper(name)) return;  // the same file already open: ignored (ln 7894)
+  OpenFile(name, "AS", false, col);
   FileOpenOp& c = Out<FileOpenOp>();
-  c.name = std::move(name);
+  c.name = name;
   c.type = "AS";
   c.inspection = true;
+  Canon asked;
+  asked.line = cur_line_;
+  asked.p = c;
+  FileDevice(asked, kDeviceMas, col);
+  // The canned header, written when the file is first opened.
+  auto number = [&](const char* param, double fallback) {
+    std::optional<double> v = env_->SystemVariable(param);
+    return fmt::format("{}", static_cast<long long>(std::trunc(v ? *v : fallback)));
+  };
+  std::string part = part_number_.empty() ? number("L3020", pallet_) : part_number_;
+  std::string header = InspectionHeader(number("L3060", 0), part, env_->Now());
+  for (size_t at = 0; at < header.size();) {
+    size_t nl = header.find('\n', at);
+    EmitFileWrite(header.substr(at, nl - at), col);
+    at = nl + 1;
+  }
 }
 
-void KtRun::CloseInspectionFile() {
-  if (file_open_) Out<FileCloseOp>();
-  file_open_ = false;
-  CloseFile();
+void KtRun::CloseOpenFile(int col, bool flag) {
+  if (open_file_.empty()) return;
+  if (!fwr_pending_.empty()) {  // a ";" continuation with nothing after it still ends its line
+    std::string rest = std::move(fwr_pending_);
+    fwr_pending_.clear();
+    EmitFileWrite(rest.substr(0, 80), col);
+  }
+  Out<FileCloseOp>();
+  Canon asked;
+  asked.line = cur_line_;
+  asked.p = FileCloseOp{};
+  open_file_.clear();
+  if (FileDevice(asked, kDeviceMas, col) && flag) SetFlag(1050);
 }
 
-void KtRun::EmitFileWrite(std::string text) {
-  WriteFile(text);
-  Out<FileWriteOp>().text = std::move(text);
+void KtRun::EmitFileWrite(std::string text, int col) {
+  if (open_file_.empty()) return;
+  files_[open_file_].text += text + "\n";
+  FileWriteOp& w = Out<FileWriteOp>();
+  w.text = std::move(text);
+  Canon asked;
+  asked.line = cur_line_;
+  asked.p = w;
+  FileDevice(asked, kDeviceMas, col);
 }
 
 void KtRun::StMsg(const Statement& st, BlockCtx&, bool) {
@@ -35,15 +102,17 @@ void KtRun::StMsg(const Statement& st, BlockCtx&, bool) {
   auto parts = SplitTopLevel(body, ',');
   if (parts.size() >= 2 && Upper(Trim(parts[0])) == "NAM") {
     if (!mode_.inspection_recording) Fail(st.col, "(MSG,NAM,...) NEEDS G36");
-    OpenInspectionFile(ExpandName(Trim(body.substr(parts[0].size() + 1)), st.col));
+    std::string name = ExpandName(Trim(body.substr(parts[0].size() + 1)), st.col);
+    if (name.empty() || name.size() > 32) Fail(st.col, "FILE NAME MUST HAVE 1-32 CHARACTERS");
+    OpenInspectionFile(std::move(name), st.col);
     return;
   }
   std::string text = Trim(body);
   Out<MessageOp>().text = text;
-  if (file_open_) {
-    // A message while a file is open is written to it, with an empty line after it.
-    EmitFileWrite(text.substr(0, 80));
-    EmitFileWrite("");
+  if (!open_file_.empty()) {
+    // A message while a file is open is written to it, with an empty line after it (ln 8043-8097).
+    EmitFileWrite(text.substr(0, 80), st.col);
+    EmitFileWrite("", st.col);
   }
 }
 
@@ -51,12 +120,11 @@ void KtRun::StOif(const Statement& st, BlockCtx&, bool) {
   if (!mode_.inspection_recording) Fail(st.col, "OIF NEEDS G36 IN THE BLOCK BEFORE");
   std::string name = ExpandName(Trim(st.body), st.col);
   if (name.empty() || name.size() > 32) Fail(st.col, "FILE NAME MUST HAVE 1-32 CHARACTERS");
-  OpenInspectionFile(std::move(name));
+  OpenInspectionFile(std::move(name), st.col);
 }
 
-void KtRun::StClf(const Statement&, BlockCtx&, bool) {
-  CloseInspectionFile();
-  SetFlag(1050);
+void KtRun::StClf(const Statement& st, BlockCtx&, bool) {
+  CloseOpenFile(st.col, true);
 }
 
 void KtRun::StFileOp(const Statement& st, BlockCtx&, bool) {
@@ -81,36 +149,25 @@ void KtRun::StFileOp(const Statement& st, BlockCtx&, bool) {
   Canon asked;  // the environment is asked about the same operation
   asked.line = cur_line_;
   asked.p = FileOpOp{m, args};
-  bool done = env_->FileOperation(asked);
-  if (done) {
-    if (m == "DLF") {
-      files_.erase(Upper(Trim(SplitTopLevel(args, '/')[0])));
-      SetFlag(1051);
-    }
-    if (m == "PRT") SetFlag(1052);
-    if (m == "CPY") SetFlag(1053);
-    if (m == "RCP") SetFlag(1054);
+  if (!FileDevice(asked, DeviceOf(m), st.col)) return;
+  if (m == "DLF") {
+    files_.erase(Upper(Trim(SplitTopLevel(args, '/')[0])));
+    SetFlag(1051);
   }
+  if (m == "PRT") SetFlag(1052);
+  if (m == "CPY") SetFlag(1053);
+  if (m == "RCP") SetFlag(1054);
 }
 
 void KtRun::OpenFile(const std::string& name, const std::string& type, bool append, int col) {
   std::string key = Upper(name);
-  CloseFile();
+  CloseOpenFile(col, false);  // one open file at a time: the old one is closed first (ln 7894, 7924)
   auto it = files_.find(key);
   if (it != files_.end() && it->second.type != type) Fail(col, "FILE ALREADY EXISTS");
   MemFile& f = files_[key];
   f.type = type;
   if (!append) f.text.clear();
   open_file_ = key;
-}
-
-void KtRun::WriteFile(const std::string& line) {
-  if (open_file_.empty()) return;
-  files_[open_file_].text += line + "\n";
-}
-
-void KtRun::CloseFile() {
-  open_file_.clear();
 }
 
 void KtRun::StOpf(const Statement& st, BlockCtx&, bool) {
@@ -131,8 +188,6 @@ void KtRun::StOpf(const Statement& st, BlockCtx&, bool) {
     if (!f.empty() && f[0] == 'A' && (f.size() == 1 || f[1] == '/')) {
       append = true;
       if (f.size() > 1) type = Trim(f.substr(2));
-    } else if (f == "AS" || f == "NC" || f == "ASCII") {
-      type = f;
     } else {
       type = f;
     }
@@ -141,17 +196,21 @@ void KtRun::StOpf(const Statement& st, BlockCtx&, bool) {
   if (type != "AS" && type != "NC") Fail(st.col, "ERROR - MUST BE EITHER NC prog OR ASCII");
   std::string file = ExpandName(name, st.col);
   if (file.empty() || file.size() > 32) Fail(st.col, "FILE NAME MUST HAVE 1-32 CHARACTERS");
+  if (open_file_ == Upper(file)) return;  // already open and in use: ignored (ln 7924)
   OpenFile(file, type, append, st.col);
-  file_open_ = true;
   FileOpenOp& c = Out<FileOpenOp>();
   c.name = std::move(file);
   c.type = type;
   c.append = append;
+  Canon asked;
+  asked.line = cur_line_;
+  asked.p = c;
+  FileDevice(asked, kDeviceMas, st.col);
 }
 
 void KtRun::StFwr(const Statement& st, BlockCtx&, bool) {
-  if (!file_open_) {
-    if (cer_mas_) return;
+  if (open_file_.empty()) {
+    if (cer_ & kDeviceMas) return;
     Fail(st.col, "PROCESS INSPECTION FILE NOT NAMED");
   }
   std::string body = st.body;
@@ -234,7 +293,7 @@ void KtRun::StFwr(const Statement& st, BlockCtx&, bool) {
     return;
   }
   fwr_pending_.clear();
-  EmitFileWrite(line.substr(0, 80));
+  EmitFileWrite(line.substr(0, 80), st.col);
 }
 
 }  // namespace cell::interp::ktapl

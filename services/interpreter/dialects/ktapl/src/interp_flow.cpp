@@ -43,6 +43,8 @@ KtRun::KtRun(const RunOptions& o) : env_(o.env ? o.env : &default_env_) {
       optional_stop_ = num(0) != 0;
     } else if (key == "PALLET") {
       pallet_ = static_cast<int>(std::clamp(num(0), 0.0, 999.0));
+    } else if (key == "PART_NUMBER") {
+      part_number_ = val;
     } else if (key == "CODED_PALLETS") {
       max_pallet_ = num(0) != 0 ? 127 : 255;
     } else if (key == "B_AXIS") {
@@ -160,6 +162,7 @@ void KtRun::ExecBlock(std::string_view text, size_t start) {
   }
   const ParsedBlock& pb = cached ? *cached : fresh;
   if (pb.deleted && block_delete_) return;
+  block_comment_ = pb.comment;
   for (const auto& st : pb.stmts) {
     if (st.mnemonic == "DFS" || st.mnemonic == "DFC") {
       Define(st, li);
@@ -182,9 +185,21 @@ void KtRun::ExecBlock(std::string_view text, size_t start) {
   ExecTypeI(bc, &pb);
   if (comp_.engaged()) [[unlikely]]
     CompEndBlock(!pb.words.empty() || !pb.stmts.empty());
+  if (bc.cycle_return) {
+    ReturnFromCycle();
+    return;
+  }
   if (bc.jump) DoJump(*bc.jump, bc.jump_col);
   if (bc.call) DoCall(bc.call_def, bc.call_locals, false);
   if (bc.end) DoEnd(bc.end_col);
+}
+
+void KtRun::ReturnFromCycle() {
+  while (frames_->depth() > 1) {
+    const bool cycle = frames_->top().data.is_cycle;
+    frames_->Pop();
+    if (cycle) return;
+  }
 }
 
 void KtRun::Define(const Statement& st, size_t li) {

@@ -159,6 +159,7 @@ struct BlockCtx {
   int call_col = 1;
   int gto_count = 0;
   int items = 0;
+  bool cycle_return = false;  // G80/G800 in a running defined cycle: the cycle ends with the block
 };
 
 // ---------------------------------------------------------------------------------------------------------
@@ -202,7 +203,8 @@ struct BlockCodes {
   int arc = 0, arc_col = 1;  // G02 / G03
   bool dwell = false;        // G04
   bool g92 = false, g98 = false, g99 = false;
-  bool probe = false;  // G22 / G23
+  bool cancel = false;  // G80 / G800
+  bool probe = false;   // G22 / G23
   int probe_g = 0;
   int probe_cycle = 0;          // G24-G27
   bool inhibit_cycle = false;   // G77
@@ -248,6 +250,7 @@ class KtRun final : public RunBase, public ExprContext {
   void Define(const Statement& st, size_t level_idx);
   void DoCall(const Def& d, std::map<int, double> locals, bool is_cycle);
   void DoEnd(int col);
+  void ReturnFromCycle();
   void DoJump(int label, int col);
   std::optional<Def> FindDef(const std::string& name);
   std::optional<Def> LoadLibrary(const std::string& name, const std::string& text);
@@ -295,11 +298,12 @@ class KtRun final : public RunBase, public ExprContext {
   void StEvt(const Statement& st, BlockCtx& bc, bool in_ift);
   void Par(const Statement& st);
   void OpenFile(const std::string& name, const std::string& type, bool append, int col);
-  void WriteFile(const std::string& line);
-  void CloseFile();
-  void CloseInspectionFile();
-  void OpenInspectionFile(std::string name);
-  void EmitFileWrite(std::string text);
+  // Closes the open file (CLF, G37, or before another is opened); `flag`: CLF/G37 set L1050 when done.
+  void CloseOpenFile(int col, bool flag);
+  void OpenInspectionFile(std::string name, int col);
+  void EmitFileWrite(std::string text, int col);
+  // Asks the environment to do a file effect; false when it did not finish (a CER-covered error warns).
+  bool FileDevice(const Canon& op, int device, int col);
   void ApplyTool();
 
   // Type I blocks (interp_convert.cpp)
@@ -392,7 +396,8 @@ class KtRun final : public RunBase, public ExprContext {
   int max_pallet_ = 255;
 
   // Files and system parameters.
-  bool file_open_ = false, cer_mas_ = false;
+  int cer_ = 0;              // device classes whose errors only warn (CER): kDeviceMas | kDeviceSeq | ...
+  std::string part_number_;  // the inspection header's PALLET CODE/PART NUMBER (PART_NUMBER; else L3020)
   std::string fwr_pending_;
   std::array<double, 8> probe_latch_{};
   std::array<double, 6> dat_{};
@@ -405,13 +410,14 @@ class KtRun final : public RunBase, public ExprContext {
     std::string text;
   };
   std::map<std::string, MemFile> files_;
-  std::string open_file_;
+  std::string open_file_;  // upper-case name of the file open for writing; empty: none
 
   // Definitions.
   std::map<std::string, Def> defs_;
   std::map<std::string, Def> lib_cache_;
   ParseCache<ParsedBlock> cache_;
-  std::string_view block_;  // the block being executed (diagnostic columns)
+  std::string_view block_;     // the block being executed (diagnostic columns)
+  std::string block_comment_;  // its comment (the operator's message of an M99 M00 in cycle code)
   int local_defs_ = 0;
 };
 
@@ -431,6 +437,16 @@ T& KtRun::CompSlot() {
   comp_staged_ = true;
   return comp_stage_.Set<T>();
 }
+
+// Device classes of CER/SER (ln 8358-8395): mass storage, sequential (printer), remote (FMS host).
+constexpr int kDeviceMas = 1, kDeviceSeq = 2, kDeviceRem = 4;
+// The inspection header's delimiter line (ch. 7 ln 7908: "the dashed line"; its length is lost in the scan).
+inline constexpr const char* kInspectionDelimiter = "---------------";
+// The header OIF (and MSG,NAM) writes when it opens a file (ch. 7 ln 7898-7908), lines ending in "\n":
+// serial number, pallet code/part number, the YY:MM:DD HH:MM stamp of `now` (year, month, day, hour,
+// minute, second), the delimiter.
+std::string InspectionHeader(const std::string& serial, const std::string& part_number,
+                             const std::array<int, 6>& now);
 
 // A tool number as the control writes it from a value: 33412.5 -> "33412.5", 1001 -> "1001".
 std::string ToolName(double v);

@@ -236,7 +236,13 @@ void KtRun::LinearMotion(const Words& words, const BlockCodes& k, const BlockMCo
 void KtRun::ProbeMove(const BlockCodes& k, uint32_t axis_mask, const AxisArray& target, bool rapid,
                       double feed, FeedMode fm) {
   // G22 (stop on contact) / G23 (stop on break): a queue buster, answered by the Environment.
-  ProbeResult pr = env_->Probe(k.probe_g == 22, pos_, target);
+  interp::ProbeMove mv;
+  mv.make = k.probe_g == 22;
+  mv.from = pos_;
+  mv.to = target;
+  mv.feed = rapid || fm != FeedMode::kPerMinute ? 0 : feed;
+  mv.length = tool_len_;
+  ProbeResult pr = env_->Probe(mv);
   ProbeOutcome result;
   if (pr.already) {
     machine_[1021] = 1;
@@ -244,8 +250,13 @@ void KtRun::ProbeMove(const BlockCodes& k, uint32_t axis_mask, const AxisArray& 
   } else if (pr.event) {
     machine_[1021] = 8;
     result = k.probe_g == 22 ? ProbeOutcome::kContact : ProbeOutcome::kBreak;
+    // L3042-L3049 hold the latch as the display shows it: relative to the offsets in effect (the probe
+    // cycles move back to it in G90 with those offsets, App. E; G25's note: "relative to offsets").
     static const int kOrder[8] = {kX, kY, kZ, kB, kA, kC, kU, kV};
-    for (int i = 0; i < 8; ++i) probe_latch_[i] = pr.at[kOrder[i]];
+    for (int i = 0; i < 8; ++i) {
+      const int a = kOrder[i];
+      probe_latch_[i] = IsRotaryAxis(a) ? pr.at[a] : pr.at[a] - Offset(a);
+    }
     for (int a = 0; a < kAxisCount; ++a) {
       if (axis_mask & (1u << a)) pos_[a] = pr.at[a];
     }

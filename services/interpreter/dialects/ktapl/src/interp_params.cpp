@@ -50,6 +50,14 @@ double KtRun::Param(int n) {
       return IsRotaryAxis(a) ? v : FromMm(v);
     }
     if (n >= 3061 && n <= 3066) return dat_[n - 3061];
+    // Lengths the machine knows (App. C): answered by the environment in mm, read in the program's units.
+    // L3029: the spindle's G26 pull-back position above a touched surface (the probe tip then stands
+    // L3029 - L3033 above it); without one from the machine, one inch above the tip.
+    if (n == 3029 || (n >= 3080 && n <= 3085) || n == 3090) {
+      std::optional<double> mm = env_->SystemVariable(fmt::format("L{}", n));
+      if (!mm && n == 3029) mm = tool_len_ + kInch;
+      return FromMm(mm.value_or(0));
+    }
     if (n == 3070) return kPi;
     if (n == 3071) return std::exp(1.0);
     if (auto v = env_->SystemVariable(fmt::format("L{}", n))) return *v;

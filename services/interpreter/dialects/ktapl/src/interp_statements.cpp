@@ -199,7 +199,12 @@ void KtRun::StErrorMode(const Statement& st, BlockCtx&, bool) {
   for (const auto& f : SplitTopLevel(st.body, ',')) {
     std::string k = Upper(Trim(f));
     if (k != "MAS" && k != "SEQ" && k != "REM") Fail(st.col, "TYPE II COMMAND SYNTAX ERROR");
-    if (k == "MAS") cer_mas_ = (st.mnemonic == "CER");
+    const int device = k == "MAS" ? kDeviceMas : k == "SEQ" ? kDeviceSeq : kDeviceRem;
+    if (st.mnemonic == "CER") {
+      cer_ |= device;
+    } else {
+      cer_ &= ~device;
+    }
   }
 }
 

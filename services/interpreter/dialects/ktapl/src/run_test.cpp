@@ -109,13 +109,12 @@ class FakeEnv : public Environment {
  public:
   int probes = 0;
   std::string waited;
-  ProbeResult Probe(bool contact, const std::array<double, kAxisCount>& from,
-                    const std::array<double, kAxisCount>& to) override {
+  ProbeResult Probe(const ProbeMove& m) override {
     ++probes;
     ProbeResult r;
-    r.event = contact;
-    r.at = from;
-    r.at[kX] = (from[kX] + to[kX]) / 2;  // contact half way
+    r.event = m.make;
+    r.at = m.from;
+    r.at[kX] = (m.from[kX] + m.to[kX]) / 2;  // contact half way
     return r;
   }
   void WaitInputs(const std::string& spec) override { waited = spec; }

@@ -37,6 +37,16 @@ struct Diagnostic {
   std::string Format() const;
 };
 
+// A probe move: toward contact (KT-APL G22, make) or away from it (G23, break), a straight move from `from`
+// to `to` (machine coordinates, mm / deg) at `feed` mm/min (0: the machine's probe feed). The positions
+// include the probe's length compensation `length` in Z (mm): the stylus ball's centre is at z - length.
+struct ProbeMove {
+  bool make = true;
+  AxisArray from{}, to{};
+  double feed = 0;
+  double length = 0;
+};
+
 // Result of a probe move (contact or break).
 struct ProbeResult {
   bool already = false;  // already in the requested state at the start: no motion
@@ -44,13 +54,19 @@ struct ProbeResult {
   AxisArray at{};        // machine position where the event happened (mm / deg)
 };
 
+// What the machine's file system said about a file effect.
+struct FileResult {
+  bool done = true;   // finished, durably: the program's completion flag (KT-APL L1050-L1054) may be set
+  std::string error;  // the device's message when it failed ("FILE ALREADY EXISTS", "SOURCE FILE READ ERROR")
+};
+
 // Queue busters: everything whose result the program reads. The offline CLI answers at once; the service
 // answers over DDS (a blocking call is fine).
 class Environment {
  public:
   virtual ~Environment() = default;
-  // A probe move toward contact (contact=true) or break, from `from` to `to` (machine coordinates).
-  virtual ProbeResult Probe(bool contact, const AxisArray& from, const AxisArray& to);
+  // A probe move; offline without a part model it never trips (the move runs to its end).
+  virtual ProbeResult Probe(const ProbeMove& move);
   // Waits until the discrete inputs match `spec` (the dialect's form). Offline: at once.
   virtual void WaitInputs(const std::string& spec) { (void)spec; }
   // Machine state the program may read (KT-APL L3000-L3999, Okuma system variables, ...), by the dialect's
@@ -61,10 +77,12 @@ class Environment {
   }
   // Wall clock: year, month, day, hour, minute, second.
   virtual std::array<int, 6> Now();
-  // Completion of a file operation the program waits for (close, delete, print, copy): true = finished.
-  virtual bool FileOperation(const Canon& op) {
+  // Every file effect of a program, the op as it is output: file_open, file_write, file_close, file_op
+  // (copy, delete, print, remote copy, fixture tables). Returns when the machine has done it; offline at
+  // once.
+  virtual FileResult FileOperation(const Canon& op) {
     (void)op;
-    return true;
+    return {};
   }
 };
 
