@@ -593,7 +593,7 @@ TEST_F(ServoDds, ProbeContactAgainstThePartModel) {
   EXPECT_EQ(hit->seq(), 1u);
   EXPECT_TRUE(hit->contact());
   EXPECT_NEAR(hit->position()[0], 100, 1e-3);
-  EXPECT_NEAR(hit->position()[2], 53, 0.01);  // face at z 50 + ball radius 3
+  EXPECT_NEAR(hit->position()[2], 50, 0.01);  // face at z 50: the tip rests on it (probe length 0)
   auto miss = bus_->probe().Take(5s);
   ASSERT_TRUE(miss);
   EXPECT_EQ(miss->seq(), 3u);

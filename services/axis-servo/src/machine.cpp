@@ -649,7 +649,7 @@ const partmodel::PartModel* Machine::PartOnTable() const {
 }
 
 partmodel::Pose Machine::PoseOf(const AxisVector& v) const {
-  return {v[kX], v[kY], v[kZ] - probe_length_, v[kA], v[kB], v[kC]};
+  return {v[kX], v[kY], v[kZ] - probe_length_ + 0.5 * cfg_.probe_ball_diameter, v[kA], v[kB], v[kC]};
 }
 
 // Each tick: did the probe trip between the last actual position and this one? The trip point is latched

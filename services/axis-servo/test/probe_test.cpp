@@ -64,14 +64,14 @@ AxisVector P(double x, double y, double z) {
   return v;
 }
 
-TEST(Probe, PlaneTripAtBallRadiusAboveFace) {
+TEST(Probe, PlaneTripsWhereTheTipRestsOnTheFace) {
   Hit h = Probe(P(100, 100, 100), P(100, 100, 0));
   ASSERT_TRUE(h.contact);
-  EXPECT_NEAR(h.pos[kZ], 53.0, 1e-4);  // 6 mm ball: centre 3 mm above the face
+  EXPECT_NEAR(h.pos[kZ], 50.0, 1e-4);  // Z is the ball's tip (probe_length 0): it rests on the face
   EXPECT_NEAR(h.pos[kX], 100.0, 1e-4);
   // Stops shortly after the trip, far from the programmed end.
-  EXPECT_LT(h.final_pos[kZ], 53.0);
-  EXPECT_GT(h.final_pos[kZ], 52.0);
+  EXPECT_LT(h.final_pos[kZ], 50.0);
+  EXPECT_GT(h.final_pos[kZ], 49.0);
 }
 
 TEST(Probe, BoreWallBossAndSphere) {
@@ -83,11 +83,12 @@ TEST(Probe, BoreWallBossAndSphere) {
   EXPECT_NEAR(boss.pos[kX], 318.0, 1e-4);
   Hit sphere = Probe(P(400, 100, 100), P(400, 100, 55));
   ASSERT_TRUE(sphere.contact);
-  EXPECT_NEAR(sphere.pos[kZ], 73.0, 1e-4);
-  // Diagonal approach to the sphere: contact where |centre - c| = 13.
+  EXPECT_NEAR(sphere.pos[kZ], 70.0, 1e-4);  // the tip on the sphere's top (60 + 10)
+  // Diagonal approach to the sphere: contact where the ball's centre (3 above the tip) is 13 from c.
   Hit diag = Probe(P(430, 100, 90), P(400, 100, 60));
   ASSERT_TRUE(diag.contact);
-  EXPECT_NEAR((diag.pos.head<3>() - Eigen::Vector3d(400, 100, 60)).norm(), 13.0, 1e-4);
+  EXPECT_NEAR((diag.pos.head<3>() + Eigen::Vector3d(0, 0, 3) - Eigen::Vector3d(400, 100, 60)).norm(), 13.0,
+              1e-4);
 }
 
 TEST(Probe, NoContactReportsEndOfTravel) {
@@ -126,7 +127,7 @@ Segment ProbeSeg(std::uint64_t id, double z, bool brk, double feed = 600) {
 }
 
 TEST(Probe, BreakLatchesWhereContactIsLostAndAlreadyMeansNoMotion) {
-  Machine m(DefaultMachineConfig("ktapl"), ClockKind::kVirtual);
+  Machine m(DefaultMachineConfig("hmc"), ClockKind::kVirtual);
   m.SetPartModel(1, partmodel::ParsePartModel(kPart, "part.toml"));
   m.SetPallets(1, 0);
   m.Push(Rapid(1, 100, 100, 100));
@@ -137,7 +138,7 @@ TEST(Probe, BreakLatchesWhereContactIsLostAndAlreadyMeansNoMotion) {
   EXPECT_TRUE(Find(ev, EventKind::kCompleted, 2)->probe.contact);
   // Overtravel: the slide stops below the trip point (the stylus deflects).
   const double stopped = m.actual()[kZ];
-  EXPECT_LT(stopped, 53.0);
+  EXPECT_LT(stopped, 50.0);
 
   m.Push(ProbeSeg(3, 0, false));  // G22 while touching: already, nothing moves
   m.RunUntilIdle(120);
@@ -148,14 +149,14 @@ TEST(Probe, BreakLatchesWhereContactIsLostAndAlreadyMeansNoMotion) {
   EXPECT_FALSE(again->probe.contact);
   EXPECT_NEAR(m.actual()[kZ], stopped, 1e-3);
 
-  m.Push(ProbeSeg(4, 100, true));  // G23 up: contact is lost at 53
+  m.Push(ProbeSeg(4, 100, true));  // G23 up: contact is lost where the tip leaves the face, z = 50
   m.RunUntilIdle(120);
   ev = m.TakeEvents();
   const Event* brk = Find(ev, EventKind::kCompleted, 4);
   ASSERT_NE(brk, nullptr);
   EXPECT_TRUE(brk->probe.contact);
   EXPECT_FALSE(brk->probe.already);
-  EXPECT_NEAR(brk->probe.position[kZ], 53.0, 1e-4);
+  EXPECT_NEAR(brk->probe.position[kZ], 50.0, 1e-4);
 
   m.Push(ProbeSeg(5, 100, true));  // G23 while clear: already
   m.RunUntilIdle(120);
@@ -165,7 +166,7 @@ TEST(Probe, BreakLatchesWhereContactIsLostAndAlreadyMeansNoMotion) {
 }
 
 TEST(Probe, DrivingTheStylusPastItsOvertravelIsAlarm602) {
-  MachineConfig cfg = DefaultMachineConfig("ktapl");
+  MachineConfig cfg = DefaultMachineConfig("hmc");
   cfg.probe_overtravel = 0.01;  // far less than the stopping distance at 600 mm/min
   Machine m(cfg, ClockKind::kVirtual);
   m.SetPartModel(1, partmodel::ParsePartModel(kPart, "part.toml"));

@@ -48,10 +48,11 @@ class OfflineEnvironment : public Environment {
   ProbeResult Probe(const ProbeMove& m) override {
     ProbeResult r;
     r.at = m.to;
-    // The part model is in machine coordinates of the stylus ball's centre (Z less the probe's length).
-    partmodel::Pose from = {m.from[kX], m.from[kY], m.from[kZ] - m.length,
-                            m.from[kA], m.from[kB], m.from[kC]};
-    partmodel::Pose to = {m.to[kX], m.to[kY], m.to[kZ] - m.length, m.to[kA], m.to[kB], m.to[kC]};
+    // The part model is in machine coordinates of the stylus ball's centre: Z less the probe's length (to the
+    // ball's tip) plus the ball's radius.
+    const double dz = ball_radius_ - m.length;
+    partmodel::Pose from = {m.from[kX], m.from[kY], m.from[kZ] + dz, m.from[kA], m.from[kB], m.from[kC]};
+    partmodel::Pose to = {m.to[kX], m.to[kY], m.to[kZ] + dz, m.to[kA], m.to[kB], m.to[kC]};
     partmodel::Trip t = part_.Probe(m.make, from, to, ball_radius_);
     if (t.kind == partmodel::Trip::kAlready) {
       r.already = true;

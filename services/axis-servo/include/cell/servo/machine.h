@@ -149,7 +149,8 @@ class Machine {
   AxisVector ToSegmentUnits(AxisVector v) const;
   void ProbeCheck();
   const partmodel::PartModel* PartOnTable() const;
-  // The stylus ball's centre in the part model's frame: the machine position less the probe's length.
+  // The stylus ball's centre in the part model's frame: the machine position less the probe's length (to the
+  // ball's tip), plus the ball's radius in Z.
   partmodel::Pose PoseOf(const AxisVector& v) const;
 
   MachineConfig cfg_;

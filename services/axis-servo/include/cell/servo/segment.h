@@ -74,7 +74,7 @@ struct Segment {
   double thread_start_angle = 0.0;
   CoolantMode coolant = CoolantMode::kOff;  // kCoolant
   bool probe_break = false;                 // kProbe: trip when contact is lost (G23), not made (G22)
-  double probe_length = 0.0;  // kProbe: the probe's length compensation in Z (mm); the ball is at Z - it
+  double probe_length = 0.0;  // kProbe: the probe's length compensation in Z (mm), to the ball's tip
   int pallet = 0;             // kPalletChange
 };
 

@@ -39,7 +39,8 @@ struct Diagnostic {
 
 // A probe move: toward contact (KT-APL G22, make) or away from it (G23, break), a straight move from `from`
 // to `to` (machine coordinates, mm / deg) at `feed` mm/min (0: the machine's probe feed). The positions
-// include the probe's length compensation `length` in Z (mm): the stylus ball's centre is at z - length.
+// include the probe's length compensation `length` in Z (mm), measured to the stylus ball's tip: the tip is
+// at z - length, the ball's centre one ball radius above it.
 struct ProbeMove {
   bool make = true;
   AxisArray from{}, to{};
