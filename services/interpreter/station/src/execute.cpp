@@ -7,6 +7,7 @@
 #include "cell/error/error.h"
 #include "cell/interp/interp.h"
 #include "cell/names/names.h"
+#include "cell/station/program_files.h"
 #include "cell/station/station.h"
 #include "cell/station/to_segment.h"
 
@@ -23,8 +24,8 @@ struct Station::ActiveRun {
 // the inputs match (WAI).
 class Station::RunEnvironment : public interp::Environment {
  public:
-  RunEnvironment(Station& station, SegmentStream& stream, double probe_feed)
-      : station_(station), stream_(stream), probe_feed_(probe_feed) {}
+  RunEnvironment(Station& station, SegmentStream& stream, double probe_feed, ProgramFiles& files)
+      : station_(station), stream_(stream), probe_feed_(probe_feed), files_(files) {}
   void WaitInputs(const std::string& spec) override { station_.WaitInputs(spec); }
   interp::ProbeResult Probe(const interp::ProbeMove& m) override {
     cell::MotionSegment seg;
@@ -42,10 +43,14 @@ class Station::RunEnvironment : public interp::Environment {
     return r;
   }
 
+  // Every file the program writes leaves the run here, to the inspection writer (program_files.h).
+  interp::FileResult FileOperation(const interp::Canon& op) override { return files_.Apply(op); }
+
  private:
   Station& station_;
   SegmentStream& stream_;
   double probe_feed_;
+  ProgramFiles& files_;
 };
 
 void Station::Execute(const Dispatch& d) {
@@ -153,7 +158,10 @@ void Station::RunProgram(ActiveRun& run, const std::string& entry) {
     if (!rest.substr(0, sub).empty()) opt.params["PROGRAM"] = rest.substr(0, sub);
     if (sub != std::string::npos && sub + 1 < rest.size()) opt.params["SUB_FILE"] = rest.substr(sub + 1);
   }
-  RunEnvironment env(*this, stream_, options_.probe_feed);
+  ProgramFiles files(
+      cfg_.id, run.d.dispatch_id, io_, clock_, [this, id = run.d.dispatch_id] { Checkpoint(id); },
+      options_.writer_wait);
+  RunEnvironment env(*this, stream_, options_.probe_feed, files);
   AuxIo aux(cfg_.aux);  // interlocks ON and the spindle stopped: each program starts from the reset state
   opt.env = &env;
   auto program = interp::StartRun(opt);

@@ -165,7 +165,8 @@ TEST_F(SegmentStreamTest, ProbeMovesWaitForTheServosResult) {
   auto probes = servo_.Ran(1, cell::SEGMENT_PROBE);
   ASSERT_EQ(probes.size(), 1u);
   EXPECT_DOUBLE_EQ(probes[0].target()[2], 0.0);
-  EXPECT_DOUBLE_EQ(probes[0].feed(), 500.0);
+  EXPECT_DOUBLE_EQ(probes[0].feed(), 200.0);  // the program's F (a probe move without F: the station's)
+  EXPECT_FALSE(probes[0].probe_break());      // G22: trip on contact
   EXPECT_DOUBLE_EQ(station_->MemoryState().image.variables.at("L1500"), 53.0);
 }
 

@@ -52,8 +52,9 @@ class StationIo {
 
 struct StationOptions {
   double probe_feed = 500.0;  // mm/min for probe moves the program does not feed itself
-  Clock::Duration servo_wait = std::chrono::seconds(10);           // for a servo on the bus at a run's start
-  Clock::Duration idle_poll = std::chrono::milliseconds(500);      // outbox retries while idle
+  Clock::Duration writer_wait = std::chrono::seconds(60);      // for an inspection writer at a file's close
+  Clock::Duration servo_wait = std::chrono::seconds(10);       // for a servo on the bus at a run's start
+  Clock::Duration idle_poll = std::chrono::milliseconds(500);  // outbox retries while idle
   Clock::Duration status_period = std::chrono::milliseconds(100);  // status while a run goes on
 };
 

@@ -1,0 +1,149 @@
+#include "cell/station/program_files.h"
+
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <cctype>
+#include <condition_variable>
+#include <mutex>
+#include <vector>
+
+#include "cell/error/error.h"
+#include "cell/station/station.h"
+
+namespace cell::station {
+
+namespace {
+
+std::string Upper(std::string s) {
+  for (char& c : s) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+  return s;
+}
+
+std::string Trim(const std::string& s) {
+  size_t a = s.find_first_not_of(' ');
+  size_t b = s.find_last_not_of(' ');
+  return a == std::string::npos ? "" : s.substr(a, b - a + 1);
+}
+
+std::vector<std::string> SplitCommas(const std::string& s) {
+  std::vector<std::string> out;
+  size_t at = 0;
+  for (;;) {
+    size_t c = s.find(',', at);
+    out.push_back(Trim(s.substr(at, c == std::string::npos ? std::string::npos : c - at)));
+    if (c == std::string::npos) return out;
+    at = c + 1;
+  }
+}
+
+}  // namespace
+
+ProgramFiles::ProgramFiles(std::string station, std::int32_t dispatch_id, StationIo& io, Clock& clock,
+                           std::function<void()> checkpoint, Clock::Duration writer_wait)
+    : station_(std::move(station)),
+      dispatch_id_(dispatch_id),
+      io_(io),
+      clock_(clock),
+      checkpoint_(std::move(checkpoint)),
+      writer_wait_(writer_wait) {}
+
+interp::FileResult ProgramFiles::Apply(const interp::Canon& op) {
+  if (const auto* o = std::get_if<interp::FileOpenOp>(&op.p)) {
+    // Append (A/) continues a file this run closed; a new name (or OIF's "opened a second time") starts
+    // empty. The writer cannot append yet: appending to a file of an earlier run is refused rather than
+    // overwriting what that run stored.
+    auto it = closed_.find(Upper(o->name));
+    if (o->append && it == closed_.end())
+      return {false, "FILE NOT STORED: appending to " + o->name + " of an earlier run is not supported yet"};
+    open_ = o->name;
+    text_ = o->append ? it->second : "";
+    return {};
+  }
+  if (const auto* w = std::get_if<interp::FileWriteOp>(&op.p)) {
+    if (!open_.empty()) text_ += w->text + "\n";
+    return {};
+  }
+  if (std::holds_alternative<interp::FileCloseOp>(op.p)) {
+    // Nothing open here: its open failed (and CER let the program go on), so nothing is stored either.
+    if (open_.empty()) return {false, "FILE NOT STORED: the file was not opened"};
+    const std::string name = std::move(open_);
+    open_.clear();
+    closed_[Upper(name)] = text_;
+    return Store(station_, name, text_);
+  }
+  if (const auto* f = std::get_if<interp::FileOpOp>(&op.p)) {
+    if (f->what == "RCP") return RemoteCopy(f->args);
+    if (f->what == "CPY") {
+      // (CPY,file1,TO or FROM,file2): a local copy of a closed file (ln 8278-8314).
+      auto a = SplitCommas(f->args);
+      if (a.size() != 3) return {false, "TYPE II COMMAND SYNTAX ERROR"};
+      const bool to = Upper(a[1]) == "TO";
+      const std::string& src = to ? a[0] : a[2];
+      const std::string& dst = to ? a[2] : a[0];
+      auto it = closed_.find(Upper(src));
+      if (it == closed_.end()) return {false, "SOURCE FILE READ ERROR"};
+      closed_[Upper(dst)] = it->second;
+      return Store(station_, dst, it->second);
+    }
+    if (f->what == "PRT") {
+      // (PRT,filename): the print spool is a file of its own beside the original (ln 8191-8276).
+      const std::string name = Trim(f->args);
+      auto it = closed_.find(Upper(name));
+      if (it == closed_.end()) return {false, "Error - PRT File Not Found or Not Closed"};
+      return Store(station_, name + ".PRT", it->second);
+    }
+  }
+  return {};
+}
+
+interp::FileResult ProgramFiles::RemoteCopy(const std::string& args) {
+  // (RCP,localfile,TO or FROM,node,remotefile/type) (ln 8316-8356).
+  auto a = SplitCommas(args);
+  if (a.size() != 4 || (Upper(a[1]) != "TO" && Upper(a[1]) != "FROM"))
+    return {false, "TYPE II COMMAND SYNTAX ERROR"};
+  if (Upper(a[1]) == "FROM")
+    return {false, "ERROR - REMOTE FILE COPY ERROR 0001 (RCP FROM is not supported by this cell)"};
+  auto it = closed_.find(Upper(a[0]));
+  if (it == closed_.end()) return {false, "ERROR - REMOTE FILE COPY ERROR 0002 (" + a[0] + " not closed)"};
+  std::string remote = a[3].substr(0, a[3].find('/'));
+  if (remote.empty()) remote = a[0];
+  return Store(Upper(a[2]), remote, it->second);
+}
+
+interp::FileResult ProgramFiles::Store(const std::string& node, const std::string& name,
+                                       const std::string& text) {
+  if (text.size() > 65536) return {false, "FILE " + name + " LARGER THAN 64 KIB"};
+  cell::InspectionRequest req;
+  req.op(cell::INSPECTION_STORE_FILE);
+  req.hdr().idempotency_key("file-" + station_ + "-" + std::to_string(dispatch_id_) + "-" + node + "-" +
+                            name + "-" + std::to_string(text.size()));
+  auto& f = req.file();
+  f.file(name.substr(0, 64));
+  f.station(node.substr(0, 16));
+  f.dispatch_id(dispatch_id_);
+  f.format(cell::INSPECTION_KT_TEXT);
+  f.text(text);
+  f.closed(true);
+  f.time_ns(clock_.WallNs());
+  // Wait for a writer on the bus (a restart takes seconds); the run can be cancelled meanwhile.
+  std::mutex mu;
+  std::condition_variable cv;
+  const auto deadline = clock_.Now() + writer_wait_;
+  for (;;) {
+    checkpoint_();
+    try {
+      if (io_.StoreRecord(req)) return {};
+    } catch (const Error& e) {
+      // A writer that went away mid-call is waited for again; one that refused the file is the answer.
+      if (e.code() != Errc::kTimeout && e.code() != Errc::kUnavailable)
+        return {false, std::string("FILE NOT STORED: ") + e.what()};
+      spdlog::warn("{}: not yet stored: {}", name, e.what());
+    }
+    if (clock_.Now() >= deadline) return {false, "FILE NOT STORED: no inspection writer on the bus"};
+    std::unique_lock lk(mu);
+    clock_.Wait(lk, cv, std::chrono::milliseconds(200));
+  }
+}
+
+}  // namespace cell::station

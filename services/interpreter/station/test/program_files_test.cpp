@@ -1,0 +1,83 @@
+// Files a program writes leave the run through the station core to the inspection writer (StoreRecord with
+// INSPECTION_STORE_FILE), and the program's completion flags are set only once the writer has them.
+#include "harness.h"
+
+namespace cell::station::testing {
+namespace {
+
+using StationFiles = StationHarness;
+
+const cell::InspectionRequest* Stored(const FakeIo& io, const std::string& node, const std::string& name) {
+  for (const auto& r : io.records)
+    if (r.op() == cell::INSPECTION_STORE_FILE && r.file().station().to_string() == node &&
+        r.file().file().to_string() == name)
+      return &r;
+  return nullptr;
+}
+
+// Manual ch. 7: G36 + OIF writes the header (ln 7894-7908), MSG lines with an empty line after each
+// (ln 8043-8071), G37 closes; OPF/FWR/CLF with the L1050 wait (ln 7997-8004); RCP to HOST (ln 8316-8356).
+constexpr const char* kProgram =
+    "G71 G90\n"
+    "(PAR,L1050=0,L1054=0)\n"
+    "N90 G36\n"
+    "N100 (OIF,PUMP341)\n"
+    "N580 (MSG,THIS IS A TEST.)\n"
+    "N950 G37\n"
+    "(OPF,DATA7)\n"
+    "(PAR,L100=12.5)\n"
+    "(FWR,\"X=\",L100)\n"
+    "(CLF)\n"
+    "(PAR,L1500=L1050)\n"
+    "(RCP,DATA7,TO,HOST,DATA7.TXT/AS)\n"
+    "(PAR,L1501=L1054)\n"
+    "M30\n";
+
+TEST_F(StationFiles, ClosedFilesGoToTheWriterAndSetTheirFlagOnceStored) {
+  Put("P", kProgram);
+  Dispatch(1, {"P"});
+  EXPECT_EQ(RunOne(1).state(), cell::RUN_COMPLETED);
+  const auto* oif = Stored(io_, "KT01", "PUMP341");
+  ASSERT_NE(oif, nullptr);
+  const std::string text = oif->file().text().to_string();
+  EXPECT_EQ(text.substr(0, 22), "CONTROL SERIAL NUMBER ");
+  EXPECT_NE(text.find("PALLET CODE/PART NUMBER = 1\n"), std::string::npos) << text;
+  EXPECT_NE(text.find("---------------\nTHIS IS A TEST.\n\n"), std::string::npos) << text;
+  EXPECT_TRUE(oif->file().closed());
+  EXPECT_EQ(oif->file().dispatch_id(), 1);
+  const auto* data = Stored(io_, "KT01", "DATA7");
+  ASSERT_NE(data, nullptr);
+  EXPECT_EQ(data->file().text().to_string(), "X=12.500000\n");
+  const auto* host = Stored(io_, "HOST", "DATA7.TXT");
+  ASSERT_NE(host, nullptr);
+  EXPECT_EQ(host->file().text().to_string(), "X=12.500000\n");
+  EXPECT_DOUBLE_EQ(Variables()["L1500"], 1.0);  // L1050 after CLF: stored
+  EXPECT_DOUBLE_EQ(Variables()["L1501"], 1.0);  // L1054 after RCP
+}
+
+TEST_F(StationFiles, AWriterThatIsAwayIsWaitedForAndNothingIsLost) {
+  Put("P", kProgram);
+  io_.writer_up = false;
+  int waits = 0;
+  script_ = [&] {
+    if (++waits == 40) io_.writer_up = true;  // back after about two seconds
+  };
+  Dispatch(1, {"P"});
+  EXPECT_EQ(RunOne(1).state(), cell::RUN_COMPLETED);
+  EXPECT_NE(Stored(io_, "KT01", "PUMP341"), nullptr);
+  EXPECT_NE(Stored(io_, "KT01", "DATA7"), nullptr);
+  EXPECT_DOUBLE_EQ(Variables()["L1500"], 1.0);
+}
+
+TEST_F(StationFiles, NoWriterAtAllFailsTheRunWithAClearReason) {
+  Put("P", kProgram);
+  io_.writer_up = false;
+  Dispatch(1, {"P"});
+  cell::RunStatus s = RunOne(1);
+  EXPECT_EQ(s.state(), cell::RUN_FAILED);
+  EXPECT_NE(s.reason().to_string().find("no inspection writer on the bus"), std::string::npos)
+      << s.reason().to_string();
+}
+
+}  // namespace
+}  // namespace cell::station::testing
