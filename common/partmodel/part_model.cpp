@@ -155,7 +155,50 @@ Trip PartModel::Probe(bool make, const Pose& from, const Pose& to, double ball_r
   return trip;
 }
 
+namespace {
+
+// The line format: `box XMIN YMIN ZMIN XMAX YMAX ZMAX` per line, `#` comments. True when the text is in it
+// (its first statement starts with the word `box` and a number, which toml cannot).
+bool IsLineFormat(std::string_view text) {
+  std::istringstream in{std::string(text)};
+  std::string line;
+  while (std::getline(in, line)) {
+    line.resize(std::min(line.size(), line.find('#')));
+    std::istringstream ls(line);
+    std::string kw;
+    double v = 0;
+    if (!(ls >> kw)) continue;
+    return kw == "box" && static_cast<bool>(ls >> v);
+  }
+  return false;
+}
+
+PartModel ParseLineFormat(std::string_view text, const std::string& source) {
+  PartModel m;
+  std::istringstream in{std::string(text)};
+  std::string line;
+  for (int n = 1; std::getline(in, line); ++n) {
+    line.resize(std::min(line.size(), line.find('#')));
+    std::istringstream ls(line);
+    std::string kw, extra;
+    Eigen::Vector3d lo, hi;
+    if (!(ls >> kw)) continue;
+    if (kw != "box" || !(ls >> lo[0] >> lo[1] >> lo[2] >> hi[0] >> hi[1] >> hi[2]) || (ls >> extra))
+      throw Error(Errc::kInvalidArgument,
+                  fmt::format("{}:{}: expected 'box XMIN YMIN ZMIN XMAX YMAX ZMAX' (mm)", source, n));
+    if (!(hi.array() > lo.array()).all())
+      throw Error(Errc::kInvalidArgument,
+                  fmt::format("{}:{}: box max must be greater than min on every axis", source, n));
+    m.AddBox(lo, hi);
+  }
+  m.set_point_contact(true);
+  return m;
+}
+
+}  // namespace
+
 PartModel ParsePartModel(std::string_view text, const std::string& source) {
+  if (IsLineFormat(text)) return ParseLineFormat(text, source);
   toml::table root;
   try {
     root = toml::parse(text, source);

@@ -137,5 +137,25 @@ TEST(PartModel, FileErrorsNameTheKey) {
   EXPECT_THROW(LoadPartModel("/nonexistent/part.toml"), Error);
 }
 
+// The first --probe-model format (lines of boxes) is still read, as point contact: a point moving +X from 0
+// stops on the box's face at X 10 when probed with no ball.
+TEST(PartModel, LineFormatIsPointContact) {
+  PartModel m = ParsePartModel("# a wall\nbox 10 -50 -50 20 50 50  # x from 10\n\n", "old.probe");
+  EXPECT_TRUE(m.point_contact());
+  Trip t = m.Probe(true, P(0, 0, 0, 0), P(20, 0, 0, 0), 0.0);
+  ASSERT_EQ(t.kind, Trip::kEvent);
+  EXPECT_NEAR(t.t * 20, 10.0, 1e-6);
+  EXPECT_FALSE(ParsePartModel("[[box]]\nmin = [0,0,0]\nmax = [1,1,1]\n", "p.toml").point_contact());
+  try {
+    ParsePartModel("box 1 2 3\n", "old.probe");
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("old.probe:1: expected 'box XMIN YMIN ZMIN XMAX YMAX ZMAX'"),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_THROW(ParsePartModel("box 0 0 0 1 1 1\nsphere 1 2 3 4\n", "old.probe"), Error);
+}
+
 }  // namespace
 }  // namespace cell::partmodel

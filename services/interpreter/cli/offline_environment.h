@@ -1,6 +1,7 @@
 // The offline machine of cell-interp: queue busters answered at once. Probe moves run against the cell's
 // part model (cell_part_model, `--probe-model FILE`, the same toml the axis servo reads) with a probe ball
-// of PROBE_BALL_DIAMETER mm (--params, default 6 as the station's probe.ball_diameter); without a model
+// of PROBE_BALL_DIAMETER mm (--params, default 6 as the station's probe.ball_diameter; 0 for a model in
+// the line format); without a model
 // nothing is ever touched. The clock and system parameters come from --params when given (CLOCK=YYYY-MM-DD
 // HH:MM:SS for DAT and inspection-file stamps, L3000-L3999 for what the machine would report, e.g.
 // L3060=345879 the control's serial number), so a run's output is reproducible.
@@ -28,6 +29,7 @@ class OfflineEnvironment : public Environment {
         double d = std::strtod(value.c_str(), &end);
         if (end == value.c_str() || !(d >= 0 && d <= 50)) return "PROBE_BALL_DIAMETER must be 0-50 (mm)";
         ball_radius_ = d / 2;
+        ball_given_ = true;
       } else if (key == "CLOCK") {
         std::array<int, 6> t{};
         if (std::sscanf(value.c_str(), "%d-%d-%d%*[ T]%d:%d:%d", &t[0], &t[1], &t[2], &t[3], &t[4], &t[5]) <
@@ -43,7 +45,11 @@ class OfflineEnvironment : public Environment {
     }
     return "";
   }
-  void SetPartModel(partmodel::PartModel m) { part_ = std::move(m); }
+  // A model in the line format is point contact (part_model.h): no ball unless the params name one.
+  void SetPartModel(partmodel::PartModel m) {
+    part_ = std::move(m);
+    if (part_.point_contact() && !ball_given_) ball_radius_ = 0;
+  }
 
   ProbeResult Probe(const ProbeMove& m) override {
     ProbeResult r;
@@ -73,6 +79,7 @@ class OfflineEnvironment : public Environment {
  private:
   partmodel::PartModel part_;
   double ball_radius_ = 3.0;
+  bool ball_given_ = false;
   std::optional<std::array<int, 6>> clock_;
   std::map<std::string, double> system_;
 };

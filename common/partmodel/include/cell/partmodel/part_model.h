@@ -11,6 +11,9 @@
 //   [rotary]   a_center = [x,y,z]  b_center = [..]  c_center = [..]   a point on each rotary table's axis
 // Coordinates are machine X Y Z in mm with every rotary table at 0; on a lathe X is a radius here.
 // The solid is (planes, boxes, bosses, spheres) minus bores.
+// The first format of `--probe-model` is still read: lines `box XMIN YMIN ZMIN XMAX YMAX ZMAX` (mm, `#`
+// comments). It described where the probe's latch point stops, so such a model is a point-contact model
+// (point_contact(): the offline machine then uses no ball unless PROBE_BALL_DIAMETER is given).
 #pragma once
 
 #include <Eigen/Core>
@@ -65,6 +68,9 @@ class PartModel {
   void SetRotaryCentre(int axis, const Eigen::Vector3d& point);
 
   bool empty() const { return planes_.empty() && boxes_.empty() && bosses_.empty() && spheres_.empty(); }
+  // Read from the line format: its surfaces are where the latch point stops (no ball).
+  bool point_contact() const { return point_contact_; }
+  void set_point_contact(bool v) { point_contact_ = v; }
 
   // Distance bound from p (model frame, tables at 0) to the material: negative inside; never larger than the
   // true distance (sphere tracing relies on it), exact away from CSG edges.
@@ -88,6 +94,7 @@ class PartModel {
   std::vector<Sphere> spheres_;
   std::vector<Cylinder> bores_;
   std::array<std::optional<Eigen::Vector3d>, 3> rotary_;
+  bool point_contact_ = false;
 };
 
 // Throws cell::Error(kInvalidArgument) naming the source, the key and the allowed range; kNotFound if the

@@ -105,7 +105,10 @@ void BaltRun::ProbeFailed(int code, int col) {
 // contact. Emits the probe op at the probe's centre (the touching point less `lead` along the move).
 bool BaltRun::ProbeMove(int g, const AxisArray& from, const AxisArray& to, double lead, AxisArray* hit) {
   Dir d = Direction(from, to);
-  ProbeResult pr = env_->Probe(true, from, to);
+  interp::ProbeMove move;
+  move.from = from;
+  move.to = to;
+  ProbeResult pr = env_->Probe(move);
   ProbeOp& op = Out<ProbeOp>();
   op.g = g;
   op.feed = {dpt_vm_, FeedMode::kPerMinute, true};

@@ -99,8 +99,9 @@ TEST(BaltRun, RequalificationChangesTheToolTable) {
 // A probe contact from the environment: G72 stores the touching point, probe-radius compensated.
 class Wall : public Environment {
  public:
-  ProbeResult Probe(bool contact, const AxisArray& from, const AxisArray& to) override {
-    (void)contact;
+  ProbeResult Probe(const ProbeMove& m) override {
+    const AxisArray& from = m.from;
+    const AxisArray& to = m.to;
     ProbeResult r;
     if ((from[kX] - 50) * (to[kX] - 50) <= 0) {
       r.event = true;
