@@ -4,46 +4,19 @@
 // its schemas); without it the tests skip.
 #include <gtest/gtest.h>
 
-#include <unistd.h>
-
-#include <cstdlib>
-#include <filesystem>
-#include <fstream>
-
 #include "cell/inspection/inspection_file.h"
-#include "cell/testing/process.h"
+#include "cell/testing/qif.h"
 
 namespace cell::inspection {
 namespace {
 
-namespace fs = std::filesystem;
-
-std::string SchemaDir() {
-  if (const char* d = std::getenv("CELL_QIF_SCHEMAS"); d && *d) return d;
-  // ../shared/reference/qif3 beside the clone (CI), or beside the worktrees' folder (here).
-  fs::path p = CELL_SOURCE_DIR;
-  for (int up = 0; up < 4; ++up, p = p.parent_path()) {
-    fs::path c = p.parent_path() / "shared/reference/qif3";
-    if (fs::exists(c / "QIFApplications/QIFDocument.xsd")) return c.string();
-  }
-  return "";
-}
-
-// "" when the document validates, else xmllint's complaint.
-std::string Validate(const std::string& xml) {
-  static int n = 0;
-  const std::string file = "/tmp/cell-qif-" + std::to_string(getpid()) + "-" + std::to_string(n++) + ".qif";
-  std::ofstream(file) << xml;
-  auto r = cell::testing::RunCommand(
-      {"xmllint", "--noout", "--nonet", "--schema", SchemaDir() + "/QIFApplications/QIFDocument.xsd", file});
-  fs::remove(file);
-  return r.code == 0 ? "" : r.err + r.out + "(exit " + std::to_string(r.code) + ")";
-}
+using cell::testing::QifSchemaDir;
+using cell::testing::ValidateQif;
 
 class QifSchema : public ::testing::Test {
  protected:
   void SetUp() override {
-    if (SchemaDir().empty())
+    if (QifSchemaDir().empty())
       GTEST_SKIP() << "QIF 3.0 schema not found (shared/reference/qif3 beside the repository)";
   }
 };
@@ -70,21 +43,21 @@ InspectionFile EveryKind() {
 }
 
 TEST_F(QifSchema, EveryCycleKindValidatesInInchAndMillimetres) {
-  EXPECT_EQ(Validate(ToQif(EveryKind(), LinearUnit::kInch, "KT01/PUMP341")), "");
-  EXPECT_EQ(Validate(ToQif(EveryKind(), LinearUnit::kMillimetre, "KT01/<odd & name>")), "");
+  EXPECT_EQ(ValidateQif(ToQif(EveryKind(), LinearUnit::kInch, "KT01/PUMP341")), "");
+  EXPECT_EQ(ValidateQif(ToQif(EveryKind(), LinearUnit::kMillimetre, "KT01/<odd & name>")), "");
 }
 
 TEST_F(QifSchema, AFileWithoutMeasurementsValidates) {
   InspectionFile f = EveryKind();
   f.body = {TextLine{"NOTHING MEASURED"}};
-  EXPECT_EQ(Validate(ToQif(f, LinearUnit::kInch, "EMPTY")), "");
+  EXPECT_EQ(ValidateQif(ToQif(f, LinearUnit::kInch, "EMPTY")), "");
   f.body.clear();
-  EXPECT_EQ(Validate(ToQif(f, LinearUnit::kInch, "EMPTY")), "");
+  EXPECT_EQ(ValidateQif(ToQif(f, LinearUnit::kInch, "EMPTY")), "");
 }
 
 TEST_F(QifSchema, ParsedFileExportsValidate) {
   const std::string text = Format(EveryKind());
-  EXPECT_EQ(Validate(ToQif(Parse(text), LinearUnit::kInch, "KT01/PUMP341")), "");
+  EXPECT_EQ(ValidateQif(ToQif(Parse(text), LinearUnit::kInch, "KT01/PUMP341")), "");
 }
 
 // The negative control: the same check refuses a document the schema does not allow.
@@ -92,16 +65,16 @@ TEST_F(QifSchema, BrokenDocumentsFail) {
   std::string q = ToQif(EveryKind(), LinearUnit::kInch, "KT01/PUMP341");
   std::string no_id = q;
   no_id.erase(no_id.find("  <QPId>"), no_id.find("</QPId>\n") + 8 - no_id.find("  <QPId>"));
-  EXPECT_NE(Validate(no_id), "");
+  EXPECT_NE(ValidateQif(no_id), "");
   std::string exponent = q;
   auto at = exponent.find("<Value>-2.5</Value>");
   ASSERT_NE(at, std::string::npos);
   exponent.replace(at, 19, "<Value>-2.5e0</Value>");  // xs:decimal has no exponent
-  EXPECT_NE(Validate(exponent), "");
+  EXPECT_NE(ValidateQif(exponent), "");
   std::string dangling = q;
   at = dangling.find("<CharacteristicItemId>");
   dangling.replace(at, 22, "<CharacteristicItemId>9999");  // an id no item has
-  EXPECT_NE(Validate(dangling), "");
+  EXPECT_NE(ValidateQif(dangling), "");
 }
 
 }  // namespace

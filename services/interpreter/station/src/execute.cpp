@@ -4,6 +4,9 @@
 #include <spdlog/spdlog.h>
 #include <nlohmann/json.hpp>
 
+#include <cstdlib>
+#include <optional>
+
 #include "cell/error/error.h"
 #include "cell/interp/interp.h"
 #include "cell/names/names.h"
@@ -46,11 +49,26 @@ class Station::RunEnvironment : public interp::Environment {
   // Every file the program writes leaves the run here, to the inspection writer (program_files.h).
   interp::FileResult FileOperation(const interp::Canon& op) override { return files_.Apply(op); }
 
+  // What the machine reports by the dialect's own names, as the offline CLI reads them from --params: the
+  // station config's [params] (KT-APL L3060, the control's serial number in the inspection-file header);
+  // KT-APL L3020, the pallet on the station, from the dispatch.
+  std::optional<double> SystemVariable(const std::string& name) override {
+    if (name == "L3020") return pallet_;
+    auto it = station_.cfg_.params.find(name);
+    if (it == station_.cfg_.params.end()) return std::nullopt;
+    char* end = nullptr;
+    const double v = std::strtod(it->second.c_str(), &end);
+    if (end == it->second.c_str()) return std::nullopt;
+    return v;
+  }
+  void SetPallet(int pallet) { pallet_ = pallet; }
+
  private:
   Station& station_;
   SegmentStream& stream_;
   double probe_feed_;
   ProgramFiles& files_;
+  int pallet_ = 0;
 };
 
 void Station::Execute(const Dispatch& d) {
@@ -162,6 +180,7 @@ void Station::RunProgram(ActiveRun& run, const std::string& entry) {
       cfg_.id, run.d.dispatch_id, io_, clock_, [this, id = run.d.dispatch_id] { Checkpoint(id); },
       options_.writer_wait);
   RunEnvironment env(*this, stream_, options_.probe_feed, files);
+  env.SetPallet(run.d.pallet);
   AuxIo aux(cfg_.aux);  // interlocks ON and the spindle stopped: each program starts from the reset state
   opt.env = &env;
   auto program = interp::StartRun(opt);

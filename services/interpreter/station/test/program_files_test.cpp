@@ -42,7 +42,7 @@ TEST_F(StationFiles, ClosedFilesGoToTheWriterAndSetTheirFlagOnceStored) {
   const std::string text = oif->file().text().to_string();
   EXPECT_EQ(text.substr(0, 22), "CONTROL SERIAL NUMBER ");
   EXPECT_NE(text.find("PALLET CODE/PART NUMBER = 1\n"), std::string::npos) << text;
-  EXPECT_NE(text.find("---------------\nTHIS IS A TEST.\n\n"), std::string::npos) << text;
+  EXPECT_NE(text.find("------------------------------\nTHIS IS A TEST.\n\n"), std::string::npos) << text;
   EXPECT_TRUE(oif->file().closed());
   EXPECT_EQ(oif->file().dispatch_id(), 1);
   const auto* data = Stored(io_, "KT01", "DATA7");

@@ -198,13 +198,23 @@ class Ktapl final : public Dialect {
   // Manual ln 8513-8525: machine related parameters L1000-L2999 "are not deleted when a program ends" and may
   // be modified "by the program, PMI, a subroutine, or the parameter display"; ln 8420: assignments range
   // -99999999. thru 999999999. Names as Run::Variables() reports them: "L" and the number, no leading zero.
+  // The fixture table (FXC/UFX, manual ch. 6) stays too: "H1.X" ... "H32.C" in mm and degrees, "H<n>.I" the
+  // B position G49 selects the line at; linear offsets within the FXC range (+-42949.672 mm).
   std::string CheckVariable(std::string_view name, double value) const override {
+    if (auto f = ktapl::ParseFixtureKey(name)) {
+      if (!std::isfinite(value) || (f->axis >= 0 && !IsRotaryAxis(f->axis) && std::fabs(value) > 42949.672))
+        return fmt::format("{} = {} is outside the fixture offset range -42949.672 .. 42949.672 mm", name,
+                           value);
+      return "";
+    }
     bool kept = name.size() == 5 && name[0] == 'L' && name[1] != '0' &&
                 std::all_of(name.begin() + 1, name.end(), [](char c) { return scan::IsDigit(c); });
     int n = kept ? std::stoi(std::string(name.substr(1))) : 0;
     if (!kept || n < 1000 || n > 2999) {
       return fmt::format(
-          "'{}' is not a variable a KT-APL station keeps (the machine parameters L1000..L2999)", name);
+          "'{}' is not a variable a KT-APL station keeps (the machine parameters L1000..L2999, the fixture "
+          "table H1.X..H32.C, H<n>.I)",
+          name);
     }
     if (!std::isfinite(value) || value < -99999999.0 || value > 999999999.0)
       return fmt::format("{} = {} is outside the parameter range -99999999. .. 999999999.", name, value);

@@ -65,7 +65,7 @@ TEST(Files, OifWritesTheControlsHeaderThenTheDelimiter) {
             "CONTROL SERIAL NUMBER = 345879\n"
             "PALLET CODE/PART NUMBER = 3452\n"
             "89:12:13 12:24\n"
-            "---------------\n");
+            "------------------------------\n");
   ASSERT_GE(env.asked.size(), 2u);
   EXPECT_EQ(env.asked.front().op(), Op::kFileOpen);
   EXPECT_EQ(env.asked.back().op(), Op::kFileClose);  // G37 closes (ln 7910)
@@ -78,10 +78,10 @@ TEST(Files, MsgLinesAreFollowedByAnEmptyLineWhileTheFileIsOpen) {
                   "N90 G36\nN100 (OIF, TESTFILE)\nN580 (MSG,THIS WRITTEN WITH \"MSG\".)\nN590 (MSG,THIS IS A "
                   "TEST.)\nN950 G37\n(MSG,NOT WRITTEN)\n");
   EXPECT_EQ(r.error, "");
-  EXPECT_EQ(
-      r.file,
-      "CONTROL SERIAL NUMBER = 345879\nPALLET CODE/PART NUMBER = 3452\n89:12:13 12:24\n---------------\n"
-      "THIS WRITTEN WITH \"MSG\".\n\nTHIS IS A TEST.\n\n");
+  EXPECT_EQ(r.file,
+            "CONTROL SERIAL NUMBER = 345879\nPALLET CODE/PART NUMBER = 3452\n89:12:13 "
+            "12:24\n------------------------------\n"
+            "THIS WRITTEN WITH \"MSG\".\n\nTHIS IS A TEST.\n\n");
 }
 
 TEST(Files, OpfHasNoHeader) {

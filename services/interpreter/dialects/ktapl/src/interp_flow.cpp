@@ -57,10 +57,22 @@ KtRun::KtRun(const RunOptions& o) : env_(o.env ? o.env : &default_env_) {
       machine_[n] = num(0);
     }
   }
-  // The station's persistent machine parameters (L1000-L2999).
+  // The station's persistent machine parameters (L1000-L2999) and fixture table (H1.X ..., FixtureKey).
   for (const auto& [k, v] : o.variables) {
+    if (!std::isfinite(v)) continue;
+    if (auto f = ParseFixtureKey(k)) {
+      FixtureLine& line = fixtures_[f->h];
+      line.set = true;
+      if (f->axis < 0) {
+        line.has_i = true;
+        line.i = v;
+      } else {
+        line.v[f->axis] = v;
+      }
+      continue;
+    }
     int n = param_number(Upper(Trim(k)));
-    if (n >= 1000 && n <= 2999 && std::isfinite(v)) machine_[n] = v;
+    if (n >= 1000 && n <= 2999) machine_[n] = v;
   }
   metric_ = basic_metric_;
   tools_ = o.tools;
@@ -70,6 +82,13 @@ KtRun::KtRun(const RunOptions& o) : env_(o.env ? o.env : &default_env_) {
 std::map<std::string, double> KtRun::Variables() const {
   std::map<std::string, double> out;
   for (const auto& [n, v] : machine_) out["L" + std::to_string(n)] = v;
+  // The fixture table stays in the CNC's memory too (FXC/UFX, manual ch. 6): every line that was set.
+  for (int h = 1; h <= kFixtureLines; ++h) {
+    const FixtureLine& line = fixtures_[h];
+    if (!line.set) continue;
+    for (int a : {kX, kY, kZ, kA, kB, kC}) out[FixtureKey(h, a)] = line.v[a];
+    if (line.has_i) out[FixtureKey(h, -1)] = line.i;
+  }
   return out;
 }
 

@@ -145,6 +145,16 @@ struct FixtureLine {
   double i = 0;
   AxisArray v{};
 };
+constexpr int kFixtureLines = 32;  // H1-H32
+
+// A fixture-table line's value as the station keeps it between runs: "H<n>.<X|Y|Z|A|B|C>" (mm, degrees,
+// what the line adds to the axis) and "H<n>.I" (the B position G49 selects it at). axis -1 is I.
+struct FixtureField {
+  int h;
+  int axis;
+};
+std::string FixtureKey(int h, int axis);
+std::optional<FixtureField> ParseFixtureKey(std::string_view key);
 
 // What a block's statements leave for the end of the block.
 struct BlockCtx {
@@ -380,7 +390,7 @@ class KtRun final : public RunBase, public ExprContext {
   AxisArray pos_{};
   uint32_t used_ = 0;
   AxisArray g98_{};  // floating zero (G98)
-  std::array<FixtureLine, 33> fixtures_{};
+  std::array<FixtureLine, kFixtureLines + 1> fixtures_{};
   int active_h_ = 0;
   bool mir_x_ = false, mir_y_ = false;
   double u88_x_ = 0.254, u88_y_ = 0;  // mm
@@ -441,7 +451,7 @@ T& KtRun::CompSlot() {
 // Device classes of CER/SER (ln 8358-8395): mass storage, sequential (printer), remote (FMS host).
 constexpr int kDeviceMas = 1, kDeviceSeq = 2, kDeviceRem = 4;
 // The inspection header's delimiter line (ch. 7 ln 7908: "the dashed line"; its length is lost in the scan).
-inline constexpr const char* kInspectionDelimiter = "---------------";
+inline constexpr const char* kInspectionDelimiter = "------------------------------";  // judgement call 54
 // The header OIF (and MSG,NAM) writes when it opens a file (ch. 7 ln 7898-7908), lines ending in "\n":
 // serial number, pallet code/part number, the YY:MM:DD HH:MM stamp of `now` (year, month, day, hour,
 // minute, second), the delimiter.

@@ -95,6 +95,27 @@ void KtRun::ApplyTool() {
   }
 }
 
+std::string FixtureKey(int h, int axis) {
+  return "H" + std::to_string(h) + "." + (axis < 0 ? 'I' : LetterOfAxis(axis));
+}
+
+std::optional<FixtureField> ParseFixtureKey(std::string_view key) {
+  if (key.size() < 4 || key[0] != 'H' || key[key.size() - 2] != '.') return std::nullopt;
+  std::string_view digits = key.substr(1, key.size() - 3);
+  if (digits.empty() || digits.size() > 2 || digits[0] == '0') return std::nullopt;
+  int h = 0;
+  for (char c : digits) {
+    if (c < '0' || c > '9') return std::nullopt;
+    h = h * 10 + (c - '0');
+  }
+  if (h < 1 || h > kFixtureLines) return std::nullopt;
+  const char letter = key.back();
+  if (letter == 'I') return FixtureField{h, -1};
+  for (int a : {kX, kY, kZ, kA, kB, kC})
+    if (LetterOfAxis(a) == letter) return FixtureField{h, a};
+  return std::nullopt;
+}
+
 void KtRun::StFxc(const Statement& st, BlockCtx&, bool) {
   const bool ufx = st.mnemonic == "UFX";
   std::string b = Upper(st.body);

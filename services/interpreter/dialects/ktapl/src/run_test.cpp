@@ -195,6 +195,39 @@ TEST(Service, PersistentVariablesInAndOut) {
   EXPECT_DOUBLE_EQ(ops[1].target()->pos[kX], 8.0);
 }
 
+// The fixture table stays on the station like the machine parameters (FXC, manual ch. 6; judgement call in
+// docs/dialects/ktapl.md): one run's (FXC,H1X.5Y-.25) in inch is H1.X = 12.7, H1.Y = -6.35 mm; the next run,
+// given those, moves X0 Y0 with H1 to machine X12.7 Y-6.35.
+TEST(Service, FixtureTableInAndOut) {
+  RunOptions o;
+  o.program_name = "S";
+  o.program_text = "G70\n(FXC,H1I90.X.5Y-.25)\nM30\n";
+  auto run = Start(o);
+  for (Step s = run->Next(); s.kind == Step::kCanon; s = run->Next()) {
+  }
+  auto vars = run->Variables();
+  EXPECT_DOUBLE_EQ(vars.at("H1.X"), 12.7);
+  EXPECT_DOUBLE_EQ(vars.at("H1.Y"), -6.35);
+  EXPECT_DOUBLE_EQ(vars.at("H1.Z"), 0.0);
+  EXPECT_DOUBLE_EQ(vars.at("H1.I"), 90.0);
+  EXPECT_EQ(vars.count("H2.X"), 0u);  // a line never set is not kept
+
+  RunOptions next;
+  next.program_name = "T";
+  next.program_text = "G70G48\nG0F0X0Y0H1\nM30\n";
+  next.variables = vars;
+  auto run2 = Start(next);
+  std::vector<Canon> ops;
+  for (Step s = run2->Next(); s.kind == Step::kCanon; s = run2->Next()) ops.push_back(s.canon);
+  ASSERT_GE(ops.size(), 2u);
+  EXPECT_NEAR(ops[1].target()->pos[kX], 12.7, 1e-9);
+  EXPECT_NEAR(ops[1].target()->pos[kY], -6.35, 1e-9);
+  EXPECT_EQ(KtaplDialect().CheckVariable("H1.X", 12.7), "");
+  EXPECT_EQ(KtaplDialect().CheckVariable("H32.I", 90), "");
+  EXPECT_NE(KtaplDialect().CheckVariable("H33.X", 0), "");
+  EXPECT_NE(KtaplDialect().CheckVariable("H1.X", 50000), "");
+}
+
 // A TLD in a program changes the run's table (every field), and the active tool's compensation follows.
 TEST(Service, TldChangesTheToolTableAndTheActiveLength) {
   RunOptions o;
