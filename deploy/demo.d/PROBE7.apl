@@ -2,9 +2,10 @@
 (NAM,BORE7)
 (UTL,1)
 (UCY,60)
-! Probe the part on pallet 7 (App. E probe cycles, shipped as KT-APL source): the top face with G26Z, the
-! bore with G27X and G27Y, into the inspection file BORE7 (G36 + OIF ... G37, manual ch. 7), copied to HOST;
-! the measured centre becomes fixture offset H1 (FXC), as FINDBORE does (part 2 ex. 9-10).
+! Probe the part on KT01 (App. E probe cycles, shipped as KT-APL source):
+! the top face with G26Z, the bore with G27X and G27Y, into the inspection
+! file BORE7 (G36 + OIF ... G37, manual ch. 7), copied to HOST by RCP; the
+! measured centre becomes fixture offset H1 (FXC), as FINDBORE does (9-10).
 N10 G71 G90 G0 X150. Y100. Z40. F0 T1
 N20 M06
 N22 Z40. ! the probe's length applies from the next Z move

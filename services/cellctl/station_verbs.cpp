@@ -1,4 +1,6 @@
 // cellctl station ls|tools|vars|input|io|reset|hold|resume|override
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <chrono>
 #include <map>
@@ -196,7 +198,8 @@ void AddStationVerbs(CLI::App& app, Context& ctx) {
     nlohmann::json j = nlohmann::json::object();
     for (auto& x : v->variables()) j[x.name().to_string()] = x.value();
     if (ctx.json) return Print(ctx, j, {});
-    for (auto& [k, val] : j.items()) std::cout << k << " = " << val << "\n";
+    // 10 significant digits, as a parameter display shows them (0.05, not 0.05000000000001137).
+    for (auto& [k, val] : j.items()) std::cout << fmt::format("{} = {:.10g}\n", k, val.get<double>());
   });
 
   auto* input =
