@@ -82,9 +82,11 @@ TEST_F(OkumaCell, ShaftScheduleMachinesTwentyFifteenAndTwentyFiveParts) {
   ASSERT_FALSE(job.empty());
   ExpectCompletedWithCounts(job);
 
-  // One run record per part, in the schedule's order (records are stored after each run).
+  // One run record per part, in the schedule's order (records are stored after each run). One pass is 60
+  // cellctl processes, which takes over 20 s on a loaded 2-core machine: the deadline leaves room for the
+  // pass after the last record is stored.
   std::vector<std::string> programs;
-  auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+  auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(90);
   for (;;) {
     programs.clear();
     for (auto& row : CtlJson({"inspect", "ls", "run-OK01-*", "--json"})) {

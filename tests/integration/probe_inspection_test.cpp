@@ -2,11 +2,11 @@
 // and a 40.1 mm bore centred at X200.05 Y99.96, 0.05 and -0.04 off its nominal X200 Y100). Pallet 1 runs
 // PROBE, which opens an inspection file (G36 + OIF, manual ln 7894-7908), probes the face (G26Z, App. E ln
 // 12230-12281) and the bore (G27X, G27Y, ln 12551-12644), sets fixture offset H1 from the measured centre
-// (FXC, as FINDBORE does, part 2 ex. 9-10 ln 10055-10114), waits on an input, closes the file (G37) and copies
-// it to HOST (RCP, ln 8316-8356); then MACH on the same pallet moves to the nominal centre with H1. The
-// inspection writer is killed with SIGKILL while the file is still open; the close waits for it and the file
-// is stored once it is back. Checks: every line of the file (numbers by hand below), the QIF export against
-// the QIF 3.0 schema, H1 kept on the station, MACH's motion at the measured centre.
+// (FXC, as FINDBORE does, part 2 ex. 9-10 ln 10055-10114), waits on an input, closes the file (G37) and
+// copies it to HOST (RCP, ln 8316-8356); then MACH on the same pallet moves to the nominal centre with H1.
+// The inspection writer is killed with SIGKILL while the file is still open; the close waits for it and the
+// file is stored once it is back. Checks: every line of the file (numbers by hand below), the QIF export
+// against the QIF 3.0 schema, H1 kept on the station, MACH's motion at the measured centre.
 //
 // By hand (6 mm ball, L1003 = L1004 = 3 its effective radius, tool 1 150 mm long; as the corpus cases
 // appE_g26z_surface and appE_g27xy_bore work them out): G26Z from Z40 finds the face at Z 10: "Z SURFACE =
@@ -41,7 +41,8 @@ namespace fs = std::filesystem;
 
 namespace {
 
-constexpr const char* kPart = R"(# A block whose top is Z 10 with a 40.1 mm bore centred at X200.05 Y99.96, 30 deep (mm).
+constexpr const char* kPart =
+    R"(# A block whose top is Z 10 with a 40.1 mm bore centred at X200.05 Y99.96, 30 deep (mm).
 [[plane]]
 point = [0, 0, 10]
 normal = [0, 0, 1]

@@ -28,8 +28,8 @@ std::string ValidateQif(const std::string& xml) {
   static std::atomic<int> n{0};
   const std::string file = "/tmp/cell-qif-" + std::to_string(getpid()) + "-" + std::to_string(n++) + ".qif";
   std::ofstream(file) << xml;
-  auto r = RunCommand(
-      {"xmllint", "--noout", "--nonet", "--schema", QifSchemaDir() + "/QIFApplications/QIFDocument.xsd", file});
+  auto r = RunCommand({"xmllint", "--noout", "--nonet", "--schema",
+                       QifSchemaDir() + "/QIFApplications/QIFDocument.xsd", file});
   fs::remove(file);
   return r.code == 0 ? "" : r.err + r.out + "(exit " + std::to_string(r.code) + ")";
 }
