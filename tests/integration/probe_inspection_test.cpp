@@ -203,6 +203,13 @@ TEST_F(ProbeInspection, ProbesABoreWritesTheInspectionFileAndTheNextProgramUsesT
   ExpectResult(l[13], "Y CENTER", 99.96, 1e-4);
   EXPECT_EQ(l[14], "");
 
+  // The program store has the file too, as a revision in each namespace, typed as an inspection file.
+  auto show = cell_.Json({"program", "show", "BORE1", "--node", "HOST", "--json"});
+  ASSERT_TRUE(show.is_object()) << show;
+  EXPECT_EQ(show.value("type", ""), "inspection") << show;
+  EXPECT_EQ(show.value("dialect", ""), "ktapl") << show;
+  EXPECT_EQ(Ctl({"program", "get", "BORE1", "--node", "KT01"}).out, cat.out);
+
   // Exports: CSV rows per quantity, QIF valid against the QIF 3.0 schema.
   auto csv = Ctl({"inspect", "export", "HOST/BORE1", "--format", "csv", "--units", "mm"});
   ASSERT_EQ(csv.code, 0) << csv.err;

@@ -735,6 +735,8 @@ TEST_F(ServoDds, CancelledRunIsAbortedOnTheMachine) {
   ASSERT_FALSE(b.timed_out) << "the next run did not complete" << Log("kt01.err");
   ExpectClean(b, 2);
   EXPECT_LT(b.last->machine_s() - t0, 40.0);
+  // Where the machine stands once idle (a sample taken at once may have been published before the end).
+  ASSERT_TRUE(bus_->WaitIdle("KT01")) << Log("kt01.err");
   auto at = bus_->NextAxes("KT01", [](const cell::AxisState&) { return true; });
   ASSERT_TRUE(at);
   EXPECT_NEAR(at->commanded()[1], 200, 0.01) << "a segment of the cancelled run ran";

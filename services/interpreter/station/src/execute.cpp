@@ -164,7 +164,7 @@ void Station::RunProgram(ActiveRun& run, const std::string& entry) {
   opt.save = [this, where](const std::string& lib, const std::string& text) {
     if (lib.find('/') == std::string::npos) return;  // KT-APL SAVE: not kept by a station (as before)
     auto [ns, name] = where(lib);
-    io_.SaveFile(ns, name, text);
+    io_.SaveFile(ns, name, text, {});
   };
   opt.tools = start.image.tools;
   opt.variables = start.image.variables;
@@ -177,8 +177,8 @@ void Station::RunProgram(ActiveRun& run, const std::string& entry) {
     if (sub != std::string::npos && sub + 1 < rest.size()) opt.params["SUB_FILE"] = rest.substr(sub + 1);
   }
   ProgramFiles files(
-      cfg_.id, run.d.dispatch_id, io_, clock_, [this, id = run.d.dispatch_id] { Checkpoint(id); },
-      options_.writer_wait);
+      cfg_.id, cfg_.dialect, run.d.dispatch_id, io_, clock_,
+      [this, id = run.d.dispatch_id] { Checkpoint(id); }, options_.writer_wait);
   RunEnvironment env(*this, stream_, options_.probe_feed, files);
   env.SetPallet(run.d.pallet);
   AuxIo aux(cfg_.aux);  // interlocks ON and the spindle stopped: each program starts from the reset state

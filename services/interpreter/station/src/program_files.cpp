@@ -1,5 +1,6 @@
 #include "cell/station/program_files.h"
 
+#include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
@@ -39,9 +40,10 @@ std::vector<std::string> SplitCommas(const std::string& s) {
 
 }  // namespace
 
-ProgramFiles::ProgramFiles(std::string station, std::int32_t dispatch_id, StationIo& io, Clock& clock,
-                           std::function<void()> checkpoint, Clock::Duration writer_wait)
+ProgramFiles::ProgramFiles(std::string station, std::string dialect, std::int32_t dispatch_id, StationIo& io,
+                           Clock& clock, std::function<void()> checkpoint, Clock::Duration writer_wait)
     : station_(std::move(station)),
+      dialect_(std::move(dialect)),
       dispatch_id_(dispatch_id),
       io_(io),
       clock_(clock),
@@ -57,11 +59,11 @@ interp::FileResult ProgramFiles::Apply(const interp::Canon& op) {
     if (o->append && it == closed_.end())
       return {false, "FILE NOT STORED: appending to " + o->name + " of an earlier run is not supported yet"};
     open_ = o->name;
-    text_ = o->append ? it->second : "";
+    file_ = o->append ? it->second : Closed{"", o->inspection};
     return {};
   }
   if (const auto* w = std::get_if<interp::FileWriteOp>(&op.p)) {
-    if (!open_.empty()) text_ += w->text + "\n";
+    if (!open_.empty()) file_.text += w->text + "\n";
     return {};
   }
   if (std::holds_alternative<interp::FileCloseOp>(op.p)) {
@@ -69,8 +71,8 @@ interp::FileResult ProgramFiles::Apply(const interp::Canon& op) {
     if (open_.empty()) return {false, "FILE NOT STORED: the file was not opened"};
     const std::string name = std::move(open_);
     open_.clear();
-    closed_[Upper(name)] = text_;
-    return Store(station_, name, text_);
+    closed_[Upper(name)] = file_;
+    return Store(station_, name, file_);
   }
   if (const auto* f = std::get_if<interp::FileOpOp>(&op.p)) {
     if (f->what == "RCP") return RemoteCopy(f->args);
@@ -111,13 +113,14 @@ interp::FileResult ProgramFiles::RemoteCopy(const std::string& args) {
   return Store(Upper(a[2]), remote, it->second);
 }
 
-interp::FileResult ProgramFiles::Store(const std::string& node, const std::string& name,
-                                       const std::string& text) {
+interp::FileResult ProgramFiles::Store(const std::string& node, const std::string& name, const Closed& file) {
+  const std::string& text = file.text;
   if (text.size() > 65536) return {false, "FILE " + name + " LARGER THAN 64 KIB"};
   cell::InspectionRequest req;
   req.op(cell::INSPECTION_STORE_FILE);
-  req.hdr().idempotency_key("file-" + station_ + "-" + std::to_string(dispatch_id_) + "-" + node + "-" +
-                            name + "-" + std::to_string(text.size()));
+  // The n-th store of this dispatch: a retry (or a replay of the run after a crash) repeats the key, so
+  // neither the writer nor the store does it twice; two stores of one run never share it.
+  req.hdr().idempotency_key(fmt::format("file-{}-{}-{}", station_, dispatch_id_, ++stores_));
   auto& f = req.file();
   f.file(name.substr(0, 64));
   f.station(node.substr(0, 16));
@@ -126,21 +129,30 @@ interp::FileResult ProgramFiles::Store(const std::string& node, const std::strin
   f.text(text);
   f.closed(true);
   f.time_ns(clock_.WallNs());
-  // Wait for a writer on the bus (a restart takes seconds); the run can be cancelled meanwhile.
+  StationIo::SaveAs as{dialect_, file.inspection ? "inspection" : "data",
+                       req.hdr().idempotency_key().to_string()};
+  // Wait for a writer and a store on the bus (a restart takes seconds); the run can be cancelled meanwhile.
+  // The writer's copy first, then the store's revision; a retry repeats neither (idempotency keys).
   std::mutex mu;
   std::condition_variable cv;
   const auto deadline = clock_.Now() + writer_wait_;
+  bool written = false;
   for (;;) {
     checkpoint_();
+    const char* who = written ? "program store" : "inspection writer";
     try {
-      if (io_.StoreRecord(req)) return {};
+      if (!written) written = io_.StoreRecord(req);
+      if (written) {
+        io_.SaveFile(node, name, text, as);
+        return {};
+      }
     } catch (const Error& e) {
-      // A writer that went away mid-call is waited for again; one that refused the file is the answer.
+      // One that went away mid-call is waited for again; one that refused the file is the answer.
       if (e.code() != Errc::kTimeout && e.code() != Errc::kUnavailable)
-        return {false, std::string("FILE NOT STORED: ") + e.what()};
-      spdlog::warn("{}: not yet stored: {}", name, e.what());
+        return {false, fmt::format("FILE NOT STORED: {}: {}", who, e.what())};
+      spdlog::warn("{}: not yet stored by the {}: {}", name, who, e.what());
     }
-    if (clock_.Now() >= deadline) return {false, "FILE NOT STORED: no inspection writer on the bus"};
+    if (clock_.Now() >= deadline) return {false, fmt::format("FILE NOT STORED: no {} on the bus", who)};
     std::unique_lock lk(mu);
     clock_.Wait(lk, cv, std::chrono::milliseconds(200));
   }

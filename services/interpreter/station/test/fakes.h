@@ -172,8 +172,11 @@ class FakeIo final : public StationIo {
     }
     return std::nullopt;
   }
-  void SaveFile(const std::string& node, const std::string& name, const std::string& text) override {
+  void SaveFile(const std::string& node, const std::string& name, const std::string& text,
+                const SaveAs& as) override {
+    if (store_down) throw Error(Errc::kUnavailable, "no cell/program_store service");
     programs[node + "/" + name] = text;
+    saved_as[node + "/" + name] = as;
   }
   bool StoreRecord(const cell::InspectionRequest& request) override {
     if (!writer_up) return false;
@@ -195,8 +198,10 @@ class FakeIo final : public StationIo {
   }
 
   std::map<std::string, std::string> programs;  // "NODE/NAME" -> text
+  std::map<std::string, SaveAs> saved_as;       // "NODE/NAME" -> how SaveFile declared it
   std::function<void(const std::string&)> on_fetch;
   bool writer_up = true, writer_refuses = false;
+  bool store_down = false;  // SaveFile: the program store is not on the bus
   std::vector<cell::StationStatus> status;
   std::vector<cell::ToolTable> tools;
   std::vector<cell::StationVariables> variables;

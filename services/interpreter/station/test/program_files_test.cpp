@@ -1,5 +1,6 @@
 // Files a program writes leave the run through the station core to the inspection writer (StoreRecord with
-// INSPECTION_STORE_FILE), and the program's completion flags are set only once the writer has them.
+// INSPECTION_STORE_FILE) and then to the program store as a revision in the node's namespace (SaveFile), and
+// the program's completion flags are set only once both have them.
 #include "harness.h"
 
 namespace cell::station::testing {
@@ -53,6 +54,33 @@ TEST_F(StationFiles, ClosedFilesGoToTheWriterAndSetTheirFlagOnceStored) {
   EXPECT_EQ(host->file().text().to_string(), "X=12.500000\n");
   EXPECT_DOUBLE_EQ(Variables()["L1500"], 1.0);  // L1050 after CLF: stored
   EXPECT_DOUBLE_EQ(Variables()["L1501"], 1.0);  // L1054 after RCP
+  // The same files in the program store, declared in the station's dialect: the OIF file as an inspection
+  // file, OPF's as data; each store under its own idempotency key.
+  EXPECT_EQ(io_.programs["KT01/PUMP341"], text);
+  EXPECT_EQ(io_.saved_as["KT01/PUMP341"].dialect, "ktapl");
+  EXPECT_EQ(io_.saved_as["KT01/PUMP341"].file_type, "inspection");
+  EXPECT_EQ(io_.programs["KT01/DATA7"], "X=12.500000\n");
+  EXPECT_EQ(io_.saved_as["KT01/DATA7"].file_type, "data");
+  EXPECT_EQ(io_.programs["HOST/DATA7.TXT"], "X=12.500000\n");
+  EXPECT_NE(io_.saved_as["KT01/DATA7"].idempotency_key, io_.saved_as["HOST/DATA7.TXT"].idempotency_key);
+}
+
+TEST_F(StationFiles, AProgramStoreThatIsAwayIsWaitedForAfterTheWriter) {
+  Put("P", kProgram);
+  io_.store_down = true;
+  int waits = 0;
+  script_ = [&] {
+    if (++waits == 40) io_.store_down = false;
+  };
+  Dispatch(1, {"P"});
+  EXPECT_EQ(RunOne(1).state(), cell::RUN_COMPLETED);
+  EXPECT_EQ(io_.programs.count("KT01/PUMP341"), 1u);
+  EXPECT_DOUBLE_EQ(Variables()["L1500"], 1.0);
+  // The writer was asked once per file: the retries were the store's.
+  int oif = 0;
+  for (const auto& r : io_.records)
+    if (r.op() == cell::INSPECTION_STORE_FILE && r.file().file().to_string() == "PUMP341") ++oif;
+  EXPECT_EQ(oif, 1);
 }
 
 TEST_F(StationFiles, AWriterThatIsAwayIsWaitedForAndNothingIsLost) {

@@ -38,10 +38,14 @@ class Service final : public StationIo, public ServoLink {
   std::optional<std::string> Program(const std::string& node, const std::string& name) override {
     return programs_.GetWithFallback(node, name);
   }
-  void SaveFile(const std::string& node, const std::string& name, const std::string& text) override {
+  void SaveFile(const std::string& node, const std::string& name, const std::string& text,
+                const SaveAs& as) override {
     program_store::Client::PutOptions o;
     o.node = node;
     o.force = true;
+    o.dialect = as.dialect;
+    o.file_type = as.file_type;
+    o.idempotency_key = as.idempotency_key;
     programs_.Put(name, text, o);
   }
   bool StoreRecord(const cell::InspectionRequest& request) override;

@@ -42,9 +42,16 @@ class StationIo {
   virtual void PublishControl(const cell::ServoControl& c) = 0;
   // A program's text from the program store: namespace `node`, then HOST; nullopt when in neither.
   virtual std::optional<std::string> Program(const std::string& node, const std::string& name) = 0;
+  // How a saved file is declared to the program store ("" = detected from name and content) and the key that
+  // makes a retried save one revision ("" = none).
+  struct SaveAs {
+    std::string dialect, file_type, idempotency_key;
+  };
   // Stores a file a program saved (a new revision over an existing one): Balt-System's origins and tool life
-  // files (FILEOR, GE1TOL on MP3). Throws cell::Error when the store refused it or did not answer.
-  virtual void SaveFile(const std::string& node, const std::string& name, const std::string& text) = 0;
+  // files (FILEOR, GE1TOL on MP3), KT-APL's inspection and data files. Throws cell::Error when the store
+  // refused it or did not answer.
+  virtual void SaveFile(const std::string& node, const std::string& name, const std::string& text,
+                        const SaveAs& as) = 0;
   // Hands a run record to the inspection writer: false when no writer is there (the record stays in the
   // outbox); throws cell::Error when the writer refused it or did not answer.
   virtual bool StoreRecord(const cell::InspectionRequest& request) = 0;
