@@ -3,6 +3,7 @@
 // run's tool table, the tool life file GE1TOL with its alternative tools, RQU / RQP and TOF.
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <set>
 
@@ -13,7 +14,8 @@ namespace cell::interp::balt {
 
 void SplitTool(const Val& v, double value, int* tool, int* offset, bool* has_offset) {
   double whole = std::floor(value);
-  *tool = static_cast<int>(whole);
+  // A number past any tool's range stays past it (the callers' 1-9999 check names it) without overflowing.
+  *tool = static_cast<int>(std::min(whole, 99999999.0));
   if (v.kind == Val::kNum) {
     // The digits after the point are the offset number as written: T1.10 is offset 10 (a judgement call).
     *has_offset = v.point && v.frac >= 0;
