@@ -19,6 +19,7 @@
 #include "cell/error/error.h"
 #include "cell/interp/interp.h"
 #include "cell/names/names.h"
+#include "cell/toml/parse.h"
 
 #ifndef CELL_CONFIG_SOURCE_DIR
 #error "CELL_CONFIG_SOURCE_DIR must name the source tree (set by common/config/CMakeLists.txt)"
@@ -387,15 +388,7 @@ StationConfig LoadStation(std::string_view id) {
 }
 
 StationConfig LoadStationFile(const fs::path& file) {
-  toml::table root;
-  try {
-    root = toml::parse_file(file.string());
-  } catch (const toml::parse_error& e) {
-    const auto& b = e.source().begin;
-    if (b.line == 0) throw Error(Errc::kIo, fmt::format("{}: {}", file.string(), e.description()));
-    throw Error(Errc::kInvalidArgument,
-                fmt::format("{}:{}:{}: {}", file.string(), b.line, b.column, e.description()));
-  }
+  toml::table root = tomlfile::ParseFile(file);
   StationConfig cfg;
   cfg.file = file;
   const toml::node* sn = root.get("station");

@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "cell/error/error.h"
+#include "cell/toml/parse.h"
 
 namespace cell::partmodel {
 namespace {
@@ -199,13 +200,7 @@ PartModel ParseLineFormat(std::string_view text, const std::string& source) {
 
 PartModel ParsePartModel(std::string_view text, const std::string& source) {
   if (IsLineFormat(text)) return ParseLineFormat(text, source);
-  toml::table root;
-  try {
-    root = toml::parse(text, source);
-  } catch (const toml::parse_error& e) {
-    throw Error(Errc::kInvalidArgument, fmt::format("{}:{}:{}: {}", source, e.source().begin.line,
-                                                    e.source().begin.column, e.description()));
-  }
+  toml::table root = tomlfile::Parse(text, source);
   auto fail = [&](const std::string& key, const std::string& why) -> void {
     throw Error(Errc::kInvalidArgument, fmt::format("{}: {}: {}", source, key, why));
   };

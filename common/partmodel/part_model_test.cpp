@@ -4,37 +4,22 @@
 
 #include <gtest/gtest.h>
 
+#include <string>
+
 #include "cell/error/error.h"
 
 namespace cell::partmodel {
 namespace {
 
-const char* kPart = R"(
-# block top face at z = 50 with a bore, a boss and a sphere on it
-[[plane]]
-point = [0, 0, 50]
-normal = [0, 0, 1]
-[[bore]]
-top = [200, 200, 50]
-axis = [0, 0, 1]
-diameter = 40
-depth = 30
-[[boss]]
-base = [300, 300, 50]
-axis = [0, 0, 1]
-diameter = 30
-height = 20
-[[sphere]]
-center = [400, 100, 60]
-diameter = 20
-)";
+// The shared test part: common/partmodel/testdata/block.toml.
+const std::string kBlock = std::string(CELL_SOURCE_DIR) + "/common/partmodel/testdata/block.toml";
 
 Pose P(double x, double y, double z, double b = 0) {
   return {x, y, z, 0, b, 0};
 }
 
 TEST(PartModel, DistanceToEachFeature) {
-  PartModel m = ParsePartModel(kPart, "part.toml");
+  PartModel m = LoadPartModel(kBlock);
   EXPECT_NEAR(m.Distance(Eigen::Vector3d(0, 0, 60)), 10, 1e-12);     // 10 above the face
   EXPECT_NEAR(m.Distance(Eigen::Vector3d(200, 200, 40)), 20, 1e-9);  // bore axis: 20 to the wall
   EXPECT_LT(m.Distance(Eigen::Vector3d(0, 0, 40)), 0);               // inside the block
@@ -67,7 +52,7 @@ rotate = [0, 30, 0]
 }
 
 TEST(PartModel, MakeTripsWhereTheBallTouches) {
-  PartModel m = ParsePartModel(kPart, "part.toml");
+  PartModel m = LoadPartModel(kBlock);
   // Down onto the face z = 50 from 100 to 0 with a 3 mm ball: the centre stops at 53, t = 47/100.
   Trip t = m.Probe(true, P(100, 100, 100), P(100, 100, 0), 3.0);
   ASSERT_EQ(t.kind, Trip::kEvent);
@@ -83,7 +68,7 @@ TEST(PartModel, MakeTripsWhereTheBallTouches) {
 }
 
 TEST(PartModel, BreakTripsWhereTheBallLeaves) {
-  PartModel m = ParsePartModel(kPart, "part.toml");
+  PartModel m = LoadPartModel(kBlock);
   // From 1 mm past contact (centre at 52) up to 100: contact is lost at 53, t = 1/48.
   Trip t = m.Probe(false, P(100, 100, 52), P(100, 100, 100), 3.0);
   ASSERT_EQ(t.kind, Trip::kEvent);

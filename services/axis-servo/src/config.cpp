@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "cell/error/error.h"
+#include "cell/toml/parse.h"
 
 namespace cell::servo {
 namespace {
@@ -199,13 +200,7 @@ void ReadAxis(const std::string& src, int index, const toml::table* t, const Mac
 }  // namespace
 
 MachineConfig ParseMachineConfig(std::string_view text, const std::string& source) {
-  toml::table root;
-  try {
-    root = toml::parse(text, source);
-  } catch (const toml::parse_error& e) {
-    throw Error(Errc::kInvalidArgument, fmt::format("{}:{}:{}: {}", source, e.source().begin.line,
-                                                    e.source().begin.column, e.description()));
-  }
+  toml::table root = tomlfile::Parse(text, source);
   MachineConfig m;
   m.source = source;
   TableReader station(source, "station.", root["station"].as_table());

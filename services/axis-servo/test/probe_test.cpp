@@ -12,25 +12,8 @@ namespace {
 using testing::Find;
 using testing::Rapid;
 
-const char* kPart = R"(
-# block top face at z = 50 with a bore, a boss and a sphere on it
-[[plane]]
-point = [0, 0, 50]
-normal = [0, 0, 1]
-[[bore]]
-top = [200, 200, 50]
-axis = [0, 0, 1]
-diameter = 40
-depth = 30
-[[boss]]
-base = [300, 300, 50]
-axis = [0, 0, 1]
-diameter = 30
-height = 20
-[[sphere]]
-center = [400, 100, 60]
-diameter = 20
-)";
+// The shared test part: common/partmodel/testdata/block.toml.
+const std::string kBlock = std::string(CELL_SOURCE_DIR) + "/common/partmodel/testdata/block.toml";
 
 struct Hit {
   bool contact;
@@ -40,7 +23,7 @@ struct Hit {
 
 Hit Probe(const AxisVector& from, const AxisVector& to, double feed = 600) {
   Machine m(DefaultMachineConfig("hmc"), ClockKind::kVirtual);
-  m.SetPartModel(1, partmodel::ParsePartModel(kPart, "part.toml"));
+  m.SetPartModel(1, partmodel::LoadPartModel(kBlock));
   m.SetPallets(1, 0);
   m.Push(Rapid(1, from[0], from[1], from[2]));
   Segment p;
@@ -128,7 +111,7 @@ Segment ProbeSeg(std::uint64_t id, double z, bool brk, double feed = 600) {
 
 TEST(Probe, BreakLatchesWhereContactIsLostAndAlreadyMeansNoMotion) {
   Machine m(DefaultMachineConfig("hmc"), ClockKind::kVirtual);
-  m.SetPartModel(1, partmodel::ParsePartModel(kPart, "part.toml"));
+  m.SetPartModel(1, partmodel::LoadPartModel(kBlock));
   m.SetPallets(1, 0);
   m.Push(Rapid(1, 100, 100, 100));
   m.Push(ProbeSeg(2, 0, false));
@@ -169,7 +152,7 @@ TEST(Probe, DrivingTheStylusPastItsOvertravelIsAlarm602) {
   MachineConfig cfg = DefaultMachineConfig("hmc");
   cfg.probe_overtravel = 0.01;  // far less than the stopping distance at 600 mm/min
   Machine m(cfg, ClockKind::kVirtual);
-  m.SetPartModel(1, partmodel::ParsePartModel(kPart, "part.toml"));
+  m.SetPartModel(1, partmodel::LoadPartModel(kBlock));
   m.SetPallets(1, 0);
   m.Push(Rapid(1, 100, 100, 100));
   m.Push(ProbeSeg(2, 0, false));
