@@ -54,7 +54,7 @@ bool IsStationRole(Role r) {
 
 // Who writes and reads each topic today (the services' bus bindings), narrowed to that. The viewer and the
 // operator read every state and event topic meant for people (a person sees the cell through them), not
-// the machine-internal ones (credits, servo control, segments, probe results) nor any reply.
+// the machine-internal ones (credits, servo control, segments, probe results, part models) nor any reply.
 const std::vector<TopicRule>& Table() {
   static const std::vector<TopicRule> table{
       {"cell/health",
@@ -139,6 +139,11 @@ const std::vector<TopicRule>& Table() {
        {kInt},
        Scope::kOwnStation,
        "the station's axis servo writes probe results to its interpreter"},
+      {"cell/station/<ID>/part",
+       {kInt},
+       {kSrv},
+       Scope::kOwnStation,
+       "the station's interpreter gives its axis servo the part model its pallet map names"},
       {"cell/station/<ID>/run/request",
        {kSch},
        {kInt},

@@ -45,7 +45,7 @@ TEST(Table, CoversExactlyTheBusTopics) {
                                    topics::kServoControl, topics::kSchedulerState,   topics::kJobState,
                                    topics::kRunStatus,    topics::kJobStatus,        topics::kProgramChange,
                                    topics::kAlarm,        topics::kInspectionStored, topics::kAxisState,
-                                   topics::Segments(st),  topics::Probe(st)};
+                                   topics::Segments(st),  topics::Probe(st),         topics::Part(st)};
   for (const std::string& svc :
        {std::string(topics::kProgramStore), std::string(topics::kScheduler), std::string(topics::kInspection),
         topics::StationRun(st), topics::StationCommand(st)}) {

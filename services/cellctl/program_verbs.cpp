@@ -104,8 +104,9 @@ void AddProgramVerbs(CLI::App& app, Context& ctx) {
       put->add_option("--name", o->name, "stored name (default: the KT-APL NAM, else the file name)");
   put->add_option("--node", o->node, "namespace: HOST or a station id");
   put->add_option("--dialect", o->dialect, cell::interp::DialectList() + " (default: detected)");
-  put->add_option("--type", o->type,
-                  "part_program, library, schedule, tool_table, fixture_offsets, inspection, data");
+  put->add_option(
+      "--type", o->type,
+      "part_program, library, schedule, tool_table, fixture_offsets, inspection, data, part_model");
   put->add_flag("--force", o->force, "store a new revision of an existing name");
   put->add_flag("--json", ctx.json);
   put->callback([o, &ctx, name_opt] {
@@ -127,9 +128,11 @@ void AddProgramVerbs(CLI::App& app, Context& ctx) {
     if (ctx.json) {
       Print(ctx, j, {});
     } else {
+      // "(709 bytes, ktapl)"; a file without a dialect shows its type ("(401 bytes, part_model)").
+      std::string what = j.value("dialect", std::string());
+      if (what.empty()) what = j.value("type", std::string("data"));
       std::cout << "stored " << o->node << ":" << j.value("name", name) << " revision "
-                << j.value("revision", 0) << " (" << j.value("size", 0) << " bytes, "
-                << j.value("dialect", std::string()) << ")\n";
+                << j.value("revision", 0) << " (" << j.value("size", 0) << " bytes, " << what << ")\n";
     }
   });
 

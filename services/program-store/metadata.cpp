@@ -7,6 +7,7 @@
 
 #include "cell/error/error.h"
 #include "cell/interp/scan.h"
+#include "cell/partmodel/part_model.h"
 
 namespace cell::program_store {
 namespace {
@@ -60,9 +61,10 @@ FileType ParseFileType(std::string_view text) {
   if (In(t, {"FIXTURE_OFFSETS", "FIXTURE_OFFSET_TABLE", "FIXTURE", "FXT"})) return FileType::kFixtureOffsets;
   if (In(t, {"INSPECTION", "INSPECTION_FILE"})) return FileType::kInspection;
   if (In(t, {"DATA", "DATA_FILE", "TEXT"})) return FileType::kData;
+  if (In(t, {"PART_MODEL", "MODEL", "WORKPIECE"})) return FileType::kPartModel;
   Invalid(
       fmt::format("unknown file type '{}' (use part_program, library, schedule, tool_table, "
-                  "fixture_offsets, inspection or data)",
+                  "fixture_offsets, inspection, data or part_model)",
                   text));
 }
 
@@ -272,6 +274,9 @@ Metadata ExtractMetadata(std::string_view content, const ExtractOptions& options
 
   if (!type) type = md.dialect != nullptr ? md.dialect->Classify(content) : FileType::kData;
   md.type = *type;
+  // A part model is read by the axis servo when a pallet map names it: a malformed one is refused here,
+  // where its author is, not at the run.
+  if (md.type == FileType::kPartModel) partmodel::ParsePartModel(content, options.name);
   if (NeedsDialect(md.type) && md.dialect == nullptr) {
     Invalid(fmt::format("a {} needs a dialect; declare it (--dialect {})", FileTypeName(md.type), choices));
   }

@@ -229,6 +229,17 @@ TEST(Detection, PlainTextIsData) {
   EXPECT_EQ(insp.dialect, kNone);
 }
 
+TEST(Detection, PartModelIsCheckedAtThePut) {
+  Metadata md = ExtractMetadata("[[plane]]\npoint = [0, 0, 50]\nnormal = [0, 0, 1]\n",
+                                Opts(std::nullopt, FileType::kPartModel, "PALLET7 PART"));
+  EXPECT_EQ(md.type, FileType::kPartModel);
+  EXPECT_EQ(md.dialect, kNone);
+  // The model's own error, with the name it is stored under, line and column.
+  ExpectError(
+      [] { ExtractMetadata("[[plane]]\npoint = [0, 0\n", Opts(std::nullopt, FileType::kPartModel, "BAD")); },
+      Errc::kInvalidArgument, "BAD:2:");
+}
+
 TEST(Text, BinaryContentIsRejected) {
   ExpectError([] { CheckText(std::string("G0\0X1", 5)); }, Errc::kInvalidArgument,
               "content is not text: control byte 0x00 at offset 2");
@@ -311,8 +322,9 @@ TEST(Names, TypeFromNameAndParsing) {
   ExpectError([] { ParseDialect("fanuc"); }, Errc::kInvalidArgument, "unknown dialect 'fanuc'");
   EXPECT_EQ(ParseFileType("fxt"), FileType::kFixtureOffsets);
   EXPECT_EQ(ParseFileType("part_program"), FileType::kPartProgram);
-  for (FileType t : {FileType::kPartProgram, FileType::kLibrary, FileType::kSchedule, FileType::kToolTable,
-                     FileType::kFixtureOffsets, FileType::kInspection, FileType::kData}) {
+  for (FileType t :
+       {FileType::kPartProgram, FileType::kLibrary, FileType::kSchedule, FileType::kToolTable,
+        FileType::kFixtureOffsets, FileType::kInspection, FileType::kData, FileType::kPartModel}) {
     EXPECT_EQ(ParseFileType(FileTypeName(t)), t);
   }
   ExpectError([] { ParseFileType("binary"); }, Errc::kInvalidArgument, "unknown file type");

@@ -1,12 +1,14 @@
-// Measurement end to end (issue 14), with real processes: KT01's table carries a part model (a face at Z 10
-// and a 40.1 mm bore centred at X200.05 Y99.96, 0.05 and -0.04 off its nominal X200 Y100). Pallet 1 runs
-// PROBE, which opens an inspection file (G36 + OIF, manual ln 7894-7908), probes the face (G26Z, App. E ln
-// 12230-12281) and the bore (G27X, G27Y, ln 12551-12644), sets fixture offset H1 from the measured centre
-// (FXC, as FINDBORE does, part 2 ex. 9-10 ln 10055-10114), waits on an input, closes the file (G37) and
-// copies it to HOST (RCP, ln 8316-8356); then MACH on the same pallet moves to the nominal centre with H1.
-// The inspection writer is killed with SIGKILL while the file is still open; the close waits for it and the
-// file is stored once it is back. Checks: every line of the file (numbers by hand below), the QIF export
-// against the QIF 3.0 schema, H1 kept on the station, MACH's motion at the measured centre.
+// Measurement end to end (issue 14), with real processes: pallet 1 carries a part model (a face at Z 10 and a
+// 40.1 mm bore centred at X200.05 Y99.96, 0.05 and -0.04 off its nominal X200 Y100), stored in the program
+// store as type part_model and named in the pallet map before its programs; KT01's station hands it to its
+// servo for the run. Pallet 1 runs PROBE, which opens an inspection file (G36 + OIF, manual ln 7894-7908),
+// probes the face (G26Z, App. E ln 12230-12281) and the bore (G27X, G27Y, ln 12551-12644), sets fixture
+// offset H1 from the measured centre (FXC, as FINDBORE does, part 2 ex. 9-10 ln 10055-10114), waits on an
+// input, closes the file (G37) and copies it to HOST (RCP, ln 8316-8356); then MACH on the same pallet moves
+// to the nominal centre with H1. The inspection writer is killed with SIGKILL while the file is still open;
+// the close waits for it and the file is stored once it is back. Checks: every line of the file (numbers by
+// hand below), the QIF export against the QIF 3.0 schema, H1 kept on the station, MACH's motion at the
+// measured centre.
 //
 // By hand (6 mm ball, L1003 = L1004 = 3 its effective radius, tool 1 150 mm long; as the corpus cases
 // appE_g26z_surface and appE_g27xy_bore work them out): G26Z from Z40 finds the face at Z 10: "Z SURFACE =
@@ -37,7 +39,6 @@
 
 using namespace cell::testing;
 using nlohmann::json;
-namespace fs = std::filesystem;
 
 namespace {
 
@@ -87,20 +88,13 @@ N30 M30
 class ProbeInspection : public ::testing::Test {
  protected:
   void SetUp() override {
-    const fs::path etc = fs::path(cell_.data_dir()) / "etc";
-    fs::create_directories(etc / "stations" / "parts");
-    fs::copy(fs::path(SourceDir()) / "deploy" / "stations", etc / "stations",
-             fs::copy_options::overwrite_existing | fs::copy_options::recursive);
-    std::ofstream(etc / "stations" / "parts" / "bore.toml") << kPart;
-    // KT01.toml ends in its [probe] table: the part model, and the probe as tool 1 (150 mm). The model is
-    // on the table's pallet, 0 at the servo's start: a dispatch runs on the pallet the table holds (the
-    // servo changes pallets on a program's pallet-change op only; docs/axis-servo.md).
-    std::ofstream(etc / "stations" / "KT01.toml", std::ios::app)
-        << "parts = [ { pallet = 0, file = \"parts/bore.toml\" } ]\n\n[[tools]]\ntool = \"1\"\nsocket = 10\n"
-           "length = 150.0\ndiameter = 6.0\nlife_left_min = 600\n";
-    cell_.SetEnv("CELL_CONFIG_DIR", etc.string());
     auto r = cell_.Up("KT01", "virtual");
     ASSERT_EQ(r.code, 0) << r.out << r.err;
+    // The spindle probe as tool 1 in socket 10, 150 mm to the stylus tip (TLD, manual ln 3975-4097).
+    const std::string tld = cell_.data_dir() + "/probe.tld";
+    std::ofstream(tld) << "%\n(TLD,S10T1P150.D6.L1000)\n%\n";
+    auto t = Ctl({"tools", "load", "KT01", tld});
+    ASSERT_EQ(t.code, 0) << t.err;
   }
   void TearDown() override {
     if (cell_.is_up()) {
@@ -149,9 +143,19 @@ void ExpectResult(const std::string& line, const std::string& label, double want
 TEST_F(ProbeInspection, ProbesABoreWritesTheInspectionFileAndTheNextProgramUsesTheOffset) {
   Put("PROBE", kProbe);
   Put("MACH", kMach);
+  // The part model is checked when it is stored: a malformed one is refused with its line and column.
+  const std::string bad = cell_.data_dir() + "/bad.toml";
+  std::ofstream(bad) << "[[bore]]\ntop = [200, 100\n";
+  auto refused = Ctl({"program", "put", bad, "--name", "BAD_PART", "--type", "part_model"});
+  EXPECT_NE(refused.code, 0);
+  EXPECT_NE(refused.err.find("BAD_PART:2:"), std::string::npos) << refused.err;
+  const std::string part = cell_.data_dir() + "/bore.toml";
+  std::ofstream(part) << kPart;
+  auto stored = Ctl({"program", "put", part, "--name", "BORE_PART", "--type", "part_model"});
+  ASSERT_EQ(stored.code, 0) << stored.err;
   cell::bus::Participant bus("probe-inspection-test");
   cell::bus::Reader<cell::AxisState> axes(bus, cell::bus::topics::kAxisState, cell::bus::QosKind::kTelemetry);
-  ASSERT_EQ(Ctl({"pallet", "set", "1", "PROBE", "MACH"}).code, 0);
+  ASSERT_EQ(Ctl({"pallet", "set", "1", "BORE_PART", "PROBE", "MACH"}).code, 0);
   auto run = Ctl({"pallet", "run", "1", "--station", "KT01"});
   ASSERT_EQ(run.code, 0) << run.err;
   const std::string job = run.out.substr(0, run.out.find('\n'));

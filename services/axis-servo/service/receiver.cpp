@@ -108,6 +108,21 @@ void Receiver::OnControl(const cell::ServoControl& c) {
   pending_control_ = c;
 }
 
+void Receiver::OnPartModel(const cell::PartModel& p) {
+  if (p.station() != station_) return;
+  RunPart part{p.run_id(), {}};
+  try {
+    part.model = partmodel::ParsePartModel(p.text().to_string(), p.name().to_string());
+  } catch (const Error& e) {
+    // The station parsed it before sending it; a model this servo cannot read is not acknowledged, so the
+    // station's run fails with the reason instead of probing air.
+    spdlog::error("part model {} for run {} refused: {}", p.name().to_string(), p.run_id(), e.what());
+    return;
+  }
+  std::lock_guard lk(in_mu_);
+  pending_part_ = std::move(part);
+}
+
 void Receiver::WaitForSegment(std::chrono::steady_clock::duration d) {
   std::unique_lock lk(in_mu_);
   in_cv_.wait_for(lk, d, [&] { return !arrived_.empty(); });
@@ -119,6 +134,12 @@ Receiver::Turn Receiver::Tick(TimePoint now) {
     if (pending_tools_) {
       machine_.SetToolTable(*pending_tools_);
       pending_tools_.reset();
+    }
+    if (pending_part_) {
+      part_ = std::move(pending_part_);
+      pending_part_.reset();
+      if (part_->run_id == run_id_) machine_.SetRunPart(part_->model);
+      dirty_ = true;  // the station waits for the acknowledgement
     }
   }
   ApplyControl();
@@ -210,6 +231,7 @@ void Receiver::StartRun(std::int32_t run_id) {
   run_start_s_.reset();
   run_end_s_ = machine_.machine_time();
   end_received_ = false;
+  machine_.SetRunPart(part_ && part_->run_id == run_id ? std::optional(part_->model) : std::nullopt);
   // A new run starts clean. After an abort too: Machine::Abort() on a machine that is already at rest
   // (everything flushed at once) stays "aborting" on the virtual clock, where an idle Step() does not run,
   // and would refuse to move; Reset() at rest ends it without moving the axes.
@@ -342,6 +364,7 @@ void Receiver::PublishProgress() {
   }
   p.feed_hold(feed_hold_);
   p.boot_id(boot_id_);
+  p.part_run_id(part_ ? part_->run_id : 0);
   sink_.Progress(p);
   dirty_ = false;
 }

@@ -15,7 +15,9 @@ Service::Service(bus::Participant& p, MachineConfig cfg, ClockKind clock)
       tools_r_(p, bus::topics::kToolTable, bus::QosKind::kState,
                [this](const cell::ToolTable& t, const bus::SampleInfo&) { rx_.OnTools(t); }),
       control_r_(p, bus::topics::kServoControl, bus::QosKind::kState,
-                 [this](const cell::ServoControl& c, const bus::SampleInfo&) { rx_.OnControl(c); }) {}
+                 [this](const cell::ServoControl& c, const bus::SampleInfo&) { rx_.OnControl(c); }),
+      part_r_(p, bus::topics::Part(cfg.station_id), bus::QosKind::kState,
+              [this](const cell::PartModel& m, const bus::SampleInfo&) { rx_.OnPartModel(m); }) {}
 
 Service::~Service() {
   Stop();

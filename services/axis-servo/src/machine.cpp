@@ -644,6 +644,7 @@ void Machine::StepOp() {
 }
 
 const partmodel::PartModel* Machine::PartOnTable() const {
+  if (run_part_) return run_part_->empty() ? nullptr : &*run_part_;
   auto it = parts_.find(pallet_table_);
   return it == parts_.end() || it->second.empty() ? nullptr : &it->second;
 }

@@ -1,6 +1,7 @@
 #include "cell/station/service.h"
 
 #include "cell/bus/topics.h"
+#include "cell/error/error.h"
 
 namespace cell::station {
 
@@ -13,6 +14,7 @@ Service::Service(bus::Participant& p, config::StationConfig cfg, const std::file
       run_w_(p, bus::topics::kRunStatus, bus::QosKind::kEvent),
       seg_w_(p, bus::topics::Segments(cfg.id), bus::QosKind::kStream),
       control_w_(p, bus::topics::kServoControl, bus::QosKind::kState),
+      part_w_(p, bus::topics::Part(cfg.id), bus::QosKind::kState),
       programs_(p),
       inspection_(p, bus::topics::kInspection),
       station_(cfg, data_dir / ("interpreter-" + cfg.id + ".db"), *this, *this, clock_),
@@ -47,6 +49,22 @@ void Service::Stop() {
   }
   run_srv_.reset();
   cmd_srv_.reset();
+}
+
+std::optional<std::string> Service::PartModel(const std::string& node, const std::string& name) {
+  auto f = programs_.FetchWithFallback(node, name);
+  if (!f || !f->info.is_object() || f->info.value("type", std::string()) != "part_model") return std::nullopt;
+  return std::move(f->content);
+}
+
+bool Service::DeleteFile(const std::string& node, const std::string& name, const std::string& key) {
+  try {
+    programs_.Delete(node, name, key);
+    return true;
+  } catch (const Error& e) {
+    if (e.code() == Errc::kNotFound) return false;
+    throw;
+  }
 }
 
 bool Service::StoreRecord(const cell::InspectionRequest& request) {

@@ -109,7 +109,8 @@ Service::Service(bus::Participant& p, const std::filesystem::path& data_dir)
       source_([this](std::string_view name) -> std::optional<StoredProgram> {
         auto f = programs_.Fetch("HOST", std::string(name));
         if (!f) return std::nullopt;
-        return StoredProgram{std::move(f->content), f->dialect()};
+        std::string type = f->info.is_object() ? f->info.value("type", std::string()) : std::string();
+        return StoredProgram{std::move(f->content), f->dialect(), std::move(type)};
       }),
       sched_(Options{(data_dir / "scheduler.db").string(), false, {}}, source_),
       live_(p),

@@ -38,16 +38,30 @@ ProgramMeta ReadProgramMeta(std::string_view text, std::string_view dialect, std
   return meta;
 }
 
+namespace {
+
+ProgramMeta MetaOf(const StoredProgram& p, std::string_view name) {
+  if (p.type == "part_model") {
+    ProgramMeta meta;
+    meta.name = std::string(name);
+    meta.part_model = true;
+    return meta;
+  }
+  return ReadProgramMeta(p.text, p.dialect, name);
+}
+
+}  // namespace
+
 std::optional<ProgramMeta> TextProgramSource::Lookup(std::string_view name) {
   std::optional<StoredProgram> p = fetch_(name);
   if (!p) return std::nullopt;
-  return ReadProgramMeta(p->text, p->dialect, name);
+  return MetaOf(*p, name);
 }
 
 std::optional<ProgramMeta> MemoryProgramSource::Lookup(std::string_view name) {
   auto it = texts_.find(name);
   if (it == texts_.end()) return std::nullopt;
-  return ReadProgramMeta(it->second.text, it->second.dialect, name);
+  return MetaOf(it->second, name);
 }
 
 }  // namespace cell::scheduler

@@ -266,11 +266,17 @@ struct Scheduler::Impl {
     }
     Op op;
     op.programs = spec.programs;
+    std::vector<std::string> models;  // part models named among the programs
     for (const auto& name : spec.programs) {
       std::optional<ProgramMeta> meta;
       std::string problem;
       try {
         meta = programs.Lookup(name);
+        if (meta && meta->part_model) {
+          models.push_back(name);
+          op.ucy.push_back(0);
+          continue;
+        }
         if (!meta) {
           problem = fmt::format("program '{}' not found", name);
           if (strict) throw Error(Errc::kNotFound, fmt::format("{}: {}", where, problem));
@@ -303,6 +309,13 @@ struct Scheduler::Impl {
         if (std::find(op.tools.begin(), op.tools.end(), t) == op.tools.end()) op.tools.push_back(t);
       }
     }
+    // The map's part model is the workpiece of its programs: one at most, and something must run on it.
+    if (models.size() > 1)
+      throw Error(Errc::kInvalidArgument, fmt::format("{}: names {} part models ({}, {}); a pallet holds one",
+                                                      where, models.size(), models[0], models[1]));
+    if (!models.empty() && models.size() == spec.programs.size())
+      throw Error(Errc::kInvalidArgument,
+                  fmt::format("{}: names only the part model {}, no program to run", where, models[0]));
     // Stations are registered only once the programs qualify, so a refused route leaves no trace.
     for (auto it = spec.stations.begin(); it != spec.stations.end(); ++it) {
       if (it->empty()) throw Error(Errc::kInvalidArgument, fmt::format("{}: empty station id", where));

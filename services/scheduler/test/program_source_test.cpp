@@ -59,10 +59,16 @@ TEST(ProgramSources, MemoryAndText) {
   EXPECT_EQ(mem.Lookup("A")->ucy_s.value_or(0), 10);
   EXPECT_FALSE(mem.Lookup("B"));
   TextProgramSource text([](std::string_view n) -> std::optional<StoredProgram> {
-    if (n == "Q") return StoredProgram{"(UTL,9)(UCY,3)", "ktapl"};
-    if (n == "BAD") return StoredProgram{"(UCY,x)", "ktapl"};
+    if (n == "Q") return StoredProgram{"(UTL,9)(UCY,3)", "ktapl", ""};
+    if (n == "BAD") return StoredProgram{"(UCY,x)", "ktapl", ""};
+    if (n == "PLATE") return StoredProgram{"[[plane]]\n", "", "part_model"};
     return std::nullopt;
   });
+  // A part model: no heading is read (it has no dialect), no tools, no cycle time.
+  EXPECT_TRUE(text.Lookup("PLATE")->part_model);
+  EXPECT_TRUE(text.Lookup("PLATE")->tools.empty());
+  EXPECT_FALSE(text.Lookup("PLATE")->ucy_s);
+  EXPECT_FALSE(text.Lookup("Q")->part_model);
   EXPECT_EQ(text.Lookup("Q")->tools, std::vector<std::string>{"9"});
   EXPECT_EQ(text.Lookup("Q")->ucy_s.value_or(0), 3);
   EXPECT_FALSE(text.Lookup("R"));

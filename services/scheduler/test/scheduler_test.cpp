@@ -471,6 +471,34 @@ TEST(PalletMaps, RunPalletOnAStation) {
   EXPECT_EQ(CodeOf([&] { c.sched->RunPallet("y", 9, "KT09"); }), Errc::kNotFound);
 }
 
+// A pallet map may name the pallet's part model (type part_model in the store): it goes to the station
+// with the programs (the station hands it to its servo), adds no tools and no backlog; one per map, and not
+// alone (docs/scheduler.md, "Part models").
+TEST(PalletMaps, APartModelRidesAlongWithThePrograms) {
+  FakeCell c;
+  c.Program("A", {"5"}, 30);
+  c.Program("B", {"5"}, 20);
+  c.programs.Put("PLATE9", "[[plane]]\npoint = [0, 0, 50]\nnormal = [0, 0, 1]\n", "", "part_model");
+  c.programs.Put("PLATE10", "[[plane]]\npoint = [0, 0, 40]\nnormal = [0, 0, 1]\n", "", "part_model");
+  c.Online("KT01", {"5"});
+  c.sched->SetPalletMap("m", 9, {"PLATE9", "A", "B"});
+  JobResult r = c.sched->RunPallet("run9", 9, "KT01");
+  c.Take(r.effects);
+  EXPECT_EQ(c.State(r.job_id), JobState::kDispatched);
+  EXPECT_EQ(c.InHand("KT01").programs, (std::vector<std::string>{"PLATE9", "A", "B"}));
+  EXPECT_EQ(c.Backlog("KT01"), 50);
+  c.sched->SetPalletMap("m2", 10, {"PLATE9", "PLATE10", "A"});
+  try {
+    c.sched->RunPallet("run10", 10, "KT01");
+    ADD_FAILURE() << "two part models accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), Errc::kInvalidArgument);
+    EXPECT_EQ(std::string(e.what()), "pallet 10: names 2 part models (PLATE9, PLATE10); a pallet holds one");
+  }
+  c.sched->SetPalletMap("m3", 11, {"PLATE9"});
+  EXPECT_EQ(CodeOf([&] { c.sched->RunPallet("run11", 11, "KT01"); }), Errc::kInvalidArgument);
+}
+
 // Issue 13 item 5: a program runs only on a station of its own controller. `route define` and `pallet run`
 // refuse a program whose dialect (the program store's record) differs from a listed station's (its station
 // file, ConfigureStation), with one line naming both, and record nothing; a program re-put in another dialect

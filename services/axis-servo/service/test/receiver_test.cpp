@@ -168,6 +168,45 @@ TEST_F(ReceiverTest, AProbeMoveReportsItsResult) {
   EXPECT_NEAR(sink_.probes[0].position()[2], 20.0, 1e-6);
 }
 
+// A pallet map's part model (PartModel from the station) is the workpiece of its run only: acknowledged in
+// progress, probed in that run (the stylus tip, probe length 0, touches the face z = 50 at machine Z 50),
+// and gone at the next run (KT01's station file has no model for the table pallet: no contact).
+TEST_F(ReceiverTest, ARunsPartModelIsAcknowledgedAndProbedInThatRunOnly) {
+  cell::PartModel part;
+  part.station("KT01");
+  part.run_id(5);
+  part.pallet(7);
+  part.name("PLATE7");
+  part.text("[[plane]]\npoint = [0, 0, 50]\nnormal = [0, 0, 1]\n");
+  rx_.OnPartModel(part);
+  ASSERT_TRUE(Turn([&] { return !sink_.progress.empty() && Last().part_run_id() == 5; }, 10));
+  Send(Seg(5, 1, cell::SEGMENT_RAPID));  // above the face first (X0 Y0 Z100)
+  Send(Seg(5, 2, cell::SEGMENT_PROBE, 0, 0, 20, 200));
+  Send(Seg(5, 3, cell::SEGMENT_END));
+  ASSERT_TRUE(Turn([&] { return Completed(5, 3); }));
+  ASSERT_EQ(sink_.probes.size(), 1u);
+  EXPECT_TRUE(sink_.probes[0].contact());
+  EXPECT_NEAR(sink_.probes[0].position()[2], 50.0, 0.01);
+  Send(Seg(6, 1, cell::SEGMENT_RAPID));
+  Send(Seg(6, 2, cell::SEGMENT_PROBE, 0, 0, 20, 200));
+  Send(Seg(6, 3, cell::SEGMENT_END));
+  ASSERT_TRUE(Turn([&] { return Completed(6, 3); }));
+  ASSERT_EQ(sink_.probes.size(), 2u);
+  EXPECT_FALSE(sink_.probes[1].contact());
+}
+
+TEST_F(ReceiverTest, AMalformedPartModelIsNotAcknowledged) {
+  cell::PartModel part;
+  part.station("KT01");
+  part.run_id(5);
+  part.name("BAD");
+  part.text("[[plane]]\npoint = [0, 0\n");
+  rx_.OnPartModel(part);
+  rx_.PublishProgress();
+  Turn([] { return false; }, 10);
+  EXPECT_EQ(Last().part_run_id(), 0);
+}
+
 TEST_F(ReceiverTest, TheMagazineIsTheStationsPublishedToolTable) {
   auto change = Seg(1, 1, cell::SEGMENT_TOOL_CHANGE);
   change.tool("4001");

@@ -95,6 +95,8 @@ std::string_view FileKindName(FileKind kind) {
       return "inspection";
     case FileKind::kData:
       return "data";
+    case FileKind::kPartModel:
+      return "part_model";
   }
   return "data";
 }

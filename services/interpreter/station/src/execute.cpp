@@ -10,6 +10,7 @@
 #include "cell/error/error.h"
 #include "cell/interp/interp.h"
 #include "cell/names/names.h"
+#include "cell/partmodel/part_model.h"
 #include "cell/station/program_files.h"
 #include "cell/station/station.h"
 #include "cell/station/to_segment.h"
@@ -84,8 +85,14 @@ void Station::Execute(const Dispatch& d) {
   try {
     if (!stream_.WaitForServo(options_.servo_wait))
       throw Error(Errc::kUnavailable, "no axis servo for station " + cfg_.id + " on the bus");
+    const std::vector<bool> model = SendPartModel(d);
     for (int rep = 0; rep < d.repeat; ++rep) {
-      for (const std::string& name : d.programs) {
+      for (std::size_t i = 0; i < d.programs.size(); ++i) {
+        const std::string& name = d.programs[i];
+        if (model[i]) {
+          ++run.programs_done;  // handed to the servo: the map's later entries keep their indices
+          continue;
+        }
         run.program = name.substr(0, name.find(','));  // a schedule run's file, without PSELECT's operands
         PublishRun(run, cell::RUN_ACTIVE);
         RunProgram(run, name);
@@ -130,6 +137,29 @@ void Station::Execute(const Dispatch& d) {
              reason);
   board_.Publish();
   FlushOutbox();
+}
+
+// A pallet map may name the pallet's part model among its programs (a file the store keeps as type
+// part_model, scheduler.md "Part models"): the servo gets it as the workpiece of this run before the first
+// segment, and probes it instead of the table pallet's model from the station file. Returns which entries
+// are models (not run).
+std::vector<bool> Station::SendPartModel(const Dispatch& d) {
+  std::vector<bool> model(d.programs.size(), false);
+  for (std::size_t i = 0; i < d.programs.size(); ++i) {
+    const std::string& entry = d.programs[i];
+    if (entry.find(',') != std::string::npos) continue;  // a schedule run's PSELECT: a program
+    std::optional<std::string> text = io_.PartModel(d.node, entry);
+    if (!text) continue;
+    partmodel::ParsePartModel(*text, entry);  // "NAME:LINE:COL: ..." fails the run before any motion
+    cell::PartModel part;
+    part.pallet(d.pallet);
+    part.name(entry.substr(0, 128));
+    part.text(*text);
+    stream_.SendPart(std::move(part));
+    spdlog::info("dispatch {}: pallet {} carries part model {}", d.dispatch_id, d.pallet, entry);
+    model[i] = true;
+  }
+  return model;
 }
 
 // One program of the dispatch. It starts from the CNC's memory as it stands; what it changed there (machine
@@ -177,7 +207,7 @@ void Station::RunProgram(ActiveRun& run, const std::string& entry) {
     if (sub != std::string::npos && sub + 1 < rest.size()) opt.params["SUB_FILE"] = rest.substr(sub + 1);
   }
   ProgramFiles files(
-      cfg_.id, cfg_.dialect, run.d.dispatch_id, io_, clock_,
+      cfg_.id, cfg_.dialect, run.d.dispatch_id, run.programs_done + 1, io_, clock_,
       [this, id = run.d.dispatch_id] { Checkpoint(id); }, options_.writer_wait);
   RunEnvironment env(*this, stream_, options_.probe_feed, files);
   env.SetPallet(run.d.pallet);

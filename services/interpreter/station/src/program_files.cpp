@@ -40,11 +40,13 @@ std::vector<std::string> SplitCommas(const std::string& s) {
 
 }  // namespace
 
-ProgramFiles::ProgramFiles(std::string station, std::string dialect, std::int32_t dispatch_id, StationIo& io,
-                           Clock& clock, std::function<void()> checkpoint, Clock::Duration writer_wait)
+ProgramFiles::ProgramFiles(std::string station, std::string dialect, std::int32_t dispatch_id, int program,
+                           StationIo& io, Clock& clock, std::function<void()> checkpoint,
+                           Clock::Duration writer_wait)
     : station_(std::move(station)),
       dialect_(std::move(dialect)),
       dispatch_id_(dispatch_id),
+      program_(program),
       io_(io),
       clock_(clock),
       checkpoint_(std::move(checkpoint)),
@@ -52,14 +54,26 @@ ProgramFiles::ProgramFiles(std::string station, std::string dialect, std::int32_
 
 interp::FileResult ProgramFiles::Apply(const interp::Canon& op) {
   if (const auto* o = std::get_if<interp::FileOpenOp>(&op.p)) {
-    // Append (A/) continues a file this run closed; a new name (or OIF's "opened a second time") starts
-    // empty. The writer cannot append yet: appending to a file of an earlier run is refused rather than
-    // overwriting what that run stored.
-    auto it = closed_.find(Upper(o->name));
-    if (o->append && it == closed_.end())
-      return {false, "FILE NOT STORED: appending to " + o->name + " of an earlier run is not supported yet"};
+    // Append (A/) continues the file: one this run closed, else the one the station's namespace keeps (an
+    // earlier run's, or HOST's as programs are found), else a new one. Its close stores the whole text as the
+    // next revision. A new name (or OIF's "opened a second time") starts empty.
+    Closed start{"", o->inspection};
+    if (o->append) {
+      if (auto it = closed_.find(Upper(o->name)); it != closed_.end()) {
+        start = it->second;
+      } else {
+        std::optional<std::string> earlier;
+        interp::FileResult got = Patiently("program store", "FILE NOT OPENED", [&] {
+          earlier = io_.Program(station_, o->name);
+          return true;
+        });
+        if (!got.done) return got;
+        if (earlier) start.text = std::move(*earlier);
+        if (!start.text.empty() && start.text.back() != '\n') start.text += '\n';
+      }
+    }
     open_ = o->name;
-    file_ = o->append ? it->second : Closed{"", o->inspection};
+    file_ = std::move(start);
     return {};
   }
   if (const auto* w = std::get_if<interp::FileWriteOp>(&op.p)) {
@@ -88,6 +102,7 @@ interp::FileResult ProgramFiles::Apply(const interp::Canon& op) {
       closed_[Upper(dst)] = it->second;
       return Store(station_, dst, it->second);
     }
+    if (f->what == "DLF") return Delete(Trim(f->args.substr(0, f->args.find('/'))));
     if (f->what == "PRT") {
       // (PRT,filename): the print spool is a file of its own beside the original (ln 8191-8276).
       const std::string name = Trim(f->args);
@@ -118,9 +133,9 @@ interp::FileResult ProgramFiles::Store(const std::string& node, const std::strin
   if (text.size() > 65536) return {false, "FILE " + name + " LARGER THAN 64 KIB"};
   cell::InspectionRequest req;
   req.op(cell::INSPECTION_STORE_FILE);
-  // The n-th store of this dispatch: a retry (or a replay of the run after a crash) repeats the key, so
-  // neither the writer nor the store does it twice; two stores of one run never share it.
-  req.hdr().idempotency_key(fmt::format("file-{}-{}-{}", station_, dispatch_id_, ++stores_));
+  // The n-th store of this program of the dispatch: a retry repeats the key, so neither the writer nor the
+  // store does it twice; two stores of one run (of one program or of two) never share it.
+  req.hdr().idempotency_key(fmt::format("file-{}-{}-{}-{}", station_, dispatch_id_, program_, ++stores_));
   auto& f = req.file();
   f.file(name.substr(0, 64));
   f.station(node.substr(0, 16));
@@ -131,28 +146,51 @@ interp::FileResult ProgramFiles::Store(const std::string& node, const std::strin
   f.time_ns(clock_.WallNs());
   StationIo::SaveAs as{dialect_, file.inspection ? "inspection" : "data",
                        req.hdr().idempotency_key().to_string()};
-  // Wait for a writer and a store on the bus (a restart takes seconds); the run can be cancelled meanwhile.
   // The writer's copy first, then the store's revision; a retry repeats neither (idempotency keys).
+  interp::FileResult r =
+      Patiently("inspection writer", "FILE NOT STORED", [&] { return io_.StoreRecord(req); });
+  if (!r.done) return r;
+  return Patiently("program store", "FILE NOT STORED", [&] {
+    io_.SaveFile(node, name, text, as);
+    return true;
+  });
+}
+
+// (DLF,filename[/type]) deletes a file from the control directory, the station's namespace, programs
+// included (ln 8006-8041). A file that is not there is already deleted (judgement call, ktapl.md); the
+// writer's copy of an inspection file stays (it is the quality record).
+interp::FileResult ProgramFiles::Delete(const std::string& name) {
+  if (!open_.empty() && Upper(open_) == Upper(name))
+    return {false, "FILE " + name + " IS OPEN: CLOSE IT BEFORE (DLF)"};
+  closed_.erase(Upper(name));
+  const std::string key = fmt::format("file-{}-{}-{}-{}", station_, dispatch_id_, program_, ++stores_);
+  bool existed = false;
+  interp::FileResult r = Patiently("program store", "FILE NOT DELETED", [&] {
+    existed = io_.DeleteFile(station_, name, key);
+    return true;
+  });
+  if (r.done && !existed) spdlog::info("(DLF,{}): no such file in {}: nothing to delete", name, station_);
+  return r;
+}
+
+// Waits for a writer or a store on the bus (a restart takes seconds); the run can be cancelled meanwhile.
+// `attempt` returns false while the service is not there; an Error it throws is a refusal (the answer)
+// unless the service went away mid-call.
+interp::FileResult ProgramFiles::Patiently(const char* who, const char* failed,
+                                           const std::function<bool()>& attempt) {
   std::mutex mu;
   std::condition_variable cv;
   const auto deadline = clock_.Now() + writer_wait_;
-  bool written = false;
   for (;;) {
     checkpoint_();
-    const char* who = written ? "program store" : "inspection writer";
     try {
-      if (!written) written = io_.StoreRecord(req);
-      if (written) {
-        io_.SaveFile(node, name, text, as);
-        return {};
-      }
+      if (attempt()) return {};
     } catch (const Error& e) {
-      // One that went away mid-call is waited for again; one that refused the file is the answer.
       if (e.code() != Errc::kTimeout && e.code() != Errc::kUnavailable)
-        return {false, fmt::format("FILE NOT STORED: {}: {}", who, e.what())};
-      spdlog::warn("{}: not yet stored by the {}: {}", name, who, e.what());
+        return {false, fmt::format("{}: {}: {}", failed, who, e.what())};
+      spdlog::warn("{}: {}", who, e.what());
     }
-    if (clock_.Now() >= deadline) return {false, fmt::format("FILE NOT STORED: no {} on the bus", who)};
+    if (clock_.Now() >= deadline) return {false, fmt::format("{}: no {} on the bus", failed, who)};
     std::unique_lock lk(mu);
     clock_.Wait(lk, cv, std::chrono::milliseconds(200));
   }

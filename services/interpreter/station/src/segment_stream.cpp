@@ -1,5 +1,6 @@
 #include "cell/station/segment_stream.h"
 
+#include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
 #include <vector>
@@ -40,6 +41,23 @@ void SegmentStream::Send(cell::MotionSegment seg) {
   unacked_.push_back(seg);
   lk.unlock();
   link_.Write(seg);
+}
+
+void SegmentStream::SendPart(cell::PartModel part) {
+  std::unique_lock lk(mu_);
+  part.station(station_);
+  part.run_id(run_id_);
+  lk.unlock();
+  link_.WritePart(part);
+  lk.lock();
+  const auto deadline = clock_.Now() + kServoGone;
+  while (servo_part_run_ != run_id_) {
+    Check(lk);
+    if (clock_.Now() > deadline)
+      throw Error(Errc::kUnavailable, fmt::format("axis servo of {} did not take part model {} within {} s",
+                                                  station_, part.name().to_string(), kServoGone.count()));
+    clock_.Wait(lk, cv_, kPoll);
+  }
 }
 
 cell::ProbeResult SegmentStream::Probe(cell::MotionSegment seg) {
@@ -139,6 +157,7 @@ bool SegmentStream::OnProgress(const cell::SegmentProgress& p) {
   std::lock_guard lk(mu_);
   const bool held_changed = servo_held_ != p.feed_hold();
   servo_held_ = p.feed_hold();
+  servo_part_run_ = p.part_run_id();
   // Progress from another servo process than the one this run started on: the servo restarted and the
   // segments it had are gone (it refuses to join a run in the middle).
   if (run_id_ != 0 && run_boot_ != 0 && p.boot_id() != run_boot_) servo_restarted_ = true;

@@ -75,6 +75,11 @@ class FakeServo final : public ServoLink {
   std::size_t Matched() override { return matched; }
   std::uint64_t TotalMatched() override { return total_matched; }
   bool WaitForServo(Clock::Duration) override { return matched > 0; }
+  void WritePart(const cell::PartModel& part) override {
+    parts.push_back(part);
+    if (takes_parts) part_run_ = part.run_id();
+    dirty_ = true;
+  }
 
   // One turn of the machine: runs up to per_wait queued segments and reports what changed (as the servo
   // does: a servo that takes and completes nothing says nothing).
@@ -114,6 +119,7 @@ class FakeServo final : public ServoLink {
     p.run_machine_s(static_cast<double>(completed_));
     p.feed_hold(hold);
     p.boot_id(boot_id);
+    p.part_run_id(part_run_);
     if (!alarm_code.empty()) {
       p.alarm(true);
       p.alarm_code(alarm_code);
@@ -138,6 +144,8 @@ class FakeServo final : public ServoLink {
   bool hold = false;    // the operator's feed hold in effect: nothing completes
   bool probe_contact = true;
   double probe_contact_z = 0;
+  bool takes_parts = true;  // acknowledges a part model (false: a servo that cannot read it)
+  std::vector<cell::PartModel> parts;
   std::uint64_t boot_id = 77;
   std::string alarm_code, alarm_text;
   std::uint64_t max_outstanding = 0;
@@ -146,7 +154,7 @@ class FakeServo final : public ServoLink {
  private:
   Station* station_ = nullptr;
   std::uint64_t capacity_;
-  std::int32_t run_ = 0;
+  std::int32_t run_ = 0, part_run_ = 0;
   std::uint64_t received_ = 0, completed_ = 0;
   std::deque<cell::MotionSegment> queue_;
   bool dirty_ = true;
@@ -171,6 +179,19 @@ class FakeIo final : public StationIo {
       if (it != programs.end()) return it->second;
     }
     return std::nullopt;
+  }
+  std::optional<std::string> PartModel(const std::string& node, const std::string& name) override {
+    for (const std::string& n : {node, std::string("HOST")}) {
+      auto it = part_models.find(n + "/" + name);
+      if (it != part_models.end()) return it->second;
+      if (programs.count(n + "/" + name)) return std::nullopt;
+    }
+    return std::nullopt;
+  }
+  bool DeleteFile(const std::string& node, const std::string& name, const std::string& key) override {
+    if (store_down) throw Error(Errc::kUnavailable, "no cell/program_store service");
+    deleted.push_back(node + "/" + name + " " + key);
+    return programs.erase(node + "/" + name) > 0;
   }
   void SaveFile(const std::string& node, const std::string& name, const std::string& text,
                 const SaveAs& as) override {
@@ -197,8 +218,10 @@ class FakeIo final : public StationIo {
     return out;
   }
 
-  std::map<std::string, std::string> programs;  // "NODE/NAME" -> text
-  std::map<std::string, SaveAs> saved_as;       // "NODE/NAME" -> how SaveFile declared it
+  std::map<std::string, std::string> programs;     // "NODE/NAME" -> text
+  std::map<std::string, std::string> part_models;  // "NODE/NAME" -> text, stored as type part_model
+  std::vector<std::string> deleted;                // "NODE/NAME KEY" per DeleteFile
+  std::map<std::string, SaveAs> saved_as;          // "NODE/NAME" -> how SaveFile declared it
   std::function<void(const std::string&)> on_fetch;
   bool writer_up = true, writer_refuses = false;
   bool store_down = false;  // SaveFile: the program store is not on the bus

@@ -107,5 +107,66 @@ TEST_F(StationFiles, NoWriterAtAllFailsTheRunWithAClearReason) {
       << s.reason().to_string();
 }
 
+// OPF with A/ (ln 7910-7930) continues the file: here one an earlier run stored in the station's namespace;
+// the close stores the whole text as the next revision.
+TEST_F(StationFiles, AppendContinuesTheFileAnEarlierRunStored) {
+  Put("FIRST", "(PAR,L100=1.)\n(OPF,LOG)\n(FWR,\"RUN=\",L100)\n(CLF)\nM30\n");
+  Put("SECOND",
+      "(PAR,L100=2.,L1050=0)\n(OPF,LOG,A/AS)\n(FWR,\"RUN=\",L100)\n(CLF)\n(PAR,L1500=L1050)\nM30\n");
+  Dispatch(1, {"FIRST"});
+  EXPECT_EQ(RunOne(1).state(), cell::RUN_COMPLETED);
+  EXPECT_EQ(io_.programs["KT01/LOG"], "RUN=1.0000000\n");  // 8 significant digits (FWR)
+  Dispatch(2, {"SECOND"});
+  EXPECT_EQ(RunOne(2).state(), cell::RUN_COMPLETED);
+  EXPECT_EQ(io_.programs["KT01/LOG"], "RUN=1.0000000\nRUN=2.0000000\n");
+  const auto* second = Stored(io_, "KT01", "LOG");
+  ASSERT_NE(second, nullptr);
+  EXPECT_DOUBLE_EQ(Variables()["L1500"], 1.0);
+}
+
+// Two programs of one pallet map that each write a file: every store has its own idempotency key (a key
+// shared by the two would make the store take the second for a retry of the first).
+TEST_F(StationFiles, EachProgramOfADispatchStoresUnderItsOwnKeys) {
+  Put("A", "(OPF,FA)\n(FWR,\"A\")\n(CLF)\nM30\n");
+  Put("B", "(OPF,FB)\n(FWR,\"B\")\n(CLF)\nM30\n");
+  Dispatch(1, {"A", "B"});
+  EXPECT_EQ(RunOne(1).state(), cell::RUN_COMPLETED);
+  EXPECT_EQ(io_.saved_as["KT01/FA"].idempotency_key, "file-KT01-1-1-1");
+  EXPECT_EQ(io_.saved_as["KT01/FB"].idempotency_key, "file-KT01-1-2-1");
+}
+
+// (DLF,filename) deletes from the control directory, the station's namespace (ln 8006-8041); L1051 is set
+// once the store has done it. A name that is not there is already deleted.
+TEST_F(StationFiles, DeleteRemovesTheFileFromTheStationsNamespace) {
+  Put("OLDDATA", "X=1\n");
+  Put("OLDDATA", "X=1\n", "HOST");
+  Put("P",
+      "(PAR,L1051=0)\n(DLF,OLDDATA)\n(PAR,L1500=L1051,L1051=0)\n(DLF,NEVERTHERE/AS)\n"
+      "(PAR,L1501=L1051)\nM30\n");
+  Dispatch(1, {"P"});
+  EXPECT_EQ(RunOne(1).state(), cell::RUN_COMPLETED);
+  EXPECT_EQ(io_.programs.count("KT01/OLDDATA"), 0u);
+  EXPECT_EQ(io_.programs.count("HOST/OLDDATA"), 1u);  // HOST is not the control's directory
+  EXPECT_DOUBLE_EQ(Variables()["L1500"], 1.0);
+  EXPECT_DOUBLE_EQ(Variables()["L1501"], 1.0);
+  ASSERT_EQ(io_.deleted.size(), 2u);
+  EXPECT_EQ(io_.deleted[0], "KT01/OLDDATA file-KT01-1-1-1");
+  EXPECT_EQ(io_.deleted[1], "KT01/NEVERTHERE file-KT01-1-1-2");
+}
+
+TEST_F(StationFiles, DeleteWaitsForAStoreThatIsAway) {
+  Put("OLDDATA", "X=1\n");
+  Put("P", "(PAR,L1051=0)\n(DLF,OLDDATA)\n(PAR,L1500=L1051)\nM30\n");
+  io_.store_down = true;
+  int waits = 0;
+  script_ = [&] {
+    if (++waits == 40) io_.store_down = false;
+  };
+  Dispatch(1, {"P"});
+  EXPECT_EQ(RunOne(1).state(), cell::RUN_COMPLETED);
+  EXPECT_EQ(io_.programs.count("KT01/OLDDATA"), 0u);
+  EXPECT_DOUBLE_EQ(Variables()["L1500"], 1.0);
+}
+
 }  // namespace
 }  // namespace cell::station::testing

@@ -390,5 +390,54 @@ TEST_F(StationCore, WorkRunsWhatArrivesAndStops) {
   EXPECT_EQ(io_.LastRun(1)->state(), cell::RUN_COMPLETED);
 }
 
+// A pallet map may name the pallet's part model (a file the store keeps as type part_model): the servo gets
+// it as the run's workpiece, acknowledged, before the run's first segment; the entry is counted as done so
+// that the later programs keep their places in the map.
+constexpr const char* kPlate = "[[plane]]\npoint = [0, 0, 50]\nnormal = [0, 0, 1]\n";
+
+TEST_F(StationCore, APalletMapsPartModelGoesToTheServoBeforeAnySegment) {
+  io_.part_models["HOST/PLATE7"] = kPlate;
+  Put("P", Moves(2));
+  Dispatch(1, {"PLATE7", "P"}, 7);
+  cell::RunStatus s = RunOne(1);
+  EXPECT_EQ(s.state(), cell::RUN_COMPLETED);
+  EXPECT_EQ(s.programs_done(), 2);
+  ASSERT_EQ(servo_.parts.size(), 1u);
+  EXPECT_EQ(servo_.parts[0].station().to_string(), "KT01");
+  EXPECT_EQ(servo_.parts[0].run_id(), 1);
+  EXPECT_EQ(servo_.parts[0].pallet(), 7);
+  EXPECT_EQ(servo_.parts[0].name().to_string(), "PLATE7");
+  EXPECT_EQ(servo_.parts[0].text().to_string(), kPlate);
+  EXPECT_EQ(servo_.written.size(), 4u);  // P's segments only: the model is not run
+  // A program index past the model: P is entry 1 of the map.
+  bool saw_p = false;
+  for (const auto& r : io_.runs)
+    if (r.dispatch_id() == 1 && r.program().to_string() == "P") saw_p = saw_p || r.program_index() == 1;
+  EXPECT_TRUE(saw_p);
+}
+
+TEST_F(StationCore, AMalformedPartModelFailsTheRunBeforeAnyMotion) {
+  io_.part_models["HOST/PLATE7"] = "[[plane]]\npoint = [0, 0\n";
+  Put("P", Moves(2));
+  Dispatch(1, {"PLATE7", "P"}, 7);
+  cell::RunStatus s = RunOne(1);
+  EXPECT_EQ(s.state(), cell::RUN_FAILED);
+  EXPECT_NE(s.reason().to_string().find("PLATE7:2:"), std::string::npos) << s.reason().to_string();
+  EXPECT_TRUE(servo_.parts.empty());
+  EXPECT_TRUE(servo_.written.empty());
+}
+
+TEST_F(StationCore, AServoThatDoesNotTakeThePartModelFailsTheRun) {
+  io_.part_models["HOST/PLATE7"] = kPlate;
+  servo_.takes_parts = false;
+  Put("P", Moves(2));
+  Dispatch(1, {"PLATE7", "P"}, 7);
+  cell::RunStatus s = RunOne(1);
+  EXPECT_EQ(s.state(), cell::RUN_FAILED);
+  EXPECT_NE(s.reason().to_string().find("did not take part model PLATE7"), std::string::npos)
+      << s.reason().to_string();
+  EXPECT_TRUE(servo_.written.empty());
+}
+
 }  // namespace
 }  // namespace cell::station::testing

@@ -34,6 +34,10 @@ inline std::string Segments(const std::string& station) {
 inline std::string Probe(const std::string& station) {
   return "cell/station/" + station + "/probe";
 }
+// State (kState), per station: the run's part model from the program store (PartModel).
+inline std::string Part(const std::string& station) {
+  return "cell/station/" + station + "/part";
+}
 // Request/reply services (two kCommand topics each: <name>/request, <name>/reply).
 inline constexpr const char* kProgramStore = "cell/program_store";  // ProgramRequest / ProgramReply
 inline constexpr const char* kScheduler = "cell/scheduler";         // SchedulerRequest / SchedulerReply

@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <deque>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -94,6 +95,9 @@ class Machine {
   // ---- Devices and probing.
   void SetToolTable(const tooltable::ToolTable& table);  // magazine contents: the station table's sockets
   void SetPartModel(int pallet, partmodel::PartModel model);
+  // The workpiece of the run now going on, when its pallet map named one (PartModel topic): probed instead
+  // of the table pallet's model until cleared (nullopt) at the next run.
+  void SetRunPart(std::optional<partmodel::PartModel> model) { run_part_ = std::move(model); }
   void SetPallets(int on_table, int on_shuttle);
 
   // ---- Observation.
@@ -189,6 +193,7 @@ class Machine {
   int pallet_table_ = 0, pallet_shuttle_ = 0;
   bool b_clamped_ = true;
   std::map<int, partmodel::PartModel> parts_;
+  std::optional<partmodel::PartModel> run_part_;
 
   // Probe
   bool probing_ = false, probe_tripped_ = false, probe_break_ = false;

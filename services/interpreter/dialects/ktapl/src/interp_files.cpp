@@ -164,9 +164,18 @@ void KtRun::OpenFile(const std::string& name, const std::string& type, bool appe
   CloseOpenFile(col, false);  // one open file at a time: the old one is closed first (ln 7894, 7924)
   auto it = files_.find(key);
   if (it != files_.end() && it->second.type != type) Fail(col, "FILE ALREADY EXISTS");
+  const bool earlier = append && it == files_.end();
   MemFile& f = files_[key];
   f.type = type;
   if (!append) f.text.clear();
+  // Appending to a file of an earlier run continues what the control keeps (offline: --lib; on a station:
+  // its namespace), so that a CLS of it runs the whole file.
+  if (earlier && opt_.library) {
+    if (std::optional<std::string> text = opt_.library(name)) {
+      f.text = std::move(*text);
+      if (!f.text.empty() && f.text.back() != '\n') f.text += '\n';
+    }
+  }
   open_file_ = key;
 }
 

@@ -99,6 +99,27 @@ TEST(Run, LibrarySubroutineReportsTheCallingLine) {
   EXPECT_DOUBLE_EQ(moves[1].target()->pos[kX], 2.0);
 }
 
+// OPF with A/ of a file an earlier run left (ln 7910-7930, judgement call 64): the run continues the text the
+// control keeps (here the library), so a CLS of the file runs the old blocks and the appended one.
+TEST(Run, AppendToAnEarlierFileContinuesItsText) {
+  RunOptions o;
+  o.program_name = "T";
+  o.program_text = "G71G90G0F0\n(OPF,NCPART,A/NC)\n(FWR,\"G0 X3.\")\n(CLF)\n(CLS,NCPART)\nM30\n";
+  o.library = [](const std::string& name) -> std::optional<std::string> {
+    if (name == "NCPART") return std::string("G0 X1.\nG0 X2.");  // no final newline: the append adds one
+    return std::nullopt;
+  };
+  auto run = Start(o);
+  std::vector<double> xs;
+  for (;;) {
+    Step s = run->Next();
+    ASSERT_NE(s.kind, Step::kError) << s.diag.Format();
+    if (s.kind != Step::kCanon) break;
+    if (s.canon.op() == Op::kRapid) xs.push_back(s.canon.target()->pos[kX]);
+  }
+  EXPECT_EQ(xs, (std::vector<double>{1.0, 2.0, 3.0}));
+}
+
 }  // namespace
 }  // namespace cell::interp
 

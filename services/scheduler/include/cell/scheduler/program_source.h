@@ -18,6 +18,9 @@ struct ProgramMeta {
   std::string dialect;             // the registry name the program store recorded (cell/interp/interp.h)
   std::vector<std::string> tools;  // UTL tool numbers, normalised ("T0012" -> "12"), in order, no duplicates
   std::optional<std::int64_t> ucy_s;  // UCY seconds; absent when the program has no UCY statement
+  // Not a program: the pallet's part model (the store's type part_model), which the station hands to its
+  // axis servo for probing; no tools, no cycle time (docs/scheduler.md, "Part models").
+  bool part_model = false;
 };
 
 // The scheduler's view of a program's heading, read by its dialect (Dialect::ReadHeading; for KT-APL DESIGN
@@ -36,10 +39,11 @@ class ProgramSource {
   virtual std::optional<ProgramMeta> Lookup(std::string_view name) = 0;
 };
 
-// A program as the store keeps it: its text and the dialect it recorded.
+// A program as the store keeps it: its text, the dialect and the type it recorded ("" = a program).
 struct StoredProgram {
   std::string text;
   std::string dialect;
+  std::string type;
 };
 
 // A ProgramSource over stored programs: `fetch` returns a program (nullopt: no such program) and
@@ -57,8 +61,8 @@ class TextProgramSource : public ProgramSource {
 // Program texts held in memory (tests, the benchmark, offline tools).
 class MemoryProgramSource : public ProgramSource {
  public:
-  void Put(std::string name, std::string text, std::string dialect) {
-    texts_[std::move(name)] = {std::move(text), std::move(dialect)};
+  void Put(std::string name, std::string text, std::string dialect, std::string type = "") {
+    texts_[std::move(name)] = {std::move(text), std::move(dialect), std::move(type)};
   }
   void Remove(const std::string& name) { texts_.erase(name); }
   std::optional<ProgramMeta> Lookup(std::string_view name) override;

@@ -4,8 +4,8 @@
 // from the station's tool table, and telemetry on the wall clock. The service feeds it bus samples and
 // publishes what it reports; tests drive it with injected times.
 //
-// Threads: OnSegment, OnTools and OnControl from any thread; Tick and WaitForSegment from the loop thread,
-// which alone touches the Machine.
+// Threads: OnSegment, OnTools, OnControl and OnPartModel from any thread; Tick and WaitForSegment from the
+// loop thread, which alone touches the Machine.
 #pragma once
 
 #include <chrono>
@@ -53,6 +53,8 @@ class Receiver {
   void OnSegment(cell::MotionSegment m);
   void OnTools(const cell::ToolTable& t);
   void OnControl(const cell::ServoControl& c);
+  // The workpiece of a run (its pallet map named a part model); acknowledged in progress (part_run_id).
+  void OnPartModel(const cell::PartModel& p);
 
   // ---- the loop thread ----
   struct Turn {
@@ -91,6 +93,12 @@ class Receiver {
   std::deque<cell::MotionSegment> arrived_;
   std::optional<tooltable::ToolTable> pending_tools_;
   std::optional<cell::ServoControl> pending_control_;
+  struct RunPart {
+    std::int32_t run_id = 0;
+    partmodel::PartModel model;
+  };
+  std::optional<RunPart> pending_part_;
+  std::optional<RunPart> part_;  // the loop thread's: applied when its run starts
 
   // The loop thread's run bookkeeping.
   std::int32_t run_id_ = 0;

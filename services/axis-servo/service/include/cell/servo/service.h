@@ -35,6 +35,7 @@ class Service final : public ReceiverSink {
   bus::Reader<cell::MotionSegment> segments_;
   bus::Reader<cell::ToolTable> tools_r_;
   bus::Reader<cell::ServoControl> control_r_;
+  bus::Reader<cell::PartModel> part_r_;
   std::atomic<bool> alive_{false};
   std::jthread loop_;
 };

@@ -25,6 +25,7 @@ enum class FileKind {
   kFixtureOffsets,  // a saved fixture offset table (KT-APL NAME;FXT)
   kInspection,      // an inspection file a program wrote
   kData,            // any other text file
+  kPartModel,       // a workpiece for probing (common/partmodel's toml form), named in a pallet map
 };
 
 // The machine a dialect programs: the axis servo's station kinds ([machine] kind in a station file). A mill

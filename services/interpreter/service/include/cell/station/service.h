@@ -38,6 +38,8 @@ class Service final : public StationIo, public ServoLink {
   std::optional<std::string> Program(const std::string& node, const std::string& name) override {
     return programs_.GetWithFallback(node, name);
   }
+  std::optional<std::string> PartModel(const std::string& node, const std::string& name) override;
+  bool DeleteFile(const std::string& node, const std::string& name, const std::string& key) override;
   void SaveFile(const std::string& node, const std::string& name, const std::string& text,
                 const SaveAs& as) override {
     program_store::Client::PutOptions o;
@@ -54,6 +56,7 @@ class Service final : public StationIo, public ServoLink {
   std::size_t Matched() override { return static_cast<std::size_t>(seg_w_.Matched()); }
   std::uint64_t TotalMatched() override { return seg_w_.TotalMatched(); }
   bool WaitForServo(Clock::Duration timeout) override;
+  void WritePart(const cell::PartModel& part) override { part_w_.Write(part); }
 
  private:
   bus::Participant& bus_;
@@ -65,6 +68,7 @@ class Service final : public StationIo, public ServoLink {
   bus::Writer<cell::RunStatus> run_w_;
   bus::Writer<cell::MotionSegment> seg_w_;
   bus::Writer<cell::ServoControl> control_w_;
+  bus::Writer<cell::PartModel> part_w_;
   program_store::Client programs_;
   bus::Client<cell::InspectionRequest, cell::InspectionReply> inspection_;
   Station station_;  // after the endpoints it uses, before the readers that feed it

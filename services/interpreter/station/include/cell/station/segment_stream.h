@@ -32,6 +32,8 @@ class ServoLink {
   virtual std::uint64_t TotalMatched() = 0;                    // matches since creation (a re-match counts)
   // True when a servo is there in both directions (segments out, progress in) within `timeout`.
   virtual bool WaitForServo(Clock::Duration timeout) = 0;
+  // The run's part model (cell/station/<ID>/part, a state topic).
+  virtual void WritePart(const cell::PartModel& part) = 0;
 };
 
 class SegmentStream {
@@ -52,6 +54,10 @@ class SegmentStream {
   // Sends the next segment of the run (station, run id and seq are filled in), waiting for a credit.
   // Throws cell::Error when the run cannot go on.
   void Send(cell::MotionSegment segment);
+  // Gives the servo the run's workpiece (its pallet map named a part model; station, run id filled in) and
+  // waits until the servo reports holding it, before the run's first segment. Throws cell::Error when the
+  // servo does not take it within kServoGone.
+  void SendPart(cell::PartModel part);
   // Sends a probe move and waits for its result.
   cell::ProbeResult Probe(cell::MotionSegment segment);
   // Waits until the servo has completed every segment sent.
@@ -88,6 +94,7 @@ class SegmentStream {
   double run_machine_s_ = 0;
   bool alarm_ = false;
   std::string alarm_code_, alarm_text_;
+  std::int32_t servo_part_run_ = 0;          // the run whose part model the servo reports holding
   std::uint64_t run_boot_ = 0;               // the servo process this run started on
   bool servo_restarted_ = false;             // progress came from another servo process mid-run
   bool servo_held_ = false;                  // the servo reports the operator's feed hold in effect

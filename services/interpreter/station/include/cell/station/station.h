@@ -42,6 +42,12 @@ class StationIo {
   virtual void PublishControl(const cell::ServoControl& c) = 0;
   // A program's text from the program store: namespace `node`, then HOST; nullopt when in neither.
   virtual std::optional<std::string> Program(const std::string& node, const std::string& name) = 0;
+  // The text of `name` when the store keeps it as a part model (type part_model), `node` then HOST; nullopt
+  // for any other file or none (a pallet map's entries: docs/station.md, "Part models").
+  virtual std::optional<std::string> PartModel(const std::string& node, const std::string& name) = 0;
+  // Deletes a file a program names (KT-APL DLF) from namespace `node`; false when it was not there. Throws
+  // cell::Error when the store refused (a protected file) or did not answer.
+  virtual bool DeleteFile(const std::string& node, const std::string& name, const std::string& key) = 0;
   // How a saved file is declared to the program store ("" = detected from name and content) and the key that
   // makes a retried save one revision ("" = none).
   struct SaveAs {
@@ -107,6 +113,7 @@ class Station {
 
   void Execute(const Dispatch& d);
   void RunProgram(ActiveRun& run, const std::string& entry);
+  std::vector<bool> SendPartModel(const Dispatch& d);
   // KT-APL WAI (interp::Environment::WaitInputs): after the motion before it, until the inputs match.
   void WaitInputs(const std::string& spec);
   // OutputOp and the station file's M codes; throws cell::Error to stop the run.
