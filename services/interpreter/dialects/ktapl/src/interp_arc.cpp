@@ -48,19 +48,22 @@ void KtRun::Arc(const Words& words, bool cw, int col, double feed, FeedMode fm) 
   const geom::Vec2 start{pos_[p1], pos_[p2]};
   const geom::Vec2 end{target_of(p1, w1), target_of(p2, w2)};
   const double en = target_of(pn, wn);
-  constexpr double kMinRadius = 0.001;  // mm
+  // ln 5501: "The minimum radius that can be programmed is .001" (.01 mm)", the maximum 1690.9320 in
+  // (42949.672 mm), in the unit the program runs in.
+  const double min_radius = MinArcRadiusMm(metric_);
+  const char* const kBelow = "ARC RADIUS BELOW THE MINIMUM .001 IN (.01 MM)";
   geom::ArcSolution sol;
   if (r) {
     const bool g90_g17 =
         !mode_.incremental && mode_.plane == geom::Plane::kXY && !mode_.coaxis_first && !mode_.coaxis_second;
     const bool zu_plane = mode_.plane == geom::Plane::kZX && mode_.coaxis_second && !mode_.incremental;
     if (!g90_g17 && !zu_plane) Fail(r->col, "R CIRCLES ARE ALLOWED ONLY IN G90 G17");
-    sol = geom::ArcFromRadius(start, end, ToMm(std::fabs(r->v)), cw, r->v < 0, kMinRadius);
+    sol = geom::ArcFromRadius(start, end, ToMm(std::fabs(r->v)), cw, r->v < 0, min_radius);
     switch (sol.error) {
       case geom::ArcError::kFullCircleWithRadius:
         Fail(r->col, "R CIRCLES CANNOT BE FULL CIRCLES");
       case geom::ArcError::kBelowMinimum:
-        Fail(r->col, "ARC RADIUS BELOW THE MINIMUM");
+        Fail(r->col, kBelow);
       case geom::ArcError::kRadiusTooSmall:
         Fail(r->col, "ARC RADIUS TOO SMALL FOR THE END POINT");
       default:
@@ -76,12 +79,15 @@ void KtRun::Arc(const Words& words, bool cw, int col, double feed, FeedMode fm) 
       return v + Offset(a);
     };
     // The control's tolerance for start and end radius: .0005 in (0.013 mm).
-    sol = geom::ArcFromCenter(start, end, {centre(p1, c1), centre(p2, c2)}, cw, kMinRadius, 0.013);
-    if (sol.error == geom::ArcError::kBelowMinimum) Fail(col, "ARC RADIUS BELOW THE MINIMUM");
+    sol = geom::ArcFromCenter(start, end, {centre(p1, c1), centre(p2, c2)}, cw, min_radius, 0.013);
+    if (sol.error == geom::ArcError::kBelowMinimum) Fail(col, kBelow);
     if (sol.error == geom::ArcError::kRadiiDiffer) {
       Fail(col, fmt::format("ARC START AND END RADIUS DIFFER ({:.4f} / {:.4f})", FromMm(sol.radius_start),
                             FromMm(sol.radius_end)));
     }
+  }
+  if (sol.radius_start > MaxArcRadiusMm(metric_) + 1e-6) {
+    Fail(r ? r->col : col, "ARC RADIUS ABOVE THE MAXIMUM 1690.9320 IN (42949.672 MM)");
   }
   AxisArray target = pos_;
   target[p1] = end.x;

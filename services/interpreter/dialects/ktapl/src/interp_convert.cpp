@@ -19,6 +19,7 @@ Word KtRun::EvalWord(const RawWord& w, bool dwell, bool passing, bool drop_undef
     switch (w.kind) {
       case WordKind::kNumber:
         r.literal = true;
+        r.num = w.num;
         r.v = ScaleLiteral(w.letter, w.num, metric_, dwell, passing);
         r.neg_zero = w.num.neg && w.num.as_written == 0;
         return r;
@@ -319,6 +320,18 @@ const Word* Find(const Words& words, char l) {
   return r;
 }
 
+// ln 5037, 5045: M30 and M60 "must be programmed in a block by itself" (an N number, a label and a comment
+// aside). An M30 that is an IFT action is the action's only item.
+void CheckAloneInBlock(const ParsedBlock& pb, const BlockMCodes& mc) {
+  const bool own = std::any_of(pb.words.begin(), pb.words.end(),
+                               [&](const RawWord& w) { return w.letter == 'M' && w.col == mc.after_col; });
+  if (!own) return;
+  const bool others =
+      pb.words.size() > 1 ||
+      std::any_of(pb.stmts.begin(), pb.stmts.end(), [](const Statement& st) { return st.mnemonic != "LBL"; });
+  if (others) Fail(mc.after_col, fmt::format("M{} MUST BE PROGRAMMED IN A BLOCK BY ITSELF", mc.after));
+}
+
 }  // namespace
 
 void KtRun::ToolAndSpeed(const Words& words, const BlockMCodes& mc) {
@@ -427,6 +440,7 @@ void KtRun::ExecTypeI(BlockCtx& bc, const ParsedBlock* pb) {
     bool dropped;
     Word g = EvalWord(w, false, false, drop_undefined, dropped);
     if (dropped) continue;
+    CheckWordFormat(g, metric_);
     if (g.v < 0 || g.v > 999) Fail(w.col, "ILLEGAL G CODE");
     gs.push_back({static_cast<int>(g.v), w.col});
   }
@@ -460,7 +474,10 @@ void KtRun::ExecTypeI(BlockCtx& bc, const ParsedBlock* pb) {
     if (w.letter == 'G') continue;
     bool dropped;
     Word r = EvalWord(w, k.dwell, false, drop_undefined, dropped);
-    if (!dropped) words.push_back(r);
+    if (dropped) continue;
+    // Letters passed to a G800-series or probe cycle are parameters in the passing formats (ln 8945-8983).
+    if (!pass800) CheckWordFormat(r, metric_);
+    words.push_back(r);
   }
   ConvertGCodes(gs, pass800, k);
 
@@ -516,6 +533,7 @@ void KtRun::ExecTypeI(BlockCtx& bc, const ParsedBlock* pb) {
   }
 
   const BlockMCodes mc = ReadMCodes(words, trigger);
+  if ((mc.after == 30 || mc.after == 60) && pb) CheckAloneInBlock(*pb, mc);
   ToolAndSpeed(words, mc);
 
   // Feed.
@@ -524,8 +542,12 @@ void KtRun::ExecTypeI(BlockCtx& bc, const ParsedBlock* pb) {
   if (f && !k.dwell && !mc.m06 && !mc.m25) {
     if (f->v < 0) Fail(f->col, "FEEDRATE MAY NOT BE NEGATIVE");
     if (mode_.inverse_time) {
-      block_feed = f->v;
-    } else {
+      // Table 1-B: G93 is 3.1 in inch and 5.1 in metric, so a metric F without a point has one decimal.
+      Word fw = *f;
+      if (fw.literal && !fw.num.point && metric_) fw.v = fw.num.as_written / 10;
+      CheckFeedFormat(fw, FeedFormat::kInverseTime, metric_);
+      block_feed = fw.v;
+    } else {  // G94: the linear or the rotary format, decided with the move (Motion)
       feed_ = f->v;
     }
   }

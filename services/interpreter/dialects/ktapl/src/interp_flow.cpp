@@ -191,6 +191,7 @@ void KtRun::ExecBlock(std::string_view text, size_t start) {
   BlockCtx bc;
   bc.words = pb.words;
   bc.items = static_cast<int>(pb.words.size() + pb.stmts.size());
+  bc.own_words = static_cast<int>(pb.words.size());
   for (const auto& st : pb.stmts) ExecStatement(st, bc, false);
   if (bc.gto_count > 0) {
     int others = 0;

@@ -68,6 +68,7 @@ struct RawNum {
   bool point = false;
   double as_written = 0;  // with the point where written, or the integer digits when there is none
   int digits = 0;         // digits written (format checks)
+  int frac_digits = 0;    // digits after the point up to the last non-zero one (the resolution used)
 };
 
 enum class WordKind { kNumber, kParam, kNegParam, kExpr };
@@ -92,6 +93,7 @@ struct Word {
   bool literal = false;  // written as a number (format scaling applied)
   bool neg_zero = false;
   int col = 1;
+  RawNum num;  // as written, when literal (the F word's format depends on the block)
 };
 using Words = InlineVec<Word, kMaxWords>;
 
@@ -117,6 +119,17 @@ int ImpliedDecimals(char letter, bool metric, bool dwell, bool passing);
 bool IntegerLetter(char c);
 double ScaleLiteral(char letter, const RawNum& n, bool metric, bool dwell, bool passing);
 void AddWord(RawWords& words, const RawWord& w);
+
+// The format tables (manual ln 893-1237, 4401-4409, 5976): a word's digit count, its resolution (literal
+// words) and its range (every value, substituted ones too), in program units. Letters without a table
+// (D O P Q) keep only the tape reader's limit. Throws through Fail.
+void CheckWordFormat(const Word& w, bool metric);
+// The F word of a feed (Tables 1-A, 1-B; ln 5976): which format it is read in.
+enum class FeedFormat { kLinear, kRotary, kInverseTime };
+void CheckFeedFormat(const Word& f, FeedFormat fmt, bool metric);
+// G02/G03 radius limits (ln 5501), in mm: .001 in / .01 mm up to 1690.9320 in / 42949.672 mm.
+double MinArcRadiusMm(bool metric);
+double MaxArcRadiusMm(bool metric);
 // Parses one block (or an IFT action fragment) into words and statements. Expression words view `s`.
 ParsedBlock ParseBlock(std::string_view s, bool fragment);
 
@@ -169,6 +182,7 @@ struct BlockCtx {
   int call_col = 1;
   int gto_count = 0;
   int items = 0;
+  int own_words = 0;          // Type I words of the block itself (not of its IFT actions)
   bool cycle_return = false;  // G80/G800 in a running defined cycle: the cycle ends with the block
 };
 
@@ -335,7 +349,7 @@ class KtRun final : public RunBase, public ExprContext {
   void Motion(const Words& words, const BlockCodes& k, const BlockMCodes& mc, uint32_t axis_mask,
               int motion_col, const Word* f, std::optional<double> block_feed);
   void LinearMotion(const Words& words, const BlockCodes& k, const BlockMCodes& mc, uint32_t axis_mask,
-                    int motion_col, std::optional<double> eff);
+                    int motion_col, std::optional<double> eff, const Word* fw);
   void ProbeMove(const BlockCodes& k, uint32_t axis_mask, const AxisArray& target, bool rapid, double feed,
                  FeedMode fm);
   void Regrid(const Words& words);

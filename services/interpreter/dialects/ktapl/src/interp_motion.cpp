@@ -91,9 +91,15 @@ void KtRun::FloatingZero(const Words& words, const BlockCodes& k) {
 void KtRun::Motion(const Words& words, const BlockCodes& k, const BlockMCodes& mc, uint32_t axis_mask,
                    int motion_col, const Word* f, std::optional<double> block_feed) {
   const uint32_t rotary_mask = (1u << kA) | (1u << kB) | (1u << kC);
+  // A G94 feed word of this block: its format (Table 1-A or the rotary F3.0) depends on the move.
+  const Word* fw = (f && !k.dwell && !mc.m06 && !mc.m25 && !mode_.inverse_time) ? f : nullptr;
+  if (fw && (k.g92 || k.g98 || k.g99 || !(axis_mask || k.arc)))
+    CheckFeedFormat(*fw, FeedFormat::kLinear, metric_);
   if (k.dwell) {
     if (axis_mask) Fail(motion_col, "NO AXIS WORDS ALLOWED IN A G04 BLOCK");
     if (!f) Fail(1, "G04 NEEDS F (DWELL SECONDS)");
+    // Table 1-C: 5.1 (the tenths are truncated below, judgement call 13).
+    if (f->literal && f->num.digits > 6) Fail(f->col, "F WORD HAS MORE THAN 6 DIGITS (G04 DWELL FORMAT 5.1)");
     double secs = std::floor(f->v * 10 + 1e-6) / 10;  // F format 5.1
     if (secs < 0.1 || secs > 99999.9) Fail(f->col, "G04 DWELL MUST BE F.1-F99999.9 SECONDS");
     Out<DwellOp>().seconds = secs;
@@ -114,18 +120,19 @@ void KtRun::Motion(const Words& words, const BlockCodes& k, const BlockMCodes& m
       if (mc.m25) Fail(k.arc_col, "M25 IS NOT ALLOWED IN A CIRCULAR BLOCK");
       if (!eff) Fail(k.arc_col, "NO FEEDRATE PROGRAMMED");
       if (*eff == 0) Fail(f ? f->col : k.arc_col, "F0 IS NOT ALLOWED IN A CIRCULAR BLOCK");
+      if (fw) CheckFeedFormat(*fw, FeedFormat::kLinear, metric_);
       bool cw = k.arc == 2;
       if (mir_x_ != mir_y_) cw = !cw;
       double feed = mode_.inverse_time ? *eff : ToMm(*eff);
       Arc(words, cw, k.arc_col, feed, mode_.inverse_time ? FeedMode::kInverseTime : FeedMode::kPerMinute);
     } else {
-      LinearMotion(words, k, mc, axis_mask, motion_col, eff);
+      LinearMotion(words, k, mc, axis_mask, motion_col, eff, fw);
     }
   }
 }
 
 void KtRun::LinearMotion(const Words& words, const BlockCodes& k, const BlockMCodes& mc, uint32_t axis_mask,
-                         int motion_col, std::optional<double> eff) {
+                         int motion_col, std::optional<double> eff, const Word* fw) {
   const uint32_t rotary_mask = (1u << kA) | (1u << kB) | (1u << kC);
   AxisArray target = pos_;
   AxisArray travel{};
@@ -191,6 +198,17 @@ void KtRun::LinearMotion(const Words& words, const BlockCodes& k, const BlockMCo
       active_h_ = hit;
     }
   }
+  bool linear_moves = false;
+  for (int a = 0; a < kAxisCount; ++a) {
+    if (!IsRotaryAxis(a) && (axis_mask & (1u << a)) && std::fabs(target[a] - pos_[a]) > 1e-9)
+      linear_moves = true;
+  }
+  // ln 5976-5978: rotary departures only (one or two rotary axes): F is degrees per minute in F3.0, so a
+  // number without a point is whole degrees (F17 = 17 DPM, where a linear block reads 1.7 IPM). An index
+  // table move runs at F0 (ln 4491); its F is the modal feed of the blocks after it.
+  const bool rotary_only = !linear_moves && travel_mask && !(b_index_ && b_moves);
+  if (fw && fw->v != 0)
+    CheckFeedFormat(*fw, rotary_only ? FeedFormat::kRotary : FeedFormat::kLinear, metric_);
   bool rapid = mc.m25 || (eff && *eff == 0);
   const uint32_t linear_mask = axis_mask & ~rotary_mask;
   if (b_index_ && (axis_mask & (1u << kB)) && !rapid) {
@@ -203,18 +221,12 @@ void KtRun::LinearMotion(const Words& words, const BlockCodes& k, const BlockMCo
   double feed = 0;
   FeedMode fm = FeedMode::kPerMinute;
   if (!rapid) {
-    bool linear_moves = false;
-    for (int a = 0; a < kAxisCount; ++a) {
-      if (!IsRotaryAxis(a) && (linear_mask & (1u << a)) && std::fabs(target[a] - pos_[a]) > 1e-9) {
-        linear_moves = true;
-      }
-    }
     if (mode_.inverse_time) {
       fm = FeedMode::kInverseTime;
       feed = *eff;
     } else if (!linear_moves && travel_mask) {
       fm = FeedMode::kDegPerMinute;
-      feed = *eff;
+      feed = fw && fw->literal && !fw->num.point ? fw->num.as_written : *eff;
     } else {
       feed = ToMm(*eff);
     }

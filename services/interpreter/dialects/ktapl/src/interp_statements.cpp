@@ -227,7 +227,10 @@ void KtRun::StSetWai(const Statement& st, BlockCtx&, bool) {
   }
 }
 
-void KtRun::StMir(const Statement& st, BlockCtx&, bool) {
+void KtRun::StMir(const Statement& st, BlockCtx& bc, bool in_ift) {
+  // ln 5369, 5380: "The Axis Inversion command must be programmed in a data block by itself" (a label may
+  // share it, ln 9106; as an IFT action it is the action's only item).
+  if (!in_ift && bc.own_words > 0) Fail(st.col, "MIR MUST BE PROGRAMMED IN A DATA BLOCK BY ITSELF");
   std::string b = Upper(st.body);
   b.erase(std::remove(b.begin(), b.end(), ' '), b.end());
   size_t xi = b.find('X'), yi = b.find('Y');

@@ -31,6 +31,36 @@ std::vector<std::string> RunAll(const std::string& text, Diagnostic* diag = null
   }
 }
 
+// The format tables (ln 893-1237, 5976): literal words by digits and resolution, every value by range; the
+// rotary-only F is read as whole degrees per minute, and the substituted value of a word is range-checked
+// at the word's column.
+TEST(Run, WordFormatsAreCheckedPerLetterAndFeedMode) {
+  Diagnostic d;
+  RunAll("G70 G0 X1. F0\nN20 X12345678\nN30 X123456789\n", &d);
+  EXPECT_EQ(d.line, 3);
+  EXPECT_EQ(d.col, 5);
+  EXPECT_EQ(d.text, "X WORD HAS MORE THAN 8 DIGITS (INCH FORMAT 4.4)");
+  d = {};
+  RunAll("G71 G0 X1. F0\n(PAR,L1=42949.673)\nG0 Y5. ZL1\n", &d);
+  EXPECT_EQ(d.line, 3);
+  EXPECT_EQ(d.col, 8);
+  EXPECT_EQ(d.text, "Z WORD OUT OF RANGE +-42949.672 MM (METRIC FORMAT 5.3)");
+  // G801-G899 letters are cycle parameters (passing formats): A999999.9 is not a rotary word there.
+  auto out = RunAll("(DFC,G801)\n(END)\nG70 G0 X1. F0\nG801 X2. A999999.9\nG80\n");
+  EXPECT_EQ(out.size(), 2u);
+
+  RunOptions o;
+  o.program_name = "T";
+  o.program_text = "G70 G90 G94 G0 B0 F0\nG01 B90. F17\nX1. F17\n";
+  o.params = {{"B_AXIS", "rotary"}};
+  auto run = Start(o);
+  std::vector<std::string> lines;
+  for (Step s = run->Next(); s.kind == Step::kCanon; s = run->Next()) lines.push_back(ToJsonLine(s.canon));
+  ASSERT_EQ(lines.size(), 3u);
+  EXPECT_NE(lines[1].find(R"("f":17.0000,"f_mode":"deg_per_min")"), std::string::npos) << lines[1];
+  EXPECT_NE(lines[2].find(R"("f":43.1800)"), std::string::npos) << lines[2];  // 1.7 in/min
+}
+
 TEST(Run, FirstOpIsUnitsAndMotionCarriesUsedAxes) {
   auto out = RunAll("%\n(NAM,TEST)\nN10 G71 G0 X10. F0\nN20 Y5. Z2.\nM30\n");
   ASSERT_EQ(out.size(), 4u);
