@@ -71,6 +71,23 @@ TEST(Files, OifWritesTheControlsHeaderThenTheDelimiter) {
   EXPECT_EQ(env.asked.back().op(), Op::kFileClose);  // G37 closes (ln 7910)
 }
 
+TEST(Files, BlanksAroundANameSubstitutionAreNotPartOfTheName) {
+  // E39 (ln 3818-3830): TEST<L25>, TEST<L25I> and TEST < L25I > < L27I > name TEST123.45600, TEST123 and
+  // TEST1231; a blank away from a substitution stays (names like CYL BORES1, ln 8767).
+  FileEnv env;
+  Ran r =
+      RunWith(env,
+              "N200 (PAR, L25 = 123.456)\nN300(OPF,TEST<L25>)\nN400 (CLF)\nN500(OPF,TEST<L25I>)\nN600 (CLF)\n"
+              "N700 (PAR, L27 = 1.567)\nN800 (OPF, TEST < L25I > < L27I >)\nN900 (CLF)\n"
+              "N910 (OPF,CYL BORES<L27I>)\n");
+  EXPECT_EQ(r.error, "");
+  std::vector<std::string> names;
+  for (const Canon& c : env.asked) {
+    if (auto* o = std::get_if<FileOpenOp>(&c.p)) names.push_back(o->name);
+  }
+  EXPECT_EQ(names, (std::vector<std::string>{"TEST123.45600", "TEST123", "TEST1231", "CYL BORES1"}));
+}
+
 TEST(Files, MsgLinesAreFollowedByAnEmptyLineWhileTheFileIsOpen) {
   // Example 7-16 (ln 8049-8071).
   FileEnv env;

@@ -285,7 +285,8 @@ int KtRun::EvalParamRef(const std::string& text, int col) {
   }
 }
 
-// <Ln>, <LnI> (truncated), <LnR> (rounded) in names.
+// <Ln>, <LnI> (truncated), <LnR> (rounded) in names. Blanks next to a substitution are not part of the
+// name: `(OPF, TEST < L25I > < L27I >)` names TEST1231 (ln 3826-3830); blanks elsewhere are (`CYL BORES1`).
 std::string KtRun::ExpandName(const std::string& name, int col) {
   std::string out;
   for (size_t i = 0; i < name.size(); ++i) {
@@ -293,6 +294,7 @@ std::string KtRun::ExpandName(const std::string& name, int col) {
       out += name[i];
       continue;
     }
+    while (!out.empty() && out.back() == ' ') out.pop_back();
     size_t close = name.find('>', i);
     if (close == std::string::npos) Fail(col, "MISSING > IN NAME");
     std::string inner = Upper(Trim(name.substr(i + 1, close - i - 1)));
@@ -317,6 +319,7 @@ std::string KtRun::ExpandName(const std::string& name, int col) {
       out += FormatKtNumber(v);
     }
     i = close;
+    while (i + 1 < name.size() && name[i + 1] == ' ') ++i;
   }
   return out;
 }
