@@ -202,6 +202,51 @@ void AddStationVerbs(CLI::App& app, Context& ctx) {
     for (auto& [k, val] : j.items()) std::cout << fmt::format("{} = {:.10g}\n", k, val.get<double>());
   });
 
+  // The fixture offset table (KT-APL FXC/UFX/ULF, manual ch. 6): the station keeps line n as the variables
+  // H<n>.X ... H<n>.C and H<n>.I (docs/dialects/ktapl.md call 61); shown here as the control's table.
+  auto* offsets = st->add_subcommand("offsets", "fixture offset table (KT-APL H lines set by FXC, UFX, ULF)");
+  offsets->add_option("ID", o->id)->required();
+  offsets->add_flag("--json", ctx.json);
+  offsets->callback([o, &ctx] {
+    RequireConfigured(o->id);
+    bus::Reader<cell::StationVariables> r(ctx.Bus(), bus::topics::kVariables, bus::QosKind::kState);
+    auto v =
+        r.WaitFor([&](const cell::StationVariables& x) { return x.station() == o->id; }, bus::Millis(3000));
+    if (!v) throw Exit{1, "station " + o->id + " has not published its variables (is it online?)"};
+    static const std::vector<std::string> kCols = {"X", "Y", "Z", "A", "B", "C", "I"};
+    std::map<int, nlohmann::json> lines;  // H number -> {axis: value}
+    for (auto& x : v->variables()) {
+      const std::string name = x.name().to_string();
+      const std::size_t dot = name.find('.');
+      if (name.size() < 4 || name[0] != 'H' || dot == std::string::npos) continue;
+      const std::string num = name.substr(1, dot - 1), col = name.substr(dot + 1);
+      if (num.empty() || !std::all_of(num.begin(), num.end(), [](char c) { return c >= '0' && c <= '9'; }))
+        continue;
+      if (std::find(kCols.begin(), kCols.end(), col) == kCols.end()) continue;
+      lines[std::stoi(num)][col] = x.value();
+    }
+    if (ctx.json) {
+      nlohmann::json j = nlohmann::json::object();
+      for (auto& [n, l] : lines) j["H" + std::to_string(n)] = l;
+      return Print(ctx, j, {});
+    }
+    if (lines.empty()) {
+      std::cout << "no fixture offsets set on " << o->id << "\n";
+      return;
+    }
+    // mm and degrees; I is the B position the line was taken at (G49).
+    std::cout << fmt::format("{:<4}", "H");
+    for (const auto& c : kCols) std::cout << fmt::format(" {:>12}", c);
+    std::cout << "\n";
+    for (auto& [n, l] : lines) {
+      std::cout << fmt::format("{:<4}", "H" + std::to_string(n));
+      for (const auto& c : kCols)
+        std::cout << (l.contains(c) ? fmt::format(" {:>12.10g}", l[c].get<double>())
+                                    : fmt::format(" {:>12}", "-"));
+      std::cout << "\n";
+    }
+  });
+
   auto* input =
       st->add_subcommand("input", "set a discrete input (for KT-APL WAI): I<word>.<bit>=0|1, e.g. I04D.1=1");
   input->add_option("ID", o->id)->required();
@@ -279,7 +324,14 @@ void AddStationVerbs(CLI::App& app, Context& ctx) {
   auto* hold = st->add_subcommand("hold", "feed hold: motion stops on its path until resume");
   hold->add_option("ID", o->id)->required();
   hold->callback([o, panel] { panel(o->id, true); });
-  auto* resume = st->add_subcommand("resume", "cycle start: release the feed hold");
+  // One CYCLE START button, two names: `start` after a program stop (M00, M01, M99 M00), `resume` after a
+  // hold.
+  auto* start =
+      st->add_subcommand("start", "cycle start: a run stopped at M00 / M01 goes on (and a hold is released)");
+  start->add_option("ID", o->id)->required();
+  start->callback([o, panel] { panel(o->id, false); });
+  auto* resume =
+      st->add_subcommand("resume", "cycle start: release the feed hold (the same button as start)");
   resume->add_option("ID", o->id)->required();
   resume->callback([o, panel] { panel(o->id, false); });
   auto* ovr = st->add_subcommand("override", "feed (0-200 %) and rapid (0-100 %) override");

@@ -230,6 +230,14 @@ TEST_F(ProbeInspection, ProbesABoreWritesTheInspectionFileAndTheNextProgramUsesT
   ASSERT_TRUE(vars.is_object()) << vars;
   EXPECT_NEAR(vars.value("H1.X", 0.0), 0.05, 1e-4) << vars;
   EXPECT_NEAR(vars.value("H1.Y", 0.0), -0.04, 1e-4) << vars;
+  // The same line as the control's fixture offset table (`station offsets`).
+  auto table = cell_.Json({"station", "offsets", "KT01", "--json"});
+  ASSERT_TRUE(table.is_object() && table.contains("H1")) << table;
+  EXPECT_NEAR(table["H1"].value("X", 0.0), 0.05, 1e-4) << table;
+  EXPECT_NEAR(table["H1"].value("Y", 0.0), -0.04, 1e-4) << table;
+  auto shown = Ctl({"station", "offsets", "KT01"});
+  EXPECT_EQ(shown.out.rfind("H ", 0), 0u) << shown.out;
+  EXPECT_NE(shown.out.find("\nH1 "), std::string::npos) << shown.out;
   auto at = axes.WaitFor(
       [](const cell::AxisState& a) {
         return a.station() == "KT01" && std::abs(a.commanded()[0] - 200.05) < 1e-3 &&

@@ -2,8 +2,10 @@
 // conformance programs with motion go through the program store, a pallet map and the station KT01
 // (interpreter + axis servo on the virtual clock) to a COMPLETED job with machine time; a negative-corpus
 // program fails the job with the interpreter's compiler-style diagnostic as its reason.
+#include <chrono>
 #include <fstream>
 #include <string>
+#include <thread>
 #include <utility>
 #include <vector>
 
@@ -101,22 +103,61 @@ TEST_F(StationCorpus, PositiveProgramsWithMotionComplete) {
 }
 
 TEST_F(StationCorpus, ProgramErrorFailsTheJobWithTheDiagnostic) {
-  // App. D: every fixed cycle starts (IFT,G91,M99M0G80); the corpus expects the M99 alarm at 3:1.
-  Put("neg_g91_fixed_cycle", "BADCYC");
-  std::string diag = ReadFile(SourceDir() + kCorpus + "neg_g91_fixed_cycle.diag");
+  // An illegal G code (ch. 2's list): the job fails with the corpus's diagnostic, the stored name as PROGRAM.
+  Put("neg_illegal_g_code", "BADG");
+  std::string diag = ReadFile(SourceDir() + kCorpus + "neg_illegal_g_code.diag");
   diag = diag.substr(0, diag.find('\n'));
-  const std::string prefix = "neg_g91_fixed_cycle.ktapl";
+  const std::string prefix = "neg_illegal_g_code.ktapl";
   ASSERT_EQ(diag.rfind(prefix, 0), 0u) << diag;
-  diag = "BADCYC" + diag.substr(prefix.size());  // PROGRAM is the stored name on a station
-  ASSERT_NE(diag.find(":3:1: error: [M99] "), std::string::npos) << diag;
+  diag = "BADG" + diag.substr(prefix.size());  // PROGRAM is the stored name on a station
+  ASSERT_NE(diag.find(":3:5: error: ILLEGAL G CODE G65"), std::string::npos) << diag;
 
-  std::string job = RunPallet("6", {"BADCYC"}, 1);
+  std::string job = RunPallet("6", {"BADG"}, 1);
   auto shown = CtlJson({"job", "show", job, "--json"});
   ASSERT_TRUE(shown.is_object());
   EXPECT_EQ(shown["state"], "FAILED") << shown.dump();
   ASSERT_TRUE(shown["reason"].is_string()) << shown.dump();
   EXPECT_NE(shown["reason"].get<std::string>().find(diag), std::string::npos)
       << "reason: " << shown["reason"] << "\nwanted: " << diag;
+}
+
+// The operator's stops on a station (issue 15 item 4): App. D's guard (IFT,G91,M99M0G80) in a G81 called in
+// G91 sounds the M99 alarm and stops the program (offline it is the [M99] error of neg_g91_fixed_cycle); so
+// does an M00. The pallet's job waits, KT01 shows PROGRAM_STOPPED with the reason and the alarm, and each
+// `cellctl station start KT01` (cycle start) lets the program go on: after G80 cancels the cycle it runs to
+// M30 and the job completes.
+TEST_F(StationCorpus, ProgramStopsWaitForCycleStart) {
+  PutText(
+      "(UCY,5)\nN10 G71 G90 G0 X10. Y10. Z100. F0 S400 M3\nN20 G91\nN30 G81 X1. Z-1. R.1 F100.\n"
+      "N40 G90 G80\nN50 (MSG,TURN THE PART)\nN60 X20. M00\nN70 X30.\nN80 M30\n",
+      "STOPS");
+  ASSERT_EQ(Ctl({"pallet", "set", "7", "STOPS"}).code, 0);
+  auto run = Ctl({"pallet", "run", "7", "--station", "KT01"});
+  ASSERT_EQ(run.code, 0) << run.err;
+  const std::string job = run.out.substr(0, run.out.find('\n'));
+  auto stopped = [&](const std::string& want_text) {
+    for (int i = 0; i < 300; ++i) {
+      for (auto& st : CtlJson({"station", "ls", "--json"}))
+        if (st["id"] == "KT01" && st["execution"] == "PROGRAM_STOPPED") {
+          EXPECT_NE(st.value("status_text", "").find(want_text), std::string::npos) << st.dump();
+          return st;
+        }
+      std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    }
+    ADD_FAILURE() << "KT01 never stopped at " << want_text;
+    return json();
+  };
+  json first = stopped("M00 program stop at STOPS line");
+  EXPECT_EQ(first.value("condition", ""), "WARNING") << first.dump();
+  EXPECT_NE(first.value("alarm_text", "").find("M99 alarm - see MAIN display"), std::string::npos)
+      << first.dump();
+  ASSERT_EQ(Ctl({"station", "start", "KT01"}).code, 0);
+  stopped("M00 program stop at STOPS line 7: press cycle start (cellctl station start KT01) - TURN THE PART");
+  EXPECT_EQ(Ctl({"job", "wait", job, "--timeout", "2"}).code, 3);  // still stopped: the pallet waits
+  ASSERT_EQ(Ctl({"station", "start", "KT01"}).code, 0);
+  auto wait = Ctl({"job", "wait", job, "--timeout", "60"});
+  EXPECT_EQ(wait.out, "COMPLETED\n") << wait.err;
+  ASSERT_EQ(Ctl({"station", "reset", "KT01"}).code, 0);  // [ALARM RESET]
 }
 
 }  // namespace

@@ -312,6 +312,7 @@ json CellView::StationJson(int s) const {
           {"condition", live ? st.condition : "UNAVAILABLE"},
           {"alarm_code", live ? OrNull(st.alarm_code) : json(nullptr)},
           {"alarm_text", live ? OrNull(st.alarm_text) : json(nullptr)},
+          {"status_text", live ? OrNull(st.status_text) : json(nullptr)},
           {"program", live ? OrNull(st.program) : json(nullptr)},
           {"line", live && st.line > 0 ? json(st.line) : json(nullptr)},
           {"pallet", live && st.pallet > 0 ? json(st.pallet) : json(nullptr)},

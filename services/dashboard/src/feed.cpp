@@ -80,6 +80,7 @@ StatusIn FromWire(const cell::StationStatus& s) {
   in.condition = ConditionName(s.condition());
   in.alarm_code = s.alarm_code().to_string();
   in.alarm_text = s.alarm_text().to_string();
+  in.status_text = s.status_text().to_string();
   in.program = s.program().to_string();
   in.line = s.line();
   in.pallet = s.pallet();

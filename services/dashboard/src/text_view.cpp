@@ -113,6 +113,11 @@ std::string RenderText(const json& snap, const TextStyle& style) {
                             cond == "FAULT" ? "1;31" : "33"));
     if (ex == "FEED_HOLD")
       notes.push_back(paint("  " + id + " feed hold: the run stands still until cycle start", "33"));
+    // What a WAIT or a program stop waits for ("M00 program stop ...: press cycle start"), else the program's
+    // message (MSG).
+    if (!s.value("status_text", json()).is_null())
+      notes.push_back(
+          paint("  " + id + " " + Fit(Str(s["status_text"], ""), W - 10), ex == "ACTIVE" ? "2" : "33"));
     if (!s.value("online", false))
       notes.push_back(paint("  " + id + " offline: its CNC is not announced", "2"));
     std::vector<std::string> queued;

@@ -36,12 +36,12 @@
     const on = st.pallet ? ' on pallet ' + st.pallet : '';
     const fault = st.condition === 'FAULT' ? 'FAULT: ' : '';
     switch (st.execution) {
-      case 'ACTIVE': return fault + 'Running ' + prog + on;
+      case 'ACTIVE': return fault + 'Running ' + prog + on + (st.status_text ? ' · ' + st.status_text : '');
       case 'FEED_HOLD': return fault + 'Feed hold: ' + prog + on + ' stopped on its path';
       case 'INTERRUPTED': return fault + 'Interrupted: ' + prog + on;
-      case 'WAIT': return fault + 'Waiting for an input: ' + prog + on;
-      case 'PROGRAM_STOPPED': return fault + 'Program stop (M00)' + on + ': press cycle start';
-      case 'OPTIONAL_STOP': return fault + 'Optional stop (M01)' + on + ': press cycle start';
+      case 'WAIT': return fault + (st.status_text ? st.status_text[0].toUpperCase() + st.status_text.slice(1) + ': ' : 'Waiting for an input: ') + prog + on;
+      case 'PROGRAM_STOPPED':
+      case 'OPTIONAL_STOP': return fault + (st.status_text || (st.execution === 'OPTIONAL_STOP' ? 'Optional stop (M01)' : 'Program stop (M00)') + on + ': press cycle start');
       case 'STOPPED': return fault + 'Stopped' + on;
       case 'PROGRAM_COMPLETED': return fault + 'Program completed' + on;
       case 'READY': {

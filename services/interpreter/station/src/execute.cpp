@@ -200,6 +200,7 @@ void Station::RunProgram(ActiveRun& run, const std::string& entry) {
   opt.variables = start.image.variables;
   opt.params = cfg_.params;  // the station config's [params]: the dialect's machine settings (EMCO's monitor)
   opt.params["PALLET"] = std::to_string(run.d.pallet);
+  opt.params["OPERATOR"] = "1";  // a station has an operator's cycle start: M99 M00 stops, as the manual says
   if (comma != std::string::npos) {
     const std::string rest = entry.substr(comma + 1);
     const std::size_t sub = rest.find(',');
@@ -236,7 +237,18 @@ void Station::RunProgram(ActiveRun& run, const std::string& entry) {
       board_.Position(name, c.line, change ? &change->tool : nullptr);
       if (auto seg = ToSegment(c)) stream_.Send(*seg);
       ExecuteIo(name, c, aux);
-      if (const auto* m = c.If<interp::MessageOp>()) spdlog::info("{} line {}: {}", name, c.line, m->text);
+      if (const auto* m = c.If<interp::MessageOp>()) {
+        spdlog::info("{} line {}: {}", name, c.line, m->text);
+        board_.Message(m->text);
+      }
+      if (const auto* a = c.If<interp::AlarmOp>()) {
+        // KT-APL M99: the alarm sounds and the message shows; the program goes on (an M00 in the block stops
+        // it below). [ALARM RESET] (`cellctl station reset`) clears the condition.
+        spdlog::warn("{} line {}: {}", name, c.line, a->text);
+        board_.Warning("PROGRAM", a->text);
+        board_.Publish();
+      }
+      if (const auto* stop = c.If<interp::StopOp>()) ProgramStop(name, c.line, *stop);
       if (clock_.Now() - last_status > options_.status_period) {
         board_.Publish();
         last_status = clock_.Now();
@@ -255,6 +267,30 @@ void Station::RunProgram(ActiveRun& run, const std::string& entry) {
   }
   ++run.programs_done;
   commit();
+}
+
+// M00, and M01 with the optional stop on: the block finishes (the motion before it drains), then the run
+// waits for the operator's cycle start (`cellctl station start ID`) in PROGRAM_STOPPED / OPTIONAL_STOP, the
+// pallet keeping its backlog; a cancel ends the wait (KT-APL ln 2485-2524).
+void Station::ProgramStop(const std::string& program, int line, const interp::StopOp& stop) {
+  stream_.WaitDrained();
+  const std::uint64_t pressed = panel_.CycleStarts();
+  std::string text =
+      fmt::format("{} at {} line {}: press cycle start (cellctl station start {})",
+                  stop.optional ? "M01 optional stop" : "M00 program stop", program, line, cfg_.id);
+  if (const std::string msg = board_.LastMessage(); !msg.empty()) text += " - " + msg;
+  spdlog::info("{}", text);
+  board_.Waiting(text, stop.optional ? cell::EXECUTION_OPTIONAL_STOP : cell::EXECUTION_PROGRAM_STOPPED);
+  board_.Publish();
+  try {
+    stream_.WaitUntil([&] { return panel_.CycleStarts() > pressed; });
+  } catch (...) {
+    board_.Waiting("");
+    throw;
+  }
+  spdlog::info("cycle start: {} goes on after line {}", program, line);
+  board_.Waiting("");
+  board_.Publish();
 }
 
 void Station::WaitInputs(const std::string& spec) {

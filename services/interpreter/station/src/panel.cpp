@@ -29,6 +29,8 @@ void StatusBoard::RunStarted(std::int32_t pallet, std::int32_t dispatch_id) {
   std::lock_guard lk(mu_);
   base_ = cell::EXECUTION_ACTIVE;
   Show();
+  message_.clear();
+  status_.status_text("");
   status_.pallet(pallet);
   status_.dispatch_id(dispatch_id);
 }
@@ -38,6 +40,7 @@ void StatusBoard::RunEnded(bool completed, int queued) {
   base_ = completed ? cell::EXECUTION_PROGRAM_COMPLETED : cell::EXECUTION_STOPPED;
   Show();
   status_.status_text("");
+  message_.clear();
   status_.part_count(status_.part_count() + (completed ? 1 : 0));
   status_.dispatch_id(0);
   status_.queued(queued);
@@ -50,11 +53,22 @@ void StatusBoard::Position(const std::string& program, int line, const std::stri
   if (tool) status_.tool(tool->substr(0, 16));
 }
 
-void StatusBoard::Waiting(const std::string& text) {
+void StatusBoard::Waiting(const std::string& text, cell::Execution execution) {
   std::lock_guard lk(mu_);
-  base_ = text.empty() ? cell::EXECUTION_ACTIVE : cell::EXECUTION_WAIT;
+  base_ = text.empty() ? cell::EXECUTION_ACTIVE : execution;
   Show();
-  status_.status_text(text.substr(0, 255));
+  status_.status_text((text.empty() ? message_ : text).substr(0, 255));
+}
+
+void StatusBoard::Message(const std::string& text) {
+  std::lock_guard lk(mu_);
+  message_ = text;
+  if (base_ == cell::EXECUTION_ACTIVE) status_.status_text(text.substr(0, 255));
+}
+
+std::string StatusBoard::LastMessage() const {
+  std::lock_guard lk(mu_);
+  return message_;
 }
 
 void StatusBoard::Warning(const std::string& code, const std::string& text) {
@@ -113,6 +127,7 @@ std::uint32_t Panel::Press(const cell::StationRequest& r) {
     if (r.rapid_override() >= 0) c.rapid_override(r.rapid_override());
   } else if (r.op() == cell::STATION_FEED_HOLD || r.op() == cell::STATION_CYCLE_START) {
     c.feed_hold(r.op() == cell::STATION_FEED_HOLD);
+    if (r.op() == cell::STATION_CYCLE_START) ++cycle_starts_;
   } else {
     throw Error(Errc::kInvalidArgument, "not a panel button");
   }
@@ -123,6 +138,11 @@ std::uint32_t Panel::Press(const cell::StationRequest& r) {
   spdlog::info("panel: feed hold {}, feed override {:.0f} %, rapid override {:.0f} %",
                c.feed_hold() ? "on" : "off", c.feed_override() * 100, c.rapid_override() * 100);
   return c.revision();
+}
+
+std::uint64_t Panel::CycleStarts() const {
+  std::lock_guard lk(mu_);
+  return cycle_starts_;
 }
 
 void Panel::AbortRun(std::int32_t run_id) {

@@ -191,6 +191,7 @@ cell::StationReply Station::OnCommand(const cell::StationRequest& r) {
     case cell::STATION_CYCLE_START:
     case cell::STATION_OVERRIDE:
       rep.revision(panel_.Press(r));
+      stream_.Wake();  // a run stopped at M00 looks again now
       return rep;
   }
   throw Error(Errc::kInvalidArgument, "unknown station command");

@@ -439,5 +439,86 @@ TEST_F(StationCore, AServoThatDoesNotTakeThePartModelFailsTheRun) {
   EXPECT_TRUE(servo_.written.empty());
 }
 
+// M00 (KT-APL ln 2485-2506): the motion before it finishes, then the run waits in PROGRAM_STOPPED, saying why
+// and how to go on, until the operator's cycle start; nothing after it is streamed meanwhile. The program's
+// last MSG is part of the status text.
+TEST_F(StationCore, M00StopsTheRunUntilCycleStart) {
+  Put("P", "G71 G90\nG01 X0 Y0 Z100. F1000.\n(MSG,CHECK THE BORE)\nX10. M00\nX20.\nM30\n");
+  Dispatch(1, {"P"});
+  int stopped_waits = 0;
+  std::size_t written_at_stop = 0;
+  std::string text;
+  script_ = [&] {
+    const cell::StationStatus st = station_->Status();
+    if (st.execution() != cell::EXECUTION_PROGRAM_STOPPED) return;
+    if (++stopped_waits == 1) {
+      written_at_stop = servo_.written.size();
+      text = st.status_text().to_string();
+    }
+    if (stopped_waits == 20) {
+      EXPECT_EQ(servo_.written.size(), written_at_stop);  // nothing after M00 left while stopped
+      Command(cell::STATION_CYCLE_START);
+    }
+  };
+  EXPECT_EQ(RunOne(1).state(), cell::RUN_COMPLETED);
+  EXPECT_GE(stopped_waits, 20);
+  EXPECT_EQ(text,
+            "M00 program stop at P line 4: press cycle start (cellctl station start KT01) - CHECK THE BORE");
+  double last_x = 0;
+  for (const auto& seg : servo_.written)
+    if (seg.kind() == cell::SEGMENT_LINEAR) last_x = Target(seg, 0);
+  EXPECT_DOUBLE_EQ(last_x, 20.0);  // the run went on after the stop
+}
+
+TEST_F(StationCore, ACancelEndsAProgramStop) {
+  Put("P", "G71 G90\nG01 X0 Y0 Z100. F1000.\nM00\nX20.\nM30\n");
+  Dispatch(1, {"P"});
+  script_ = [&] {
+    if (station_->Status().execution() == cell::EXECUTION_PROGRAM_STOPPED) Cancel(1);
+  };
+  EXPECT_EQ(RunOne(1).state(), cell::RUN_CANCELLED);
+}
+
+// M01 stops only with the optional stop on (the station file's [params] OPTIONAL_STOP = 1), in OPTIONAL_STOP.
+TEST_F(StationCore, M01StopsOnlyWithTheOptionalStopOn) {
+  Put("P", "G71 G90\nG01 X0 Y0 Z100. F1000.\nM01\nX20.\nM30\n");
+  Dispatch(1, {"P"});
+  bool stopped = false;
+  script_ = [&] { stopped = stopped || station_->Status().execution() == cell::EXECUTION_OPTIONAL_STOP; };
+  EXPECT_EQ(RunOne(1).state(), cell::RUN_COMPLETED);
+  EXPECT_FALSE(stopped);
+
+  cfg_.params["OPTIONAL_STOP"] = "1";
+  Make();
+  Dispatch(2, {"P"});
+  script_ = [&] {
+    if (station_->Status().execution() != cell::EXECUTION_OPTIONAL_STOP) return;
+    stopped = true;
+    Command(cell::STATION_CYCLE_START);
+  };
+  EXPECT_EQ(RunOne(2).state(), cell::RUN_COMPLETED);
+  EXPECT_TRUE(stopped);
+}
+
+// M99 with M00 on a station (E20, ln 3078-3094): the alarm shows with the block's comment (condition WARNING,
+// cleared by reset) and the program stops until cycle start; offline it is the [M99] error (call 10).
+TEST_F(StationCore, M99WithM00RaisesTheAlarmAndStops) {
+  Put("P", "G71 G90\nG00 X0 Y0 Z100. F0\nN120 M00M99 !GAUGE BORE SIZE\nX20.\nM30\n");
+  Dispatch(1, {"P"});
+  cell::StationStatus at_stop;
+  script_ = [&] {
+    const cell::StationStatus st = station_->Status();
+    if (st.execution() != cell::EXECUTION_PROGRAM_STOPPED) return;
+    at_stop = st;
+    Command(cell::STATION_CYCLE_START);
+  };
+  EXPECT_EQ(RunOne(1).state(), cell::RUN_COMPLETED);
+  EXPECT_EQ(at_stop.condition(), cell::CONDITION_WARNING);
+  EXPECT_EQ(at_stop.alarm_text().to_string(), "M99 alarm - see MAIN display: GAUGE BORE SIZE");
+  EXPECT_EQ(station_->Status().condition(), cell::CONDITION_WARNING);
+  Command(cell::STATION_RESET);
+  EXPECT_EQ(station_->Status().condition(), cell::CONDITION_NORMAL);
+}
+
 }  // namespace
 }  // namespace cell::station::testing

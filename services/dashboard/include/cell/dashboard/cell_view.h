@@ -32,6 +32,7 @@ struct StatusIn {  // cell/station/status
   std::string execution = "READY";   // MTConnect vocabulary: READY, ACTIVE, FEED_HOLD, ...
   std::string condition = "NORMAL";  // NORMAL, WARNING, FAULT
   std::string alarm_code, alarm_text;
+  std::string status_text;  // what a WAIT or a program stop waits for, else the program's last message
   std::string program;
   int line = 0;
   int pallet = 0;

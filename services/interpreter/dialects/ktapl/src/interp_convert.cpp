@@ -348,10 +348,10 @@ void KtRun::ToolAndSpeed(const Words& words, const BlockMCodes& mc) {
     speed_ = s->v;
     mode_.tapping_range = false;
   }
-  ImmediateMCodes(words, speed_changed, s);
+  ImmediateMCodes(words, speed_changed, s, mc.after == 0);
 }
 
-void KtRun::ImmediateMCodes(const Words& words, bool speed_changed, const Word* s) {
+void KtRun::ImmediateMCodes(const Words& words, bool speed_changed, const Word* s, bool m00) {
   const bool running = mode_.spindle == SpindleDir::kCw || mode_.spindle == SpindleDir::kCcw;
   bool dir_given = false;
   for (const auto& m : words) {
@@ -412,9 +412,14 @@ void KtRun::ImmediateMCodes(const Words& words, bool speed_changed, const Word* 
         if (code == 48 || code == 49) mode_.overrides_locked = code == 49;
         Out<AuxOp>().m = code;
         break;
-      case 99:
-        Out<AlarmOp>().text = "M99 alarm - see MAIN display";
+      case 99: {
+        // With M00 in the block and an operator at the machine the program stops with the block's comment
+        // shown (E20, ln 3078-3094): the comment is the alarm's message.
+        std::string text = "M99 alarm - see MAIN display";
+        if (operator_ && m00 && !block_comment_.empty()) text += ": " + block_comment_;
+        Out<AlarmOp>().text = text;
         break;
+      }
       default:
         break;
     }
@@ -568,7 +573,7 @@ void KtRun::ExecTypeI(BlockCtx& bc, const ParsedBlock* pb) {
 
   Motion(words, k, mc, axis_mask, motion_col, f, block_feed);
   AfterMCode(mc);
-  if (mc.m99 && mc.after == 0) {
+  if (mc.m99 && mc.after == 0 && !operator_) {
     // In cycle and library code the operator cannot see the block: its comment is the message (App. E
     // puts each error's text there: "! ERROR: PROBE DID NOT MAKE CONTACT WITH SURFACE").
     std::string text = "M99 alarm - see MAIN display (program stopped by M99 M00)";

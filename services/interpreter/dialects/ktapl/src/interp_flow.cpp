@@ -41,6 +41,8 @@ KtRun::KtRun(const RunOptions& o) : env_(o.env ? o.env : &default_env_) {
       block_delete_ = num(0) != 0;
     } else if (key == "OPTIONAL_STOP") {
       optional_stop_ = num(0) != 0;
+    } else if (key == "OPERATOR") {
+      operator_ = num(0) != 0;
     } else if (key == "PALLET") {
       pallet_ = static_cast<int>(std::clamp(num(0), 0.0, 999.0));
     } else if (key == "PART_NUMBER") {

@@ -338,7 +338,7 @@ class KtRun final : public RunBase, public ExprContext {
                            bool drop_undefined, uint32_t axis_mask, Words& words);
   BlockMCodes ReadMCodes(const Words& words, bool trigger);
   void ToolAndSpeed(const Words& words, const BlockMCodes& mc);
-  void ImmediateMCodes(const Words& words, bool speed_changed, const Word* s);
+  void ImmediateMCodes(const Words& words, bool speed_changed, const Word* s, bool m00);
   void AfterMCode(const BlockMCodes& mc);
 
   // Motion (interp_motion.cpp, interp_arc.cpp)
@@ -417,6 +417,7 @@ class KtRun final : public RunBase, public ExprContext {
   double tool_len_ = 0, tool_dia_ = 0;
   int pallet_ = 0;
   bool block_delete_ = false, optional_stop_ = false, b_index_ = true;
+  bool operator_ = false;  // OPERATOR=1 (a station): M99 M00 is the alarm and a program stop, not an error
   int max_pallet_ = 255;
 
   // Files and system parameters.

@@ -129,7 +129,7 @@ TEST(Run, LibrarySubroutineReportsTheCallingLine) {
   EXPECT_DOUBLE_EQ(moves[1].target()->pos[kX], 2.0);
 }
 
-// OPF with A/ of a file an earlier run left (ln 7910-7930, judgement call 64): the run continues the text the
+// OPF with A/ of a file an earlier run left (ln 7910-7930, judgement call 69): the run continues the text the
 // control keeps (here the library), so a CLS of the file runs the old blocks and the appended one.
 TEST(Run, AppendToAnEarlierFileContinuesItsText) {
   RunOptions o;

@@ -32,9 +32,14 @@ class StatusBoard {
   void RunEnded(bool completed, int queued);
   // Where the run is (published with the next Publish: the caller throttles).
   void Position(const std::string& program, int line, const std::string* tool);
-  // The run waits for inputs (KT-APL WAI): execution WAIT with `text` ("waiting for I04D.1=1") as the status
-  // text; "" when the wait is over (ACTIVE again).
-  void Waiting(const std::string& text);
+  // The run waits: for inputs (KT-APL WAI, execution WAIT, "waiting for I04D.1=1") or for the operator's
+  // cycle start after M00 / M01 (PROGRAM_STOPPED / OPTIONAL_STOP); `text` is the status text; "" when the
+  // wait is over (ACTIVE again).
+  void Waiting(const std::string& text, cell::Execution execution = cell::EXECUTION_WAIT);
+  // The program's operator message (KT-APL MSG outside an inspection file, Okuma/EMCO messages): the status
+  // text while nothing is awaited, until the next message or the run's end.
+  void Message(const std::string& text);
+  std::string LastMessage() const;
   void Warning(const std::string& code, const std::string& text);  // a program error: condition WARNING
   void Reset();                                                    // condition NORMAL, alarm cleared
   void ServoHeld(bool held);                                       // publishes when it changes the display
@@ -50,6 +55,7 @@ class StatusBoard {
   cell::StationStatus status_;
   cell::Execution base_ = cell::EXECUTION_READY;  // what the run state alone says
   bool held_ = false;
+  std::string message_;  // the run's last operator message
 };
 
 class Panel {
@@ -59,6 +65,8 @@ class Panel {
   // STATION_FEED_HOLD, STATION_CYCLE_START or STATION_OVERRIDE: recorded, persisted, published; returns
   // the control's revision. Throws cell::Error(kInvalidArgument) for an override out of range.
   std::uint32_t Press(const cell::StationRequest& r);
+  // Cycle starts pressed since the process started: a run stopped at M00 goes on at the next one.
+  std::uint64_t CycleStarts() const;
   // The scheduler cancelled the running dispatch: the servo stops it too.
   void AbortRun(std::int32_t run_id);
   void Publish();
@@ -69,6 +77,7 @@ class Panel {
   std::function<void(const cell::ServoControl&)> publish_;
   mutable std::mutex mu_;
   cell::ServoControl control_;
+  std::uint64_t cycle_starts_ = 0;
 };
 
 }  // namespace cell::station

@@ -114,6 +114,7 @@ class Station {
   void Execute(const Dispatch& d);
   void RunProgram(ActiveRun& run, const std::string& entry);
   std::vector<bool> SendPartModel(const Dispatch& d);
+  void ProgramStop(const std::string& program, int line, const interp::StopOp& stop);
   // KT-APL WAI (interp::Environment::WaitInputs): after the motion before it, until the inputs match.
   void WaitInputs(const std::string& spec);
   // OutputOp and the station file's M codes; throws cell::Error to stop the run.
