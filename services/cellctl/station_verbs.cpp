@@ -50,6 +50,17 @@ std::pair<std::string, double> Assignment(const std::string& text) {
   return {text.substr(0, eq), std::stod(v)};
 }
 
+// The station's kept variables as published (revision `min_rev` or later: after a --set), or a one-line
+// reason.
+cell::StationVariables Variables(Context& ctx, const std::string& id, uint32_t min_rev = 0) {
+  bus::Reader<cell::StationVariables> r(ctx.Bus(), bus::topics::kVariables, bus::QosKind::kState);
+  auto v =
+      r.WaitFor([&](const cell::StationVariables& x) { return x.station() == id && x.revision() >= min_rev; },
+                bus::Millis(3000));
+  if (!v) throw Exit{1, "station " + id + " has not published its variables (is it online?)"};
+  return *v;
+}
+
 }  // namespace
 
 void AddStationVerbs(CLI::App& app, Context& ctx) {
@@ -190,13 +201,9 @@ void AddStationVerbs(CLI::App& app, Context& ctx) {
       }
       min_rev = ctx.StationCommand(o->id, req).revision();
     }
-    bus::Reader<cell::StationVariables> r(ctx.Bus(), bus::topics::kVariables, bus::QosKind::kState);
-    auto v = r.WaitFor(
-        [&](const cell::StationVariables& x) { return x.station() == o->id && x.revision() >= min_rev; },
-        bus::Millis(3000));
-    if (!v) throw Exit{1, "station " + o->id + " has not published its variables (is it online?)"};
+    const cell::StationVariables v = Variables(ctx, o->id, min_rev);
     nlohmann::json j = nlohmann::json::object();
-    for (auto& x : v->variables()) j[x.name().to_string()] = x.value();
+    for (auto& x : v.variables()) j[x.name().to_string()] = x.value();
     if (ctx.json) return Print(ctx, j, {});
     // 10 significant digits, as a parameter display shows them (0.05, not 0.05000000000001137).
     for (auto& [k, val] : j.items()) std::cout << fmt::format("{} = {:.10g}\n", k, val.get<double>());
@@ -209,13 +216,10 @@ void AddStationVerbs(CLI::App& app, Context& ctx) {
   offsets->add_flag("--json", ctx.json);
   offsets->callback([o, &ctx] {
     RequireConfigured(o->id);
-    bus::Reader<cell::StationVariables> r(ctx.Bus(), bus::topics::kVariables, bus::QosKind::kState);
-    auto v =
-        r.WaitFor([&](const cell::StationVariables& x) { return x.station() == o->id; }, bus::Millis(3000));
-    if (!v) throw Exit{1, "station " + o->id + " has not published its variables (is it online?)"};
+    const cell::StationVariables v = Variables(ctx, o->id);
     static const std::vector<std::string> kCols = {"X", "Y", "Z", "A", "B", "C", "I"};
     std::map<int, nlohmann::json> lines;  // H number -> {axis: value}
-    for (auto& x : v->variables()) {
+    for (auto& x : v.variables()) {
       const std::string name = x.name().to_string();
       const std::size_t dot = name.find('.');
       if (name.size() < 4 || name[0] != 'H' || dot == std::string::npos) continue;

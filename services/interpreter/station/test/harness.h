@@ -103,6 +103,13 @@ class StationHarness : public ::testing::Test {
     EXPECT_TRUE(s.has_value()) << "no run status for dispatch " << dispatch;
     return s.value_or(cell::RunStatus{});
   }
+  // Sets `flag` to `value` at the core's `waits`-th wait: a writer or a store that comes back while the run
+  // waits for it.
+  void SetAfter(int waits, bool& flag, bool value) {
+    script_ = [&flag, value, waits, n = 0]() mutable {
+      if (++n == waits) flag = value;
+    };
+  }
   std::map<std::string, double> Variables() const { return station_->MemoryState().image.variables; }
   const tooltable::ToolEntry* Tool(const std::string& t) const {
     tools_copy_ = station_->MemoryState().image.tools;

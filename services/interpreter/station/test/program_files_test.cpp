@@ -68,10 +68,7 @@ TEST_F(StationFiles, ClosedFilesGoToTheWriterAndSetTheirFlagOnceStored) {
 TEST_F(StationFiles, AProgramStoreThatIsAwayIsWaitedForAfterTheWriter) {
   Put("P", kProgram);
   io_.store_down = true;
-  int waits = 0;
-  script_ = [&] {
-    if (++waits == 40) io_.store_down = false;
-  };
+  SetAfter(40, io_.store_down, false);
   Dispatch(1, {"P"});
   EXPECT_EQ(RunOne(1).state(), cell::RUN_COMPLETED);
   EXPECT_EQ(io_.programs.count("KT01/PUMP341"), 1u);
@@ -86,10 +83,7 @@ TEST_F(StationFiles, AProgramStoreThatIsAwayIsWaitedForAfterTheWriter) {
 TEST_F(StationFiles, AWriterThatIsAwayIsWaitedForAndNothingIsLost) {
   Put("P", kProgram);
   io_.writer_up = false;
-  int waits = 0;
-  script_ = [&] {
-    if (++waits == 40) io_.writer_up = true;  // back after about two seconds
-  };
+  SetAfter(40, io_.writer_up, true);  // back after about two seconds
   Dispatch(1, {"P"});
   EXPECT_EQ(RunOne(1).state(), cell::RUN_COMPLETED);
   EXPECT_NE(Stored(io_, "KT01", "PUMP341"), nullptr);
@@ -158,10 +152,7 @@ TEST_F(StationFiles, DeleteWaitsForAStoreThatIsAway) {
   Put("OLDDATA", "X=1\n");
   Put("P", "(PAR,L1051=0)\n(DLF,OLDDATA)\n(PAR,L1500=L1051)\nM30\n");
   io_.store_down = true;
-  int waits = 0;
-  script_ = [&] {
-    if (++waits == 40) io_.store_down = false;
-  };
+  SetAfter(40, io_.store_down, false);
   Dispatch(1, {"P"});
   EXPECT_EQ(RunOne(1).state(), cell::RUN_COMPLETED);
   EXPECT_EQ(io_.programs.count("KT01/OLDDATA"), 0u);
