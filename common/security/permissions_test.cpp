@@ -40,12 +40,12 @@ std::vector<std::string> AllIdentityNames() {
 
 TEST(Table, CoversExactlyTheBusTopics) {
   const std::string st = "<ID>";
-  std::set<std::string> bus_topics{topics::kHealth,       topics::kStationStatus,    topics::kToolTable,
-                                   topics::kVariables,    topics::kStationIo,        topics::kProgress,
-                                   topics::kServoControl, topics::kSchedulerState,   topics::kJobState,
-                                   topics::kRunStatus,    topics::kJobStatus,        topics::kProgramChange,
-                                   topics::kAlarm,        topics::kInspectionStored, topics::kAxisState,
-                                   topics::Segments(st),  topics::Probe(st),         topics::Part(st)};
+  std::set<std::string> bus_topics{
+      topics::kHealth,         topics::kStationStatus, topics::kToolTable,        topics::kVariables,
+      topics::kStationIo,      topics::kProgress,      topics::kStationEvent,     topics::kServoControl,
+      topics::kSchedulerState, topics::kJobState,      topics::kRunStatus,        topics::kJobStatus,
+      topics::kProgramChange,  topics::kAlarm,         topics::kInspectionStored, topics::kAxisState,
+      topics::Segments(st),    topics::Probe(st),      topics::Part(st)};
   for (const std::string& svc :
        {std::string(topics::kProgramStore), std::string(topics::kScheduler), std::string(topics::kInspection),
         topics::StationRun(st), topics::StationCommand(st)}) {

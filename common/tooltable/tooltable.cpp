@@ -4,6 +4,7 @@
 #include <cctype>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <utility>
 
 #include "cell/error/error.h"
 
@@ -52,26 +53,69 @@ std::string_view BaseTool(std::string_view tool) {
 ToolTable::ToolTable(std::vector<ToolEntry> entries, std::vector<ProcessComp> process)
     : entries_(std::move(entries)), process_(std::move(process)) {}
 
-const ToolEntry* ToolTable::Find(std::string_view tool) const {
+const ToolEntry* ToolTable::Find(std::string_view tool, int socket) const {
+  const ToolEntry* first = nullptr;
   for (const auto& e : entries_) {
-    if (e.tool == tool) return &e;
+    if (e.tool != tool) continue;
+    if (socket <= 0 || e.socket == socket) return &e;
+    if (!first) first = &e;
   }
-  return nullptr;
+  return socket > 0 ? nullptr : first;
 }
 
-ToolEntry* ToolTable::Find(std::string_view tool) {
-  for (auto& e : entries_) {
-    if (e.tool == tool) return &e;
-  }
-  return nullptr;
+ToolEntry* ToolTable::Find(std::string_view tool, int socket) {
+  return const_cast<ToolEntry*>(std::as_const(*this).Find(tool, socket));
 }
 
 void ToolTable::Upsert(const ToolEntry& entry) {
-  if (ToolEntry* e = Find(entry.tool)) {
-    *e = entry;
-    return;
+  ToolEntry* same = nullptr;   // this number in this socket
+  ToolEntry* other = nullptr;  // this number, where a new socket does not make it an alternate
+  bool in_other_socket = false;
+  for (auto& e : entries_) {
+    if (e.tool != entry.tool) continue;
+    if (e.socket == entry.socket) {
+      same = &e;
+      break;
+    }
+    if (e.socket > 0 && entry.socket > 0) {
+      in_other_socket = true;
+    } else if (!other) {
+      other = &e;
+    }
   }
-  entries_.push_back(entry);
+  if (same) {
+    *same = entry;
+  } else if (other && !in_other_socket) {
+    *other = entry;
+  } else {
+    entries_.push_back(entry);
+  }
+}
+
+const ToolEntry* ToolTable::Select(std::string_view tool, bool* exists) const {
+  bool any = false;
+  for (const auto& e : entries_) {
+    if (e.tool != tool) continue;
+    any = true;
+    if (Usable(e)) {
+      if (exists) *exists = true;
+      return &e;
+    }
+  }
+  if (exists) *exists = any;
+  return nullptr;
+}
+
+bool ToolTable::Charge(const ToolWear& wear) {
+  ToolEntry* e = Find(wear.tool, wear.socket);
+  if (!e && wear.socket > 0) e = Find(wear.tool);
+  if (!e) return false;
+  if (wear.cutting_s > 0 && e->life_left_min > 0) {
+    e->life_left_min = std::max(0.0, e->life_left_min - wear.cutting_s / 60.0);
+    if (e->life_left_min <= 0) e->worn = true;
+  }
+  if (wear.broken) e->broken = true;
+  return true;
 }
 
 bool ToolTable::UpsertProcess(const ProcessComp& comp) {
@@ -92,8 +136,9 @@ void ToolTable::Clear() {
   process_.clear();
 }
 
-bool ToolTable::Effective(std::string_view tool, int pallet, Compensation* out) const {
-  const ToolEntry* e = Find(tool);
+bool ToolTable::Effective(std::string_view tool, int pallet, Compensation* out, int socket) const {
+  const ToolEntry* e = Find(tool, socket);
+  if (e == nullptr && socket > 0) e = Find(tool);
   if (e == nullptr) return false;
   Compensation c{e->length, e->diameter};
   if (pallet != 0) {
@@ -111,7 +156,7 @@ bool ToolTable::Effective(std::string_view tool, int pallet, Compensation* out) 
 bool ToolTable::Holds(std::string_view tool) const {
   const bool want_suffix = tool.find('.') != std::string_view::npos;
   for (const auto& e : entries_) {
-    if (e.broken) continue;
+    if (!Usable(e)) continue;
     if (want_suffix ? e.tool == tool : BaseTool(e.tool) == tool) return true;
   }
   return false;

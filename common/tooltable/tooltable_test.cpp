@@ -42,6 +42,70 @@ TEST(ToolTable, SuffixSetHoldsBaseToolButBrokenDoesNot) {
   EXPECT_FALSE(t.Holds("9"));
 }
 
+// Part 2 Fig. 6.1 (ln 6213-6222) lists tools 4421 and 11113 twice: a data set of a tool number already in
+// another magazine socket is an alternate (sister) tool, kept beside it; the same socket replaces.
+TEST(ToolTable, AnotherSocketAddsAnAlternateTheSameSocketReplaces) {
+  ToolTable t;
+  t.Upsert(ToolEntry{.tool = "4421", .socket = 3, .length = 100, .life_left_min = 200});
+  t.Upsert(ToolEntry{.tool = "4421", .socket = 17, .length = 101, .life_left_min = 200});
+  ASSERT_EQ(t.entries().size(), 2u);
+  t.Upsert(ToolEntry{.tool = "4421", .socket = 17, .length = 102, .life_left_min = 200});
+  ASSERT_EQ(t.entries().size(), 2u);
+  EXPECT_DOUBLE_EQ(t.Find("4421", 17)->length, 102);
+  EXPECT_DOUBLE_EQ(t.Find("4421")->length, 100);  // the first in table order
+  EXPECT_EQ(t.Find("4421", 9), nullptr);
+  // A manual tool (no socket) of the number replaces its data set rather than adding a third.
+  t.Upsert(ToolEntry{.tool = "5", .socket = 0, .length = 1});
+  t.Upsert(ToolEntry{.tool = "5", .socket = 0, .length = 2});
+  EXPECT_EQ(t.entries().size(), 3u);
+  EXPECT_DOUBLE_EQ(t.Find("5")->length, 2);
+}
+
+// Tool life (part 1 TLD L, ln 4007; part 2 Fig. 6.1: cutting time past the limit marks the tool worn):
+// cutting time is charged to the data set that cut; at zero life it is worn, and selection moves on to the
+// alternate; with every data set worn or broken the number is not held (the UTL check) and not selectable.
+TEST(ToolTable, CuttingTimeWearsTheToolAndSelectionMovesToTheAlternate) {
+  ToolTable t({ToolEntry{.tool = "1001", .socket = 1, .life_left_min = 1.0},
+               ToolEntry{.tool = "1001", .socket = 2, .life_left_min = 2.0},
+               ToolEntry{.tool = "2002", .socket = 3}});
+  bool exists = false;
+  ASSERT_EQ(t.Select("1001", &exists), t.Find("1001", 1));
+  EXPECT_TRUE(exists);
+  ASSERT_TRUE(t.Charge(ToolWear{"1001", 1, 45.0, false}));
+  EXPECT_NEAR(t.Find("1001", 1)->life_left_min, 0.25, 1e-12);
+  EXPECT_FALSE(t.Find("1001", 1)->worn);
+  EXPECT_EQ(t.Select("1001"), t.Find("1001", 1));
+  ASSERT_TRUE(t.Charge(ToolWear{"1001", 1, 20.0, false}));  // 65 s in all: past its minute
+  EXPECT_EQ(t.Find("1001", 1)->life_left_min, 0);
+  EXPECT_TRUE(t.Find("1001", 1)->worn);
+  EXPECT_EQ(t.Select("1001"), t.Find("1001", 2));
+  EXPECT_DOUBLE_EQ(t.Find("1001", 2)->life_left_min, 2.0);  // the alternate is untouched
+  EXPECT_TRUE(t.Holds("1001"));
+  ASSERT_TRUE(t.Charge(ToolWear{"1001", 2, 0, true}));  // G38 found it broken
+  EXPECT_TRUE(t.Find("1001", 2)->broken);
+  EXPECT_EQ(t.Select("1001", &exists), nullptr);
+  EXPECT_TRUE(exists);
+  EXPECT_FALSE(t.Holds("1001"));
+  // No life given (0): cutting time does not wear it; a number not in the table is not selected.
+  ASSERT_TRUE(t.Charge(ToolWear{"2002", 3, 3600.0, false}));
+  EXPECT_FALSE(t.Find("2002")->worn);
+  EXPECT_EQ(t.Select("7777", &exists), nullptr);
+  EXPECT_FALSE(exists);
+  EXPECT_FALSE(t.Charge(ToolWear{"7777", 0, 1.0, false}));
+  // A socket the table does not know charges the number's first data set (the machine found it by number).
+  ToolTable u({ToolEntry{.tool = "9", .socket = 4, .life_left_min = 10}});
+  ASSERT_TRUE(u.Charge(ToolWear{"9", 0, 60.0, false}));
+  EXPECT_DOUBLE_EQ(u.Find("9")->life_left_min, 9.0);
+}
+
+TEST(ToolTable, WornToolIsNotHeld) {
+  ToolTable t({ToolEntry{.tool = "33412", .socket = 1, .worn = true},
+               ToolEntry{.tool = "33412.5", .socket = 1, .worn = true}});
+  EXPECT_FALSE(t.Holds("33412"));
+  t.Upsert(ToolEntry{.tool = "33412", .socket = 6});
+  EXPECT_TRUE(t.Holds("33412"));
+}
+
 // KT-APL manual ln 4073: a process compensation needs its tool's data set first; ln 4093-4095: it is added
 // to the data set while its pallet is on the table.
 TEST(ToolTable, ProcessCompensationNeedsDataSetAndAddsOnItsPallet) {

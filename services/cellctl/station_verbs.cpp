@@ -71,6 +71,9 @@ void AddStationVerbs(CLI::App& app, Context& ctx) {
     std::vector<std::string> sets;
     std::string input;
     double feed_pct = -1, rapid_pct = -1;
+    int socket = 0;
+    bool mend = false;
+    std::string switch_to;
   };
   auto o = std::make_shared<Opts>();
 
@@ -338,6 +341,32 @@ void AddStationVerbs(CLI::App& app, Context& ctx) {
       st->add_subcommand("resume", "cycle start: release the feed hold (the same button as start)");
   resume->add_option("ID", o->id)->required();
   resume->callback([o, panel] { panel(o->id, false); });
+  // The machine's tool model, for a G38 check (and the tests that need a tool to break): the tool in SOCKET
+  // is broken until mended; the check sets the tool table's broken flag and stops the run.
+  auto* brk =
+      st->add_subcommand("break", "the tool in a magazine socket is broken (a G38 check finds it so)");
+  brk->add_option("ID", o->id)->required();
+  brk->add_option("SOCKET", o->socket, "magazine socket")->required()->check(CLI::Range(1, 1000));
+  brk->add_flag("--mend", o->mend, "the tool there is whole again (replaced)");
+  brk->callback([o, &ctx] {
+    RequireConfigured(o->id);
+    cell::StationRequest req;
+    req.op(cell::STATION_BREAK_TOOL);
+    req.socket(o->socket);
+    req.mend(o->mend);
+    ctx.StationCommand(o->id, req);
+  });
+  // The panel's [ENABLE OPTION STOP] switch: M01 stops the next programs (OPTIONAL_STOP) while it is on.
+  auto* opt_stop = st->add_subcommand("optional-stop", "the optional-stop switch: M01 stops while it is on");
+  opt_stop->add_option("ID", o->id)->required();
+  opt_stop->add_option("STATE", o->switch_to, "on or off")->required()->check(CLI::IsMember({"on", "off"}));
+  opt_stop->callback([o, &ctx] {
+    RequireConfigured(o->id);
+    cell::StationRequest req;
+    req.op(cell::STATION_OPTIONAL_STOP);
+    req.optional_stop(o->switch_to == "on");
+    ctx.StationCommand(o->id, req);
+  });
   auto* ovr = st->add_subcommand("override", "feed (0-200 %) and rapid (0-100 %) override");
   ovr->add_option("ID", o->id)->required();
   ovr->add_option("--feed", o->feed_pct, "feed override, percent")->check(Real() & CLI::Range(0.0, 200.0));

@@ -39,6 +39,7 @@ Segment FromWire(const cell::MotionSegment& m, uint64_t id) {
       s.kind = SegmentKind::kProbe;
       s.probe_break = m.probe_break();
       s.probe_length = m.probe_length();
+      s.tool_check = m.tool_check();
       break;
     case cell::SEGMENT_STOP:
       s.kind = SegmentKind::kDwell;
@@ -65,6 +66,7 @@ Segment FromWire(const cell::MotionSegment& m, uint64_t id) {
   s.turns = static_cast<uint32_t>(std::max(0, m.turns()));
   s.dwell_s = m.dwell_s();
   s.tool = m.tool().to_string();
+  s.tool_socket = m.tool_socket();
   s.spindle_rpm = m.spindle_rpm();
   s.spindle_dir = m.spindle_mode() == 1   ? SpindleDirection::kCW
                   : m.spindle_mode() == 2 ? SpindleDirection::kCCW
@@ -230,6 +232,7 @@ void Receiver::StartRun(std::int32_t run_id) {
   probe_.clear();
   run_start_s_.reset();
   run_end_s_ = machine_.machine_time();
+  machine_.ResetCutting();
   end_received_ = false;
   machine_.SetRunPart(part_ && part_->run_id == run_id ? std::optional(part_->model) : std::nullopt);
   // A new run starts clean. After an abort too: Machine::Abort() on a machine that is already at rest
@@ -290,6 +293,7 @@ void Receiver::ApplyControl() {
     }
     spdlog::info("feed hold {}", feed_hold_ ? "on" : "released");
   }
+  machine_.SetBrokenSockets(std::vector<int>(c->broken_sockets().begin(), c->broken_sockets().end()));
   machine_.SetFeedOverride(c->feed_override());
   machine_.SetRapidOverride(c->rapid_override());
   dirty_ = true;
@@ -365,6 +369,15 @@ void Receiver::PublishProgress() {
   p.feed_hold(feed_hold_);
   p.boot_id(boot_id_);
   p.part_run_id(part_ ? part_->run_id : 0);
+  // Cumulative per tool, so a sample the station misses (a state topic keeps the last) loses nothing.
+  const auto& cut = machine_.Cutting();
+  const std::size_t n = std::min<std::size_t>(cut.size(), kMaxCutTools);
+  p.cutting().resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    p.cutting()[i].tool(cut[i].tool.substr(0, 16));
+    p.cutting()[i].socket(cut[i].socket);
+    p.cutting()[i].cutting_s(cut[i].cutting_s);
+  }
   sink_.Progress(p);
   dirty_ = false;
 }

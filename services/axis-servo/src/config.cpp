@@ -245,7 +245,18 @@ MachineConfig ParseMachineConfig(std::string_view text, const std::string& sourc
   TableReader mag(source, "magazine.", root["magazine"].as_table());
   m.magazine_sockets = mag.Integer("sockets", 1, 1000, std::nullopt);
   m.magazine_index_time = mag.Number("index_time", 0, 60, 0.1, "s per socket");
+  mag.Mark("broken");
   mag.Done();
+  if (const toml::node* broken = root["magazine"]["broken"].node()) {
+    const toml::array* arr = broken->as_array();
+    if (!arr) mag.Fail("broken", "must be an array of socket numbers");
+    for (const auto& n : *arr) {
+      auto sock = n.value_exact<int64_t>();
+      if (!sock || *sock < 1 || *sock > m.magazine_sockets)
+        mag.Fail("broken", fmt::format("socket numbers are in [1, {}]", m.magazine_sockets));
+      m.broken_sockets.push_back(static_cast<int>(*sock));
+    }
+  }
 
   TableReader times(source, "times.", root["times"].as_table());
   m.tool_change_time = times.Number("tool_change", 0, 600, std::nullopt, "s");

@@ -120,8 +120,40 @@ void Machine::SetToolTable(const tooltable::ToolTable& table) {
   magazine_.clear();
   for (const auto& e : table.entries()) {
     if (e.socket <= 0) continue;  // a manual tool, or not loaded
-    if (e.tool != spindle_tool_ || spindle_tool_.empty()) magazine_[e.socket] = e.tool;
+    // The spindle tool's socket stays empty until it goes back (an alternate of it in another socket is
+    // there).
+    if (spindle_tool_.empty() || e.tool != spindle_tool_ || e.socket != spindle_tool_socket_)
+      magazine_[e.socket] = e.tool;
   }
+}
+
+void Machine::ChargeCutting(double seconds) {
+  if (cut_index_ < 0) {
+    for (std::size_t i = 0; i < cutting_.size(); ++i)
+      if (cutting_[i].tool == spindle_tool_ && cutting_[i].socket == spindle_tool_socket_)
+        cut_index_ = static_cast<int>(i);
+    if (cut_index_ < 0) {
+      cutting_.push_back({spindle_tool_, spindle_tool_socket_, 0.0});
+      cut_index_ = static_cast<int>(cutting_.size()) - 1;
+    }
+  }
+  cutting_[static_cast<std::size_t>(cut_index_)].cutting_s += seconds;
+}
+
+bool Machine::SpindleToolBroken() const {
+  if (spindle_tool_.empty()) return false;  // nothing to check: the post sees no edge missing
+  const int sock = spindle_tool_socket_;
+  auto has = [sock](const std::vector<int>& v) { return std::find(v.begin(), v.end(), sock) != v.end(); };
+  return has(cfg_.broken_sockets) || has(broken_commanded_);
+}
+
+void Machine::SetBrokenSockets(const std::vector<int>& sockets) {
+  broken_commanded_ = sockets;
+}
+
+void Machine::ResetCutting() {
+  cutting_.clear();
+  cut_index_ = -1;
 }
 
 void Machine::SetPartModel(int pallet, partmodel::PartModel model) {
@@ -416,13 +448,17 @@ bool Machine::StartBarrier(Entry& e) {
         timer(t);
         break;
       }
-      if (!spindle_tool_.empty() && BaseTool(spindle_tool_) == BaseTool(s.tool)) {
+      // Already in the spindle (the same physical tool: an alternate in another socket is another one).
+      if (!spindle_tool_.empty() && BaseTool(spindle_tool_) == BaseTool(s.tool) &&
+          (s.tool_socket <= 0 || s.tool_socket == spindle_tool_socket_)) {
         timer(0);
         break;
       }
       int socket = 0;
       for (const auto& [sock, tool] : magazine_)
-        if (tool == s.tool || BaseTool(tool) == BaseTool(s.tool)) socket = sock;
+        if ((tool == s.tool || BaseTool(tool) == BaseTool(s.tool)) &&
+            (s.tool_socket <= 0 || sock == s.tool_socket))
+          socket = sock;
       if (socket == 0) {
         RaiseAlarm(AlarmCode::kToolNotInMagazine,
                    fmt::format("segment {}: tool {} is not in the magazine", s.id, s.tool), s.id);
@@ -447,6 +483,13 @@ bool Machine::StartBarrier(Entry& e) {
       timer(0);
       break;
     case SegmentKind::kProbe: {
+      if (s.tool_check) {
+        // G38: the detection post's switches see the edges go by in one revolution of the spindle (at
+        // least half a second); the axes stay where the block before put them.
+        const double rpm = std::abs(spindle_.rpm());
+        timer(std::max(0.5, rpm > 0 ? 60.0 / rpm : 0.0));
+        break;
+      }
       const AxisVector start = planner_.EndOfPath();
       std::string why;
       if (!SoftLimitCheck(s, start, why)) {
@@ -538,9 +581,11 @@ void Machine::StepOp() {
           if (!spindle_tool_.empty()) magazine_[spindle_tool_socket_] = spindle_tool_;
           spindle_tool_.clear();
           spindle_tool_socket_ = 0;
+          cut_index_ = -1;
           if (!s.tool.empty() && s.tool != "0") {
             for (auto it = magazine_.begin(); it != magazine_.end(); ++it)
-              if (it->second == s.tool || BaseTool(it->second) == BaseTool(s.tool)) {
+              if ((it->second == s.tool || BaseTool(it->second) == BaseTool(s.tool)) &&
+                  (s.tool_socket <= 0 || it->first == s.tool_socket)) {
                 spindle_tool_ = it->second;
                 spindle_tool_socket_ = magazine_at_ = it->first;
                 magazine_.erase(it);
@@ -562,6 +607,14 @@ void Machine::StepOp() {
           break;
       }
       const std::uint64_t seg = op_.seg;
+      if (s.kind == SegmentKind::kProbe) {  // a G38 tool check (the only timed probe segment)
+        ProbeResult r;
+        r.contact = !SpindleToolBroken();
+        r.position = ToSegmentUnits(planner_.Position());
+        op_ = Op{};
+        Complete(seg, &r);
+        return;
+      }
       op_ = Op{};
       Complete(seg);
       return;
@@ -753,9 +806,12 @@ bool Machine::StepNow() {
       if (at >= 0) planner_.IndexPulse(at);
     }
   }
-  const AxisVector& pre = planner_.Tick();
   const bool op_motion =
       op_.phase == OpPhase::kMotion || op_.phase == OpPhase::kIndexMove || op_.phase == OpPhase::kIndexRest;
+  // Cutting time: a feed move of the program (not a probe or index move) with the spindle turning.
+  if (spindle_.rpm() != 0 && !op_motion && planner_.OnFeedMove() && !spindle_tool_.empty()) [[unlikely]]
+    ChargeCutting(cfg_.servo_period_s);
+  const AxisVector& pre = planner_.Tick();
   for (const auto& m : planner_.Marks()) {
     if (op_motion && m.seg == op_.seg) continue;
     if (!m.finished) {

@@ -127,6 +127,18 @@ TEST(Config, BadValueNamesFileKeyAndRange) {
   EXPECT_NE(e.find("axes.x.drive.max_torque"), std::string::npos) << e;
 }
 
+// The machine's tool model for G38: the tools in [magazine] broken sockets are broken.
+TEST(Config, BrokenSocketsOfTheMagazine) {
+  MachineConfig c = ParseMachineConfig(Replace(kMinimal, "sockets = 30", "sockets = 30\nbroken = [4, 12]"),
+                                       "stations/T1.toml");
+  EXPECT_EQ(c.broken_sockets, (std::vector<int>{4, 12}));
+  std::string e = ErrorOf(Replace(kMinimal, "sockets = 30", "sockets = 30\nbroken = [31]"));
+  EXPECT_NE(e.find("magazine.broken"), std::string::npos) << e;
+  EXPECT_NE(e.find("[1, 30]"), std::string::npos) << e;
+  e = ErrorOf(Replace(kMinimal, "sockets = 30", "sockets = 30\nbroken = 4"));
+  EXPECT_NE(e.find("magazine.broken"), std::string::npos) << e;
+}
+
 TEST(Config, MissingValuesAreNamed) {
   std::string e = ErrorOf(Replace(kMinimal, "following_error_limit = 0.5\ndrive", "drive"));
   EXPECT_NE(e.find("axes.x.following_error_limit: missing"), std::string::npos) << e;

@@ -232,6 +232,116 @@ TEST(Devices, ToolChangeFromMagazine) {
   EXPECT_EQ(m.State().tool, "1002");
 }
 
+// Alternate tools (issue 15): the control names the socket of the data set it chose; the machine takes that
+// one, not the first socket holding the number, and a socket without the tool is alarm 600.
+TEST(Devices, ToolChangeTakesTheAlternateTheControlChose) {
+  Machine m = Kt();
+  m.SetToolTable(tooltable::ToolTable({{.tool = "1001", .socket = 1}, {.tool = "1001", .socket = 9}}));
+  Segment t;
+  t.id = 1;
+  t.kind = SegmentKind::kToolChange;
+  t.tool = "1001";
+  t.tool_socket = 9;
+  m.Push(t);
+  m.RunUntilIdle();
+  auto ev = m.TakeEvents();
+  const Event* done = Find(ev, EventKind::kCompleted, 1);
+  ASSERT_NE(done, nullptr);
+  // From socket 1 (where the magazine stands at power-up) to socket 9: 8 steps.
+  EXPECT_NEAR(done->machine_time, m.config().tool_change_time + 8 * m.config().magazine_index_time,
+              2 * m.period());
+  // The same number from the other socket is another tool: a real change (socket 1 is one step back).
+  t.id = 2;
+  t.tool_socket = 1;
+  m.Push(t);
+  const double before = m.machine_time();
+  m.RunUntilIdle();
+  ev = m.TakeEvents();
+  done = Find(ev, EventKind::kCompleted, 2);
+  ASSERT_NE(done, nullptr);
+  EXPECT_GT(done->machine_time - before, m.config().tool_change_time);
+  t.id = 3;
+  t.tool_socket = 4;
+  m.Push(t);
+  m.RunUntilIdle();
+  EXPECT_EQ(m.alarm().code, AlarmCode::kToolNotInMagazine);
+}
+
+// Tool life is charged with cutting time: machine seconds of feed moves with the spindle turning, per tool
+// and socket; rapids, and feed moves with the spindle stopped, do not count.
+TEST(Devices, CuttingTimeCountsFeedMovesWithTheSpindleTurning) {
+  Machine m = Kt();
+  m.SetToolTable(tooltable::ToolTable({{.tool = "1001", .socket = 3}}));
+  Segment t;
+  t.id = 1;
+  t.kind = SegmentKind::kToolChange;
+  t.tool = "1001";
+  m.Push(t);
+  Segment on;
+  on.id = 2;
+  on.kind = SegmentKind::kSpindle;
+  on.spindle_rpm = 1000;
+  on.spindle_dir = SpindleDirection::kCW;
+  m.Push(on);
+  m.Push(Rapid(3, 0, 0, 100));
+  m.Push(Line(4, 100, 0, 100, 600, true));  // 100 mm at 600 mm/min: 10 s and the ramps
+  Segment off = on;
+  off.id = 5;
+  off.spindle_dir = SpindleDirection::kStop;
+  off.spindle_rpm = 0;
+  m.Push(off);
+  m.Push(Line(6, 0, 0, 100, 600, true));  // spindle stopped: not cutting
+  std::vector<Event> ev;
+  while (m.Step())
+    for (auto& e : m.TakeEvents()) ev.push_back(e);
+  const double line =
+      Find(ev, EventKind::kCompleted, 4)->machine_time - Find(ev, EventKind::kStarted, 4)->machine_time;
+  ASSERT_EQ(m.Cutting().size(), 1u);
+  EXPECT_EQ(m.Cutting()[0].tool, "1001");
+  EXPECT_EQ(m.Cutting()[0].socket, 3);
+  EXPECT_GT(m.Cutting()[0].cutting_s, 10.0);
+  // The move's own time, within the look-ahead filter's few periods and the in-position settle.
+  EXPECT_NEAR(m.Cutting()[0].cutting_s, line, 0.1);
+  m.ResetCutting();
+  EXPECT_TRUE(m.Cutting().empty());
+}
+
+// G38 (KT-APL ln 1583-1593): the check of the spindle tool at the post takes a revolution and reports the
+// tool whole (contact) unless the machine's model has it broken: the station file's [magazine] broken or
+// the operator's word (ServoControl.broken_sockets).
+TEST(Devices, G38ToolCheckFindsTheBrokenToolsOfTheModel) {
+  MachineConfig cfg = DefaultMachineConfig("hmc");
+  cfg.broken_sockets = {7};
+  Machine m(cfg, ClockKind::kVirtual);
+  m.SetToolTable(tooltable::ToolTable({{.tool = "1001", .socket = 3}, {.tool = "1002", .socket = 7}}));
+  std::uint64_t id = 0;
+  auto check = [&](const std::string& tool) {
+    Segment t;
+    t.id = ++id;
+    t.kind = SegmentKind::kToolChange;
+    t.tool = tool;
+    m.Push(t);
+    Segment g;
+    g.id = ++id;
+    g.kind = SegmentKind::kProbe;
+    g.tool_check = true;
+    g.axes = 0;
+    m.Push(g);
+    m.RunUntilIdle();
+    const auto ev = m.TakeEvents();
+    const Event* done = Find(ev, EventKind::kCompleted, id);
+    EXPECT_NE(done, nullptr);
+    EXPECT_EQ(m.alarm().code, AlarmCode::kNone) << m.alarm().text;
+    return done && done->probe.contact;
+  };
+  EXPECT_TRUE(check("1001"));
+  EXPECT_FALSE(check("1002"));  // configured broken
+  m.SetBrokenSockets({3});
+  EXPECT_FALSE(check("1001"));  // commanded broken
+  m.SetBrokenSockets({});
+  EXPECT_TRUE(check("1001"));
+}
+
 TEST(Devices, SpindleCoolantPalletTimes) {
   Machine m = Kt();
   m.SetPallets(3, 7);

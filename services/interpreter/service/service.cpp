@@ -11,6 +11,7 @@ Service::Service(bus::Participant& p, config::StationConfig cfg, const std::file
       tools_w_(p, bus::topics::kToolTable, bus::QosKind::kState),
       vars_w_(p, bus::topics::kVariables, bus::QosKind::kState),
       io_w_(p, bus::topics::kStationIo, bus::QosKind::kState),
+      event_w_(p, bus::topics::kStationEvent, bus::QosKind::kEvent),
       run_w_(p, bus::topics::kRunStatus, bus::QosKind::kEvent),
       seg_w_(p, bus::topics::Segments(cfg.id), bus::QosKind::kStream),
       control_w_(p, bus::topics::kServoControl, bus::QosKind::kState),

@@ -14,7 +14,7 @@ int ToolIndex::Intern(std::string_view tool) {
 void StationState::SetTools(const tooltable::ToolTable& table, ToolIndex& index) {
   held.clear();
   for (const auto& e : table.entries()) {
-    if (e.broken) continue;
+    if (!tooltable::Usable(e)) continue;  // worn or broken: the station cannot cut with it
     const auto id = static_cast<std::size_t>(index.Intern(tooltable::BaseTool(e.tool)));
     if (held.size() <= id / 64) held.resize(id / 64 + 1, 0);
     held[id / 64] |= std::uint64_t{1} << (id % 64);

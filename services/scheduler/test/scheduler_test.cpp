@@ -190,6 +190,34 @@ TEST(Operate, BrokenToolDoesNotCount) {
   EXPECT_EQ(c.Reason(job), "no eligible station: KT01 missing tools 9");
 }
 
+// Issue 15: a station holds tool N when some entry of N is neither worn nor broken. A worn primary with a
+// usable alternate still holds it; once the alternate wears out too, the pallet goes to the other station.
+TEST(Operate, WornToolsCountOnlyThroughAUsableAlternate) {
+  FakeCell c;
+  c.Program("A", {"9"}, 60);
+  c.Online("KT01");
+  c.Online("KT02");
+  tooltable::ToolTable kt01({tooltable::ToolEntry{.tool = "9", .socket = 1, .worn = true},
+                             tooltable::ToolEntry{.tool = "9", .socket = 2, .life_left_min = 5}});
+  c.Take(c.sched->StationTools("KT01", kt01));
+  c.Take(c.sched->StationTools("KT02", testing::Tools({"9"})));
+  c.Route("R", {"KT01,KT02:A"});
+  const auto j1 = c.Operate("R", 1);
+  EXPECT_EQ(c.StationOf(j1), "KT01");             // the tie goes to the station listed first
+  c.Complete(c.received["KT01"][0].dispatch_id);  // both backlogs are 0 again
+  tooltable::ToolTable worn({tooltable::ToolEntry{.tool = "9", .socket = 1, .worn = true},
+                             tooltable::ToolEntry{.tool = "9", .socket = 2, .worn = true}});
+  c.Take(c.sched->StationTools("KT01", worn));
+  c.Take(c.sched->StationTools("KT02", testing::Tools({"9"})));
+  const auto j2 = c.Operate("R", 2);
+  EXPECT_EQ(c.StationOf(j2), "KT02");
+  const auto job = c.sched->Job(j2);
+  ASSERT_TRUE(job && !job->decisions.empty());
+  const auto& d = job->decisions.back();
+  ASSERT_FALSE(d.considered.empty());
+  EXPECT_FALSE(d.considered[0].eligible);
+}
+
 TEST(Operate, OfflineStationsAreNamedAndOnlineReleases) {
   FakeCell c;
   c.Program("A", {}, 60);

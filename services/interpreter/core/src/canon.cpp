@@ -358,11 +358,19 @@ struct Writer {
       Key(out, "tip");
       Int(out, t.tip);
     }
+    if (t.socket != 0) {
+      Key(out, "socket");
+      Int(out, t.socket);
+    }
   }
   void operator()(const StopOp& s) const {
     Key(out, "m");
     Int(out, s.m);
     Bool(out, "optional", s.optional);
+    if (!s.why.empty()) {
+      Key(out, "why");
+      Str(out, s.why);
+    }
   }
   void operator()(const EndOp& e) const {
     Key(out, "m");
@@ -500,6 +508,8 @@ const char* ProbeOutcomeName(ProbeOutcome r) {
       return "already";
     case ProbeOutcome::kToolOk:
       return "tool_ok";
+    case ProbeOutcome::kToolBroken:
+      return "tool_broken";
   }
   return "none";
 }

@@ -47,6 +47,16 @@ class Station::RunEnvironment : public interp::Environment {
     return r;
   }
 
+  // G38: the servo checks the spindle tool against its tool model where the axes stand.
+  bool CheckTool(int flutes) override {
+    (void)flutes;  // the servo's model knows a tool whole or broken, not its edges
+    cell::MotionSegment seg;
+    seg.tool_check(true);
+    seg.exact_stop(true);
+    return stream_.Probe(seg).contact();
+  }
+  std::vector<tooltable::ToolWear> TakeToolWear() override { return stream_.TakeWear(); }
+
   // Every file the program writes leaves the run here, to the inspection writer (program_files.h).
   interp::FileResult FileOperation(const interp::Canon& op) override { return files_.Apply(op); }
 
@@ -201,6 +211,8 @@ void Station::RunProgram(ActiveRun& run, const std::string& entry) {
   opt.params = cfg_.params;  // the station config's [params]: the dialect's machine settings (EMCO's monitor)
   opt.params["PALLET"] = std::to_string(run.d.pallet);
   opt.params["OPERATOR"] = "1";  // a station has an operator's cycle start: M99 M00 stops, as the manual says
+  // The panel's [ENABLE OPTION STOP] switch, once the operator has set it, over the station file's default.
+  if (const std::optional<bool> on = panel_.OptionalStop()) opt.params["OPTIONAL_STOP"] = *on ? "1" : "0";
   if (comma != std::string::npos) {
     const std::string rest = entry.substr(comma + 1);
     const std::size_t sub = rest.find(',');
@@ -219,7 +231,10 @@ void Station::RunProgram(ActiveRun& run, const std::string& entry) {
     RunProgress progress;
     progress.dispatch_id = run.d.dispatch_id;
     progress.programs_done = run.programs_done;
-    memory_.Commit(start.image, program->Tools(), program->Variables(), progress);
+    // The cutting time the run has not charged itself (since its last tool change) goes with what it left.
+    tooltable::ToolTable tools = program->Tools();
+    for (const auto& w : stream_.TakeWear()) tools.Charge(w);
+    memory_.Commit(start.image, tools, program->Variables(), progress);
   };
   try {
     auto last_status = clock_.Now();
@@ -237,6 +252,19 @@ void Station::RunProgram(ActiveRun& run, const std::string& entry) {
       board_.Position(name, c.line, change ? &change->tool : nullptr);
       if (auto seg = ToSegment(c)) stream_.Send(*seg);
       ExecuteIo(name, c, aux);
+      if (const auto* ev = c.If<interp::EventOp>()) {
+        // KT-APL EVT: recorded for the supervisor (the manual's central computer): an event on the bus.
+        cell::StationEvent e;
+        e.station(cfg_.id);
+        e.dispatch_id(run.d.dispatch_id);
+        e.pallet(run.d.pallet);
+        names::Assign(e.program(), name.substr(0, 64), "program name");
+        e.line(c.line);
+        e.text(ev->text.substr(0, 255));
+        e.time_ns(clock_.WallNs());
+        spdlog::info("{} line {}: event {}", name, c.line, ev->text);
+        io_.PublishEvent(e);
+      }
       if (const auto* m = c.If<interp::MessageOp>()) {
         spdlog::info("{} line {}: {}", name, c.line, m->text);
         board_.Message(m->text);
@@ -275,10 +303,13 @@ void Station::RunProgram(ActiveRun& run, const std::string& entry) {
 void Station::ProgramStop(const std::string& program, int line, const interp::StopOp& stop) {
   stream_.WaitDrained();
   const std::uint64_t pressed = panel_.CycleStarts();
-  std::string text =
-      fmt::format("{} at {} line {}: press cycle start (cellctl station start {})",
-                  stop.optional ? "M01 optional stop" : "M00 program stop", program, line, cfg_.id);
-  if (const std::string msg = board_.LastMessage(); !msg.empty()) text += " - " + msg;
+  const std::string what = !stop.why.empty() ? stop.why + ", cycle stop"
+                           : stop.optional   ? "M01 optional stop"
+                                             : "M00 program stop";
+  std::string text = fmt::format("{} at {} line {}: press cycle start (cellctl station start {})", what,
+                                 program, line, cfg_.id);
+  if (const std::string msg = board_.LastMessage(); !msg.empty() && msg != stop.why) text += " - " + msg;
+  if (!stop.why.empty()) board_.Warning("TOOL", stop.why);
   spdlog::info("{}", text);
   board_.Waiting(text, stop.optional ? cell::EXECUTION_OPTIONAL_STOP : cell::EXECUTION_PROGRAM_STOPPED);
   board_.Publish();

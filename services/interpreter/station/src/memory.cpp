@@ -50,7 +50,7 @@ std::vector<T> ApplyKeyed(const std::vector<T>& now, const std::vector<T>& befor
 tooltable::ToolTable ApplyToolChanges(const tooltable::ToolTable& now, const tooltable::ToolTable& before,
                                       const tooltable::ToolTable& after) {
   auto entries = ApplyKeyed(now.entries(), before.entries(), after.entries(),
-                            [](const tooltable::ToolEntry& e) { return e.tool; });
+                            [](const tooltable::ToolEntry& e) { return std::make_pair(e.tool, e.socket); });
   auto process = ApplyKeyed(now.process_comps(), before.process_comps(), after.process_comps(),
                             [](const tooltable::ProcessComp& c) { return std::make_pair(c.tool, c.pallet); });
   return tooltable::ToolTable(std::move(entries), std::move(process));

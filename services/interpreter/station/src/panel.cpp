@@ -1,5 +1,7 @@
 #include "cell/station/panel.h"
 
+#include <set>
+
 #include <spdlog/spdlog.h>
 
 #include "cell/error/error.h"
@@ -113,6 +115,8 @@ Panel::Panel(const std::string& station, StationDb& db,
   control_.feed_hold(p.feed_hold);
   control_.feed_override(p.feed_override);
   control_.rapid_override(p.rapid_override);
+  control_.broken_sockets().assign(p.broken_sockets.begin(), p.broken_sockets.end());
+  optional_stop_ = p.optional_stop;
 }
 
 // The servo reports the hold in its progress, which turns the displayed execution to FEED_HOLD and back
@@ -128,16 +132,41 @@ std::uint32_t Panel::Press(const cell::StationRequest& r) {
   } else if (r.op() == cell::STATION_FEED_HOLD || r.op() == cell::STATION_CYCLE_START) {
     c.feed_hold(r.op() == cell::STATION_FEED_HOLD);
     if (r.op() == cell::STATION_CYCLE_START) ++cycle_starts_;
+  } else if (r.op() == cell::STATION_OPTIONAL_STOP) {
+    optional_stop_ = r.optional_stop();  // read by the next program (its M01s)
+  } else if (r.op() == cell::STATION_BREAK_TOOL) {
+    // The operator's word for the tool model of the machine: a G38 check finds the tool there broken (or,
+    // mended, whole again); the tool table's own broken flag is the control's, set by that check.
+    if (r.socket() < 1 || r.socket() > 1000) throw Error(Errc::kInvalidArgument, "a socket is 1..1000");
+    std::set<int> broken(c.broken_sockets().begin(), c.broken_sockets().end());
+    if (r.mend()) {
+      broken.erase(r.socket());
+    } else {
+      broken.insert(r.socket());
+    }
+    if (broken.size() > 64) throw Error(Errc::kInvalidArgument, "at most 64 sockets can be broken at once");
+    c.broken_sockets().assign(broken.begin(), broken.end());
   } else {
     throw Error(Errc::kInvalidArgument, "not a panel button");
   }
   c.revision(c.revision() + 1);
-  db_.SavePanel({c.feed_hold(), c.feed_override(), c.rapid_override()});
+  PanelState saved;
+  saved.feed_hold = c.feed_hold();
+  saved.feed_override = c.feed_override();
+  saved.rapid_override = c.rapid_override();
+  saved.broken_sockets.insert(c.broken_sockets().begin(), c.broken_sockets().end());
+  saved.optional_stop = optional_stop_;
+  db_.SavePanel(saved);
   control_ = c;
   publish_(control_);
   spdlog::info("panel: feed hold {}, feed override {:.0f} %, rapid override {:.0f} %",
                c.feed_hold() ? "on" : "off", c.feed_override() * 100, c.rapid_override() * 100);
   return c.revision();
+}
+
+std::optional<bool> Panel::OptionalStop() const {
+  std::lock_guard lk(mu_);
+  return optional_stop_;
 }
 
 std::uint64_t Panel::CycleStarts() const {

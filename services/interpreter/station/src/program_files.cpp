@@ -103,6 +103,15 @@ interp::FileResult ProgramFiles::Apply(const interp::Canon& op) {
       return Store(station_, dst, it->second);
     }
     if (f->what == "DLF") return Delete(Trim(f->args.substr(0, f->args.find('/'))));
+    if (f->what == "USF") {
+      // (USF[,name]): the fixture offset table as NAME;FXT in the station's namespace (ln 4253-4284), a new
+      // revision over the last; the run's ULF reads it back as programs are found (namespace, then HOST).
+      const std::string key = fmt::format("file-{}-{}-{}-{}", station_, dispatch_id_, program_, ++stores_);
+      return Patiently("program store", "FILE NOT STORED", [&] {
+        io_.SaveFile(station_, f->args, f->text, StationIo::SaveAs{dialect_, "fixture_offsets", key});
+        return true;
+      });
+    }
     if (f->what == "PRT") {
       // (PRT,filename): the print spool is a file of its own beside the original (ln 8191-8276).
       const std::string name = Trim(f->args);

@@ -26,6 +26,7 @@ void SegmentStream::Begin(std::int32_t run_id, std::function<void()> checkpoint)
   run_boot_ = 0;
   unacked_.clear();
   probes_.clear();
+  cut_.clear();
   matches_ = link_.TotalMatched();
   last_progress_ = last_report_ = last_resend_ = clock_.Now();
 }
@@ -169,6 +170,10 @@ bool SegmentStream::OnProgress(const cell::SegmentProgress& p) {
     last_report_ = last_progress_ = clock_.Now();
     while (!unacked_.empty() && unacked_.front().seq() <= completed_seq_) unacked_.pop_front();
     run_machine_s_ = p.run_machine_s();
+    for (const auto& c : p.cutting()) {
+      Cut& cut = cut_[{c.tool().to_string(), c.socket()}];
+      cut.reported_s = std::max(cut.reported_s, c.cutting_s());
+    }
     if (p.alarm()) {
       alarm_ = true;
       alarm_code_ = p.alarm_code().to_string();
@@ -189,6 +194,17 @@ void SegmentStream::OnProbe(const cell::ProbeResult& r) {
 void SegmentStream::Wake() {
   std::lock_guard lk(mu_);
   cv_.notify_all();
+}
+
+std::vector<tooltable::ToolWear> SegmentStream::TakeWear() {
+  std::lock_guard lk(mu_);
+  std::vector<tooltable::ToolWear> out;
+  for (auto& [key, cut] : cut_) {
+    if (cut.reported_s <= cut.taken_s) continue;
+    out.push_back(tooltable::ToolWear{key.first, key.second, cut.reported_s - cut.taken_s, false});
+    cut.taken_s = cut.reported_s;
+  }
+  return out;
 }
 
 double SegmentStream::RunMachineSeconds() const {

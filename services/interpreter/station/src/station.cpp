@@ -190,6 +190,8 @@ cell::StationReply Station::OnCommand(const cell::StationRequest& r) {
     case cell::STATION_FEED_HOLD:
     case cell::STATION_CYCLE_START:
     case cell::STATION_OVERRIDE:
+    case cell::STATION_BREAK_TOOL:
+    case cell::STATION_OPTIONAL_STOP:
       rep.revision(panel_.Press(r));
       stream_.Wake();  // a run stopped at M00 looks again now
       return rep;

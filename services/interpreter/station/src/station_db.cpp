@@ -1,5 +1,7 @@
 #include "cell/station/station_db.h"
 
+#include <cstdlib>
+
 #include <nlohmann/json.hpp>
 
 namespace cell::station {
@@ -250,6 +252,9 @@ PanelState StationDb::LoadPanel() {
     if (n == "feed_hold") p.feed_hold = q.ColumnDouble(1) != 0;
     if (n == "feed_override") p.feed_override = q.ColumnDouble(1);
     if (n == "rapid_override") p.rapid_override = q.ColumnDouble(1);
+    if (n == "optional_stop") p.optional_stop = q.ColumnDouble(1) != 0;
+    if (n.rfind("broken_socket.", 0) == 0 && q.ColumnDouble(1) != 0)
+      p.broken_sockets.insert(std::atoi(n.c_str() + 14));
   }
   return p;
 }
@@ -262,6 +267,17 @@ void StationDb::SavePanel(const PanelState& p) {
                       {"feed_override", p.feed_override},
                       {"rapid_override", p.rapid_override}}) {
     save.BindText(1, n).BindDouble(2, v);
+    save.Run();
+    save.Reset();
+  }
+  if (p.optional_stop) {
+    save.BindText(1, "optional_stop").BindDouble(2, *p.optional_stop ? 1.0 : 0.0);
+    save.Run();
+    save.Reset();
+  }
+  db_.Prepare("DELETE FROM panel WHERE name LIKE 'broken_socket.%'").Run();
+  for (int sock : p.broken_sockets) {
+    save.BindText(1, "broken_socket." + std::to_string(sock)).BindDouble(2, 1.0);
     save.Run();
     save.Reset();
   }

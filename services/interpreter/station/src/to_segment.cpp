@@ -98,6 +98,7 @@ std::optional<cell::MotionSegment> ToSegment(const interp::Canon& c) {
     case interp::Op::kToolChange:
       s.kind(cell::SEGMENT_TOOL_CHANGE);
       s.tool(c.As<interp::ToolChangeOp>().tool);
+      s.tool_socket(c.As<interp::ToolChangeOp>().socket);
       return s;
     case interp::Op::kPallet:
       s.kind(cell::SEGMENT_PALLET);

@@ -8,8 +8,10 @@
 #include <functional>
 #include <map>
 #include <optional>
+#include <set>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "cell/station/station.h"
@@ -92,12 +94,13 @@ class FakeServo final : public ServoLink {
       queue_.pop_front();
       ran.push_back(seg);
       completed_ = seg.seq();
+      Machine(seg);
       if (seg.kind() == cell::SEGMENT_PROBE) {
         cell::ProbeResult r;
         r.station(seg.station());
         r.run_id(seg.run_id());
         r.seq(seg.seq());
-        r.contact(probe_contact);
+        r.contact(seg.tool_check() ? !broken_sockets.count(tool_socket_) : probe_contact);
         for (size_t a = 0; a < 9; ++a) r.position()[a] = seg.target()[a];
         r.position()[2] = probe_contact_z;
         station_->OnProbe(r);
@@ -120,12 +123,39 @@ class FakeServo final : public ServoLink {
     p.feed_hold(hold);
     p.boot_id(boot_id);
     p.part_run_id(part_run_);
+    for (const auto& [key, secs] : cut_) {
+      cell::ToolCutting c;
+      c.tool(key.first);
+      c.socket(key.second);
+      c.cutting_s(secs);
+      p.cutting().push_back(c);
+    }
     if (!alarm_code.empty()) {
       p.alarm(true);
       p.alarm_code(alarm_code);
       p.alarm_text(alarm_text);
     }
     station_->OnProgress(p);
+  }
+  // The machine's state a segment changes: the spindle tool (the socket the station named, else the
+  // station file's), the spindle, and `cut_per_feed_s` of cutting per feed move with the spindle turning.
+  void Machine(const cell::MotionSegment& seg) {
+    if (seg.seq() == 1) cut_.clear();  // a new run counts from zero, as the servo does
+    switch (seg.kind()) {
+      case cell::SEGMENT_TOOL_CHANGE:
+        tool_ = seg.tool().to_string();
+        tool_socket_ = seg.tool_socket() > 0 ? seg.tool_socket() : socket_of[tool_];
+        break;
+      case cell::SEGMENT_SPINDLE:
+        spindle_on_ = seg.spindle_mode() == 1 || seg.spindle_mode() == 2;
+        break;
+      case cell::SEGMENT_LINEAR:
+      case cell::SEGMENT_ARC:
+        if (spindle_on_ && !tool_.empty()) cut_[{tool_, tool_socket_}] += cut_per_feed_s;
+        break;
+      default:
+        break;
+    }
   }
   // Segments of run `run` that the machine ran, by kind.
   std::vector<cell::MotionSegment> Ran(std::int32_t run, cell::SegmentKind kind) const {
@@ -150,6 +180,9 @@ class FakeServo final : public ServoLink {
   std::string alarm_code, alarm_text;
   std::uint64_t max_outstanding = 0;
   std::vector<cell::MotionSegment> written, ran;
+  double cut_per_feed_s = 10;
+  std::map<std::string, int> socket_of;  // the magazine by tool number (a tool change without a socket)
+  std::set<int> broken_sockets;          // a G38 check of the tool from there finds it broken
 
  private:
   Station* station_ = nullptr;
@@ -157,6 +190,10 @@ class FakeServo final : public ServoLink {
   std::int32_t run_ = 0, part_run_ = 0;
   std::uint64_t received_ = 0, completed_ = 0;
   std::deque<cell::MotionSegment> queue_;
+  std::string tool_;
+  int tool_socket_ = 0;
+  bool spindle_on_ = false;
+  std::map<std::pair<std::string, int>, double> cut_;  // this run's cutting time (cumulative)
   bool dirty_ = true;
   bool reported_hold_ = false;
   std::uint64_t reported_boot_ = 0;
@@ -169,6 +206,7 @@ class FakeIo final : public StationIo {
   void PublishTools(const cell::ToolTable& t) override { tools.push_back(t); }
   void PublishVariables(const cell::StationVariables& v) override { variables.push_back(v); }
   void PublishIo(const cell::StationIoState& s) override { io.push_back(s); }
+  void PublishEvent(const cell::StationEvent& e) override { events.push_back(e); }
   void PublishRun(const cell::RunStatus& r) override { runs.push_back(r); }
   void PublishControl(const cell::ServoControl& c) override { control.push_back(c); }
   std::optional<std::string> Program(const std::string& node, const std::string& name) override {
@@ -229,6 +267,7 @@ class FakeIo final : public StationIo {
   std::vector<cell::ToolTable> tools;
   std::vector<cell::StationVariables> variables;
   std::vector<cell::StationIoState> io;
+  std::vector<cell::StationEvent> events;
   std::vector<cell::RunStatus> runs;
   std::vector<cell::ServoControl> control;
   std::vector<cell::InspectionRequest> records;

@@ -498,6 +498,19 @@ TEST_F(StationCore, M01StopsOnlyWithTheOptionalStopOn) {
   };
   EXPECT_EQ(RunOne(2).state(), cell::RUN_COMPLETED);
   EXPECT_TRUE(stopped);
+
+  // The panel's switch (`cellctl station optional-stop KT01 off`) overrides the station file, and persists.
+  cell::StationRequest r;
+  r.station("KT01");
+  r.op(cell::STATION_OPTIONAL_STOP);
+  r.optional_stop(false);
+  station_->OnCommand(r);
+  Make();
+  stopped = false;
+  script_ = [&] { stopped = stopped || station_->Status().execution() == cell::EXECUTION_OPTIONAL_STOP; };
+  Dispatch(3, {"P"});
+  EXPECT_EQ(RunOne(3).state(), cell::RUN_COMPLETED);
+  EXPECT_FALSE(stopped);
 }
 
 // M99 with M00 on a station (E20, ln 3078-3094): the alarm shows with the block's comment (condition WARNING,
@@ -518,6 +531,153 @@ TEST_F(StationCore, M99WithM00RaisesTheAlarmAndStops) {
   EXPECT_EQ(station_->Status().condition(), cell::CONDITION_WARNING);
   Command(cell::STATION_RESET);
   EXPECT_EQ(station_->Status().condition(), cell::CONDITION_NORMAL);
+}
+
+// Tool life (issue 15): the servo's cutting time (feed moves with the spindle turning) is charged to the
+// data set that cut, and committed with what the program left; `station tools` shows the life left.
+TEST_F(StationCore, CuttingTimeIsChargedToTheToolThatCut) {
+  // Three feed moves with the spindle on (10 s each in the fake servo) and one with it off.
+  servo_.socket_of = {{"1001", 1}, {"1002", 2}};
+  Put("CUT", "G71 G90\nT1001 M6\nS1000 M3\nG01 X0 Y0 Z100. F1000.\nX10.\nX20.\nM5\nX30.\nM30\n");
+  Dispatch(1, {"CUT"});
+  ASSERT_EQ(RunOne(1).state(), cell::RUN_COMPLETED);
+  ASSERT_NE(Tool("1001"), nullptr);
+  EXPECT_NEAR(Tool("1001")->life_left_min, 240 - 30.0 / 60, 1e-9);
+  EXPECT_FALSE(Tool("1001")->worn);
+  EXPECT_NEAR(Tool("1002")->life_left_min, 180, 1e-9);  // never cut
+  // Published, and kept across a restart.
+  ASSERT_FALSE(io_.tools.empty());
+  EXPECT_NEAR(io_.tools.back().tools()[0].life_left_min(), 239.5, 1e-9);
+  Make();
+  EXPECT_NEAR(Tool("1001")->life_left_min, 239.5, 1e-9);
+}
+
+// A tool that wears out in one program: the next program's M06 of its number takes the alternate in the
+// other socket (the servo is told which), and once that wears out too the M06 stops the run.
+TEST_F(StationCore, AWornToolGivesWayToItsAlternateThenNoneIsLeft) {
+  Command(cell::STATION_LOAD_TOOLS, "(TLD,S1T1001P152.4D25.4L1)\n(TLD,S9T1001P150.D25.4L1)\n");
+  const tooltable::ToolTable loaded = station_->MemoryState().image.tools;
+  ASSERT_NE(loaded.Find("1001", 9), nullptr);
+  ASSERT_NE(loaded.Find("1001", 1), nullptr);
+  // 6 feed moves x 10 s = 1 minute: the whole life of one data set.
+  Put("CUT", "G71 G90\nT1001 M6\nS1000 M3\nG01 X0 Y0 Z100. F1000.\nX10.\nX20.\nX30.\nX40.\nX50.\nM5\nM30\n");
+  Dispatch(1, {"CUT", "CUT"});
+  ASSERT_EQ(RunOne(1).state(), cell::RUN_COMPLETED);
+  const auto changes = servo_.Ran(1, cell::SEGMENT_TOOL_CHANGE);
+  ASSERT_EQ(changes.size(), 2u);
+  EXPECT_EQ(changes[0].tool_socket(), 1);
+  EXPECT_EQ(changes[1].tool_socket(), 9);
+  const tooltable::ToolTable t = station_->MemoryState().image.tools;
+  EXPECT_TRUE(t.Find("1001", 1)->worn);
+  EXPECT_EQ(t.Find("1001", 1)->life_left_min, 0);
+  EXPECT_TRUE(t.Find("1001", 9)->worn);
+  Dispatch(2, {"CUT"});
+  const cell::RunStatus failed = RunOne(2);
+  EXPECT_EQ(failed.state(), cell::RUN_FAILED);
+  EXPECT_NE(failed.reason().to_string().find("CUT:2:7: error: TOOL 1001 IS WORN OR BROKEN"),
+            std::string::npos)
+      << failed.reason().to_string();
+}
+
+// G38 (ln 1583-1593): the servo finds the spindle tool broken; the table says so, the run waits in cycle
+// stop with "TOOL BROKEN" until cycle start, and the next M06 takes the alternate.
+TEST_F(StationCore, G38FindsTheToolBrokenTheRunStopsAndTheAlternateIsTaken) {
+  Command(cell::STATION_LOAD_TOOLS, "(TLD,S1T1001P152.4D25.4L100)\n(TLD,S9T1001P150.D25.4L100)\n");
+  servo_.broken_sockets = {1};
+  Put("CHK", "G71 G90\nT1001 M6\nG01 X0 Y0 Z100. S30 M3 F1000.\nG38 S16\nT1001 M6\nX10.\nM30\n");
+  Dispatch(1, {"CHK"});
+  std::string text, code;
+  int stopped_waits = 0;
+  script_ = [&] {
+    const cell::StationStatus st = station_->Status();
+    if (st.execution() != cell::EXECUTION_PROGRAM_STOPPED) return;
+    if (++stopped_waits == 1) {
+      text = st.status_text().to_string();
+      code = st.alarm_code().to_string();
+    }
+    if (stopped_waits == 5) Command(cell::STATION_CYCLE_START);
+  };
+  EXPECT_EQ(RunOne(1).state(), cell::RUN_COMPLETED);
+  EXPECT_EQ(text, "TOOL BROKEN, cycle stop at CHK line 4: press cycle start (cellctl station start KT01)");
+  EXPECT_EQ(code, "TOOL");
+  const auto checks = servo_.Ran(1, cell::SEGMENT_PROBE);
+  ASSERT_EQ(checks.size(), 1u);
+  EXPECT_TRUE(checks[0].tool_check());
+  const auto changes = servo_.Ran(1, cell::SEGMENT_TOOL_CHANGE);
+  ASSERT_EQ(changes.size(), 2u);
+  EXPECT_EQ(changes[1].tool_socket(), 9);
+  const tooltable::ToolTable t = station_->MemoryState().image.tools;
+  EXPECT_TRUE(t.Find("1001", 1)->broken);
+  EXPECT_FALSE(t.Find("1001", 9)->broken);
+}
+
+// `cellctl station break ID SOCKET`: the operator's word goes to the servo (ServoControl) and persists.
+TEST_F(StationCore, BrokenSocketsGoToTheServoAndPersist) {
+  cell::StationRequest r;
+  r.station("KT01");
+  r.op(cell::STATION_BREAK_TOOL);
+  r.socket(5);
+  station_->OnCommand(r);
+  ASSERT_FALSE(io_.control.empty());
+  EXPECT_EQ(io_.control.back().broken_sockets(), (std::vector<int32_t>{5}));
+  Make();
+  EXPECT_EQ(io_.control.back().broken_sockets(), (std::vector<int32_t>{5}));  // published again at start
+  r.mend(true);
+  station_->OnCommand(r);
+  EXPECT_TRUE(io_.control.back().broken_sockets().empty());
+  r.socket(0);
+  EXPECT_THROW(station_->OnCommand(r), Error);
+}
+
+// USF then ULF on another pallet (issue 15; KT-APL ln 4213-4284, E48): pallet 38's program saves its fixture
+// table as PALLET38;FXT in the station's namespace (type fixture_offsets); a later pallet clears its table
+// and loads that file by name: the station keeps the loaded lines.
+TEST_F(StationCore, UsfThenUlfOnAnotherPalletRestoresTheOffsets) {
+  Put("SAVE", "G70\n(FXC,H1X.5Y.25)\n(FXC,H3Z-1.I90.)\n(USF)\nM30\n");
+  Dispatch(1, {"SAVE"}, 38);
+  ASSERT_EQ(RunOne(1).state(), cell::RUN_COMPLETED);
+  ASSERT_TRUE(io_.programs.count("KT01/PALLET38;FXT"));
+  EXPECT_EQ(io_.saved_as["KT01/PALLET38;FXT"].file_type, "fixture_offsets");
+  const std::string file = io_.programs["KT01/PALLET38;FXT"];
+  EXPECT_NE(file.find("(FXC,H1X12.7000Y6.3500Z0.0000A0.0000B0.0000C0.0000)"), std::string::npos) << file;
+  EXPECT_NE(file.find("(FXC,H3X0.0000Y0.0000Z-25.4000A0.0000B0.0000C0.0000I90.0000)"), std::string::npos)
+      << file;
+
+  Put("LOAD", "G71\n(ZTB,H)\n(FXC,H2X1.)\n(ULF,PALLET38)\nM30\n");
+  Dispatch(2, {"LOAD"}, 7);
+  ASSERT_EQ(RunOne(2).state(), cell::RUN_COMPLETED);
+  const auto vars = Variables();
+  ASSERT_TRUE(vars.count("H1.X") && vars.count("H1.Y") && vars.count("H3.Z") && vars.count("H3.I"));
+  EXPECT_DOUBLE_EQ(vars.at("H1.X"), 12.7);
+  EXPECT_DOUBLE_EQ(vars.at("H1.Y"), 6.35);
+  EXPECT_DOUBLE_EQ(vars.at("H3.Z"), -25.4);
+  EXPECT_DOUBLE_EQ(vars.at("H3.I"), 90);
+  EXPECT_FALSE(vars.count("H2.X"));  // the file replaced the whole table
+
+  // A file that is not there stops the run with the device's message.
+  Put("MISS", "G71\n(ULF,NOSUCH)\nM30\n");
+  Dispatch(3, {"MISS"}, 7);
+  const cell::RunStatus failed = RunOne(3);
+  EXPECT_EQ(failed.state(), cell::RUN_FAILED);
+  EXPECT_NE(failed.reason().to_string().find("FILE NOSUCH;FXT NOT FOUND"), std::string::npos)
+      << failed.reason().to_string();
+}
+
+// KT-APL EVT (ln 3430-3434: an event for the supervisory computer): published on cell/station/event with
+// the station, dispatch, pallet, program and line.
+TEST_F(StationCore, EvtPublishesTheProgramsEvent) {
+  Put("EV", "G71 G90\n(EVT,PART 7 DONE)\nM30\n");
+  Dispatch(4, {"EV"}, 12);
+  ASSERT_EQ(RunOne(4).state(), cell::RUN_COMPLETED);
+  ASSERT_EQ(io_.events.size(), 1u);
+  const cell::StationEvent& e = io_.events[0];
+  EXPECT_EQ(e.station().to_string(), "KT01");
+  EXPECT_EQ(e.dispatch_id(), 4);
+  EXPECT_EQ(e.pallet(), 12);
+  EXPECT_EQ(e.program().to_string(), "EV");
+  EXPECT_EQ(e.line(), 2);
+  EXPECT_EQ(e.text().to_string(), "PART 7 DONE");
+  EXPECT_GT(e.time_ns(), 0);
 }
 
 }  // namespace

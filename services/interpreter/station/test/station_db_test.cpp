@@ -32,7 +32,7 @@ TEST_F(StationDbFixture, AVersion2DatabaseMigratesWithEverythingItHeld) {
     EXPECT_TRUE(raw.LoadOutputs().empty());
     EXPECT_EQ(raw.Count(RunState::kCompleted), 2);
     EXPECT_EQ(raw.Count(RunState::kActive), 1);
-    EXPECT_EQ(raw.LoadPanel(), (PanelState{true, 0.5, 1.0}));
+    EXPECT_EQ(raw.LoadPanel(), (PanelState{true, 0.5, 1.0, {}, std::nullopt}));
     EXPECT_TRUE(raw.ToolsSeeded());
   }
   Make();  // the station core on it

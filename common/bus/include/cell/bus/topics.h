@@ -14,6 +14,7 @@ inline constexpr const char* kStationStatus = "cell/station/status";    // Stati
 inline constexpr const char* kToolTable = "cell/station/tools";         // ToolTable
 inline constexpr const char* kVariables = "cell/station/variables";     // StationVariables
 inline constexpr const char* kStationIo = "cell/station/io";            // StationIoState
+inline constexpr const char* kStationEvent = "cell/station/event";      // StationEvent (KT-APL EVT)
 inline constexpr const char* kProgress = "cell/motion/progress";        // SegmentProgress (credits)
 inline constexpr const char* kServoControl = "cell/motion/control";     // ServoControl (hold, overrides)
 inline constexpr const char* kSchedulerState = "cell/scheduler/state";  // SchedulerState (backlog)

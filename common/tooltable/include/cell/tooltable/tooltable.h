@@ -23,9 +23,10 @@ struct ToolEntry {
   int socket = 0;            // magazine socket or turret station; 0 = none (manual tool, not loaded)
   double length = 0;         // length compensation (KT-APL P, a mill's length along length_axis), signed
   double diameter = 0;       // cutter diameter compensation (KT-APL D, Balt-System K), signed
-  double life_left_min = 0;  // remaining tool life, minutes (KT-APL L, hhmm); 0 = no limit given
-  bool worn = false;         // KT-APL E
-  bool broken = false;       // KT-APL B
+  double life_left_min = 0;  // remaining tool life, minutes (KT-APL L, hhmm); 0 = no limit given (or used up:
+                             // then `worn`)
+  bool worn = false;         // KT-APL E; set when cutting time uses up the life
+  bool broken = false;       // KT-APL B; set by a G38 check that finds the tool broken
   bool check = false;        // KT-APL C: check the tool on its first use
   bool manual = false;       // KT-APL M: manual tool
   double max_hp = 0;         // KT-APL H: maximum allowable horsepower (0 = not given)
@@ -36,6 +37,22 @@ struct ToolEntry {
   int tip = 0;               // lathes: tip position code 0-9 (0: the nose centre)
 
   bool operator==(const ToolEntry&) const = default;
+};
+
+// Usable for cutting: neither worn nor broken.
+inline bool Usable(const ToolEntry& e) {
+  return !e.worn && !e.broken;
+}
+
+// What the machine measured on one data set while a program ran: cutting time (feed moves with the spindle
+// turning, machine seconds) and a G38 check that found the tool broken. The station collects it from its
+// servo; a run applies it to its table (ToolTable::Charge) before it selects a tool.
+struct ToolWear {
+  std::string tool;  // as the tool change named it
+  int socket = 0;
+  double cutting_s = 0;
+  bool broken = false;
+  bool operator==(const ToolWear&) const = default;
 };
 
 // A process compensation (KT-APL TLD with W): added to a tool's data set while pallet `pallet` is on the
@@ -63,11 +80,26 @@ class ToolTable {
 
   const std::vector<ToolEntry>& entries() const { return entries_; }
   const std::vector<ProcessComp>& process_comps() const { return process_; }
-  const ToolEntry* Find(std::string_view tool) const;
-  ToolEntry* Find(std::string_view tool);
+  // The first data set of this tool number (exact, suffix included); with `socket` > 0 the one in that
+  // socket, else the first.
+  const ToolEntry* Find(std::string_view tool, int socket = 0) const;
+  ToolEntry* Find(std::string_view tool, int socket = 0);
 
-  // Adds or replaces a data set by tool number (a TLD statement loads a whole data set, as on the control).
+  // Adds or replaces a data set (a TLD statement loads a whole data set, as on the control). A data set of a
+  // tool number already in another magazine socket is an alternate (sister) tool: both are kept (KT-APL
+  // Fig. 6.1 lists tools 4421 and 11113 twice). Otherwise the data set of that number is replaced.
   void Upsert(const ToolEntry& entry);
+
+  // The data set a selection of tool number `tool` loads (KT-APL T + M06): the first usable one (neither
+  // worn nor broken) in table order, so alternates are used one after the other. nullptr when the number has
+  // data sets but none is usable (`*exists` = true), or has none (`*exists` = false: the tool is as
+  // programmed, the machine finds it by number).
+  const ToolEntry* Select(std::string_view tool, bool* exists = nullptr) const;
+
+  // Applies what the machine measured: the data set (tool, socket; else the first of that number) loses
+  // the cutting time from its life (minutes; a life of 0 means none was given and is not counted) and is
+  // worn when it reaches 0; `broken` sets its broken flag. False when no such data set is in the table.
+  bool Charge(const ToolWear& wear);
   // Adds or replaces a process compensation by (tool, pallet). A process compensation needs a primary or
   // suffix data set of its tool first (KT-APL manual ln 4073): returns false, table unchanged, without one.
   bool UpsertProcess(const ProcessComp& comp);
@@ -80,10 +112,11 @@ class ToolTable {
     double length = 0;
     double diameter = 0;
   };
-  bool Effective(std::string_view tool, int pallet, Compensation* out) const;
+  bool Effective(std::string_view tool, int pallet, Compensation* out, int socket = 0) const;
 
-  // True when a usable (not broken) data set of this tool number is in the table. A bare UTL number such as
-  // "33412" is held by its primary set or any suffix set of it.
+  // True when a usable (neither worn nor broken) data set of this tool number is in the table: the UTL check
+  // (a station holds tool N when some entry of N is usable). A bare UTL number such as "33412" is held by
+  // its primary set, an alternate, or any suffix set of it.
   bool Holds(std::string_view tool) const;
 
   bool operator==(const ToolTable&) const = default;

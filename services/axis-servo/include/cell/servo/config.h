@@ -74,6 +74,7 @@ struct MachineConfig {
   double pallet_change_time = 25.0;  // s
   double coolant_time = 0.3;         // s
   tooltable::ToolTable tools;        // initial magazine contents (tool and socket of [[tools]])
+  std::vector<int> broken_sockets;   // [magazine] broken: the tools there are broken (a G38 check finds it)
   // Probe
   double probe_ball_diameter = 6.0;  // mm
   double probe_max_feed = 2000.0;    // mm/min

@@ -99,6 +99,19 @@ class Machine {
   // of the table pallet's model until cleared (nullopt) at the next run.
   void SetRunPart(std::optional<partmodel::PartModel> model) { run_part_ = std::move(model); }
   void SetPallets(int on_table, int on_shuttle);
+  // The tools the operator says are broken (ServoControl), beside the station file's [magazine] broken: a
+  // G38 check of such a tool finds it broken.
+  void SetBrokenSockets(const std::vector<int>& sockets);
+
+  // Cutting time since ResetCutting(), per tool that was in the spindle: machine seconds of feed moves
+  // (linear, arc, thread) with the spindle turning. The station charges it to the tools' life.
+  struct ToolCut {
+    std::string tool;
+    int socket = 0;
+    double cutting_s = 0;
+  };
+  const std::vector<ToolCut>& Cutting() const { return cutting_; }
+  void ResetCutting();
 
   // ---- Observation.
   // Events since the last call (started, completed with probe results, flushed, alarms), in order.
@@ -152,6 +165,8 @@ class Machine {
             const ProbeResult* probe = nullptr);
   AxisVector ToSegmentUnits(AxisVector v) const;
   void ProbeCheck();
+  void ChargeCutting(double seconds);
+  bool SpindleToolBroken() const;
   const partmodel::PartModel* PartOnTable() const;
   // The stylus ball's centre in the part model's frame: the machine position less the probe's length (to the
   // ball's tip), plus the ball's radius in Z.
@@ -189,6 +204,9 @@ class Machine {
   std::map<int, std::string> magazine_;  // socket -> tool
   std::string spindle_tool_;
   int spindle_tool_socket_ = 0;
+  std::vector<int> broken_commanded_;  // SetBrokenSockets
+  std::vector<ToolCut> cutting_;
+  int cut_index_ = -1;  // cutting_'s entry of the spindle tool, once it has cut
   int magazine_at_ = 1;
   int pallet_table_ = 0, pallet_shuttle_ = 0;
   bool b_clamped_ = true;

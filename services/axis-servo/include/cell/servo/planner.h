@@ -132,6 +132,8 @@ class Planner {
   void IndexPulse(double turned);
   // A thread is waiting for its index pulse or being cut: the spindle speed must not change.
   bool InThread() const { return sync_ != Sync::kNone; }
+  // The current element is a feed move (not a rapid) and the path is not held at rest.
+  bool OnFeedMove() const { return count_ > 0 && !At(0).rapid && !(hold_ && v_ == 0); }
   void SetOverrides(double feed, double rapid);
   // Stops as fast as the limits allow on the current element (probe trip). Later elements are kept.
   void StopOnCurrent();

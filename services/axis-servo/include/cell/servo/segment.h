@@ -26,7 +26,8 @@ enum class SegmentKind : std::uint8_t {
   kCoolant,       // `coolant` on/off
   kPalletChange,  // shuttle `pallet` onto the table (0: swap table and shuttle)
   kProbe,         // straight move towards `end` at `feed`, stops where the probe makes contact with the part
-                  // model (G22) or, with `probe_break`, loses it (G23)
+                  // model (G22) or, with `probe_break`, loses it (G23); with `tool_check` a G38 check
+                  // of the spindle tool at the detection post, where the axes stand
   kEnd,           // program end: completes once all motion is in position
   kThread,        // spindle-synchronised straight move to `end`: `thread_lead` mm per spindle revolution
 };
@@ -57,6 +58,8 @@ struct Segment {
   std::uint32_t turns = 0;
   double dwell_s = 0.0;  // kDwell
   std::string tool;      // kToolChange, e.g. "1001" or "33412.5"
+  int tool_socket =
+      0;  // kToolChange: the socket the control chose (an alternate tool); 0: the first holding it
   // kSpindle. Every spindle segment states the whole spindle command; nothing carries over from the last.
   double spindle_rpm = 0.0;  // rpm when css_surface_speed is 0
   SpindleDirection spindle_dir = SpindleDirection::kStop;
@@ -75,6 +78,8 @@ struct Segment {
   CoolantMode coolant = CoolantMode::kOff;  // kCoolant
   bool probe_break = false;                 // kProbe: trip when contact is lost (G23), not made (G22)
   double probe_length = 0.0;  // kProbe: the probe's length compensation in Z (mm), to the ball's tip
+  bool tool_check = false;    // kProbe: a G38 broken-tool check of the spindle tool, no motion; the result's
+                              // contact = every edge seen (the tool is whole)
   int pallet = 0;             // kPalletChange
 };
 

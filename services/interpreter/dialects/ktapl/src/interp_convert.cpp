@@ -109,14 +109,9 @@ void KtRun::ConvertGCodes(const GWords& gs, bool pass800, BlockCodes& k) {
         CloseOpenFile(col, true);
         mode_.inspection_recording = false;
         break;
-      case 38: {
-        ProbeOp& c = Out<ProbeOp>();
-        c.g = 38;
-        c.to.pos = pos_;
-        c.to.used = used_;
-        c.result = ProbeOutcome::kToolOk;
+      case 38:
+        k.g38_col = col;
         break;
-      }
       case 39:
         mode_.calculated_offsets = false;
         break;
@@ -334,14 +329,14 @@ void CheckAloneInBlock(const ParsedBlock& pb, const BlockMCodes& mc) {
 
 }  // namespace
 
-void KtRun::ToolAndSpeed(const Words& words, const BlockMCodes& mc) {
+void KtRun::ToolAndSpeed(const Words& words, const BlockMCodes& mc, bool s_is_flutes) {
   if (const Word* t = Find(words, 'T')) {
     if (t->v < 0 || t->v > 9999999) Fail(t->col, "T WORD OUT OF RANGE 1-9999999");
     selected_tool_ = ToolName(t->v);
     Out<ToolSelectOp>().tool = selected_tool_;
   }
   bool speed_changed = false;
-  const Word* s = Find(words, 'S');
+  const Word* s = s_is_flutes ? nullptr : Find(words, 'S');
   if (s && !mc.m19) {
     if (s->v < 0 || s->v > 99999) Fail(s->col, "S WORD OUT OF RANGE 0-99999");
     speed_changed = s->v != speed_;
@@ -539,7 +534,7 @@ void KtRun::ExecTypeI(BlockCtx& bc, const ParsedBlock* pb) {
 
   const BlockMCodes mc = ReadMCodes(words, trigger);
   if ((mc.after == 30 || mc.after == 60) && pb) CheckAloneInBlock(*pb, mc);
-  ToolAndSpeed(words, mc);
+  ToolAndSpeed(words, mc, k.g38_col != 0);  // ln 7082: "G38 S16", S the flutes of the cutter
 
   // Feed.
   const Word* f = Find(words, 'F');
@@ -571,6 +566,7 @@ void KtRun::ExecTypeI(BlockCtx& bc, const ParsedBlock* pb) {
     active_h_ = hv;
   }
 
+  if (k.g38_col) CheckTool(words);  // where the block before left the tool (ln 7061-7090)
   Motion(words, k, mc, axis_mask, motion_col, f, block_feed);
   AfterMCode(mc);
   if (mc.m99 && mc.after == 0 && !operator_) {
@@ -607,10 +603,7 @@ void KtRun::AfterMCode(const BlockMCodes& mc) {
       break;
     }
     case 6:
-      Out<ToolChangeOp>().tool = selected_tool_;
-      active_tool_ = selected_tool_;
-      uat_ = 0;
-      ApplyTool();
+      ChangeTool(mc.after_col);
       if (mode_.spindle == SpindleDir::kCw || mode_.spindle == SpindleDir::kCcw)
         mode_.spindle = SpindleDir::kStop;
       mode_.overrides_locked = false;

@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 
 #include "interp_internal.h"
 
@@ -127,14 +128,77 @@ void KtRun::StClf(const Statement& st, BlockCtx&, bool) {
   CloseOpenFile(st.col, true);
 }
 
+namespace {
+
+// A fixture offset table file (USF/ULF, ;FXT): one FXC statement per line that is set, values in mm and
+// degrees whatever the unit mode ("G71" first, so the file reads as what it is), I the B position G49
+// selects the line at.
+std::string FixtureFileText(const std::array<FixtureLine, kFixtureLines + 1>& lines) {
+  std::string text = "G71\n";
+  for (int h = 1; h <= kFixtureLines; ++h) {
+    const FixtureLine& f = lines[static_cast<std::size_t>(h)];
+    if (!f.set) continue;
+    text += fmt::format("(FXC,H{}", h);
+    for (int a : {kX, kY, kZ, kA, kB, kC}) text += fmt::format("{}{:.4f}", LetterOfAxis(a), f.v[a]);
+    if (f.has_i) text += fmt::format("I{:.4f}", f.i);
+    text += ")\n";
+  }
+  return text;
+}
+
+// Reads FixtureFileText's form back; false (the table untouched) when a line is not of it.
+bool ParseFixtureFile(const std::string& text, std::array<FixtureLine, kFixtureLines + 1>& out) {
+  std::array<FixtureLine, kFixtureLines + 1> lines{};
+  std::size_t at = 0;
+  while (at < text.size()) {
+    std::size_t end = text.find('\n', at);
+    if (end == std::string::npos) end = text.size();
+    std::string line = Upper(Trim(text.substr(at, end - at)));
+    at = end + 1;
+    if (line.empty() || line == "G71") continue;
+    if (line.rfind("(FXC,", 0) != 0 || line.back() != ')') return false;
+    line = line.substr(5, line.size() - 6);
+    int h = -1;
+    std::size_t i = 0;
+    while (i < line.size()) {
+      const char letter = line[i++];
+      const char* begin = line.c_str() + i;
+      char* stop = nullptr;
+      const double v = std::strtod(begin, &stop);
+      if (stop == begin || !std::isfinite(v)) return false;
+      i += static_cast<std::size_t>(stop - begin);
+      if (letter == 'H') {
+        h = static_cast<int>(v);
+        if (h < 1 || h > kFixtureLines || v != h) return false;
+        lines[static_cast<std::size_t>(h)].set = true;
+      } else if (h < 0) {
+        return false;
+      } else if (letter == 'I') {
+        lines[static_cast<std::size_t>(h)].has_i = true;
+        lines[static_cast<std::size_t>(h)].i = v;
+      } else {
+        const int a = AxisOfLetter(letter);
+        if (a < 0 || a > kC) return false;
+        lines[static_cast<std::size_t>(h)].v[a] = v;
+      }
+    }
+  }
+  out = lines;
+  return true;
+}
+
+}  // namespace
+
 void KtRun::StFileOp(const Statement& st, BlockCtx&, bool) {
   const std::string& m = st.mnemonic;
   std::string args = st.body;
+  std::string text;
   if (m == "USF" || m == "ULF") {
     std::string name = ExpandName(Trim(args), st.col);
     if (name.empty()) name = fmt::format("PALLET{:02d}", pallet_);
     if (name.size() > 28) Fail(st.col, "FIXTURE TABLE FILE NAME EXCEEDS 28 CHARACTERS");
     args = name + ";FXT";
+    if (m == "USF") text = FixtureFileText(fixtures_);
   } else {
     auto parts = SplitTopLevel(args, ',', true);
     args.clear();
@@ -146,10 +210,13 @@ void KtRun::StFileOp(const Statement& st, BlockCtx&, bool) {
   FileOpOp& op = Out<FileOpOp>();
   op.what = m;
   op.args = args;
+  op.text = text;
   Canon asked;  // the environment is asked about the same operation
   asked.line = cur_line_;
-  asked.p = FileOpOp{m, args};
+  asked.p = FileOpOp{m, args, text};
   if (!FileDevice(asked, DeviceOf(m), st.col)) return;
+  if (m == "USF") files_[Upper(args)] = MemFile{"FXT", text};
+  if (m == "ULF") LoadFixtureFile(args, st.col);
   if (m == "DLF") {
     files_.erase(Upper(Trim(SplitTopLevel(args, '/')[0])));
     SetFlag(1051);
@@ -157,6 +224,29 @@ void KtRun::StFileOp(const Statement& st, BlockCtx&, bool) {
   if (m == "PRT") SetFlag(1052);
   if (m == "CPY") SetFlag(1053);
   if (m == "RCP") SetFlag(1054);
+}
+
+// ULF: the table saved by a USF of this run, else the file the control keeps (offline --lib DIR; on a
+// station its namespace, then HOST, as programs are found). It replaces the whole fixture table.
+void KtRun::LoadFixtureFile(const std::string& name, int col) {
+  std::optional<std::string> text;
+  if (auto it = files_.find(Upper(name)); it != files_.end()) {
+    text = it->second.text;
+  } else if (opt_.library) {
+    text = opt_.library(name);
+  }
+  std::string error;
+  if (!text) {
+    error = "FILE " + name + " NOT FOUND";
+  } else if (!ParseFixtureFile(*text, fixtures_)) {
+    error = "FILE " + name + " IS NOT A FIXTURE OFFSET TABLE";
+  }
+  if (error.empty()) return;
+  if (cer_ & kDeviceMas) {  // CER: a warning, the program goes on (ln 8364-8370)
+    Out<MessageOp>().text = error;
+    return;
+  }
+  Fail(col, error);
 }
 
 void KtRun::OpenFile(const std::string& name, const std::string& type, bool append, int col) {

@@ -230,6 +230,7 @@ struct BlockCodes {
   bool cancel = false;  // G80 / G800
   bool probe = false;   // G22 / G23
   int probe_g = 0;
+  int g38_col = 0;              // G38 in the block (its column): S is the number of flutes
   int probe_cycle = 0;          // G24-G27
   bool inhibit_cycle = false;   // G77
   bool drop_undefined = false;  // G78
@@ -329,6 +330,9 @@ class KtRun final : public RunBase, public ExprContext {
   // Asks the environment to do a file effect; false when it did not finish (a CER-covered error warns).
   bool FileDevice(const Canon& op, int device, int col);
   void ApplyTool();
+  void LoadFixtureFile(const std::string& name, int col);
+  void ChangeTool(int col);
+  void CheckTool(const Words& words);
 
   // Type I blocks (interp_convert.cpp)
   void ExecTypeI(BlockCtx& bc, const ParsedBlock* pb);
@@ -337,7 +341,7 @@ class KtRun final : public RunBase, public ExprContext {
   bool PassCycleParameters(const RawWords& raw, const BlockCodes& k, const ParsedBlock* pb,
                            bool drop_undefined, uint32_t axis_mask, Words& words);
   BlockMCodes ReadMCodes(const Words& words, bool trigger);
-  void ToolAndSpeed(const Words& words, const BlockMCodes& mc);
+  void ToolAndSpeed(const Words& words, const BlockMCodes& mc, bool s_is_flutes);
   void ImmediateMCodes(const Words& words, bool speed_changed, const Word* s, bool m00);
   void AfterMCode(const BlockMCodes& mc);
 
@@ -413,6 +417,7 @@ class KtRun final : public RunBase, public ExprContext {
   // Tools.
   tooltable::ToolTable tools_;
   std::string selected_tool_, active_tool_;
+  int active_socket_ = 0;  // the data set M06 chose among the tool number's alternates (0: by number)
   int uat_ = 0;
   double tool_len_ = 0, tool_dia_ = 0;
   int pallet_ = 0;

@@ -82,6 +82,57 @@ void KtRun::StUat(const Statement& st, BlockCtx&, bool) {
   ApplyTool();
 }
 
+// M06 loads the selected tool number. Its data set is chosen here, with the wear the machine has measured so
+// far applied: the first that is neither worn nor broken, so a worn-out or broken tool gives way to an
+// alternate of the same number (ln 1593, 1738; part 2 Fig. 6.1), and a number whose data sets are all worn
+// or broken stops the run. A number without data sets is used as programmed (the magazine finds it).
+void KtRun::ChangeTool(int col) {
+  for (const auto& w : env_->TakeToolWear()) tools_.Charge(w);
+  bool exists = false;
+  const tooltable::ToolEntry* e = tools_.Select(selected_tool_, &exists);
+  if (!e && exists) {
+    Fail(col,
+         fmt::format("TOOL {} IS WORN OR BROKEN AND NO ALTERNATE IS LEFT IN THE TOOL TABLE", selected_tool_));
+  }
+  int sisters = 0;
+  for (const auto& t : tools_.entries()) sisters += t.tool == selected_tool_ && t.socket > 0;
+  ToolChangeOp& c = Out<ToolChangeOp>();
+  c.tool = selected_tool_;
+  // The socket goes to the machine only when it has a choice to make (alternates in other sockets).
+  active_socket_ = e ? e->socket : 0;
+  c.socket = sisters > 1 ? active_socket_ : 0;
+  active_tool_ = selected_tool_;
+  uat_ = 0;
+  ApplyTool();
+}
+
+// G38 (ln 1583-1593, 7034-7124): the machine checks the spindle tool at the detection post. A broken one is
+// set broken in the tool table, "TOOL BROKEN" shows and the machine goes to CYCLE STOP (the operator
+// inspects the tool and presses cycle start); the next M06 of its number chooses an alternate.
+void KtRun::CheckTool(const Words& words) {
+  const Word* s = nullptr;
+  for (const auto& w : words)
+    if (w.letter == 'S') s = &w;
+  int flutes = 0;
+  if (s) {
+    if (s->v < 0 || s->v > 99 || s->v != std::floor(s->v))
+      Fail(s->col, "G38 S (NUMBER OF FLUTES) OUT OF RANGE 0-99");
+    flutes = static_cast<int>(s->v);
+  }
+  const bool whole = env_->CheckTool(flutes);
+  ProbeOp& c = Out<ProbeOp>();
+  c.g = 38;
+  c.to.pos = pos_;
+  c.to.used = used_;
+  c.result = whole ? ProbeOutcome::kToolOk : ProbeOutcome::kToolBroken;
+  if (whole) return;
+  if (!active_tool_.empty()) tools_.Charge(tooltable::ToolWear{active_tool_, active_socket_, 0, true});
+  Out<MessageOp>().text = "TOOL BROKEN";
+  StopOp& stop = Out<StopOp>();
+  stop.m = 0;
+  stop.why = "TOOL BROKEN";
+}
+
 void KtRun::ApplyTool() {
   tool_len_ = tool_dia_ = 0;
   if (active_tool_.empty()) return;
@@ -89,7 +140,7 @@ void KtRun::ApplyTool() {
   if (uat_ > 0) key += "." + std::to_string(uat_);
   // A process compensation for the pallet on the table is added to the data set (ln 4093-4095).
   tooltable::ToolTable::Compensation c;
-  if (tools_.Effective(key, pallet_, &c)) {
+  if (tools_.Effective(key, pallet_, &c, active_socket_)) {
     tool_len_ = c.length;
     tool_dia_ = c.diameter;
   }

@@ -309,5 +309,143 @@ TEST(Service, TldChangesTheToolTableAndTheActiveLength) {
   EXPECT_DOUBLE_EQ(z[1], 100);
 }
 
+// Tool life and alternates (issue 15; part 1 ln 1593, 1738, 4007-4013; part 2 Fig. 6.1 ln 6213-6222): M06
+// loads the first data set of the number that is neither worn nor broken, with the wear the machine
+// measured so far (Environment::TakeToolWear) charged first.
+class WearEnv : public Environment {
+ public:
+  std::vector<std::vector<tooltable::ToolWear>> wear;  // handed out one list per call
+  int calls = 0;
+  bool whole = true;
+  int flutes = -1;
+  std::vector<tooltable::ToolWear> TakeToolWear() override {
+    return calls < static_cast<int>(wear.size()) ? wear[static_cast<std::size_t>(calls++)]
+                                                 : std::vector<tooltable::ToolWear>{};
+  }
+  bool CheckTool(int n) override {
+    flutes = n;
+    return whole;
+  }
+};
+
+struct Ran {
+  std::vector<Canon> ops;
+  Diagnostic diag;
+  bool error = false;
+  tooltable::ToolTable tools;
+};
+
+Ran RunWith(const std::string& text, const tooltable::ToolTable& tools, Environment* env) {
+  RunOptions o;
+  o.program_name = "W";
+  o.program_text = text;
+  o.tools = tools;
+  o.env = env;
+  auto run = Start(o);
+  Ran r;
+  for (Step s = run->Next();; s = run->Next()) {
+    if (s.kind == Step::kCanon) {
+      r.ops.push_back(s.canon);
+      continue;
+    }
+    r.error = s.kind == Step::kError;
+    r.diag = s.diag;
+    break;
+  }
+  r.tools = run->Tools();
+  return r;
+}
+
+std::vector<const ToolChangeOp*> Changes(const Ran& r) {
+  std::vector<const ToolChangeOp*> out;
+  for (const auto& c : r.ops)
+    if (const auto* t = c.If<ToolChangeOp>()) out.push_back(t);
+  return out;
+}
+
+tooltable::ToolTable Sisters() {
+  return tooltable::ToolTable(
+      {tooltable::ToolEntry{.tool = "1001", .socket = 1, .length = 50, .life_left_min = 1},
+       tooltable::ToolEntry{.tool = "1001", .socket = 2, .length = 60, .life_left_min = 3},
+       tooltable::ToolEntry{.tool = "2", .socket = 5, .length = 10}});
+}
+
+TEST(ToolLife, WearMeasuredDuringTheRunMovesTheNextM06ToTheAlternate) {
+  WearEnv env;
+  // First M06: nothing measured yet. Second (T2): 1001 in socket 1 cut 61 s, past its minute. Third: 1001
+  // again, now from socket 2, with its own length.
+  env.wear = {{}, {tooltable::ToolWear{"1001", 1, 61.0, false}}, {}};
+  const Ran r = RunWith("G71 T1001 M6\nG0 F0 Z0\nT2 M6\nT1001 M6\nG0 F0 Z0\nM30\n", Sisters(), &env);
+  ASSERT_FALSE(r.error) << r.diag.Format();
+  const auto ch = Changes(r);
+  ASSERT_EQ(ch.size(), 3u);
+  EXPECT_EQ(ch[0]->socket, 1);  // the number has alternates: the machine is told which
+  EXPECT_EQ(ch[1]->socket, 0);  // tool 2 has one data set: found by number
+  EXPECT_EQ(ch[2]->socket, 2);
+  std::vector<double> z;
+  for (const auto& c : r.ops)
+    if (c.op() == Op::kRapid) z.push_back(c.target()->pos[kZ]);
+  ASSERT_EQ(z.size(), 2u);
+  EXPECT_DOUBLE_EQ(z[0], 50);  // socket 1's length
+  EXPECT_DOUBLE_EQ(z[1], 60);  // the alternate's
+  const tooltable::ToolEntry* worn = r.tools.Find("1001", 1);
+  ASSERT_NE(worn, nullptr);
+  EXPECT_TRUE(worn->worn);
+  EXPECT_EQ(worn->life_left_min, 0);
+  EXPECT_FALSE(r.tools.Find("1001", 2)->worn);
+}
+
+TEST(ToolLife, NoUsableDataSetLeftStopsAtTheM06) {
+  tooltable::ToolTable t({tooltable::ToolEntry{.tool = "1001", .socket = 1, .worn = true},
+                          tooltable::ToolEntry{.tool = "1001", .socket = 2, .broken = true}});
+  const Ran r = RunWith("G71\nT1001 M6\nM30\n", t, nullptr);
+  ASSERT_TRUE(r.error);
+  EXPECT_EQ(r.diag.line, 2);
+  EXPECT_EQ(r.diag.col, 7);  // the M06
+  EXPECT_NE(r.diag.text.find("TOOL 1001 IS WORN OR BROKEN"), std::string::npos) << r.diag.Format();
+  // A number the table does not have is used as programmed (the magazine finds it by number).
+  const Ran ok = RunWith("G71\nT7 M6\nM30\n", t, nullptr);
+  ASSERT_FALSE(ok.error) << ok.diag.Format();
+}
+
+// ln 1593, 7053, 7082: "N80 G38 S16" checks the 16 flutes of the spindle tool (S is not a speed there). A
+// broken tool: status broken, "TOOL BROKEN", CYCLE STOP; the next M06 of the number takes the alternate.
+TEST(ToolLife, G38FindsTheToolBrokenStopsAndTheAlternateIsTakenNext) {
+  WearEnv env;
+  env.whole = false;
+  const Ran r =
+      RunWith("G71 T1001 M6\nX0 Y0 Z0 S30 M3 F0\nG38 S16\nT1001 M6\nG0 F0 Z0\nM30\n", Sisters(), &env);
+  ASSERT_FALSE(r.error) << r.diag.Format();
+  EXPECT_EQ(env.flutes, 16);
+  bool checked = false, message = false, stop = false;
+  for (const auto& c : r.ops) {
+    if (const auto* sp = c.If<SpindleOp>()) {
+      EXPECT_EQ(sp->rpm, 30) << ToJsonLine(c);  // S16 is no speed
+    }
+    if (const auto* p = c.If<ProbeOp>()) checked = p->g == 38 && p->result == ProbeOutcome::kToolBroken;
+    if (const auto* m = c.If<MessageOp>()) message = m->text == "TOOL BROKEN";
+    if (const auto* st = c.If<StopOp>()) stop = st->m == 0 && st->why == "TOOL BROKEN";
+  }
+  EXPECT_TRUE(checked);
+  EXPECT_TRUE(message);
+  EXPECT_TRUE(stop);
+  EXPECT_TRUE(r.tools.Find("1001", 1)->broken);
+  const auto ch = Changes(r);
+  ASSERT_EQ(ch.size(), 2u);
+  EXPECT_EQ(ch[1]->socket, 2);
+  // A whole tool: tool_ok, nothing else.
+  WearEnv fine;
+  const Ran ok = RunWith("G71 T1001 M6\nG38\nM30\n", Sisters(), &fine);
+  ASSERT_FALSE(ok.error) << ok.diag.Format();
+  EXPECT_EQ(fine.flutes, 0);
+  for (const auto& c : ok.ops) {
+    if (const auto* p = c.If<ProbeOp>()) {
+      EXPECT_EQ(p->result, ProbeOutcome::kToolOk);
+    }
+    EXPECT_FALSE(c.If<StopOp>());
+  }
+  EXPECT_FALSE(ok.tools.Find("1001", 1)->broken);
+}
+
 }  // namespace
 }  // namespace cell::interp

@@ -46,6 +46,7 @@ class Receiver {
   // Virtual clock: how long (wall) the machine waits for the producer to refill a look-ahead queue that is
   // less than half full before it runs on with what it has (see LookAheadStarved()).
   static constexpr auto kLookAheadWait = std::chrono::milliseconds(5);
+  static constexpr std::size_t kMaxCutTools = 128;  // SegmentProgress.cutting's bound
 
   Receiver(MachineConfig cfg, ClockKind clock, std::uint64_t boot_id, ReceiverSink& sink);
 

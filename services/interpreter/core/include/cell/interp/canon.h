@@ -81,7 +81,7 @@ enum class CoolantMode : std::uint8_t {
   kAuxFlood,   // M58
   kAuxPulse,   // M59
 };
-enum class ProbeOutcome : std::uint8_t { kContact, kBreak, kNone, kAlready, kToolOk };
+enum class ProbeOutcome : std::uint8_t { kContact, kBreak, kNone, kAlready, kToolOk, kToolBroken };
 
 const char* SpindleDirName(SpindleDir d);
 const char* CoolantModeName(CoolantMode m);
@@ -167,11 +167,13 @@ struct ToolChangeOp {
   std::string tool;  // tool number (KT-APL "1001" or "33412.5"; a lathe's turret tool "3")
   int offset = 0;    // lathes: the tool offset number the T word selects; 0 = none / the tool's own
   int tip = -1;      // lathes: tool-nose tip position code 0-9 in force; -1 = not a lathe tool
+  int socket = 0;    // the magazine socket of the data set the control chose (an alternate); 0 = not chosen
 };
 struct StopOp {
   static constexpr Op kOp = Op::kStop;
   int m = 0;
   bool optional = false;
+  std::string why;  // a stop the control makes itself (KT-APL G38: "TOOL BROKEN"); "" for M00/M01
 };
 struct EndOp {
   static constexpr Op kOp = Op::kEnd;
@@ -231,6 +233,7 @@ struct FileOpOp {
   static constexpr Op kOp = Op::kFileOp;
   std::string what;  // CPY, DLF, PRT, RCP, USF, ULF
   std::string args;
+  std::string text;  // USF: the file's content (the fixture offset table as FXC lines)
 };
 struct EventOp {
   static constexpr Op kOp = Op::kEvent;

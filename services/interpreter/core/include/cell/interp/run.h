@@ -20,6 +20,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "cell/interp/canon.h"
 #include "cell/interp/program_text.h"
@@ -76,6 +77,15 @@ class Environment {
     (void)name;
     return std::nullopt;
   }
+  // G38 broken-tool check of the tool in the spindle where the machine stands (`flutes`: the edges to see in
+  // one revolution, 0 for a single-point tool): true when the tool is whole. Offline: always whole.
+  virtual bool CheckTool(int flutes) {
+    (void)flutes;
+    return true;
+  }
+  // What the machine measured on the tools since the last call (cutting time, for tool life): the run
+  // applies it to its table (ToolTable::Charge) before it selects a tool. Offline: nothing.
+  virtual std::vector<tooltable::ToolWear> TakeToolWear() { return {}; }
   // Wall clock: year, month, day, hour, minute, second.
   virtual std::array<int, 6> Now();
   // Every file effect of a program, the op as it is output: file_open, file_write, file_close, file_op

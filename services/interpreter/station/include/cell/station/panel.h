@@ -13,6 +13,7 @@
 #include <cstdint>
 #include <functional>
 #include <mutex>
+#include <optional>
 #include <string>
 
 #include "cell/idl/motion.h"
@@ -65,6 +66,9 @@ class Panel {
   // STATION_FEED_HOLD, STATION_CYCLE_START or STATION_OVERRIDE: recorded, persisted, published; returns
   // the control's revision. Throws cell::Error(kInvalidArgument) for an override out of range.
   std::uint32_t Press(const cell::StationRequest& r);
+  // The [ENABLE OPTION STOP] switch as the operator last set it (persisted); unset: never touched, the
+  // station file's [params] OPTIONAL_STOP decides.
+  std::optional<bool> OptionalStop() const;
   // Cycle starts pressed since the process started: a run stopped at M00 goes on at the next one.
   std::uint64_t CycleStarts() const;
   // The scheduler cancelled the running dispatch: the servo stops it too.
@@ -78,6 +82,7 @@ class Panel {
   mutable std::mutex mu_;
   cell::ServoControl control_;
   std::uint64_t cycle_starts_ = 0;
+  std::optional<bool> optional_stop_;
 };
 
 }  // namespace cell::station

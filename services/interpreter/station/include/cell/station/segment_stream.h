@@ -17,9 +17,12 @@
 #include <mutex>
 #include <optional>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "cell/idl/motion.h"
 #include "cell/station/clock.h"
+#include "cell/tooltable/tooltable.h"
 
 namespace cell::station {
 
@@ -72,6 +75,10 @@ class SegmentStream {
   // Wakes the waits (after a cancel or a stop request) so that their checkpoint runs now.
   void Wake();
 
+  // The tools' cutting time the servo reported since the last call (per tool and socket, from its cumulative
+  // counts of this run): charged to their life by the run (at M06) or by the commit after it.
+  std::vector<tooltable::ToolWear> TakeWear();
+
   double RunMachineSeconds() const;
   bool ServoHeld() const;
   std::uint64_t SentSeq() const;
@@ -102,6 +109,11 @@ class SegmentStream {
   std::uint64_t matches_ = 0;                // link_.TotalMatched() at the last check
   Clock::TimePoint last_progress_{}, last_report_{}, last_resend_{};
   std::map<std::uint64_t, cell::ProbeResult> probes_;  // results of this run by seq
+  struct Cut {
+    double reported_s = 0;  // the servo's cumulative count for this run
+    double taken_s = 0;     // what TakeWear has handed out
+  };
+  std::map<std::pair<std::string, int>, Cut> cut_;  // this run's cutting time by (tool, socket)
 };
 
 }  // namespace cell::station

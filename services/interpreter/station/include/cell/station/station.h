@@ -38,6 +38,7 @@ class StationIo {
   virtual void PublishTools(const cell::ToolTable& t) = 0;
   virtual void PublishVariables(const cell::StationVariables& v) = 0;
   virtual void PublishIo(const cell::StationIoState& s) = 0;
+  virtual void PublishEvent(const cell::StationEvent& e) = 0;  // what a program records (KT-APL EVT)
   virtual void PublishRun(const cell::RunStatus& r) = 0;
   virtual void PublishControl(const cell::ServoControl& c) = 0;
   // A program's text from the program store: namespace `node`, then HOST; nullopt when in neither.

@@ -10,6 +10,7 @@
 #include <map>
 #include <mutex>
 #include <optional>
+#include <set>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -44,6 +45,8 @@ struct PanelState {
   bool feed_hold = false;
   double feed_override = 1.0;
   double rapid_override = 1.0;
+  std::set<int> broken_sockets;       // the operator says the tools there are broken (cellctl station break)
+  std::optional<bool> optional_stop;  // the [ENABLE OPTION STOP] switch; unset: the station file's params
   bool operator==(const PanelState&) const = default;
 };
 

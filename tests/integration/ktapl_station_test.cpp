@@ -1,0 +1,164 @@
+// A KT-APL station's tools and fixture files through the cell (issue 15, domain 42), with real processes on
+// the virtual clock:
+// - the servo's cutting time wears KT01's tool 1001 (one minute of life, TLD L1: hhmm, KT-APL manual
+//   ln 4007) over three pallets of 25 s of cutting each, and the fourth pallet's UTL check (scheduler.md §3)
+//   sends it to KT02, which still holds 1001;
+// - `cellctl station break` makes the servo's G38 check find the tool broken (manual ln 1593): the run
+//   waits in cycle stop with "TOOL BROKEN" until `cellctl station start`, the table marks the tool broken
+//   and the next M06 takes its alternate;
+// - USF on pallet 38 saves the fixture table as PALLET38;FXT in KT01's namespace (manual ln 4253-4284, E48)
+//   and a later pallet's ULF restores it (`cellctl station offsets`).
+#include <chrono>
+#include <fstream>
+#include <string>
+#include <thread>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "cell/testing/cell_fixture.h"
+
+using namespace cell::testing;
+using nlohmann::json;
+
+namespace {
+
+std::string FirstLine(const std::string& s) {
+  return s.substr(0, s.find('\n'));
+}
+
+class KtaplStation : public CellFixture {
+ protected:
+  KtaplStation() : CellFixture("cell-ktapl-station-") {}
+  void SetUp() override { Up("KT01,KT02"); }
+  void Put(const std::string& name, const std::string& text) {
+    const std::string path = cell_.data_dir() + "/" + name + ".apl";
+    std::ofstream(path) << text;
+    auto r = Ctl({"program", "put", path});
+    ASSERT_EQ(r.code, 0) << r.err;
+  }
+  void LoadTools(const std::string& station, const std::string& tld) {
+    const std::string path = cell_.data_dir() + "/" + station + ".tld";
+    std::ofstream(path) << tld;
+    auto r = Ctl({"tools", "load", station, path});
+    ASSERT_EQ(r.code, 0) << r.err;
+  }
+  // The data set of `tool` in `socket` as `station tools --json` shows it (null when absent).
+  json Tool(const std::string& station, const std::string& tool, int socket) {
+    for (auto& t : CtlJson({"station", "tools", station, "--json"}))
+      if (t["tool"] == tool && t["socket"] == socket) return t;
+    return nullptr;
+  }
+  json Station(const std::string& id) {
+    for (auto& s : CtlJson({"station", "ls", "--json"}))
+      if (s["id"] == id) return s;
+    return nullptr;
+  }
+};
+
+TEST_F(KtaplStation, AToolWornOverThreePalletsMovesTheFourthPalletToTheOtherStation) {
+  LoadTools("KT01", "%\n(TLD,S1T1001P152.4D25.4L1)\n%\n");
+  ASSERT_EQ(Tool("KT01", "1001", 1)["life_left_min"], 1.0);
+  // N40 is a rapid (F0); N50 cuts 200 mm at 480 mm/min with the spindle on: 25 s and the ramps.
+  Put("WEAR",
+      "%\n(NAM,WEAR)\n(UTL,1001)\n(UCY,30)\nN10 G71 G90\nN20 T1001 M06\nN30 S1000 M03\n"
+      "N40 G01 X0 Y0 Z100. F0\nN50 X200. F480.\nN60 M05\nN70 M30\n%\n");
+  ASSERT_EQ(Ctl({"route", "define", "RW", "--op", "KT01,KT02:WEAR"}).code, 0);
+  for (int pallet = 1; pallet <= 4; ++pallet) {
+    auto r = Ctl({"route", "operate", "RW", "--pallet", std::to_string(pallet)});
+    ASSERT_EQ(r.code, 0) << r.err;
+    const std::string job = FirstLine(r.out);
+    auto w = Ctl({"job", "wait", job, "--timeout", "60"});
+    ASSERT_EQ(w.out, "COMPLETED\n") << w.err;
+    json j = CtlJson({"job", "show", job, "--json"});
+    const json kt01 = Tool("KT01", "1001", 1);
+    ASSERT_TRUE(kt01.is_object());
+    if (pallet <= 3) {
+      // Both stations idle, both hold 1001: the tie goes to KT01, listed first.
+      EXPECT_EQ(j["station"], "KT01") << "pallet " << pallet << ": " << j.dump();
+      const double left = kt01["life_left_min"];
+      // 25 s of each pallet's cut (a little more for the ramps at the ends of the move).
+      EXPECT_NEAR(left, std::max(0.0, 1.0 - pallet * 25.0 / 60), 0.02) << "pallet " << pallet;
+      EXPECT_EQ(kt01["worn"], pallet == 3) << "pallet " << pallet << ": " << kt01.dump();
+    } else {
+      EXPECT_EQ(j["station"], "KT02") << j.dump();
+      const json& d = j["decisions"].back();
+      EXPECT_EQ(d["winner"], "KT02");
+      EXPECT_EQ(d["considered"][0]["station"], "KT01");
+      EXPECT_EQ(d["considered"][0]["eligible"], false);
+      EXPECT_EQ(d["considered"][0]["missing_tools"], json({"1001"}));
+      // KT02's 1001 (life 240 min in deploy/stations/KT02.toml) cut this pallet.
+      const json kt02 = Tool("KT02", "1001", 1);
+      ASSERT_TRUE(kt02.is_object());
+      EXPECT_LT(kt02["life_left_min"].get<double>(), 240.0);
+      EXPECT_FALSE(kt02["worn"].get<bool>());
+    }
+  }
+}
+
+TEST_F(KtaplStation, G38FindsTheBrokenToolTheRunStopsAndTheAlternateIsTaken) {
+  LoadTools("KT01", "%\n(TLD,S1T1001P152.4D25.4L200)\n(TLD,S9T1001P150.D25.4L200)\n%\n");
+  ASSERT_EQ(Ctl({"station", "break", "KT01", "1"}).code, 0);
+  auto bad = Ctl({"station", "break", "KT01", "0"});
+  EXPECT_NE(bad.code, 0);
+  Put("CHK",
+      "%\n(NAM,CHK)\n(UCY,30)\nN10 G71 G90\nN20 T1001 M06\nN30 G01 X0 Y0 Z100. S30 M03 F0\n"
+      "N40 G38 S16\nN50 T1001 M06\nN60 G01 X10. F1000.\nN70 M30\n%\n");
+  ASSERT_EQ(Ctl({"pallet", "set", "5", "CHK"}).code, 0);
+  auto run = Ctl({"pallet", "run", "5", "--station", "KT01"});
+  ASSERT_EQ(run.code, 0) << run.err;
+  const std::string job = FirstLine(run.out);
+  json st;
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  for (;;) {
+    st = Station("KT01");
+    if (st.is_object() && st["execution"] == "PROGRAM_STOPPED") break;
+    ASSERT_LT(std::chrono::steady_clock::now(), deadline) << st;
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  EXPECT_NE(st["status_text"].get<std::string>().find("TOOL BROKEN"), std::string::npos) << st;
+  EXPECT_EQ(Ctl({"job", "wait", job, "--timeout", "1"}).code, 3);  // still running: stopped, not failed
+  ASSERT_EQ(Ctl({"station", "start", "KT01"}).code, 0);
+  auto w = Ctl({"job", "wait", job, "--timeout", "60"});
+  ASSERT_EQ(w.out, "COMPLETED\n") << w.err;
+  EXPECT_EQ(Tool("KT01", "1001", 1)["broken"], true);
+  EXPECT_EQ(Tool("KT01", "1001", 9)["broken"], false);
+  EXPECT_EQ(Ctl({"station", "break", "KT01", "1", "--mend"}).code, 0);
+}
+
+TEST_F(KtaplStation, UsfThenUlfOnAnotherPalletRestoresTheOffsets) {
+  Put("SAVEFX",
+      "%\n(NAM,SAVEFX)\n(UCY,30)\nN10 G70 G90\nN20 (FXC,H1X.5Y.25)\nN30 (USF)\n"
+      "N35 (EVT,FIXTURE TABLE PALLET38 SAVED)\nN40 M30\n%\n");
+  Put("LOADFX", "%\n(NAM,LOADFX)\n(UCY,30)\nN10 G71 G90\nN20 (ZTB,H)\nN30 (ULF,PALLET38)\nN40 M30\n%\n");
+  auto run = [&](const std::string& pallet, const std::string& program) {
+    ASSERT_EQ(Ctl({"pallet", "set", pallet, program}).code, 0);
+    auto r = Ctl({"pallet", "run", pallet, "--station", "KT01"});
+    ASSERT_EQ(r.code, 0) << r.err;
+    auto w = Ctl({"job", "wait", FirstLine(r.out), "--timeout", "60"});
+    ASSERT_EQ(w.out, "COMPLETED\n") << w.err;
+  };
+  run("38", "SAVEFX");
+  // EVT: the event is on the bus; `cellctl watch` shows it (a late joiner gets the event topic's history).
+  std::string frame;
+  for (int i = 0; i < 20 && frame.find("FIXTURE TABLE PALLET38 SAVED") == std::string::npos; ++i)
+    frame = Ctl({"watch", "--count", "1"}).out;
+  EXPECT_NE(frame.find("KT01 pallet 38 SAVEFX line 7: FIXTURE TABLE PALLET38 SAVED"), std::string::npos)
+      << frame;
+  auto ls = CtlJson({"program", "ls", "--node", "KT01", "--json"});
+  bool saved = false;
+  for (auto& p : ls) saved = saved || (p["name"] == "PALLET38;FXT" && p["type"] == "fixture_offsets");
+  EXPECT_TRUE(saved) << ls;
+  // Another program clears the table on the station.
+  Put("CLEARFX", "%\n(NAM,CLEARFX)\n(UCY,30)\nN10 (ZTB,H)\nN20 (FXC,H2X1.)\nN30 M30\n%\n");
+  run("7", "CLEARFX");
+  EXPECT_FALSE(CtlJson({"station", "offsets", "KT01", "--json"}).contains("H1"));
+  run("7", "LOADFX");
+  const json table = CtlJson({"station", "offsets", "KT01", "--json"});
+  ASSERT_TRUE(table.contains("H1")) << table;
+  EXPECT_NEAR(table["H1"]["X"].get<double>(), 12.7, 1e-9);  // .5 in
+  EXPECT_NEAR(table["H1"]["Y"].get<double>(), 6.35, 1e-9);
+  EXPECT_FALSE(table.contains("H2")) << table;  // the file replaced the whole table
+}
+
+}  // namespace
