@@ -279,6 +279,19 @@ void CellView::Stored(const StoredIn& in) {
   Push({{"type", "inspection"}, {"record", StoredJson(in)}});
 }
 
+void CellView::ProgramEvent(const EventIn& in) {
+  std::lock_guard lk(mu_);
+  program_events_.push_front(in);
+  while (program_events_.size() > 50) program_events_.pop_back();
+  Push({{"type", "program_event"}, {"program_event", EventJson(in)}});
+}
+
+json CellView::EventJson(const EventIn& e) {
+  return {{"station", e.station},         {"program", e.program},      {"line", e.line},
+          {"pallet", e.pallet},           {"dispatch", e.dispatch_id}, {"text", e.text},
+          {"time", TimeOrNull(e.time_ns)}};
+}
+
 json CellView::StationJson(int s) const {
   const StationState& x = st_[static_cast<size_t>(s)];
   const StationDef& d = model_.stations()[static_cast<size_t>(s)];
@@ -411,7 +424,10 @@ json CellView::Snapshot() const {
                       {"time", mtc::IsoTime(c.time_ns)}});
   json stored = json::array();
   for (auto& s : stored_) stored.push_back(StoredJson(s));
+  json events = json::array();
+  for (auto& e : program_events_) events.push_back(EventJson(e));
   return {{"stations", stations},
+          {"program_events", events},
           {"jobs", jobs},
           {"cycles", cycles},
           {"inspections", stored},

@@ -184,6 +184,18 @@ Feed::Feed(bus::Participant& p, CellView& view, FeedOptions opts)
                 in.excerpt = s.excerpt().to_string();
                 in.time_ns = s.time_ns();
                 view_.Stored(in);
+              }),
+      events_(p, topics::kStationEvent, bus::QosKind::kEvent,
+              [this](const cell::StationEvent& e, const bus::SampleInfo&) {
+                EventIn in;
+                in.station = e.station().to_string();
+                in.program = e.program().to_string();
+                in.text = e.text().to_string();
+                in.dispatch_id = e.dispatch_id();
+                in.pallet = e.pallet();
+                in.line = e.line();
+                in.time_ns = e.time_ns();
+                view_.ProgramEvent(in);
               }) {
   if (opts.axes)
     axes_.emplace(p, topics::kAxisState, bus::QosKind::kTelemetry,

@@ -158,6 +158,21 @@ std::string RenderText(const json& snap, const TextStyle& style) {
     }
   }
 
+  // What programs recorded for the supervisor (KT-APL EVT), newest first.
+  if (!snap.value("program_events", json::array()).empty()) {
+    out += "\n" + paint("EVENTS", "1") + "\n";
+    int n = 0;
+    for (auto& e : snap["program_events"]) {
+      if (n++ >= 5) break;
+      std::string when = Str(e["time"], "");
+      if (when.size() >= 19) when = when.substr(11, 8);  // hh:mm:ss of the ISO time
+      out += Fit(fmt::format("  {} {} pallet {} {} line {}: {}", when, Str(e["station"]), Str(e["pallet"]),
+                             Str(e["program"]), Str(e["line"]), Str(e["text"], "")),
+                 W) +
+             "\n";
+    }
+  }
+
   // Jobs
   out += "\n" +
          paint(fmt::format("{:>5} {:<10} {:<12} {:>6} {:<7} {:>5} {:>9}  {}", "JOB", "STATE", "ROUTE",

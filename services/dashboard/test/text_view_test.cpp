@@ -37,5 +37,31 @@ TEST(TextView, StationsBacklogWaitingPalletsAndJobs) {
   EXPECT_NE(RenderText(v.Snapshot(), {100, true, 10}).find("\x1b[1;32mACTIVE"), std::string::npos);
 }
 
+// KT-APL EVT (cell/station/event): the newest events a program recorded, with station, pallet, program and
+// line; at most five in the frame.
+TEST(TextView, ProgramEventsNewestFirst) {
+  CellView v(testing::TwoStations());
+  EXPECT_EQ(RenderText(v.Snapshot(), {100, false, 10}).find("EVENTS"), std::string::npos);
+  for (int i = 1; i <= 7; ++i) {
+    EventIn e;
+    e.station = "KT01";
+    e.program = "PUMP341";
+    e.pallet = 3;
+    e.line = 10 * i;
+    e.text = "PART " + std::to_string(i) + " DONE";
+    e.time_ns = 1'795'000'000'000'000'000 + i;
+    v.ProgramEvent(e);
+  }
+  const auto snap = v.Snapshot();
+  ASSERT_EQ(snap["program_events"].size(), 7u);
+  EXPECT_EQ(snap["program_events"][0]["text"], "PART 7 DONE");
+  const std::string f = RenderText(snap, {100, false, 10});
+  EXPECT_NE(f.find("EVENTS"), std::string::npos) << f;
+  EXPECT_NE(f.find("KT01 pallet 3 PUMP341 line 70: PART 7 DONE"), std::string::npos) << f;
+  EXPECT_NE(f.find("line 30: PART 3 DONE"), std::string::npos) << f;
+  EXPECT_EQ(f.find("PART 2 DONE"), std::string::npos) << f;  // five shown
+  EXPECT_LT(f.find("PART 7"), f.find("PART 6"));
+}
+
 }  // namespace
 }  // namespace cell::dashboard

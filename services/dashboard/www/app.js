@@ -355,6 +355,20 @@
     }
   }
 
+  // ---- program events (EVT) ----
+  function renderProgramEvents() {
+    const body = document.querySelector('#progevents tbody');
+    body.replaceChildren();
+    const evs = S.program_events || [];
+    if (!evs.length) { const r = el('tr'); const td = el('td', 'empty', 'no event yet'); td.colSpan = 6; r.append(td); body.append(r); }
+    for (const x of evs.slice(0, 12)) {
+      const r = el('tr');
+      r.append(el('td', null, time(x.time)), el('td', null, x.station), el('td', null, x.pallet || '—'),
+               el('td', null, x.program), el('td', null, String(x.line)), el('td', null, x.text));
+      body.append(r);
+    }
+  }
+
   function renderServices() {
     const names = { 'cell-program-store': 'program store', 'cell-scheduler': 'scheduler', 'cell-inspection-writer': 'inspection writer' };
     const box = byId('services');
@@ -386,6 +400,7 @@
     for (const c of S.cycles) addCycle(c);
     renderCycles();
     renderInspections();
+    renderProgramEvents();
     renderServices();
     drawAxes();
   }
@@ -399,6 +414,10 @@
       case 'inspection':
         S.inspections = [ev.record, ...S.inspections.filter((x) => x.name !== ev.record.name)].slice(0, 50);
         renderInspections();
+        break;
+      case 'program_event':
+        S.program_events = [ev.program_event, ...(S.program_events || [])].slice(0, 50);
+        renderProgramEvents();
         break;
       case 'services': S.services = ev.services; renderServices(); break;
     }

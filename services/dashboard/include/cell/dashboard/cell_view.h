@@ -96,6 +96,12 @@ struct StoredIn {    // cell/inspection/stored
   std::int64_t time_ns = 0;
 };
 
+struct EventIn {  // cell/station/event: what a program recorded (KT-APL EVT)
+  std::string station, program, text;
+  int dispatch_id = 0, pallet = 0, line = 0;
+  std::int64_t time_ns = 0;
+};
+
 struct ViewOptions {
   std::size_t buffer_size = 131072;  // MTConnect observations kept for /sample
   std::size_t event_log = 4096;      // page events kept for reconnecting browsers
@@ -119,6 +125,7 @@ class CellView {
   void Axes(const AxesIn& a);
   void Run(const RunIn& r);
   void Stored(const StoredIn& s);
+  void ProgramEvent(const EventIn& e);
 
   // ---- the page ----
   nlohmann::json Snapshot() const;                        // whole state; "event" = the last event id in it
@@ -181,6 +188,7 @@ class CellView {
   nlohmann::json StationJson(int s) const;
   nlohmann::json JobJson(const JobIn& j, bool decisions) const;
   nlohmann::json StoredJson(const StoredIn& s) const;
+  static nlohmann::json EventJson(const EventIn& e);
   std::vector<mtc::ToolAsset> ToolAssets() const;
 
   mtc::DeviceModel model_;
@@ -194,6 +202,7 @@ class CellView {
   std::map<int, RunTrack> runs_;
   std::deque<CycleTime> cycles_;
   std::deque<StoredIn> stored_;
+  std::deque<EventIn> program_events_;  // newest first, the last 50
   std::set<std::string> stored_names_;
   SequenceBuffer buffer_;
   std::deque<Event> events_;

@@ -54,6 +54,7 @@ class Feed {
   bus::Reader<cell::JobInfo> jobs_;
   bus::Reader<cell::RunStatus> runs_;
   bus::Reader<cell::InspectionStored> stored_;
+  bus::Reader<cell::StationEvent> events_;
   std::optional<bus::Reader<cell::AxisState>> axes_;
 };
 
