@@ -23,7 +23,8 @@ using namespace std::chrono_literals;
 std::string Program(const std::string& name, const std::string& utl) {
   return "%\n(NAM," + name + ")\n(UTL," + utl +
          ")\n(UCY,60)\nN10 G71 G90 G01\nN20 X0 Y0 Z100. F0\n"
-         "N30 X300. Y40. Z20. F6000.\nN40 G00 X0 Y0 Z100. F0\nN50 M30\n%\n";
+         "N30 X300. Y40. Z20. F6000.\nN40 G00 X0 Y0 Z100. F0\nN45 (EVT," +
+         name + " PART DONE)\nN50 M30\n%\n";
 }
 
 std::string SchemaDir() {
@@ -108,6 +109,10 @@ TEST_F(DashboardBrowser, ThePageFollowsTheCellLive) {
                  20s))
       << b.Exec("return document.querySelector('#inspections').outerHTML");
   EXPECT_TRUE(b.WaitTrue("return document.querySelector('#cycletable').textContent.includes('DASH1')", 10s));
+  // Its EVT (cell/station/event) in the program events table.
+  EXPECT_TRUE(
+      b.WaitTrue("return document.querySelector('#progevents').textContent.includes('DASH1 PART DONE')", 10s))
+      << b.Exec("return document.querySelector('#progevents').outerHTML");
 
   // 2. A pallet needing tool 7777, which no station holds: it waits, and each card says why.
   Put("DASH2", Program("DASH2", "7777"));
