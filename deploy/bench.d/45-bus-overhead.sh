@@ -7,8 +7,9 @@
 # the largest it holds). Each cell: the median over CELL_BENCH_RUNS runs of each run's median (and the
 # largest p99), and its ratio to raw on the same vendor. Interleaved, so load on a shared machine falls on
 # all three alike. Then DDS Security (issue 22): the request/reply on the program store's own topics,
-# operator to program-store, secured against unsecured (target: at most 2x at 4 KiB), and the start-up of a
-# one-station local cell (`cellctl up`) secured against unsecured.
+# operator to program-store, and the pub/sub ping-pong on a station's segment and probe topics, interpreter
+# to axis servo and back, each secured against unsecured (target: at most 2x at 4 KiB), and the start-up of
+# a one-station local cell (`cellctl up`) secured against unsecured.
 # Env: CELL_BUILD_DIR (default build/), CELL_BENCH_DOMAIN (default 93), CELL_BENCH_RUNS (default 3).
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
@@ -76,20 +77,24 @@ awk "$RESULTS_AWK"'
 for _ in $(seq "$RUNS"); do
   for vendor in fastdds cyclonedds; do
     for size in 64 4096; do
-      for kind in rpc srpc; do CELL_BENCH_PKI="$work/pki" one "$kind-$vendor" "$size" 1000; done
+      for kind in rpc srpc bus sbus; do CELL_BENCH_PKI="$work/pki" one "$kind-$vendor" "$size" 1000; done
     done
   done
 done
 echo
-echo "DDS Security: request/reply operator -> program-store, median (largest p99) in us; x = secured / unsecured"
+echo "DDS Security: round trips, median (largest p99) in us; x = secured / unsecured"
+echo "  request/reply: operator -> program-store (cell/program_store); pub/sub: interpreter-KT01 -> axis-servo-KT01"
+echo "  (cell/station/KT01/segments) and back (cell/station/KT01/probe)"
 awk "$RESULTS_AWK"'
   END {
-    printf "%-11s %7s %20s %26s\n", "vendor", "bytes", "unsecured", "secured"
+    printf "%-14s %-11s %7s %20s %26s\n", "exchange", "vendor", "bytes", "unsecured", "secured"
     split("fastdds cyclonedds", vs, " "); split("64 4096", ss, " ")
-    for (v = 1; v <= 2; v++) for (s = 1; s <= 2; s++) {
-      u = median("rpc-" vs[v] " " ss[s]); q = median("srpc-" vs[v] " " ss[s])
-      printf "%-11s %7d %9.1f (%8.1f) %9.1f (%8.1f) %5.2fx%s\n", vs[v], ss[s], u, p99["rpc-" vs[v] " " ss[s]],
-        q, p99["srpc-" vs[v] " " ss[s]], q / u, (ss[s] == 4096 ? (q / u <= 2 ? "  (target <= 2x: met)" : "  (target <= 2x: MISSED)") : "")
+    split("rpc bus", ks, " "); name["rpc"] = "request/reply"; name["bus"] = "pub/sub"
+    for (k = 1; k <= 2; k++) for (v = 1; v <= 2; v++) for (s = 1; s <= 2; s++) {
+      u = median(ks[k] "-" vs[v] " " ss[s]); q = median("s" ks[k] "-" vs[v] " " ss[s])
+      printf "%-14s %-11s %7d %9.1f (%8.1f) %9.1f (%8.1f) %5.2fx%s\n", name[ks[k]], vs[v], ss[s], u,
+        p99[ks[k] "-" vs[v] " " ss[s]], q, p99["s" ks[k] "-" vs[v] " " ss[s]], q / u,
+        (ss[s] == 4096 ? (q / u <= 2 ? "  (target <= 2x: met)" : "  (target <= 2x: MISSED)") : "")
     }
   }' "$out"
 

@@ -12,6 +12,11 @@
 // program store's own service topics, ping as `operator`, pong as `program-store`, with the PKI in
 // CELL_BENCH_PKI (`cellctl pki init --dir`); rpc-* uses the same topic names unsecured when CELL_BENCH_PKI is
 // set, so the two differ only in security.
+// IMPL sbus-fastdds or sbus-cyclonedds: the pub/sub secured, on a station's segment and probe topics (the
+// only pair one identity writes and the other reads back: ping as `interpreter-KT01` writes
+// cell/station/KT01/segments and reads cell/station/KT01/probe, pong as `axis-servo-KT01` the other way),
+// with the PKI in CELL_BENCH_PKI (made with `--station KT01`); bus-* uses the same topic names unsecured when
+// CELL_BENCH_PKI is set.
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -43,13 +48,31 @@ bus::ParticipantOptions Options(const std::string& name, int domain, const std::
   return o;
 }
 
+// The pub/sub topics: the bench's own, or (CELL_BENCH_PKI set) a station's segments and probe topics, which
+// the governance covers and the permissions grant one way each.
+std::string PingTopic() {
+  return std::getenv("CELL_BENCH_PKI") ? "cell/station/KT01/segments" : kPingTopic;
+}
+std::string PongTopic() {
+  return std::getenv("CELL_BENCH_PKI") ? "cell/station/KT01/probe" : kPongTopic;
+}
+bus::ParticipantOptions PubSubOptions(bool pinger, int domain, const std::string& vendor, bool secure) {
+  auto o = Options(pinger ? "pingpong-ping" : "pingpong-pong", domain, vendor);
+  setenv("CELL_SECURITY", secure ? "on" : "off", 1);
+  if (secure) {
+    o.identity = pinger ? "interpreter-KT01" : "axis-servo-KT01";
+    o.security_dir = std::getenv("CELL_BENCH_PKI");
+  }
+  return o;
+}
+
 // A bus Writer and Reader per direction: the bus's pub/sub path against the vendor's.
 class BusPingPong : public PingPong {
  public:
-  BusPingPong(bool pinger, int domain, const std::string& vendor, OnReceive on_receive)
-      : p_(Options(pinger ? "pingpong-ping" : "pingpong-pong", domain, vendor)),
-        w_(p_, pinger ? kPingTopic : kPongTopic, bus::QosKind::kCommand),
-        r_(p_, pinger ? kPongTopic : kPingTopic, bus::QosKind::kCommand,
+  BusPingPong(bool pinger, int domain, const std::string& vendor, bool secure, OnReceive on_receive)
+      : p_(PubSubOptions(pinger, domain, vendor, secure)),
+        w_(p_, pinger ? PingTopic() : PongTopic(), bus::QosKind::kCommand),
+        r_(p_, pinger ? PongTopic() : PingTopic(), bus::QosKind::kCommand,
            [cb = std::move(on_receive)](const cell::ProgramRequest& m, const bus::SampleInfo&) {
              cb(m.chunk_index(), m.data().data(), m.data().size());
            }) {}
@@ -139,9 +162,18 @@ int PongRpc(const std::string& vendor, bool secure, int domain) {
 std::unique_ptr<PingPong> Make(const std::string& impl, bool pinger, int domain, PingPong::OnReceive cb) {
   if (impl == "raw-fastdds") return MakeRawFastDds(pinger, domain, std::move(cb));
   if (impl == "raw-cyclonedds") return MakeRawCyclone(pinger, domain, std::move(cb));
-  if (impl == "bus-fastdds") return std::make_unique<BusPingPong>(pinger, domain, "fastdds", std::move(cb));
-  if (impl == "bus-cyclonedds")
-    return std::make_unique<BusPingPong>(pinger, domain, "cyclonedds", std::move(cb));
+  for (const std::string vendor : {"fastdds", "cyclonedds"}) {
+    if (impl == "bus-" + vendor)
+      return std::make_unique<BusPingPong>(pinger, domain, vendor, false, std::move(cb));
+    if (impl == "sbus-" + vendor) {
+      if (!std::getenv("CELL_BENCH_PKI")) {
+        std::fprintf(stderr, "pingpong: %s needs CELL_BENCH_PKI (a `cellctl pki init --dir` directory)\n",
+                     impl.c_str());
+        return nullptr;
+      }
+      return std::make_unique<BusPingPong>(pinger, domain, vendor, true, std::move(cb));
+    }
+  }
   return nullptr;
 }
 
