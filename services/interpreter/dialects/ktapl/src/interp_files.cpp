@@ -168,8 +168,8 @@ bool ParseFixtureFile(const std::string& text, std::array<FixtureLine, kFixtureL
       if (stop == begin || !std::isfinite(v)) return false;
       i += static_cast<std::size_t>(stop - begin);
       if (letter == 'H') {
+        if (v < 1 || v > kFixtureLines || v != std::floor(v)) return false;
         h = static_cast<int>(v);
-        if (h < 1 || h > kFixtureLines || v != h) return false;
         lines[static_cast<std::size_t>(h)].set = true;
       } else if (h < 0) {
         return false;
