@@ -53,6 +53,13 @@ std::string BaseTool(const std::string& t) {
   return t.substr(0, t.find('.'));
 }
 
+// The magazine's `tool` in `socket` is what tool change `s` asks for: the same physical tool, in the socket
+// the control chose when it named one (an alternate).
+bool IsRequested(const Segment& s, int socket, const std::string& tool) {
+  return (tool == s.tool || BaseTool(tool) == BaseTool(s.tool)) &&
+         (s.tool_socket <= 0 || socket == s.tool_socket);
+}
+
 }  // namespace
 
 const char* ExecutionName(Execution e) {
@@ -456,9 +463,7 @@ bool Machine::StartBarrier(Entry& e) {
       }
       int socket = 0;
       for (const auto& [sock, tool] : magazine_)
-        if ((tool == s.tool || BaseTool(tool) == BaseTool(s.tool)) &&
-            (s.tool_socket <= 0 || sock == s.tool_socket))
-          socket = sock;
+        if (IsRequested(s, sock, tool)) socket = sock;
       if (socket == 0) {
         RaiseAlarm(AlarmCode::kToolNotInMagazine,
                    fmt::format("segment {}: tool {} is not in the magazine", s.id, s.tool), s.id);
@@ -584,8 +589,7 @@ void Machine::StepOp() {
           cut_index_ = -1;
           if (!s.tool.empty() && s.tool != "0") {
             for (auto it = magazine_.begin(); it != magazine_.end(); ++it)
-              if ((it->second == s.tool || BaseTool(it->second) == BaseTool(s.tool)) &&
-                  (s.tool_socket <= 0 || it->first == s.tool_socket)) {
+              if (IsRequested(s, it->first, it->second)) {
                 spindle_tool_ = it->second;
                 spindle_tool_socket_ = magazine_at_ = it->first;
                 magazine_.erase(it);

@@ -106,7 +106,7 @@ interp::FileResult ProgramFiles::Apply(const interp::Canon& op) {
     if (f->what == "USF") {
       // (USF[,name]): the fixture offset table as NAME;FXT in the station's namespace (ln 4253-4284), a new
       // revision over the last; the run's ULF reads it back as programs are found (namespace, then HOST).
-      const std::string key = fmt::format("file-{}-{}-{}-{}", station_, dispatch_id_, program_, ++stores_);
+      const std::string key = NextKey();
       return Patiently("program store", "FILE NOT STORED", [&] {
         io_.SaveFile(station_, f->args, f->text, StationIo::SaveAs{dialect_, "fixture_offsets", key});
         return true;
@@ -121,6 +121,12 @@ interp::FileResult ProgramFiles::Apply(const interp::Canon& op) {
     }
   }
   return {};
+}
+
+// The n-th store or delete of this program of the dispatch: a retry repeats the key, so neither the writer
+// nor the store does it twice; two operations of one run (of one program or of two) never share it.
+std::string ProgramFiles::NextKey() {
+  return fmt::format("file-{}-{}-{}-{}", station_, dispatch_id_, program_, ++stores_);
 }
 
 interp::FileResult ProgramFiles::RemoteCopy(const std::string& args) {
@@ -142,9 +148,7 @@ interp::FileResult ProgramFiles::Store(const std::string& node, const std::strin
   if (text.size() > 65536) return {false, "FILE " + name + " LARGER THAN 64 KIB"};
   cell::InspectionRequest req;
   req.op(cell::INSPECTION_STORE_FILE);
-  // The n-th store of this program of the dispatch: a retry repeats the key, so neither the writer nor the
-  // store does it twice; two stores of one run (of one program or of two) never share it.
-  req.hdr().idempotency_key(fmt::format("file-{}-{}-{}-{}", station_, dispatch_id_, program_, ++stores_));
+  req.hdr().idempotency_key(NextKey());
   auto& f = req.file();
   f.file(name.substr(0, 64));
   f.station(node.substr(0, 16));
@@ -172,7 +176,7 @@ interp::FileResult ProgramFiles::Delete(const std::string& name) {
   if (!open_.empty() && Upper(open_) == Upper(name))
     return {false, "FILE " + name + " IS OPEN: CLOSE IT BEFORE (DLF)"};
   closed_.erase(Upper(name));
-  const std::string key = fmt::format("file-{}-{}-{}-{}", station_, dispatch_id_, program_, ++stores_);
+  const std::string key = NextKey();
   bool existed = false;
   interp::FileResult r = Patiently("program store", "FILE NOT DELETED", [&] {
     existed = io_.DeleteFile(station_, name, key);

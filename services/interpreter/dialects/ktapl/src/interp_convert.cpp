@@ -566,7 +566,7 @@ void KtRun::ExecTypeI(BlockCtx& bc, const ParsedBlock* pb) {
     active_h_ = hv;
   }
 
-  if (k.g38_col) CheckTool(words);  // where the block before left the tool (ln 7061-7090)
+  if (k.g38_col) CheckTool(Find(words, 'S'));  // where the block before left the tool (ln 7061-7090)
   Motion(words, k, mc, axis_mask, motion_col, f, block_feed);
   AfterMCode(mc);
   if (mc.m99 && mc.after == 0 && !operator_) {

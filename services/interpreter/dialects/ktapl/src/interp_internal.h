@@ -332,7 +332,7 @@ class KtRun final : public RunBase, public ExprContext {
   void ApplyTool();
   void LoadFixtureFile(const std::string& name, int col);
   void ChangeTool(int col);
-  void CheckTool(const Words& words);
+  void CheckTool(const Word* flutes);
 
   // Type I blocks (interp_convert.cpp)
   void ExecTypeI(BlockCtx& bc, const ParsedBlock* pb);

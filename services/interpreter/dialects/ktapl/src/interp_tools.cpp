@@ -109,10 +109,7 @@ void KtRun::ChangeTool(int col) {
 // G38 (ln 1583-1593, 7034-7124): the machine checks the spindle tool at the detection post. A broken one is
 // set broken in the tool table, "TOOL BROKEN" shows and the machine goes to CYCLE STOP (the operator
 // inspects the tool and presses cycle start); the next M06 of its number chooses an alternate.
-void KtRun::CheckTool(const Words& words) {
-  const Word* s = nullptr;
-  for (const auto& w : words)
-    if (w.letter == 'S') s = &w;
+void KtRun::CheckTool(const Word* s) {
   int flutes = 0;
   if (s) {
     if (s->v < 0 || s->v > 99 || s->v != std::floor(s->v))

@@ -36,6 +36,7 @@ class ProgramFiles {
   interp::FileResult RemoteCopy(const std::string& args);
   interp::FileResult Delete(const std::string& name);
   interp::FileResult Patiently(const char* who, const char* failed, const std::function<bool()>& attempt);
+  std::string NextKey();  // the idempotency key of the next store or delete
 
   const std::string station_;
   const std::string dialect_;
