@@ -139,6 +139,37 @@ std::string Join(const std::vector<std::string>& v, const std::string& sep) {
   return out;
 }
 
+// The services the frame shows (the view's host services, the stations' interpreters) that the local cell's
+// record (cellctl up) has running now on this domain: ones a watch of that cell must hear before it prints.
+// Empty without a record.
+std::vector<std::string> RecordedShown(const nlohmann::json& snap) {
+  std::set<std::string> shown;
+  for (auto& s : snap.at("services").items()) shown.insert(s.key());
+  for (auto& st : snap.at("stations")) shown.insert("cell-interpreter/" + st["id"].get<std::string>());
+  const char* domain = std::getenv("CELL_DOMAIN");
+  std::vector<std::string> out;
+  try {
+    for (auto& p : LoadRecord())
+      if (shown.count(p.service) && Env(p, "CELL_DOMAIN") == (domain ? domain : "") && IsRunning(p))
+        out.push_back(p.service);
+  } catch (const Exit&) {  // an unreadable record: watch as without one
+  }
+  return out;
+}
+
+// Those of `services` the view does not show online yet.
+std::vector<std::string> Unheard(const nlohmann::json& snap, const std::vector<std::string>& services) {
+  std::set<std::string> online;
+  for (auto& s : snap.at("services").items())
+    if (s.value().get<bool>()) online.insert(s.key());
+  for (auto& st : snap.at("stations"))
+    if (st["online"].get<bool>()) online.insert("cell-interpreter/" + st["id"].get<std::string>());
+  std::vector<std::string> out;
+  for (auto& s : services)
+    if (!online.count(s)) out.push_back(s);
+  return out;
+}
+
 }  // namespace
 
 void AddCellVerbs(CLI::App& app, Context& ctx) {
@@ -282,10 +313,25 @@ void AddCellVerbs(CLI::App& app, Context& ctx) {
     const bool tty = isatty(STDOUT_FILENO) != 0;
     cell::dashboard::TextStyle style;
     style.color = tty && !std::getenv("NO_COLOR");
+    // With a finite --count a script reads only these frames: a service the local cell runs must have been
+    // heard (and then, by Settled, its data) first, as discovery can take seconds on a loaded machine.
+    // Without a record only Settled's grace period stands in for discovery. At the deadline: what is known.
+    feed.Tick();
+    const auto expected = o->count > 0 ? RecordedShown(view.Snapshot()) : std::vector<std::string>{};
+    const auto limit = std::chrono::seconds(expected.empty() ? 4 : 10);
     const auto t0 = std::chrono::steady_clock::now();
-    while (!feed.Settled(std::chrono::duration_cast<bus::Millis>(std::chrono::steady_clock::now() - t0)) &&
-           std::chrono::steady_clock::now() - t0 < std::chrono::seconds(4)) {
-      feed.Tick();
+    for (;;) {
+      feed.Tick();  // first: a service the view shows online is one Settled has seen and waits on
+      const auto waited = std::chrono::steady_clock::now() - t0;
+      if (feed.Settled(std::chrono::duration_cast<bus::Millis>(waited)) &&
+          Unheard(view.Snapshot(), expected).empty())
+        break;
+      if (waited >= limit) {
+        if (auto u = Unheard(view.Snapshot(), expected); !u.empty())
+          std::cerr << "cellctl: watch: not heard within " << limit.count()
+                    << " s, shown offline: " << Join(u, ", ") << "\n";
+        break;
+      }
       std::this_thread::sleep_for(std::chrono::milliseconds(20));
     }
     for (int n = 0; o->count == 0 || n < o->count; ++n) {
