@@ -11,15 +11,19 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <memory>
+#include <mutex>
 #include <sstream>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -28,6 +32,7 @@
 #include "cell/idl/health.h"
 #include "cell/idl/motion.h"
 #include "cell/idl/program_store.h"
+#include "cell/idl/station.h"
 #include "cell/security/pki.h"
 
 namespace bus = cell::bus;
@@ -263,6 +268,102 @@ bool ProgramTextOnTheWire(const std::string& vendor, const std::string& client, 
   cl.Call(req, kMatch);
   std::this_thread::sleep_for(300ms);  // the capture thread reads what was sent
   return cap.seen();
+}
+
+// A participant of `identity`'s files that writes in `partition`: what a station would do to pass for
+// another one (docs/security.md, "Partitions").
+std::unique_ptr<bus::Backend> Impersonating(const std::string& identity, const std::string& partition) {
+  const auto f = cell::security::FindIdentityFiles(g_pki, identity);
+  bus::BackendOptions o;
+  o.domain = std::atoi(std::getenv("CELL_DOMAIN"));
+  o.participant_name = "bus-security-test/impersonator";
+  o.security = {identity,       f.ca.string(),         f.governance.string(), f.certificate.string(),
+                f.key.string(), f.permissions.string()};
+  o.partition = partition;
+  return bus::MakeFastDdsBackend(o);
+}
+
+TEST_P(BusSecurity, AStationWritesOnlyInItsOwnPartition) {
+  auto tk = cell::bus::TypeSupportFor<cell::StationStatus>();
+  // Control: in its own partition interpreter-KT02 may publish the shared status topic.
+  EXPECT_NO_THROW(Impersonating("interpreter-KT02", "id/interpreter-KT02")
+                      ->CreateWriter(bus::topics::kStationStatus, tk, bus::QosKind::kState));
+  try {
+    Impersonating("interpreter-KT02", "id/interpreter-KT01")
+        ->CreateWriter(bus::topics::kStationStatus, tk, bus::QosKind::kState);
+    ADD_FAILURE() << "interpreter-KT02 could publish in interpreter-KT01's partition";
+  } catch (const cell::Error& e) {
+    EXPECT_EQ(e.code(), cell::Errc::kPermissionDenied) << e.what();
+  }
+}
+
+TEST_P(BusSecurity, AStationsSampleAboutAnotherStationIsDroppedAndEverySampleNamesItsWriter) {
+  auto kt01 = Make(vendor(), "interpreter-KT01");
+  auto kt02 = Make(vendor(), "interpreter-KT02");
+  auto sched = Make(vendor(), "scheduler");
+  std::mutex mu;
+  std::vector<std::pair<std::string, std::string>> got;  // (station, authenticated writer)
+  bus::Reader<cell::StationStatus> r(sched, bus::topics::kStationStatus, bus::QosKind::kState,
+                                     [&](const cell::StationStatus& v, const bus::SampleInfo& info) {
+                                       std::lock_guard lk(mu);
+                                       got.emplace_back(v.station().to_string(), info.writer);
+                                     });
+  bus::Writer<cell::StationStatus> w1(kt01, bus::topics::kStationStatus, bus::QosKind::kState);
+  bus::Writer<cell::StationStatus> w2(kt02, bus::topics::kStationStatus, bus::QosKind::kState);
+  ASSERT_TRUE(w1.WaitForMatched(1, kMatch));
+  ASSERT_TRUE(w2.WaitForMatched(1, kMatch));
+  cell::StationStatus st;
+  st.station("KT01");
+  st.line(66);
+  w2.Write(st);  // KT02 writes KT01's status: dropped
+  w1.Write(st);  // the control: KT01 writes its own
+  st.station("KT02");
+  w2.Write(st);  // and KT02 its own, after the forged one
+  // KT02's own status follows its forged one on the same writer: once it is here, the forged one was
+  // delivered or dropped before it.
+  auto has_kt02 = [&] {
+    std::lock_guard lk(mu);
+    return std::find(got.begin(), got.end(),
+                     std::make_pair(std::string("KT02"), std::string("interpreter-KT02"))) != got.end();
+  };
+  ASSERT_TRUE(bus::WaitUntil([&] { return has_kt02(); }, kMatch));
+  ASSERT_TRUE(bus::WaitUntil(
+      [&] {
+        std::lock_guard lk(mu);
+        return std::find(got.begin(), got.end(),
+                         std::make_pair(std::string("KT01"), std::string("interpreter-KT01"))) != got.end();
+      },
+      kMatch));
+  std::lock_guard lk(mu);
+  std::sort(got.begin(), got.end());
+  const std::vector<std::pair<std::string, std::string>> want{{"KT01", "interpreter-KT01"},
+                                                              {"KT02", "interpreter-KT02"}};
+  EXPECT_EQ(got, want);
+}
+
+TEST_P(BusSecurity, AServerKnowsTheAuthenticatedIdentityOfEachRequest) {
+  auto station = Make(vendor(), "interpreter-KT01");
+  auto op = Make(vendor(), "operator");
+  auto sched = Make(vendor(), "scheduler");
+  std::mutex mu;
+  std::vector<std::string> from;
+  bus::Server<cell::StationRequest, cell::StationReply> srv(
+      station, bus::topics::StationCommand("KT01"),
+      [&](const cell::StationRequest&) {
+        std::lock_guard lk(mu);
+        from.push_back(bus::RequesterIdentity());
+        return cell::StationReply();
+      },
+      [](const cell::StationRequest&) { return std::string("reset"); });
+  bus::Client<cell::StationRequest, cell::StationReply> c_op(op, bus::topics::StationCommand("KT01"));
+  bus::Client<cell::StationRequest, cell::StationReply> c_sched(sched, bus::topics::StationCommand("KT01"));
+  cell::StationRequest req;
+  req.station("KT01");
+  req.op(cell::STATION_RESET);
+  c_op.Call(req, kMatch);
+  c_sched.Call(req, kMatch);
+  std::lock_guard lk(mu);
+  EXPECT_EQ(from, (std::vector<std::string>{"operator", "scheduler"}));
 }
 
 TEST_P(BusSecurity, NoProgramTextOnTheWire) {

@@ -4,9 +4,12 @@
 // must give the same semantics, and across vendors.
 #include "cell/bus/bus.h"
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
+#include <mutex>
 #include <optional>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -63,6 +66,47 @@ TEST_P(BusTest, PublishSubscribeAcrossParticipants) {
   EXPECT_EQ(got->station(), "KT01");
   EXPECT_EQ(got->line(), 7);
   EXPECT_EQ(got->execution(), cell::EXECUTION_ACTIVE);
+}
+
+// docs/security.md, "Partitions": a sample names its writer's identity (claimed here, unsecured; the
+// permissions make it authenticated), and a reader drops a station identity's sample about another station.
+TEST_P(BusTest, ASampleNamesItsWriterAndNoStationWritesAnothersKey) {
+  ParticipantOptions kt02 = A("bus-test-kt02"), sched = A("bus-test-sched");
+  kt02.identity = "interpreter-KT02";
+  sched.identity = "scheduler";
+  Participant a(kt02), s(sched), b(B("bus-test-b"));
+  std::mutex mu;
+  std::vector<std::pair<std::string, std::string>> got;  // (station, writer)
+  Reader<cell::StationStatus> r(b, "test/partitions", QosKind::kState,
+                                [&](const cell::StationStatus& v, const SampleInfo& info) {
+                                  std::lock_guard lk(mu);
+                                  got.emplace_back(v.station().to_string(), info.writer);
+                                });
+  Writer<cell::StationStatus> w(a, "test/partitions", QosKind::kState);
+  Writer<cell::StationStatus> ws(s, "test/partitions", QosKind::kState);
+  ASSERT_TRUE(w.WaitForMatched(1, kMatch));
+  ASSERT_TRUE(ws.WaitForMatched(1, kMatch));
+  w.Write(Status("KT01", 1));   // another station's key: dropped
+  w.Write(Status("KT02", 2));   // its own
+  ws.Write(Status("KT01", 3));  // the control: a cell service may write any station's key
+  auto has = [&](const std::string& station, const std::string& writer) {
+    std::lock_guard lk(mu);
+    return std::find(got.begin(), got.end(), std::make_pair(station, writer)) != got.end();
+  };
+  ASSERT_TRUE(WaitUntil([&] { return has("KT02", "interpreter-KT02") && has("KT01", "scheduler"); }, kMatch));
+  w.Write(
+      Status("KT02", 4));  // written after the KT01 sample: once it is here, that one was not dropped late
+  ASSERT_TRUE(WaitUntil(
+      [&] {
+        std::lock_guard lk(mu);
+        return std::count(got.begin(), got.end(),
+                          std::make_pair(std::string("KT02"), std::string("interpreter-KT02"))) >= 2;
+      },
+      kMatch));
+  std::lock_guard lk(mu);
+  for (const auto& [station, writer] : got)
+    EXPECT_FALSE(station == "KT01" && writer == "interpreter-KT02")
+        << "a station wrote another station's key";
 }
 
 TEST_P(BusTest, LateJoinerGetsLastSampleOfEveryKey) {
@@ -203,6 +247,18 @@ TEST_P(BusTest, RejoinKeepsEveryEndpointWorking) {
   req.station("KT03");
   EXPECT_EQ(peer_client.Call(req, kMatch).station(), "KT03");  // the rejoined side serves
   EXPECT_EQ(client.Call(req, kMatch).revision(), 2u);          // and calls
+}
+
+TEST(Bus, AStationOwnsItsNamespaceAndItsMemoriesOnly) {
+  EXPECT_TRUE(StationOwns("BS01", "BS01"));
+  EXPECT_TRUE(StationOwns("BS01", "BS01/MP3"));
+  EXPECT_FALSE(StationOwns("BS01", "BS011"));
+  EXPECT_FALSE(StationOwns("BS01", "BS02/MP3"));
+  EXPECT_FALSE(StationOwns("BS01", "HOST"));
+  EXPECT_EQ(StationOfIdentity("interpreter-KT01"), "KT01");
+  EXPECT_EQ(StationOfIdentity("axis-servo-KT01"), "KT01");
+  EXPECT_EQ(StationOfIdentity("scheduler"), "");
+  EXPECT_EQ(StationOfIdentity("fms-test-observer"), "");
 }
 
 TEST(Bus, CallWithoutServerIsUnavailable) {

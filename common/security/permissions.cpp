@@ -129,11 +129,16 @@ const std::vector<TopicRule>& Table() {
        {kSch, kOp, kView},
        Scope::kCell,
        "program store writes program changes; the scheduler reads"},
+      {"cell/program/list",
+       {kPs},
+       {kOp, kView},
+       Scope::kCell,
+       "program store writes the list of every namespace; `program ls` as viewer reads"},
       {"cell/inspection/stored",
        {kIw},
        {kOp, kView},
        Scope::kCell,
-       "inspection writer writes what it made durable; dashboard reads"},
+       "inspection writer writes what it made durable (run records, whole files); dashboard reads"},
       {"cell/station/<ID>/segments",
        {kInt},
        {kSrv},
@@ -256,6 +261,14 @@ Grants GrantsFor(const Identity& id) {
   return g;
 }
 
+std::string WritePartition(const std::string& identity_name) {
+  return "id/" + identity_name;
+}
+
+std::string IdentityOfPartition(const std::string& partition) {
+  return partition.rfind("id/", 0) == 0 ? partition.substr(3) : std::string();
+}
+
 std::string SubjectName(const std::string& identity_name) {
   return fmt::format("CN={},O=cell", identity_name);
 }
@@ -320,20 +333,26 @@ std::string PermissionsXml(const Identity& id, const std::string& not_before, co
       "      <validity>\n"
       "        <not_before>{2}</not_before>\n"
       "        <not_after>{3}</not_after>\n"
-      "      </validity>\n"
-      "      <allow_rule>\n",
+      "      </validity>\n",
       id.Name(), SubjectName(id.Name()), not_before, not_after);
-  x += DomainsXml("        ");
-  auto criteria = [&x](const char* what, const std::vector<std::string>& topics) {
-    if (topics.empty()) return;  // an empty <topics> is invalid; no element grants nothing
-    x += fmt::format("        <{}>\n          <topics>\n", what);
-    for (const auto& t : topics) x += fmt::format("            <topic>{}</topic>\n", t);
-    x += fmt::format("          </topics>\n        </{}>\n", what);
+  auto criterion = [&x](const char* what, const std::string& topic, std::string_view partition) {
+    x += fmt::format(
+        "        <{0}>\n          <topics>\n            <topic>{1}</topic>\n          </topics>\n"
+        "          <partitions>\n            <partition>{2}</partition>\n          </partitions>\n"
+        "        </{0}>\n",
+        what, topic, partition);
   };
-  criteria("publish", g.publish);
-  criteria("subscribe", g.subscribe);
-  x += "      </allow_rule>\n"
-       "      <default>DENY</default>\n"
+  const std::string own = WritePartition(id.Name());
+  for (const auto& rule : Table()) {
+    const bool pub = Has(rule.publish, id.role), sub = Has(rule.subscribe, id.role);
+    if (!pub && !sub) continue;
+    x += "      <allow_rule>\n";
+    x += DomainsXml("        ");
+    if (pub) criterion("publish", TopicFor(rule.topic, id), own);
+    if (sub) criterion("subscribe", TopicFor(rule.topic, id), kReadPartition);
+    x += "      </allow_rule>\n";
+  }
+  x += "      <default>DENY</default>\n"
        "    </grant>\n"
        "  </permissions>\n"
        "</dds>\n";
@@ -342,8 +361,9 @@ std::string PermissionsXml(const Identity& id, const std::string& not_before, co
 
 namespace {
 
-std::string Who(const std::vector<Role>& roles, std::string_view topic) {
-  const bool per_station = topic.find(kStationMark) != std::string_view::npos;
+// `writes`: the publish column (a station writes its own station's data only), else the subscribe one.
+std::string Who(const std::vector<Role>& roles, const TopicRule& rule, bool writes) {
+  const bool per_station = rule.topic.find(kStationMark) != std::string_view::npos;
   std::string out;
   for (Role r : Roles()) {
     if (!Has(roles, r)) continue;
@@ -352,8 +372,10 @@ std::string Who(const std::vector<Role>& roles, std::string_view topic) {
       out += RoleName(r);
     else if (per_station)
       out += fmt::format("{}-`<ID>` (own station)", RoleName(r));
+    else if (writes)
+      out += fmt::format("{}-`<ID>` (own station's data)", RoleName(r));
     else
-      out += fmt::format("{}-`<ID>` (whole topic)", RoleName(r));
+      out += fmt::format("{}-`<ID>` (every station's)", RoleName(r));
   }
   return out.empty() ? "nobody" : out;
 }
@@ -365,9 +387,9 @@ std::string_view Separable(Scope s) {
     case Scope::kOwnStation:
       return "yes (per-station topic)";
     case Scope::kSharedKeyed:
-      return "not yet (shared keyed topic)";
+      return "yes (writer's partition; readers drop another station's key)";
     case Scope::kSharedService:
-      return "not yet (shared service topic)";
+      return "yes (writer's partition; the service checks the sender)";
   }
   return "?";
 }
@@ -379,8 +401,8 @@ std::string RenderTable() {
       "| topic | published by | subscribed by | separable per station | used today |\n"
       "|---|---|---|---|---|\n";
   for (const auto& r : Table())
-    out += fmt::format("| `{}` | {} | {} | {} | {} |\n", r.topic, Who(r.publish, r.topic),
-                       Who(r.subscribe, r.topic), Separable(r.scope), r.use);
+    out += fmt::format("| `{}` | {} | {} | {} | {} |\n", r.topic, Who(r.publish, r, true),
+                       Who(r.subscribe, r, false), Separable(r.scope), r.use);
   return out;
 }
 

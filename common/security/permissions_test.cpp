@@ -45,7 +45,7 @@ TEST(Table, CoversExactlyTheBusTopics) {
       topics::kStationIo,      topics::kProgress,      topics::kStationEvent,     topics::kServoControl,
       topics::kSchedulerState, topics::kJobState,      topics::kRunStatus,        topics::kJobStatus,
       topics::kProgramChange,  topics::kAlarm,         topics::kInspectionStored, topics::kAxisState,
-      topics::Segments(st),    topics::Probe(st),      topics::Part(st)};
+      topics::kProgramList,    topics::Segments(st),   topics::Probe(st),         topics::Part(st)};
   for (const std::string& svc :
        {std::string(topics::kProgramStore), std::string(topics::kScheduler), std::string(topics::kInspection),
         topics::StationRun(st), topics::StationCommand(st)}) {
@@ -172,6 +172,23 @@ TEST(Documents, SubjectNameIsTheRfc2253FormOfTheCertificateSubject) {
   EXPECT_EQ(OpensslSubject("interpreter-KT01"), "/O=cell/CN=interpreter-KT01");
 }
 
+// "publish <partition>" or "subscribe <partition>": the criterion naming `topic` in a permissions document.
+std::string CriterionOf(const std::string& x, const std::string& topic) {
+  const auto at = x.find("<topic>" + topic + "</topic>");
+  if (at == std::string::npos) return "none";
+  const auto pub = x.rfind("<publish>", at), sub = x.rfind("<subscribe>", at);
+  const bool is_pub = pub != std::string::npos && (sub == std::string::npos || pub > sub);
+  const auto p = x.find("<partition>", at) + std::string("<partition>").size();
+  return std::string(is_pub ? "publish " : "subscribe ") + x.substr(p, x.find("</partition>", p) - p);
+}
+
+TEST(Documents, PartitionsNameTheIdentity) {
+  EXPECT_EQ(WritePartition("interpreter-KT01"), "id/interpreter-KT01");
+  EXPECT_EQ(IdentityOfPartition("id/interpreter-KT01"), "interpreter-KT01");
+  EXPECT_EQ(IdentityOfPartition("KT01"), "");
+  EXPECT_EQ(IdentityOfPartition(""), "");
+}
+
 TEST(Documents, PermissionsGrantTheTableAndDenyTheRest) {
   const auto id = *ParseIdentity("interpreter-KT01");
   const std::string x = PermissionsXml(id, "2026-01-01T00:00:00", "2036-01-01T00:00:00");
@@ -179,14 +196,19 @@ TEST(Documents, PermissionsGrantTheTableAndDenyTheRest) {
   EXPECT_NE(x.find("<not_before>2026-01-01T00:00:00</not_before>"), std::string::npos);
   EXPECT_NE(x.find("<default>DENY</default>"), std::string::npos);
   EXPECT_NE(x.find("<max>230</max>"), std::string::npos);  // Cyclone 0.10 refuses more
-  const auto pub = x.find("<publish>"), sub = x.find("<subscribe>");
-  ASSERT_NE(pub, std::string::npos);
-  ASSERT_NE(sub, std::string::npos);
-  const auto seg = x.find("<topic>cell/station/KT01/segments</topic>");
-  EXPECT_TRUE(seg > pub && seg < sub);
-  const auto probe = x.find("<topic>cell/station/KT01/probe</topic>");
-  EXPECT_TRUE(probe != std::string::npos && probe > sub);
+  // Its own segments it publishes, in its own partition only; the probe results it reads, in any.
+  EXPECT_EQ(CriterionOf(x, "cell/station/KT01/segments"), "publish id/interpreter-KT01");
+  EXPECT_EQ(CriterionOf(x, "cell/station/KT01/probe"), "subscribe *");
+  EXPECT_EQ(CriterionOf(x, "cell/station/status"), "publish id/interpreter-KT01");
   EXPECT_EQ(x.find("KT02"), std::string::npos);
+  // One allow_rule per topic (Fast DDS checks a partition against every criterion of a rule).
+  const Grants g = GrantsFor(id);
+  size_t rules = 0;
+  for (auto at = x.find("<allow_rule>"); at != std::string::npos; at = x.find("<allow_rule>", at + 1))
+    ++rules;
+  std::set<std::string> topics(g.publish.begin(), g.publish.end());
+  topics.insert(g.subscribe.begin(), g.subscribe.end());
+  EXPECT_EQ(rules, topics.size());
 
   const std::string v =
       PermissionsXml(*ParseIdentity("viewer"), "2026-01-01T00:00:00", "2036-01-01T00:00:00");

@@ -1,9 +1,11 @@
 // cellctl: the cell's supervisor CLI (DESIGN.md §6). `cellctl <noun> <verb> [args]`.
 #include <iostream>
 
+#include "cell/bus/backend.h"
 #include "context.h"
 
 int main(int argc, char** argv) {
+  cell::bus::SilenceDdsLog();  // stdout is the command's output, stderr its one-line reason
   CLI::App app{"cellctl: supervise a DDS machining cell"};
   app.require_subcommand(1);
   cellctl::Context ctx;

@@ -4,8 +4,10 @@
 #include <iostream>
 #include <sstream>
 
+#include "cell/config/config.h"
 #include "cell/interp/interp.h"
 #include "cell/names/names.h"
+#include "cell/program_store/client.h"
 #include "cell/program_store/memory_commands.h"
 #include "cell/program_store/metadata.h"
 #include "context.h"
@@ -188,7 +190,12 @@ void AddProgramVerbs(CLI::App& app, Context& ctx) {
   ls->callback([o, &ctx] {
     cell::names::CheckNode(o->node);
     cell::names::CheckPattern(o->pattern);
-    Print(ctx, ctx.Programs().List(o->node, o->pattern),
+    // A viewer may not use the store's request topic: it lists what the store publishes (docs/security.md).
+    const bool viewer = cell::config::IdentityOverride() == "viewer";
+    Print(ctx,
+          viewer
+              ? cell::program_store::ListPublished(ctx.Bus(), o->node, o->pattern, cell::bus::Millis(10000))
+              : ctx.Programs().List(o->node, o->pattern),
           {"name", "node", "type", "dialect", "revision", "size", "protected"});
   });
 

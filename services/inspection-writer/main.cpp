@@ -1,4 +1,5 @@
 // cell-inspection-writer: durable run records and inspection files, served over the bus.
+#include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
 #include "cell/bus/bus.h"
@@ -28,9 +29,27 @@ std::string Tail(const std::string& text, size_t n) {
   return from == std::string::npos ? text.substr(text.size() - n) : text.substr(from + 1);
 }
 
+// A station's interpreter stores its own run records and files, and files it sends HOST (KT-APL RCP TO
+// HOST); nothing of another station (docs/security.md: the writer checks the sender's identity).
+void CheckRequester(const cell::InspectionRequest& r) {
+  const std::string& who = cell::bus::RequesterIdentity();
+  const std::string own = cell::bus::StationOfIdentity(who);
+  if (own.empty()) return;
+  std::string of;
+  const std::string run = r.run().station().to_string(), file = r.file().station().to_string();
+  if (r.op() == cell::INSPECTION_STORE_RUN && !cell::bus::StationOwns(own, run)) of = run;
+  if (r.op() == cell::INSPECTION_STORE_FILE && !cell::bus::StationOwns(own, file) && file != "HOST")
+    of = file;
+  if (!of.empty())
+    throw cell::Error(
+        cell::Errc::kPermissionDenied,
+        fmt::format("identity '{}' may store records of station {} only, not of {}", who, own, of));
+}
+
 cell::InspectionReply Handle(cell::inspection::Records& records,
                              cell::bus::Writer<cell::InspectionStored>& stored,
                              const cell::InspectionRequest& r) {
+  CheckRequester(r);
   cell::InspectionReply rep;
   cell::InspectionStored ev;  // published once the record is durable
   switch (r.op()) {
@@ -64,6 +83,7 @@ cell::InspectionReply Handle(cell::inspection::Records& records,
       ev.name(rep.info().to_string());
       ev.station(r.file().station());
       ev.excerpt(Tail(r.file().text().to_string(), 4000));
+      ev.text(r.file().text());  // the whole file, for viewers (docs/security.md)
       break;
     case cell::INSPECTION_LIST: {
       std::string s = records.List(r.name().to_string().empty() ? "*" : r.name().to_string()).dump();
@@ -91,6 +111,15 @@ cell::InspectionReply Handle(cell::inspection::Records& records,
   return rep;
 }
 
+// The audit trail: what a request stores; empty for a query.
+std::string Describe(const cell::InspectionRequest& r) {
+  if (r.op() == cell::INSPECTION_STORE_RUN)
+    return fmt::format("run record of {} dispatch {}", r.run().station().to_string(), r.run().dispatch_id());
+  if (r.op() == cell::INSPECTION_STORE_FILE)
+    return fmt::format("file {}/{}", r.file().station().to_string(), r.file().file().to_string());
+  return {};
+}
+
 }  // namespace
 
 int main() {
@@ -106,7 +135,7 @@ int main() {
                                                      cell::bus::QosKind::kEvent);
     cell::bus::Server<cell::InspectionRequest, cell::InspectionReply> server(
         bus, cell::bus::topics::kInspection,
-        [&](const cell::InspectionRequest& r) { return Handle(records, stored, r); });
+        [&](const cell::InspectionRequest& r) { return Handle(records, stored, r); }, Describe);
     health.Set(cell::SERVICE_READY);
     daemon.NotifyReady("writing records");
     spdlog::info("ready on domain {} with {}", bus.domain(), bus.vendor());

@@ -12,6 +12,7 @@
 #include <mutex>
 #include <string>
 #include <thread>
+#include <tuple>
 #include <vector>
 
 #include <fmt/format.h>
@@ -19,6 +20,7 @@
 
 #include "cell/bus/bus.h"
 #include "cell/bus/topics.h"
+#include "cell/error/error.h"
 #include "cell/idl/program_store.h"
 #include "cell/program_store/client.h"
 #include "cell/testing/process.h"
@@ -257,6 +259,76 @@ TEST_F(ProgramStoreTest, CopyAndMoveBetweenNamespacesThenRemove) {
   ASSERT_TRUE(cell::bus::WaitUntil([&] { return EventsFor("KT03", "RCP MOVED").size() >= 2; },
                                    std::chrono::seconds(5)));
   EXPECT_EQ(EventsFor("KT03", "RCP MOVED").back().kind(), cell::CHANGE_DELETED);
+}
+
+// docs/security.md: the store knows each request's sender (its partition; authenticated under DDS
+// Security, claimed here) and logs every change with it. A station changes its own namespace, sends HOST a
+// data file (KT-APL RCP TO HOST, ln 8316-8356), and changes nothing else.
+TEST_F(ProgramStoreTest, AStationChangesOnlyItsOwnNamespaceAndTheAuditNamesWhoChangedWhat) {
+  cell::bus::ParticipantOptions o = cell::bus::Named("program_store_test/kt02");
+  o.identity = "interpreter-KT02";
+  cell::bus::Participant station(o);
+  cell::program_store::Client kt02(station, cell::bus::Millis(30000));
+  auto put = [&](const std::string& node, const std::string& name, const std::string& type) {
+    cell::program_store::Client::PutOptions po;
+    po.node = node;
+    po.file_type = type;
+    return kt02.Put(name, kGear, po);
+  };
+  EXPECT_NO_THROW(put("KT02", "OWN PART", ""));
+  EXPECT_NO_THROW(put("HOST", "KT02 GAUGE.TXT", "data"));
+  for (const auto& [node, name, type] : std::vector<std::tuple<std::string, std::string, std::string>>{
+           {"KT01", "FORGED PART", ""}, {"HOST", "FORGED PART", ""}}) {
+    try {
+      put(node, name, type);
+      ADD_FAILURE() << "interpreter-KT02 changed " << node;
+    } catch (const cell::Error& e) {
+      EXPECT_EQ(e.code(), cell::Errc::kPermissionDenied) << e.what();
+      EXPECT_NE(std::string(e.what()).find("interpreter-KT02"), std::string::npos) << e.what();
+    }
+  }
+  EXPECT_TRUE(Ls("KT01", "FORGED*").empty());
+  EXPECT_TRUE(Ls("HOST", "FORGED*").empty());
+  // The control: the operator's CLI (a cell identity) writes into KT01.
+  Ok({"program", "put", Write("kt01.apl", kGear), "--name", "OPERATOR PART", "--node", "KT01"});
+  EXPECT_EQ(Names(Ls("KT01", "OPERATOR*")), std::vector<std::string>{"OPERATOR PART"});
+  // The audit trail, in the store's journal (stderr here).
+  ASSERT_TRUE(cell::bus::WaitUntil(
+      [&] {
+        const std::string err = cell::testing::ReadFile(*dir_ + "/store.err");
+        return err.find("accepted program put KT02:OWN PART from identity 'interpreter-KT02'") !=
+                   std::string::npos &&
+               err.find("accepted program put KT01:OPERATOR PART from identity 'operator'") !=
+                   std::string::npos;
+      },
+      std::chrono::seconds(5)))
+      << cell::testing::ReadFile(*dir_ + "/store.err");
+}
+
+// What a read-only viewer lists (docs/security.md): the store publishes its list on cell/program/list, the
+// same files as `program ls` gets by request, kept up to date by puts, flags and deletes.
+TEST_F(ProgramStoreTest, TheListIsPublishedForViewers) {
+  auto names = [](const json& list) {
+    std::vector<std::string> out;
+    for (auto& f : list) out.push_back(f["name"].get<std::string>());
+    return out;
+  };
+  Ok({"program", "put", Write("pub1.apl", kGear), "--name", "PUB ONE", "--node", "KT04"});
+  Ok({"program", "put", Write("pub2.apl", kGear), "--name", "PUB TWO", "--node", "KT04"});
+  Ok({"program", "protect", "PUB TWO", "--node", "KT04"});
+  const cell::bus::Millis wait(10000);
+  json published = cell::program_store::ListPublished(*bus_, "KT04", "PUB*", wait);
+  EXPECT_EQ(names(published), names(Ls("KT04", "PUB*")));  // the control: the request's answer
+  EXPECT_EQ(names(published), (std::vector<std::string>{"PUB ONE", "PUB TWO"}));
+  ASSERT_EQ(published.size(), 2u);
+  EXPECT_EQ(published[1]["protected"], true);
+  EXPECT_EQ(published[0]["revision"], 1);
+  Ok({"program", "rm", "PUB ONE", "--node", "KT04"});
+  // A fresh reader (a viewer starting now) sees the namespace as it is.
+  cell::bus::Participant viewer("program_store_test/viewer");
+  EXPECT_EQ(names(cell::program_store::ListPublished(viewer, "KT04", "PUB*", wait)),
+            std::vector<std::string>{"PUB TWO"});
+  EXPECT_TRUE(cell::program_store::ListPublished(viewer, "KT04", "NONE*", wait).empty());
 }
 
 TEST_F(ProgramStoreTest, ProtectedFilesCannotBeOverwrittenMovedOrDeleted) {

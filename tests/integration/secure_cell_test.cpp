@@ -2,13 +2,18 @@
 // starts every process with CELL_SECURITY=on. Pallets run end to end through the secured bus; the refusals
 // are checked against their positive controls: the operator puts a program where the viewer is refused (and
 // the viewer still reads), and an unsecured cellctl finds nobody where the secured one is answered.
+#include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <string>
+#include <thread>
+#include <vector>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
 #include "cell/testing/local_cell.h"
+#include "cell/testing/process.h"
 
 using namespace cell::testing;
 using nlohmann::json;
@@ -78,6 +83,24 @@ TEST_F(SecureCell, TheViewerReadsButCannotWrite) {
   EXPECT_TRUE(kt01_online) << ls.out;
   // The viewer's put never reached the store.
   EXPECT_NE(As("", {"program", "get", "BYVIEWER"}).code, 0);
+  // It lists programs from what the store publishes (cell/program/list), as the operator does by request.
+  auto programs = As("viewer", {"program", "ls", "BY*", "--json"});
+  ASSERT_EQ(programs.code, 0) << programs.err;
+  const json list = json::parse(programs.out, nullptr, false);
+  ASSERT_FALSE(list.is_discarded()) << "stdout is not JSON: " << programs.out << programs.err;
+  std::vector<std::string> names;
+  for (auto& f : list) names.push_back(f["name"].get<std::string>());
+  EXPECT_EQ(names, std::vector<std::string>{"BYOPER"}) << programs.out;
+  // The store's journal names who put it (the audit trail, authenticated).
+  std::string store_log;
+  for (const auto& p : cell_.Record())
+    if (p.service == "cell-program-store") store_log = p.log;
+  ASSERT_FALSE(store_log.empty());
+  const std::string line = "accepted program put HOST:BYOPER from identity 'operator' (authenticated";
+  const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(5);
+  while (ReadFile(store_log).find(line) == std::string::npos && std::chrono::steady_clock::now() < until)
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  EXPECT_NE(ReadFile(store_log).find(line), std::string::npos) << ReadFile(store_log);
 }
 
 TEST_F(SecureCell, AnUnsecuredCellctlFindsNobody) {

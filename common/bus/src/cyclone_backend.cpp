@@ -243,7 +243,7 @@ class CycReader : public RawReader {
           if (sz >= 4 && p[0] == 0 && p[1] <= 1) {  // XCDR1 only
             s.cdr.assign(p, p + sz);
             s.cdr[2] = s.cdr[3] = 0;  // options (padding count) mean nothing to Fast CDR
-            cb_(s, RawInfo{true});
+            cb_(s, RawInfo{true, WriterPartition(reader, si[i].publication_handle)});
           }
           ddsi_serdata_to_ser_unref(r, &ref);
         }
@@ -251,7 +251,30 @@ class CycReader : public RawReader {
       }
     }
   }
+  // The partition of the writer of a sample (RawInfo::writer_partition), from its matched publication's QoS,
+  // remembered per writer.
+  std::string WriterPartition(dds_entity_t reader, dds_instance_handle_t writer) {
+    auto it = partitions_.find(writer);
+    if (it != partitions_.end()) return it->second;
+    std::string out;
+    if (dds_builtintopic_endpoint_t* ep = dds_get_matched_publication_data(reader, writer)) {
+      uint32_t n = 0;
+      char** ps = nullptr;
+      if (ep->qos && dds_qget_partition(ep->qos, &n, &ps)) {
+        if (n == 1) out = ps[0];
+        for (uint32_t i = 0; i < n; ++i) dds_free(ps[i]);
+        dds_free(ps);
+      }
+      dds_builtintopic_free_endpoint(ep);
+    } else {
+      return std::string();  // not (or no longer) matched: ask again next time
+    }
+    if (partitions_.size() > 4096) partitions_.clear();  // writers come and go; bounded
+    partitions_[writer] = out;
+    return out;
+  }
   RawCallback cb_;
+  std::map<dds_instance_handle_t, std::string> partitions_;
   dds_entity_t r_ = 0;
   std::mutex mu_;
 };
@@ -289,7 +312,8 @@ void Secure(const SecurityFiles& f, dds_qos_t* qos) {
 
 class CycloneBackend : public Backend {
  public:
-  explicit CycloneBackend(const BackendOptions& o) : domain_(o.domain) {
+  explicit CycloneBackend(const BackendOptions& o)
+      : domain_(o.domain), partition_(o.partition.empty() ? "id/unknown" : o.partition) {
     // Always an explicit configuration: neither CYCLONEDDS_URI nor a file elsewhere can widen the default.
     const std::string what =
         o.profile_xml.empty() ? "the built-in loopback profile" : "DDS profile " + o.profile_path;
@@ -311,6 +335,20 @@ class CycloneBackend : public Backend {
                       (identity_.empty() ? "" : " as security identity '" + identity_ + "'") + ": " +
                       dds_strretcode(pp_));
     }
+    // docs/security.md, "Partitions": write in the identity's own partition, read every partition.
+    dds_qos_t* pq = dds_create_qos();
+    const char* own = partition_.c_str();
+    dds_qset_partition(pq, 1, &own);
+    pub_ = dds_create_publisher(pp_, pq, nullptr);
+    const char* all = "*";
+    dds_qset_partition(pq, 1, &all);
+    sub_ = dds_create_subscriber(pp_, pq, nullptr);
+    dds_delete_qos(pq);
+    if (pub_ < 0 || sub_ < 0) {
+      dds_delete(pp_);
+      Domains::Release(domain_);
+      throw Error(Errc::kInternal, "cannot create a Cyclone publisher or subscriber");
+    }
   }
   ~CycloneBackend() override {
     dds_delete(pp_);
@@ -322,7 +360,7 @@ class CycloneBackend : public Backend {
                                           QosKind q) override {
     dds_entity_t t = TopicFor(topic, type);
     dds_qos_t* qos = MakeQos(q);
-    dds_entity_t w = dds_create_writer(pp_, t, qos, nullptr);
+    dds_entity_t w = dds_create_writer(pub_, t, qos, nullptr);
     dds_delete_qos(qos);
     if (w == DDS_RETCODE_NOT_ALLOWED_BY_SECURITY) throw Refused(identity_, "publish", topic);
     Check(w, "Cyclone writer for " + topic);
@@ -336,7 +374,7 @@ class CycloneBackend : public Backend {
     auto reader = std::make_unique<CycReader>(std::move(cb));
     dds_listener_t* l = dds_create_listener(reader.get());
     dds_lset_data_available(l, &CycReader::OnData);
-    dds_entity_t r = dds_create_reader(pp_, t, qos, l);
+    dds_entity_t r = dds_create_reader(sub_, t, qos, l);
     dds_delete_listener(l);
     dds_delete_qos(qos);
     if (r == DDS_RETCODE_NOT_ALLOWED_BY_SECURITY) throw Refused(identity_, "subscribe to", topic);
@@ -357,7 +395,10 @@ class CycloneBackend : public Backend {
   }
   std::mutex mu_;
   int domain_;
+  std::string partition_;
   dds_entity_t pp_ = 0;
+  dds_entity_t pub_ = 0;
+  dds_entity_t sub_ = 0;
   std::string identity_;  // DDS Security identity; empty: unsecured
 };
 

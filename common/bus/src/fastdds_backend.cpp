@@ -4,8 +4,10 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <cstring>
 #include <map>
+#include <memory>
 #include <mutex>
 #include <random>
 #include <set>
@@ -17,6 +19,9 @@
 #include <fastdds/dds/core/policy/QosPolicies.hpp>
 #include <fastdds/dds/domain/DomainParticipant.hpp>
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
+#include <fastdds/dds/domain/DomainParticipantListener.hpp>
+#include <fastdds/dds/log/Log.hpp>
+#include <fastdds/dds/log/StdoutErrConsumer.hpp>
 #include <fastdds/dds/publisher/DataWriter.hpp>
 #include <fastdds/dds/publisher/DataWriterListener.hpp>
 #include <fastdds/dds/publisher/Publisher.hpp>
@@ -143,9 +148,45 @@ class FastWriter : public RawWriter {
   dds::DataWriter* w_;
 };
 
+// The partition each writer publishes in, from discovery, so that a sample's publication handle names its
+// writer's identity (RawInfo::writer_partition). Fast DDS 2.9 does not implement
+// DataReader::get_matched_publication_data; its participant listener hears every remote writer before the
+// writer is matched with a local reader (PDP::addWriterProxyData), so no sample arrives before its entry.
+class WriterPartitions : public dds::DomainParticipantListener {
+ public:
+  explicit WriterPartitions(std::string own) : own_(std::move(own)) {}
+  void SetOwnPrefix(const rtps::GuidPrefix_t& p) {
+    std::lock_guard lk(mu_);
+    own_prefix_ = p;
+  }
+  void on_publisher_discovery(dds::DomainParticipant*, rtps::WriterDiscoveryInfo&& info) override {
+    std::lock_guard lk(mu_);
+    if (info.status == rtps::WriterDiscoveryInfo::REMOVED_WRITER) {
+      by_writer_.erase(info.info.guid());
+      return;
+    }
+    const auto names = info.info.m_qos.m_partition.names();
+    by_writer_[info.info.guid()] = names.size() == 1 ? names.front() : std::string();
+  }
+  std::string Of(const rtps::InstanceHandle_t& publication) {
+    const rtps::GUID_t g = rtps::iHandle2GUID(publication);
+    std::lock_guard lk(mu_);
+    if (g.guidPrefix == own_prefix_) return own_;  // this participant's own writers are not discovered
+    auto it = by_writer_.find(g);
+    return it == by_writer_.end() ? std::string() : it->second;
+  }
+
+ private:
+  std::mutex mu_;
+  std::string own_;
+  rtps::GuidPrefix_t own_prefix_;
+  std::map<rtps::GUID_t, std::string> by_writer_;
+};
+
 class FastReader : public RawReader, public dds::DataReaderListener {
  public:
-  FastReader(dds::Subscriber* sub, RawCallback cb) : sub_(sub), cb_(std::move(cb)) {}
+  FastReader(dds::Subscriber* sub, RawCallback cb, WriterPartitions* writers)
+      : sub_(sub), cb_(std::move(cb)), writers_(writers) {}
   void Attach(dds::DataReader* r) { r_ = r; }
   ~FastReader() override {
     r_->set_listener(nullptr);
@@ -164,6 +205,7 @@ class FastReader : public RawReader, public dds::DataReaderListener {
     while (reader->take_next_sample(&s, &info) == eprosima::fastrtps::types::ReturnCode_t::RETCODE_OK) {
       RawInfo ri;
       ri.valid = info.valid_data;
+      if (ri.valid) ri.writer_partition = writers_->Of(info.publication_handle);
       cb_(s, ri);
     }
   }
@@ -172,12 +214,15 @@ class FastReader : public RawReader, public dds::DataReaderListener {
   dds::Subscriber* sub_;
   dds::DataReader* r_ = nullptr;
   RawCallback cb_;
+  WriterPartitions* writers_;
   std::mutex mu_;
 };
 
 class FastBackend : public Backend {
  public:
-  explicit FastBackend(const BackendOptions& o) {
+  explicit FastBackend(const BackendOptions& o)
+      : partition_(o.partition.empty() ? "id/unknown" : o.partition), writers_(partition_) {
+    LogToStderr();
     auto* factory = dds::DomainParticipantFactory::get_instance();
     dds::DomainParticipantQos qos;  // built from scratch: no XML file in the CWD or env can widen it
     if (!o.profile_xml.empty())
@@ -192,10 +237,11 @@ class FastBackend : public Backend {
     if (!o.security.identity.empty()) Secure(o.security, qos);
     identity_ = o.security.identity;
     ChooseSlot(o.domain, qos);
-    p_ = factory->create_participant(o.domain, qos);
+    // The listener hears discovery only (no status: data goes to each reader's own listener).
+    p_ = factory->create_participant(o.domain, qos, &writers_, dds::StatusMask::none());
     if (!p_ && qos.wire_protocol().participant_id >= 0) {  // lost a race for the slot: let Fast DDS choose
       qos.wire_protocol().participant_id = -1;
-      p_ = factory->create_participant(o.domain, qos);
+      p_ = factory->create_participant(o.domain, qos, &writers_, dds::StatusMask::none());
     }
     if (!p_)
       throw Error(
@@ -203,8 +249,19 @@ class FastBackend : public Backend {
           "cannot create a DDS participant on domain " + std::to_string(o.domain) +
               (identity_.empty() ? ""
                                  : " as security identity '" + identity_ + "' (Fast DDS's log says why)"));
-    pub_ = p_->create_publisher(dds::PUBLISHER_QOS_DEFAULT);
-    sub_ = p_->create_subscriber(dds::SUBSCRIBER_QOS_DEFAULT);
+    writers_.SetOwnPrefix(p_->guid().guidPrefix);
+    // docs/security.md, "Partitions": write in the identity's own partition, read every partition.
+    dds::PublisherQos pq = dds::PUBLISHER_QOS_DEFAULT;
+    pq.partition().push_back(partition_.c_str());
+    dds::SubscriberQos sq = dds::SUBSCRIBER_QOS_DEFAULT;
+    sq.partition().push_back("*");
+    pub_ = p_->create_publisher(pq);
+    sub_ = p_->create_subscriber(sq);
+    if (!pub_ || !sub_) {
+      p_->delete_contained_entities();
+      factory->delete_participant(p_);
+      throw Error(Errc::kInternal, "cannot create a DDS publisher or subscriber");
+    }
   }
 
   ~FastBackend() override {
@@ -248,7 +305,7 @@ class FastBackend : public Backend {
       rq.resource_limits().max_samples_per_instance = rq.history().depth;
       rq.resource_limits().max_samples = 4096 * rq.history().depth;
     }
-    auto reader = std::make_unique<FastReader>(sub_, std::move(cb));
+    auto reader = std::make_unique<FastReader>(sub_, std::move(cb), &writers_);
     auto* r = sub_->create_datareader(t, rq, reader.get(), dds::StatusMask::data_available());
     if (!r && !identity_.empty()) throw Refused(identity_, "subscribe to", topic);
     if (!r) throw Error(Errc::kInternal, "cannot create a DDS reader for " + topic);
@@ -257,6 +314,19 @@ class FastBackend : public Backend {
   }
 
  private:
+  // Fast DDS logs to stdout by default (its StdoutConsumer), where it would corrupt what a command prints
+  // (`cellctl ... --json`): its log goes to stderr, the process's log, or nowhere (SilenceDdsLog).
+  static void LogToStderr() {
+    static std::once_flag once;
+    std::call_once(once, [] {
+      dds::Log::ClearConsumers();
+      if (DdsLogSilenced()) return;
+      auto consumer = std::make_unique<dds::StdoutErrConsumer>();
+      consumer->stderr_threshold(dds::Log::Kind::Info);
+      dds::Log::RegisterConsumer(std::move(consumer));
+    });
+  }
+
   // The participant profile named "cell" of a CELL_DDS_PROFILE file (deploy/dds/*.fastdds.xml). Loaded once
   // per process: Fast DDS refuses a second profile of the same name (a rejoin makes the backend again).
   static void FromProfile(const BackendOptions& o, dds::DomainParticipantQos& qos) {
@@ -361,6 +431,8 @@ class FastBackend : public Backend {
   }
 
   std::mutex mu_;
+  std::string partition_;
+  WriterPartitions writers_;  // declared before p_: the participant (deleted in ~FastBackend) uses it
   dds::DomainParticipant* p_ = nullptr;
   std::string identity_;  // DDS Security identity; empty: unsecured
   dds::Publisher* pub_ = nullptr;
@@ -370,6 +442,17 @@ class FastBackend : public Backend {
 };
 
 }  // namespace
+
+namespace {
+std::atomic<bool> silenced{false};
+}  // namespace
+
+void SilenceDdsLog() {
+  silenced = true;
+}
+bool DdsLogSilenced() {
+  return silenced;
+}
 
 std::unique_ptr<Backend> MakeFastDdsBackend(const BackendOptions& opts) {
   return std::make_unique<FastBackend>(opts);

@@ -10,6 +10,7 @@
 #include "cell/bus/bus.h"
 #include "cell/config/config.h"
 #include "cell/config/dds.h"
+#include "cell/security/permissions.h"
 #include "cell/security/pki.h"
 
 namespace cell::bus {
@@ -22,15 +23,75 @@ std::string DefaultIdentity(const std::string& name) {
   return id;
 }
 
+std::string PartitionOf(const std::string& identity) {
+  return cell::security::WritePartition(identity);
+}
+
+std::string IdentityOfPartition(const std::string& partition) {
+  return cell::security::IdentityOfPartition(partition);
+}
+
+std::string StationOfIdentity(const std::string& identity) {
+  const auto id = cell::security::ParseIdentity(identity);
+  return id && cell::security::IsStationRole(id->role) ? id->station : std::string();
+}
+
+bool StationOwns(std::string_view own, std::string_view name) {
+  return name.substr(0, own.size()) == own && (name.size() == own.size() || name[own.size()] == '/');
+}
+
+bool ForeignStation(const std::string& writer, std::string_view station, const std::string& topic) {
+  if (station.empty()) return false;
+  const std::string own = StationOfIdentity(writer);
+  if (own.empty() || StationOwns(own, station)) return false;
+  static std::mutex mu;
+  static std::set<std::string> told;  // one warning per writer, station and topic
+  std::lock_guard lk(mu);
+  if (told.size() < 1024 && told.insert(writer + "|" + std::string(station) + "|" + topic).second)
+    spdlog::warn(
+        "{}: dropped a sample about station {} written by identity '{}' (a station writes only its own "
+        "station's data; docs/security.md)",
+        topic, station, writer);
+  return true;
+}
+
 namespace {
+thread_local const std::string* requester = nullptr;
+}  // namespace
+
+const std::string& RequesterIdentity() {
+  static const std::string none;
+  return requester ? *requester : none;
+}
+
+RequesterScope::RequesterScope(const std::string& identity) : prev_(requester) {
+  requester = &identity;
+}
+RequesterScope::~RequesterScope() {
+  requester = prev_;
+}
+
+void LogAccepted(const std::string& service, const std::string& what, const std::string& writer,
+                 bool authenticated, const std::string& client, uint64_t request_id) {
+  spdlog::info("{}: accepted {} from identity '{}' ({}; client {}, request {})", service, what,
+               writer.empty() ? "unknown" : writer, authenticated ? "authenticated" : "claimed, unsecured",
+               client, request_id);
+}
+
+namespace {
+
+// The identity a participant claims: the option, else CELL_IDENTITY, else derived from its name.
+std::string ClaimedIdentity(const ParticipantOptions& opts) {
+  if (!opts.identity.empty()) return opts.identity;
+  std::string identity = cell::config::IdentityOverride();
+  return identity.empty() ? DefaultIdentity(opts.name) : identity;
+}
 
 // With CELL_SECURITY=on, the files of the identity this participant claims; throws cell::Error with a
 // one-line reason (the missing file, or a name that is no identity).
 SecurityFiles SecurityFor(const ParticipantOptions& opts) {
   if (!cell::config::SecurityOn()) return {};
-  std::string identity = opts.identity;
-  if (identity.empty()) identity = cell::config::IdentityOverride();
-  if (identity.empty()) identity = DefaultIdentity(opts.name);
+  const std::string identity = ClaimedIdentity(opts);
   const std::filesystem::path dir =
       opts.security_dir.empty() ? cell::security::SecurityDir() : std::filesystem::path(opts.security_dir);
   try {
@@ -66,7 +127,8 @@ Participant::Participant(const ParticipantOptions& opts) {
   std::random_device rd;
   id_ = fmt::format("{}@{}/{}/{:x}", opts.name.empty() ? "cell" : opts.name, host, getpid(), rd() & 0xffffff);
   if (id_.size() > 63) id_ = id_.substr(id_.size() - 63);
-  BackendOptions bo{domain_, profile.string(), opts.name, {}, SecurityFor(opts)};
+  BackendOptions bo{domain_, profile.string(),  opts.name,
+                    {},      SecurityFor(opts), PartitionOf(ClaimedIdentity(opts))};
   identity_ = bo.security.identity;
   if (!profile.empty()) bo.profile_xml = cell::config::LoadDdsProfile(profile);  // ${VAR}s expanded once
   if (vendor_ == "fastdds")

@@ -1,5 +1,7 @@
 #include "cell/station/service.h"
 
+#include <fmt/format.h>
+
 #include "cell/bus/topics.h"
 #include "cell/error/error.h"
 
@@ -28,14 +30,56 @@ Service::~Service() {
   Stop();
 }
 
+namespace {
+
+// The audit trail: what a dispatch or a panel command asks for (every one changes something).
+std::string DescribeRun(const cell::RunRequest& r) {
+  return fmt::format("{} {} (job {}, pallet {})", r.cancel() ? "cancel of dispatch" : "dispatch",
+                     r.dispatch_id(), r.job_id(), r.pallet());
+}
+
+std::string DescribeCommand(const cell::StationRequest& r) {
+  switch (r.op()) {
+    case cell::STATION_SET_VARIABLES:
+      return fmt::format("set {} variable(s)", r.variables().size());
+    case cell::STATION_SET_INPUT:
+      return fmt::format("set {} input(s)", r.variables().size());
+    case cell::STATION_LOAD_TOOLS:
+      return "tool load";
+    case cell::STATION_RESET:
+      return "reset";
+    case cell::STATION_FEED_HOLD:
+      return "feed hold";
+    case cell::STATION_CYCLE_START:
+      return "cycle start";
+    case cell::STATION_OVERRIDE:
+      return fmt::format("override feed {} rapid {}", r.feed_override(), r.rapid_override());
+    case cell::STATION_BREAK_TOOL:
+      return fmt::format("{} socket {}", r.mend() ? "mend" : "break", r.socket());
+    case cell::STATION_OPTIONAL_STOP:
+      return fmt::format("optional stop {}", r.optional_stop() ? "on" : "off");
+  }
+  return "command";
+}
+
+}  // namespace
+
 void Service::Start() {
   station_.Start();
   const std::string id = station_.Status().station().to_string();
   run_srv_ = std::make_unique<bus::Server<cell::RunRequest, cell::RunReply>>(
-      bus_, bus::topics::StationRun(id), [this](const cell::RunRequest& r) { return station_.OnRun(r); });
+      bus_, bus::topics::StationRun(id), [this](const cell::RunRequest& r) { return station_.OnRun(r); },
+      DescribeRun);
   cmd_srv_ = std::make_unique<bus::Server<cell::StationRequest, cell::StationReply>>(
       bus_, bus::topics::StationCommand(id),
-      [this](const cell::StationRequest& r) { return station_.OnCommand(r); });
+      [this](const cell::StationRequest& r) {
+        // The scheduler writes this topic to set variables (schedule VSET); the panel verbs are the
+        // operator's (docs/security.md, "Partitions").
+        if (bus::RequesterIdentity() == "scheduler" && r.op() != cell::STATION_SET_VARIABLES)
+          throw Error(Errc::kPermissionDenied, "identity 'scheduler' may only set variables on a station");
+        return station_.OnCommand(r);
+      },
+      DescribeCommand);
   worker_ = std::jthread([this] {
     worker_alive_ = true;
     station_.Work();

@@ -1,7 +1,11 @@
 #include "cell/program_store/client.h"
 
 #include <algorithm>
+#include <chrono>
+#include <map>
+#include <optional>
 #include <random>
+#include <string_view>
 
 #include <fmt/format.h>
 
@@ -183,6 +187,67 @@ nlohmann::json Client::Flag(const std::string& node, const std::string& name, co
   names::Assign(req.to_name(), flag, "flag");
   names::Assign(req.hdr().idempotency_key(), key, "idempotency key");
   return Info(Call(req));
+}
+
+namespace {
+
+// The store's pattern rule: '*' any run, '?' one character, "" everything.
+bool Matches(std::string_view pattern, std::string_view name) {
+  if (pattern.empty()) return true;
+  size_t p = 0, n = 0, star = std::string_view::npos, mark = 0;
+  while (n < name.size()) {
+    if (p < pattern.size() && (pattern[p] == '?' || pattern[p] == name[n])) {
+      ++p;
+      ++n;
+    } else if (p < pattern.size() && pattern[p] == '*') {
+      star = p++;
+      mark = n;
+    } else if (star != std::string_view::npos) {
+      p = star + 1;
+      n = ++mark;
+    } else {
+      return false;
+    }
+  }
+  while (p < pattern.size() && pattern[p] == '*') ++p;
+  return p == pattern.size();
+}
+
+}  // namespace
+
+nlohmann::json ListPublished(bus::Participant& p, const std::string& node, const std::string& pattern,
+                             bus::Millis timeout) {
+  bus::Reader<cell::ProgramEntry> r(p, bus::topics::kProgramList, bus::QosKind::kState);
+  std::map<std::string, nlohmann::json> files;
+  std::optional<size_t> count;
+  const auto deadline = std::chrono::steady_clock::now() + timeout;
+  while (!count || files.size() != *count) {
+    const auto left = std::chrono::duration_cast<bus::Millis>(deadline - std::chrono::steady_clock::now());
+    if (left.count() <= 0) break;
+    auto e = r.Take(std::min(left, bus::Millis(100)));
+    if (!e || e->node() != node) continue;
+    const std::string name = e->name().to_string();
+    const auto info = nlohmann::json::parse(e->info().to_string(), nullptr, false);
+    if (name.empty()) {
+      if (info.is_object() && info.contains("files")) count = info["files"].get<size_t>();
+    } else if (e->present() && info.is_object()) {
+      files[name] = info;
+    } else {
+      files.erase(name);
+    }
+  }
+  if (!count)
+    throw Error(Errc::kUnavailable,
+                fmt::format("the program store's list of {} was not heard on {} within {} ms", node,
+                            bus::topics::kProgramList, timeout.count()));
+  if (files.size() != *count)
+    throw Error(Errc::kUnavailable, fmt::format("the program store's list of {} arrived incomplete ({} of {} "
+                                                "files within {} ms)",
+                                                node, files.size(), *count, timeout.count()));
+  nlohmann::json out = nlohmann::json::array();
+  for (const auto& [name, info] : files)
+    if (Matches(pattern, name)) out.push_back(info);
+  return out;
 }
 
 }  // namespace cell::program_store

@@ -1,6 +1,11 @@
 #include "cell/program_store/service.h"
 
+#include <fmt/format.h>
 #include <spdlog/spdlog.h>
+
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "cell/bus/topics.h"
 #include "cell/program_store/client.h"
@@ -54,13 +59,86 @@ void SetInfo(cell::ProgramReply& rep, const nlohmann::json& j) {
   rep.info(s);
 }
 
+// The namespaces a request changes; none for a query.
+std::vector<std::string> Changes(const cell::ProgramRequest& r) {
+  const std::string node = r.node().to_string(), to = r.to_node().to_string();
+  switch (r.op()) {
+    case cell::PROGRAM_PUT:
+    case cell::PROGRAM_PUT_CHUNK:
+    case cell::PROGRAM_DELETE:
+    case cell::PROGRAM_PROTECT:
+    case cell::PROGRAM_UNPROTECT:
+      return {node};
+    case cell::PROGRAM_COPY:
+      return {to.empty() ? node : to};
+    case cell::PROGRAM_RENAME:
+      return {node, to.empty() ? node : to};
+    default:
+      return {};
+  }
+}
+
+const char* OpName(cell::ProgramOp op) {
+  switch (op) {
+    case cell::PROGRAM_PUT:
+    case cell::PROGRAM_PUT_CHUNK:
+      return "put";
+    case cell::PROGRAM_COPY:
+      return "copy";
+    case cell::PROGRAM_RENAME:
+      return "rename";
+    case cell::PROGRAM_DELETE:
+      return "delete";
+    case cell::PROGRAM_PROTECT:
+      return "protect";
+    case cell::PROGRAM_UNPROTECT:
+      return "unprotect";
+    default:
+      return "query";
+  }
+}
+
+// The audit trail names what changed (a chunked put once, at its last chunk).
+std::string Describe(const cell::ProgramRequest& r) {
+  if (Changes(r).empty() || (r.op() == cell::PROGRAM_PUT_CHUNK && !r.last_chunk())) return {};
+  std::string what =
+      fmt::format("program {} {}:{}", OpName(r.op()), r.node().to_string(), r.name().to_string());
+  if (r.op() == cell::PROGRAM_COPY || r.op() == cell::PROGRAM_RENAME)
+    what += fmt::format(" -> {}:{}", r.to_node().size() == 0 ? r.node().to_string() : r.to_node().to_string(),
+                        r.to_name().to_string());
+  return what;
+}
+
+// A station's interpreter stores its own files (USF, probe results) in its namespace and its memories
+// (Balt-System BS01/MP3), and reads any namespace. Elsewhere it may only send HOST a data or inspection file
+// (KT-APL RCP TO HOST, ln 8316-8356): it changes no other station's namespace and no program in HOST
+// (docs/security.md: the store checks the sender's identity).
+void CheckRequester(const cell::ProgramRequest& r) {
+  const std::string& who = bus::RequesterIdentity();
+  const std::string own = bus::StationOfIdentity(who);
+  if (own.empty()) return;
+  const std::string type = r.file_type().to_string();
+  const bool sends_host_a_file = (r.op() == cell::PROGRAM_PUT || r.op() == cell::PROGRAM_PUT_CHUNK) &&
+                                 (type == "data" || type == "inspection");
+  for (const auto& node : Changes(r)) {
+    if (bus::StationOwns(own, node) || (node == "HOST" && sends_host_a_file)) continue;
+    throw Error(Errc::kPermissionDenied,
+                fmt::format("identity '{}' may change namespace {} only (and send HOST data or inspection "
+                            "files), not {} in {}",
+                            who, own, OpName(r.op()), node));
+  }
+}
+
 }  // namespace
 
 Service::Service(bus::Participant& p, ProgramStore& store, std::chrono::seconds stream_idle)
     : store_(store),
       stream_idle_(stream_idle),
       changes_(p, bus::topics::kProgramChange, bus::QosKind::kEvent),
-      server_(p, bus::topics::kProgramStore, [this](const cell::ProgramRequest& r) { return Handle(r); }) {
+      list_(p, bus::topics::kProgramList, bus::QosKind::kState),
+      server_(
+          p, bus::topics::kProgramStore, [this](const cell::ProgramRequest& r) { return Handle(r); },
+          Describe) {
   store_.SetChangeListener([this](const ChangeEvent& e) {
     cell::ProgramChange c;
     c.seq(e.seq);
@@ -75,7 +153,56 @@ Service::Service(bus::Participant& p, ProgramStore& store, std::chrono::seconds 
     if (e.node == cache_.node && e.name == cache_.name) cache_ = {};
     changes_.Write(c);
     spdlog::info("{} {}:{} revision {}", ChangeKindName(e.kind), e.node, e.name, e.revision);
+    pending_.emplace_back(e.node, e.name);  // the listener may not call back into the store: Handle lists
   });
+  std::lock_guard lk(mu_);
+  std::vector<std::string> nodes{std::string(kHostNamespace)};
+  for (const auto& n : store_.namespaces())
+    if (n != kHostNamespace) nodes.push_back(n);
+  for (const auto& node : nodes) {
+    for (const auto& f : store_.List(node)) PublishEntry(f, false);
+    PublishSummary(node);
+  }
+}
+
+// cell/program/list (ProgramEntry): what a viewer sees of the store. A list that cannot be published (a
+// namespace past the topic's 4096 instances) is a warning, never a failed request.
+void Service::PublishEntry(const FileInfo& f, bool summary) {
+  cell::ProgramEntry e;
+  e.node(f.node);
+  e.name(f.name);
+  e.present(true);
+  e.info(FileJson(f).dump());
+  WriteEntry(e);
+  if (summary) PublishSummary(f.node);
+}
+
+void Service::PublishEntry(const std::string& node, const std::string& name) {
+  for (const auto& f : store_.List(node, name))
+    if (f.name == name) return PublishEntry(f, true);
+  cell::ProgramEntry e;  // deleted (or moved away)
+  e.node(node);
+  e.name(name);
+  e.present(false);
+  WriteEntry(e);
+  PublishSummary(node);
+}
+
+void Service::PublishSummary(const std::string& node) {
+  cell::ProgramEntry e;
+  e.node(node);
+  e.present(true);
+  e.info(nlohmann::json{{"files", store_.List(node).size()}}.dump());
+  WriteEntry(e);
+}
+
+void Service::WriteEntry(const cell::ProgramEntry& e) {
+  try {
+    list_.Write(e);
+  } catch (const Error& err) {
+    spdlog::warn("{}: {}:{} not published: {}", bus::topics::kProgramList, e.node().to_string(),
+                 e.name().to_string(), err.what());
+  }
 }
 
 void Service::Housekeeping() {
@@ -85,6 +212,7 @@ void Service::Housekeeping() {
 }
 
 cell::ProgramReply Service::Handle(const cell::ProgramRequest& r) {
+  CheckRequester(r);
   std::lock_guard lk(mu_);
   cell::ProgramReply rep;
   const std::string node = r.node().to_string(), name = r.name().to_string();
@@ -228,9 +356,11 @@ cell::ProgramReply Service::Handle(const cell::ProgramRequest& r) {
       }
       OpResult res = store_.SetFlag(node, name, f, r.op() == cell::PROGRAM_PROTECT, key);
       SetInfo(rep, FileJson(res.file));
+      pending_.emplace_back(node, name);  // a flag is no change event, but the list shows it
       break;
     }
   }
+  for (const auto& [n, m] : std::exchange(pending_, {})) PublishEntry(n, m);
   return rep;
 }
 

@@ -101,6 +101,28 @@ std::string Key(const cell::SchedulerRequest& r) {
   return k.empty() ? r.hdr().client().to_string() + "#" + std::to_string(r.hdr().request_id()) : k;
 }
 
+// The audit trail: what a request changes; empty for a query.
+std::string Describe(const cell::SchedulerRequest& r) {
+  const std::string name = r.name().to_string();
+  switch (r.op()) {
+    case cell::SCHED_PALLET_SET:
+      return fmt::format("pallet set {}", r.pallet());
+    case cell::SCHED_PALLET_RUN:
+      return fmt::format("pallet run {}{}", r.pallet(),
+                         r.station().size() == 0 ? "" : " on " + r.station().to_string());
+    case cell::SCHED_ROUTE_DEFINE:
+      return fmt::format("route define {}", name);
+    case cell::SCHED_ROUTE_OPERATE:
+      return fmt::format("route operate {} (pallet {})", name, r.pallet());
+    case cell::SCHED_SCHEDULE_RUN:
+      return fmt::format("schedule run {}", name);
+    case cell::SCHED_JOB_CANCEL:
+      return fmt::format("job cancel {}", r.job_id());
+    default:
+      return {};
+  }
+}
+
 }  // namespace
 
 Service::Service(bus::Participant& p, const std::filesystem::path& data_dir)
@@ -175,7 +197,7 @@ void Service::Start() {
                      });
   sender_ = std::jthread([this](std::stop_token st) { Sender(st); });
   server_ = std::make_unique<bus::Server<cell::SchedulerRequest, cell::SchedulerReply>>(
-      bus_, bus::topics::kScheduler, [this](const cell::SchedulerRequest& r) { return Handle(r); });
+      bus_, bus::topics::kScheduler, [this](const cell::SchedulerRequest& r) { return Handle(r); }, Describe);
 }
 
 void Service::Stop() {

@@ -39,6 +39,10 @@ struct RawSample {
 // string-keyed instances from other vendors, and liveness is a heartbeat on a state topic.
 struct RawInfo {
   bool valid = true;  // false: an instance state change only, cdr empty (ignored above)
+  // The writer's partition (BackendOptions::partition of the process that wrote it): "id/<identity>".
+  // Under DDS Security the permissions grant each identity its own partition only, so this is the
+  // authenticated identity of the writer. Empty when the backend could not tell.
+  std::string writer_partition;
 };
 
 class RawWriter {
@@ -87,7 +91,21 @@ struct BackendOptions {
   std::string profile_xml;  // empty: the built-in loopback-only profile; else the profile's text with its
                             // ${VAR}s expanded (config::LoadDdsProfile)
   SecurityFiles security;
+  // Every writer of the participant publishes in this one partition, "id/<identity>" (PartitionOf); every
+  // reader subscribes to "*" (every partition but the default one). Empty: "id/unknown".
+  std::string partition;
 };
+
+// The partition a participant of this identity writes in, and the identity a partition names ("" for a
+// partition of another form). docs/security.md, "Partitions".
+std::string PartitionOf(const std::string& identity);
+std::string IdentityOfPartition(const std::string& partition);
+
+// A command-line tool's stdout and stderr are its own (JSON, one-line errors): before its first participant
+// it drops the DDS stack's own log, whose errors it reports as cell::Error anyway. Services keep it, on
+// stderr (the journal).
+void SilenceDdsLog();
+bool DdsLogSilenced();
 
 // Both backends give the same semantics (QoS presets above, a 3 s participant lease, loopback-only by
 // default: UDPv4 on 127.0.0.1, unicast discovery, no multicast, no shared memory).

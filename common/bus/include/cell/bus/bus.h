@@ -126,7 +126,40 @@ bool WaitUntil(const std::function<bool()>& cond, Millis timeout);
 
 struct SampleInfo {
   int64_t received_ns = 0;  // steady clock, when the bus got it
+  // The identity of the writer, from the partition it writes in (BackendOptions::partition): authenticated
+  // under DDS Security (the permissions grant each identity its own partition only), claimed without it.
+  // Empty when the backend could not tell.
+  std::string writer;
 };
+
+// True, with one warning per writer, station and topic, when `writer` is a station's identity
+// ("interpreter-KT01") and `station` another station: a Reader drops such a sample, so no station can write
+// another station's key of a topic the stations share (docs/security.md, "Partitions").
+bool ForeignStation(const std::string& writer, std::string_view station, const std::string& topic);
+
+// The station of a station's identity ("interpreter-KT01" -> "KT01"); empty for any other identity.
+std::string StationOfIdentity(const std::string& identity);
+// Whether `name` (a station id or program store namespace) is station `own`'s: "BS01" and its memories
+// ("BS01/MP3", Balt-System) are BS01's.
+bool StationOwns(std::string_view own, std::string_view name);
+
+// While a Server's handler runs: the identity that sent the request (SampleInfo::writer), so a service can
+// check what only some identities may ask for. Empty elsewhere or when unknown.
+const std::string& RequesterIdentity();
+class RequesterScope {
+ public:
+  explicit RequesterScope(const std::string& identity);
+  ~RequesterScope();
+  RequesterScope(const RequesterScope&) = delete;
+  RequesterScope& operator=(const RequesterScope&) = delete;
+
+ private:
+  const std::string* prev_;
+};
+
+// The audit trail: one journal line per accepted command, with the identity that sent it.
+void LogAccepted(const std::string& service, const std::string& what, const std::string& writer,
+                 bool authenticated, const std::string& client, uint64_t request_id);
 
 template <class T>
 class Writer : public Rejoinable {
@@ -195,6 +228,7 @@ class Reader : public Rejoinable {
   Reader(Participant& p, const std::string& topic, QosKind qos, Callback cb = nullptr)
       : p_(p), topic_(topic), qos_(qos), state_(std::make_shared<State>()) {
     state_->cb = std::move(cb);
+    state_->topic = topic;
     std::weak_ptr<State> weak = state_;
     Participant* part = &p;
     raw_cb_ = [weak, part](const RawSample& s, const RawInfo& info) {
@@ -262,6 +296,7 @@ class Reader : public Rejoinable {
     std::recursive_mutex call_mu;  // held while the callback runs
     std::condition_variable cv;
     Callback cb;
+    std::string topic;
     std::deque<std::pair<T, SampleInfo>> queue;
 
     void Deliver(Participant& p, const std::weak_ptr<State>& weak, const RawSample& s, const RawInfo& info) {
@@ -270,7 +305,11 @@ class Reader : public Rejoinable {
       if (!FromCdr(s.cdr.data(), s.cdr.size(), v)) return;  // undecodable: never crash a service
       SampleInfo si{std::chrono::duration_cast<std::chrono::nanoseconds>(
                         std::chrono::steady_clock::now().time_since_epoch())
-                        .count()};
+                        .count(),
+                    IdentityOfPartition(info.writer_partition)};
+      if constexpr (requires { v.station().c_str(); }) {
+        if (!si.writer.empty() && ForeignStation(si.writer, v.station().c_str(), topic)) return;
+      }
       {
         std::lock_guard lk(mu);
         if (!cb) {
@@ -279,7 +318,7 @@ class Reader : public Rejoinable {
           return;
         }
       }
-      p.Post([weak, v = std::move(v), si] {
+      p.Post([weak, v = std::move(v), si = std::move(si)] {
         auto st = weak.lock();
         if (!st) return;
         std::lock_guard call(st->call_mu);
@@ -431,17 +470,23 @@ template <class Req, class Rep>
 class Server {
  public:
   using Handler = std::function<Rep(const Req&)>;
+  // The audit trail: names a request that changes something ("program put HOST:O1000"); empty for a
+  // query, which is not logged. An accepted request it names is logged with its sender's identity.
+  using Describe = std::function<std::string(const Req&)>;
 
-  Server(Participant& p, const std::string& service, Handler h)
-      : handler_(std::move(h)),
+  Server(Participant& p, const std::string& service, Handler h, Describe describe = nullptr)
+      : p_(p),
+        service_(service),
+        handler_(std::move(h)),
+        describe_(std::move(describe)),
         rep_(p, ReplyTopic(service), QosKind::kCommand),
         req_(p, RequestTopic(service), QosKind::kCommand,
-             [this](const Req& r, const SampleInfo&) { Handle(r); }) {}
+             [this](const Req& r, const SampleInfo& si) { Handle(r, si); }) {}
 
   int Matched() const { return req_.Matched(); }
 
  private:
-  void Handle(const Req& r) {
+  void Handle(const Req& r, const SampleInfo& si) {
     auto key = std::make_pair(std::string(r.hdr().client()), r.hdr().request_id());
     auto it = cache_.find(key);
     if (it != cache_.end()) {  // a re-sent request: answer again, do not run again
@@ -450,7 +495,14 @@ class Server {
     }
     Rep rep;
     try {
+      RequesterScope scope(si.writer);
       rep = handler_(r);
+      if (describe_ && rep.hdr().code() == 0) {
+        const std::string what = describe_(r);
+        if (!what.empty())
+          LogAccepted(service_, what, si.writer, !p_.identity().empty(), r.hdr().client().to_string(),
+                      r.hdr().request_id());
+      }
     } catch (const Error& e) {
       rep = Rep();
       rep.hdr().code(static_cast<int32_t>(e.code()) + 1);
@@ -487,7 +539,10 @@ class Server {
   }
 
   static constexpr size_t kCacheSize = 4096;
+  Participant& p_;
+  std::string service_;
   Handler handler_;
+  Describe describe_;
   std::map<std::pair<std::string, uint64_t>, Rep> cache_;
   std::deque<std::pair<std::string, uint64_t>> order_;
   Writer<Rep> rep_;

@@ -19,6 +19,7 @@ inline constexpr const char* kProgress = "cell/motion/progress";        // Segme
 inline constexpr const char* kServoControl = "cell/motion/control";     // ServoControl (hold, overrides)
 inline constexpr const char* kSchedulerState = "cell/scheduler/state";  // SchedulerState (backlog)
 inline constexpr const char* kJobState = "cell/job/state";              // JobInfo, key job_id % kJobSlots
+inline constexpr const char* kProgramList = "cell/program/list";        // ProgramEntry, key node and name
 // Event topics (kEvent): recent history for late joiners.
 inline constexpr const char* kRunStatus = "cell/run/status";          // RunStatus
 inline constexpr const char* kJobStatus = "cell/job/status";          // JobStatus

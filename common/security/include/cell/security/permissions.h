@@ -30,11 +30,18 @@ bool IsStationRole(Role r);         // interpreter, axis-servo
 enum class Scope {
   kCell,           // carries no station's data (or only the cell services' view of it)
   kOwnStation,     // "cell/station/<ID>/...": a station identity is granted its own station's topic only
-  kSharedKeyed,    // one topic keyed by station or service: every station identity that writes it writes
-                   // all keys (not yet separable per station: that needs per-station topics or partitions)
-  kSharedService,  // a cell service's request or reply topic that station identities use too: a station can
-                   // ask for (and read answers about) another station's files and records
+  kSharedKeyed,    // one topic keyed by station or service: a station identity writes it in its own partition
+                   // only, and every reader drops a station identity's sample about another station
+  kSharedService,  // a cell service's request or reply topic that station identities use too: the service
+                   // knows each request's sender (its partition) and refuses another station's data
 };
+
+// Partitions (docs/security.md, "Partitions"): every participant writes in the one partition of its
+// identity, "id/<identity>", and reads every partition ("*"). The permissions grant each identity its own
+// partition only, so the partition of a sample names its writer's authenticated identity.
+std::string WritePartition(const std::string& identity_name);   // "id/interpreter-KT01"
+std::string IdentityOfPartition(const std::string& partition);  // "" unless "id/<identity>"
+inline constexpr std::string_view kReadPartition = "*";
 
 // One row of the table. `topic` is a topic name, or a pattern with "<ID>" standing for a station id.
 struct TopicRule {
@@ -68,8 +75,8 @@ std::vector<Identity> CellIdentities(const std::vector<std::string>& stations);
 // The topic names (fnmatch patterns for roles that span stations, e.g. "cell/station/*/command/request")
 // an identity may publish and subscribe, in table order.
 struct Grants {
-  std::vector<std::string> publish;
-  std::vector<std::string> subscribe;
+  std::vector<std::string> publish;    // in WritePartition(identity) only
+  std::vector<std::string> subscribe;  // in kReadPartition
 };
 Grants GrantsFor(const Identity& id);
 
@@ -93,7 +100,9 @@ inline constexpr int kLastDomain = 230;
 std::string GovernanceXml();
 
 // The permissions document of one identity: one grant for SubjectName(id), valid from not_before to
-// not_after ("YYYY-MM-DDTHH:MM:SS", UTC), allowing GrantsFor(id), default DENY.
+// not_after ("YYYY-MM-DDTHH:MM:SS", UTC), allowing GrantsFor(id) in their partitions, default DENY. One
+// allow_rule per topic: Fast DDS 2.9 checks a writer's partitions against every criterion of the first
+// rule that names its topic, so a rule shared by topics would let one topic's partition grant another's.
 std::string PermissionsXml(const Identity& id, const std::string& not_before, const std::string& not_after);
 
 // The table as the Markdown docs/security.md carries between its table markers.

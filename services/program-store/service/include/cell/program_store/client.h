@@ -62,4 +62,11 @@ class Client {
   bus::Millis timeout_;
 };
 
+// The list as the store publishes it on cell/program/list: how a read-only viewer, which may not use the
+// store's request topic, lists a namespace (the same JSON objects as List, by name). Waits, up to
+// `timeout`, until the namespace's summary and as many present files as it counts have arrived; throws
+// cell::Error(kUnavailable) when they have not.
+nlohmann::json ListPublished(bus::Participant& p, const std::string& node, const std::string& pattern,
+                             bus::Millis timeout);
+
 }  // namespace cell::program_store

@@ -6,6 +6,8 @@
 #include <memory>
 #include <mutex>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -29,9 +31,17 @@ class Service {
 
  private:
   cell::ProgramReply Handle(const cell::ProgramRequest& r);
+  // cell/program/list: one file (and its namespace's summary), one file looked up (absent: deleted), the
+  // namespace's count.
+  void PublishEntry(const FileInfo& f, bool summary);
+  void PublishEntry(const std::string& node, const std::string& name);
+  void PublishSummary(const std::string& node);
+  void WriteEntry(const cell::ProgramEntry& e);
   ProgramStore& store_;
   std::chrono::seconds stream_idle_;
   bus::Writer<cell::ProgramChange> changes_;
+  bus::Writer<cell::ProgramEntry> list_;
+  std::vector<std::pair<std::string, std::string>> pending_;  // (node, name) changed, to publish; under mu_
   std::mutex mu_;  // Handle runs on the dispatch thread, Housekeeping on main
   struct CachedGet {
     std::string node, name;
