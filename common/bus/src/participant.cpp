@@ -23,10 +23,6 @@ std::string DefaultIdentity(const std::string& name) {
   return id;
 }
 
-std::string PartitionOf(const std::string& identity) {
-  return cell::security::WritePartition(identity);
-}
-
 std::string IdentityOfPartition(const std::string& partition) {
   return cell::security::IdentityOfPartition(partition);
 }
@@ -128,7 +124,7 @@ Participant::Participant(const ParticipantOptions& opts) {
   id_ = fmt::format("{}@{}/{}/{:x}", opts.name.empty() ? "cell" : opts.name, host, getpid(), rd() & 0xffffff);
   if (id_.size() > 63) id_ = id_.substr(id_.size() - 63);
   BackendOptions bo{domain_, profile.string(),  opts.name,
-                    {},      SecurityFor(opts), PartitionOf(ClaimedIdentity(opts))};
+                    {},      SecurityFor(opts), cell::security::WritePartition(ClaimedIdentity(opts))};
   identity_ = bo.security.identity;
   if (!profile.empty()) bo.profile_xml = cell::config::LoadDdsProfile(profile);  // ${VAR}s expanded once
   if (vendor_ == "fastdds")

@@ -5,12 +5,12 @@
 #include <map>
 #include <optional>
 #include <random>
-#include <string_view>
 
 #include <fmt/format.h>
 
 #include "cell/bus/topics.h"
 #include "cell/names/names.h"
+#include "cell/program_store/program_store.h"
 
 namespace cell::program_store {
 
@@ -189,32 +189,6 @@ nlohmann::json Client::Flag(const std::string& node, const std::string& name, co
   return Info(Call(req));
 }
 
-namespace {
-
-// The store's pattern rule: '*' any run, '?' one character, "" everything.
-bool Matches(std::string_view pattern, std::string_view name) {
-  if (pattern.empty()) return true;
-  size_t p = 0, n = 0, star = std::string_view::npos, mark = 0;
-  while (n < name.size()) {
-    if (p < pattern.size() && (pattern[p] == '?' || pattern[p] == name[n])) {
-      ++p;
-      ++n;
-    } else if (p < pattern.size() && pattern[p] == '*') {
-      star = p++;
-      mark = n;
-    } else if (star != std::string_view::npos) {
-      p = star + 1;
-      n = ++mark;
-    } else {
-      return false;
-    }
-  }
-  while (p < pattern.size() && pattern[p] == '*') ++p;
-  return p == pattern.size();
-}
-
-}  // namespace
-
 nlohmann::json ListPublished(bus::Participant& p, const std::string& node, const std::string& pattern,
                              bus::Millis timeout) {
   bus::Reader<cell::ProgramEntry> r(p, bus::topics::kProgramList, bus::QosKind::kState);
@@ -246,7 +220,7 @@ nlohmann::json ListPublished(bus::Participant& p, const std::string& node, const
                                                 node, files.size(), *count, timeout.count()));
   nlohmann::json out = nlohmann::json::array();
   for (const auto& [name, info] : files)
-    if (Matches(pattern, name)) out.push_back(info);
+    if (pattern.empty() || WildcardMatch(pattern, name)) out.push_back(info);  // "": all, as List
   return out;
 }
 

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <string>
 #include <utility>
 #include <vector>
@@ -131,6 +132,19 @@ void CheckRequester(const cell::ProgramRequest& r) {
 
 }  // namespace
 
+namespace {
+
+cell::ProgramEntry PresentEntry(const FileInfo& f) {
+  cell::ProgramEntry e;
+  e.node(f.node);
+  e.name(f.name);
+  e.present(true);
+  e.info(FileJson(f).dump());
+  return e;
+}
+
+}  // namespace
+
 Service::Service(bus::Participant& p, ProgramStore& store, std::chrono::seconds stream_idle)
     : store_(store),
       stream_idle_(stream_idle),
@@ -160,39 +174,35 @@ Service::Service(bus::Participant& p, ProgramStore& store, std::chrono::seconds 
   for (const auto& n : store_.namespaces())
     if (n != kHostNamespace) nodes.push_back(n);
   for (const auto& node : nodes) {
-    for (const auto& f : store_.List(node)) PublishEntry(f, false);
-    PublishSummary(node);
+    const std::vector<FileInfo> files = store_.List(node);
+    for (const auto& f : files) WriteEntry(PresentEntry(f));
+    WriteSummary(node, files.size());
   }
 }
 
-// cell/program/list (ProgramEntry): what a viewer sees of the store. A list that cannot be published (a
-// namespace past the topic's 4096 instances) is a warning, never a failed request.
-void Service::PublishEntry(const FileInfo& f, bool summary) {
-  cell::ProgramEntry e;
-  e.node(f.node);
-  e.name(f.name);
-  e.present(true);
-  e.info(FileJson(f).dump());
-  WriteEntry(e);
-  if (summary) PublishSummary(f.node);
-}
-
+// cell/program/list (ProgramEntry): what a viewer sees of the store. One file changed or gone: its entry and
+// its namespace's count, from one listing. A list that cannot be published (a namespace past the topic's 4096
+// instances) is a warning, never a failed request.
 void Service::PublishEntry(const std::string& node, const std::string& name) {
-  for (const auto& f : store_.List(node, name))
-    if (f.name == name) return PublishEntry(f, true);
-  cell::ProgramEntry e;  // deleted (or moved away)
-  e.node(node);
-  e.name(name);
-  e.present(false);
-  WriteEntry(e);
-  PublishSummary(node);
+  const std::vector<FileInfo> files = store_.List(node);
+  auto it = std::find_if(files.begin(), files.end(), [&](const FileInfo& f) { return f.name == name; });
+  if (it != files.end()) {
+    WriteEntry(PresentEntry(*it));
+  } else {
+    cell::ProgramEntry e;  // deleted (or moved away)
+    e.node(node);
+    e.name(name);
+    e.present(false);
+    WriteEntry(e);
+  }
+  WriteSummary(node, files.size());
 }
 
-void Service::PublishSummary(const std::string& node) {
+void Service::WriteSummary(const std::string& node, size_t files) {
   cell::ProgramEntry e;
   e.node(node);
   e.present(true);
-  e.info(nlohmann::json{{"files", store_.List(node).size()}}.dump());
+  e.info(nlohmann::json{{"files", files}}.dump());
   WriteEntry(e);
 }
 

@@ -91,14 +91,13 @@ struct BackendOptions {
   std::string profile_xml;  // empty: the built-in loopback-only profile; else the profile's text with its
                             // ${VAR}s expanded (config::LoadDdsProfile)
   SecurityFiles security;
-  // Every writer of the participant publishes in this one partition, "id/<identity>" (PartitionOf); every
-  // reader subscribes to "*" (every partition but the default one). Empty: "id/unknown".
+  // Every writer of the participant publishes in this one partition, "id/<identity>" (security::
+  // WritePartition); every reader subscribes to "*" (every partition but the default one). Empty:
+  // "id/unknown".
   std::string partition;
 };
 
-// The partition a participant of this identity writes in, and the identity a partition names ("" for a
-// partition of another form). docs/security.md, "Partitions".
-std::string PartitionOf(const std::string& identity);
+// The identity a partition names ("" for a partition of another form). docs/security.md, "Partitions".
 std::string IdentityOfPartition(const std::string& partition);
 
 // A command-line tool's stdout and stderr are its own (JSON, one-line errors): before its first participant

@@ -31,11 +31,10 @@ class Service {
 
  private:
   cell::ProgramReply Handle(const cell::ProgramRequest& r);
-  // cell/program/list: one file (and its namespace's summary), one file looked up (absent: deleted), the
-  // namespace's count.
-  void PublishEntry(const FileInfo& f, bool summary);
+  // cell/program/list: a changed file's entry (absent: deleted) and its namespace's count; the count alone;
+  // one entry.
   void PublishEntry(const std::string& node, const std::string& name);
-  void PublishSummary(const std::string& node);
+  void WriteSummary(const std::string& node, size_t files);
   void WriteEntry(const cell::ProgramEntry& e);
   ProgramStore& store_;
   std::chrono::seconds stream_idle_;
