@@ -17,7 +17,6 @@
 
 #include "cell/config/dds.h"
 #include "cell/error/error.h"
-#include "cell/interp/interp.h"
 #include "cell/names/names.h"
 #include "cell/toml/parse.h"
 
@@ -40,14 +39,11 @@ bool IsUnder(const fs::path& p, const fs::path& root) {
   return r == root.end() && q != p.end();
 }
 
-// The dialects a station may be programmed in: the registry's (no other list in the product).
-std::string DialectList() {
-  std::string out;
-  for (const interp::Dialect* d : interp::Dialects()) {
-    if (!out.empty()) out += ", ";
-    out += d->name();
-  }
-  return out;
+// A dialect named without rules: what any registry name looks like (the registry decides the rest).
+bool IsDialectName(std::string_view name) {
+  return !name.empty() && name.size() <= 32 && std::all_of(name.begin(), name.end(), [](char c) {
+    return (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '_' || c == '-';
+  });
 }
 
 // A located error: "<file>:<line>: <text>".
@@ -371,7 +367,7 @@ std::vector<std::string> ListStations() {
   return ids;
 }
 
-StationConfig LoadStation(std::string_view id) {
+StationConfig LoadStation(std::string_view id, const DialectRules* rules) {
   names::CheckStation(id);
   fs::path file = ConfigDir() / "stations" / (std::string(id) + ".toml");
   std::error_code ec;
@@ -384,10 +380,10 @@ StationConfig LoadStation(std::string_view id) {
     throw Error(Errc::kNotFound, fmt::format("station '{}' is not configured: no file {} (configured: {})",
                                              id, file.string(), known.empty() ? "none" : known));
   }
-  return LoadStationFile(file);
+  return LoadStationFile(file, rules);
 }
 
-StationConfig LoadStationFile(const fs::path& file) {
+StationConfig LoadStationFile(const fs::path& file, const DialectRules* rules) {
   toml::table root = tomlfile::ParseFile(file);
   StationConfig cfg;
   cfg.file = file;
@@ -416,15 +412,24 @@ StationConfig LoadStationFile(const fs::path& file) {
          fmt::format("[station] id = '{}': must be 1-16 characters of A-Z, a-z, 0-9, '_' or '-'", cfg.id));
   }
   const toml::node* dialect = st->get("dialect");
-  if (dialect == nullptr)
-    Fail(file, sn, fmt::format("[station]: missing key 'dialect' (one of {})", DialectList()));
-  cfg.dialect = GetString(file, *dialect, "[station] dialect");
-  const interp::Dialect* d = interp::FindDialect(cfg.dialect);
-  if (d == nullptr) {
-    Fail(file, dialect,
-         fmt::format("[station] dialect = '{}': must be one of {}", cfg.dialect, DialectList()));
+  if (dialect == nullptr) {
+    Fail(file, sn,
+         rules != nullptr ? fmt::format("[station]: missing key 'dialect' (one of {})", rules->names)
+                          : std::string("[station]: missing key 'dialect'"));
   }
-  cfg.dialect = std::string(d->name());
+  cfg.dialect = GetString(file, *dialect, "[station] dialect");
+  if (rules != nullptr) {
+    std::string name = rules->canonical(cfg.dialect);
+    if (name.empty()) {
+      Fail(file, dialect,
+           fmt::format("[station] dialect = '{}': must be one of {}", cfg.dialect, rules->names));
+    }
+    cfg.dialect = std::move(name);
+  } else if (!IsDialectName(cfg.dialect)) {
+    Fail(file, dialect,
+         fmt::format("[station] dialect = '{}': must be a dialect name (1-32 letters, digits, '_' or '-')",
+                     cfg.dialect.substr(0, 32)));
+  }
   if (const toml::node* d = st->get("description"))
     cfg.description = GetString(file, *d, "[station] description");
   if (const toml::node* c = st->get("coded_pallets")) {
@@ -438,8 +443,8 @@ StationConfig LoadStationFile(const fs::path& file) {
       Fail(file, d, fmt::format("[station] dds = '{}': must be one of {}", cfg.dds, DdsVendorList()));
   }
   if (const toml::node* pn = root.get("params")) {
-    // The dialect's machine settings (interp::RunOptions::params), by the dialect's own names: EMCO's
-    // operator monitor (O11 = 9, S01 = 2), ... Values are given to every run as text.
+    // The dialect's machine settings (the interpreter's RunOptions::params), by the dialect's own names:
+    // EMCO's operator monitor (O11 = 9, S01 = 2), ... Values are given to every run as text.
     const toml::table* pt = pn->as_table();
     if (pt == nullptr) Fail(file, pn, "params must be a table [params] of NAME = value");
     for (auto&& [k, v] : *pt) {
@@ -477,7 +482,8 @@ StationConfig LoadStationFile(const fs::path& file) {
       const toml::node& entry = *arr->get(i);
       tooltable::ToolEntry tool = ParseTool(file, entry, i);
       // The dialect's own ranges, as its tool-table form (KT-APL TLD) enforces them on every other path.
-      if (std::string why = d->CheckToolEntry(tool); !why.empty())
+      if (std::string why = rules != nullptr ? rules->check_tool(cfg.dialect, tool) : std::string();
+          !why.empty())
         Fail(file, &entry, fmt::format("[[tools]] entry {} (tool {}): {}", i + 1, tool.tool, why));
       if (auto [it, fresh] = by_tool.emplace(tool.tool, i); !fresh) {
         Fail(file, &entry,

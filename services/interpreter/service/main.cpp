@@ -7,6 +7,7 @@
 #include "cell/daemon/daemon.h"
 #include "cell/health/health.h"
 #include "cell/identity/identity.h"
+#include "cell/interp/station_rules.h"
 #include "cell/log/log.h"
 #include "cell/station/service.h"
 
@@ -18,7 +19,7 @@ int main(int argc, char** argv) {
   cell::log::Init("cell-interpreter", station);
   try {
     cell::daemon::Daemon daemon;
-    auto cfg = cell::config::LoadStation(station);
+    auto cfg = cell::interp::LoadStation(station);      // the registry checks its dialect and tools
     const auto dds = cell::config::DdsVendor(cfg.dds);  // the station file's dds, else CELL_DDS
     cell::bus::Participant bus(cell::bus::Named("cell-interpreter/" + station, dds.vendor));
     cell::health::Announcer health(bus, "cell-interpreter", station);

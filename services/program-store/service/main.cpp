@@ -12,6 +12,7 @@
 #include "cell/daemon/daemon.h"
 #include "cell/health/health.h"
 #include "cell/identity/identity.h"
+#include "cell/interp/station_rules.h"
 #include "cell/log/log.h"
 #include "cell/program_store/service.h"
 
@@ -42,7 +43,7 @@ int main() {
     // A station namespace falls back to the station's dialect for files that do not show theirs. A
     // Balt-System station also has the memories MP0, MP2..MP6 as "ID/MPn" (MP1, the default, is "ID").
     for (const auto& id : cell::config::ListStations()) {
-      const std::string dialect = cell::config::LoadStation(id).dialect;
+      const std::string dialect = cell::interp::LoadStation(id).dialect;
       std::vector<std::string> spaces = {id};
       if (dialect == "balt") {
         for (const char* mp : {"/MP0", "/MP2", "/MP3", "/MP4", "/MP5", "/MP6"}) spaces.push_back(id + mp);

@@ -8,6 +8,7 @@
 #include "cell/bus/topics.h"
 #include "cell/config/config.h"
 #include "cell/idl/health.h"
+#include "cell/interp/station_rules.h"
 #include "cell/names/names.h"
 #include "cell/scheduler/json.h"
 #include "cell/scheduler/route.h"
@@ -149,7 +150,7 @@ void Service::Start() {
   {
     std::lock_guard lk(mu_);
     for (auto& id : config::ListStations()) {
-      auto cfg = config::LoadStation(id);
+      auto cfg = interp::LoadStation(id);
       dialect_[id] = cfg.dialect;
       online_[id] = false;
       sched_.ConfigureStation(id, cfg.dialect);

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <string>
 #include <string_view>
@@ -46,7 +47,7 @@ std::string IdentityOverride();
 //
 //   [station]
 //   id = "KT01"              # must equal the file name's stem
-//   dialect = "ktapl"        # a dialect of the registry (cell/interp/interp.h): ktapl | okuma | emco | balt
+//   dialect = "ktapl"        # a dialect of the registry (DialectRules below): ktapl | okuma | emco | balt
 //   description = "..."      # optional, default ""
 //   coded_pallets = false    # optional, default false (KT-APL coded-pallet FMS module: pallets 1-127)
 //   dds = "cyclonedds"       # optional: the DDS stack of the station's processes (wins over CELL_DDS)
@@ -74,7 +75,7 @@ std::string IdentityOverride();
 //   interlock_off = 185      #   ON again at every program start (the control's reset state)
 //   note = "OSP-E100L ln 2015-2023"  # optional (up to 80 characters): the source, quoted in the refusal
 //
-// Each [[tools]] entry must also fit the station dialect's own ranges (interp::Dialect::CheckToolEntry;
+// With DialectRules, each [[tools]] entry must also fit the station dialect's own ranges (check_tool;
 // KT-APL: the TLD statement's, socket 1-999, length and diameter +-999.999 mm, life up to 99 h 59 min).
 // Unknown keys inside [station], [[tools]] and [[io.aux]] are errors (typos must not pass silently); other
 // tables ([machine], [axes.x], [magazine], ...) belong to other readers and are ignored here.
@@ -104,6 +105,19 @@ struct StationConfig {
   std::filesystem::path file;                 // the file it was read from
 };
 
+// What a station file's dialect is checked against. The interpreter's registry supplies them
+// (cell/interp/station_rules.h, the tier above): this library names dialects as strings and links none, and
+// the processes that run programs consult the registry. Without rules a dialect is any name of 1-32 letters,
+// digits,
+// '_' or '-', kept as written, and tools are checked only for what every dialect shares.
+struct DialectRules {
+  std::string names;  // every dialect's name, for messages: "ktapl, okuma, emco, balt"
+  // The dialect's own name for `name` (an alias, any case), or "" when no dialect has it.
+  std::function<std::string(std::string_view name)> canonical;
+  // Why `tool` does not fit the ranges of `dialect` (a name canonical returned), or "".
+  std::function<std::string(std::string_view dialect, const tooltable::ToolEntry& tool)> check_tool;
+};
+
 // Station ids (file stems of <ConfigDir()>/stations/*.toml), sorted. Throws cell::Error(kNotFound) when
 // the stations directory does not exist.
 std::vector<std::string> ListStations();
@@ -111,10 +125,10 @@ std::vector<std::string> ListStations();
 // Reads and validates <ConfigDir()>/stations/<id>.toml. Throws cell::Error: kInvalidArgument for a
 // malformed id or file (the message names the file, line, key and allowed values), kNotFound when there
 // is no such station (the message lists the configured ones).
-StationConfig LoadStation(std::string_view id);
+StationConfig LoadStation(std::string_view id, const DialectRules* rules = nullptr);
 
 // Same for an explicit file; the [station] id must equal the file's stem.
-StationConfig LoadStationFile(const std::filesystem::path& file);
+StationConfig LoadStationFile(const std::filesystem::path& file, const DialectRules* rules = nullptr);
 
 // True for a well-formed station id: 1-16 characters of A-Z, a-z, 0-9, '_' or '-'.
 bool IsValidStationId(std::string_view id);

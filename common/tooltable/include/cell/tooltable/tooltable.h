@@ -3,7 +3,7 @@
 // its wire form (cell/tooltable/wire.h) and ToJson/FromJson its stored and printed form.
 //
 // Each dialect reads and writes tool tables in its own form (KT-APL TLD statements, a lathe's X/Z/R/L table,
-// a mill's offset file) through the dialect registry (services/interpreter); this library only holds the
+// a mill's offset file) through the dialect registry (interp/registry); this library only holds the
 // data.
 #pragma once
 

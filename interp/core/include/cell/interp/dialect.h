@@ -1,6 +1,6 @@
 // A controller language: everything the cell needs to know about one dialect, behind one interface. Each
-// dialect implements it in its own library under services/interpreter/dialects/<name>/, and the registry
-// (cell/interp/interp.h, services/interpreter/registry) lists them in one table that the program store, the
+// dialect implements it in its own library under interp/dialects/<name>/, and the registry
+// (cell/interp/interp.h, interp/registry) lists them in one table that the program store, the
 // scheduler, cell-interp, the station service and the station config use. The core includes no dialect.
 #pragma once
 

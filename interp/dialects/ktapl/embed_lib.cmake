@@ -8,7 +8,7 @@ foreach(f ${files})
   file(READ ${f} text)
   string(APPEND body "    {\"${name}\", R\"KTAPLLIB(${text})KTAPLLIB\"},\n")
 endforeach()
-file(WRITE ${OUT}.tmp "// Generated from services/interpreter/dialects/ktapl/lib by embed_lib.cmake. Do not edit.
+file(WRITE ${OUT}.tmp "// Generated from interp/dialects/ktapl/lib by embed_lib.cmake. Do not edit.
 #include <map>
 #include <optional>
 #include <string>
