@@ -246,7 +246,7 @@ class Interpreter {
 };
 
 // The machine library's own cycle time for `prog`, started at rest at the end of `home`.
-double ReferenceCycle(const servo::MachineConfig& cfg, const std::vector<cell::MotionSegment>& home,
+double ReferenceCycle(const cell::machine::MachineConfig& cfg, const std::vector<cell::MotionSegment>& home,
                       const std::vector<cell::MotionSegment>& prog) {
   servo::Machine m(cfg, servo::ClockKind::kVirtual);
   uint64_t id = 0;
@@ -314,8 +314,8 @@ class ServoDds : public ::testing::Test {
   static std::string Log(const std::string& name) {
     return "\n--- " + name + " ---\n" + cell::testing::ReadFile((fs::path(*root_) / name).string());
   }
-  static servo::MachineConfig StationConfig(const std::string& id) {
-    return servo::LoadMachineConfig(fs::path(*root_) / "etc" / "stations" / (id + ".toml"));
+  static cell::machine::MachineConfig StationConfig(const std::string& id) {
+    return cell::machine::LoadMachineConfig(fs::path(*root_) / "etc" / "stations" / (id + ".toml"));
   }
   static int32_t NextRun() { return ++run_id_; }
 

@@ -15,6 +15,9 @@
 #include "cell/servo/machine.h"
 
 using namespace cell::servo;
+using cell::machine::AxisConfig;
+using cell::machine::DefaultMachineConfig;
+using cell::machine::MachineConfig;
 
 namespace {
 

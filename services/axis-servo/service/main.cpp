@@ -29,7 +29,7 @@ int main(int argc, char** argv) {
       throw cell::Error(cell::Errc::kInvalidArgument, "CELL_CLOCK=" + clock + ": expected real or virtual");
     cell::daemon::Daemon daemon;
     auto cfg = cell::config::LoadStation(station);  // validates the [station] table
-    auto machine = cell::servo::LoadMachineConfig(cfg.file);
+    auto machine = cell::machine::LoadMachineConfig(cfg.file);
     const auto dds = cell::config::DdsVendor(cfg.dds);  // the station file's dds, else CELL_DDS
     cell::bus::Participant bus(cell::bus::Named("cell-axis-servo/" + station, dds.vendor));
     cell::health::Announcer health(bus, "cell-axis-servo", station);

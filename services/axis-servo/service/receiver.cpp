@@ -7,6 +7,8 @@
 
 namespace cell::servo {
 
+using machine::MachineConfig;
+
 Segment FromWire(const cell::MotionSegment& m, uint64_t id) {
   Segment s;
   s.id = id;

@@ -5,6 +5,8 @@
 
 namespace cell::servo {
 
+using machine::MachineConfig;
+
 Service::Service(bus::Participant& p, MachineConfig cfg, ClockKind clock)
     : progress_(p, bus::topics::kProgress, bus::QosKind::kState),
       axes_(p, bus::topics::kAxisState, bus::QosKind::kTelemetry),

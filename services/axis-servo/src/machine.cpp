@@ -9,6 +9,10 @@
 #include "cell/error/error.h"
 
 namespace cell::servo {
+
+using machine::AxisConfig;
+using machine::AxisType;
+using machine::MachineConfig;
 namespace {
 
 bool IsPathMotion(SegmentKind k) {

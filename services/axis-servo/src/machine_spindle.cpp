@@ -8,6 +8,8 @@
 
 namespace cell::servo {
 
+using machine::AxisType;
+
 bool Machine::StartSpindle(const Segment& s) {
   const int dir = s.spindle_dir == SpindleDirection::kCW    ? 1
                   : s.spindle_dir == SpindleDirection::kCCW ? -1

@@ -5,6 +5,8 @@
 
 namespace cell::servo {
 
+using machine::MachineConfig;
+
 Runner::Runner(MachineConfig config, ClockKind clock, EventSink sink)
     : machine_(std::move(config), clock), sink_(std::move(sink)) {}
 

@@ -5,6 +5,9 @@
 
 namespace cell::servo {
 
+using machine::AxisConfig;
+using machine::DriveConfig;
+
 void AxisServo::Configure(const AxisConfig& axis, double period) {
   const DriveConfig& d = axis.drive;
   period_ = period;

@@ -13,6 +13,7 @@
 namespace cell::servo {
 namespace {
 
+using machine::DefaultMachineConfig;
 using testing::Find;
 
 Machine Lathe() {

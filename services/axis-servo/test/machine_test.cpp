@@ -15,6 +15,10 @@
 namespace cell::servo {
 namespace {
 
+using machine::AxisConfig;
+using machine::DefaultMachineConfig;
+using machine::LoadMachineConfig;
+using machine::MachineConfig;
 using testing::Find;
 using testing::LimitChecker;
 using testing::Line;

@@ -11,6 +11,8 @@
 namespace cell::servo {
 namespace {
 
+using machine::AxisConfig;
+using machine::DefaultMachineConfig;
 using testing::Arc;
 using testing::Find;
 using testing::LimitChecker;

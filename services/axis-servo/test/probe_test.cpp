@@ -9,6 +9,8 @@
 namespace cell::servo {
 namespace {
 
+using machine::DefaultMachineConfig;
+using machine::MachineConfig;
 using testing::Find;
 using testing::Rapid;
 

@@ -14,6 +14,9 @@
 namespace cell::servo {
 namespace {
 
+using machine::DefaultMachineConfig;
+using machine::MachineConfig;
+
 TEST(Runner, FeedsOnCreditAndDeliversEventsInOrder) {
   for (ClockKind clock : {ClockKind::kVirtual, ClockKind::kReal}) {
     MachineConfig c = DefaultMachineConfig("hmc");

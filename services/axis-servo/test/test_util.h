@@ -46,7 +46,7 @@ class LimitChecker {
  public:
   explicit LimitChecker(const Machine& m) : m_(m) {
     for (int i = 0; i < kNumAxes; ++i) {
-      const AxisConfig& a = m.config().axes[i];
+      const machine::AxisConfig& a = m.config().axes[i];
       if (!a.present) continue;
       vmax_[i] = std::max(a.rapid, a.max_velocity) / 60.0;
       amax_[i] = a.max_acceleration;

@@ -11,6 +11,8 @@
 namespace cell::servo {
 namespace {
 
+using machine::LoadMachineConfig;
+
 // KT01's in_position (0.025 mm): an exact-stop segment completes within it (the jerk filter still settles).
 constexpr double kInPosition = 0.025;
 

@@ -14,8 +14,8 @@
 #include <string>
 #include <vector>
 
+#include "cell/machine/machine_config.h"
 #include "cell/partmodel/part_model.h"
-#include "cell/servo/config.h"
 #include "cell/servo/planner.h"
 #include "cell/servo/segment.h"
 #include "cell/servo/servo.h"
@@ -54,9 +54,9 @@ struct AxisState {
 
 class Machine {
  public:
-  Machine(MachineConfig config, ClockKind clock);
+  Machine(machine::MachineConfig config, ClockKind clock);
 
-  const MachineConfig& config() const { return cfg_; }
+  const machine::MachineConfig& config() const { return cfg_; }
   ClockKind clock() const { return clock_kind_; }
   double period() const { return cfg_.servo_period_s; }
 
@@ -172,7 +172,7 @@ class Machine {
   // ball's tip), plus the ball's radius in Z.
   partmodel::Pose PoseOf(const AxisVector& v) const;
 
-  MachineConfig cfg_;
+  machine::MachineConfig cfg_;
   ClockKind clock_kind_;
   PlannerLimits limits_;
   Planner planner_;

@@ -1,6 +1,6 @@
 // Runner: a Machine on its own servo thread, safe to call from DDS listener threads.
 //
-//   Runner r(LoadMachineConfig(file), ClockKind::kVirtual, [&](const Event& e) { publish(e); });
+//   Runner r(machine::LoadMachineConfig(file), ClockKind::kVirtual, [&](const Event& e) { publish(e); });
 //   r.Start();
 //   if (r.credits() > 0) r.Push(segment);       // from the segment listener
 //   AxisState s = r.State();                    // from a wall-clock telemetry timer
@@ -24,7 +24,7 @@ namespace cell::servo {
 class Runner {
  public:
   using EventSink = std::function<void(const Event&)>;
-  Runner(MachineConfig config, ClockKind clock, EventSink sink);
+  Runner(machine::MachineConfig config, ClockKind clock, EventSink sink);
   ~Runner();
   Runner(const Runner&) = delete;
   Runner& operator=(const Runner&) = delete;

@@ -7,11 +7,14 @@
 #include <cstdint>
 #include <string>
 
+#include "cell/machine/machine_config.h"
+
 namespace cell::servo {
 
-inline constexpr int kNumAxes = 6;
-enum Axis : int { kX = 0, kY = 1, kZ = 2, kA = 3, kB = 4, kC = 5 };
-inline constexpr std::array<char, kNumAxes> kAxisNames = {'x', 'y', 'z', 'a', 'b', 'c'};
+// The axes are the station file's (cell::machine); the servo indexes by them everywhere.
+using machine::kAxisNames;
+using machine::kNumAxes;
+using enum machine::Axis;
 
 // Positions of the six axes: mm for X Y Z, degrees for A B C.
 using AxisVector = Eigen::Matrix<double, kNumAxes, 1>;

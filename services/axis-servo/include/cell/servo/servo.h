@@ -5,7 +5,7 @@
 #include <Eigen/Core>
 #include <vector>
 
-#include "cell/servo/config.h"
+#include "cell/machine/machine_config.h"
 #include "cell/servo/segment.h"
 
 namespace cell::servo {
@@ -15,7 +15,7 @@ namespace cell::servo {
 class AxisServo {
  public:
   AxisServo() = default;
-  void Configure(const AxisConfig& axis, double period);
+  void Configure(const machine::AxisConfig& axis, double period);
   void Reset(double position);                              // axis units; at rest, integrator cleared
   void Shift(double units) { state_[0] += units * gain_; }  // renumber the position (modular axes)
 

@@ -1,5 +1,5 @@
 // What the dashboard knows of each station from configuration: identity, dialect, machine kind and the
-// axes the machine really has (deploy/stations/<ID>.toml, read with the axis servo's own config reader),
+// axes the machine really has (deploy/stations/<ID>.toml, read with cell::machine as the axis servo does),
 // so that a lathe shows X/Z and a machining centre X/Y/Z and B without a list of station kinds here.
 #pragma once
 
@@ -9,7 +9,7 @@
 namespace cell::config {
 struct StationConfig;
 }
-namespace cell::servo {
+namespace cell::machine {
 struct MachineConfig;
 }
 
@@ -32,7 +32,7 @@ struct StationDef {
 
 // From the two config readers' results (tests build these without files).
 StationDef MakeStationDef(const cell::config::StationConfig& station,
-                          const cell::servo::MachineConfig& machine);
+                          const cell::machine::MachineConfig& machine);
 // Every configured station (cell::config::ListStations), in order. Throws cell::Error like LoadStation.
 std::vector<StationDef> LoadStationDefs();
 

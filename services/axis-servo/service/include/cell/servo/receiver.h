@@ -48,7 +48,7 @@ class Receiver {
   static constexpr auto kLookAheadWait = std::chrono::milliseconds(5);
   static constexpr std::size_t kMaxCutTools = 128;  // SegmentProgress.cutting's bound
 
-  Receiver(MachineConfig cfg, ClockKind clock, std::uint64_t boot_id, ReceiverSink& sink);
+  Receiver(machine::MachineConfig cfg, ClockKind clock, std::uint64_t boot_id, ReceiverSink& sink);
 
   // ---- from the bus (any thread) ----
   void OnSegment(cell::MotionSegment m);

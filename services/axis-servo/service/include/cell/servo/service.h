@@ -15,7 +15,7 @@ namespace cell::servo {
 
 class Service final : public ReceiverSink {
  public:
-  Service(bus::Participant& p, MachineConfig cfg, ClockKind clock);
+  Service(bus::Participant& p, machine::MachineConfig cfg, ClockKind clock);
   ~Service() override;
   void Start();
   void Stop();

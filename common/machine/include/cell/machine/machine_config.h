@@ -1,4 +1,5 @@
-// Station machine configuration: the machine tables of deploy/stations/<ID>.toml.
+// Station machine configuration: the machine tables of deploy/stations/<ID>.toml, read by the axis servo
+// and by the dashboard (which axes a station has).
 // Tables owned by others ([station] apart from id/dialect, anything unknown) are ignored; [[tools]] is read
 // only for its `tool` and `socket` keys (initial magazine contents; common/config reads the rest).
 #pragma once
@@ -9,10 +10,14 @@
 #include <string_view>
 #include <vector>
 
-#include "cell/servo/segment.h"
 #include "cell/tooltable/tooltable.h"
 
-namespace cell::servo {
+namespace cell::machine {
+
+// The six axes every station file and motion segment index by.
+inline constexpr int kNumAxes = 6;
+enum Axis : int { kX = 0, kY = 1, kZ = 2, kA = 3, kB = 4, kC = 5 };
+inline constexpr std::array<char, kNumAxes> kAxisNames = {'x', 'y', 'z', 'a', 'b', 'c'};
 
 enum class AxisType { kLinear, kRotary, kIndex };
 
@@ -92,4 +97,4 @@ MachineConfig ParseMachineConfig(std::string_view toml_text, const std::string& 
 // "lathe" (X as a diameter, Z, like OK01). Throws cell::Error(kInvalidArgument) for another kind.
 MachineConfig DefaultMachineConfig(std::string_view kind);
 
-}  // namespace cell::servo
+}  // namespace cell::machine

@@ -5,9 +5,9 @@
 #include <string>
 
 #include "cell/error/error.h"
-#include "cell/servo/config.h"
+#include "cell/machine/machine_config.h"
 
-namespace cell::servo {
+namespace cell::machine {
 namespace {
 
 const std::string kStations = std::string(CELL_SOURCE_DIR) + "/deploy/stations/";
@@ -164,4 +164,4 @@ TEST(Config, LatheNeedsDiameterX) {
 }
 
 }  // namespace
-}  // namespace cell::servo
+}  // namespace cell::machine

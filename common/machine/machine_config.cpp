@@ -1,4 +1,4 @@
-#include "cell/servo/config.h"
+#include "cell/machine/machine_config.h"
 
 #include <fmt/format.h>
 
@@ -13,7 +13,7 @@
 #include "cell/error/error.h"
 #include "cell/toml/parse.h"
 
-namespace cell::servo {
+namespace cell::machine {
 namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
@@ -426,4 +426,4 @@ max_feed = 2000.0
                             "<builtin hmc>");
 }
 
-}  // namespace cell::servo
+}  // namespace cell::machine
