@@ -1,7 +1,7 @@
 // QIF exports validated against the QIF 3.0 schema (DESIGN §6: `xmllint --noout --nonet --schema
 // reference/qif3/QIFApplications/QIFDocument.xsd`), with a broken document as the negative control so the
-// check can fail. The schema is the shared reference beside the repository (as the MTConnect test finds
-// its schemas); without it the tests skip.
+// check can fail. The schema is the repository's copy (tests/schemas/qif3, as the MTConnect tests find
+// theirs in tests/schemas/mtconnect); without it the tests fail.
 #include <gtest/gtest.h>
 
 #include "cell/inspection/inspection_file.h"
@@ -16,8 +16,7 @@ using cell::testing::ValidateQif;
 class QifSchema : public ::testing::Test {
  protected:
   void SetUp() override {
-    if (QifSchemaDir().empty())
-      GTEST_SKIP() << "QIF 3.0 schema not found (shared/reference/qif3 beside the repository)";
+    ASSERT_NE(QifSchemaDir(), "") << "QIF 3.0 schema not found (tests/schemas/qif3 in CELL_SOURCE_DIR)";
   }
 };
 

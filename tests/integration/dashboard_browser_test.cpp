@@ -27,13 +27,10 @@ std::string Program(const std::string& name, const std::string& utl) {
          name + " PART DONE)\nN50 M30\n%\n";
 }
 
+// The MTConnect 2.4 schemas the repository carries (tests/schemas/README.md); "" when they are missing.
 std::string SchemaDir() {
-  std::filesystem::path p = SourceDir();
-  for (int up = 0; up < 4; ++up, p = p.parent_path()) {
-    auto c = p.parent_path() / "shared/reference/mtconnect";
-    if (std::filesystem::exists(c / "MTConnectStreams_2.4_1.0.xsd")) return c.string();
-  }
-  return "";
+  const std::string dir = SourceDir() + "/tests/schemas/mtconnect";
+  return std::filesystem::exists(dir + "/MTConnectStreams_2.4_1.0.xsd") ? dir : "";
 }
 
 class DashboardBrowser : public ::testing::Test {
@@ -155,7 +152,7 @@ TEST_F(DashboardBrowser, ThePageFollowsTheCellLive) {
   EXPECT_TRUE(row) << w.out;
 
   // MTConnect documents of the live cell.
-  ASSERT_NE(SchemaDir(), "") << "shared/reference/mtconnect not found beside the repository";
+  ASSERT_NE(SchemaDir(), "") << "tests/schemas/mtconnect not found in CELL_SOURCE_DIR";
   EXPECT_EQ(Validate("/probe", "MTConnectDevices_2.4_1.0.xsd"), "");
   EXPECT_EQ(Validate("/current", "MTConnectStreams_2.4_1.0.xsd"), "");
   EXPECT_EQ(Validate("/sample?count=500", "MTConnectStreams_2.4_1.0.xsd"), "");

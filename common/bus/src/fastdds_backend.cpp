@@ -236,12 +236,15 @@ class FastBackend : public Backend {
         eprosima::fastrtps::Duration_t(1, 0);
     if (!o.security.identity.empty()) Secure(o.security, qos);
     identity_ = o.security.identity;
-    ChooseSlot(o.domain, qos);
-    // The listener hears discovery only (no status: data goes to each reader's own listener).
-    p_ = factory->create_participant(o.domain, qos, &writers_, dds::StatusMask::none());
-    if (!p_ && qos.wire_protocol().participant_id >= 0) {  // lost a race for the slot: let Fast DDS choose
-      qos.wire_protocol().participant_id = -1;
+    {
+      // One participant at a time per process, from choosing its slot until it has bound the slot's ports.
+      SlotTable& slots = Slots();
+      std::lock_guard lk(slots.mu);
+      slot_ = ChooseSlot(o.domain, qos, slots.held);
+      // The listener hears discovery only (no status: data goes to each reader's own listener).
       p_ = factory->create_participant(o.domain, qos, &writers_, dds::StatusMask::none());
+      // Taken by p_, or, when it could not be made, kept by Fast DDS for the life of the process.
+      if (slot_ >= 0) slots.held.insert(slot_);
     }
     if (!p_)
       throw Error(
@@ -266,7 +269,12 @@ class FastBackend : public Backend {
 
   ~FastBackend() override {
     p_->delete_contained_entities();
-    dds::DomainParticipantFactory::get_instance()->delete_participant(p_);
+    dds::DomainParticipantFactory::get_instance()->delete_participant(p_);  // releases its id and ports
+    if (slot_ >= 0) {
+      SlotTable& slots = Slots();
+      std::lock_guard lk(slots.mu);
+      slots.held.erase(slot_);
+    }
   }
 
   std::string Name() const override { return "fastdds"; }
@@ -355,18 +363,31 @@ class FastBackend : public Backend {
   // participants in bus_test showed it. So the backend takes the lowest slot whose ports no process (of
   // either stack: Cyclone uses the same formula) has bound, and a fresh random GUID prefix, because Fast DDS
   // derives the prefix from the number and a rejoin must look like a stranger to every peer.
-  static void ChooseSlot(int domain, dds::DomainParticipantQos& qos) {
+  // Free ports are not enough: Fast DDS keeps the number of a participant it failed to make (a refused
+  // identity: RTPSDomainImpl::createParticipant returns before releasing it) and refuses it ever after
+  // ("RTPSParticipant with the same ID already exists"). Hence `held`, the slots this process gave Fast DDS
+  // and not yet got back. Returns the slot, -1 when all 32 are taken (Fast DDS then numbers it).
+  static int ChooseSlot(int domain, dds::DomainParticipantQos& qos, const std::set<int>& held) {
     for (int slot = 0; slot < 32; ++slot) {
       const int port = 7400 + 250 * domain + 10 + 2 * slot;  // metatraffic unicast; user unicast is port + 1
-      if (!PortFree(port) || !PortFree(port + 1)) continue;
+      if (held.count(slot) || !PortFree(port) || !PortFree(port + 1)) continue;
       qos.wire_protocol().participant_id = slot;
       std::random_device rd;
       auto& prefix = qos.wire_protocol().prefix;
       prefix.value[0] = 0x01;  // eProsima's vendor id, as Fast DDS writes it
       prefix.value[1] = 0x0f;
       for (size_t i = 2; i < prefix.size; ++i) prefix.value[i] = static_cast<rtps::octet>(rd());
-      return;
+      return slot;
     }
+    return -1;
+  }
+  struct SlotTable {
+    std::mutex mu;
+    std::set<int> held;
+  };
+  static SlotTable& Slots() {
+    static SlotTable table;  // every domain: Fast DDS numbers the participants of a process, not of a domain
+    return table;
   }
   static bool PortFree(int port) {
     int fd = socket(AF_INET, SOCK_DGRAM, 0);
@@ -434,6 +455,7 @@ class FastBackend : public Backend {
   std::string partition_;
   WriterPartitions writers_;  // declared before p_: the participant (deleted in ~FastBackend) uses it
   dds::DomainParticipant* p_ = nullptr;
+  int slot_ = -1;         // participant id, -1: Fast DDS chose it
   std::string identity_;  // DDS Security identity; empty: unsecured
   dds::Publisher* pub_ = nullptr;
   dds::Subscriber* sub_ = nullptr;

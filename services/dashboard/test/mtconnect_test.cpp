@@ -16,18 +16,14 @@ namespace testing {
 
 std::string SchemaDir() {
   if (const char* d = std::getenv("CELL_MTCONNECT_SCHEMAS"); d && *d) return d;
-  // The shared reference lives beside the repository (CI: beside the clone; here: beside the worktrees).
-  std::filesystem::path p = cell::testing::SourceDir();
-  for (int up = 0; up < 4; ++up, p = p.parent_path()) {
-    auto c = p.parent_path() / "shared/reference/mtconnect";
-    if (std::filesystem::exists(c / "MTConnectStreams_2.4_1.0.xsd")) return c.string();
-  }
-  return "";
+  // The repository carries them (tests/schemas/README.md), so a clone validates with nothing beside it.
+  const std::string dir = cell::testing::SourceDir() + "/tests/schemas/mtconnect";
+  return std::filesystem::exists(dir + "/MTConnectStreams_2.4_1.0.xsd") ? dir : "";
 }
 
 std::string Validate(const std::string& xml, const std::string& schema) {
   const std::string dir = SchemaDir();
-  if (dir.empty()) return "MTConnect schemas not found (shared/reference/mtconnect beside the repository)";
+  if (dir.empty()) return "MTConnect schemas not found (tests/schemas/mtconnect in CELL_SOURCE_DIR)";
   static int n = 0;
   std::string file = "/tmp/cell-mtc-" + std::to_string(getpid()) + "-" + std::to_string(n++) + ".xml";
   std::ofstream(file) << xml;

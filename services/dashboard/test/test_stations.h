@@ -54,7 +54,8 @@ inline tooltable::ToolTable Tools(const std::vector<ToolRow>& rows) {
   return tooltable::ToolTable(out);
 }
 
-// The MTConnect 2.4 schemas (`_1.0.xsd` variants) in the shared reference beside the repository.
+// The MTConnect 2.4 schemas (`_1.0.xsd` variants) the repository carries in tests/schemas/mtconnect, or
+// CELL_MTCONNECT_SCHEMAS; "" when they are missing.
 std::string SchemaDir();
 // Validates a document with xmllint --noout --nonet --schema; returns xmllint's complaint, "" when valid.
 std::string Validate(const std::string& xml, const std::string& schema);
