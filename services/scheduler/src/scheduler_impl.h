@@ -1,0 +1,102 @@
+// The scheduler's decision core, private to cell_scheduler_lib. Scheduler::Impl changes the State, collects
+// what a call produced (Effects) and commits the call's changes through the Store in one transaction.
+// scheduler.cpp holds the decision rules and the commands, scheduler_reports.cpp what stations report,
+// scheduler_queries.cpp the views.
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <type_traits>
+#include <utility>
+#include <vector>
+
+#include "cell/scheduler/program_source.h"
+#include "cell/scheduler/route.h"
+#include "cell/scheduler/scheduler.h"
+#include "scheduler_store.h"
+#include "state.h"
+
+namespace cell::scheduler {
+
+struct Scheduler::Impl : State {
+  Options opt;
+  ProgramSource& programs;
+  std::optional<Store> store;  // none: in memory only
+  Effects fx;                  // what the call in progress produced
+
+  Impl(Options o, ProgramSource& p);
+
+  std::int64_t NowMs() const {
+    return std::chrono::duration_cast<std::chrono::milliseconds>(opt.clock().time_since_epoch()).count();
+  }
+  int MaxPallet() const { return opt.coded_pallets ? 127 : 255; }
+  void CheckPallet(int pallet) const;
+
+  // ---- building operations from specs ----
+  std::string DialectClash(const ProgramMeta& meta, const std::vector<std::string>& station_ids) const;
+  // Throws when `strict`; otherwise records the problem in Op::blocked.
+  Op BuildOp(const OpSpec& spec, bool require_ucy, bool strict, std::string_view where);
+  Ops BuildRouteOps(const RouteSpec& spec, bool strict);
+
+  // ---- decisions ----
+  void JobChanged(JobRec& j);
+  DecisionRec& AddDecision(JobRec& j, std::string trigger);
+  void SetWaiting(JobRec& j, std::string reason, std::string_view trigger, const AllocationRec* alloc);
+  // Allocates the job's current operation, or makes it wait.
+  void Evaluate(JobRec& j, std::string_view trigger);
+  // Hands out the station's next pallet when it has none in hand.
+  void TrySend(int s);
+  DispatchAction Action(const DispatchRec& d, bool resent) const;
+  // Schedule jobs: steps the runner to the next PSELECT run, the END, or an alarm.
+  void StepSchedule(JobRec& j, int station, std::string_view trigger);
+  // Removes a live dispatch from its station (queue or hand) and releases its backlog.
+  void Detach(DispatchRec& d, DState end);
+  void FinishJob(JobRec& j, JobState state, std::string reason);
+  // Re-evaluates waiting jobs whose current operation lists `station` (-1: all).
+  void ReevaluateWaiting(int station, std::string_view trigger);
+  // A station that vanished or faulted gives up its pallets.
+  void Interrupt(int s, const std::string& why);
+
+  // ---- idempotency ----
+  std::optional<std::int64_t> Seen(std::string_view key, const std::string& command) const;
+  void Remember(std::string_view key, const std::string& command, std::int64_t result);
+
+  // ---- call framing: commit or roll back, then hand out effects ----
+  template <typename F>
+  auto Call(F&& f) {
+    fx = Effects{};
+    ClearDirty();
+    try {
+      if constexpr (std::is_void_v<decltype(f())>) {
+        f();
+        Flush();
+      } else {
+        auto r = f();
+        Flush();
+        return r;
+      }
+    } catch (...) {
+      // In-memory state may be ahead of the database: reload what was committed.
+      if (Dirty()) Reload();
+      fx = Effects{};
+      ClearDirty();
+      throw;
+    }
+  }
+  Effects TakeEffects() { return std::exchange(fx, Effects{}); }
+
+  // Back to what the database holds (a failed call may have changed the records).
+  void Reload();
+  // Commits the call's changes.
+  void Flush();
+
+  // ---- views ----
+  JobView View(const JobRec& j, bool with_decisions) const;
+  StationView ViewStation(int s) const;
+  RouteView ViewRoute(const std::string& name, const RouteRec& r) const;
+};
+
+}  // namespace cell::scheduler
