@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Inspection file export (services/inspection-writer/inspection_export_bench.cpp): `cellctl inspect export`
+# Inspection file export (services/inspection-writer/bench/inspection_export_bench.cpp): `cellctl inspect export`
 # without the bus on a KT-APL inspection file of 10,000 measurements: parse the text, export CSV or QIF 3.0,
 # write it to /dev/null. Baseline in the same run: fprintf of 10,000 one-number lines to /dev/null.
 # Figures: CPU ms per export, the ratio to the baseline, and the target (under 1 s per 10,000 measurements).

@@ -30,7 +30,18 @@ class Service {
   void Housekeeping();
 
  private:
+  // Runs one request under mu_, then publishes what it changed on cell/program/list.
   cell::ProgramReply Handle(const cell::ProgramRequest& r);
+  // One per request kind.
+  cell::ProgramReply Put(const cell::ProgramRequest& r);
+  cell::ProgramReply PutChunk(const cell::ProgramRequest& r);
+  cell::ProgramReply Get(const cell::ProgramRequest& r);
+  cell::ProgramReply Show(const cell::ProgramRequest& r);
+  cell::ProgramReply List(const cell::ProgramRequest& r);
+  cell::ProgramReply Copy(const cell::ProgramRequest& r);
+  cell::ProgramReply Rename(const cell::ProgramRequest& r);
+  cell::ProgramReply Delete(const cell::ProgramRequest& r);
+  cell::ProgramReply SetFlag(const cell::ProgramRequest& r);
   // cell/program/list: a changed file's entry (absent: deleted) and its namespace's count; the count alone;
   // one entry.
   void PublishEntry(const std::string& node, const std::string& name);
