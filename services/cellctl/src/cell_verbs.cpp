@@ -170,18 +170,17 @@ std::vector<std::string> Unheard(const nlohmann::json& snap, const std::vector<s
   return out;
 }
 
-}  // namespace
+// The options of every cell verb: one invocation parses one verb.
+struct Opts {
+  std::string stations = "KT01,KT02";
+  std::string clock = "real";
+  std::string service;
+  int count = 0;
+  bool secure = false;
+};
+using OptsPtr = std::shared_ptr<Opts>;
 
-void AddCellVerbs(CLI::App& app, Context& ctx) {
-  struct Opts {
-    std::string stations = "KT01,KT02";
-    std::string clock = "real";
-    std::string service;
-    int count = 0;
-    bool secure = false;
-  };
-  auto o = std::make_shared<Opts>();
-
+void AddCellUp(CLI::App& app, Context& ctx, const OptsPtr& o) {
   auto* up = app.add_subcommand("up",
                                 "start a local cell from the systemd units' command lines (or what is "
                                 "missing of one that is partly down)");
@@ -253,7 +252,9 @@ void AddCellVerbs(CLI::App& app, Context& ctx) {
       if (!u.empty()) std::cout << "dashboard: " << u << " (MTConnect: " << u << "probe)\n";
     }
   });
+}
 
+void AddCellRestart(CLI::App& app, Context& ctx, const OptsPtr& o) {
   auto* restart = app.add_subcommand("restart", "restart one service of the local cell: SERVICE[/ID]");
   restart->add_option("SERVICE", o->service, "e.g. cell-scheduler, cell-interpreter/KT01")->required();
   restart->callback([o, &ctx] {
@@ -288,7 +289,9 @@ void AddCellVerbs(CLI::App& app, Context& ctx) {
     if (!missing.empty()) throw Exit{1, target.service + " did not come up: " + Join(missing, "; ")};
     std::cout << target.service << " restarted: pid " << target.pid << "\n";
   });
+}
 
+void AddCellDown(CLI::App& app) {
   auto* down = app.add_subcommand("down", "stop the local cell (SIGTERM, then SIGKILL after 10 s)");
   down->callback([] {
     RecordLock lock;
@@ -301,7 +304,9 @@ void AddCellVerbs(CLI::App& app, Context& ctx) {
     fs::remove(RecordFile());
     std::cout << "cell down: " << procs.size() << " processes stopped\n";
   });
+}
 
+void AddCellWatch(CLI::App& app, Context& ctx, const OptsPtr& o) {
   auto* watch =
       app.add_subcommand("watch", "live view of the cell: stations, backlog, waiting pallets, jobs");
   watch->add_option("--count", o->count, "stop after N frames (0: never; 1: one frame for scripts)")
@@ -356,6 +361,16 @@ void AddCellVerbs(CLI::App& app, Context& ctx) {
       }
     }
   });
+}
+
+}  // namespace
+
+void AddCellVerbs(CLI::App& app, Context& ctx) {
+  auto o = std::make_shared<Opts>();
+  AddCellUp(app, ctx, o);
+  AddCellRestart(app, ctx, o);
+  AddCellDown(app);
+  AddCellWatch(app, ctx, o);
 }
 
 }  // namespace cellctl

@@ -87,20 +87,16 @@ class ClientMemory : public cell::program_store::MemoryBackend {
   int n_ = 0;
 };
 
-}  // namespace
+// The options of every program verb: one invocation parses one verb.
+struct Opts {
+  std::string file, name, node = "HOST", from = "HOST", to = "HOST", dialect, type, out, pattern = "*", a, b;
+  bool force = false;
+  uint32_t revision = 0;
+};
+using OptsPtr = std::shared_ptr<Opts>;
 
-void AddProgramVerbs(CLI::App& app, Context& ctx) {
-  auto* prog = app.add_subcommand("program", "the program store")->require_subcommand(1);
-
-  struct Opts {
-    std::string file, name, node = "HOST", from = "HOST", to = "HOST", dialect, type, out, pattern = "*", a,
-                            b;
-    bool force = false;
-    uint32_t revision = 0;
-  };
-  auto o = std::make_shared<Opts>();
-
-  auto* put = prog->add_subcommand("put", "store FILE (a new name, or --force for a new revision)");
+void AddProgramPut(CLI::App& prog, Context& ctx, const OptsPtr& o) {
+  auto* put = prog.add_subcommand("put", "store FILE (a new name, or --force for a new revision)");
   put->add_option("FILE", o->file)->required();
   auto* name_opt =
       put->add_option("--name", o->name, "stored name (default: the KT-APL NAM, else the file name)");
@@ -137,8 +133,10 @@ void AddProgramVerbs(CLI::App& app, Context& ctx) {
                 << j.value("revision", 0) << " (" << j.value("size", 0) << " bytes, " << what << ")\n";
     }
   });
+}
 
-  auto* get = prog->add_subcommand("get", "print a program (or -o FILE)");
+void AddProgramGet(CLI::App& prog, Context& ctx, const OptsPtr& o) {
+  auto* get = prog.add_subcommand("get", "print a program (or -o FILE)");
   get->add_option("NAME", o->name)->required();
   get->add_option("--node", o->node);
   get->add_option("--revision", o->revision, "a past revision (default: latest)")->check(Decimal());
@@ -157,8 +155,10 @@ void AddProgramVerbs(CLI::App& app, Context& ctx) {
       WriteLocalFile(o->out, *text);
     }
   });
+}
 
-  auto* show = prog->add_subcommand("show", "metadata: type, dialect, NAM, UTL, UCY, revisions");
+void AddProgramShow(CLI::App& prog, Context& ctx, const OptsPtr& o) {
+  auto* show = prog.add_subcommand("show", "metadata: type, dialect, NAM, UTL, UCY, revisions");
   show->add_option("NAME", o->name)->required();
   show->add_option("--node", o->node);
   show->add_flag("--json", ctx.json);
@@ -174,16 +174,20 @@ void AddProgramVerbs(CLI::App& app, Context& ctx) {
       std::cout << "  " << r["revision"] << "  " << r["created_at"].get<std::string>() << "  " << r["size"]
                 << " bytes  " << r["sha256"].get<std::string>().substr(0, 16) << "\n";
   });
+}
 
-  auto* rm = prog->add_subcommand("rm", "delete a program (not when protected)");
+void AddProgramRm(CLI::App& prog, Context& ctx, const OptsPtr& o) {
+  auto* rm = prog.add_subcommand("rm", "delete a program (not when protected)");
   rm->add_option("NAME", o->name)->required();
   rm->add_option("--node", o->node);
   rm->callback([o, &ctx] {
     CheckAddress(o->node, o->name);
     ctx.Programs().Delete(o->node, o->name, ctx.IdempotencyKey("program-rm"));
   });
+}
 
-  auto* ls = prog->add_subcommand("ls", "list programs matching PATTERN (* and ?)");
+void AddProgramLs(CLI::App& prog, Context& ctx, const OptsPtr& o) {
+  auto* ls = prog.add_subcommand("ls", "list programs matching PATTERN (* and ?)");
   ls->add_option("PATTERN", o->pattern);
   ls->add_option("--node", o->node);
   ls->add_flag("--json", ctx.json);
@@ -198,10 +202,12 @@ void AddProgramVerbs(CLI::App& app, Context& ctx) {
               : ctx.Programs().List(o->node, o->pattern),
           {"name", "node", "type", "dialect", "revision", "size", "protected"});
   });
+}
 
+void AddProgramCopyMove(CLI::App& prog, Context& ctx, const OptsPtr& o) {
   for (std::string verb : {"cp", "mv"}) {
-    auto* c = prog->add_subcommand(verb, verb == "cp" ? "copy A to B (between namespaces: --from/--to)"
-                                                      : "rename A to B (between namespaces: --from/--to)");
+    auto* c = prog.add_subcommand(verb, verb == "cp" ? "copy A to B (between namespaces: --from/--to)"
+                                                     : "rename A to B (between namespaces: --from/--to)");
     c->add_option("A", o->a)->required();
     c->add_option("B", o->b);
     c->add_option("--from", o->from, "source namespace (default HOST)");
@@ -219,10 +225,12 @@ void AddProgramVerbs(CLI::App& app, Context& ctx) {
         ctx.Programs().Rename(o->from, o->a, o->to, b, key);
     });
   }
+}
 
+void AddProgramProtect(CLI::App& prog, Context& ctx, const OptsPtr& o) {
   for (std::string verb : {"protect", "unprotect"}) {
     auto* p =
-        prog->add_subcommand(verb, verb == "protect" ? "forbid overwrite and delete" : "allow them again");
+        prog.add_subcommand(verb, verb == "protect" ? "forbid overwrite and delete" : "allow them again");
     p->add_option("NAME", o->name)->required();
     p->add_option("--node", o->node);
     p->callback([o, &ctx, verb] {
@@ -230,11 +238,13 @@ void AddProgramVerbs(CLI::App& app, Context& ctx) {
       ctx.Programs().Protect(o->node, o->name, verb == "protect");
     });
   }
+}
 
-  // Balt-System's memory commands on a station's memories (docs/dialects/balt.md, "Memories").
-  auto* mem = prog->add_subcommand("memory",
-                                   "run a Balt-System memory command (DIR COP REN DEL ATT DIF INI "
-                                   "SPG REL) on STATION's memories, e.g. \"COP,P9/MP2,P2/MP3\"");
+// Balt-System's memory commands on a station's memories (docs/dialects/balt.md, "Memories").
+void AddProgramMemory(CLI::App& prog, Context& ctx, const OptsPtr& o) {
+  auto* mem = prog.add_subcommand("memory",
+                                  "run a Balt-System memory command (DIR COP REN DEL ATT DIF INI "
+                                  "SPG REL) on STATION's memories, e.g. \"COP,P9/MP2,P2/MP3\"");
   mem->add_option("STATION", o->node)->required();
   mem->add_option("COMMAND", o->a)->required();
   mem->add_flag("--yes", o->force, "answer Y to the control's question (EXISTS DELETE???, DO YOU CONFIRM?)");
@@ -252,8 +262,10 @@ void AddProgramVerbs(CLI::App& app, Context& ctx) {
     }
     if (r.differ) throw Exit{1, ""};
   });
+}
 
-  auto* imp = prog->add_subcommand("import", "store every file of DIR (names: NAM or file name)");
+void AddProgramImport(CLI::App& prog, Context& ctx, const OptsPtr& o) {
+  auto* imp = prog.add_subcommand("import", "store every file of DIR (names: NAM or file name)");
   imp->add_option("DIR", o->file)->required();
   imp->add_option("--node", o->node);
   imp->add_flag("--force", o->force);
@@ -296,8 +308,10 @@ void AddProgramVerbs(CLI::App& app, Context& ctx) {
     std::cout << n << " file(s) imported\n";
     if (refused > 0) throw Exit{1, std::to_string(refused) + " file(s) refused"};
   });
+}
 
-  auto* exp = prog->add_subcommand("export", "write every program of a namespace into DIR");
+void AddProgramExport(CLI::App& prog, Context& ctx, const OptsPtr& o) {
+  auto* exp = prog.add_subcommand("export", "write every program of a namespace into DIR");
   exp->add_option("DIR", o->file)->required();
   exp->add_option("--node", o->node);
   exp->callback([o, &ctx] {
@@ -315,6 +329,23 @@ void AddProgramVerbs(CLI::App& app, Context& ctx) {
     }
     std::cout << n << " file(s) exported\n";
   });
+}
+
+}  // namespace
+
+void AddProgramVerbs(CLI::App& app, Context& ctx) {
+  auto* prog = app.add_subcommand("program", "the program store")->require_subcommand(1);
+  auto o = std::make_shared<Opts>();
+  AddProgramPut(*prog, ctx, o);
+  AddProgramGet(*prog, ctx, o);
+  AddProgramShow(*prog, ctx, o);
+  AddProgramRm(*prog, ctx, o);
+  AddProgramLs(*prog, ctx, o);
+  AddProgramCopyMove(*prog, ctx, o);
+  AddProgramProtect(*prog, ctx, o);
+  AddProgramMemory(*prog, ctx, o);
+  AddProgramImport(*prog, ctx, o);
+  AddProgramExport(*prog, ctx, o);
 }
 
 }  // namespace cellctl

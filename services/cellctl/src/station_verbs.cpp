@@ -61,23 +61,20 @@ cell::StationVariables Variables(Context& ctx, const std::string& id, uint32_t m
   return *v;
 }
 
-}  // namespace
+// The options of every station verb: one invocation parses one verb.
+struct Opts {
+  std::string id;
+  std::vector<std::string> sets;
+  std::string input;
+  double feed_pct = -1, rapid_pct = -1;
+  int socket = 0;
+  bool mend = false;
+  std::string switch_to;
+};
+using OptsPtr = std::shared_ptr<Opts>;
 
-void AddStationVerbs(CLI::App& app, Context& ctx) {
-  auto* st =
-      app.add_subcommand("station", "stations: state, tools, variables, inputs")->require_subcommand(1);
-  struct Opts {
-    std::string id;
-    std::vector<std::string> sets;
-    std::string input;
-    double feed_pct = -1, rapid_pct = -1;
-    int socket = 0;
-    bool mend = false;
-    std::string switch_to;
-  };
-  auto o = std::make_shared<Opts>();
-
-  auto* ls = st->add_subcommand("ls", "configured and announced stations");
+void AddStationLs(CLI::App& st, Context& ctx) {
+  auto* ls = st.add_subcommand("ls", "configured and announced stations");
   ls->add_flag("--json", ctx.json);
   ls->callback([&ctx] {
     cell::health::Liveness live(ctx.Bus());
@@ -161,8 +158,10 @@ void AddStationVerbs(CLI::App& app, Context& ctx) {
           {"id", "dialect", "online", "execution", "condition", "backlog_s", "pallet", "program", "line",
            "status_text"});
   });
+}
 
-  auto* tools = st->add_subcommand("tools", "the station's tool table as it publishes it");
+void AddStationTools(CLI::App& st, Context& ctx, const OptsPtr& o) {
+  auto* tools = st.add_subcommand("tools", "the station's tool table as it publishes it");
   tools->add_option("ID", o->id)->required();
   tools->add_flag("--json", ctx.json);
   tools->callback([o, &ctx] {
@@ -184,8 +183,10 @@ void AddStationVerbs(CLI::App& app, Context& ctx) {
     }
     Print(ctx, arr, {"tool", "socket", "length", "diameter", "life_left_min", "worn", "broken"});
   });
+}
 
-  auto* vars = st->add_subcommand("vars", "station variables (KT-APL parameters, Okuma common variables)");
+void AddStationVars(CLI::App& st, Context& ctx, const OptsPtr& o) {
+  auto* vars = st.add_subcommand("vars", "station variables (KT-APL parameters, Okuma common variables)");
   vars->add_option("ID", o->id)->required();
   vars->add_option("--set", o->sets, "NAME=VALUE (repeatable)");
   vars->add_flag("--json", ctx.json);
@@ -211,10 +212,12 @@ void AddStationVerbs(CLI::App& app, Context& ctx) {
     // 10 significant digits, as a parameter display shows them (0.05, not 0.05000000000001137).
     for (auto& [k, val] : j.items()) std::cout << fmt::format("{} = {:.10g}\n", k, val.get<double>());
   });
+}
 
-  // The fixture offset table (KT-APL FXC/UFX/ULF, manual ch. 6): the station keeps line n as the variables
-  // H<n>.X ... H<n>.C and H<n>.I (docs/dialects/ktapl.md call 61); shown here as the control's table.
-  auto* offsets = st->add_subcommand("offsets", "fixture offset table (KT-APL H lines set by FXC, UFX, ULF)");
+// The fixture offset table (KT-APL FXC/UFX/ULF, manual ch. 6): the station keeps line n as the variables
+// H<n>.X ... H<n>.C and H<n>.I (docs/dialects/ktapl.md call 61); shown here as the control's table.
+void AddStationOffsets(CLI::App& st, Context& ctx, const OptsPtr& o) {
+  auto* offsets = st.add_subcommand("offsets", "fixture offset table (KT-APL H lines set by FXC, UFX, ULF)");
   offsets->add_option("ID", o->id)->required();
   offsets->add_flag("--json", ctx.json);
   offsets->callback([o, &ctx] {
@@ -253,9 +256,11 @@ void AddStationVerbs(CLI::App& app, Context& ctx) {
       std::cout << "\n";
     }
   });
+}
 
+void AddStationInput(CLI::App& st, Context& ctx, const OptsPtr& o) {
   auto* input =
-      st->add_subcommand("input", "set a discrete input (for KT-APL WAI): I<word>.<bit>=0|1, e.g. I04D.1=1");
+      st.add_subcommand("input", "set a discrete input (for KT-APL WAI): I<word>.<bit>=0|1, e.g. I04D.1=1");
   input->add_option("ID", o->id)->required();
   input->add_option("BIT=VALUE", o->input)->required();
   input->callback([o, &ctx] {
@@ -278,8 +283,10 @@ void AddStationVerbs(CLI::App& app, Context& ctx) {
                    bus::Millis(3000)))
       throw Exit{1, "input set, but station " + o->id + " has not published it within 3 s"};
   });
+}
 
-  auto* io = st->add_subcommand("io", "the station's discrete inputs and outputs");
+void AddStationIo(CLI::App& st, Context& ctx, const OptsPtr& o) {
+  auto* io = st.add_subcommand("io", "the station's discrete inputs and outputs");
   io->add_option("ID", o->id)->required();
   io->add_flag("--json", ctx.json);
   io->callback([o, &ctx] {
@@ -300,8 +307,10 @@ void AddStationVerbs(CLI::App& app, Context& ctx) {
                      {"power_up", p.power_up()}});
     Print(ctx, arr, {"kind", "name", "value", "power_up"});
   });
+}
 
-  auto* reset = st->add_subcommand("reset", "clear the station's alarm condition");
+void AddStationReset(CLI::App& st, Context& ctx, const OptsPtr& o) {
+  auto* reset = st.add_subcommand("reset", "clear the station's alarm condition");
   reset->add_option("ID", o->id)->required();
   reset->callback([o, &ctx] {
     RequireConfigured(o->id);
@@ -309,42 +318,46 @@ void AddStationVerbs(CLI::App& app, Context& ctx) {
     req.op(cell::STATION_RESET);
     ctx.StationCommand(o->id, req);
   });
+}
 
-  // The panel's feed hold and cycle start: each returns once the station reports the hold in effect or
-  // released (execution FEED_HOLD in `station ls`, from the servo's own report), or fails saying the
-  // servo has not confirmed it; the request stands either way (a servo that comes back applies it).
-  auto panel = [&ctx](const std::string& id, bool hold) {
-    RequireConfigured(id);
-    bus::Reader<cell::StationStatus> status(ctx.Bus(), bus::topics::kStationStatus, bus::QosKind::kState);
-    cell::StationRequest req;
-    req.op(hold ? cell::STATION_FEED_HOLD : cell::STATION_CYCLE_START);
-    ctx.StationCommand(id, req);
-    auto s = status.WaitFor(
-        [&](const cell::StationStatus& x) {
-          return x.station() == id && (x.execution() == cell::EXECUTION_FEED_HOLD) == hold;
-        },
-        bus::Millis(5000));
-    if (!s)
-      throw Exit{1, std::string(hold ? "feed hold" : "cycle start") + " recorded, but the axis servo of " +
-                        id + " has not confirmed it within 5 s (is it running?)"};
-  };
-  auto* hold = st->add_subcommand("hold", "feed hold: motion stops on its path until resume");
+// The panel's feed hold and cycle start: each returns once the station reports the hold in effect or
+// released (execution FEED_HOLD in `station ls`, from the servo's own report), or fails saying the
+// servo has not confirmed it; the request stands either way (a servo that comes back applies it).
+void Panel(Context& ctx, const std::string& id, bool hold) {
+  RequireConfigured(id);
+  bus::Reader<cell::StationStatus> status(ctx.Bus(), bus::topics::kStationStatus, bus::QosKind::kState);
+  cell::StationRequest req;
+  req.op(hold ? cell::STATION_FEED_HOLD : cell::STATION_CYCLE_START);
+  ctx.StationCommand(id, req);
+  auto s = status.WaitFor(
+      [&](const cell::StationStatus& x) {
+        return x.station() == id && (x.execution() == cell::EXECUTION_FEED_HOLD) == hold;
+      },
+      bus::Millis(5000));
+  if (!s)
+    throw Exit{1, std::string(hold ? "feed hold" : "cycle start") + " recorded, but the axis servo of " + id +
+                      " has not confirmed it within 5 s (is it running?)"};
+}
+
+void AddStationPanel(CLI::App& st, Context& ctx, const OptsPtr& o) {
+  auto* hold = st.add_subcommand("hold", "feed hold: motion stops on its path until resume");
   hold->add_option("ID", o->id)->required();
-  hold->callback([o, panel] { panel(o->id, true); });
+  hold->callback([o, &ctx] { Panel(ctx, o->id, true); });
   // One CYCLE START button, two names: `start` after a program stop (M00, M01, M99 M00), `resume` after a
   // hold.
   auto* start =
-      st->add_subcommand("start", "cycle start: a run stopped at M00 / M01 goes on (and a hold is released)");
+      st.add_subcommand("start", "cycle start: a run stopped at M00 / M01 goes on (and a hold is released)");
   start->add_option("ID", o->id)->required();
-  start->callback([o, panel] { panel(o->id, false); });
-  auto* resume =
-      st->add_subcommand("resume", "cycle start: release the feed hold (the same button as start)");
+  start->callback([o, &ctx] { Panel(ctx, o->id, false); });
+  auto* resume = st.add_subcommand("resume", "cycle start: release the feed hold (the same button as start)");
   resume->add_option("ID", o->id)->required();
-  resume->callback([o, panel] { panel(o->id, false); });
-  // The machine's tool model, for a G38 check (and the tests that need a tool to break): the tool in SOCKET
-  // is broken until mended; the check sets the tool table's broken flag and stops the run.
-  auto* brk =
-      st->add_subcommand("break", "the tool in a magazine socket is broken (a G38 check finds it so)");
+  resume->callback([o, &ctx] { Panel(ctx, o->id, false); });
+}
+
+// The machine's tool model, for a G38 check (and the tests that need a tool to break): the tool in SOCKET
+// is broken until mended; the check sets the tool table's broken flag and stops the run.
+void AddStationBreak(CLI::App& st, Context& ctx, const OptsPtr& o) {
+  auto* brk = st.add_subcommand("break", "the tool in a magazine socket is broken (a G38 check finds it so)");
   brk->add_option("ID", o->id)->required();
   brk->add_option("SOCKET", o->socket, "magazine socket")->required()->check(CLI::Range(1, 1000));
   brk->add_flag("--mend", o->mend, "the tool there is whole again (replaced)");
@@ -356,8 +369,11 @@ void AddStationVerbs(CLI::App& app, Context& ctx) {
     req.mend(o->mend);
     ctx.StationCommand(o->id, req);
   });
-  // The panel's [ENABLE OPTION STOP] switch: M01 stops the next programs (OPTIONAL_STOP) while it is on.
-  auto* opt_stop = st->add_subcommand("optional-stop", "the optional-stop switch: M01 stops while it is on");
+}
+
+// The panel's [ENABLE OPTION STOP] switch: M01 stops the next programs (OPTIONAL_STOP) while it is on.
+void AddStationOptionalStop(CLI::App& st, Context& ctx, const OptsPtr& o) {
+  auto* opt_stop = st.add_subcommand("optional-stop", "the optional-stop switch: M01 stops while it is on");
   opt_stop->add_option("ID", o->id)->required();
   opt_stop->add_option("STATE", o->switch_to, "on or off")->required()->check(CLI::IsMember({"on", "off"}));
   opt_stop->callback([o, &ctx] {
@@ -367,7 +383,10 @@ void AddStationVerbs(CLI::App& app, Context& ctx) {
     req.optional_stop(o->switch_to == "on");
     ctx.StationCommand(o->id, req);
   });
-  auto* ovr = st->add_subcommand("override", "feed (0-200 %) and rapid (0-100 %) override");
+}
+
+void AddStationOverride(CLI::App& st, Context& ctx, const OptsPtr& o) {
+  auto* ovr = st.add_subcommand("override", "feed (0-200 %) and rapid (0-100 %) override");
   ovr->add_option("ID", o->id)->required();
   ovr->add_option("--feed", o->feed_pct, "feed override, percent")->check(Real() & CLI::Range(0.0, 200.0));
   ovr->add_option("--rapid", o->rapid_pct, "rapid override, percent")->check(Real() & CLI::Range(0.0, 100.0));
@@ -380,6 +399,25 @@ void AddStationVerbs(CLI::App& app, Context& ctx) {
     req.rapid_override(o->rapid_pct < 0 ? -1 : o->rapid_pct / 100);
     ctx.StationCommand(o->id, req);
   });
+}
+
+}  // namespace
+
+void AddStationVerbs(CLI::App& app, Context& ctx) {
+  auto* st =
+      app.add_subcommand("station", "stations: state, tools, variables, inputs")->require_subcommand(1);
+  auto o = std::make_shared<Opts>();
+  AddStationLs(*st, ctx);
+  AddStationTools(*st, ctx, o);
+  AddStationVars(*st, ctx, o);
+  AddStationOffsets(*st, ctx, o);
+  AddStationInput(*st, ctx, o);
+  AddStationIo(*st, ctx, o);
+  AddStationReset(*st, ctx, o);
+  AddStationPanel(*st, ctx, o);
+  AddStationBreak(*st, ctx, o);
+  AddStationOptionalStop(*st, ctx, o);
+  AddStationOverride(*st, ctx, o);
 }
 
 }  // namespace cellctl

@@ -37,16 +37,15 @@ nlohmann::json Info(const cell::SchedulerReply& r) {
   return s.empty() ? nlohmann::json::object() : nlohmann::json::parse(s);
 }
 
-}  // namespace
+// The options of every FMS verb: one invocation parses one verb.
+struct Opts {
+  int pallet = 0;
+  std::vector<std::string> programs, ops;
+  std::string station, name, file;
+};
+using OptsPtr = std::shared_ptr<Opts>;
 
-void AddFmsVerbs(CLI::App& app, Context& ctx) {
-  struct Opts {
-    int pallet = 0;
-    std::vector<std::string> programs, ops;
-    std::string station, name, file;
-  };
-  auto o = std::make_shared<Opts>();
-
+void AddPalletVerbs(CLI::App& app, Context& ctx, const OptsPtr& o) {
   auto* pallet = app.add_subcommand("pallet", "pallet maps")->require_subcommand(1);
   auto* pset = pallet->add_subcommand("set", "map pallet P to an ordered list of 1-75 programs");
   pset->add_option("P", o->pallet)->required()->check(Decimal());
@@ -82,7 +81,9 @@ void AddFmsVerbs(CLI::App& app, Context& ctx) {
     cell::names::Assign(r.station(), o->station, "station id");
     std::cout << ctx.Scheduler(r).job_id() << "\n";
   });
+}
 
+void AddRouteVerbs(CLI::App& app, Context& ctx, const OptsPtr& o) {
   auto* route = app.add_subcommand("route", "FMS routes")->require_subcommand(1);
   auto* rdef = route->add_subcommand("define", "define NAME from --op \"ST1,ST2:PROG1,PROG2\" (or --file)");
   rdef->add_option("NAME", o->name)->required();
@@ -132,7 +133,9 @@ void AddFmsVerbs(CLI::App& app, Context& ctx) {
     r.pallet(o->pallet);
     std::cout << ctx.Scheduler(r).job_id() << "\n";
   });
+}
 
+void AddScheduleVerbs(CLI::App& app, Context& ctx, const OptsPtr& o) {
   auto* sched = app.add_subcommand("schedule", "Okuma schedule programs")->require_subcommand(1);
   auto* srun = sched->add_subcommand("run", "run FILE (a local file, or a stored name) on a station");
   srun->add_option("FILE", o->file)->required();
@@ -162,7 +165,9 @@ void AddFmsVerbs(CLI::App& app, Context& ctx) {
     }
     std::cout << ctx.Scheduler(r).job_id() << "\n";
   });
+}
 
+void AddToolsVerbs(CLI::App& app, Context& ctx, const OptsPtr& o) {
   auto* tools = app.add_subcommand("tools", "tool data")->require_subcommand(1);
   auto* load =
       tools->add_subcommand("load", "send the station's tool data file (its dialect's form) to station ID");
@@ -199,6 +204,16 @@ void AddFmsVerbs(CLI::App& app, Context& ctx) {
       throw cell::Error(e.code(), what);
     }
   });
+}
+
+}  // namespace
+
+void AddFmsVerbs(CLI::App& app, Context& ctx) {
+  auto o = std::make_shared<Opts>();
+  AddPalletVerbs(app, ctx, o);
+  AddRouteVerbs(app, ctx, o);
+  AddScheduleVerbs(app, ctx, o);
+  AddToolsVerbs(app, ctx, o);
 }
 
 }  // namespace cellctl
