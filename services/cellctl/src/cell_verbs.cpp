@@ -18,6 +18,7 @@
 #include "cell/config/units.h"
 #include "cell/dashboard/feed.h"
 #include "cell/dashboard/text_view.h"
+#include "cell/interp/station_rules.h"
 #include "cell/names/names.h"
 #include "cell/security/pki.h"
 #include "context.h"
@@ -80,7 +81,7 @@ std::vector<CellProcess> Planned(const std::vector<std::string>& stations, const
 void Secure(const std::vector<std::string>& stations) {
   const std::string cell_vendor = cell::config::DdsVendor().vendor;
   for (auto& s : stations) {
-    const std::string v = cell::config::DdsVendor(cell::config::LoadStation(s).dds).vendor;
+    const std::string v = cell::config::DdsVendor(cell::interp::LoadStation(s).dds).vendor;
     if (v != cell_vendor)
       throw Exit{1, "a secured cell uses one DDS stack: station " + s + " runs " + v + ", the cell " +
                         cell_vendor +
@@ -194,7 +195,7 @@ void AddCellUp(CLI::App& app, Context& ctx, const OptsPtr& o) {
   up->callback([o, &ctx, stations_opt, clock_opt] {
     auto stations = Split(o->stations);
     if (stations.empty()) throw Exit{2, "--stations names no station"};
-    for (auto& s : stations) cell::config::LoadStation(s);  // unknown station: a clear error now
+    for (auto& s : stations) cell::interp::LoadStation(s);  // unknown station: a clear error now
     umask(077);  // the data directory, the record and the logs are the owner's only
     if (o->secure) Secure(stations);
     std::vector<CellProcess> procs;

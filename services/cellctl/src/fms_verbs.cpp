@@ -4,6 +4,7 @@
 
 #include "cell/config/config.h"
 #include "cell/interp/interp.h"
+#include "cell/interp/station_rules.h"
 #include "cell/names/names.h"
 #include "cell/program_store/metadata.h"
 #include "cell/scheduler/route.h"
@@ -188,7 +189,7 @@ void AddToolsVerbs(CLI::App& app, Context& ctx, const OptsPtr& o) {
       throw Exit{1, o->file + ": " + e.what()};
     }
     try {
-      const auto cfg = cell::config::LoadStation(o->station);
+      const auto cfg = cell::interp::LoadStation(o->station);
       cell::interp::DialectOrThrow(cfg.dialect)
           .ParseToolTable(text, o->file, cell::tooltable::ToolTable(cfg.tools));
     } catch (const cell::Error& e) {

@@ -12,6 +12,7 @@
 #include "cell/dashboard/feed.h"
 #include "cell/idl/health.h"
 #include "cell/idl/scheduler.h"
+#include "cell/interp/station_rules.h"
 #include "cell/names/names.h"
 #include "cell/tooltable/wire.h"
 #include "context.h"
@@ -120,7 +121,7 @@ void AddStationLs(CLI::App& st, Context& ctx) {
     }
     nlohmann::json arr = nlohmann::json::array();
     for (auto& id : ids) {
-      auto cfg = cell::config::LoadStation(id);
+      auto cfg = cell::interp::LoadStation(id);
       bool online =
           live.StationOnline(id) ||
           (by_id.count(id) && bus::WaitUntil([&] { return live.StationOnline(id); }, bus::Millis(1500)));
