@@ -169,6 +169,57 @@ c.rapid("N18", z=5)
 c.spindle("N18", "stop", 1200)
 c.op("coolant", "N18", m=5, mode="off")
 
+# ln 2958-2983, 4317: G27 and G28 differ at the corners. The canonical commands carry only `exact_stop`
+# (docs/canonical-commands.md): G27, the power-up mode (ln 2979), decelerates "to 0 at the end of each block"
+# with the default ERF=0 (ln 4317): every feed move has exact_stop; G28 "without automatic deceleration on
+# corners ... output speed equal to the programmed speed" (ln 2969): the feed moves blend (no exact_stop).
+# With ERF=.05 G27 still stops (the canon has no form-error bound; a judgement call, balt.md). The profile is
+# the manual's continuous-mode example (ln 2991-3005): N13 (75,-230), N14 Y0, N15 CCW about I0 J0 = (0,0)
+# from (75,0) to (-70.477,25.651), N16 (-187,-295); the G00 blocks always stop (ln 2977).
+a15 = math.degrees(math.atan2(25.651, -70.477))
+c = Case("p5_08_g27_g28_corners", """
+; ln 2958-2983, 4317 G27 (ERF=0: exact stop at each block end) against G28 (blended corners)
+N10 S800 T4.4 M6
+N11 G X-235 Y-230 M13
+N12 Z-10
+N13 G1 X75 F500
+N14 Y
+N15 G3 X-70.477 Y25.651 I J
+N16 G1 X-187 Y-295
+N17 G Z5 M5
+N20 G28 G X-235 Y-230 M13
+N21 Z-10
+N22 G1 X75 F500
+N23 Y
+N24 G3 X-70.477 Y25.651 I J
+N25 G1 X-187 Y-295
+N26 ERF=.05
+N27 G27 X75 Y-230
+N28 G Z5 M5
+""", "L2958")
+c.units("N10")
+c.op("tool_select", "N10", tool="4")
+c.op("tool_change", "N10", tool="4", offset=4)
+for n in ("N11", "N20"):
+    c.spindle(n, "cw", 800)
+    c.op("coolant", n, m=13, mode="flood")
+    c.rapid(n, x=-235, y=-230)
+    k = int(n[1:])
+    c.rapid(f"N{k + 1}", z=-10)
+    c.exact_default = n == "N11"  # G27 first, G28 from N20
+    c.lin(f"N{k + 2}", 500, x=75)
+    c.lin(f"N{k + 3}", 500, y=0)
+    c.arc(f"N{k + 4}", 500, (0, 0), False, a15, x=-70.477, y=25.651)
+    c.lin(f"N{k + 5}", 500, x=-187, y=-295)
+    if n == "N11":
+        c.rapid("N17", z=5)
+        c.spindle("N17", "stop", 800)
+        c.op("coolant", "N17", m=5, mode="off")
+c.lin("N27", 500, exact=True, x=75, y=-230)
+c.rapid("N28", z=5)
+c.spindle("N28", "stop", 800)
+c.op("coolant", "N28", m=5, mode="off")
+
 # L3616-3621 (Fig 5.24) under a temporary origin (100,200): N1 to the origin, N2 P1 (30,40), N3-N4 G91 to
 # P2 (80,65) and P3 (9,77), N5 G90 P4 (110,35), N6 G79 P5 at machine (70,55), not shifted.
 c = Case("p5_08_absolute_incremental_g79", """
