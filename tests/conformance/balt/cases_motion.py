@@ -442,6 +442,24 @@ c.op("message", 16, text="E42=16")
 c.op("message", 17, text="E17=10")
 c.op("message", 18, text="E25=30")
 
+# L5429-5435: "E(En) = <expression> ... n can be a number or an E parameter (of either byte or integer type)".
+# E(31)=12.5 is E31 = 12.5; E3=32 then E(E3)=E(31)*2 sets E32 = 12.5 * 2 = 25; E(14)=7 sets the integer E14.
+# E50=E(E3)-E(14) = E32 - E14 = 25 - 7 = 18. The move reads them back, E(32) also as an address value:
+# X = E31 = 12.5, Y = E(32) = 25, Z = E50 = 18 (no origin or tool offsets: positions as programmed).
+c = Case("p5_16_e_number_index", """
+; L5429-5435 E(n) = <expression> with n a number or an E parameter (K14)
+E(31)=12.5
+E3=32
+E(E3)=E(31)*2
+E(14)=7
+E50=E(E3)-E(14)
+G1 XE31 YE(32) ZE50 F100
+(DIS,"E14=",E14)
+""", "L5429")
+c.units(7)
+c.lin(7, 100, x=12.5, y=25, z=18)
+c.op("message", 8, text="E14=7")
+
 # ln 2936-2956 G18 (abscissa Z, ordinate X) with I J as the plane's abscissa and ordinate (ln 2454): from
 # (X0 Z0) CW about (Z20, X0) to (Z20, X20): 90 degrees. G19 (Y, Z): from (Y0 Z20) CCW about (Y0 Z30) to
 # (Y10 Z30): 90 degrees. DPI makes another pair the plane (ln 6578-6604): (DPI,X,Z), from (X20 Z30) CW
