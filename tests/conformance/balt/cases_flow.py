@@ -59,9 +59,16 @@ c.rapid("N36", z=50)
 c.spindle("N36", "stop", 600)
 c.op("coolant", "N36", m=5, mode="off")
 
-# L3372-3428: G83 with I K J (chip discharge), R1 = 3 ("M3" in the scan read as R3): pecks of 20, 16, 12.8,
-# then 10.24 cut short at Z-55: bottoms -17, -33, -45.8, -55. After each peck a rapid back to R1, then a
-# rapid down to 1 mm above the last bottom (the manual's "R1 = R1 + I - 1").
+# L3372-3428: G83 with I K J (chip discharge), R1 = 3 ("M3" in the scan read as R3), Z-55, I20 K.8 J6.
+# The manual's steps (ln 3389-3400): b. rapid to R1, c. feed to R1 + I, d. rapid back to R1 (the initial one,
+# ln 3400), e. R1 = R1 + I - 1, f. I = I*K (at least J). I is taken in the drilling direction (-Z), so
+# "R1 + I" is R1 - I here and "- 1" is 1 mm back up. Worked by hand, per hole:
+#   peck 1: rapid Z3, feed to 3 - 20 = -17, rapid Z3;          R1 = -17 + 1 = -16,     I = 20 * .8 = 16
+#   peck 2: rapid Z-16, feed to -16 - 16 = -32, rapid Z3;      R1 = -32 + 1 = -31,     I = 12.8
+#   peck 3: rapid Z-31, feed to -31 - 12.8 = -43.8, rapid Z3;  R1 = -43.8 + 1 = -42.8, I = 10.24
+#   peck 4: rapid Z-42.8, feed to -42.8 - 10.24 = -53.04, rapid Z3; R1 = -52.04,       I = 8.192
+#   peck 5: rapid Z-52.04, -52.04 - 8.192 = -60.232 is past Z-55: feed to -55, rapid Z3 (no R2).
+# (Feeding I from the last bottom instead, the old defect, gave -17, -33, -45.8, -55: 1 mm deeper a peck.)
 c = Case("p5_8_7_g83_deep_drilling", """
 ; L3422-3428 G83 deep drilling with chip discharge (I20 K.8 J6)
 N66 S930 F65 T6.6 M6
@@ -78,26 +85,59 @@ c.spindle("N67", "cw", 930)
 c.op("coolant", "N67", m=13, mode="flood")
 for n, (x, y) in zip(("N68", "N69", "N70"), ((-15.81, -22.2), (23, -22.2), (9, 35.8))):
     c.rapid(n, x=x, y=y)
-    if c.pos["z"] != 3 or "z" not in c.used:
+    if n == "N68":  # later holes are already at R1 = 3 (the last discharge): no move (DESIGN §4)
         c.rapid(n, z=3)
-    bottom, inc = 3.0, 20.0
-    first = True
-    while True:
-        if not first:
-            c.rapid(n, z=bottom + 1)
-        first = False
-        nxt = bottom - inc
-        last = nxt <= -55
-        nxt = max(nxt, -55)
-        c.lin(n, 65, exact=True, z=round(nxt, 6))
-        bottom = nxt
-        c.rapid(n, z=3)
-        if last:
-            break
-        inc = max(inc * 0.8, 6)
+    c.lin(n, 65, exact=True, z=-17)
+    c.rapid(n, z=3)
+    c.rapid(n, z=-16)
+    c.lin(n, 65, exact=True, z=-32)
+    c.rapid(n, z=3)
+    c.rapid(n, z=-31)
+    c.lin(n, 65, exact=True, z=-43.8)
+    c.rapid(n, z=3)
+    c.rapid(n, z=-42.8)
+    c.lin(n, 65, exact=True, z=-53.04)
+    c.rapid(n, z=3)
+    c.rapid(n, z=-52.04)
+    c.lin(n, 65, exact=True, z=-55)
+    c.rapid(n, z=3)
 c.rapid("N71", z=50)
 c.spindle("N71", "stop", 930)
 c.op("coolant", "N71", m=5, mode="off")
+
+# L3389-3402: a constant peck (K1, no J: "to keep I invariable ... program K=1 and omit J", ln 3402) with R2
+# ("R2 only serves for the last discharge", ln 3400). R1 = 2, R2 = 10, Z-30, I10. Worked by hand:
+#   peck 1: rapid Z2, feed to 2 - 10 = -8, rapid Z2;      R1 = -8 + 1 = -7
+#   peck 2: rapid Z-7, feed to -7 - 10 = -17, rapid Z2;   R1 = -16
+#   peck 3: rapid Z-16, feed to -16 - 10 = -26, rapid Z2; R1 = -25
+#   peck 4: rapid Z-25, -25 - 10 = -35 is past Z-30: feed to -30, then the last discharge rapid to R2 = 10.
+# The second hole starts from Z10 (R2): rapid to the point, rapid to R1 = 2, the same pecks.
+c = Case("p5_8_7_g83_constant_peck", """
+; L3389-3402 G83 chip discharge with a constant peck (K1, J omitted) and R2 for the last discharge
+N1 S1000 F80 M3
+N2 G83 R2 R10 Z-30 I10 K1
+N3 X20 Y20
+N4 X40
+N5 G80 Z50 M5
+""", "L3389")
+c.units("N1")
+c.spindle("N1", "cw", 1000)
+for n, x in (("N3", 20), ("N4", 40)):
+    c.rapid(n, x=x, y=20)
+    c.rapid(n, z=2)
+    c.lin(n, 80, exact=True, z=-8)
+    c.rapid(n, z=2)
+    c.rapid(n, z=-7)
+    c.lin(n, 80, exact=True, z=-17)
+    c.rapid(n, z=2)
+    c.rapid(n, z=-16)
+    c.lin(n, 80, exact=True, z=-26)
+    c.rapid(n, z=2)
+    c.rapid(n, z=-25)
+    c.lin(n, 80, exact=True, z=-30)
+    c.rapid(n, z=10)
+c.rapid("N5", z=50)
+c.spindle("N5", "stop", 1000)
 
 # L3432-3476: G84 without a spindle transducer: F = S x pitch x 0.9 = 315 given; in at F, the spindle
 # reverses at the bottom, out to R1 at F (RMS 100 %), the spindle turns forward again. Holes on a

@@ -169,6 +169,57 @@ c.rapid("N18", z=5)
 c.spindle("N18", "stop", 1200)
 c.op("coolant", "N18", m=5, mode="off")
 
+# ln 2958-2983, 4317: G27 and G28 differ at the corners. The canonical commands carry only `exact_stop`
+# (docs/canonical-commands.md): G27, the power-up mode (ln 2979), decelerates "to 0 at the end of each block"
+# with the default ERF=0 (ln 4317): every feed move has exact_stop; G28 "without automatic deceleration on
+# corners ... output speed equal to the programmed speed" (ln 2969): the feed moves blend (no exact_stop).
+# With ERF=.05 G27 still stops (the canon has no form-error bound; a judgement call, balt.md). The profile is
+# the manual's continuous-mode example (ln 2991-3005): N13 (75,-230), N14 Y0, N15 CCW about I0 J0 = (0,0)
+# from (75,0) to (-70.477,25.651), N16 (-187,-295); the G00 blocks always stop (ln 2977).
+a15 = math.degrees(math.atan2(25.651, -70.477))
+c = Case("p5_08_g27_g28_corners", """
+; ln 2958-2983, 4317 G27 (ERF=0: exact stop at each block end) against G28 (blended corners)
+N10 S800 T4.4 M6
+N11 G X-235 Y-230 M13
+N12 Z-10
+N13 G1 X75 F500
+N14 Y
+N15 G3 X-70.477 Y25.651 I J
+N16 G1 X-187 Y-295
+N17 G Z5 M5
+N20 G28 G X-235 Y-230 M13
+N21 Z-10
+N22 G1 X75 F500
+N23 Y
+N24 G3 X-70.477 Y25.651 I J
+N25 G1 X-187 Y-295
+N26 ERF=.05
+N27 G27 X75 Y-230
+N28 G Z5 M5
+""", "L2958")
+c.units("N10")
+c.op("tool_select", "N10", tool="4")
+c.op("tool_change", "N10", tool="4", offset=4)
+for n in ("N11", "N20"):
+    c.spindle(n, "cw", 800)
+    c.op("coolant", n, m=13, mode="flood")
+    c.rapid(n, x=-235, y=-230)
+    k = int(n[1:])
+    c.rapid(f"N{k + 1}", z=-10)
+    c.exact_default = n == "N11"  # G27 first, G28 from N20
+    c.lin(f"N{k + 2}", 500, x=75)
+    c.lin(f"N{k + 3}", 500, y=0)
+    c.arc(f"N{k + 4}", 500, (0, 0), False, a15, x=-70.477, y=25.651)
+    c.lin(f"N{k + 5}", 500, x=-187, y=-295)
+    if n == "N11":
+        c.rapid("N17", z=5)
+        c.spindle("N17", "stop", 800)
+        c.op("coolant", "N17", m=5, mode="off")
+c.lin("N27", 500, exact=True, x=75, y=-230)
+c.rapid("N28", z=5)
+c.spindle("N28", "stop", 800)
+c.op("coolant", "N28", m=5, mode="off")
+
 # L3616-3621 (Fig 5.24) under a temporary origin (100,200): N1 to the origin, N2 P1 (30,40), N3-N4 G91 to
 # P2 (80,65) and P3 (9,77), N5 G90 P4 (110,35), N6 G79 P5 at machine (70,55), not shifted.
 c = Case("p5_08_absolute_incremental_g79", """
@@ -390,6 +441,24 @@ c.op("message", 15, text="E41=22")
 c.op("message", 16, text="E42=16")
 c.op("message", 17, text="E17=10")
 c.op("message", 18, text="E25=30")
+
+# L5429-5435: "E(En) = <expression> ... n can be a number or an E parameter (of either byte or integer type)".
+# E(31)=12.5 is E31 = 12.5; E3=32 then E(E3)=E(31)*2 sets E32 = 12.5 * 2 = 25; E(14)=7 sets the integer E14.
+# E50=E(E3)-E(14) = E32 - E14 = 25 - 7 = 18. The move reads them back, E(32) also as an address value:
+# X = E31 = 12.5, Y = E(32) = 25, Z = E50 = 18 (no origin or tool offsets: positions as programmed).
+c = Case("p5_16_e_number_index", """
+; L5429-5435 E(n) = <expression> with n a number or an E parameter (K14)
+E(31)=12.5
+E3=32
+E(E3)=E(31)*2
+E(14)=7
+E50=E(E3)-E(14)
+G1 XE31 YE(32) ZE50 F100
+(DIS,"E14=",E14)
+""", "L5429")
+c.units(7)
+c.lin(7, 100, x=12.5, y=25, z=18)
+c.op("message", 8, text="E14=7")
 
 # ln 2936-2956 G18 (abscissa Z, ordinate X) with I J as the plane's abscissa and ordinate (ln 2454): from
 # (X0 Z0) CW about (Z20, X0) to (Z20, X20): 90 degrees. G19 (Y, Z): from (Y0 Z20) CCW about (Y0 Z30) to

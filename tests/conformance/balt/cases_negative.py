@@ -52,6 +52,23 @@ neg("neg_g00_with_g01", "; Table 5.5 ln 2620\nG0 G1 X10\n", 2, 4, 25,
     "BLOCK DOES NOT MATCH: G00 and G01 in one block (Table 5.5)", "L2620")
 neg("neg_cycle_without_g80", "; ln 3331\nG81 R2 Z-10 F100\nG82 R2 Z-5\n", 3, 1, 25,
     "BLOCK DOES NOT MATCH: G81 is active: close it with G80 first (ln 3331)", "L3331")
+# FILMS4 13 (a judgement call): a G83 whose increment shrinks (K < 1, no J) to no more than the 1 mm of
+# "R1 = R1 + I - 1" (ln 3395) can never reach Z. R2 Z-30 I5 K.5, worked by hand: peck 1 to 2 - 5 = -3,
+# R1 = -2, I = 2.5; peck 2 to -4.5, R1 = -3.5, I = 1.25; peck 3 to -4.75, R1 = -3.75, I = .625 <= 1: refused
+# when the hole is reached, before any cut (the positioning rapids to X10 Y10 and to R1 have run); the column
+# is the block's first axis word, X10.
+neg("neg_g83_increment_too_small", "; ln 3389-3402\nS1000 F80 M3\nG83 R2 Z-30 I5 K.5\nN4 X10 Y10\n", 4, 4, 13,
+    "FORMAT ERROR: G83: the increment falls to 0.625 mm, not more than the 1 mm re-approach of R1 = R1 + I - 1: "
+    "Z is never reached (ln 3395-3402)", "L3395",
+    ops=(units(2), lambda c: c.spindle(2, "cw", 1000), lambda c: c.rapid(4, x=10, y=10),
+         lambda c: c.rapid(4, z=2)))
+# E(n) = ... (ln 5429-5435): a number index names an E parameter that must exist (E0-E999 configured by
+# default, E_PARAMETERS): FILMS4 18 INDEX OUT OF RANGE; an E-parameter index must be byte or integer
+# (E0-E19, Table 5.8 ln 5417-5418): E30 is long real, FILMS4 13 FORMAT ERROR.
+neg("neg_e_number_index_out_of_range", "; ln 5435\nE(1000)=1\n", 2, 1, 18,
+    "INDEX OUT OF RANGE: E1000 (E parameters are E0-E999)", "L5435")
+neg("neg_e_index_parameter_real", "; ln 5435\nE30=5\nE(E30)=1\n", 3, 1, 13,
+    "FORMAT ERROR: E(E30): the index parameter must be E0-E19", "L5435")
 neg("neg_cycle_with_compensation", "; ln 3208\nG1 G41 X10 Y0 F100\nG81 R2 Z-10\n", 3, 1, 25,
     "BLOCK DOES NOT MATCH: fixed cycles with cutter compensation on", "L3208", ops=(units(2),))
 neg("neg_compensation_starts_on_arc", "; ln 3088\nG41\nG2 X20 Y0 I10 J0 F100\n", 3, 1, 25,

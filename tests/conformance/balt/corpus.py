@@ -20,6 +20,9 @@ class Case:
         self.files = files  # suffix -> text (".tools", ".params", ".probe", ".args", "lib/NAME")
         self.ops, self.used, self.diag = [], set(), None
         self.pos = {a: 0.0 for a in AXES}
+        # Feed moves stop at their end unless the case is in G28: G27 (the power-up mode, ln 2979) decelerates
+        # to 0 at each block end with ERF=0 (ln 4317), G29 always (ln 2971). A G28 case sets this False.
+        self.exact_default = True
         CASES.append(self)
 
     def line_of(self, text):
@@ -55,22 +58,22 @@ class Case:
         self._target(d, ax, travel)
         self.ops.append(d)
 
-    def lin(self, line, f, exact=False, mode=None, travel=None, **ax):
+    def lin(self, line, f, exact=None, mode=None, travel=None, **ax):
         d = {"op": "linear", "line": line if isinstance(line, int) else self.line_of(line)}
         self._target(d, ax, travel)
         d["f"] = f
         if mode:
             d["f_mode"] = mode
-        if exact:
+        if self.exact_default if exact is None else exact:
             d["exact_stop"] = True
         self.ops.append(d)
 
-    def arc(self, line, f, center, cw, angle, plane="xy", exact=False, **ax):
+    def arc(self, line, f, center, cw, angle, plane="xy", exact=None, **ax):
         d = {"op": "arc", "line": line if isinstance(line, int) else self.line_of(line)}
         z = self.pos["z"]
         self._target(d, ax, None)
         d["f"] = f
-        if exact:
+        if self.exact_default if exact is None else exact:
             d["exact_stop"] = True
         c = list(center) + [z] * (3 - len(center))
         d["center"] = [r(v) for v in c]

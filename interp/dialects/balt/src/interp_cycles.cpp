@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <vector>
 
 #include "interp_internal.h"
 
@@ -110,23 +111,37 @@ void BaltRun::DrillHole(int col) {
   switch (c.g) {
     case 83: {
       if (c.has_k || c.has_j) {
-        // Chip discharge (ln 3380-3402): feed I deeper, rapid back to R1, rapid down to 1 mm above the last
-        // bottom (the "R1 + I - 1" of the manual, a judgement call), I = max(I*K, J).
-        double inc = c.i, bottom = c.r1;
+        // Chip discharge (ln 3380-3402): b. rapid to R1, c. feed to R1 + I, d. rapid back to the initial R1
+        // (step b "always carried out at the initial R1": the discharge leaves the hole), e. R1 = R1 + I - 1,
+        // f. I = I*K, at least J. The next peck rapids down to the new R1, 1 mm (`PECK_CLEARANCE`) short of
+        // the last bottom, and feeds I from there: it cuts I - 1 of new depth, not I. The pecks are worked
+        // out before any move so that a hole that would never reach Z is refused undrilled.
+        std::vector<double> bottoms;
+        double inc = c.i, r1 = c.r1;
         const double k = c.has_k ? c.k : 1.0, j = c.has_j ? c.j : 0.0;
-        bool first = true;
-        for (int n = 0; n < 100000; ++n) {
-          if (!first) SpindleAxisMove(bottom - dir * peck_clearance_, true, 0);
-          first = false;
-          double next = bottom + dir * inc;
-          bool last = dir < 0 ? next <= c.depth : next >= c.depth;
-          if (last) next = c.depth;
-          SpindleAxisMove(next, false, feed);
-          bottom = next;
-          if (last) break;
-          SpindleAxisMove(c.r1, true, 0);
+        for (;;) {
+          double next = r1 + dir * inc;
+          if (dir < 0 ? next <= c.depth : next >= c.depth) {
+            bottoms.push_back(c.depth);
+            break;
+          }
+          bottoms.push_back(next);
+          r1 = next - dir * peck_clearance_;
           inc = std::max(inc * k, j);
-          if (inc < 0.001) inc = 0.001;
+          // A peck no longer than the re-approach gets no deeper (K < 1 without J, or J <= 1 mm).
+          if (inc <= peck_clearance_ + 1e-6 || bottoms.size() >= 10000) {
+            Fail(col, 13,
+                 fmt::format("G83: the increment falls to {:g} mm, not more than the {:g} mm re-approach of "
+                             "R1 = R1 + I - 1: Z is never reached (ln 3395-3402)",
+                             inc, peck_clearance_));
+          }
+        }
+        for (std::size_t n = 0; n < bottoms.size(); ++n) {
+          if (n > 0) {
+            SpindleAxisMove(c.r1, true, 0);                                    // d. chip discharge
+            SpindleAxisMove(bottoms[n - 1] - dir * peck_clearance_, true, 0);  // b. to the new R1
+          }
+          SpindleAxisMove(bottoms[n], false, feed);  // c. to R1 + I
         }
       } else {
         // Woodpecking without discharge (ln 3404-3414): feed by I, dwell TMR, feed by I, ...

@@ -356,6 +356,7 @@ void BaltRun::GtlSegment(const gtl::Element& e, Vec2 from, Vec2 to, int line) {
   Feed f;
   f.rate = *feed_;
   f.mode = mode_.feed == FeedCode::kG95 ? FeedMode::kPerRev : FeedMode::kPerMinute;
+  f.exact_stop = mode_.dynamic != Dynamic::kG28;  // G27 stops at block ends, G28 blends (ln 2967-2969, 4317)
   Target* t;
   if (m.arc) {
     ArcOp& a = c.Set<ArcOp>();
@@ -630,6 +631,7 @@ void BaltRun::GtlApproach(Vec2 p) {
   Feed f;
   f.rate = *feed_;
   f.mode = mode_.feed == FeedCode::kG95 ? FeedMode::kPerRev : FeedMode::kPerMinute;
+  f.exact_stop = mode_.dynamic != Dynamic::kG28;  // G27 stops at block ends, G28 blends (ln 2967-2969, 4317)
   CheckLimits(pos_, target, nullptr, 1);
   CheckAreas(pos_, target, nullptr, 1);
   EmitUnitsOnce();

@@ -189,7 +189,9 @@ void BaltRun::LinearMove(const ParsedBlock& pb, const BlockG& g, const Targets& 
     for (int a : {kA, kB, kC}) rot += travel[a] * travel[a];
     feed.rate = BlockFeed(pb, linear_moves ? len : std::sqrt(rot), !linear_moves && travel_mask != 0,
                           &feed.mode, col);
-    feed.exact_stop = mode_.dynamic == Dynamic::kG29 || g.decel;
+    // G28 blends (no corner deceleration, ln 2969); G29 stops; G27 decelerates to 0 at each block end with
+    // the default ERF=0 (ln 4317) and, as the canon carries no form error, with any ERF (balt.md).
+    feed.exact_stop = mode_.dynamic != Dynamic::kG28 || g.decel;
   }
   if (!g.g79) CheckLimits(pos_, mach, nullptr, col);
   CheckAreas(pos_, mach, nullptr, col);

@@ -95,12 +95,15 @@ class ExprParser {
       if (Peek() == '(') {
         ++i_;
         Skip();
-        if (Peek() != 'E') Fail(Col(), 11, "E(En) needs an E parameter");
-        ++i_;
+        // E(n) with a number n is En (ln 5435).
+        const bool number = IsDigit(Peek());
+        if (!number && Peek() != 'E') Fail(Col(), 11, "E(n) needs a number or an E parameter");
+        if (!number) ++i_;
         int idx = Index(col);
         Skip();
         if (Peek() != ')') Fail(Col(), 11, "closing bracket missing");
         ++i_;
+        if (number) return run_.Param(idx, col);
         Val v;
         v.kind = Val::kIndirect;
         v.param = idx;

@@ -68,7 +68,7 @@ class Reader {
   void Advance(std::size_t k = 1) { i_ += k; }
   std::string_view Rest() const { return s_.substr(i_); }
 
-  // A value after an address: [sign] (number | E<n> | E(E<n>)) or nothing.
+  // A value after an address: [sign] (number | E<n> | E(<n>) | E(E<n>)) or nothing.
   Val Value() {
     Val v;
     Skip();
@@ -83,9 +83,15 @@ class Reader {
       if (Peek() == '(') {
         Advance();
         Skip();
-        if (Peek() != 'E' || !IsDigit(Peek(1))) Fail(col, 11, "E(En) needs a byte or integer E parameter");
-        Advance();
-        v.kind = Val::kIndirect;
+        // "n can be a number or an E parameter" (ln 5435): E(25) is E25, its range checked where it is used.
+        if (IsDigit(Peek())) {
+          v.kind = Val::kParam;
+        } else {
+          if (Peek() != 'E' || !IsDigit(Peek(1)))
+            Fail(col, 11, "E(n) needs a number or a byte or integer E parameter");
+          Advance();
+          v.kind = Val::kIndirect;
+        }
         v.param = Digits(col);
         Skip();
         if (Peek() != ')') Fail(col, 11, "closing bracket missing in E(En)");
