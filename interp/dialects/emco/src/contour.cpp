@@ -28,15 +28,19 @@ Vec2 Unit(Vec2 v) {
 // Chamfer / radius insertion
 
 void CornerInsert::Hold(Move&& m, Vec2 start, double size, bool chamfer) {
+  double trim = 0;
   if (held_) {
-    // A chain of corners: this line closes the held corner and holds its own.
+    // A chain of corners: this line closes the held corner and holds its own. It is not written here: it
+    // starts where the first insertion ends and ends where the second one starts (each laid symmetrically
+    // into its corner, ln 77-84).
     Item it;
     it.m = m;
-    Take(std::move(it));
+    trim = Close(it);
   }
   held_ = true;
   line_ = std::move(m);
   start_ = start;
+  trim_start_ = trim;
   size_ = size;
   chamfer_ = chamfer;
 }
@@ -46,6 +50,11 @@ void CornerInsert::Take(Item&& it) {
     after_.push_back(std::move(it));
     return;
   }
+  Close(it);
+  out_(std::move(it));
+}
+
+double CornerInsert::Close(const Item& it) {
   held_ = false;
   Vec2 c = line_.end, e = it.m.end;
   double len_a = geom::Norm(c - start_), len_b = geom::Norm(e - c);
@@ -59,6 +68,12 @@ void CornerInsert::Take(Item&& it) {
     Alarm(
         389, it.m.col,
         fmt::format("{:.3f} mm back from the corner, the shorter line is {:.3f}", t, std::min(len_a, len_b)));
+  }
+  // In a chain the held line has lost `trim_start_` to the insertion before it; the two must not overlap.
+  if (trim_start_ + t > len_a + 1e-9) {
+    Alarm(389, it.m.col,
+          fmt::format("{:.3f} + {:.3f} mm back from the two corners of a {:.3f} mm line", trim_start_, t,
+                      len_a));
   }
   Vec2 p1 = c + (-t) * da, p2 = c + t * db;
   Item first;
@@ -80,7 +95,7 @@ void CornerInsert::Take(Item&& it) {
     out_(std::move(after_.front()));
     after_.pop_front();
   }
-  out_(std::move(it));
+  return t;
 }
 
 // ---------------------------------------------------------------------------------------------------------

@@ -236,6 +236,9 @@ void EmRun::ConvertValues(BlockWords& bw) const {
   length(bw.p[0]);
   length(bw.p[1]);
   length(bw.p[2]);
+  // F4 and S4 are digits without a decimal point (ln 1146, 4985): F0.15 is outside the format, not 0.15 um.
+  if (bw.f.set && bw.f.point) Alarm(620, bw.f.col, "F is F4, without a decimal point");
+  if (bw.s.set && bw.s.point) Alarm(620, bw.s.col, "S is S4, without a decimal point");
   whole(bw.f, 9999, "F is 0-9999 (F4)");
   whole(bw.s, 9999, "S is 0-9999 (S4)");
   whole(bw.t, 9999, "T is 0000-9999 (TTCC)");

@@ -152,10 +152,14 @@ class CornerInsert {
   void Take(Item&& it);
 
  private:
+  // Writes the held line up to its insertion and the insertion; returns how far it lies back on `it`.
+  double Close(const Item& it);
+
   Sink out_;
   bool held_ = false;
   Move line_;
-  Vec2 start_;
+  Vec2 start_;             // the held line's programmed start (its direction and length)
+  double trim_start_ = 0;  // what the insertion before it took off its start (a chain of corners)
   double size_ = 0;
   bool chamfer_ = false;
   std::deque<Item> after_;  // other commands between the two lines

@@ -523,7 +523,9 @@ void OkRun::CallProgram(const ProgramRef& p, const std::string& name, FrameData:
   f.data.modin_limit = modin_limit;
   f.data.program_begin = p.begin;
   f.data.program_begin_line = p.line;
-  f.data.tape_started = true;
+  // A file fetched by the program's name and run from its first line may begin with its tape header
+  // ("$ SHAFT-ABC.SUB %", ln 8518, 8705): skipped as in a main file until the tape starts.
+  f.data.tape_started = p.begin != 0;
   // Variables set in the CALL block are registered as new entries of the subprogram, in the order written, so
   // that a later one may use an earlier one (ln 7634-7666, E-98 ln 8627).
   if (args) {

@@ -50,7 +50,7 @@ void OkRun::LapCall(const BlockWords& w, const Block& b, int g, int col) {
     p.infeed = modal_.infeed;
   }
   // G84 change points (continuation lines of the call): XA= DA= FA= / XB= DB= FB= (ZA=, ZB= transverse).
-  auto change = [&](LapChange& c, int xi, int zi, int di, int fi) {
+  auto change = [&](LapChange& c, int xi, int zi, int di, int fi, char ab) {
     if (w.HasExt(xi) || w.HasExt(zi)) {
       c.set = true;
       c.at = w.HasExt(xi) ? ToMachine(kX, w.ext[static_cast<size_t>(xi)]) / 2
@@ -58,10 +58,17 @@ void OkRun::LapCall(const BlockWords& w, const Block& b, int g, int col) {
       c.axis_x = w.HasExt(xi);
     }
     if (w.HasExt(di)) c.d = w.ext[static_cast<size_t>(di)];
-    if (w.HasExt(fi)) c.f = w.ext[static_cast<size_t>(fi)];
+    // FA/FB are feeds like F and E, in the unit system's feed unit (ln 1048-1059, 5087-5088).
+    if (w.HasExt(fi)) c.f = Scale('F', w.ext[static_cast<size_t>(fi)], modal_.per_rev);
+    for (int i : {di, fi}) {
+      if (w.HasExt(i) && w.ext[static_cast<size_t>(i)] <= 0) {
+        Fail(w.ext_col[static_cast<size_t>(i)],
+             fmt::format("{}{} must be positive", i == di ? 'D' : 'F', ab));
+      }
+    }
   };
-  change(p.a, 7, 9, 3, 5);
-  change(p.b, 8, 10, 4, 6);
+  change(p.a, 7, 9, 3, 5, 'A');
+  change(p.b, 8, 10, 4, 6, 'B');
   auto found = FindSequence(b.label, true);
   if (!found) Fail(b.label_col, fmt::format("LAP contour {} not found in this program", b.label));
   lap_ = LapState();

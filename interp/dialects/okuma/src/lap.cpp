@@ -326,9 +326,14 @@ void FinalPass(Builder& b, const Setup& st, const LapParams& p) {
   const Vec2 end = b.at();
   b.Rapid({end.x + st.du, end.y + st.dv});
   if (p.m85) return;
-  // Back to the start point: both axes together when the contour begins with G00, else X first (ln
+  // Back to the start point. AP mode II: Z to the start point's Z, then X (ln 5579; the contour ends at its
+  // largest diameter, ln 6263, so X first or both together could cross the part); transverse: the same with
+  // the axes exchanged. Otherwise both axes together when the contour begins with G00, else X first (ln
   // 5419-5426).
-  if (st.first_rapid) {
+  if (p.mode == 2) {
+    b.Rapid({st.s.x, b.at().y});
+    b.Rapid(st.s);
+  } else if (st.first_rapid) {
     b.Rapid(st.s);
   } else {
     const Vec2 cur = b.at();
