@@ -7,6 +7,7 @@
 
 #include "cell/error/error.h"
 #include "cell/interp/dialect.h"
+#include "cell/interp/run_base.h"
 
 namespace cell::interp {
 
@@ -15,6 +16,15 @@ std::string Diagnostic::Format() const {
   if (!alarm.empty()) out += "[" + alarm + "] ";
   out += text;
   return out;
+}
+
+RunBase::RunBase(const RunOptions& o) : env_(o.env ? o.env : &default_env_) {
+  opt_.dialect = o.dialect;
+  opt_.program_name = o.program_name;
+  opt_.library = o.library;
+  opt_.save = o.save;
+  opt_.params = o.params;
+  opt_.env = o.env;
 }
 
 ProbeResult Environment::Probe(const ProbeMove& move) {

@@ -178,4 +178,31 @@ Corner ComputeCorner(const Path& a, const Path& b, double r, int side, bool bypa
   return k;
 }
 
+int CenterSlot(int axis) {
+  if (axis == kX || axis == kU) return 0;
+  if (axis == kY || axis == kV) return 1;
+  return 2;
+}
+
+Canon FillInMove(const Corner& k, Target to, Vec2 corner, int p1, int p2, const Feed* feed, int line) {
+  to.pos[p1] = k.b_start.x;
+  to.pos[p2] = k.b_start.y;
+  Canon f;
+  f.line = line;
+  if (!feed) {
+    f.Set<RapidOp>().to = to;
+    return f;
+  }
+  ArcOp& arc = f.Set<ArcOp>();
+  arc.to = to;
+  arc.feed = *feed;
+  arc.cw = k.fill_cw;
+  arc.angle = k.fill_sweep;
+  arc.plane = {static_cast<std::int8_t>(p1), static_cast<std::int8_t>(p2)};
+  arc.center = {to.pos[kX], to.pos[kY], to.pos[kZ]};
+  arc.center[CenterSlot(p1)] = corner.x;
+  arc.center[CenterSlot(p2)] = corner.y;
+  return f;
+}
+
 }  // namespace cell::interp::geom

@@ -16,13 +16,6 @@ using namespace geom;  // NOLINT: the contour is written in the offset geometry'
 
 namespace {
 
-// Slot of an axis in ArcOp::center ([x, y, z]; U, V, W take the slot of their parallel axis).
-int CenterSlot(int axis) {
-  if (axis == kX || axis == kU) return 0;
-  if (axis == kY || axis == kV) return 1;
-  return 2;
-}
-
 [[noreturn]] void Undefined(const std::string& why) {
   throw ContourError{77, why};
 }
@@ -197,23 +190,7 @@ Canon Contour::FillIn(const geom::Corner& k, Vec2 corner, int line, const Feed* 
   Target to;
   to.pos = last_;
   to.used = used;
-  SetPlaneOf(to.pos, k.b_start);
-  Canon f;
-  f.line = line;
-  if (!feed) {
-    f.Set<RapidOp>().to = to;  // both moves rapid: a positioning move, not a contour
-    return f;
-  }
-  ArcOp& arc = f.Set<ArcOp>();
-  arc.to = to;
-  arc.feed = *feed;
-  arc.cw = k.fill_cw;
-  arc.angle = k.fill_sweep;
-  arc.plane = {static_cast<std::int8_t>(p1_), static_cast<std::int8_t>(p2_)};
-  arc.center = {to.pos[kX], to.pos[kY], to.pos[kZ]};
-  arc.center[CenterSlot(p1_)] = corner.x;
-  arc.center[CenterSlot(p2_)] = corner.y;
-  return f;
+  return FillInMove(k, to, corner, p1_, p2_, feed, line);  // both moves rapid (no feed): a rapid move
 }
 
 // A corner word between the held move and `next` (ln 3160-3200, 5192-5215): the programmed elements are

@@ -188,7 +188,7 @@ void BaltRun::StepOnce() {
     d.col = cur_own_ ? e.col : 1;
     if (e.code > 0) d.alarm = fmt::format("FILMS4 {:02}", e.code);
     d.text = e.code > 0 ? std::string(FilmsText(e.code)) : std::string();
-    if (!e.detail.empty()) d.text = d.text.empty() ? e.detail : d.text + ": " + e.detail;
+    if (!e.text.empty()) d.text = d.text.empty() ? e.text : d.text + ": " + e.text;
     if (!cur_own_ && line) {
       for (std::size_t i = fr.depth(); i-- > 0;) {
         if (!fr[i].report_own) {

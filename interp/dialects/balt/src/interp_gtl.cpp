@@ -27,27 +27,8 @@ struct Token {
   int col = 1;
 };
 
-}  // namespace
-
-gtl::Element BaltRun::ResolveRef(const ElemRef& r) {
-  double idx = ValueOf(r.index, r.col);
-  if (idx != std::floor(idx) || idx < 0 || idx > gtl::Geometry::kMaxIndex) {
-    Fail(r.col, 18, fmt::format("{}{:g} (elements are 0-255)", r.kind, idx));
-  }
-  const gtl::Element* e = gtl_.Get(r.kind, static_cast<int>(idx));
-  if (!e) Fail(r.col, 15, fmt::format("{}{:g} is not defined", r.kind, idx));
-  return r.neg ? e->Reversed() : *e;
-}
-
-// "NAME INDEX = <definition>" (ln 4420-4513).
-void BaltRun::DefineElement(const Assignment& a) {
-  const char kind = a.name[0];
-  double idx = ValueOf(a.gindex, a.col);
-  if (idx != std::floor(idx) || idx < 0 || idx > gtl::Geometry::kMaxIndex) {
-    Fail(a.col, 18, fmt::format("{}{:g} (elements are 0-255)", kind, idx));
-  }
-  if (mode_.incremental) Fail(a.col, 25, "GTL works in G90 only");
-  // Tokens; commas only separate (a point may be written "B70,Y40", ln 5225).
+// The tokens of a definition; commas only separate (a point may be written "B70,Y40", ln 5225).
+std::vector<Token> GtlTokens(const Assignment& a, int p1, int p2) {
   std::vector<Token> toks;
   std::string_view s = a.rhs;
   std::size_t i = 0;
@@ -110,7 +91,7 @@ void BaltRun::DefineElement(const Assignment& a) {
       toks.push_back(t);
       continue;
     }
-    bool coord = c == LetterOfAxis(mode_.p1) || c == LetterOfAxis(mode_.p2) || c == 'I' || c == 'J';
+    bool coord = c == LetterOfAxis(p1) || c == LetterOfAxis(p2) || c == 'I' || c == 'J';
     if (coord || c == 'r' || c == 'a' || c == 'd' || c == 'm') {
       t.letter = c;
       ++i;
@@ -120,45 +101,73 @@ void BaltRun::DefineElement(const Assignment& a) {
     }
     if (IsUpper(c)) {
       Fail(t.col, 24,
-           fmt::format("'{}' is not a coordinate of the {}{} plane", c, LetterOfAxis(mode_.p1),
-                       LetterOfAxis(mode_.p2)));
+           fmt::format("'{}' is not a coordinate of the {}{} plane", c, LetterOfAxis(p1), LetterOfAxis(p2)));
     }
     Fail(t.col, 11, fmt::format("'{}' in a GTL definition", c));
   }
+  return toks;
+}
+
+// Literal words being collected into one operand: a point, a circle (I J r) or a polar point (m a [r]).
+struct GtlGroup {
+  char kind = 0;  // 'P' point, 'C' circle (I J r), 'M' polar (m a [r])
+  double x = 0, y = 0, r = 0, m = 0, an = 0;
+  bool hx = false, hy = false, hr = false, ha = false;
+  std::optional<gtl::Element> o;
+
+  // The group as an operand (when there is one), and a new group.
+  void Close(std::vector<gtl::Operand>& ops, int rhs_col) {
+    if (!kind) return;
+    auto place = [&](Vec2 v) { return o ? o->p + Rotate(v, o->a) : v; };
+    gtl::Operand op;
+    op.literal = true;
+    if (kind == 'P') {
+      op.kind = gtl::Operand::kPoint;
+      op.e.kind = gtl::Element::kPoint;
+      op.e.p = place({x, y});
+    } else {
+      Vec2 c = kind == 'C' ? Vec2{x, y} : Vec2{m * std::cos(an * kDeg), m * std::sin(an * kDeg)};
+      bool circle = kind == 'C' || hr;
+      if (kind == 'C' && !hr) Fail(rhs_col, 12, "a circle needs its radius r");
+      op.kind = circle ? gtl::Operand::kCircle : gtl::Operand::kPoint;
+      op.e.kind = circle ? gtl::Element::kCircle : gtl::Element::kPoint;
+      op.e.p = place(c);
+      op.e.r = r;
+    }
+    ops.push_back(op);
+    *this = GtlGroup();
+  }
+};
+
+}  // namespace
+
+gtl::Element BaltRun::ResolveRef(const ElemRef& r) {
+  double idx = ValueOf(r.index, r.col);
+  if (idx != std::floor(idx) || idx < 0 || idx > gtl::Geometry::kMaxIndex) {
+    Fail(r.col, 18, fmt::format("{}{:g} (elements are 0-255)", r.kind, idx));
+  }
+  const gtl::Element* e = gtl_.Get(r.kind, static_cast<int>(idx));
+  if (!e) Fail(r.col, 15, fmt::format("{}{:g} is not defined", r.kind, idx));
+  return r.neg ? e->Reversed() : *e;
+}
+
+// "NAME INDEX = <definition>" (ln 4420-4513).
+void BaltRun::DefineElement(const Assignment& a) {
+  const char kind = a.name[0];
+  double idx = ValueOf(a.gindex, a.col);
+  if (idx != std::floor(idx) || idx < 0 || idx > gtl::Geometry::kMaxIndex) {
+    Fail(a.col, 18, fmt::format("{}{:g} (elements are 0-255)", kind, idx));
+  }
+  if (mode_.incremental) Fail(a.col, 25, "GTL works in G90 only");
+  const std::vector<Token> toks = GtlTokens(a, mode_.p1, mode_.p2);
   // Operands.
   const double unit = UnitFactor();
   std::vector<gtl::Operand> ops;
   std::optional<gtl::Element> origin;
   bool any_origin = false;
   double origin_angle = 0;
-  struct Group {
-    char kind = 0;  // 'P' point, 'C' circle (I J r), 'M' polar (m a [r])
-    double x = 0, y = 0, r = 0, m = 0, an = 0;
-    bool hx = false, hy = false, hr = false, ha = false;
-    std::optional<gtl::Element> o;
-  } g;
-  auto place = [&](Vec2 v, const std::optional<gtl::Element>& o) { return o ? o->p + Rotate(v, o->a) : v; };
-  auto close = [&]() {
-    if (!g.kind) return;
-    gtl::Operand op;
-    op.literal = true;
-    if (g.kind == 'P') {
-      op.kind = gtl::Operand::kPoint;
-      op.e.kind = gtl::Element::kPoint;
-      op.e.p = place({g.x, g.y}, g.o);
-    } else {
-      Vec2 c =
-          g.kind == 'C' ? Vec2{g.x, g.y} : Vec2{g.m * std::cos(g.an * kDeg), g.m * std::sin(g.an * kDeg)};
-      bool circle = g.kind == 'C' || g.hr;
-      if (g.kind == 'C' && !g.hr) Fail(a.rhs_col, 12, "a circle needs its radius r");
-      op.kind = circle ? gtl::Operand::kCircle : gtl::Operand::kPoint;
-      op.e.kind = circle ? gtl::Element::kCircle : gtl::Element::kPoint;
-      op.e.p = place(c, g.o);
-      op.e.r = g.r;
-    }
-    ops.push_back(op);
-    g = Group();
-  };
+  GtlGroup g;
+  auto close = [&]() { g.Close(ops, a.rhs_col); };
   for (const Token& t : toks) {
     if (t.kind == Token::kS2) {
       close();

@@ -35,6 +35,8 @@
 #include "cell/interp/inline_vec.h"
 #include "cell/interp/parse_cache.h"
 #include "cell/interp/run_base.h"
+#include "cell/interp/run_error.h"
+#include "cell/interp/scan.h"
 #include "contour.h"
 #include "gtl.h"
 #include "tool_files.h"
@@ -53,19 +55,9 @@ constexpr int kMaxRepeatLevels = 3;          // ln 5930
 
 const char* FilmsText(int code);
 
-struct RunError {
-  int code = 11;
-  std::string detail;
-  int col = 1;
-};
+// RunError and Fail(col, code, detail): cell/interp/run_error.h; code 0 is a message without a FILMS4 number.
 
-[[noreturn]] inline void Fail(int col, int code, std::string detail = {}) {
-  throw RunError{code, std::move(detail), col};
-}
-
-inline bool IsDigit(char c) {
-  return c >= '0' && c <= '9';
-}
+using scan::IsDigit;
 inline bool IsUpper(char c) {
   return c >= 'A' && c <= 'Z';
 }
@@ -434,11 +426,6 @@ class BaltRun final : public RunBase {
   // profiles) while it is engaged; straight into the queue otherwise (the hot path: no copies).
   template <class T>
   T& Out();
-
-  // Options and the environment.
-  RunOptions opt_;
-  Environment default_env_;
-  Environment* env_;
 
   // Stepping.
   std::unique_ptr<Frames> frames_;

@@ -257,8 +257,10 @@ std::vector<Operand> SplitOperands(std::string_view body, int col0) {
   return out;
 }
 
-ParsedBlock ParseBlock(std::string_view s) {
-  ParsedBlock pb;
+namespace {
+
+// Every character of the block is one of Table 5.1 (quoted texts and the comment aside).
+void CheckCharacters(std::string_view s) {
   for (std::size_t i = 0; i < s.size(); ++i) {
     if (s[i] == ';') break;  // the rest is a comment
     if (s[i] == '"') {
@@ -272,7 +274,10 @@ ParsedBlock ParseBlock(std::string_view s) {
            (s[i] >= 32 && s[i] < 127) ? fmt::format("illegal character '{}'", s[i]) : "illegal character");
     }
   }
-  Reader r(s);
+}
+
+// The prefixes: '/', "label", N number, '#' / '&'.
+void ReadPrefixes(Reader& r, std::string_view s, ParsedBlock& pb) {
   r.Skip();
   if (r.Peek() == '/') {
     pb.slash = true;
@@ -306,52 +311,87 @@ ParsedBlock ParseBlock(std::string_view s) {
     r.Advance();
     r.Skip();
   }
-  if (r.End() || r.Peek() == ';') return pb;  // label or number alone, comment block
-  const int body_col = r.Col();
-  std::string_view body = r.Rest();
-  if (r.Peek() == '@') {
-    pb.kind = BlockKind::kExec;
-    r.Advance();
-    r.Skip();
-    pb.exec = r.Rest();
-    pb.exec_col = r.Col();
-    if (std::size_t semi = pb.exec.find(';'); semi != std::string_view::npos)
-      pb.exec = pb.exec.substr(0, semi);
-    while (!pb.exec.empty() && (pb.exec.back() == ' ' || pb.exec.back() == '\t')) pb.exec.remove_suffix(1);
-    return pb;
-  }
-  // An assignment has '=' outside brackets and quotes.
-  {
-    int depth = 0;
-    bool quote = false;
-    for (std::size_t i = 0; i < body.size(); ++i) {
-      char c = body[i];
-      if (c == ';' && !quote) break;
-      if (c == '"') quote = !quote;
-      if (quote) continue;
-      if (c == '(') ++depth;
-      if (c == ')') --depth;
-      if (c == '=' && depth == 0) {
-        pb.kind = BlockKind::kAssign;
-        if (!ReadAssignTarget(body.substr(0, i), body_col, pb.assign)) {
-          Fail(body_col, 11, "no variable before '='");
-        }
-        std::string_view rhs = body.substr(i + 1);
-        if (std::size_t semi = rhs.find(';');
-            semi != std::string_view::npos && rhs.find('"') == std::string_view::npos) {
-          rhs = rhs.substr(0, semi);
-        }
-        std::size_t b = rhs.find_first_not_of(" \t");
-        if (b == std::string_view::npos)
-          Fail(body_col + static_cast<int>(i) + 1, 12, "value missing after '='");
-        std::size_t e = rhs.find_last_not_of(" \t");
-        pb.assign.rhs = rhs.substr(b, e - b + 1);
-        pb.assign.rhs_col = body_col + static_cast<int>(i + 1 + b);
-        return pb;
+}
+
+// "@..." (K14 execution): the rest of the block.
+void ReadExec(Reader& r, ParsedBlock& pb) {
+  pb.kind = BlockKind::kExec;
+  r.Advance();
+  r.Skip();
+  pb.exec = r.Rest();
+  pb.exec_col = r.Col();
+  if (std::size_t semi = pb.exec.find(';'); semi != std::string_view::npos) pb.exec = pb.exec.substr(0, semi);
+  while (!pb.exec.empty() && (pb.exec.back() == ' ' || pb.exec.back() == '\t')) pb.exec.remove_suffix(1);
+}
+
+// An assignment: '=' outside brackets and quotes. False when the block has none.
+bool ReadAssignment(std::string_view body, int body_col, ParsedBlock& pb) {
+  int depth = 0;
+  bool quote = false;
+  for (std::size_t i = 0; i < body.size(); ++i) {
+    char c = body[i];
+    if (c == ';' && !quote) break;
+    if (c == '"') quote = !quote;
+    if (quote) continue;
+    if (c == '(') ++depth;
+    if (c == ')') --depth;
+    if (c == '=' && depth == 0) {
+      pb.kind = BlockKind::kAssign;
+      if (!ReadAssignTarget(body.substr(0, i), body_col, pb.assign)) {
+        Fail(body_col, 11, "no variable before '='");
       }
+      std::string_view rhs = body.substr(i + 1);
+      if (std::size_t semi = rhs.find(';');
+          semi != std::string_view::npos && rhs.find('"') == std::string_view::npos) {
+        rhs = rhs.substr(0, semi);
+      }
+      std::size_t b = rhs.find_first_not_of(" \t");
+      if (b == std::string_view::npos)
+        Fail(body_col + static_cast<int>(i) + 1, 12, "value missing after '='");
+      std::size_t e = rhs.find_last_not_of(" \t");
+      pb.assign.rhs = rhs.substr(b, e - b + 1);
+      pb.assign.rhs_col = body_col + static_cast<int>(i + 1 + b);
+      return true;
     }
   }
-  pb.kind = BlockKind::kIso;
+  return false;
+}
+
+// A lower-case word of an ISO block: a GTL element, s2, or a corner / paraxial word (r b t u v w).
+void ReadLowerWord(Reader& r, char c, int col, ParsedBlock& pb) {
+  if (c == 'p' || c == 'l' || c == 'c') {
+    if (pb.elem.kind) Fail(col, 24, "one GTL element per block");
+    pb.elem.kind = c;
+    pb.elem.col = col;
+    r.Advance();
+    pb.elem.index = r.Value();
+    if (pb.elem.index.kind == Val::kNone || pb.elem.index.neg) Fail(col, 11, "a GTL element needs an index");
+    return;
+  }
+  if (c == 's') {
+    r.Advance();
+    r.Skip();
+    if (r.Peek() != '2') Fail(col, 11, "the intersection selector is s2");
+    r.Advance();
+    if (pb.s2) Fail(col, 24, "s2 twice");
+    pb.s2 = true;
+    pb.s2_col = col;
+    return;
+  }
+  if (c == 'r' || c == 'b' || c == 't' || c == 'u' || c == 'v' || c == 'w') {
+    Word w;
+    w.letter = c;
+    w.col = col;
+    r.Advance();
+    w.v = r.Value();
+    if (!pb.words.push_back(w)) Fail(col, 23, "too many words");
+    return;
+  }
+  Fail(col, 24, fmt::format("'{}' is a GTL definition word, not allowed in an ISO block", c));
+}
+
+// The words and commands of an ISO block.
+void ReadIso(Reader& r, std::string_view s, ParsedBlock& pb) {
   bool non_g = false;
   while (true) {
     r.Skip();
@@ -379,36 +419,8 @@ ParsedBlock ParseBlock(std::string_view s) {
     }
     if (IsLower(c)) {
       non_g = true;
-      if (c == 'p' || c == 'l' || c == 'c') {
-        if (pb.elem.kind) Fail(col, 24, "one GTL element per block");
-        pb.elem.kind = c;
-        pb.elem.col = col;
-        r.Advance();
-        pb.elem.index = r.Value();
-        if (pb.elem.index.kind == Val::kNone || pb.elem.index.neg)
-          Fail(col, 11, "a GTL element needs an index");
-        continue;
-      }
-      if (c == 's') {
-        r.Advance();
-        r.Skip();
-        if (r.Peek() != '2') Fail(col, 11, "the intersection selector is s2");
-        r.Advance();
-        if (pb.s2) Fail(col, 24, "s2 twice");
-        pb.s2 = true;
-        pb.s2_col = col;
-        continue;
-      }
-      if (c == 'r' || c == 'b' || c == 't' || c == 'u' || c == 'v' || c == 'w') {
-        Word w;
-        w.letter = c;
-        w.col = col;
-        r.Advance();
-        w.v = r.Value();
-        if (!pb.words.push_back(w)) Fail(col, 23, "too many words");
-        continue;
-      }
-      Fail(col, 24, fmt::format("'{}' is a GTL definition word, not allowed in an ISO block", c));
+      ReadLowerWord(r, c, col, pb);
+      continue;
     }
     if (!IsUpper(c)) Fail(col, 11, fmt::format("unexpected '{}'", c));
     if (c == 'E') {
@@ -436,6 +448,25 @@ ParsedBlock ParseBlock(std::string_view s) {
     }
     if (!pb.words.push_back(w)) Fail(col, 23, "too many words");
   }
+}
+
+}  // namespace
+
+ParsedBlock ParseBlock(std::string_view s) {
+  ParsedBlock pb;
+  CheckCharacters(s);
+  Reader r(s);
+  ReadPrefixes(r, s, pb);
+  if (r.End() || r.Peek() == ';') return pb;  // label or number alone, comment block
+  const int body_col = r.Col();
+  std::string_view body = r.Rest();
+  if (r.Peek() == '@') {
+    ReadExec(r, pb);
+    return pb;
+  }
+  if (ReadAssignment(body, body_col, pb)) return pb;
+  pb.kind = BlockKind::kIso;
+  ReadIso(r, s, pb);
   return pb;
 }
 

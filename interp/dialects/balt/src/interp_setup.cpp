@@ -56,14 +56,7 @@ std::uint32_t Axes(const std::string& key, const std::string& v, bool rotary_onl
 
 }  // namespace
 
-BaltRun::BaltRun(const RunOptions& o) : env_(o.env ? o.env : &default_env_) {
-  // Everything but the program text (which may be large) is kept.
-  opt_.dialect = o.dialect;
-  opt_.program_name = o.program_name;
-  opt_.library = o.library;
-  opt_.save = o.save;
-  opt_.params = o.params;
-  opt_.env = o.env;
+BaltRun::BaltRun(const RunOptions& o) : RunBase(o) {
   scale_.fill(1.0);
   std::size_t syvar_bytes = 200;
   std::map<int, double> initial_e;

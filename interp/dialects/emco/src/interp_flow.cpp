@@ -87,9 +87,7 @@ std::string CheckKeptVariable(std::string_view name, double value) {
 }
 
 EmRun::EmRun(const RunOptions& o)
-    : program_name_(o.program_name),
-      library_(o.library),
-      env_(o.env ? o.env : &default_env_),
+    : RunBase(o),
       corner_([this](Item&& it) { Route(std::move(it), 1); }),
       comp_([this](Item&& it) { Route(std::move(it), 2); }),
       tools_(o.tools) {
@@ -272,7 +270,7 @@ void EmRun::StepOnce() {
     ExecLine(*line);
   } catch (const RunError& e) {
     Diagnostic d;
-    d.program = program_name_;
+    d.program = opt_.program_name;
     d.line = cur_line_;
     d.col = cur_own_ ? e.col : 1;
     d.alarm = e.alarm;
@@ -362,10 +360,10 @@ std::optional<EmRun::Subroutine> EmRun::FindSubroutine(int number) {
     for (auto& [n, span] : IndexPrograms(text, nullptr)) subs_[n] = {span, true};
   }
   if (auto it = subs_.find(number); it != subs_.end()) return it->second;
-  if (!library_) return std::nullopt;
+  if (!opt_.library) return std::nullopt;
   for (const std::string& n :
        {fmt::format("O{:04d}", number), fmt::format("O{}", number), std::to_string(number)}) {
-    if (std::optional<std::string> body = library_(n)) {
+    if (std::optional<std::string> body = opt_.library(n)) {
       std::optional<TextSpan> whole;
       std::map<int, TextSpan> in = IndexPrograms(ProgramText::FromString(std::move(*body)), &whole);
       std::optional<TextSpan> span = in.count(number) ? std::optional<TextSpan>(in.at(number)) : whole;

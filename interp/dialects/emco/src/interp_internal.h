@@ -29,6 +29,7 @@
 #include "cell/interp/geometry/offset_path.h"
 #include "cell/interp/parse_cache.h"
 #include "cell/interp/run_base.h"
+#include "cell/interp/run_error.h"
 
 namespace cell::interp::emco {
 
@@ -40,18 +41,12 @@ constexpr int kMaxNesting = 10;  // G25 levels (ALARM 300)
 
 // ---------------------------------------------------------------------------------------------------------
 // Errors: the manual's alarm (3 digits, "version 6.00" numbering; the 2-digit numbers in older pages map to
-// them: 51 -> 510) with its title, or a text of our own where the manual has no alarm.
-
-struct RunError {
-  std::string alarm;
-  std::string text;
-  int col = 1;
-};
+// them: 51 -> 510) with its title, or a text of our own where the manual has no alarm (RunError and Fail:
+// cell/interp/run_error.h).
 
 // The alarm list's title for `code` ("OFFSET CHANGED, GO WITH G00"); empty for codes we do not raise.
 std::string_view AlarmTitle(int code);
 [[noreturn]] void Alarm(int code, int col, std::string_view detail = {});
-[[noreturn]] void Fail(int col, std::string text);
 
 // ---------------------------------------------------------------------------------------------------------
 // The tape format (interp_read.cpp)
@@ -330,10 +325,6 @@ class EmRun final : public RunBase {
   double DLen(const BlockWords& bw, int i, double def) const;  // a D length in mm (um or 1/10000 in)
 
   // Options and environment.
-  std::string program_name_;
-  std::function<std::optional<std::string>(const std::string&)> library_;
-  Environment default_env_;
-  Environment* env_;
   Monitor mon_;
 
   // Stepping.

@@ -7,15 +7,15 @@
 
 #include <cmath>
 
+#include "cell/interp/scan.h"
 #include "interp_internal.h"
 
 namespace cell::interp::emco {
 
 namespace {
 
-bool IsDigit(char c) {
-  return c >= '0' && c <= '9';
-}
+using scan::IsDigit;
+
 char Up(char c) {
   return (c >= 'a' && c <= 'z') ? static_cast<char>(c - 'a' + 'A') : c;
 }
@@ -227,11 +227,7 @@ void Alarm(int code, int col, std::string_view detail) {
     text += detail;
     text += ')';
   }
-  throw RunError{fmt::format("{:03d}", code), std::move(text), col};
-}
-
-void Fail(int col, std::string text) {
-  throw RunError{"", std::move(text), col};
+  Fail(col, std::move(text), fmt::format("{:03d}", code));
 }
 
 bool IsHeaderLine(std::string_view text) {

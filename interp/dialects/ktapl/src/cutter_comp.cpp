@@ -8,16 +8,6 @@
 
 namespace cell::interp::ktapl::cc {
 
-namespace {
-
-// Slot of an axis in Canon::center ([x, y, z]; U, V, W take the slot of their parallel axis).
-int CenterSlot(int axis) {
-  if (axis == kX || axis == kU) return 0;
-  if (axis == kY || axis == kV) return 1;
-  return 2;
-}
-
-}  // namespace
 // ---------------------------------------------------------------------------------------------------------
 // Compensator
 
@@ -130,41 +120,31 @@ Canon Compensator::FillIn(const Corner& k, const Canon& next) const {
   Target to = *a.target();
   to.travel = {};
   to.travel_mask = 0;
-  SetPlane(to.pos, k.b_start);
+  // Both blocks at F0: a rapid move, a positioning move rather than a contour.
   const Feed* feed = a.feed() ? a.feed() : next.feed();
-  Canon f;
-  f.line = a.line;
-  if (!feed) {
-    f.Set<RapidOp>().to = to;  // both blocks at F0: a positioning move, not a contour
-    return f;
+  return FillInMove(k, to, pend_.path.end, p1_, p2_, feed, a.line);
+}
+
+// Not a move: held behind the held block while compensation is on.
+void Compensator::TakeOther(Canon&& c) {
+  const ProbeOp* probe = c.If<ProbeOp>();
+  if (c.op() == Op::kToolChange || c.op() == Op::kRegrid || (probe && probe->g != 38)) {
+    block_clears_ = true;  // the slides went elsewhere: no residual offset is left
+    if (state_ == kResidual) {
+      state_ = kOff;
+      Update();
+    }
   }
-  ArcOp& arc = f.Set<ArcOp>();
-  arc.to = to;
-  arc.feed = *feed;
-  arc.cw = k.fill_cw;
-  arc.angle = k.fill_sweep;
-  arc.plane = {static_cast<std::int8_t>(p1_), static_cast<std::int8_t>(p2_)};
-  arc.center = {to.pos[kX], to.pos[kY], to.pos[kZ]};
-  arc.center[CenterSlot(p1_)] = pend_.path.end.x;
-  arc.center[CenterSlot(p2_)] = pend_.path.end.y;
-  return f;
+  if (state_ == kOn) {
+    held_.push_back(std::move(c));
+  } else {
+    Out(std::move(c));
+  }
 }
 
 void Compensator::Take(Canon&& c) {
   if (!IsMove(c.op())) {
-    const ProbeOp* probe = c.If<ProbeOp>();
-    if (c.op() == Op::kToolChange || c.op() == Op::kRegrid || (probe && probe->g != 38)) {
-      block_clears_ = true;  // the slides went elsewhere: no residual offset is left
-      if (state_ == kResidual) {
-        state_ = kOff;
-        Update();
-      }
-    }
-    if (state_ == kOn) {
-      held_.push_back(std::move(c));
-    } else {
-      Out(std::move(c));
-    }
+    TakeOther(std::move(c));
     return;
   }
   Path p;
@@ -180,27 +160,7 @@ void Compensator::Take(Canon&& c) {
   bool in_plane = p.arc || Norm(p.end - p.start) >= kTiny;
 
   if (plan_ == kPlanRampOn && state_ != kOn) {
-    // Ramp-on (ln 1613-1641, 6466): no comp at its start, the full offset at its end.
-    if (p.arc)
-      throw Error("", fmt::format("G{} RAMP-ON BLOCK MUST BE A LINEAR MOVE (G00/G01)", g_),
-                  CompError::kAtCode);
-    if (!in_plane || Norm(p.end - p.start) < min_move_ - 1e-9) {
-      throw Error("",
-                  fmt::format("G{} RAMP-ON BLOCK NEEDS A MOVE OF AT LEAST 0.0001 IN (0.001 MM) IN {}", g_,
-                              AxesText()),
-                  CompError::kAtCode);
-    }
-    pend_.c = std::move(c);
-    pend_.path = p;
-    pend_.kind = kRamp;
-    pend_.side = side_;
-    pend_.g = g_;
-    pend_.start = actual_;
-    pend_.trim_start = 0;
-    state_ = kOn;
-    block_motion_ = true;
-    no_motion_blocks_ = 0;
-    Update();
+    TakeRampOn(std::move(c), p, in_plane);
     return;
   }
   if (state_ == kOff) {
@@ -208,31 +168,61 @@ void Compensator::Take(Canon&& c) {
     return;
   }
   if (state_ == kResidual) {
-    // After G40 without motion (ln 6532) the cutter is still offset; the next move in the plane starts
-    // there and goes to its programmed point.
-    if (!in_plane) {
-      SetPlane(c.target()->pos, actual_);
-      Out(std::move(c));
-      return;
-    }
-    if (p.arc && Norm(actual_ - p.start) >= kTiny) {
-      // An arc cannot start off its circle: straight to its start first, at the arc's feed.
-      Canon l;
-      l.line = c.line;
-      LinearOp& lin = l.Set<LinearOp>();
-      lin.feed = c.As<ArcOp>().feed;
-      lin.to.pos = last_;
-      lin.to.used = c.target()->used;
-      SetPlane(lin.to.pos, p.start);
-      Out(std::move(l));
-    }
-    Out(std::move(c));
-    state_ = kOff;
-    Update();
+    TakeResidual(std::move(c), p, in_plane);
     return;
   }
+  TakeHeld(std::move(c), p, in_plane);
+}
 
-  // Compensation on: a block is held.
+// Ramp-on (ln 1613-1641, 6466): no comp at its start, the full offset at its end.
+void Compensator::TakeRampOn(Canon&& c, const Path& p, bool in_plane) {
+  if (p.arc)
+    throw Error("", fmt::format("G{} RAMP-ON BLOCK MUST BE A LINEAR MOVE (G00/G01)", g_), CompError::kAtCode);
+  if (!in_plane || Norm(p.end - p.start) < min_move_ - 1e-9) {
+    throw Error(
+        "",
+        fmt::format("G{} RAMP-ON BLOCK NEEDS A MOVE OF AT LEAST 0.0001 IN (0.001 MM) IN {}", g_, AxesText()),
+        CompError::kAtCode);
+  }
+  pend_.c = std::move(c);
+  pend_.path = p;
+  pend_.kind = kRamp;
+  pend_.side = side_;
+  pend_.g = g_;
+  pend_.start = actual_;
+  pend_.trim_start = 0;
+  state_ = kOn;
+  block_motion_ = true;
+  no_motion_blocks_ = 0;
+  Update();
+}
+
+// After G40 without motion (ln 6532) the cutter is still offset; the next move in the plane starts there
+// and goes to its programmed point.
+void Compensator::TakeResidual(Canon&& c, const Path& p, bool in_plane) {
+  if (!in_plane) {
+    SetPlane(c.target()->pos, actual_);
+    Out(std::move(c));
+    return;
+  }
+  if (p.arc && Norm(actual_ - p.start) >= kTiny) {
+    // An arc cannot start off its circle: straight to its start first, at the arc's feed.
+    Canon l;
+    l.line = c.line;
+    LinearOp& lin = l.Set<LinearOp>();
+    lin.feed = c.As<ArcOp>().feed;
+    lin.to.pos = last_;
+    lin.to.used = c.target()->used;
+    SetPlane(lin.to.pos, p.start);
+    Out(std::move(l));
+  }
+  Out(std::move(c));
+  state_ = kOff;
+  Update();
+}
+
+// Compensation on: a block is held.
+void Compensator::TakeHeld(Canon&& c, const Path& p, bool in_plane) {
   if (plan_ == kPlanCancel) {
     // Ramp-off (ln 1599-1611, 6533-6550): the held block ends at its own offset point, the G40 move goes
     // straight from there to its programmed end point.
@@ -262,6 +252,12 @@ void Compensator::Take(Canon&& c) {
   block_motion_ = true;
   no_motion_blocks_ = 0;
 
+  Join(next, p);
+  pend_ = std::move(next);
+}
+
+// The held block and `next` (its programmed path `p`): where the held one ends and `next` starts.
+void Compensator::Join(Pending& next, const Path& p) {
   const Pending& a = pend_;
   if (next.side != a.side || next.kind == kPerpendicular) {
     // G41<->G42 (retrace, ln 6692-6696) or a G43 excursion (ln 1643-1652): the held block ends at its own
@@ -305,7 +301,6 @@ void Compensator::Take(Canon&& c) {
       Release(k.a_end, k.a_trim, nullptr);
     }
   }
-  pend_ = std::move(next);
 }
 
 void Compensator::EndBlock(bool counts) {

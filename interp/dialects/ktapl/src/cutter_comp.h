@@ -102,6 +102,11 @@ class Compensator {
   void Release(Vec2 end, double trim_end, const Canon* fill);
   void ReleaseHeld();
   Canon FillIn(const Corner& k, const Canon& next) const;
+  void TakeOther(Canon&& c);
+  void TakeRampOn(Canon&& c, const Path& p, bool in_plane);
+  void TakeResidual(Canon&& c, const Path& p, bool in_plane);
+  void TakeHeld(Canon&& c, const Path& p, bool in_plane);
+  void Join(Pending& next, const Path& p);
   std::string AxesText() const;
 
   std::vector<Canon> ready_;

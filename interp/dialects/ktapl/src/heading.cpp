@@ -7,6 +7,7 @@
 #include <string>
 
 #include "cell/interp/ktapl_statements.h"
+#include "cell/interp/scan.h"
 
 namespace cell::interp {
 
@@ -14,12 +15,9 @@ namespace {
 
 using Kind = HeadingNotice::Kind;
 
-bool IsDigit(char c) {
-  return c >= '0' && c <= '9';
-}
-bool AllDigits(std::string_view s) {
-  return !s.empty() && std::all_of(s.begin(), s.end(), IsDigit);
-}
+using scan::AllDigits;
+using scan::IsDigit;
+
 bool IsAlnum(char c) {
   return IsDigit(c) || (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z');
 }

@@ -45,6 +45,93 @@ Word KtRun::EvalWord(const RawWord& w, bool dwell, bool passing, bool drop_undef
   return r;
 }
 
+// The G codes that only set a mode (or do nothing here); false for the others.
+bool KtRun::ModeGCode(int g) {
+  switch (g) {
+    case 0:
+      mode_.contouring = false;
+      break;
+    case 1:
+      mode_.contouring = true;
+      break;
+    case 28:
+      mode_.obstruction_detection = true;
+      break;
+    case 29:
+      mode_.obstruction_detection = false;
+      break;
+    case 36:
+      mode_.inspection_recording = true;
+      break;
+    case 39:
+      mode_.calculated_offsets = false;
+      break;
+    case 47:
+      mode_.calculated_offsets = true;
+      break;
+    case 48:
+      mode_.explicit_fixtures = true;
+      break;
+    case 49:
+      mode_.explicit_fixtures = false;
+      break;
+    case 50:
+      mode_.adaptive = Adaptive::kOff;
+      break;
+    case 51:
+      mode_.adaptive = Adaptive::kOn;
+      break;
+    case 53:
+      mode_.adaptive = Adaptive::kWithoutAirGap;
+      break;
+    case 90:
+      mode_.incremental = false;
+      break;
+    case 91:
+      mode_.incremental = true;
+      break;
+    case 93:
+      mode_.inverse_time = true;
+      break;
+    case 94:
+      mode_.inverse_time = false;
+      break;
+    case 4:   // the block's dwell (BlockCodes::dwell)
+    case 70:  // units: before the block's words are read
+    case 71:
+    case 44:
+    case 52:
+    case 79:
+      break;
+    default:
+      return false;
+  }
+  return true;
+}
+
+// G40-G46: the compensation codes of the block (acted on by CompPrepare).
+void KtRun::CompGCode(int g, int col) {
+  switch (g) {
+    case 40:
+    case 41:
+    case 42:
+      if (comp_codes_.g && comp_codes_.g != g) Fail(col, "G40, G41 AND G42 CANNOT BE IN THE SAME BLOCK");
+      comp_codes_.any = true;
+      comp_codes_.g = g;
+      comp_codes_.g_col = col;
+      break;
+    case 43:
+      comp_codes_.any = comp_codes_.g43 = true;
+      break;
+    case 46:
+      comp_codes_.any = comp_codes_.g46 = true;
+      comp_codes_.g46_col = col;
+      break;
+    default:
+      break;
+  }
+}
+
 void KtRun::ConvertGCodes(const GWords& gs, bool pass800, BlockCodes& k) {
   bool plane_set = false, b20 = false, b21 = false;
   for (auto [g, col] : gs) {
@@ -53,19 +140,12 @@ void KtRun::ConvertGCodes(const GWords& gs, bool pass800, BlockCodes& k) {
       k.passed.push_back({g, col});
       continue;
     }
+    if (ModeGCode(g)) continue;
     switch (g) {
-      case 0:
-        mode_.contouring = false;
-        break;
-      case 1:
-        mode_.contouring = true;
-        break;
       case 2:
       case 3:
         k.arc = g;
         k.arc_col = col;
-        break;
-      case 4:
         break;
       case 17:
         mode_.plane = geom::Plane::kXY;
@@ -96,15 +176,6 @@ void KtRun::ConvertGCodes(const GWords& gs, bool pass800, BlockCodes& k) {
       case 27:
         k.probe_cycle = g;
         break;
-      case 28:
-        mode_.obstruction_detection = true;
-        break;
-      case 29:
-        mode_.obstruction_detection = false;
-        break;
-      case 36:
-        mode_.inspection_recording = true;
-        break;
       case 37:
         CloseOpenFile(col, true);
         mode_.inspection_recording = false;
@@ -112,46 +183,12 @@ void KtRun::ConvertGCodes(const GWords& gs, bool pass800, BlockCodes& k) {
       case 38:
         k.g38_col = col;
         break;
-      case 39:
-        mode_.calculated_offsets = false;
-        break;
-      case 47:
-        mode_.calculated_offsets = true;
-        break;
       case 40:
       case 41:
       case 42:
-        if (comp_codes_.g && comp_codes_.g != g) Fail(col, "G40, G41 AND G42 CANNOT BE IN THE SAME BLOCK");
-        comp_codes_.any = true;
-        comp_codes_.g = g;
-        comp_codes_.g_col = col;
-        break;
       case 43:
-        comp_codes_.any = comp_codes_.g43 = true;
-        break;
-      case 44:
-        break;
       case 46:
-        comp_codes_.any = comp_codes_.g46 = true;
-        comp_codes_.g46_col = col;
-        break;
-      case 48:
-        mode_.explicit_fixtures = true;
-        break;
-      case 49:
-        mode_.explicit_fixtures = false;
-        break;
-      case 50:
-        mode_.adaptive = Adaptive::kOff;
-        break;
-      case 51:
-        mode_.adaptive = Adaptive::kOn;
-        break;
-      case 53:
-        mode_.adaptive = Adaptive::kWithoutAirGap;
-        break;
-      case 52:
-      case 79:
+        CompGCode(g, col);
         break;
       case 60:
       case 61:
@@ -159,9 +196,6 @@ void KtRun::ConvertGCodes(const GWords& gs, bool pass800, BlockCodes& k) {
         mode_.probe_count =
             g == 60 ? ProbeCount::kOff : (g == 61 ? ProbeCount::kContacts : ProbeCount::kBreaks);
         if (g != 60) machine_[1022] = 0;
-        break;
-      case 70:
-      case 71:
         break;
       case 77:
         k.inhibit_cycle = true;
@@ -177,20 +211,8 @@ void KtRun::ConvertGCodes(const GWords& gs, bool pass800, BlockCodes& k) {
           it = program_.erase(it);
         }
         break;
-      case 90:
-        mode_.incremental = false;
-        break;
-      case 91:
-        mode_.incremental = true;
-        break;
       case 92:
         k.g92 = true;
-        break;
-      case 93:
-        mode_.inverse_time = true;
-        break;
-      case 94:
-        mode_.inverse_time = false;
         break;
       case 98:
         k.g98 = true;
@@ -426,15 +448,39 @@ void KtRun::ImmediateMCodes(const Words& words, bool speed_changed, const Word* 
   }
 }
 
-void KtRun::ExecTypeI(BlockCtx& bc, const ParsedBlock* pb) {
-  const auto& raw = bc.words;
-  if (raw.empty()) return;
-  const bool drop_undefined = std::any_of(raw.begin(), raw.end(), [](const RawWord& w) {
-    return w.letter == 'G' && w.kind == WordKind::kNumber && !w.num.point && w.num.as_written == 78;
-  });
+namespace {
 
-  // G codes first: they decide the units and the cycle mode of the block.
-  GWords gs;  // fits: one per raw word
+bool HasG(const GWords& gs, int code) {
+  return std::any_of(gs.begin(), gs.end(), [code](GWord g) { return g.code == code; });
+}
+
+// Does the block run in G800-series passing mode? A probe cycle (G24-G27) takes the block's other G codes
+// as L807 and its letters as L801-L826, as the G800-series cycles do (App. E checks that there are none:
+// "NO OTHER M OR G CODES ALLOWED").
+bool PassesLetters(const GWords& gs, int cycle, bool running_cycle, bool g77) {
+  int new_cycle = cycle;
+  for (auto [g, col] : gs) {
+    (void)col;
+    if (g == 80 || g == 800) new_cycle = 0;
+    if ((g >= 81 && g <= 89) || (g >= 801 && g <= 899)) new_cycle = g;
+  }
+  const bool probe_block =
+      std::any_of(gs.begin(), gs.end(), [](GWord g) { return g.code >= 24 && g.code <= 27; });
+  return (!running_cycle && !g77 && new_cycle >= 801) || probe_block;
+}
+
+// Column of the block's first axis word (1 without one).
+int MotionCol(const Words& words) {
+  for (const auto& w : words) {
+    if (AxisOfLetter(w.letter) >= 0) return w.col;
+  }
+  return 1;
+}
+
+}  // namespace
+
+// G codes first: they decide the units and the cycle mode of the block.
+void KtRun::ReadGWords(const RawWords& raw, bool drop_undefined, GWords& gs) {
   for (const auto& w : raw) {
     if (w.letter != 'G') continue;
     bool dropped;
@@ -444,31 +490,85 @@ void KtRun::ExecTypeI(BlockCtx& bc, const ParsedBlock* pb) {
     if (g.v < 0 || g.v > 999) Fail(w.col, "ILLEGAL G CODE");
     gs.push_back({static_cast<int>(g.v), w.col});
   }
-  const bool has70 = std::any_of(gs.begin(), gs.end(), [](GWord g) { return g.code == 70; });
-  const bool has71 = std::any_of(gs.begin(), gs.end(), [](GWord g) { return g.code == 71; });
+  const bool has70 = HasG(gs, 70);
+  const bool has71 = HasG(gs, 71);
   if (has70 && has71) Fail(gs.front().col, "G70 AND G71 CANNOT BE IN THE SAME BLOCK");
   if (has70) SetUnits(false);
   if (has71) SetUnits(true);
   // The run's unit mode at start: the basic state, or the G70/G71 of the first Type I block.
   EmitUnitsOnce();
+}
 
-  const bool running_cycle = RunningCycle();
-  // Does this block run in G800-series passing mode?
-  int new_cycle = mode_.cycle;
-  for (auto [g, col] : gs) {
-    (void)col;
-    if (g == 80 || g == 800) new_cycle = 0;
-    if ((g >= 81 && g <= 89) || (g >= 801 && g <= 899)) new_cycle = g;
+// The axis words of the block as a mask; E I J K P Q R H D stay as the letters' values.
+uint32_t KtRun::KeepLetters(const Words& words) {
+  uint32_t axis_mask = 0;
+  for (const auto& w : words) {
+    int a = AxisOfLetter(w.letter);
+    if (a >= 0) axis_mask |= 1u << a;
+    if (w.letter == 'E' || w.letter == 'I' || w.letter == 'J' || w.letter == 'K' || w.letter == 'P' ||
+        w.letter == 'Q' || w.letter == 'R' || w.letter == 'H' || w.letter == 'D') {
+      letters_[w.letter - 'A'] = w.v;
+    }
   }
-  const bool g77 = std::any_of(gs.begin(), gs.end(), [](GWord g) { return g.code == 77; });
-  // A probe cycle (G24-G27) takes the block's other G codes as L807 and its letters as L801-L826, as the
-  // G800-series cycles do (App. E checks that there are none: "NO OTHER M OR G CODES ALLOWED").
-  const bool probe_block =
-      std::any_of(gs.begin(), gs.end(), [](GWord g) { return g.code >= 24 && g.code <= 27; });
-  const bool pass800 = (!running_cycle && !g77 && new_cycle >= 801) || probe_block;
+  return axis_mask;
+}
+
+// A probe cycle block: its letters to L801-L826, its other G code to L807, then the cycle.
+void KtRun::ProbeCycleBlock(const RawWords& raw, const BlockCodes& k, const ParsedBlock* pb,
+                            bool drop_undefined, bool running_cycle) {
+  if (running_cycle) Fail(1, "PROBE CYCLES CANNOT BE CALLED FROM A CYCLE");
+  for (const auto& rw : raw) {
+    if (rw.letter == 'G') continue;
+    bool dropped;
+    Word w = EvalWord(rw, false, true, drop_undefined, dropped);
+    if (!dropped) SetParam(800 + (rw.letter - 'A') + 1, w.v, rw.col);
+  }
+  if (!k.passed.empty()) SetParam(807, k.passed.back().code, k.passed.back().col);
+  // The block's N number, passed as X.4: the cycles write it back as N<L814*10000> (App. E).
+  if (pb && pb->has_n) SetParam(814, ScaleLiteral('N', pb->n, metric_, false, true), 1);
+  CallCycle(k.probe_cycle);
+}
+
+// The F word: G94's feed (its linear or rotary format is decided with the move), or G93's for this block.
+std::optional<double> KtRun::BlockFeed(const Word* f, const BlockCodes& k, const BlockMCodes& mc) {
+  if (!f || k.dwell || mc.m06 || mc.m25) return std::nullopt;
+  if (f->v < 0) Fail(f->col, "FEEDRATE MAY NOT BE NEGATIVE");
+  if (!mode_.inverse_time) {
+    feed_ = f->v;
+    return std::nullopt;
+  }
+  // Table 1-B: G93 is 3.1 in inch and 5.1 in metric, so a metric F without a point has one decimal.
+  Word fw = *f;
+  if (fw.literal && !fw.num.point && metric_) fw.v = fw.num.as_written / 10;
+  CheckFeedFormat(fw, FeedFormat::kInverseTime, metric_);
+  return fw.v;
+}
+
+// H word: fixture offsets.
+void KtRun::FixtureWord(const Words& words) {
+  const Word* h = Find(words, 'H');
+  if (!h) return;
+  int hv = static_cast<int>(h->v);
+  if (hv < 0 || hv > 32) Fail(h->col, "H WORD OUT OF RANGE 0-32");
+  if (hv != 0 && !mode_.explicit_fixtures)
+    Fail(h->col, "H WORD NOT ALLOWED IN G49 (IMPLICIT FIXTURE OFFSET) MODE");
+  active_h_ = hv;
+}
+
+void KtRun::ExecTypeI(BlockCtx& bc, const ParsedBlock* pb) {
+  const auto& raw = bc.words;
+  if (raw.empty()) return;
+  const bool drop_undefined = std::any_of(raw.begin(), raw.end(), [](const RawWord& w) {
+    return w.letter == 'G' && w.kind == WordKind::kNumber && !w.num.point && w.num.as_written == 78;
+  });
+  GWords gs;  // fits: one per raw word
+  ReadGWords(raw, drop_undefined, gs);
+  const bool running_cycle = RunningCycle();
+  const bool g77 = HasG(gs, 77);
+  const bool pass800 = PassesLetters(gs, mode_.cycle, running_cycle, g77);
 
   BlockCodes k;
-  k.dwell = std::any_of(gs.begin(), gs.end(), [](GWord g) { return g.code == 4; });
+  k.dwell = HasG(gs, 4);
   Words words;
   for (const auto& w : raw) {
     if (w.letter == 'G') continue;
@@ -481,38 +581,14 @@ void KtRun::ExecTypeI(BlockCtx& bc, const ParsedBlock* pb) {
   }
   ConvertGCodes(gs, pass800, k);
 
-  uint32_t axis_mask = 0;
-  for (const auto& w : words) {
-    int a = AxisOfLetter(w.letter);
-    if (a >= 0) axis_mask |= 1u << a;
-    if (w.letter == 'E' || w.letter == 'I' || w.letter == 'J' || w.letter == 'K' || w.letter == 'P' ||
-        w.letter == 'Q' || w.letter == 'R' || w.letter == 'H' || w.letter == 'D') {
-      letters_[w.letter - 'A'] = w.v;
-    }
-  }
-  int motion_col = 1;
-  for (const auto& w : words) {
-    if (AxisOfLetter(w.letter) >= 0) {
-      motion_col = w.col;
-      break;
-    }
-  }
+  uint32_t axis_mask = KeepLetters(words);
+  const int motion_col = MotionCol(words);
   if (comp_codes_.any || comp_.engaged()) [[unlikely]] {
     CompPrepare(words, motion_col, running_cycle, k.probe || k.probe_cycle != 0, k.g92);
   }
 
   if (k.probe_cycle) {
-    if (running_cycle) Fail(1, "PROBE CYCLES CANNOT BE CALLED FROM A CYCLE");
-    for (const auto& rw : raw) {
-      if (rw.letter == 'G') continue;
-      bool dropped;
-      Word w = EvalWord(rw, false, true, drop_undefined, dropped);
-      if (!dropped) SetParam(800 + (rw.letter - 'A') + 1, w.v, rw.col);
-    }
-    if (!k.passed.empty()) SetParam(807, k.passed.back().code, k.passed.back().col);
-    // The block's N number, passed as X.4: the cycles write it back as N<L814*10000> (App. E).
-    if (pb && pb->has_n) SetParam(814, ScaleLiteral('N', pb->n, metric_, false, true), 1);
-    CallCycle(k.probe_cycle);
+    ProbeCycleBlock(raw, k, pb, drop_undefined, running_cycle);
     return;
   }
 
@@ -536,36 +612,15 @@ void KtRun::ExecTypeI(BlockCtx& bc, const ParsedBlock* pb) {
   if ((mc.after == 30 || mc.after == 60) && pb) CheckAloneInBlock(*pb, mc);
   ToolAndSpeed(words, mc, k.g38_col != 0);  // ln 7082: "G38 S16", S the flutes of the cutter
 
-  // Feed.
   const Word* f = Find(words, 'F');
-  std::optional<double> block_feed;
-  if (f && !k.dwell && !mc.m06 && !mc.m25) {
-    if (f->v < 0) Fail(f->col, "FEEDRATE MAY NOT BE NEGATIVE");
-    if (mode_.inverse_time) {
-      // Table 1-B: G93 is 3.1 in inch and 5.1 in metric, so a metric F without a point has one decimal.
-      Word fw = *f;
-      if (fw.literal && !fw.num.point && metric_) fw.v = fw.num.as_written / 10;
-      CheckFeedFormat(fw, FeedFormat::kInverseTime, metric_);
-      block_feed = fw.v;
-    } else {  // G94: the linear or the rotary format, decided with the move (Motion)
-      feed_ = f->v;
-    }
-  }
+  const std::optional<double> block_feed = BlockFeed(f, k, mc);
 
   if (trigger) {
     // G80-series: everything but the passed letters has been executed; run the cycle body.
     CallCycle(mode_.cycle);
     return;
   }
-  // H word: fixture offsets.
-  if (const Word* h = Find(words, 'H')) {
-    int hv = static_cast<int>(h->v);
-    if (hv < 0 || hv > 32) Fail(h->col, "H WORD OUT OF RANGE 0-32");
-    if (hv != 0 && !mode_.explicit_fixtures)
-      Fail(h->col, "H WORD NOT ALLOWED IN G49 (IMPLICIT FIXTURE OFFSET) MODE");
-    active_h_ = hv;
-  }
-
+  FixtureWord(words);
   if (k.g38_col) CheckTool(Find(words, 'S'));  // where the block before left the tool (ln 7061-7090)
   Motion(words, k, mc, axis_mask, motion_col, f, block_feed);
   AfterMCode(mc);

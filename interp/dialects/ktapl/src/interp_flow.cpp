@@ -9,14 +9,7 @@
 
 namespace cell::interp::ktapl {
 
-KtRun::KtRun(const RunOptions& o) : env_(o.env ? o.env : &default_env_) {
-  // Everything but the program text (which may be large) is kept.
-  opt_.dialect = o.dialect;
-  opt_.program_name = o.program_name;
-  opt_.library = o.library;
-  opt_.save = o.save;
-  opt_.params = o.params;
-  opt_.env = o.env;
+KtRun::KtRun(const RunOptions& o) : RunBase(o) {
   auto param_number = [](const std::string& key) -> int {
     if (key.size() < 2 || key.size() > 5 || key[0] != 'L' ||
         !std::all_of(key.begin() + 1, key.end(), IsDigit)) {

@@ -28,6 +28,8 @@
 #include "cell/interp/ktapl_statements.h"
 #include "cell/interp/parse_cache.h"
 #include "cell/interp/run_base.h"
+#include "cell/interp/run_error.h"
+#include "cell/interp/scan.h"
 #include "cutter_comp.h"
 #include "expr.h"
 #include "tld.h"
@@ -40,20 +42,10 @@ constexpr double kPi = 3.14159265358979323846;
 constexpr int kMaxLevels = 4;  // main + 3 nested calls
 constexpr int kMaxDefinitions = 20;
 
-// A program error at a column of the current block; the alarm is the manual's number where it has one.
-struct RunError {
-  std::string alarm;
-  std::string text;
-  int col = 1;
-};
+// Program errors: RunError and Fail (cell/interp/run_error.h), the alarm the manual's number where it has
+// one.
 
-[[noreturn]] inline void Fail(int col, const std::string& text, const std::string& alarm = "") {
-  throw RunError{alarm, text, col};
-}
-
-inline bool IsDigit(char c) {
-  return c >= '0' && c <= '9';
-}
+using scan::IsDigit;
 inline bool IsAlpha(char c) {
   return (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z');
 }
@@ -336,8 +328,16 @@ class KtRun final : public RunBase, public ExprContext {
 
   // Type I blocks (interp_convert.cpp)
   void ExecTypeI(BlockCtx& bc, const ParsedBlock* pb);
+  void ReadGWords(const RawWords& raw, bool drop_undefined, GWords& gs);
+  uint32_t KeepLetters(const Words& words);
+  void ProbeCycleBlock(const RawWords& raw, const BlockCodes& k, const ParsedBlock* pb, bool drop_undefined,
+                       bool running_cycle);
+  std::optional<double> BlockFeed(const Word* f, const BlockCodes& k, const BlockMCodes& mc);
+  void FixtureWord(const Words& words);
   Word EvalWord(const RawWord& w, bool dwell, bool passing, bool drop_undefined, bool& dropped);
   void ConvertGCodes(const GWords& gs, bool pass800, BlockCodes& k);
+  bool ModeGCode(int g);
+  void CompGCode(int g, int col);
   bool PassCycleParameters(const RawWords& raw, const BlockCodes& k, const ParsedBlock* pb,
                            bool drop_undefined, uint32_t axis_mask, Words& words);
   BlockMCodes ReadMCodes(const Words& words, bool trigger);
@@ -380,11 +380,6 @@ class KtRun final : public RunBase, public ExprContext {
   void CompFinish();
   void CompDrain();
   [[noreturn]] void CompFail(const cc::CompError& e);
-
-  // Options and the environment.
-  RunOptions opt_;
-  Environment default_env_;
-  Environment* env_;
 
   // Stepping.
   std::unique_ptr<Frames> frames_;

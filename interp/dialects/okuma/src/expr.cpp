@@ -329,14 +329,14 @@ int32_t ExprParser::Primary() {
     return e;
   }
   if (c == '(') Error("'(' starts a comment: group expressions with [ ]");
-  if (IsDigitC(c) || c == '.') {
+  if (IsDigit(c) || c == '.') {
     Node n;
     n.col = col;
     n.integer = true;
     double v = 0, scale = 0.1;
     int digits = 0;
     bool point = false;
-    while (pos_ < s_.size() && (IsDigitC(s_[pos_]) || s_[pos_] == '.')) {
+    while (pos_ < s_.size() && (IsDigit(s_[pos_]) || s_[pos_] == '.')) {
       if (s_[pos_] == '.') {
         if (point) Error("two decimal points in a number");
         point = true;
@@ -361,7 +361,7 @@ int32_t ExprParser::Primary() {
     int64_t v = 0;
     while (pos_ < s_.size() && std::isxdigit(static_cast<unsigned char>(s_[pos_]))) {
       char d = Up(s_[pos_]);
-      v = v * 16 + (IsDigitC(d) ? d - '0' : d - 'A' + 10);
+      v = v * 16 + (IsDigit(d) ? d - '0' : d - 'A' + 10);
       if (v > 0xffffffffLL) Error("hexadecimal constant too long");
       ++pos_;
     }
@@ -400,7 +400,7 @@ int32_t ExprParser::Primary() {
     --depth_;
     return Add(n);
   }
-  if (name[0] == 'V' && name.size() > 1 && std::all_of(name.begin() + 1, name.end(), IsDigitC)) {
+  if (name[0] == 'V' && name.size() > 1 && std::all_of(name.begin() + 1, name.end(), IsDigit)) {
     if (name.size() > 4) Fail(col, fmt::format("common variable {}: common variables are V1-V200", name));
     int v = std::stoi(name.substr(1));
     if (v < 1 || v > 200) Fail(col, fmt::format("common variable {}: common variables are V1-V200", name));

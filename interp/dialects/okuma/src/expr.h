@@ -10,28 +10,21 @@
 #include <string_view>
 #include <vector>
 
+#include "cell/interp/run_error.h"
+#include "cell/interp/scan.h"
+
 namespace cell::interp::okuma {
 
-// A program error at a column of the current block; `alarm` is the manual's alarm number where it has one.
-struct RunError {
-  std::string alarm;
-  std::string text;
-  int col = 1;
-};
-
-[[noreturn]] inline void Fail(int col, const std::string& text, const std::string& alarm = "") {
-  throw RunError{alarm, text, col};
-}
+// Program errors: RunError and Fail (cell/interp/run_error.h), `alarm` the manual's alarm number where it
+// has one.
 
 // Character classes of the tape (ASCII; lower case is read as upper case, ln 540-715).
 inline bool IsLetter(char c) {
   return (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z');
 }
-inline bool IsDigitC(char c) {
-  return c >= '0' && c <= '9';
-}
+using scan::IsDigit;
 inline bool IsAlnumC(char c) {
-  return IsLetter(c) || IsDigitC(c);
+  return IsLetter(c) || IsDigit(c);
 }
 inline char Up(char c) {
   return (c >= 'a' && c <= 'z') ? static_cast<char>(c - 'a' + 'A') : c;

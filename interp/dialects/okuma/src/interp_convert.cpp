@@ -196,6 +196,138 @@ void OkRun::CollectWords(const Block& b, BlockWords& w) {
   }
 }
 
+// The block's G codes: modal groups, one-shots, and the codes the cell does not run.
+void OkRun::ReadNcGCodes(const BlockWords& w, NcGCodes& k) {
+  for (const auto& g : w.g) {
+    if (!KnownG(g.code)) {
+      if (const char* what = UnsupportedG(g.code)) {
+        Fail(g.col, fmt::format("G{} ({}) is not supported by the cell's OSP-E100L dialect", g.code, what));
+      }
+      Fail(g.col, fmt::format("G{} is not an OSP-E100L G code", g.code));
+    }
+    if (IsMotionG(g.code)) {
+      if (k.motion_g >= 0 && k.motion_g != g.code) Fail(g.col, "two motion G codes in one block");
+      k.motion_g = g.code;
+      k.motion_col = g.col;
+      continue;
+    }
+    switch (g.code) {
+      case 4:
+        k.dwell = true;
+        break;
+      case 13:
+        k.g13 = true;
+        break;
+      case 14:
+        k.g14 = true;
+        break;
+      case 18:
+      case 28:
+      case 29:
+      case 136:
+        break;  // the turning plane; torque limit (no torque model: accepted, no effect); G136 (G137 unused)
+      case 40:
+      case 41:
+      case 42:
+        if (k.comp_g && k.comp_g != g.code) Fail(g.col, "two of G40/G41/G42 in one block");
+        k.comp_g = g.code;
+        break;
+      case 50:
+        k.g50 = true;
+        break;
+      case 64:
+      case 65:
+        modal_.droop = g.code == 65;
+        break;
+      case 71:
+      case 72:
+      case 73:
+      case 74:
+      case 77:
+      case 78:
+        if (k.cycle) Fail(g.col, "two cycle G codes in one block");
+        k.cycle = g.code;
+        k.cycle_col = g.col;
+        break;
+      case 75:
+      case 76:
+        k.chamfer = g.code;
+        break;
+      case 80:
+        k.g80 = true;
+        break;
+      case 84:
+        break;  // change of rough turning conditions: read by G85
+      case 85:
+      case 86:
+      case 87:
+      case 88:
+        k.lap = g.code;
+        k.cycle_col = g.col;
+        break;
+      case 90:
+        k.g90 = true;
+        break;
+      case 91:
+        k.g91 = true;
+        break;
+      case 94:
+      case 95:
+        if (lap_.active || lap_.finish) Fail(g.col, "G94/G95 cannot change inside a LAP contour");
+        modal_.per_rev = g.code == 95;
+        break;
+      case 96:
+      case 97:
+        if (lap_.active || lap_.finish) Fail(g.col, "G96/G97 cannot change inside a LAP contour");
+        if (!w.Has('S')) Fail(g.col, fmt::format("a G{} block must contain S", g.code));
+        break;
+      case 110:
+      case 111:
+        modal_.css_turret_b = g.code == 111;
+        break;
+      default:
+        break;
+    }
+  }
+}
+
+// The block's motion G code, checked against a LAP contour being defined.
+void OkRun::MotionGCode(int motion_g, int motion_col) {
+  if (motion_g == 0 && (lap_.active || lap_.finish) && lap_.first_block_seen && !lap_.blank) {
+    Fail(motion_col, "G00 is allowed only in the first block of a LAP contour");
+  }
+  if (lap_.active && lap_.blank &&
+      (motion_g == 0 || (!lap_.first_block_seen && (motion_g == 2 || motion_g == 3)))) {
+    Fail(motion_col, motion_g == 0 ? "G00 cannot define a blank shape (G83)"
+                                   : "the first block of a blank shape (G83) cannot be G02/G03");
+  }
+  modal_.motion = motion_g;
+  if (!(motion_g >= 31 && motion_g <= 35)) chain_.active = false;
+}
+
+// What the block does after its codes: a dwell, a zero shift, a cycle, or its move.
+void OkRun::NcAction(const BlockWords& w, const Block& b, const NcGCodes& k, bool xz) {
+  if (k.dwell) {
+    Dwell(w, w.FindG(4)->col);
+  } else if (k.g50) {
+    ZeroShift(w, w.FindG(50)->col);
+  } else if (k.lap) {
+    LapCall(w, b, k.lap, k.cycle_col);
+  } else if (k.cycle == 71 || k.cycle == 72) {
+    CompoundThread(w, k.cycle, k.cycle_col);
+  } else if (k.cycle == 73 || k.cycle == 74) {
+    Grooving(w, k.cycle, k.cycle_col);
+  } else if (k.cycle == 77 || k.cycle == 78) {
+    Tapping(w, k.cycle, k.cycle_col);
+  } else {
+    if (k.chamfer && modal_.motion != 1) {
+      Fail(w.FindG(k.chamfer)->col, fmt::format("G{} is effective only in G01 mode", k.chamfer));
+    }
+    Motion(w, b, k.motion_col);
+    if ((lap_.active || lap_.finish) && xz) lap_.first_block_seen = true;
+  }
+}
+
 void OkRun::ExecNc(const Block& b) {
   BlockWords& w = words_;
   w.Clear();
@@ -217,109 +349,16 @@ void OkRun::ExecNc(const Block& b) {
     return;
   }
 
-  // G codes: modal groups, one-shots, and the codes the cell does not run.
-  int motion_g = -1, motion_col = 1, comp_g = 0;
-  bool dwell = false, g50 = false, g90 = false, g91 = false, g13 = false, g14 = false, g80 = false;
-  int chamfer = 0, cycle = 0, lap = 0, cycle_col = 1;
-  for (const auto& g : w.g) {
-    if (!KnownG(g.code)) {
-      if (const char* what = UnsupportedG(g.code)) {
-        Fail(g.col, fmt::format("G{} ({}) is not supported by the cell's OSP-E100L dialect", g.code, what));
-      }
-      Fail(g.col, fmt::format("G{} is not an OSP-E100L G code", g.code));
-    }
-    if (IsMotionG(g.code)) {
-      if (motion_g >= 0 && motion_g != g.code) Fail(g.col, "two motion G codes in one block");
-      motion_g = g.code;
-      motion_col = g.col;
-      continue;
-    }
-    switch (g.code) {
-      case 4:
-        dwell = true;
-        break;
-      case 13:
-        g13 = true;
-        break;
-      case 14:
-        g14 = true;
-        break;
-      case 18:
-      case 28:
-      case 29:
-      case 136:
-        break;  // the turning plane; torque limit (no torque model: accepted, no effect); G136 (G137 unused)
-      case 40:
-      case 41:
-      case 42:
-        if (comp_g && comp_g != g.code) Fail(g.col, "two of G40/G41/G42 in one block");
-        comp_g = g.code;
-        break;
-      case 50:
-        g50 = true;
-        break;
-      case 64:
-      case 65:
-        modal_.droop = g.code == 65;
-        break;
-      case 71:
-      case 72:
-      case 73:
-      case 74:
-      case 77:
-      case 78:
-        if (cycle) Fail(g.col, "two cycle G codes in one block");
-        cycle = g.code;
-        cycle_col = g.col;
-        break;
-      case 75:
-      case 76:
-        chamfer = g.code;
-        break;
-      case 80:
-        g80 = true;
-        break;
-      case 84:
-        break;  // change of rough turning conditions: read by G85
-      case 85:
-      case 86:
-      case 87:
-      case 88:
-        lap = g.code;
-        cycle_col = g.col;
-        break;
-      case 90:
-        g90 = true;
-        break;
-      case 91:
-        g91 = true;
-        break;
-      case 94:
-      case 95:
-        if (lap_.active || lap_.finish) Fail(g.col, "G94/G95 cannot change inside a LAP contour");
-        modal_.per_rev = g.code == 95;
-        break;
-      case 96:
-      case 97:
-        if (lap_.active || lap_.finish) Fail(g.col, "G96/G97 cannot change inside a LAP contour");
-        if (!w.Has('S')) Fail(g.col, fmt::format("a G{} block must contain S", g.code));
-        break;
-      case 110:
-      case 111:
-        modal_.css_turret_b = g.code == 111;
-        break;
-      default:
-        break;
-    }
-  }
-  if (g90 && g91) Fail(w.FindG(91)->col, "G90 and G91 in one block");
-  if (g90) modal_.incremental = false;
-  if (g91) modal_.incremental = true;
-  if (g13 || g14) {
+  NcGCodes k;
+  ReadNcGCodes(w, k);
+  if (k.g90 && k.g91) Fail(w.FindG(91)->col, "G90 and G91 in one block");
+  if (k.g90) modal_.incremental = false;
+  if (k.g91) modal_.incremental = true;
+  if (k.g13 || k.g14) {
     // Turret selection (ln 7156-7361): alone in its block; refused during G41/G42, G91, LAP and G96.
-    const bool b_turret = g14;
+    const bool b_turret = k.g14;
     if (b_turret != modal_.turret_b) {
-      const int col = w.FindG(g14 ? 14 : 13)->col;
+      const int col = w.FindG(k.g14 ? 14 : 13)->col;
       if (modal_.comp != 40 || modal_.incremental || lap_.active || lap_.finish || modal_.css) {
         Fail(col, "ALARM-B change timing G13/G14 (turret selection during G41/G42, G91, LAP or G96)");
       }
@@ -328,68 +367,41 @@ void OkRun::ExecNc(const Block& b) {
     EndBlockStages(false);
     return;
   }
-  if (!b.label.empty() && !lap) Fail(b.label_col, "a sequence name argument is taken only by G85-G88");
-  if (lap && b.label.empty()) Fail(cycle_col, fmt::format("G{} needs the contour's sequence name", lap));
-  if (motion_g >= 0) {
-    if (motion_g == 0 && (lap_.active || lap_.finish) && lap_.first_block_seen && !lap_.blank) {
-      Fail(motion_col, "G00 is allowed only in the first block of a LAP contour");
-    }
-    if (lap_.active && lap_.blank &&
-        (motion_g == 0 || (!lap_.first_block_seen && (motion_g == 2 || motion_g == 3)))) {
-      Fail(motion_col, motion_g == 0 ? "G00 cannot define a blank shape (G83)"
-                                     : "the first block of a blank shape (G83) cannot be G02/G03");
-    }
-    modal_.motion = motion_g;
-    if (!(motion_g >= 31 && motion_g <= 35)) chain_.active = false;
-  }
-  if (cycle && modal_.comp != 40 && (cycle == 71 || cycle == 72)) {
-    Fail(cycle_col, "thread cycles are not allowed in nose radius compensation mode");
+  if (!b.label.empty() && !k.lap) Fail(b.label_col, "a sequence name argument is taken only by G85-G88");
+  if (k.lap && b.label.empty())
+    Fail(k.cycle_col, fmt::format("G{} needs the contour's sequence name", k.lap));
+  if (k.motion_g >= 0) MotionGCode(k.motion_g, k.motion_col);
+  if (k.cycle && modal_.comp != 40 && (k.cycle == 71 || k.cycle == 72)) {
+    Fail(k.cycle_col, "thread cycles are not allowed in nose radius compensation mode");
   }
 
   // T, then S and the M codes that act before the axes.
   // T: in G73/G74 the offset number of the last groove (read by the cycle), else the turret and offsets.
-  if (w.Has('T') && cycle != 73 && cycle != 74) ToolWord(w);
+  if (w.Has('T') && k.cycle != 73 && k.cycle != 74) ToolWord(w);
   SpindleAndM(w, true);
-  if (w.Has('F') && !dwell) {
+  if (w.Has('F') && !k.dwell) {
     double f = Scale('F', w.Get('F'), modal_.per_rev);
     if (f < 0) Fail(w.Col('F'), "F must not be negative");
     f_ = f;
   }
-  const bool thread_block = cycle == 71 || cycle == 72 || (modal_.motion >= 31 && modal_.motion <= 35 && xz);
-  if (w.Has('E') && !thread_block && !dwell && cycle == 0) {
+  const bool thread_block =
+      k.cycle == 71 || k.cycle == 72 || (modal_.motion >= 31 && modal_.motion <= 35 && xz);
+  if (w.Has('E') && !thread_block && !k.dwell && k.cycle == 0) {
     e_ = Scale('F', w.Get('E'), modal_.per_rev);
   }
 
   // Nose radius compensation codes act on this block's move.
-  CompCodes(w, motion_col, xz);
+  CompCodes(w, k.motion_col, xz);
 
-  if (dwell) {
-    Dwell(w, w.FindG(4)->col);
-  } else if (g50) {
-    ZeroShift(w, w.FindG(50)->col);
-  } else if (lap) {
-    LapCall(w, b, lap, cycle_col);
-  } else if (cycle == 71 || cycle == 72) {
-    CompoundThread(w, cycle, cycle_col);
-  } else if (cycle == 73 || cycle == 74) {
-    Grooving(w, cycle, cycle_col);
-  } else if (cycle == 77 || cycle == 78) {
-    Tapping(w, cycle, cycle_col);
-  } else {
-    if (chamfer && modal_.motion != 1) {
-      Fail(w.FindG(chamfer)->col, fmt::format("G{} is effective only in G01 mode", chamfer));
-    }
-    Motion(w, b, motion_col);
-    if ((lap_.active || lap_.finish) && xz) lap_.first_block_seen = true;
-  }
-  if (g80) {
+  NcAction(w, b, k, xz);
+  if (k.g80) {
     if (!lap_.active && !lap_.finish) Fail(w.FindG(80)->col, "G80 without a LAP contour definition");
     EndBlockStages(xz);
     LapEndCapture(w.FindG(80)->col);
     StopAndEnd(w);
     return;
   }
-  const bool motion_block = xz && IsMotionG(modal_.motion) && !dwell && !g50 && !lap && cycle == 0;
+  const bool motion_block = xz && IsMotionG(modal_.motion) && !k.dwell && !k.g50 && !k.lap && k.cycle == 0;
   EndBlockStages(xz);
   StopAndEnd(w);
   if (!ended_ && motion_block) TriggerModin();

@@ -62,13 +62,7 @@ double ParamNumber(const std::string& v, double def) {
 
 }  // namespace
 
-OkRun::OkRun(const RunOptions& o) : env_(o.env ? o.env : &default_env_) {
-  opt_.dialect = o.dialect;
-  opt_.program_name = o.program_name;
-  opt_.library = o.library;
-  opt_.save = o.save;
-  opt_.params = o.params;
-  opt_.env = o.env;
+OkRun::OkRun(const RunOptions& o) : RunBase(o) {
   std::string select;
   for (const auto& [k, v] : o.params) {
     std::string key = scan::Upper(scan::Trim(k));

@@ -192,6 +192,15 @@ class OkRun final : public RunBase, public VarReader {
 
   // NC blocks (interp_convert.cpp)
   void ExecNc(const Block& b);
+  // The G codes of an NC block as they act (ReadNcGCodes -> the rest of ExecNc).
+  struct NcGCodes {
+    int motion_g = -1, motion_col = 1, comp_g = 0;
+    bool dwell = false, g50 = false, g90 = false, g91 = false, g13 = false, g14 = false, g80 = false;
+    int chamfer = 0, cycle = 0, lap = 0, cycle_col = 1;
+  };
+  void ReadNcGCodes(const BlockWords& w, NcGCodes& k);
+  void MotionGCode(int motion_g, int motion_col);
+  void NcAction(const BlockWords& w, const Block& b, const NcGCodes& k, bool xz);
   double WordValue(const Block& b, const Word& w);
   void CollectWords(const Block& b, BlockWords& w);
   void ApplyModalG(const BlockWords& w, bool* motion_code, int* motion_col);
@@ -243,10 +252,7 @@ class OkRun final : public RunBase, public VarReader {
   void LapRestore();
   void LapCapture(Staged& s);
 
-  // Options, environment, text.
-  RunOptions opt_;
-  Environment default_env_;
-  Environment* env_;
+  // The program text (options and environment: RunBase).
   std::unique_ptr<Frames> frames_;
   ParseCache<Block> cache_;
   Block fresh_;

@@ -89,7 +89,7 @@ class Lexer {
     std::string name = Run(true);
     std::string_view rest = std::string_view(name).substr(1);
     bool ok = !rest.empty() && rest.size() <= 5 &&
-              (std::all_of(rest.begin(), rest.end(), IsDigitC) || IsLetter(rest[0]));
+              (std::all_of(rest.begin(), rest.end(), IsDigit) || IsLetter(rest[0]));
     if (!ok) {
       Fail(b_.seq_col, fmt::format("sequence name {}: N and at most five letters or digits (a name with "
                                    "letters begins with a letter), followed by a space or tab",
@@ -204,9 +204,9 @@ class Lexer {
     if (Keyword("READ", true) || Keyword("WRITE", true)) {
       b_.stmt = Up(s_[b_.stmt_col - 1]) == 'R' ? Stmt::kRead : Stmt::kWrite;
       Blanks();
-      if (i_ >= s_.size() || !IsDigitC(s_[i_])) Error("RS232C channel number expected");
+      if (i_ >= s_.size() || !IsDigit(s_[i_])) Error("RS232C channel number expected");
       int n = 0;
-      while (i_ < s_.size() && IsDigitC(s_[i_])) n = std::min(99, n * 10 + (s_[i_++] - '0'));
+      while (i_ < s_.size() && IsDigit(s_[i_])) n = std::min(99, n * 10 + (s_[i_++] - '0'));
       b_.channel = n;
       ExpectEnd("the channel");
       return true;
@@ -317,7 +317,7 @@ class Lexer {
   void Variable(const std::string& name, size_t at) {
     Assign a;
     a.col = static_cast<int>(at) + 1;
-    if (name[0] == 'V' && name.size() > 1 && std::all_of(name.begin() + 1, name.end(), IsDigitC)) {
+    if (name[0] == 'V' && name.size() > 1 && std::all_of(name.begin() + 1, name.end(), IsDigit)) {
       int n = name.size() <= 4 ? std::stoi(name.substr(1)) : 0;
       if (n < 1 || n > 200)
         ErrorAt(at, fmt::format("common variable {}: common variables are V1-V200", name));
@@ -463,7 +463,7 @@ class Lexer {
     }
     double v = 0, scale = 0.1;
     int digits = 0, written = 0;
-    while (i_ < s_.size() && (IsDigitC(s_[i_]) || s_[i_] == '.')) {
+    while (i_ < s_.size() && (IsDigit(s_[i_]) || s_[i_] == '.')) {
       if (s_[i_] == '.') {
         if (w.point) Error("two decimal points in a number");
         w.point = true;
@@ -573,7 +573,7 @@ std::string ProgramNameOf(std::string_view block) {
   std::string out(s);
   for (char& c : out) c = Up(c);
   std::string_view rest = std::string_view(out).substr(1);
-  if (std::all_of(rest.begin(), rest.end(), IsDigitC)) return out;
+  if (std::all_of(rest.begin(), rest.end(), IsDigit)) return out;
   if (!IsLetter(rest[0]) || !std::all_of(rest.begin(), rest.end(), IsAlnumC)) return {};
   return out;
 }

@@ -24,6 +24,14 @@ class RunBase : public Run {
   }
 
  protected:
+  RunBase() = default;
+  // Keeps the options but the program text (it may be large: the dialect reads it once into its frames), the
+  // tool table and the variables (the dialect reads them into its own state); env_ is the caller's
+  // environment or the offline one.
+  explicit RunBase(const RunOptions& o);
+  RunBase(const RunBase&) = delete;
+  RunBase& operator=(const RunBase&) = delete;
+
   // Executes one block (or ends the run with End / Fail).
   virtual void StepOnce() = 0;
 
@@ -47,8 +55,11 @@ class RunBase : public Run {
   bool finished() const { return finished_; }
 
   CanonQueue out_;
+  RunOptions opt_;
+  Environment* env_ = &default_env_;
 
  private:
+  Environment default_env_;
   bool finished_ = false;
   Step final_;
 };

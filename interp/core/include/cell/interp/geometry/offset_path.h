@@ -5,6 +5,7 @@
 // compensation, Balt-System's radius compensation.
 #pragma once
 
+#include "cell/interp/canon.h"
 #include "cell/interp/geometry/vec2.h"
 
 namespace cell::interp::geom {
@@ -72,5 +73,12 @@ struct Corner {
 // bypass_fill_in (G46): a turn away meets at the intersection of the extended offset paths instead of a
 // fill-in arc (a fill-in arc is still used when they do not meet ahead of both ends, e.g. a reversal).
 Corner ComputeCorner(const Path& a, const Path& b, double r, int side, bool bypass_fill_in);
+
+// Slot of a plane axis in ArcOp::center ([x, y, z]; U, V, W take the slot of their parallel axis).
+int CenterSlot(int axis);
+// The fill-in arc of `k` (block `line`) as a command: to `to` with its plane axes (p1, p2) set to k.b_start,
+// about the programmed corner `corner`, at `feed`; without a feed (both moves rapid) a rapid move on the
+// chord, a positioning move rather than a contour.
+Canon FillInMove(const Corner& k, Target to, Vec2 corner, int p1, int p2, const Feed* feed, int line);
 
 }  // namespace cell::interp::geom
