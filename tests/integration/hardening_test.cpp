@@ -100,6 +100,9 @@ TEST_F(Offline, NumbersAreDecimalAndSizesAreCheckedFirst) {
   Refused({"route", "operate", "PUMP", "--pallet", "0x10"}, "expected a decimal integer", 2);
   Refused({"route", "operate", "PUMP", "--pallet", "010x"}, "expected a decimal integer", 2);
   Refused({"pallet", "run", "1e2", "--station", "KT01"}, "expected a decimal integer", 2);
+  // A leading zero is still decimal (issue 39 item 5: 0256 was read as octal 174, a pallet in range).
+  Refused({"pallet", "show", "0256"}, "pallet 256 is outside 1-255", 2);
+  Refused({"route", "operate", "PUMP", "--pallet", "000"}, "pallet 0 is outside 1-255", 2);
   Refused({"job", "show", "-5"}, "", 2);
   Refused({"job", "wait", "7", "--timeout", "0x10"}, "expected a decimal number", 2);
   Refused({"station", "override", "KT01", "--feed", "1e2"}, "expected a decimal number", 2);

@@ -311,7 +311,7 @@ void AddCellWatch(CLI::App& app, Context& ctx, const OptsPtr& o) {
   auto* watch =
       app.add_subcommand("watch", "live view of the cell: stations, backlog, waiting pallets, jobs");
   watch->add_option("--count", o->count, "stop after N frames (0: never; 1: one frame for scripts)")
-      ->check(Decimal());
+      ->transform(Decimal());
   watch->callback([o, &ctx] {
     // The same view the dashboard serves (services/dashboard), fed from the same topics.
     cell::dashboard::CellView view(cell::dashboard::LoadStationDefs());

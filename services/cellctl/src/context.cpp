@@ -111,6 +111,8 @@ CLI::Validator Decimal() {
         if (s.empty() || s.size() > 9 ||
             !std::all_of(s.begin(), s.end(), [](char c) { return c >= '0' && c <= '9'; }))
           return "expected a decimal integer (digits only), got " + cell::names::Shown(s);
+        // CLI11 converts with base detection: without its leading zeros "010" stays ten, not octal eight.
+        s.erase(0, std::min(s.find_first_not_of('0'), s.size() - 1));
         return "";
       },
       "DECIMAL");

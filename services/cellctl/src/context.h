@@ -55,7 +55,8 @@ class Context {
 std::string ReadLocalFile(const std::string& path, std::uint64_t max_bytes, const std::string& what);
 
 // CLI11 checks for numbers on the command line: decimal digits only (CLI11 itself reads "0x10" as 16 and
-// "010" as 8); Real allows one decimal point, no exponent, no hexadecimal float.
+// "010" as 8); Decimal drops leading zeros, so it must be given as a transform (a check's edits are
+// discarded). Real allows one decimal point, no exponent, no hexadecimal float.
 CLI::Validator Decimal();
 CLI::Validator Real();
 

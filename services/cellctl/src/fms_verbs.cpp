@@ -49,7 +49,7 @@ using OptsPtr = std::shared_ptr<Opts>;
 void AddPalletVerbs(CLI::App& app, Context& ctx, const OptsPtr& o) {
   auto* pallet = app.add_subcommand("pallet", "pallet maps")->require_subcommand(1);
   auto* pset = pallet->add_subcommand("set", "map pallet P to an ordered list of 1-75 programs");
-  pset->add_option("P", o->pallet)->required()->check(Decimal());
+  pset->add_option("P", o->pallet)->required()->transform(Decimal());
   pset->add_option("PROG", o->programs)->required();
   pset->callback([o, &ctx] {
     CheckPallet(o->pallet);
@@ -61,7 +61,7 @@ void AddPalletVerbs(CLI::App& app, Context& ctx, const OptsPtr& o) {
     ctx.Scheduler(r);
   });
   auto* pshow = pallet->add_subcommand("show", "the programs mapped to pallet P");
-  pshow->add_option("P", o->pallet)->required()->check(Decimal());
+  pshow->add_option("P", o->pallet)->required()->transform(Decimal());
   pshow->add_flag("--json", ctx.json);
   pshow->callback([o, &ctx] {
     CheckPallet(o->pallet);
@@ -72,7 +72,7 @@ void AddPalletVerbs(CLI::App& app, Context& ctx, const OptsPtr& o) {
     for (auto& p : j["programs"]) std::cout << p.get<std::string>() << "\n";
   });
   auto* prun = pallet->add_subcommand("run", "run pallet P's map on one station; prints the job id");
-  prun->add_option("P", o->pallet)->required()->check(Decimal());
+  prun->add_option("P", o->pallet)->required()->transform(Decimal());
   prun->add_option("--station", o->station)->required();
   prun->callback([o, &ctx] {
     CheckPallet(o->pallet);
@@ -125,7 +125,7 @@ void AddRouteVerbs(CLI::App& app, Context& ctx, const OptsPtr& o) {
   });
   auto* rop = route->add_subcommand("operate", "start pallet P on route NAME; prints the job id");
   rop->add_option("NAME", o->name)->required();
-  rop->add_option("--pallet", o->pallet)->required()->check(Decimal());
+  rop->add_option("--pallet", o->pallet)->required()->transform(Decimal());
   rop->callback([o, &ctx] {
     CheckPallet(o->pallet);
     cell::names::CheckRoute(o->name);

@@ -50,7 +50,7 @@ void AddJobVerbs(CLI::App& app, Context& ctx) {
   });
 
   auto* show = job->add_subcommand("show", "one job with its decision log");
-  show->add_option("ID", o->id)->required()->check(Decimal());
+  show->add_option("ID", o->id)->required()->transform(Decimal());
   show->add_flag("--json", ctx.json);
   show->callback([o, &ctx] {
     auto j = JobInfo(ctx, o->id);
@@ -63,7 +63,7 @@ void AddJobVerbs(CLI::App& app, Context& ctx) {
   });
 
   auto* cancel = job->add_subcommand("cancel", "cancel a job");
-  cancel->add_option("ID", o->id)->required()->check(Decimal());
+  cancel->add_option("ID", o->id)->required()->transform(Decimal());
   cancel->callback([o, &ctx] {
     JobInfo(ctx, o->id);  // unknown id: exit 2
     cell::SchedulerRequest r;
@@ -74,7 +74,7 @@ void AddJobVerbs(CLI::App& app, Context& ctx) {
   });
 
   auto* wait = job->add_subcommand("wait", "block until COMPLETED (exit 0), FAILED or CANCELLED (exit 1)");
-  wait->add_option("ID", o->id)->required()->check(Decimal());
+  wait->add_option("ID", o->id)->required()->transform(Decimal());
   wait->add_option("--timeout", o->timeout, "wall seconds (exit 3 when reached)")->check(Real());
   wait->callback([o, &ctx] {
     auto start = std::chrono::steady_clock::now();

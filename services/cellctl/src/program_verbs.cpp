@@ -139,7 +139,7 @@ void AddProgramGet(CLI::App& prog, Context& ctx, const OptsPtr& o) {
   auto* get = prog.add_subcommand("get", "print a program (or -o FILE)");
   get->add_option("NAME", o->name)->required();
   get->add_option("--node", o->node);
-  get->add_option("--revision", o->revision, "a past revision (default: latest)")->check(Decimal());
+  get->add_option("--revision", o->revision, "a past revision (default: latest)")->transform(Decimal());
   get->add_option("-o,--output", o->out, "write to FILE instead of stdout");
   get->callback([o, &ctx] {
     CheckAddress(o->node, o->name);
