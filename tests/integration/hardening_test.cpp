@@ -136,6 +136,9 @@ TEST_F(Offline, NamesAreCheckedBeforeTheyAreSent) {
           {{"CELLCTL_IDEMPOTENCY_KEY", std::string(41, 'k')}});
   Refused({"route", "operate", "PUMP", "--pallet", "1"}, "without spaces", 2,
           {{"CELLCTL_IDEMPOTENCY_KEY", "a key"}});
+  // An empty key is an error, not "no key" (issue 39 item 4, DESIGN section 6).
+  Refused({"route", "operate", "PUMP", "--pallet", "1"}, "CELLCTL_IDEMPOTENCY_KEY is set but empty", 2,
+          {{"CELLCTL_IDEMPOTENCY_KEY", ""}});
 }
 
 // ---------------------------------------------------------------------------------------------------------

@@ -16,6 +16,7 @@
 #include <fmt/format.h>
 
 #include "cell/bus/topics.h"
+#include "cell/error/error.h"
 #include "cell/names/names.h"
 
 namespace cellctl {
@@ -66,7 +67,14 @@ cell::StationReply Context::StationCommand(const std::string& station, cell::Sta
 
 std::string Context::IdempotencyKey(const std::string& verb) const {
   // CELLCTL_IDEMPOTENCY_KEY lets a supervisor retry a command after a crash without running it twice.
-  if (const char* k = std::getenv("CELLCTL_IDEMPOTENCY_KEY"); k && *k) return cell::names::WireKey(k, verb);
+  if (const char* k = std::getenv("CELLCTL_IDEMPOTENCY_KEY")) {
+    // An empty key is a mistake (a variable set from nothing), not "no key": the retry would run twice.
+    if (*k == '\0') {
+      throw cell::Error(cell::Errc::kInvalidArgument,
+                        "CELLCTL_IDEMPOTENCY_KEY is set but empty: give a key or unset the variable");
+    }
+    return cell::names::WireKey(k, verb);
+  }
   std::random_device rd;
   return fmt::format("cellctl-{}-{:08x}{:08x}:{}", getpid(), rd(), rd(), verb);
 }
