@@ -85,7 +85,8 @@ TEST_F(StationRulesTest, ToolsFitTheDialectsRanges) {
   EXPECT_NE(err("socket = 1\nlife_left_min = 6000\n").find("TLD L TOOL LIFE 6000 MIN OUTSIDE 0-5999 MIN"),
             std::string::npos);
   // A KT-APL data set has P and D only (TLD, ln 3975-4097).
-  EXPECT_NE(err("socket = 1\nx_offset = -1.5\n").find("a KT-APL tool has no lathe offsets"), std::string::npos);
+  EXPECT_NE(err("socket = 1\nx_offset = -1.5\n").find("a KT-APL tool has no lathe offsets"),
+            std::string::npos);
   // A lathe station keeps its own (the default: finite numbers).
   Write("OK01",
         "[station]\nid = \"OK01\"\ndialect = \"okuma\"\n[[tools]]\ntool = \"1\"\nsocket = 1\n"
