@@ -412,6 +412,8 @@ TEST_F(ServoDds, CycleTimeMatchesTheMachineLibrary) {
   arc.center()[0] = 520;
   arc.center()[1] = 500;
   arc.center()[2] = 120;
+  arc.plane_first(0);  // x y: the plane is always named (a segment without one is refused)
+  arc.plane_second(1);
   arc.ccw(true);
   prog.push_back(arc);
   prog.push_back(Seg(cell::SEGMENT_RAPID, 100, 100, 100));

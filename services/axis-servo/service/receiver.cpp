@@ -2,6 +2,8 @@
 
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
+
 #include "cell/error/error.h"
 #include "cell/tooltable/wire.h"
 
@@ -61,9 +63,9 @@ Segment FromWire(const cell::MotionSegment& m, uint64_t id) {
                                      : FeedMode::kPerMinute;
   s.exact_stop = m.exact_stop();
   s.center = {m.center()[0], m.center()[1], m.center()[2]};
-  s.plane = m.plane() == cell::PLANE_ZX   ? ArcPlane::kZX
-            : m.plane() == cell::PLANE_YZ ? ArcPlane::kYZ
-                                          : ArcPlane::kXY;
+  // Out-of-range indices stay out of range: the planner refuses the arc rather than guess its plane.
+  s.plane = {static_cast<uint8_t>(std::min<unsigned>(m.plane_first(), 255)),
+             static_cast<uint8_t>(std::min<unsigned>(m.plane_second(), 255))};
   s.direction = m.ccw() ? ArcDirection::kCCW : ArcDirection::kCW;
   s.turns = static_cast<uint32_t>(std::max(0, m.turns()));
   s.dwell_s = m.dwell_s();

@@ -114,9 +114,13 @@ void Planner::AddThread(const AxisVector& end, double lead, double lead_change, 
 bool Planner::MakeArc(const AxisVector& start, const AxisVector& end, const std::array<double, 3>& center,
                       ArcPlane plane, ArcDirection dir, std::uint32_t turns, PathElement& e,
                       std::string& why) const {
-  int i = kX, j = kY;
-  if (plane == ArcPlane::kZX) i = kZ, j = kX;
-  if (plane == ArcPlane::kYZ) i = kY, j = kZ;
+  // The centre is x y z: an arc turns in a plane of two of the linear axes, in the program's order.
+  const int i = plane.first, j = plane.second;
+  if (i > kZ || j > kZ || i == j) {
+    const auto name = [](int a) { return a < 9 ? std::string(1, "XYZABCUVW"[a]) : std::string("?"); };
+    why = fmt::format("arc plane {}{} is not two of the servo's linear axes X Y Z", name(i), name(j));
+    return false;
+  }
   const double ci = center[i], cj = center[j];
   const double x0 = start[i] - ci, y0 = start[j] - cj, x1 = end[i] - ci, y1 = end[j] - cj;
   const double r0 = std::hypot(x0, y0), r1 = std::hypot(x1, y1);

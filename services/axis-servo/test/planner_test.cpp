@@ -174,7 +174,7 @@ TEST(Planner, HelixInZxPlaneEndsOnTarget) {
   LimitChecker check(m);
   Segment s = Line(2, 300, 150, 200, 2000);  // ZX plane, y is the helix axis
   s.kind = SegmentKind::kArc;
-  s.plane = ArcPlane::kZX;
+  s.plane = {kZ, kX};
   s.center = {300, 0, 180};
   s.direction = ArcDirection::kCW;
   s.turns = 1;
@@ -189,6 +189,69 @@ TEST(Planner, HelixInZxPlaneEndsOnTarget) {
   EXPECT_LT(max_err, m.config().path_tolerance);
   EXPECT_NEAR(m.actual()[kY], 150, 1e-3);
   EXPECT_NEAR(m.actual()[kZ], 200, 1e-3);
+}
+
+// DESIGN section 4: a plane is two axes in the program's order, the sense seen with the first axis right and
+// the second up. (DPI,X,Z) G2 from the top of the circle to its right (+X) end is a quarter turn through
+// X > cx, Z > cz; read as G18 (first Z) it would be three quarters through X < cx.
+TEST(Planner, ArcInReversedPlaneTurnsInTheProgramsSense) {
+  struct Case {
+    ArcPlane plane;
+    ArcDirection dir;
+    double x0, y0, z0, x1, y1, z1;
+  };
+  // Centre (300, 200, 180) radius 20. First axis right, second up: start at 90 deg, end at 0 deg, cw.
+  const Case cases[] = {
+      {{kX, kZ}, ArcDirection::kCW, 300, 200, 200, 320, 200, 180},  // Balt (DPI,X,Z) G2
+      {{kY, kX}, ArcDirection::kCW, 320, 200, 180, 300, 220, 180},  // Balt (DPI,Y,X) G2
+      {{kZ, kY}, ArcDirection::kCW, 300, 220, 180, 300, 200, 200},  // (DPI,Z,Y) G2
+  };
+  for (const Case& c : cases) {
+    Machine m = Kt();
+    m.Push(Rapid(1, c.x0, c.y0, c.z0));
+    m.RunUntilIdle();
+    LimitChecker check(m);
+    Segment s = Line(2, c.x1, c.y1, c.z1, 1000);
+    s.kind = SegmentKind::kArc;
+    s.plane = c.plane;
+    s.center = {300, 200, 180};
+    s.direction = c.dir;
+    m.Push(s);
+    const double centre[3] = {300, 200, 180};
+    double lowest_first = 1e9, lowest_second = 1e9, max_err = 0;
+    auto ev = RunChecked(m, check, 60, [&] {
+      const AxisVector a = m.actual();
+      const double u = a[c.plane.first] - centre[c.plane.first],
+                   v = a[c.plane.second] - centre[c.plane.second];
+      lowest_first = std::min(lowest_first, u);
+      lowest_second = std::min(lowest_second, v);
+      max_err = std::max(max_err, std::abs(std::hypot(u, v) - 20));
+    });
+    ASSERT_NE(Find(ev, EventKind::kCompleted, 2), nullptr);
+    check.ExpectWithinLimits();
+    // The quarter from 90 to 0 degrees stays in the first quadrant of (first, second).
+    EXPECT_GT(lowest_first, -1e-3) << int(c.plane.first) << int(c.plane.second);
+    EXPECT_GT(lowest_second, -1e-3) << int(c.plane.first) << int(c.plane.second);
+    EXPECT_LT(max_err, m.config().path_tolerance);
+    EXPECT_NEAR(m.actual()[kX], c.x1, 1e-3);
+    EXPECT_NEAR(m.actual()[kY], c.y1, 1e-3);
+    EXPECT_NEAR(m.actual()[kZ], c.z1, 1e-3);
+  }
+}
+
+TEST(Planner, ArcOutsideTheLinearAxesIsRefused) {
+  Machine m = Kt();
+  PathElement e;
+  std::string why;
+  AxisVector a = AxisVector::Zero(), b = AxisVector::Zero();
+  a[kX] = 10;
+  b[kB] = 10;
+  // Balt (DPI,B,Y) circles are refused by the dialect; a segment that names a rotary or co-axis plane is
+  // refused here too, never turned in some other plane.
+  EXPECT_FALSE(m.planner().MakeArc(a, b, {0, 0, 0}, {kB, kY}, ArcDirection::kCW, 0, e, why));
+  EXPECT_NE(why.find("BY"), std::string::npos) << why;
+  EXPECT_FALSE(m.planner().MakeArc(a, b, {0, 0, 0}, {kZ, 6}, ArcDirection::kCW, 0, e, why));
+  EXPECT_NE(why.find("ZU"), std::string::npos) << why;
 }
 
 TEST(Planner, FeedHoldStopsOnPathAndResumes) {
@@ -261,7 +324,7 @@ TEST(Planner, ArcInYzPlaneAndRapidOverride) {
   testing::LimitChecker check(m);
   Segment s = testing::Line(2, 300, 240, 300, 3000);
   s.kind = SegmentKind::kArc;
-  s.plane = ArcPlane::kYZ;  // full circle around (y 200, z 300), radius 40
+  s.plane = {kY, kZ};  // full circle around (y 200, z 300), radius 40
   s.center = {0, 200, 300};
   s.direction = ArcDirection::kCCW;
   m.Push(s);

@@ -34,7 +34,7 @@ inline Segment Arc(std::uint64_t id, double x, double y, double z, double cx, do
   Segment s = Line(id, x, y, z, feed);
   s.kind = SegmentKind::kArc;
   s.center = {cx, cy, 0};
-  s.plane = ArcPlane::kXY;
+  s.plane = {kX, kY};
   s.direction = ccw ? ArcDirection::kCCW : ArcDirection::kCW;
   s.turns = turns;
   return s;

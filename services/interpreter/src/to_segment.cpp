@@ -21,16 +21,6 @@ void SetFeed(cell::MotionSegment& s, const interp::Feed& f) {
   s.exact_stop(f.exact_stop);
 }
 
-cell::ArcPlane PlaneOf(const interp::PlaneAxes& p) {
-  auto base = [](int a) {
-    return a >= interp::kU ? a - interp::kU : a;
-  };  // a co-axis moves like its parallel
-  int first = base(p.first);
-  if (first == interp::kZ) return cell::PLANE_ZX;
-  if (first == interp::kY) return cell::PLANE_YZ;
-  return cell::PLANE_XY;
-}
-
 }  // namespace
 
 std::optional<cell::MotionSegment> ToSegment(const interp::Canon& c) {
@@ -55,7 +45,9 @@ std::optional<cell::MotionSegment> ToSegment(const interp::Canon& c) {
       SetTarget(s, a.to);
       SetFeed(s, a.feed);
       s.center({a.center[0], a.center[1], a.center[2]});
-      s.plane(PlaneOf(a.plane));
+      // Exactly the canonical arc: its two axes in the program's order and its sense in that frame.
+      s.plane_first(static_cast<uint16_t>(a.plane.first));
+      s.plane_second(static_cast<uint16_t>(a.plane.second));
       s.ccw(!a.cw);
       // A one-block full circle sweeps 360 degrees with end == start: no extra turn.
       s.turns(a.angle > 360.0 + 1e-6 ? static_cast<int32_t>(std::floor((a.angle - 1e-6) / 360.0)) : 0);

@@ -54,10 +54,26 @@ TEST(ToSegment, PerRevolutionFeedAndArcPlanes) {
   a.angle = 90;
   auto s = ToSegment(c);
   ASSERT_TRUE(s);
-  EXPECT_EQ(s->plane(), cell::PLANE_ZX);
+  EXPECT_EQ(s->plane_first(), interp::kZ);
+  EXPECT_EQ(s->plane_second(), interp::kX);
   EXPECT_EQ(s->feed_mode(), 1);
   EXPECT_DOUBLE_EQ(s->feed(), 0.2);
   EXPECT_EQ(s->turns(), 0);
+  // Every pair keeps its order and its sense: Balt-System (DPI,X,Z) G2 is not G18 G2 (DESIGN section 4).
+  a.plane = {interp::kX, interp::kZ};
+  a.cw = true;
+  s = ToSegment(c);
+  ASSERT_TRUE(s);
+  EXPECT_EQ(s->plane_first(), interp::kX);
+  EXPECT_EQ(s->plane_second(), interp::kZ);
+  EXPECT_FALSE(s->ccw());
+  a.plane = {interp::kY, interp::kX};
+  a.cw = false;
+  s = ToSegment(c);
+  ASSERT_TRUE(s);
+  EXPECT_EQ(s->plane_first(), interp::kY);
+  EXPECT_EQ(s->plane_second(), interp::kX);
+  EXPECT_TRUE(s->ccw());
   // Messages, tool selection and file ops are the CNC's own: no segment.
   Canon m;
   m.Set<interp::MessageOp>().text = "x";

@@ -35,8 +35,14 @@ enum class SegmentKind : std::uint8_t {
   kThread,        // spindle-synchronised straight move to `end`: `thread_lead` mm per spindle revolution
 };
 
-enum class ArcPlane : std::uint8_t { kXY, kZX, kYZ };
-enum class ArcDirection : std::uint8_t { kCW, kCCW };  // looking from the positive end of the plane normal
+// The plane of an arc: its first and second axis as the program selected them (indices of the station's
+// x y z a b c u v w; the servo moves x y z in a plane). Any pair and either order: Balt-System (DPI,X,Z) is
+// {kX, kZ}, G18 is {kZ, kX}.
+struct ArcPlane {
+  std::uint8_t first = kX, second = kY;
+};
+// Seen with the first axis pointing right and the second up (from the positive end of first x second).
+enum class ArcDirection : std::uint8_t { kCW, kCCW };
 enum class FeedMode : std::uint8_t { kPerMinute, kPerRevolution, kInverseTime };
 enum class SpindleDirection : std::uint8_t { kStop, kCW, kCCW, kOrient };
 enum class CoolantMode : std::uint8_t { kOff, kFlood, kMist, kThroughSpindle };
@@ -56,7 +62,7 @@ struct Segment {
   bool exact_stop = false;
   // kArc: centre (x y z; lathe x as a diameter), plane, direction, extra full turns for helices.
   std::array<double, 3> center{};
-  ArcPlane plane = ArcPlane::kXY;
+  ArcPlane plane;
   ArcDirection direction = ArcDirection::kCCW;
   std::uint32_t turns = 0;
   double dwell_s = 0.0;  // kDwell
