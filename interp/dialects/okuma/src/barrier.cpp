@@ -121,13 +121,16 @@ bool OkRun::CheckBarriers() {
     const geom::Vec2 a = prog(from), b = prog(to->pos);
     const char* what = nullptr;
     if (const ArcOp* arc = c.If<ArcOp>()) {
-      // The arc as a polygon of 64 chords per turn (radius coordinates, so the circle stays round).
+      // The arc as chords no more than 1 um inside it (at least 64 per turn; radius coordinates, so the
+      // circle stays round): a bulge into a barrier is not cut off by the polygon.
       AxisArray ctr{};
       ctr[static_cast<size_t>(kX)] = arc->center[0];
       ctr[static_cast<size_t>(kZ)] = arc->center[2];
       const geom::Vec2 cp = prog(ctr);
       const geom::Vec2 c0{cp.x, cp.y / 2}, s0{a.x - c0.x, a.y / 2 - c0.y};
-      const int steps = std::max(1, static_cast<int>(std::ceil(arc->angle / 360.0 * 64)));
+      const double r = std::hypot(s0.x, s0.y);
+      const double step = r > 0.001 ? std::min(2 * kPi / 64, 2 * std::acos(1 - 0.001 / r)) : 2 * kPi / 64;
+      const int steps = std::max(1, static_cast<int>(std::ceil(arc->angle * kPi / 180.0 / step)));
       const double sweep = (arc->cw != modal_.turret_b ? -1.0 : 1.0) * arc->angle * kPi / 180.0;
       geom::Vec2 p = a;
       for (int k = 1; k <= steps && !what; ++k) {
