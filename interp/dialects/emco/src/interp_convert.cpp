@@ -137,6 +137,7 @@ bool Threading(Motion m) {
 void Set(Val& v, const Word& w, int order) {
   v.set = true;
   v.point = w.point;
+  v.sign = w.sign;
   v.raw = w.value;
   v.v = w.value;
   v.col = w.col;
@@ -239,12 +240,21 @@ void EmRun::ConvertValues(BlockWords& bw) const {
   // F4 and S4 are digits without a decimal point (ln 1146, 4985): F0.15 is outside the format, not 0.15 um.
   if (bw.f.set && bw.f.point) Alarm(620, bw.f.col, "F is F4, without a decimal point");
   if (bw.s.set && bw.s.point) Alarm(620, bw.s.col, "S is S4, without a decimal point");
+  // F4, S4, D45 (and T, L) are "digits without decimal point and sign" (ln 1146, 1154-1156): a sign is
+  // outside the format (judgement 29).
+  for (const Val* v : {&bw.f, &bw.s, &bw.t, &bw.l}) {
+    if (v->set && v->sign) Alarm(620, v->col, "F, S, T and L are written without a sign");
+  }
   whole(bw.f, 9999, "F is 0-9999 (F4)");
   whole(bw.s, 9999, "S is 0-9999 (S4)");
   whole(bw.t, 9999, "T is 0000-9999 (TTCC)");
   whole(bw.l, 25599, "L is at most 25599 (subroutine O0255, 99 runs)");
   for (Val& d : bw.d) {
     if (!d.set) continue;
+    // D45 has no point (ln 1154-1156); the printed "D3 = 2.000" is 2000 um with a thousands separator (the
+    // listing importer reads it so), and on tape 2.000 would be 2 um: refused (judgement 29).
+    if (d.point) Alarm(620, d.col, "D is D45, without a decimal point: D3=2000 is 2 mm");
+    if (d.sign) Alarm(620, d.col, "D is D45, without a sign");
     if (d.raw < 0 || d.raw > 32767) Alarm(620, d.col, "D parameters are 0-32767");
     if (d.raw != std::floor(d.raw)) Alarm(200, d.col, "D parameters are whole numbers");
   }
@@ -440,9 +450,12 @@ void EmRun::Execute(const Block& b) {
   } else if (g[6] == 27) {
     Jump(bw, gcol[6]);
   } else if (g[6] == 26) {
-    // G26 calls a polygon program for the graphic simulation only (ln 2275-2284): nothing to run.
-    if (!bw.l.set || bw.l.raw < 7000 || bw.l.raw > 9999)
-      Fail(gcol[6], "G26 NEEDS L7000-L9999 (A POLYGON PROGRAM)");
+    // G26 calls a polygon program of the graphic simulation (ln 2275-2284). The cell has no graphic
+    // simulation and keeps no polygon programs: ALARM 750, as a control without that program (judgement 30).
+    const double l = bw.l.set ? bw.l.raw : 0;
+    if (!bw.l.set || l < 7000 || l > 9999 || (l >= 8001 && l <= 8899))
+      Alarm(751, bw.l.set ? bw.l.col : gcol[6], "G26 takes L7000-L9999, not the tool profiles 8001-8899");
+    Alarm(750, gcol[6], fmt::format("O{:04d}: the cell keeps no polygon programs", static_cast<int>(l)));
   }
   if (m[2] == 17) ReturnFromSubroutine(mcol[2]);
   if (m[2] == 30) EndOfProgram(mcol[2]);

@@ -299,8 +299,13 @@ void EmRun::ExecLine(const Line& line) {
     }
     return;
   }
-  if (b->count == 0) return;  // blank, comment or a bare block number
   if (b->skip && mon_.skip) return;
+  if (b->count == 0) {
+    // A bare block number is a block without position words: not allowed after a chamfer/radius block
+    // (ln 6839-6841, judgement 31). Blank and comment lines are not blocks (comments go on read-in, ln 5634).
+    if (b->has_n && corner_next_) Alarm(382, 1, "a block without X(U)/Z(W) after the chamfer/radius block");
+    return;
+  }
   Execute(*b);
 }
 

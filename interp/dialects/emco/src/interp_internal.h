@@ -56,6 +56,7 @@ struct Word {
   char letter = 0;     // upper case
   int8_t index = -1;   // P0-P7 / D0-D7; -1 for other letters
   bool point = false;  // written with a decimal point
+  bool sign = false;   // written with a + or - sign
   double value = 0;    // signed, as written (digits with the point where it was written)
   uint16_t col = 1;    // 1-based column of the address letter
 };
@@ -86,6 +87,7 @@ bool IsHeaderLine(std::string_view text);
 struct Val {
   bool set = false;
   bool point = false;
+  bool sign = false;
   double raw = 0;  // as written
   double v = 0;    // converted (mm for lengths; the raw number for the others)
   int col = 0;

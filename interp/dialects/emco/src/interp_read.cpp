@@ -59,9 +59,10 @@ struct Cursor {
 
 // A number: optional sign (blanks allowed around it), digits, an optional decimal point. Returns false when
 // there are no digits.
-bool ReadNumber(Cursor& c, double& value, bool& point, int& int_digits) {
+bool ReadNumber(Cursor& c, double& value, bool& point, bool& sign, int& int_digits) {
   bool neg = false;
-  if (c.Peek() == '+' || c.Peek() == '-') {
+  sign = c.Peek() == '+' || c.Peek() == '-';
+  if (sign) {
     neg = c.Peek() == '-';
     ++c.i;
     c.SkipBlanks();
@@ -211,6 +212,10 @@ std::string_view AlarmTitle(int code) {
       return "INVALID INDEX ENTERED";
     case 700:
       return "NO CHANGE OF ACTIVE TOOL DATA/PSO";
+    case 750:
+      return "POLYGON PROGRAM NOT AVAILABLE";
+    case 751:
+      return "INVALID POLYGON PROGRAM NUMBER";
     case 785:
       return "WPC-PRESET = 0, CYCLE START IGNORED";
     case 940:
@@ -360,13 +365,14 @@ void ParseBlock(std::string_view text, Block& out) {
       }
     }
     int int_digits = 0;
-    bool point = false;
-    if (!ReadNumber(c, w.value, point, int_digits)) {
+    bool point = false, sign = false;
+    if (!ReadNumber(c, w.value, point, sign, int_digits)) {
       if (c.Peek() == ',')
         Fail(c.Col(), "',' IS NOT A DECIMAL POINT ON TAPE (ln 5716; --listing reads the manual's style)");
       Fail(col, fmt::format("ADDRESS {} WITHOUT A VALUE", letter));
     }
     w.point = point;
+    w.sign = sign;
     if (c.Peek() == ',')
       Fail(c.Col(), "',' IS NOT A DECIMAL POINT ON TAPE (ln 5716; --listing reads the manual's style)");
     if (out.count >= kMaxWords) Alarm(650, col, fmt::format("more than {} words", kMaxWords));

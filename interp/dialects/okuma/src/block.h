@@ -93,6 +93,7 @@ struct Block {
   // CALL / MODIN / program name
   std::string program;
   int program_col = 1;
+  int repeat = 1;  // CALL ... Q n: runs of the subprogram (judgement 48)
   // IF
   int32_t cond = -1;
   std::string defined;  // IF name: a local variable name

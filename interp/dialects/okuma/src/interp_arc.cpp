@@ -70,7 +70,7 @@ void OkRun::Arc(const BlockWords& w, const Block& b, bool cw, int col) {
   ArcOp& a = Out<ArcOp>();
   a.to.pos = pos_;
   a.to.used = used_;
-  a.feed = {f_, FeedModeNow(), false};
+  a.feed = {f_, FeedModeNow(), modal_.droop};
   a.center = {2 * sol.center.y, pos_[kY], sol.center.x};
   a.cw = cw;
   a.plane = {static_cast<std::int8_t>(kZ), static_cast<std::int8_t>(kX)};

@@ -351,6 +351,7 @@ void OkRun::ExecNc(const Block& b) {
 
   NcGCodes k;
   ReadNcGCodes(w, k);
+  RefuseUnsupported(w);
   if (k.g90 && k.g91) Fail(w.FindG(91)->col, "G90 and G91 in one block");
   if (k.g90) modal_.incremental = false;
   if (k.g91) modal_.incremental = true;
@@ -405,6 +406,48 @@ void OkRun::ExecNc(const Block& b) {
   EndBlockStages(xz);
   StopAndEnd(w);
   if (!ended_ && motion_block) TriggerModin();
+}
+
+// Codes and words the manual defines that the cell cannot do, refused before the block does anything.
+void OkRun::RefuseUnsupported(const BlockWords& w) {
+  // P is the 2S synchronisation code (ln 6960-6990): the cell runs one program on one saddle (judgement 45).
+  if (w.Has('P')) {
+    Fail(w.Col('P'),
+         "P (two-turret synchronisation, ln 6960-6990) is not supported: one program, one saddle");
+  }
+  const int sb = ExtIndex(MakeAddr('S', 'B'));
+  if (w.HasExt(sb)) {
+    Fail(w.ext_col[static_cast<size_t>(sb)],
+         "SB= (M-tool spindle speed, ln 1863-1871) is not supported by the cell's OSP-E100L dialect: no "
+         "M-tool "
+         "spindle");
+  }
+  for (const auto& m : w.m) {
+    switch (m.code) {
+      case 13:
+      case 14:
+        // One spindle and no M-tool spindle speed in the canonical output (judgement 46).
+        Fail(m.col,
+             fmt::format("M{} (M-tool spindle {}) is not supported by the cell's OSP-E100L dialect: no "
+                         "M-tool spindle",
+                         m.code, m.code == 13 ? "CW" : "CCW"));
+      case 61:
+      case 63:
+        // The servo's spindle segment completes at speed and the move waits for it: the overlap these codes
+        // ask for (ln 1971-1974, 9112-9142) cannot be given (judgement 44).
+        Fail(m.col,
+             fmt::format("M{} ({}) is not supported by the cell's OSP-E100L dialect: the axes always wait "
+                         "for the spindle",
+                         m.code,
+                         m.code == 61 ? "surface speed arrival ignore" : "spindle rotation answer ignore"));
+      case 100:
+        Fail(m.col,
+             "M100 (waiting synchronisation of two turrets, ln 6992-7005) is not supported: one program, "
+             "one saddle");
+      default:
+        break;
+    }
+  }
 }
 
 // T nntt oo / tt oo (ln 1885-1922, 2249-2274): nose-R number, turret station, offset number, right-aligned.
@@ -516,13 +559,6 @@ void OkRun::SpindleAndM(const BlockWords& w, bool before_motion) {
         co.mode = c == 8 ? CoolantMode::kFlood : CoolantMode::kOff;
         break;
       }
-      case 13:
-      case 14:
-        if (!modal_.c_joined && !modal_.mtool_release) {
-          Fail(m.col, fmt::format("M{}: the M-tool spindle needs the C axis joined (M110) or M153", c));
-        }
-        Out<AuxOp>().m = c;
-        break;
       case 15:
       case 16:
         modal_.c_negative = c == 16;
@@ -535,9 +571,7 @@ void OkRun::SpindleAndM(const BlockWords& w, bool before_motion) {
       case 27:
       case 85:
       case 60:
-      case 61:
-      case 63:
-        break;  // read by the blocks that use them
+        break;  // read by the blocks that use them; M60 (wait for the surface speed) is what the servo does
       case 32:
       case 33:
       case 34:
@@ -547,6 +581,12 @@ void OkRun::SpindleAndM(const BlockWords& w, bool before_motion) {
       case 74:
       case 75:
         modal_.infeed = c;
+        break;
+      case 20:
+      case 21:
+      case 24:
+      case 25:
+        BarrierCode(c, m.col);
         break;
       case 109:
       case 110:

@@ -104,6 +104,9 @@ OkRun::OkRun(const RunOptions& o) : RunBase(o) {
       m75_pattern_ = ParamNumber(val, 3) == 4 ? 4 : 3;
     } else if (key == "MAX_IDLE_BLOCKS") {
       max_idle_ = std::max(1L, static_cast<long>(ParamNumber(val, 1000000)));
+    } else if (key == "VCHKL" || key == "VCHKD" || key == "VCHKZ" || key == "VCHKX" || key == "VTSL" ||
+               key == "VTSDA" || key == "VTSDB" || key == "VWKR") {
+      system_[{PackName(key), 0}] = ParamNumber(val, 0);  // barrier data of the parameter screen (ln 9046)
     } else if (key.rfind("RS232C", 0) == 0) {
       read_area_ = std::string(scan::Trim(v));  // READ data of the virtual channel (offline)
     }
@@ -265,6 +268,8 @@ void OkRun::StepOnce() {
   } catch (const RunError& e) {
     ReportError(e, first_line);
   }
+  // The barrier check sees every move before it goes out, those queued before an error too (ln 9081).
+  if (CheckBarriers()) BarrierOffAfterBlock();
   cur_block_ = nullptr;
 }
 
@@ -403,6 +408,8 @@ void OkRun::ExecStatement(const Block& b) {
       if (!p) Fail(b.program_col, fmt::format("subprogram {} not found", b.program));
       EndBlockStages(false);
       CallProgram(*p, b.program, FrameData::kSub, frames_->top().data.modin_limit, &b);
+      frames_->top().data.runs_left = b.repeat - 1;
+      frames_->top().data.first = frames_->top().at;
       return;
     }
     case Stmt::kRts:
@@ -538,6 +545,16 @@ void OkRun::PopLocals(int level) {
 void OkRun::Return(int col) {
   if (frames_->depth() <= 1) Fail(col, "RTS outside a subprogram");
   if (frames_->top().data.kind == FrameData::kLap) Fail(col, "RTS inside a LAP contour definition");
+  auto& f = frames_->top();
+  if (f.data.runs_left > 0) {
+    // CALL ... Q n: RTS starts the next run; the CALL's arguments and the locals stay registered (judgement
+    // 48).
+    --f.data.runs_left;
+    f.at = f.data.first;
+    f.data.tape_started = f.data.program_begin != 0;
+    f.jumped = true;
+    return;
+  }
   PopLocals(static_cast<int>(frames_->depth()));
   frames_->Pop();
 }
@@ -616,6 +633,7 @@ void OkRun::ResetProgramState() {
   modal_.per_rev = true;
   modal_.turret_b = false;
   modal_.comp = 40;
+  modal_.chuck_barrier = modal_.tail_barrier = false;  // barrier off at reset (ln 9108)
   f_ = 0;
 }
 

@@ -55,6 +55,8 @@ struct FrameData {
   int program_begin_line = 1;
   bool tape_started = false;  // a "%" or a block other than a comment: a "$" line is no longer a tape header
   JumpTargets<std::string> labels;  // sequence names found by GOTO / IF / LAP
+  int runs_left = 0;                // CALL ... Q n: runs still to come after this one
+  TextPos first{};                  // where a repeated run starts again
 };
 using Frames = CallStack<FrameData>;
 
@@ -114,6 +116,8 @@ struct Modal {
   bool css_turret_b = false;               // G111 / G110
   bool turret_b = false;                   // G14 / G13 (reset)
   bool droop = false;                      // G65 / G64
+  bool chuck_barrier = false;              // M25 / M24 (off at power-on and reset, ln 9108)
+  bool tail_barrier = false;               // M21 / M20
   int comp = 40;                           // G40 / G41 / G42 as programmed
   SpindleDir spindle = SpindleDir::kStop;  // M03 M04 M05 M19 (as the spindle turns, after G14's mirror)
   bool coolant = false;                    // M08 / M09
@@ -180,6 +184,12 @@ class OkRun final : public RunBase, public VarReader {
   void TriggerModin();
   void ResetProgramState();
 
+  // Chuck and tailstock barriers (barrier.cpp)
+  void BarrierCode(int m, int col);
+  bool CheckBarriers();
+  void BarrierOffAfterBlock();
+  double BarrierDatum(const char* name) const;
+
   // Variables (interp_vars.cpp)
   void Assignment(const Assign& a, const Block& b, bool call_arg);
   void SetLocal(uint64_t name, double v, bool new_entry, int col);
@@ -192,6 +202,7 @@ class OkRun final : public RunBase, public VarReader {
 
   // NC blocks (interp_convert.cpp)
   void ExecNc(const Block& b);
+  void RefuseUnsupported(const BlockWords& w);
   // The G codes of an NC block as they act (ReadNcGCodes -> the rest of ExecNc).
   struct NcGCodes {
     int motion_g = -1, motion_col = 1, comp_g = 0;
@@ -287,6 +298,8 @@ class OkRun final : public RunBase, public VarReader {
   // Modal state and positions (machine coordinates, X a diameter).
   Modal modal_;
   AxisArray pos_{};
+  int barrier_off_ = 0;       // M24 (1) / M20 (2) in this block: off once its moves are checked
+  AxisArray barrier_from_{};  // where the last command the barrier check passed ends (machine)
   uint32_t used_ = 0;
   bool open_line_ = false;  // the last line was given by an angle only: its end comes with the next block
   std::array<double, kAxisCount> zero_offset_{};  // VZOF*

@@ -255,7 +255,7 @@ void OkRun::LapEndCapture(int col) {
         ArcOp& a = Out<ArcOp>();
         a.to.pos = pos_;
         a.to.used = used_;
-        a.feed = {m.f, FeedModeNow(), false};
+        a.feed = {m.f, FeedModeNow(), modal_.droop};
         a.center = {2 * m.center.y, pos_[kY], m.center.x};
         a.cw = m.cw;
         a.plane = {static_cast<std::int8_t>(kZ), static_cast<std::int8_t>(kX)};

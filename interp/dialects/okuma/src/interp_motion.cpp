@@ -264,7 +264,7 @@ void OkRun::EmitMove(const AxisArray& target, uint32_t moved, bool rapid, double
     to = &Out<RapidOp>().to;
   } else {
     LinearOp& l = Out<LinearOp>();
-    l.feed = {feed, fm, false};
+    l.feed = {feed, fm, modal_.droop};  // G65: each feed move ends in position (ln 1742-1746)
     to = &l.to;
   }
   force_stage_ = false;

@@ -126,6 +126,30 @@ class Lexer {
     return name;
   }
 
+  // CALL's repeat count (later OSP controls; the E100L figure is lost, ln 7966), written as PSELECT's Q (ln
+  // 8855-8862): "Q=n", "Q n" or "Qn", n 1-9999 as digits. A local variable's name has two letters at least
+  // (ln 7585), so "Q" with digits is no variable. False when the name is not Q or Q and digits.
+  bool RepeatCount(const std::string& name, size_t at) {
+    std::string digits = name.substr(1);
+    if (!digits.empty() && !std::all_of(digits.begin(), digits.end(), IsDigit)) return false;
+    Blanks();
+    if (digits.empty() && i_ < s_.size() && s_[i_] == '=') {
+      ++i_;
+      Blanks();
+    }
+    if (digits.empty()) {
+      size_t start = i_;
+      while (i_ < s_.size() && IsDigit(s_[i_])) ++i_;
+      digits = std::string(s_.substr(start, i_ - start));
+      if (digits.empty()) ErrorAt(at, "CALL ... Q: the repeat count (1-9999) expected after Q");
+    }
+    if (b_.repeat != 1) ErrorAt(at, "CALL: Q (the repeat count) given twice");
+    if (digits.size() > 4 || std::stoi(digits) < 1) ErrorAt(at, "CALL ... Q: the repeat count is 1-9999");
+    b_.repeat = std::stoi(digits);
+    Blanks();
+    return true;
+  }
+
   std::string ProgramArg() {
     Blanks();
     b_.program_col = Col();
@@ -187,6 +211,7 @@ class Lexer {
         size_t at = i_;
         if (!IsLetter(s_[i_])) Error("variable=value expected");
         std::string name = Run(true);
+        if (b_.stmt == Stmt::kCall && name[0] == 'Q' && RepeatCount(name, at)) continue;
         Assignment(name, at);
       }
       return true;
@@ -535,6 +560,7 @@ void Block::Clear() {
   label_col = 1;
   program.clear();
   program_col = 1;
+  repeat = 1;
   cond = -1;
   defined.clear();
   channel = 0;

@@ -139,3 +139,50 @@ TEST(OkumaDialect, KindsAndEvidence) {
 
 }  // namespace
 }  // namespace cell::interp
+
+namespace cell::interp {
+namespace {
+
+// Chuck barrier data set by the program itself (system variables, ln 7764-7777): CX 60, CZ -50, L1 10, D1 5:
+// the jaw step is Z-60..-50 for X60..70 and the body Z <= -60 from X60 out (judgement 47). A G03 from X60
+// Z-45 to X60 Z-65 about Z-55 (radius 10 on the radius, I0 K-10) goes over the top: both ends and the chord
+// lie on the edge X60 (touching), but between 150 and 180 degrees the path is at Z-63.7..-65, X70..60: inside
+// the body. Only a check along the path sees it.
+TEST(OkumaBarrier, AnArcThatPassesThroughTheJawIsRefusedAtItsBlock) {
+  const std::string prog =
+      "N1 VCHKX=60 VCHKZ=-50 VCHKL=10 VCHKD=5\n"
+      "N2 G00 X60 Z-45 M25\n"
+      "N3 G03 X60 Z-65 I0 K-10 F0.1\n"
+      "N4 M02\n";
+  auto r = RunText(prog);
+  EXPECT_NE(r.diag.find("T.MIN:3:1: error: Chuck barrier"), std::string::npos) << r.diag;
+  ASSERT_EQ(r.ops.size(), 2u);  // units and the rapid to the start; the arc never goes out
+}
+
+// The same arc with the barrier off (M24 before it) runs.
+TEST(OkumaBarrier, OffAfterM24) {
+  const std::string prog =
+      "N1 VCHKX=60 VCHKZ=-50 VCHKL=10 VCHKD=5\n"
+      "N2 G00 X60 Z-45 M25\n"
+      "N3 M24\n"
+      "N4 G03 X60 Z-65 I0 K-10 F0.1\n"
+      "N5 M02\n";
+  auto r = RunText(prog);
+  EXPECT_EQ(r.diag, "");
+}
+
+// CALL ... Q (judgement 48): the three written forms, and a count outside 1-9999 is an alarm naming it.
+TEST(OkumaCall, RepeatCountForms) {
+  for (const char* q : {"Q3", "Q 3", "Q=3"}) {
+    auto r = RunText(std::string("O1\nN1 G00 X40 Z0\nN2 CALL O2 ") + q +
+                     "\nN3 M02\nO2\nN1 G91 G01 Z-1 F0.1\nN2 G90\nN3 RTS\n");
+    EXPECT_EQ(r.diag, "") << q;
+    ASSERT_EQ(r.ops.size(), 6u) << q;  // units, rapid, three feeds, end
+    EXPECT_NE(r.ops[4].find(R"("z":-3.0000)"), std::string::npos) << q;
+  }
+  auto bad = RunText("O1\nN2 CALL O2 Q0\nN3 M02\nO2\nN3 RTS\n");
+  EXPECT_NE(bad.diag.find("repeat count is 1-9999"), std::string::npos) << bad.diag;
+}
+
+}  // namespace
+}  // namespace cell::interp

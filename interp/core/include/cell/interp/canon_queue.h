@@ -29,6 +29,12 @@ class CanonQueue {
     return c.Set<T>();
   }
   void clear() { head_ = size_ = 0; }
+  // The i-th waiting command from the front; dropping all from the i-th on (a command found unsafe to run,
+  // Okuma's barrier check).
+  Canon& at(std::size_t i) { return ring_[(head_ + i) % ring_.size()]; }
+  void truncate(std::size_t n) {
+    if (n < size_) size_ = n;
+  }
 
  private:
   Canon& Slot() {
