@@ -3,6 +3,8 @@
 // geometry.
 #include <fmt/format.h>
 
+#include <algorithm>
+
 #include "interp_internal.h"
 
 namespace cell::interp::ktapl {
@@ -31,10 +33,14 @@ void KtRun::CompPrepare(const Words& words, int motion_col, bool running_cycle, 
     if (probe) Fail(1, "PROBE MOVES ARE NOT ALLOWED WITH G41/G42 IN EFFECT");
     if (g92) Fail(1, "G92 IS NOT ALLOWED WITH G41/G42 IN EFFECT");
     for (const auto& w : words) {
-      if (w.letter != 'M') continue;
       // ln 6523: G40 must precede the next tool change.
-      if (w.v == 6) Fail(w.col, "An automatic tool change cannot be programmed with G41 or G42 in effect");
-      if (w.v != 25) continue;
+      if (w.letter == 'M' && w.v == 6)
+        Fail(w.col, "An automatic tool change cannot be programmed with G41 or G42 in effect");
+      const bool z_word =
+          std::any_of(words.begin(), words.end(), [](const Word& a) { return a.letter == 'Z'; });
+      if (w.letter == 'P' && w.v == 0 && (p1 == kZ || p2 == kZ) && z_word)
+        Fail(w.col, "P0 MAY NOT MOVE THE COMPENSATION PLANE WITH G41/G42 IN EFFECT");
+      if (w.letter != 'M' || w.v != 25) continue;
       for (const auto& a : words) {
         int ax = AxisOfLetter(a.letter);
         if (ax == p1 || ax == p2)
