@@ -643,6 +643,8 @@ void KtRun::ExecTypeI(BlockCtx& bc, const ParsedBlock* pb) {
   const std::optional<double> block_feed = BlockFeed(f, k, mc);
 
   if (trigger) {
+    // P0 would have to reach into the cycle body's moves (ln 1185): refused, never ignored (call 78).
+    if (const Word* p = Find(words, 'P')) Fail(p->col, "P0 IS NOT ALLOWED IN A FIXED CYCLE BLOCK");
     // G80-series: everything but the passed letters has been executed; run the cycle body.
     CallCycle(mode_.cycle);
     return;

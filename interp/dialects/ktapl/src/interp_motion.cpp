@@ -266,7 +266,14 @@ void KtRun::LinearMotion(const Words& words, const BlockCodes& k, const BlockMCo
   if (k.probe) {
     ProbeMove(k, axis_mask, target, rapid, feed, fm);
   } else if (mode_.obstruction_detection) [[unlikely]] {
-    GuardedMove(axis_mask, target, rapid, feed, fm, exact, travel, travel_mask, motion_col);
+    if (b_moves && b_index_ && (axis_mask & (1u << kZ)) && std::fabs(target[kZ] - pos_[kZ]) > 1e-9) {
+      AxisArray first = target;  // the index order holds in G28 too: B (with X, Y), then Z
+      first[kZ] = pos_[kZ];
+      GuardedMove(axis_mask & ~(1u << kZ), first, rapid, feed, fm, exact, travel, travel_mask, motion_col);
+      GuardedMove(1u << kZ, target, rapid, feed, fm, exact, {}, 0, motion_col);
+    } else {
+      GuardedMove(axis_mask, target, rapid, feed, fm, exact, travel, travel_mask, motion_col);
+    }
   } else if (b_moves && b_index_ && (axis_mask & (1u << kZ)) && std::fabs(target[kZ] - pos_[kZ]) > 1e-9) {
     // Index B (with X, Y) first, then Z.
     AxisArray first = target;
