@@ -350,6 +350,7 @@ class KtRun final : public RunBase, public ExprContext {
 
   // Motion (interp_motion.cpp, interp_arc.cpp)
   double Offset(int axis) const;
+  double FixtureOffset(int axis) const;
   void RebaseFixtures(const Words& words, const BlockMCodes& mc, uint32_t axis_mask, bool positioning,
                       AxisArray& target);
   double ToMm(double v) const { return metric_ ? v : v * kInch; }

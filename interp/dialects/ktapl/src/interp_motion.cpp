@@ -11,21 +11,22 @@
 namespace cell::interp::ktapl {
 
 double KtRun::Offset(int axis) const {
-  double o = g98_[axis];
-  if (active_h_ > 0) {
-    const FixtureLine& f = fixtures_[active_h_];
-    if (mode_.calculated_offsets && (axis == kX || axis == kZ)) [[unlikely]] {
-      // G47: the line's X/Z offset turns with the table from its initial B (the line's I) to the B of the
-      // last positioning; ln 6296: X-.5 Z-.75 at B20, B to 110 gives X.75 Z-.5 (judgement call 77).
-      const double d = (calc_b_ - (f.has_i ? f.i : 0)) * kPi / 180;
-      const double c = std::cos(d), s = std::sin(d);
-      o += axis == kX ? f.v[kX] * c - f.v[kZ] * s : f.v[kX] * s + f.v[kZ] * c;
-    } else {
-      o += f.v[axis];
-    }
-  }
+  double o = g98_[axis] + FixtureOffset(axis);
   if (axis == kZ) o += tool_len_;
   return o;
+}
+
+// The active fixture line's offset on an axis. G47: the line's X/Z offset turns with the table from its
+// initial B (the line's I) to the B of the last positioning; ln 6296: X-.5 Z-.75 at B20, B to 110 gives
+// X.75 Z-.5 (judgement call 77).
+double KtRun::FixtureOffset(int axis) const {
+  if (active_h_ <= 0) return 0;
+  const FixtureLine& f = fixtures_[active_h_];
+  if (!mode_.calculated_offsets || (axis != kX && axis != kZ)) [[likely]]
+    return f.v[axis];
+  const double d = (calc_b_ - (f.has_i ? f.i : 0)) * kPi / 180;
+  const double c = std::cos(d), s = std::sin(d);
+  return axis == kX ? f.v[kX] * c - f.v[kZ] * s : f.v[kX] * s + f.v[kZ] * c;
 }
 
 // The fixture line of a block that moves B, before the block's linear targets are final. G49: a G90 G00

@@ -36,7 +36,7 @@ double KtRun::Param(int n) {
     if (n >= 3008 && n <= 3012) {
       int a = kAxisOrder[n - 3008];
       // The offset in force (G47: as calculated for the table's position, ln 6296).
-      double v = active_h_ ? Offset(a) - g98_[a] - (a == kZ ? tool_len_ : 0) : 0;
+      double v = FixtureOffset(a);
       return IsRotaryAxis(a) ? v : FromMm(v);
     }
     if (n == 3016) return FromMm(u88_x_);
