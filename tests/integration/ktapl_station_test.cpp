@@ -7,7 +7,9 @@
 //   waits in cycle stop with "TOOL BROKEN" until `cellctl station start`, the table marks the tool broken
 //   and the next M06 takes its alternate;
 // - USF on pallet 38 saves the fixture table as PALLET38;FXT in KT01's namespace (manual ln 4253-4284, E48)
-//   and a later pallet's ULF restores it (`cellctl station offsets`).
+//   and a later pallet's ULF restores it (`cellctl station offsets`);
+// - G28 obstruction detection (manual ln 1539-1541, 9416): the servo runs each G28 move as a guarded probe
+//   move against the pallet's part model; a clear path completes, a clamp in the path is an E-STOP.
 #include <chrono>
 #include <fstream>
 #include <string>
@@ -159,6 +161,38 @@ TEST_F(KtaplStation, UsfThenUlfOnAnotherPalletRestoresTheOffsets) {
   EXPECT_NEAR(table["H1"]["X"].get<double>(), 12.7, 1e-9);  // .5 in
   EXPECT_NEAR(table["H1"]["Y"].get<double>(), 6.35, 1e-9);
   EXPECT_FALSE(table.contains("H2")) << table;  // the file replaced the whole table
+}
+
+// A clamp 20 mm wide (X100-120) and 30 mm high (Z10-40) on a face at Z10 (mm). The probe is tool 1, 150 mm
+// to its tip, 6 mm ball. By hand: N40 X50 Z25 and N50 Z50 touch nothing (the ball's bottom is at the
+// programmed Z, 25 > 10 beside the clamp, 50 > 40 over it); CLEAR's N60 X150 at Z50 passes over the
+// clamp. BLOCKED's N60 X150 at Z25 meets the clamp's side: E-STOP at BLOCKED's line 9.
+TEST_F(KtaplStation, G28GuardedMovesStopAtAnObstructionOnTheServo) {
+  const std::string part = cell_.data_dir() + "/clamp.toml";
+  std::ofstream(part) << "[[plane]]\npoint = [0, 0, 10]\nnormal = [0, 0, 1]\n"
+                         "[[box]]\nmin = [100, -50, 10]\nmax = [120, 50, 40]\n";
+  auto stored = Ctl({"program", "put", part, "--name", "CLAMP_PART", "--type", "part_model"});
+  ASSERT_EQ(stored.code, 0) << stored.err;
+  LoadTools("KT01", "%\n(TLD,S10T1P150.D6.L1000)\n%\n");
+  const std::string head = "\n(UCY,5)\nN10 G71 G90 G0 X0 Y0 Z100. F0 T1\nN20 M06\nN30 Z100.\n";
+  Put("CLEAR", "%\n(NAM,CLEAR)" + head + "N40 G28 X50. Z25.\nN50 Z50.\nN60 X150.\nN70 G29\nN80 M30\n%\n");
+  Put("BLOCKED", "%\n(NAM,BLOCKED)" + head + "N40 G28 X50. Z25.\nN50 Z25.\nN60 X150.\nN70 G29\nN80 M30\n%\n");
+  ASSERT_EQ(Ctl({"pallet", "set", "7", "CLAMP_PART", "CLEAR"}).code, 0);
+  auto run = Ctl({"pallet", "run", "7", "--station", "KT01"});
+  ASSERT_EQ(run.code, 0) << run.err;
+  const std::string clear = FirstLine(run.out);
+  auto w = Ctl({"job", "wait", clear, "--timeout", "60"});
+  ASSERT_EQ(w.out, "COMPLETED\n") << w.err << CtlJson({"job", "show", clear, "--json"}).dump();
+  ASSERT_EQ(Ctl({"pallet", "set", "8", "CLAMP_PART", "BLOCKED"}).code, 0);
+  run = Ctl({"pallet", "run", "8", "--station", "KT01"});
+  ASSERT_EQ(run.code, 0) << run.err;
+  const std::string blocked = FirstLine(run.out);
+  EXPECT_NE(Ctl({"job", "wait", blocked, "--timeout", "60"}).code, 0);
+  auto shown = CtlJson({"job", "show", blocked, "--json"});
+  EXPECT_EQ(shown["state"], "FAILED") << shown.dump();
+  EXPECT_NE(shown.value("reason", "").find("BLOCKED:9:5: error: [E-STOP] OBSTRUCTION DETECTED"),
+            std::string::npos)
+      << shown.dump();
 }
 
 }  // namespace

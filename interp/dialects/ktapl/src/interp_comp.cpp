@@ -3,6 +3,8 @@
 // geometry.
 #include <fmt/format.h>
 
+#include <algorithm>
+
 #include "interp_internal.h"
 
 namespace cell::interp::ktapl {
@@ -30,11 +32,16 @@ void KtRun::CompPrepare(const Words& words, int motion_col, bool running_cycle, 
     if (mode_.cycle != 0 && !running_cycle) Fail(1, "FIXED CYCLES ARE NOT ALLOWED WITH G41/G42 IN EFFECT");
     if (probe) Fail(1, "PROBE MOVES ARE NOT ALLOWED WITH G41/G42 IN EFFECT");
     if (g92) Fail(1, "G92 IS NOT ALLOWED WITH G41/G42 IN EFFECT");
+    const bool z_word =
+        std::any_of(words.begin(), words.end(), [](const Word& a) { return a.letter == 'Z'; });
     for (const auto& w : words) {
-      if (w.letter != 'M') continue;
       // ln 6523: G40 must precede the next tool change.
-      if (w.v == 6) Fail(w.col, "An automatic tool change cannot be programmed with G41 or G42 in effect");
-      if (w.v != 25) continue;
+      if (w.letter == 'M' && w.v == 6)
+        Fail(w.col, "An automatic tool change cannot be programmed with G41 or G42 in effect");
+      // P0 would shift a compensated axis's offset path by the tool length (call 78).
+      if (w.letter == 'P' && w.v == 0 && (p1 == kZ || p2 == kZ) && z_word)
+        Fail(w.col, "P0 MAY NOT MOVE THE COMPENSATION PLANE WITH G41/G42 IN EFFECT");
+      if (w.letter != 'M' || w.v != 25) continue;
       for (const auto& a : words) {
         int ax = AxisOfLetter(a.letter);
         if (ax == p1 || ax == p2)

@@ -67,6 +67,7 @@ bool KtRun::ModeGCode(int g) {
       mode_.calculated_offsets = false;
       break;
     case 47:
+      if (!mode_.calculated_offsets) calc_b_ = pos_[kB];  // calculated for where the table stands
       mode_.calculated_offsets = true;
       break;
     case 48:
@@ -75,14 +76,8 @@ bool KtRun::ModeGCode(int g) {
     case 49:
       mode_.explicit_fixtures = false;
       break;
-    case 50:
+    case 50:  // adaptive control off: the state the cell is always in (judgement call 80)
       mode_.adaptive = Adaptive::kOff;
-      break;
-    case 51:
-      mode_.adaptive = Adaptive::kOn;
-      break;
-    case 53:
-      mode_.adaptive = Adaptive::kWithoutAirGap;
       break;
     case 90:
       mode_.incremental = false;
@@ -99,14 +94,29 @@ bool KtRun::ModeGCode(int g) {
     case 4:   // the block's dwell (BlockCodes::dwell)
     case 70:  // units: before the block's words are read
     case 71:
-    case 44:
-    case 52:
     case 79:
       break;
     default:
       return false;
   }
   return true;
+}
+
+// Codes the manual defines that the cell cannot honour: refused rather than accepted without their effect
+// (docs/dialects/ktapl.md, "Refused codes"; judgement calls 79-80).
+void KtRun::RefusedGCode(int g, int col) {
+  switch (g) {
+    case 44:  // ln 1654
+      Fail(col,
+           "G44 IS NOT AVAILABLE: FEEDRATE AT THE TOOL CENTERLINE ON COMPENSATED ARCS IS NOT "
+           "IMPLEMENTED");
+    case 52:  // ln 1740
+      Fail(col, "G52 IS NOT AVAILABLE: THE CELL CANNOT MEASURE SPINDLE HORSEPOWER FOR CALIBRATION");
+    default:  // G51, G53: ln 1728-1774
+      Fail(col, fmt::format("G{} IS NOT AVAILABLE: ADAPTIVE CONTROL NEEDS SPINDLE HORSEPOWER, WHICH THE "
+                            "CELL CANNOT MEASURE",
+                            g));
+  }
 }
 
 // G40-G46: the compensation codes of the block (acted on by CompPrepare).
@@ -220,6 +230,11 @@ void KtRun::ConvertGCodes(const GWords& gs, bool pass800, BlockCodes& k) {
       case 99:
         k.g99 = true;
         break;
+      case 44:
+      case 51:
+      case 52:
+      case 53:
+        RefusedGCode(g, col);
       default:
         if ((g >= 81 && g <= 89) || (g >= 801 && g <= 899)) {
           if (RunningCycle()) Fail(col, "A RUNNING DEFINED CYCLE CANNOT CALL ANOTHER CYCLE");
@@ -553,6 +568,17 @@ void KtRun::FixtureWord(const Words& words) {
   if (hv != 0 && !mode_.explicit_fixtures)
     Fail(h->col, "H WORD NOT ALLOWED IN G49 (IMPLICIT FIXTURE OFFSET) MODE");
   active_h_ = hv;
+  calc_b_ = pos_[kB];  // G47: the line is calculated for where the table stands
+}
+
+// ln 1183-1185: P0 leaves the tool length compensation out of the block's targets (M25, the preferred
+// form, leaves out every offset). The manual defines no other P in a Type I block (judgement call 78).
+bool KtRun::LengthBypass(const Words& words, bool arc) {
+  const Word* p = Find(words, 'P');
+  if (!p) return false;
+  if (p->v != 0) Fail(p->col, "ONLY P0 (LENGTH COMPENSATION BYPASS) IS DEFINED FOR THE P WORD");
+  if (arc) Fail(p->col, "P0 IS NOT ALLOWED IN A CIRCULAR BLOCK");
+  return true;
 }
 
 void KtRun::ExecTypeI(BlockCtx& bc, const ParsedBlock* pb) {
@@ -597,6 +623,7 @@ void KtRun::ExecTypeI(BlockCtx& bc, const ParsedBlock* pb) {
   bool trigger = false;
   const bool machine_block = std::any_of(
       words.begin(), words.end(), [](const Word& w) { return w.letter == 'M' && (w.v == 25 || w.v == 6); });
+  const bool passes_letters = mode_.cycle >= 801 && !running_cycle && !g77 && !machine_block;
   if (mode_.cycle != 0 && !running_cycle && !g77 && !machine_block) {
     trigger = PassCycleParameters(raw, k, pb, drop_undefined, axis_mask, words);
     if (mode_.cycle >= 801) {
@@ -616,13 +643,17 @@ void KtRun::ExecTypeI(BlockCtx& bc, const ParsedBlock* pb) {
   const std::optional<double> block_feed = BlockFeed(f, k, mc);
 
   if (trigger) {
+    // P0 would have to reach into the cycle body's moves (ln 1185): refused, never ignored (call 78).
+    if (const Word* p = Find(words, 'P')) Fail(p->col, "P0 IS NOT ALLOWED IN A FIXED CYCLE BLOCK");
     // G80-series: everything but the passed letters has been executed; run the cycle body.
     CallCycle(mode_.cycle);
     return;
   }
   FixtureWord(words);
   if (k.g38_col) CheckTool(Find(words, 'S'));  // where the block before left the tool (ln 7061-7090)
+  length_bypass_ = !passes_letters && LengthBypass(words, k.arc != 0);
   Motion(words, k, mc, axis_mask, motion_col, f, block_feed);
+  length_bypass_ = false;
   AfterMCode(mc);
   if (mc.m99 && mc.after == 0 && !operator_) {
     // In cycle and library code the operator cannot see the block: its comment is the message (App. E

@@ -297,6 +297,7 @@ class KtRun final : public RunBase, public ExprContext {
   void StCls(const Statement& st, BlockCtx& bc, bool in_ift);
   void StDlp(const Statement& st, BlockCtx& bc, bool in_ift);
   void StHeading(const Statement& st, BlockCtx& bc, bool in_ift);
+  void StRefused(const Statement& st, BlockCtx& bc, bool in_ift);
   void StMsg(const Statement& st, BlockCtx& bc, bool in_ift);
   void StOif(const Statement& st, BlockCtx& bc, bool in_ift);
   void StOpf(const Statement& st, BlockCtx& bc, bool in_ift);
@@ -334,9 +335,11 @@ class KtRun final : public RunBase, public ExprContext {
                        bool running_cycle);
   std::optional<double> BlockFeed(const Word* f, const BlockCodes& k, const BlockMCodes& mc);
   void FixtureWord(const Words& words);
+  bool LengthBypass(const Words& words, bool arc);
   Word EvalWord(const RawWord& w, bool dwell, bool passing, bool drop_undefined, bool& dropped);
   void ConvertGCodes(const GWords& gs, bool pass800, BlockCodes& k);
   bool ModeGCode(int g);
+  [[noreturn]] void RefusedGCode(int g, int col);
   void CompGCode(int g, int col);
   bool PassCycleParameters(const RawWords& raw, const BlockCodes& k, const ParsedBlock* pb,
                            bool drop_undefined, uint32_t axis_mask, Words& words);
@@ -347,6 +350,9 @@ class KtRun final : public RunBase, public ExprContext {
 
   // Motion (interp_motion.cpp, interp_arc.cpp)
   double Offset(int axis) const;
+  double FixtureOffset(int axis) const;
+  void RebaseFixtures(const Words& words, const BlockMCodes& mc, uint32_t axis_mask, bool positioning,
+                      AxisArray& target);
   double ToMm(double v) const { return metric_ ? v : v * kInch; }
   double FromMm(double v) const { return metric_ ? v : v / kInch; }
   void ResetAtEnd();
@@ -354,6 +360,8 @@ class KtRun final : public RunBase, public ExprContext {
               int motion_col, const Word* f, std::optional<double> block_feed);
   void LinearMotion(const Words& words, const BlockCodes& k, const BlockMCodes& mc, uint32_t axis_mask,
                     int motion_col, std::optional<double> eff, const Word* fw);
+  void GuardedMove(uint32_t axis_mask, const AxisArray& target, bool rapid, double feed, FeedMode fm,
+                   bool exact, const AxisArray& travel, uint32_t travel_mask, int col);
   void ProbeMove(const BlockCodes& k, uint32_t axis_mask, const AxisArray& target, bool rapid, double feed,
                  FeedMode fm);
   void Regrid(const Words& words);
@@ -405,6 +413,8 @@ class KtRun final : public RunBase, public ExprContext {
   AxisArray g98_{};  // floating zero (G98)
   std::array<FixtureLine, kFixtureLines + 1> fixtures_{};
   int active_h_ = 0;
+  double calc_b_ = 0;           // G47: the B position the active line's offsets are calculated for
+  bool length_bypass_ = false;  // P0 in the block being executed: no tool length compensation (ln 1185)
   bool mir_x_ = false, mir_y_ = false;
   double u88_x_ = 0.254, u88_y_ = 0;  // mm
   std::array<double, 26> letters_{};

@@ -11,10 +11,56 @@
 namespace cell::interp::ktapl {
 
 double KtRun::Offset(int axis) const {
-  double o = g98_[axis];
-  if (active_h_ > 0) o += fixtures_[active_h_].v[axis];
+  double o = g98_[axis] + FixtureOffset(axis);
   if (axis == kZ) o += tool_len_;
   return o;
+}
+
+// The active fixture line's offset on an axis. G47: the line's X/Z offset turns with the table from its
+// initial B (the line's I) to the B of the last positioning; ln 6296: X-.5 Z-.75 at B20, B to 110 gives
+// X.75 Z-.5 (judgement call 77).
+double KtRun::FixtureOffset(int axis) const {
+  if (active_h_ <= 0) return 0;
+  const FixtureLine& f = fixtures_[active_h_];
+  if (!mode_.calculated_offsets || (axis != kX && axis != kZ)) [[likely]]
+    return f.v[axis];
+  const double d = (calc_b_ - (f.has_i ? f.i : 0)) * kPi / 180;
+  const double c = std::cos(d), s = std::sin(d);
+  return axis == kX ? f.v[kX] * c - f.v[kZ] * s : f.v[kX] * s + f.v[kZ] * c;
+}
+
+// The fixture line of a block that moves B, before the block's linear targets are final. G49: a G90 G00
+// move of B to a listed I position selects that line. G47: a positioning move of B recalculates the line
+// in force for the new B (ln 6288-6290; "not applied dynamically during machining", ln 6278), and a B
+// position no line lists keeps it. The block's linear targets are re-based on the new offsets.
+void KtRun::RebaseFixtures(const Words& words, const BlockMCodes& mc, uint32_t axis_mask, bool positioning,
+                           AxisArray& target) {
+  const bool calc = mode_.calculated_offsets && positioning;
+  if (calc && active_h_ > 0) {
+    for (const auto& w : words) {
+      // The manual gives the calculation for B only (ln 6296); A/C would turn other axes (call 77).
+      if (w.letter == 'A' || w.letter == 'C')
+        Fail(w.col, "G47 CALCULATED FIXTURE OFFSETS ARE DEFINED FOR THE B AXIS ONLY");
+    }
+  }
+  if (!(axis_mask & (1u << kB))) return;
+  int h = active_h_;
+  if (!mode_.explicit_fixtures && !mode_.incremental && !mode_.contouring && !mc.m25) {
+    int hit = 0;
+    for (int n = 1; n <= kFixtureLines; ++n) {
+      if (fixtures_[n].set && fixtures_[n].has_i && std::fabs(fixtures_[n].i - target[kB]) < 1e-6) hit = n;
+    }
+    if (hit != 0 || !mode_.calculated_offsets) h = hit;
+  }
+  if (h == active_h_ && !calc) return;
+  AxisArray prog{};
+  for (int a : {kX, kY, kZ}) prog[a] = target[a] - Offset(a);
+  active_h_ = h;
+  if (calc) calc_b_ = target[kB];
+  if (mc.m25) return;  // the block's linear targets are machine positions
+  for (int a : {kX, kY, kZ}) {
+    if (axis_mask & (1u << a)) target[a] = prog[a] + Offset(a);
+  }
 }
 
 void KtRun::ResetAtEnd() {
@@ -118,6 +164,9 @@ void KtRun::Motion(const Words& words, const BlockCodes& k, const BlockMCodes& m
     if (k.arc) {
       if (axis_mask & rotary_mask) Fail(k.arc_col, "ROTARY AXIS WORDS ARE NOT ALLOWED IN A CIRCULAR BLOCK");
       if (mc.m25) Fail(k.arc_col, "M25 IS NOT ALLOWED IN A CIRCULAR BLOCK");
+      // The machine's guarded move is straight (judgement call 81).
+      if (mode_.obstruction_detection)
+        Fail(k.arc_col, "CIRCULAR MOVES ARE NOT ALLOWED IN G28 (OBSTRUCTION DETECTION)");
       if (!eff) Fail(k.arc_col, "NO FEEDRATE PROGRAMMED");
       if (*eff == 0) Fail(f ? f->col : k.arc_col, "F0 IS NOT ALLOWED IN A CIRCULAR BLOCK");
       if (fw) CheckFeedFormat(*fw, FeedFormat::kLinear, metric_);
@@ -176,28 +225,11 @@ void KtRun::LinearMotion(const Words& words, const BlockCodes& k, const BlockMCo
     double off = Offset(a);
     double prog = pos_[a] - off;
     target[a] = (mode_.incremental ? prog + v : v) + off;
+    if (a == kZ && length_bypass_) target[a] -= tool_len_;  // P0 (ln 1185)
   }
-  // G49 implicit fixture offsets follow a G90 G00 move of B to a listed position.
-  if (!mode_.explicit_fixtures && !mode_.incremental && !mode_.contouring && (axis_mask & (1u << kB)) &&
-      !mc.m25) {
-    int hit = 0;
-    for (int h = 1; h <= 32; ++h) {
-      if (fixtures_[h].set && fixtures_[h].has_i && std::fabs(fixtures_[h].i - target[kB]) < 1e-6) hit = h;
-    }
-    if (hit != active_h_) {
-      // Linear targets in this block are re-based on the new offsets.
-      for (int a : {kX, kY, kZ}) {
-        if (!(axis_mask & (1u << a))) continue;
-        double old_off = Offset(a);
-        double prog = target[a] - old_off;
-        int save = active_h_;
-        active_h_ = hit;
-        target[a] = prog + Offset(a);
-        active_h_ = save;
-      }
-      active_h_ = hit;
-    }
-  }
+  const bool positioning =
+      mc.m25 || !mode_.contouring || (eff && *eff == 0) || (b_index_ && (axis_mask & (1u << kB)));
+  RebaseFixtures(words, mc, axis_mask, positioning, target);
   bool linear_moves = false;
   for (int a = 0; a < kAxisCount; ++a) {
     if (!IsRotaryAxis(a) && (axis_mask & (1u << a)) && std::fabs(target[a] - pos_[a]) > 1e-9)
@@ -234,6 +266,15 @@ void KtRun::LinearMotion(const Words& words, const BlockCodes& k, const BlockMCo
   const bool exact = !mode_.contouring;
   if (k.probe) {
     ProbeMove(k, axis_mask, target, rapid, feed, fm);
+  } else if (mode_.obstruction_detection) [[unlikely]] {
+    if (b_moves && b_index_ && (axis_mask & (1u << kZ)) && std::fabs(target[kZ] - pos_[kZ]) > 1e-9) {
+      AxisArray first = target;  // the index order holds in G28 too: B (with X, Y), then Z
+      first[kZ] = pos_[kZ];
+      GuardedMove(axis_mask & ~(1u << kZ), first, rapid, feed, fm, exact, travel, travel_mask, motion_col);
+      GuardedMove(1u << kZ, target, rapid, feed, fm, exact, {}, 0, motion_col);
+    } else {
+      GuardedMove(axis_mask, target, rapid, feed, fm, exact, travel, travel_mask, motion_col);
+    }
   } else if (b_moves && b_index_ && (axis_mask & (1u << kZ)) && std::fabs(target[kZ] - pos_[kZ]) > 1e-9) {
     // Index B (with X, Y) first, then Z.
     AxisArray first = target;
@@ -242,6 +283,61 @@ void KtRun::LinearMotion(const Words& words, const BlockCodes& k, const BlockMCo
     EmitMove(target, 1u << kZ, rapid, feed, fm, exact, {}, 0);
   } else {
     EmitMove(target, axis_mask, rapid, feed, fm, exact, travel, travel_mask);
+  }
+}
+
+// G28 obstruction detection (ln 1539-1541; ln 9416: "E-stop and message upon any probe contact"): the
+// block's linear move is the machine's probe move that must not touch (on a station the servo's guarded
+// probe segment). A rotary turn of the block comes first as a plain move (judgement call 81).
+void KtRun::GuardedMove(uint32_t axis_mask, const AxisArray& target, bool rapid, double feed, FeedMode fm,
+                        bool exact, const AxisArray& travel, uint32_t travel_mask, int col) {
+  const uint32_t rotary_mask = (1u << kA) | (1u << kB) | (1u << kC);
+  if (comp_.engaged()) Fail(col, "G28 MOVES ARE NOT ALLOWED WITH G41/G42 IN EFFECT");
+  if (travel_mask) {
+    AxisArray turned = pos_;
+    for (int a : {kA, kB, kC}) turned[a] = target[a];
+    EmitMove(turned, axis_mask & rotary_mask, rapid, feed, fm, exact, travel, travel_mask);
+  }
+  bool moves = false;
+  for (int a = 0; a < kAxisCount; ++a) {
+    if (!IsRotaryAxis(a) && (axis_mask & (1u << a)) && std::fabs(target[a] - pos_[a]) > 1e-9) moves = true;
+  }
+  used_ |= axis_mask;
+  if (!moves) return;
+  interp::ProbeMove mv;
+  mv.make = true;
+  mv.from = pos_;
+  mv.to = pos_;
+  for (int a = 0; a < kAxisCount; ++a) {
+    if (!IsRotaryAxis(a) && (axis_mask & (1u << a))) mv.to[a] = target[a];
+  }
+  mv.feed = rapid || fm != FeedMode::kPerMinute ? 0 : feed;
+  mv.length = tool_len_;
+  const ProbeResult pr = env_->Probe(mv);
+  if (pr.already) {
+    // The stylus is deflected at the start (after a G22 touch; offline, a run starting in the model): the
+    // probe cannot signal a new contact until it breaks, and the guarded move cannot start. The block runs
+    // as programmed (judgement call 81; 9-16 MULTIBORES probes with G27 under G28).
+    EmitMove(mv.to, axis_mask & ~rotary_mask, rapid, feed, fm, exact, {}, 0);
+    return;
+  }
+  ProbeOutcome result = ProbeOutcome::kNone;
+  if (pr.event) {
+    result = ProbeOutcome::kContact;
+    for (int a = 0; a < kAxisCount; ++a) {
+      if (!IsRotaryAxis(a) && (axis_mask & (1u << a))) pos_[a] = pr.at[a];
+    }
+  } else {
+    pos_ = mv.to;
+  }
+  ProbeOp& c = Out<ProbeOp>();
+  c.g = 28;
+  c.feed = {rapid ? 0 : feed, fm, false};
+  c.result = result;
+  c.to.pos = pos_;
+  c.to.used = used_;
+  if (result == ProbeOutcome::kContact) {
+    Fail(col, "OBSTRUCTION DETECTED: PROBE CONTACT IN G28 (OBSTRUCTION DETECTION)", "E-STOP");
   }
 }
 

@@ -35,7 +35,8 @@ double KtRun::Param(int n) {
     }
     if (n >= 3008 && n <= 3012) {
       int a = kAxisOrder[n - 3008];
-      double v = active_h_ ? fixtures_[active_h_].v[a] : 0;
+      // The offset in force (G47: as calculated for the table's position, ln 6296).
+      double v = FixtureOffset(a);
       return IsRotaryAxis(a) ? v : FromMm(v);
     }
     if (n == 3016) return FromMm(u88_x_);

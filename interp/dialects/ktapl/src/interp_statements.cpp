@@ -14,7 +14,7 @@ const std::map<std::string_view, KtRun::StatementFn>& KtRun::StatementTable() {
       {"PAR", &KtRun::StPar},       {"IFT", &KtRun::StIft},       {"GTO", &KtRun::StGto},
       {"LBL", &KtRun::StLbl},       {"END", &KtRun::StEnd},       {"CLS", &KtRun::StCls},
       {"DLP", &KtRun::StDlp},       {"NAM", &KtRun::StHeading},   {"UTL", &KtRun::StHeading},
-      {"UCY", &KtRun::StHeading},   {"ACP", &KtRun::StHeading},   {"SSA", &KtRun::StHeading},
+      {"UCY", &KtRun::StHeading},   {"ACP", &KtRun::StRefused},   {"SSA", &KtRun::StHeading},
       {"MSG", &KtRun::StMsg},       {"OIF", &KtRun::StOif},       {"OPF", &KtRun::StOpf},
       {"CLF", &KtRun::StClf},       {"FWR", &KtRun::StFwr},       {"DAT", &KtRun::StDat},
       {"CPY", &KtRun::StFileOp},    {"DLF", &KtRun::StFileOp},    {"PRT", &KtRun::StFileOp},
@@ -188,6 +188,13 @@ void KtRun::StDlp(const Statement& st, BlockCtx&, bool) {
 
 void KtRun::StHeading(const Statement&, BlockCtx&, bool) {
   // Heading / option data: no effect on the run (read by the program store and the scheduler).
+}
+
+// ln 3171-3226: ACP sets the target horsepower of adaptive control, which the cell cannot measure (G51).
+void KtRun::StRefused(const Statement& st, BlockCtx&, bool) {
+  Fail(st.col, st.mnemonic +
+                   " IS NOT AVAILABLE: ADAPTIVE CONTROL NEEDS SPINDLE HORSEPOWER, WHICH THE CELL "
+                   "CANNOT MEASURE");
 }
 
 void KtRun::StDat(const Statement&, BlockCtx&, bool) {
