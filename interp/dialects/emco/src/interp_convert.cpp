@@ -201,7 +201,8 @@ void EmRun::Collect(const Block& b, BlockWords& bw) const {
         break;
       case 'G':
       case 'M': {
-        if (w.point || w.value < 0 || w.value > 99 || w.value != std::floor(w.value)) {
+        // G2/M2: two digits, no point and no sign (ln 1102-1110): G+01 is outside the format like G1.5.
+        if (w.point || w.sign || w.value < 0 || w.value > 99 || w.value != std::floor(w.value)) {
           Alarm(w.letter == 'G' ? 410 : 420, w.col, fmt::format("{}{}", w.letter, w.value));
         }
         auto& list = w.letter == 'G' ? bw.g : bw.m;
