@@ -103,6 +103,16 @@ TEST_F(SecureCell, TheViewerReadsButCannotWrite) {
   EXPECT_NE(ReadFile(store_log).find(line), std::string::npos) << ReadFile(store_log);
 }
 
+// Issue 39 item 3: an identity that may not read a topic the verb needs gets the promised one line and exit 1
+// (cellctl died of SIGSEGV tearing down the refused reader).
+TEST_F(SecureCell, AnIdentityThatMayNotReadIsRefusedInOneLine) {
+  auto ls = As("interpreter-KT01", {"station", "ls"});
+  EXPECT_EQ(ls.code, 1) << ls.out << ls.err;
+  EXPECT_NE(ls.err.find("may not subscribe to"), std::string::npos) << ls.err;
+  EXPECT_NE(ls.err.find("interpreter-KT01"), std::string::npos) << ls.err;
+  EXPECT_EQ(ls.err.find('\n'), ls.err.size() - 1) << "one line: " << ls.err;
+}
+
 TEST_F(SecureCell, AnUnsecuredCellctlFindsNobody) {
   auto secured = As("", {"job", "ls", "--json"});
   EXPECT_EQ(secured.code, 0) << secured.err;  // control

@@ -189,6 +189,7 @@ class FastReader : public RawReader, public dds::DataReaderListener {
       : sub_(sub), cb_(std::move(cb)), writers_(writers) {}
   void Attach(dds::DataReader* r) { r_ = r; }
   ~FastReader() override {
+    if (!r_) return;  // never created (refused by access control): nothing to detach or delete
     r_->set_listener(nullptr);
     std::lock_guard lk(mu_);  // wait out a callback in flight
     sub_->delete_datareader(r_);
