@@ -106,6 +106,8 @@ void CheckProgram(std::string_view name, std::string_view what) {
     Bad(what, name, "'*' and '?' are list wildcards, not name characters");
   if (name.find_first_of("/\\") != std::string_view::npos) Bad(what, name, "no '/' or '\\'");
   if (name.front() == ' ' || name.back() == ' ') Bad(what, name, "no leading or trailing space");
+  // A namespace is a directory on the stations' side (and in exports): "." and ".." name directories.
+  if (name == "." || name == "..") Bad(what, name, "'.' and '..' name directories, not programs");
 }
 
 void CheckRecord(std::string_view name) {

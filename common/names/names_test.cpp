@@ -94,8 +94,8 @@ TEST(Rules, ProgramsAndPatterns) {
   for (std::string ok : std::vector<std::string>{"O1234", "GEAR HOUSING, REV B", "PALLET38;FXT", "A.MIN",
                                                  std::string(128, 'p')})
     EXPECT_NO_THROW(CheckProgram(ok)) << ok;
-  for (std::string bad :
-       std::vector<std::string>{"", "a/b", "a\\b", "*", "a?", " A", "A ", "A\tB", std::string(129, 'p')})
+  for (std::string bad : std::vector<std::string>{"", "a/b", "a\\b", "*", "a?", " A", "A ", "A\tB", ".", "..",
+                                                  std::string(129, 'p')})
     EXPECT_THROW(CheckProgram(bad), Error) << bad;
   EXPECT_NO_THROW(CheckPattern("PUMP*"));
   EXPECT_THROW(CheckPattern("../*"), Error);

@@ -128,6 +128,9 @@ TEST_F(Offline, NamesAreCheckedBeforeTheyAreSent) {
   Refused({"pallet", "set", "1", "A\x07"}, "'A\\x07'", 2);
   Refused({"program", "get", std::string(129, 'P')}, "at most 128", 2);
   Refused({"program", "put", "/etc/hostname", "--name", "a/b"}, "no '/'", 2);
+  // Issue 39 item 5: "." and ".." were stored in HOST.
+  Refused({"program", "put", "/etc/hostname", "--name", ".."}, "name directories, not programs", 2);
+  Refused({"program", "put", "/etc/hostname", "--name", "."}, "name directories, not programs", 2);
   Refused({"program", "ls", "--node", "../KT01"}, "must be HOST, a station id or a station's memory", 2);
   Refused({"station", "tools", "KT01\n"}, "'KT01\\x0a'", 2);
   Refused({"inspect", "cat", "../../etc/passwd"}, "record name", 2);
