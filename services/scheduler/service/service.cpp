@@ -18,26 +18,6 @@ namespace cell::scheduler {
 
 namespace {
 
-cell::JobState Wire(JobState s) {
-  switch (s) {
-    case JobState::kQueued:
-      return cell::JOB_QUEUED;
-    case JobState::kWaiting:
-      return cell::JOB_WAITING;
-    case JobState::kDispatched:
-      return cell::JOB_DISPATCHED;
-    case JobState::kRunning:
-      return cell::JOB_RUNNING;
-    case JobState::kCompleted:
-      return cell::JOB_COMPLETED;
-    case JobState::kFailed:
-      return cell::JOB_FAILED;
-    case JobState::kCancelled:
-      return cell::JOB_CANCELLED;
-  }
-  return cell::JOB_QUEUED;
-}
-
 std::string Cut(const std::string& s, size_t n) {
   return s.size() <= n ? s : s.substr(0, n - 3) + "...";
 }
@@ -47,7 +27,7 @@ cell::JobInfo ToWire(const JobView& v) {
   cell::JobInfo w;
   w.slot(static_cast<int32_t>(v.id % bus::topics::kJobSlots));
   w.job_id(static_cast<int32_t>(v.id));
-  w.state(Wire(v.state));
+  w.state(WireState(v.state));
   w.kind(Cut(v.kind, 16));
   w.route(Cut(v.route, 64));
   w.schedule(Cut(v.schedule, 64));
@@ -425,7 +405,7 @@ void Service::Apply(const Effects& e) {
     auto v = sched_.Job(c.job_id, false);
     cell::JobStatus s;
     s.job_id(static_cast<int32_t>(c.job_id));
-    s.state(Wire(c.state));
+    s.state(WireState(c.state));
     names::AssignText(s.reason(), c.reason);
     if (v) {
       names::Assign(s.route(), v->route, "route name");
