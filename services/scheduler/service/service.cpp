@@ -62,7 +62,9 @@ cell::JobInfo ToWire(const JobView& v) {
         tools += (tools.empty() ? "" : ",") + t;
         ++shown;
       }
-      if (shown < k.missing_tools.size()) tools += fmt::format(" +{} more", k.missing_tools.size() - shown);
+      // An entry of its own, so the list the page splits back ends with "+N more".
+      if (shown < k.missing_tools.size())
+        tools += fmt::format("{}+{} more", tools.empty() ? "" : ",", k.missing_tools.size() - shown);
       ds.missing_tools(tools);
       ds.eligible(k.eligible);
       x.considered().push_back(ds);
