@@ -22,6 +22,24 @@ std::vector<std::string> SplitCommas(const std::string& s) {
   return out;
 }
 
+std::string Cut(const std::string& s, std::size_t n) {
+  return s.size() <= n ? s : s.substr(0, n - 3) + "...";
+}
+
+// The wire's comma-separated list within its 256 characters; what does not fit is counted in a last entry.
+std::string JoinTools(const std::vector<std::string>& tools) {
+  std::string out;
+  std::size_t shown = 0;
+  for (const auto& t : tools) {
+    if (out.size() + t.size() + 16 > 256) break;
+    out += (out.empty() ? "" : ",") + t;
+    ++shown;
+  }
+  if (shown < tools.size())
+    out += (out.empty() ? "+" : ",+") + std::to_string(tools.size() - shown) + " more";
+  return out;
+}
+
 }  // namespace
 
 json DecisionJson(const Decision& d) {
@@ -97,6 +115,49 @@ Job FromWire(const cell::JobInfo& w) {
     j.decisions.push_back(std::move(x));
   }
   return j;
+}
+
+cell::JobInfo ToWire(const Job& j) {
+  cell::JobInfo w;
+  w.job_id(static_cast<std::int32_t>(j.id));
+  w.state(JobStateFromName(j.state).value_or(cell::JOB_QUEUED));
+  w.kind(Cut(j.kind, 16));
+  w.route(Cut(j.route, 64));
+  w.schedule(Cut(j.schedule, 64));
+  w.pallet(j.pallet);
+  w.station(j.station);
+  w.reason(Cut(j.reason, 1024));
+  w.started_ns(j.started_ns);
+  w.finished_ns(j.finished_ns);
+  w.cycle_s(j.cycle_s.value_or(-1));
+  w.op_index(j.op_index);
+  w.op_count(j.op_count);
+  w.decision_count(j.decision_count);
+  const std::size_t first = j.decisions.size() > 16 ? j.decisions.size() - 16 : 0;
+  for (std::size_t i = first; i < j.decisions.size(); ++i) {
+    const Decision& d = j.decisions[i];
+    cell::JobDecision x;
+    x.seq(d.seq);
+    x.time_ns(d.time_ns);
+    x.op(d.op);
+    x.trigger(Cut(d.trigger, 256));
+    for (std::size_t c = 0; c < d.considered.size() && c < 16; ++c) {
+      const DecisionStation& k = d.considered[c];
+      cell::DecisionStation ds;
+      ds.station(k.station);
+      ds.online(k.online);
+      ds.fault(k.fault);
+      ds.backlog_s(k.backlog_s);
+      ds.missing_tools(JoinTools(k.missing_tools));
+      ds.eligible(k.eligible);
+      x.considered().push_back(ds);
+    }
+    x.winner(d.winner);
+    x.why(Cut(d.why, 1024));
+    x.added_backlog_s(d.added_backlog_s);
+    w.decisions().push_back(x);
+  }
+  return w;
 }
 
 }  // namespace cell::records

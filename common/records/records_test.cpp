@@ -100,6 +100,15 @@ TEST(Job, UnsetFieldsAreNullAndDecisionsListTheirMissingTools) {
   wd.considered().push_back(ws);
   w.decisions().push_back(wd);
   Job back = FromWire(w);
+  // The round trip the page sees: what the scheduler publishes reads back as the same record.
+  j.decision_count = 1;
+  j.decisions[0].considered[0].missing_tools.assign(100, "1234567");
+  const Job trip = FromWire(ToWire(j));
+  EXPECT_EQ(JobJson(trip, false), JobJson(j, false));
+  const auto& tools = trip.decisions[0].considered[0].missing_tools;
+  ASSERT_FALSE(tools.empty());
+  EXPECT_LT(tools.size(), 100u);
+  EXPECT_EQ(tools.back(), "+" + std::to_string(100 - (tools.size() - 1)) + " more");
   EXPECT_EQ(back.state, "WAITING");
   EXPECT_FALSE(back.cycle_s);
   EXPECT_EQ(back.decisions[0].considered[0].missing_tools, (std::vector<std::string>{"1001", "1002"}));

@@ -50,5 +50,9 @@ nlohmann::json DecisionJson(const Decision& d);
 
 // From cell/job/state (the scheduler's JobInfo sample): comma-separated missing tools become a list.
 Job FromWire(const cell::JobInfo& w);
+// The sample the scheduler publishes: within the IDL bounds (long texts cut with "...", the latest 16
+// decisions with 16 stations each, a missing-tool list cut at 256 characters with a last "+N more" entry).
+// The slot and the update time are the publisher's to set.
+cell::JobInfo ToWire(const Job& j);
 
 }  // namespace cell::records
