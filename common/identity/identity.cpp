@@ -7,6 +7,7 @@
 
 #include "cell/bus/topics.h"
 #include "cell/error/error.h"
+#include "cell/records/time.h"
 
 namespace cell::identity {
 
@@ -32,9 +33,7 @@ void Claim::Confirm() {
       std::lock_guard lk(mu_);
       if (rival_) {
         const auto& h = *rival_;
-        std::time_t t = static_cast<std::time_t>(h.started_ns() / 1000000000);
-        char when[32];
-        std::strftime(when, sizeof when, "%Y-%m-%dT%H:%M:%SZ", std::gmtime(&t));
+        const std::string when = records::IsoTime(h.started_ns());
         throw Error(
             Errc::kAlreadyExists,
             fmt::format("another live process is {}: pid {} (boot {:016x}, started {}); refusing to start a "

@@ -210,7 +210,8 @@ MachineConfig ParseMachineConfig(std::string_view text, const std::string& sourc
   }
   TableReader mach(source, "machine.", root["machine"].as_table());
   if (!mach.exists()) mach.Fail("", "missing table [machine]");
-  m.kind = mach.Choice("kind", {"hmc", "vmc", "lathe"}, std::nullopt);
+  m.kind = mach.Choice("kind", {MachineKinds()[0].name, MachineKinds()[1].name, MachineKinds()[2].name},
+                       std::nullopt);
   m.servo_period_s = mach.Number("servo_period_ms", 0.1, 10, 1.0, "ms") / 1000.0;
   m.path_tolerance = mach.Number("path_tolerance", 0.001, 1, 0.02, "mm");
   m.in_position = mach.Number("in_position", 0.001, 1, 0.025, "mm");
@@ -320,6 +321,12 @@ MachineConfig LoadMachineConfig(const std::filesystem::path& file) {
   std::stringstream ss;
   ss << in.rdbuf();
   return ParseMachineConfig(ss.str(), file.string());
+}
+
+const std::vector<KindInfo>& MachineKinds() {
+  static const std::vector<KindInfo> kinds = {
+      {"hmc", "horizontal machining centre"}, {"vmc", "vertical machining centre"}, {"lathe", "lathe"}};
+  return kinds;
 }
 
 MachineConfig DefaultMachineConfig(std::string_view kind) {

@@ -14,9 +14,12 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <map>
+#include <regex>
 #include <thread>
 
 #include <gtest/gtest.h>
+#include <httplib.h>
 #include <nlohmann/json.hpp>
 
 #include "cell/bus/bus.h"
@@ -35,6 +38,11 @@ std::string Program(const std::string& name, const std::string& utl, int ucy) {
   return "%\n(NAM," + name + ")\n(UTL," + utl + ")\n(UCY," + std::to_string(ucy) +
          ")\nN10 G71 G90 G01\nN20 X0 Y0 Z100. F0\nN30 X50. Y20. Z10. F2000.\nN40 G00 X0 Y0 Z100. F0\nN50 "
          "M30\n%\n";
+}
+
+// A JSON scalar as MTConnect writes the value: strings bare, numbers in decimal.
+std::string Str(const json& v) {
+  return v.is_string() ? v.get<std::string>() : v.dump();
 }
 
 std::string FirstLine(const std::string& s) {
@@ -469,3 +477,111 @@ TEST_F(Fms, ScheduleProgramSetsVariablesAndRunsPselectRepeats) {
 }
 
 }  // namespace
+
+// Issue 37: one rendering per record. KT01 holds a pallet mid-run (FEED_HOLD), KT02 runs idle (READY), KT03
+// is configured but not started: `station ls --json`, the dashboard's /api/state and its MTConnect /current
+// say the same of each, field by field, and `job show --json` is the page's job.
+TEST_F(Fms, EveryViewRendersTheSameStationRowsAndJob) {
+  const std::string job = HeldMidRun("ONE37", 60, 37);
+  std::string url = ReadFile(data_ + "/dashboard.url");
+  url = url.substr(0, url.find('\n'));
+  ASSERT_NE(url.find("http://127.0.0.1:"), std::string::npos) << url;
+  httplib::Client http("127.0.0.1", std::stoi(url.substr(url.rfind(':') + 1)));
+  auto get = [&](const std::string& path) {
+    auto r = http.Get(path);
+    if (!r) ADD_FAILURE() << path << ": " << httplib::to_string(r.error());
+    return r && r->status == 200 ? r->body : std::string();
+  };
+  const json ls = CtlJson({"station", "ls", "--json"});
+  ASSERT_TRUE(ls.is_array());
+  std::map<std::string, json> rows;
+  for (const auto& r : ls) rows[r["id"].get<std::string>()] = r;
+  ASSERT_TRUE(rows.count("KT01") && rows.count("KT02") && rows.count("KT03")) << ls.dump();
+  EXPECT_EQ(rows["KT01"]["execution"], "FEED_HOLD");
+  EXPECT_EQ(rows["KT01"]["pallet"], 37);
+  EXPECT_EQ(rows["KT02"]["execution"], "READY");
+  EXPECT_EQ(rows["KT02"]["condition"], "NORMAL");
+  EXPECT_EQ(rows["KT03"]["online"], false);
+  EXPECT_EQ(rows["KT03"]["execution"], "UNAVAILABLE");
+  EXPECT_EQ(rows["KT03"]["condition"], "UNAVAILABLE");  // not announced (DESIGN §3 and §6)
+
+  // The page follows the topics on its own: poll until it has caught up (deadline, no fixed sleep), then
+  // every key of every `station ls` row must be the page's.
+  auto page_rows = [&] {
+    std::map<std::string, json> out;
+    auto text = get("/api/state");
+    if (text.empty()) return out;
+    const json state = json::parse(text);  // kept: a range over a temporary's member dangles
+    for (const auto& r : state["stations"]) out[r["id"].get<std::string>()] = r;
+    return out;
+  };
+  auto same = [&](const std::map<std::string, json>& page) {
+    for (const auto& [id, row] : rows) {
+      if (!page.count(id)) return false;
+      for (const auto& [k, v] : row.items())
+        if (page.at(id).value(k, json("<missing>")) != v) return false;
+    }
+    return true;
+  };
+  std::map<std::string, json> page;
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(15);
+  while (!same(page = page_rows()) && std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  for (const auto& [id, row] : rows) {
+    ASSERT_TRUE(page.count(id)) << id;
+    for (const auto& [k, v] : row.items())
+      EXPECT_EQ(page[id].value(k, json("<missing>")), v) << id << " " << k;
+  }
+
+  // MTConnect says it in its own words: the Path's Execution, Program, LineNumber and PalletId, the System
+  // condition's level, the Device's Availability.
+  const std::string current = get("/current");
+  ASSERT_FALSE(current.empty());
+  auto element = [](const std::string& doc, const std::string& tag) {
+    std::smatch m;
+    return std::regex_search(doc, m, std::regex("<" + tag + " [^>]*>([^<]*)</" + tag + ">"))
+               ? m[1].str()
+               : std::string("-");
+  };
+  for (const auto& id : {"KT01", "KT02", "KT03"}) {
+    const auto from = current.find(std::string("<DeviceStream name=\"") + id + "\"");
+    ASSERT_NE(from, std::string::npos) << id;
+    const std::string dev = current.substr(from, current.find("</DeviceStream>", from) - from);
+    const json& row = rows[id];
+    auto words = [](const json& v) { return v.is_null() ? std::string("UNAVAILABLE") : Str(v); };
+    EXPECT_EQ(element(dev, "Availability"), row["online"] ? "AVAILABLE" : "UNAVAILABLE") << id;
+    EXPECT_EQ(element(dev, "Execution"), row["execution"]) << id;
+    EXPECT_EQ(element(dev, "Program"), words(row["program"])) << id;
+    EXPECT_EQ(element(dev, "LineNumber"), words(row["line"])) << id;
+    EXPECT_EQ(element(dev, "PalletId"), words(row["pallet"])) << id;
+    std::smatch level;
+    ASSERT_TRUE(std::regex_search(dev, level, std::regex("<Condition>\\s*<(\\w+) "))) << dev;
+    std::string cond = level[1].str();
+    for (auto& c : cond) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+    EXPECT_EQ(cond, row["condition"]) << id;
+  }
+
+  // The job: `job show --json` and the page's (/api/state's row and /api/job/ID with its decisions).
+  const json shown = Job(job);
+  json row, detail;
+  const auto job_deadline = std::chrono::steady_clock::now() + std::chrono::seconds(15);
+  do {
+    const json state = json::parse(get("/api/state"));
+    for (const auto& j : state["jobs"])
+      if (std::to_string(j["id"].get<int>()) == job) row = j;
+    const std::string d = get("/api/job/" + job);
+    detail = d.empty() ? json() : json::parse(d);
+    if (row.value("state", "") == shown["state"] && detail.value("state", "") == shown["state"]) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  } while (std::chrono::steady_clock::now() < job_deadline);
+  ASSERT_TRUE(row.is_object()) << "no job " << job << " on the page";
+  for (const auto& [k, v] : shown.items()) {
+    if (k != "decisions") {
+      EXPECT_EQ(row.value(k, json("<missing>")), v) << k;
+    }
+    EXPECT_EQ(detail.value(k, json("<missing>")), v) << k;
+  }
+  EXPECT_EQ(row.size() + 1, shown.size()) << row.dump() << "\n" << shown.dump();  // no key only the page has
+  Resume("KT01");
+  ExpectCompleted(job);
+}

@@ -6,6 +6,7 @@
 #include "cell/idl/inspection.h"
 #include "cell/inspection/inspection_file.h"
 #include "cell/names/names.h"
+#include "cell/records/names.h"
 #include "context.h"
 
 namespace cellctl {
@@ -22,10 +23,6 @@ nlohmann::json JobInfo(Context& ctx, int id) {
     if (e.code() == cell::Errc::kNotFound) throw Exit{2, e.what()};
     throw;
   }
-}
-
-bool Terminal(const std::string& s) {
-  return s == "COMPLETED" || s == "FAILED" || s == "CANCELLED";
 }
 
 }  // namespace
@@ -89,7 +86,7 @@ void AddJobVerbs(CLI::App& app, Context& ctx) {
     auto j = JobInfo(ctx, o->id);
     while (true) {
       std::string state = j["state"].get<std::string>();
-      if (Terminal(state)) {
+      if (cell::records::IsTerminalJobState(state)) {
         std::cout << state << "\n";
         if (state == "COMPLETED") return;
         throw Exit{1, "job " + std::to_string(o->id) + " " + state + ": " +

@@ -14,16 +14,13 @@
 #include "cell/idl/scheduler.h"
 #include "cell/interp/station_rules.h"
 #include "cell/names/names.h"
+#include "cell/records/station.h"
 #include "cell/tooltable/wire.h"
 #include "context.h"
 
 namespace cellctl {
 
 namespace {
-
-// The MTConnect words of the station state, as the dashboard shows them.
-using cell::dashboard::ConditionName;
-using cell::dashboard::ExecutionName;
 
 void RequireConfigured(const std::string& id) {
   cell::names::CheckStation(id);
@@ -83,10 +80,10 @@ void AddStationLs(CLI::App& st, Context& ctx) {
     bus::Reader<cell::StationStatus> status(ctx.Bus(), bus::topics::kStationStatus, bus::QosKind::kState);
     // The scheduler's conditions on a station (two processes claiming its interpreter or servo).
     bus::Reader<cell::Alarm> alarms(ctx.Bus(), bus::topics::kAlarm, bus::QosKind::kEvent);
-    std::map<std::string, cell::Alarm> alarm;  // station -> the latest scheduler alarm
+    std::map<std::string, cell::records::StationAlarm> alarm;  // station -> the latest scheduler alarm
     const auto ids = cell::config::ListStations();
     std::map<std::string, double> backlog;
-    std::map<std::string, cell::StationStatus> by_id;
+    std::map<std::string, cell::records::StationStatus> by_id;
     // All three topics are transient-local: each announced service's last sample arrives soon after this
     // process discovers it. Gather until every station that heartbeats has sent its status and a running
     // scheduler its backlog (discovery is slower on a loaded machine, so no fixed window). A station not
@@ -97,10 +94,11 @@ void AddStationLs(CLI::App& st, Context& ctx) {
     std::set<std::string> sched_offline;  // stations a settled scheduler reports without a heartbeat
     const auto t0 = std::chrono::steady_clock::now();
     for (;;) {
-      while (auto st = status.Take(bus::Millis(0))) by_id[st->station().to_string()] = *st;
+      while (auto st = status.Take(bus::Millis(0)))
+        by_id[st->station().to_string()] = cell::records::FromWire(*st);
       while (auto a = alarms.Take(bus::Millis(0))) {
         auto& last = alarm[a->station().to_string()];
-        if (a->time_ns() >= last.time_ns()) last = *a;
+        if (a->time_ns() >= last.time_ns) last = cell::records::FromWire(*a);
       }
       while (auto sc = sched.Take(bus::Millis(0))) {
         sched_seen = true;
@@ -125,34 +123,13 @@ void AddStationLs(CLI::App& st, Context& ctx) {
       bool online =
           live.StationOnline(id) ||
           (by_id.count(id) && bus::WaitUntil([&] { return live.StationOnline(id); }, bus::Millis(1500)));
-      nlohmann::json j = {{"id", id},
-                          {"dialect", cfg.dialect},
-                          {"online", online},
-                          {"execution", "UNAVAILABLE"},
-                          {"condition", "NORMAL"},
-                          {"alarm_code", nullptr},
-                          {"alarm_text", nullptr},
-                          {"backlog_s", backlog.count(id) ? backlog[id] : 0.0},
-                          {"pallet", nullptr},
-                          {"program", nullptr},
-                          {"line", nullptr},
-                          {"status_text", nullptr}};
-      if (online && by_id.count(id)) {
-        auto& s = by_id[id];
-        j["execution"] = ExecutionName(s.execution());
-        j["condition"] = ConditionName(s.condition());
-        if (!s.alarm_code().to_string().empty()) j["alarm_code"] = s.alarm_code().to_string();
-        if (!s.alarm_text().to_string().empty()) j["alarm_text"] = s.alarm_text().to_string();
-        if (s.pallet()) j["pallet"] = s.pallet();
-        if (!s.program().to_string().empty()) j["program"] = s.program().to_string();
-        if (s.line()) j["line"] = s.line();
-        if (!s.status_text().to_string().empty()) j["status_text"] = s.status_text().to_string();
-      }
-      if (auto a = alarm.find(id); a != alarm.end() && a->second.active()) {
-        j["condition"] = "FAULT";
-        j["alarm_code"] = a->second.code().to_string();
-        j["alarm_text"] = a->second.text().to_string();
-      }
+      // The row and its state rules are the records module's: the dashboard prints the same.
+      auto st = by_id.find(id);
+      auto a = alarm.find(id);
+      auto b = backlog.find(id);
+      nlohmann::json j = cell::records::StationRow(
+          {id, cfg.dialect, online, st == by_id.end() ? nullptr : &st->second,
+           a == alarm.end() ? nullptr : &a->second, b == backlog.end() ? 0.0 : b->second});
       arr.push_back(j);
     }
     Print(ctx, arr,

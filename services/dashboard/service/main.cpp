@@ -14,7 +14,9 @@
 #include "cell/dashboard/server.h"
 #include "cell/health/health.h"
 #include "cell/identity/identity.h"
+#include "cell/interp/interp.h"
 #include "cell/log/log.h"
+#include "cell/machine/machine_config.h"
 
 int main() {
   cell::log::Init("cell-dashboard");
@@ -30,6 +32,11 @@ int main() {
                           std::string("CELL_DASHBOARD_BUFFER='") + b + "': observations, 16..16777216");
       view_opts.buffer_size = static_cast<size_t>(n);
     }
+    // The page's words for dialects and machine kinds: the registry's titles and the machine tables' own.
+    for (const auto* d : cell::interp::Dialects())
+      view_opts.vocabulary["dialects"][std::string(d->name())] = std::string(d->title());
+    for (const auto& k : cell::machine::MachineKinds())
+      view_opts.vocabulary["kinds"][std::string(k.name)] = std::string(k.title);
     cell::dashboard::CellView view(cell::dashboard::LoadStationDefs(), view_opts);
     cell::bus::Participant bus("cell-dashboard");
     // Secured, the dashboard is the read-only viewer (docs/security.md): it publishes nothing, so it neither

@@ -5,6 +5,11 @@
 #include <algorithm>
 #include <cmath>
 
+#include "cell/records/entries.h"
+#include "cell/records/names.h"
+#include "cell/records/time.h"
+#include "cell/records/values.h"
+
 namespace cell::dashboard {
 
 using nlohmann::json;
@@ -12,15 +17,7 @@ using nlohmann::json;
 namespace {
 
 bool Terminal(const std::string& state) {
-  return state == "COMPLETED" || state == "FAILED" || state == "CANCELLED";
-}
-
-json TimeOrNull(std::int64_t ns) {
-  return ns > 0 ? json(mtc::IsoTime(ns)) : json(nullptr);
-}
-
-json OrNull(const std::string& s) {
-  return s.empty() ? json(nullptr) : json(s);
+  return records::IsTerminalJobState(state);
 }
 
 std::string Fixed(double v, int digits) {
@@ -38,7 +35,11 @@ std::string WhyNot(const DecisionStationIn& c) {
   auto add = [&](const std::string& s) { why += (why.empty() ? "" : "; ") + s; };
   if (!c.online) add("station offline");
   if (c.fault) add("station in fault");
-  if (!c.missing_tools.empty()) add("missing tools " + c.missing_tools);
+  if (!c.missing_tools.empty()) {
+    std::string tools;
+    for (const auto& t : c.missing_tools) tools += (tools.empty() ? "" : ",") + t;
+    add("missing tools " + tools);
+  }
   return why.empty() ? "not eligible" : why;
 }
 
@@ -67,9 +68,7 @@ CellView::CellView(std::vector<StationDef> stations, ViewOptions opts)
 }
 
 std::int64_t CellView::Now() const {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(
-             std::chrono::system_clock::now().time_since_epoch())
-      .count();
+  return records::NowNs();
 }
 
 void CellView::Observe(int station, const std::string& key, std::string value, std::int64_t t,
@@ -87,29 +86,31 @@ void CellView::Observe(int station, const std::string& key, std::string value, s
   buffer_.Add(std::move(o));
 }
 
+// The Path's data items take the station's state from the record's rules (records::StateOf), the same
+// words `station ls` and the page print.
 void CellView::ObserveStatus(int s, std::int64_t t) {
-  StationState& x = st_[static_cast<size_t>(s)];
-  const bool live = x.online && x.seen;
-  const std::string un = "UNAVAILABLE";
+  const StationState& x = st_[static_cast<size_t>(s)];
+  const records::StationState state = records::StateOf(Facts(s));
+  const std::string un(records::kUnavailable);
   Observe(s, "avail", x.online ? "AVAILABLE" : un, t);
-  if (!live) {
+  if (!state.live) {
     for (const char* k : {"exec", "mode", "program", "line", "parts", "tool", "pallet", "message"})
       Observe(s, k, un, t);
-    Observe(s, "system", "", t, "UNAVAILABLE");
+    Observe(s, "system", "", t, state.condition);
     return;
   }
   const StatusIn& st = x.status;
-  Observe(s, "exec", st.execution, t);
+  Observe(s, "exec", state.execution, t);
   Observe(s, "mode", "AUTOMATIC", t);  // the cell's stations run what the scheduler dispatches
   Observe(s, "program", st.program.empty() ? un : st.program, t);
   Observe(s, "line", st.line > 0 ? std::to_string(st.line) : un, t);
   Observe(s, "parts", std::to_string(st.part_count), t);
   Observe(s, "tool", st.tool.empty() ? un : st.tool, t);
   Observe(s, "pallet", st.pallet > 0 ? std::to_string(st.pallet) : un, t);
-  if (st.condition == "NORMAL")
+  if (state.condition == "NORMAL")
     Observe(s, "system", "", t, "NORMAL");
   else
-    Observe(s, "system", st.alarm_text, t, st.condition, st.alarm_code);
+    Observe(s, "system", state.alarm_text, t, state.condition, state.alarm_code);
 }
 
 void CellView::Push(json ev) {
@@ -146,6 +147,17 @@ void CellView::Online(const std::string& station, bool online) {
   if (s < 0 || st_[static_cast<size_t>(s)].online == online) return;
   st_[static_cast<size_t>(s)].online = online;
   ObserveStatus(s, Now());
+  PushStations();
+}
+
+void CellView::Alarm(const std::string& station, const records::StationAlarm& a) {
+  std::lock_guard lk(mu_);
+  int s = model_.StationIndex(station);
+  if (s < 0) return;
+  auto& last = st_[static_cast<size_t>(s)].alarm;
+  if (last && a.time_ns < last->time_ns) return;  // an older one, delivered late
+  last = a;
+  ObserveStatus(s, a.time_ns > 0 ? a.time_ns : Now());
   PushStations();
 }
 
@@ -201,7 +213,7 @@ void CellView::Job(const JobIn& j) {
       ++it;
     }
   }
-  Push({{"type", "job"}, {"job", JobJson(j, false)}});
+  Push({{"type", "job"}, {"job", records::JobJson(j, false)}});
   PushStations();
 }
 
@@ -257,7 +269,7 @@ void CellView::Run(const RunIn& r) {
            {{"program", c.program},
             {"station", c.station},
             {"s", c.seconds},
-            {"time", mtc::IsoTime(c.time_ns)}}}});
+            {"time", records::TimeOrNull(c.time_ns)}}}});
   }
   tr.done = r.programs_done;
   tr.end_s = r.machine_s;
@@ -287,17 +299,33 @@ void CellView::ProgramEvent(const EventIn& in) {
 }
 
 json CellView::EventJson(const EventIn& e) {
-  return {{"station", e.station},         {"program", e.program},      {"line", e.line},
-          {"pallet", e.pallet},           {"dispatch", e.dispatch_id}, {"text", e.text},
-          {"time", TimeOrNull(e.time_ns)}};
+  return {{"station", e.station},
+          {"program", e.program},
+          {"line", e.line},
+          {"pallet", e.pallet},
+          {"dispatch", e.dispatch_id},
+          {"text", e.text},
+          {"time", records::TimeOrNull(e.time_ns)}};
 }
 
+records::StationFacts CellView::Facts(int s) const {
+  const StationState& x = st_[static_cast<size_t>(s)];
+  const StationDef& d = model_.stations()[static_cast<size_t>(s)];
+  return {d.id,       d.dialect, x.online, x.seen ? &x.status : nullptr, x.alarm ? &*x.alarm : nullptr,
+          x.backlog_s};
+}
+
+// The row `station ls --json` prints (records::StationRow), and what the page adds to it: the station's
+// configuration, its tools, and the jobs waiting for it or queued on it.
 json CellView::StationJson(int s) const {
   const StationState& x = st_[static_cast<size_t>(s)];
   const StationDef& d = model_.stations()[static_cast<size_t>(s)];
-  const bool live = x.online && x.seen;
-  json axes = json::array();
-  for (auto& a : d.axes) axes.push_back(a.name + (a.diameter ? " (dia)" : ""));
+  json axes = json::array(), axis_defs = json::array();
+  for (auto& a : d.axes) {
+    const std::string label = a.name + (a.diameter ? " (dia)" : "");
+    axes.push_back(label);
+    axis_defs.push_back({{"name", a.name}, {"label", label}, {"rotary", a.rotary}, {"diameter", a.diameter}});
+  }
   int worn = 0, broken = 0;
   for (auto& t : x.tools) {
     worn += t.worn ? 1 : 0;
@@ -308,89 +336,41 @@ json CellView::StationJson(int s) const {
     if (j.state == "WAITING" && !j.decisions.empty()) {
       for (auto& c : j.decisions.back().considered)
         if (c.station == d.id)
-          waiting.push_back(
-              {{"job", id}, {"pallet", j.pallet}, {"route", OrNull(j.route)}, {"why", WhyNot(c)}});
+          waiting.push_back({{"job", id},
+                             {"pallet", j.pallet},
+                             {"route", records::TextOrNull(j.route)},
+                             {"why", WhyNot(c)}});
     } else if ((j.state == "DISPATCHED" || j.state == "RUNNING") && j.station == d.id) {
-      queue.push_back({{"job", id}, {"pallet", j.pallet}, {"route", OrNull(j.route)}, {"state", j.state}});
+      queue.push_back(
+          {{"job", id}, {"pallet", j.pallet}, {"route", records::TextOrNull(j.route)}, {"state", j.state}});
     }
   }
-  const StatusIn& st = x.status;
-  return {{"id", d.id},
-          {"dialect", d.dialect},
-          {"description", d.description},
-          {"kind", d.kind},
-          {"axes", axes},
-          {"online", x.online},
-          {"execution", live ? st.execution : "UNAVAILABLE"},
-          {"condition", live ? st.condition : "UNAVAILABLE"},
-          {"alarm_code", live ? OrNull(st.alarm_code) : json(nullptr)},
-          {"alarm_text", live ? OrNull(st.alarm_text) : json(nullptr)},
-          {"status_text", live ? OrNull(st.status_text) : json(nullptr)},
-          {"program", live ? OrNull(st.program) : json(nullptr)},
-          {"line", live && st.line > 0 ? json(st.line) : json(nullptr)},
-          {"pallet", live && st.pallet > 0 ? json(st.pallet) : json(nullptr)},
-          {"part_count", st.part_count},
-          {"tool", live ? OrNull(st.tool) : json(nullptr)},
-          {"queued", st.queued},
-          {"backlog_s", x.backlog_s},
-          {"tools", {{"count", x.tools.size()}, {"worn", worn}, {"broken", broken}}},
-          {"waiting", waiting},
-          {"queue", queue}};
+  json row = records::StationRow(Facts(s));
+  row["description"] = d.description;
+  row["kind"] = d.kind;
+  row["axes"] = axes;
+  row["axis_defs"] = axis_defs;
+  row["queued"] = x.status.queued;
+  row["tools"] = {{"count", x.tools.size()}, {"worn", worn}, {"broken", broken}};
+  row["waiting"] = waiting;
+  row["queue"] = queue;
+  return row;
 }
 
-json CellView::JobJson(const JobIn& j, bool decisions) const {
-  json out = {{"id", j.id},
-              {"state", j.state},
-              {"kind", j.kind},
-              {"route", OrNull(j.route)},
-              {"schedule", OrNull(j.schedule)},
-              {"pallet", j.pallet},
-              {"station", OrNull(j.station)},
-              {"reason", OrNull(j.reason)},
-              {"started", TimeOrNull(j.started_ns)},
-              {"finished", TimeOrNull(j.finished_ns)},
-              {"cycle_s", j.cycle_s >= 0 ? json(j.cycle_s) : json(nullptr)},
-              {"op_index", j.op_index},
-              {"op_count", j.op_count},
-              {"decision_count", j.decision_count}};
-  if (decisions) {
-    json d = json::array();
-    for (auto& x : j.decisions) {
-      json considered = json::array();
-      for (auto& c : x.considered)
-        considered.push_back({{"station", c.station},
-                              {"online", c.online},
-                              {"fault", c.fault},
-                              {"backlog_s", c.backlog_s},
-                              {"missing_tools", c.missing_tools},
-                              {"eligible", c.eligible}});
-      d.push_back({{"seq", x.seq},
-                   {"time", TimeOrNull(x.time_ns)},
-                   {"op", x.op},
-                   {"trigger", x.trigger},
-                   {"considered", considered},
-                   {"winner", OrNull(x.winner)},
-                   {"why", x.why},
-                   {"added_backlog_s", x.added_backlog_s}});
-    }
-    out["decisions"] = d;
-  }
-  return out;
-}
-
+// The `inspect ls` row of the record (its size is the writer's to know: null here), and what the notice
+// carries besides.
 json CellView::StoredJson(const StoredIn& s) const {
-  return {{"kind", s.kind},
-          {"name", s.name},
-          {"station", s.station},
-          {"job", s.job_id},
-          {"pallet", s.pallet},
-          {"dispatch", s.dispatch_id},
-          {"programs", s.programs},
-          {"completed", s.completed},
-          {"reason", OrNull(s.reason)},
-          {"machine_s", s.machine_s},
-          {"excerpt", OrNull(s.excerpt)},
-          {"time", TimeOrNull(s.time_ns)}};
+  json row = records::InspectionRow({s.name, s.station, s.kind, std::nullopt});
+  row["job"] = s.job_id;
+  row["pallet"] = s.pallet;
+  row["dispatch"] = s.dispatch_id;
+  row["programs"] = s.programs;
+  row["completed"] = s.completed;
+  row["reason"] = records::TextOrNull(s.reason);
+  row["machine_s"] = s.machine_s;
+  row["excerpt"] = records::TextOrNull(s.excerpt);
+  row["time"] = records::TimeOrNull(s.time_ns);
+  return row;
 }
 
 json CellView::Snapshot() const {
@@ -414,14 +394,14 @@ json CellView::Snapshot() const {
     bool done = Terminal(it->second.state);
     if (done && finished >= 200) continue;
     finished += done ? 1 : 0;
-    jobs.push_back(JobJson(it->second, false));
+    jobs.push_back(records::JobJson(it->second, false));
   }
   json cycles = json::array();
   for (auto& c : cycles_)
     cycles.push_back({{"program", c.program},
                       {"station", c.station},
                       {"s", c.seconds},
-                      {"time", mtc::IsoTime(c.time_ns)}});
+                      {"time", records::TimeOrNull(c.time_ns)}});
   json stored = json::array();
   for (auto& s : stored_) stored.push_back(StoredJson(s));
   json events = json::array();
@@ -433,6 +413,7 @@ json CellView::Snapshot() const {
           {"inspections", stored},
           {"axes", axes},
           {"services", services_},
+          {"vocabulary", opts_.vocabulary},
           {"event", next_event_ - 1},
           {"sequence", buffer_.next()},
           {"now", static_cast<double>(Now()) * 1e-9}};
@@ -442,7 +423,7 @@ std::optional<json> CellView::JobDetail(int id) const {
   std::lock_guard lk(mu_);
   auto it = jobs_.find(id);
   if (it == jobs_.end()) return std::nullopt;
-  return JobJson(it->second, true);
+  return records::JobJson(it->second, true);
 }
 
 std::optional<std::vector<CellView::Event>> CellView::EventsAfter(std::uint64_t after,

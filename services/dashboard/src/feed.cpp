@@ -2,128 +2,12 @@
 
 #include "cell/bus/topics.h"
 #include "cell/config/config.h"
+#include "cell/records/names.h"
 #include "cell/tooltable/wire.h"
 
 namespace cell::dashboard {
 
 namespace topics = bus::topics;
-
-const char* ExecutionName(cell::Execution e) {
-  switch (e) {
-    case cell::EXECUTION_READY:
-      return "READY";
-    case cell::EXECUTION_ACTIVE:
-      return "ACTIVE";
-    case cell::EXECUTION_INTERRUPTED:
-      return "INTERRUPTED";
-    case cell::EXECUTION_FEED_HOLD:
-      return "FEED_HOLD";
-    case cell::EXECUTION_STOPPED:
-      return "STOPPED";
-    case cell::EXECUTION_OPTIONAL_STOP:
-      return "OPTIONAL_STOP";
-    case cell::EXECUTION_PROGRAM_STOPPED:
-      return "PROGRAM_STOPPED";
-    case cell::EXECUTION_PROGRAM_COMPLETED:
-      return "PROGRAM_COMPLETED";
-    case cell::EXECUTION_WAIT:
-      return "WAIT";
-    default:
-      return "UNAVAILABLE";
-  }
-}
-
-const char* ConditionName(cell::Condition c) {
-  return c == cell::CONDITION_FAULT ? "FAULT" : c == cell::CONDITION_WARNING ? "WARNING" : "NORMAL";
-}
-
-const char* JobStateName(cell::JobState s) {
-  switch (s) {
-    case cell::JOB_QUEUED:
-      return "QUEUED";
-    case cell::JOB_WAITING:
-      return "WAITING";
-    case cell::JOB_DISPATCHED:
-      return "DISPATCHED";
-    case cell::JOB_RUNNING:
-      return "RUNNING";
-    case cell::JOB_COMPLETED:
-      return "COMPLETED";
-    case cell::JOB_FAILED:
-      return "FAILED";
-    case cell::JOB_CANCELLED:
-      return "CANCELLED";
-  }
-  return "QUEUED";
-}
-
-const char* RunStateName(cell::RunState s) {
-  switch (s) {
-    case cell::RUN_QUEUED:
-      return "QUEUED";
-    case cell::RUN_ACTIVE:
-      return "ACTIVE";
-    case cell::RUN_COMPLETED:
-      return "COMPLETED";
-    case cell::RUN_FAILED:
-      return "FAILED";
-    case cell::RUN_CANCELLED:
-      return "CANCELLED";
-  }
-  return "QUEUED";
-}
-
-StatusIn FromWire(const cell::StationStatus& s) {
-  StatusIn in;
-  in.station = s.station().to_string();
-  in.execution = ExecutionName(s.execution());
-  in.condition = ConditionName(s.condition());
-  in.alarm_code = s.alarm_code().to_string();
-  in.alarm_text = s.alarm_text().to_string();
-  in.status_text = s.status_text().to_string();
-  in.program = s.program().to_string();
-  in.line = s.line();
-  in.pallet = s.pallet();
-  in.part_count = s.part_count();
-  in.tool = s.tool().to_string();
-  in.dispatch_id = s.dispatch_id();
-  in.queued = s.queued();
-  in.time_ns = s.updated_ns();
-  return in;
-}
-
-JobIn FromWire(const cell::JobInfo& w) {
-  JobIn j;
-  j.id = w.job_id();
-  j.state = JobStateName(w.state());
-  j.kind = w.kind().to_string();
-  j.route = w.route().to_string();
-  j.schedule = w.schedule().to_string();
-  j.station = w.station().to_string();
-  j.reason = w.reason().to_string();
-  j.pallet = w.pallet();
-  j.started_ns = w.started_ns();
-  j.finished_ns = w.finished_ns();
-  j.cycle_s = w.cycle_s();
-  j.op_index = w.op_index();
-  j.op_count = w.op_count();
-  j.decision_count = w.decision_count();
-  for (auto& d : w.decisions()) {
-    DecisionIn x;
-    x.seq = d.seq();
-    x.time_ns = d.time_ns();
-    x.op = d.op();
-    x.trigger = d.trigger().to_string();
-    x.winner = d.winner().to_string();
-    x.why = d.why().to_string();
-    x.added_backlog_s = d.added_backlog_s();
-    for (auto& c : d.considered())
-      x.considered.push_back({c.station().to_string(), c.online(), c.fault(), c.eligible(), c.backlog_s(),
-                              c.missing_tools().to_string()});
-    j.decisions.push_back(std::move(x));
-  }
-  return j;
-}
 
 Feed::Feed(bus::Participant& p, CellView& view, FeedOptions opts)
     : p_(p),
@@ -131,7 +15,7 @@ Feed::Feed(bus::Participant& p, CellView& view, FeedOptions opts)
       live_(p),
       status_(p, topics::kStationStatus, bus::QosKind::kState,
               [this](const cell::StationStatus& s, const bus::SampleInfo&) {
-                view_.Status(FromWire(s));
+                view_.Status(records::FromWire(s));
                 std::lock_guard lk(mu_);
                 status_seen_.insert(s.station().to_string());
               }),
@@ -149,15 +33,19 @@ Feed::Feed(bus::Participant& p, CellView& view, FeedOptions opts)
                  backlog_seen_ = true;
                  sched_offline_ = OfflineBySettledScheduler(s);
                }),
+      alarms_(p, topics::kAlarm, bus::QosKind::kEvent,
+              [this](const cell::Alarm& a, const bus::SampleInfo&) {
+                view_.Alarm(a.station().to_string(), records::FromWire(a));
+              }),
       jobs_(p, topics::kJobState, bus::QosKind::kState,
-            [this](const cell::JobInfo& j, const bus::SampleInfo&) { view_.Job(FromWire(j)); }),
+            [this](const cell::JobInfo& j, const bus::SampleInfo&) { view_.Job(records::FromWire(j)); }),
       runs_(p, topics::kRunStatus, bus::QosKind::kEvent,
             [this](const cell::RunStatus& r, const bus::SampleInfo&) {
               RunIn in;
               in.dispatch_id = r.dispatch_id();
               in.station = r.station().to_string();
               in.program = r.program().to_string();
-              in.state = RunStateName(r.state());
+              in.state = std::string(records::RunStateName(r.state()));
               in.job_id = r.job_id();
               in.pallet = r.pallet();
               in.programs_done = r.programs_done();

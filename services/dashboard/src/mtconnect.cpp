@@ -3,10 +3,10 @@
 #include <fmt/format.h>
 
 #include <cctype>
-#include <chrono>
-#include <ctime>
 #include <functional>
 #include <map>
+
+#include "cell/records/time.h"
 
 namespace cell::dashboard::mtc {
 
@@ -67,16 +67,7 @@ void WriteItem(std::string& out, const DataItem& d, const std::string& indent) {
 }  // namespace
 
 std::string IsoTime(std::int64_t ns) {
-  if (ns <= 0)
-    ns = std::chrono::duration_cast<std::chrono::nanoseconds>(
-             std::chrono::system_clock::now().time_since_epoch())
-             .count();
-  std::time_t t = static_cast<std::time_t>(ns / 1000000000);
-  std::tm tm{};
-  gmtime_r(&t, &tm);
-  char buf[32];
-  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%S", &tm);
-  return fmt::format("{}.{:06d}Z", buf, (ns % 1000000000) / 1000);
+  return records::IsoTimeMicros(ns > 0 ? ns : records::NowNs());
 }
 
 std::string XmlEscape(std::string_view s) {

@@ -105,7 +105,7 @@ std::string RenderText(const json& snap, const TextStyle& style) {
            Pad(paint(Fit(ex, 17), ExecColour(ex)), std::min<size_t>(ex.size(), 17), 17) + " " +
            Pad(paint(cond, CondColour(cond)), cond.size(), 11) +
            fmt::format(" {:<14} {:>5} {:>6} {:<8} {:>5}  ", Fit(Str(s["program"]), 14), Str(s["line"]),
-                       Str(s["pallet"]), Fit(Str(s["tool"]), 8), s.value("part_count", 0)) +
+                       Str(s["pallet"]), Fit(Str(s["tool"]), 8), Str(s["part_count"])) +
            paint(bar, "34") + " " + Dur(backlog) + "\n";
     if (!s["alarm_code"].is_null() || !s["alarm_text"].is_null())
       notes.push_back(paint(fmt::format("  {} {} {}: {}", id, cond == "FAULT" ? "ALARM" : "warning",

@@ -162,7 +162,7 @@ TEST_F(HttpTest, StateAndJobDetailAsJson) {
   j.state = "WAITING";
   j.pallet = 2;
   j.decisions = {DecisionIn{
-      1, 0, 1, "operate", "", "no eligible station", 0, {{"KT01", true, false, false, 0, "7777"}}}};
+      1, 0, 1, "operate", "", "no eligible station", 0, {{"KT01", true, false, false, 0, {"7777"}}}}};
   view_->Job(j);
   auto s = Get("/api/state");
   ASSERT_TRUE(s);
@@ -172,7 +172,8 @@ TEST_F(HttpTest, StateAndJobDetailAsJson) {
   EXPECT_FALSE(state["jobs"][0].contains("decisions"));
   auto d = Get("/api/job/5");
   ASSERT_TRUE(d);
-  EXPECT_EQ(nlohmann::json::parse(d->body)["decisions"][0]["considered"][0]["missing_tools"], "7777");
+  EXPECT_EQ(nlohmann::json::parse(d->body)["decisions"][0]["considered"][0]["missing_tools"],
+            nlohmann::json::array({"7777"}));
   auto none = Get("/api/job/6");
   ASSERT_TRUE(none);
   EXPECT_EQ(none->status, 404);

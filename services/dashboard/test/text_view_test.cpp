@@ -19,7 +19,7 @@ TEST(TextView, StationsBacklogWaitingPalletsAndJobs) {
   j.state = "WAITING";
   j.route = "R";
   j.pallet = 7;
-  j.decisions = {DecisionIn{1, 0, 1, "operate", "", "x", 0, {{"KT01", true, false, false, 0, "7777"}}}};
+  j.decisions = {DecisionIn{1, 0, 1, "operate", "", "x", 0, {{"KT01", true, false, false, 0, {"7777"}}}}};
   v.Job(j);
   std::string f = RenderText(v.Snapshot(), {100, false, 10});
   EXPECT_NE(f.find("KT01   ACTIVE"), std::string::npos) << f;

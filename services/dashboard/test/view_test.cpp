@@ -26,7 +26,7 @@ JobIn WaitingJob(int id, int pallet) {
   DecisionIn d;
   d.trigger = "operate";
   d.why = j.reason;
-  d.considered = {{"KT01", true, false, false, 0, "7777"}, {"OK01", false, false, false, 0, ""}};
+  d.considered = {{"KT01", true, false, false, 0, {"7777"}}, {"OK01", false, false, false, 0, {}}};
   j.decisions = {d};
   j.decision_count = 1;
   return j;
@@ -87,6 +87,35 @@ TEST(CellView, StationCardsSpeakMtconnectAndShowWhyAPalletWaits) {
   EXPECT_EQ(v.Snapshot()["stations"][0]["execution"], "UNAVAILABLE");
 }
 
+// The station row is records::StationRow: not announced, condition is UNAVAILABLE too (DESIGN §3), and an
+// alarm raised on the station (the scheduler's DUPLICATE) is its condition, on the page and in MTConnect.
+TEST(CellView, StationRowsFollowTheRecordsRules) {
+  ViewOptions o;
+  o.vocabulary = {{"dialects", {{"ktapl", "Kearney & Trecker KT-APL"}}}};
+  CellView v(TwoStations(), o);
+  auto kt = v.Snapshot()["stations"][0];
+  EXPECT_EQ(kt["condition"], "UNAVAILABLE");
+  EXPECT_TRUE(kt["part_count"].is_null());
+  EXPECT_EQ(v.Snapshot()["vocabulary"]["dialects"]["ktapl"], "Kearney & Trecker KT-APL");
+  EXPECT_EQ(kt["axis_defs"][3],
+            nlohmann::json({{"name", "B"}, {"label", "B"}, {"rotary", true}, {"diameter", false}}));
+  v.Online("KT01", true);
+  v.Status(Status("KT01", "READY"));
+  EXPECT_EQ(v.Snapshot()["stations"][0]["condition"], "NORMAL");
+  v.Alarm("KT01", {true, "DUPLICATE", "cell-interpreter/KT01 runs in 2 processes", 5});
+  kt = v.Snapshot()["stations"][0];
+  EXPECT_EQ(kt["condition"], "FAULT");
+  EXPECT_EQ(kt["alarm_code"], "DUPLICATE");
+  EXPECT_NE(v.Current(0).find("nativeCode=\"DUPLICATE\""), std::string::npos);
+  v.Alarm("KT01", {false, "DUPLICATE", "", 4});  // older than the raise: ignored
+  EXPECT_EQ(v.Snapshot()["stations"][0]["condition"], "FAULT");
+  v.Alarm("KT01", {false, "DUPLICATE", "", 6});
+  EXPECT_EQ(v.Snapshot()["stations"][0]["condition"], "NORMAL");
+  v.Online("KT01", false);
+  EXPECT_EQ(v.Snapshot()["stations"][0]["condition"], "UNAVAILABLE");
+  EXPECT_NE(v.Current(0).find("<Unavailable "), std::string::npos);
+}
+
 TEST(CellView, EventsCarryEachChangeOnceAndResyncWhenTooOld) {
   ViewOptions o;
   o.event_log = 8;
@@ -128,7 +157,7 @@ TEST(CellView, JobDetailHasTheDecisionLogAndInspectionsAreNewestFirst) {
   auto d = v.JobDetail(3);
   ASSERT_TRUE(d);
   ASSERT_EQ((*d)["decisions"].size(), 1u);
-  EXPECT_EQ((*d)["decisions"][0]["considered"][0]["missing_tools"], "7777");
+  EXPECT_EQ((*d)["decisions"][0]["considered"][0]["missing_tools"], nlohmann::json::array({"7777"}));
   EXPECT_FALSE(v.JobDetail(4));
   StoredIn a{"run", "run-KT01-1.json", "KT01", 3, 1, 1, {"P1"}, true, "", 12.5, "", 0};
   StoredIn b = a;

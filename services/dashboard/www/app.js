@@ -95,18 +95,18 @@
     const canvas = el('canvas');
     e.plot.append(canvas);
     const rec = { data: st, el: e, card: c, chart: null, trail: [] };
-    if (HAS_CHART) rec.chart = makeAxisChart(canvas, st.axes);
+    if (HAS_CHART) rec.chart = makeAxisChart(canvas, st.axis_defs);
     return rec;
   }
 
+  // The station's axes as the server describes them (label, rotary): degrees on the right-hand scale.
   function makeAxisChart(canvas, axes) {
-    const rotary = (n) => /^[ABC]/.test(n);
     return new Chart(canvas, {
       type: 'line',
       data: {
-        datasets: axes.map((n, i) => ({
-          label: n, data: [], borderColor: AXIS_COLOURS[i % AXIS_COLOURS.length], borderWidth: 1.5,
-          pointRadius: 0, yAxisID: rotary(n) ? 'deg' : 'mm',
+        datasets: axes.map((a, i) => ({
+          label: a.label, data: [], borderColor: AXIS_COLOURS[i % AXIS_COLOURS.length], borderWidth: 1.5,
+          pointRadius: 0, yAxisID: a.rotary ? 'deg' : 'mm',
         })),
       },
       options: {
@@ -117,7 +117,7 @@
                grid: { color: '#262c34' } },
           mm: { position: 'left', ticks: { color: '#7d8794', font: { size: 10 } }, grid: { color: '#262c34' },
                 title: { display: true, text: 'mm', color: '#7d8794', font: { size: 10 } } },
-          deg: { position: 'right', display: axes.some(rotary), ticks: { color: '#7d8794', font: { size: 10 } },
+          deg: { position: 'right', display: axes.some((a) => a.rotary), ticks: { color: '#7d8794', font: { size: 10 } },
                  grid: { display: false }, title: { display: true, text: 'deg', color: '#7d8794', font: { size: 10 } } },
         },
       },
@@ -143,9 +143,11 @@
     c.dataset.execution = st.execution;
     c.dataset.condition = st.condition;
     c.dataset.online = st.online;
-    const DIALECT = { ktapl: 'KT-APL', okuma: 'Okuma OSP', emco: 'EMCOTRONIC', balt: 'Balt-System' };
-    const KIND = { hmc: 'machining centre', lathe: 'lathe', mill: 'mill' };
-    e.kind.textContent = (DIALECT[st.dialect] || st.dialect) + ' ' + (KIND[st.kind] || st.kind) + ' · ' + st.axes.join(' ');
+    // The words for dialect and machine kind come from the server (the registry, the machine tables).
+    const words = S.vocabulary || {};
+    const dialect = (words.dialects || {})[st.dialect] || st.dialect;
+    const kind = (words.kinds || {})[st.kind] || st.kind;
+    e.kind.textContent = dialect + ' ' + kind + ' · ' + st.axes.join(' ');
     c.title = st.description || '';
     e.badge.textContent = st.execution.replace(/_/g, ' ');
     e.badge.className = 'badge execution';
@@ -157,7 +159,7 @@
     e.fact.line.textContent = val(st.line);
     e.fact.pallet.textContent = val(st.pallet);
     e.fact.tool.textContent = val(st.tool);
-    e.fact.part_count.textContent = st.part_count;
+    e.fact.part_count.textContent = val(st.part_count);
     e.fact.queued.textContent = st.queued;
     const t = st.tools || { count: 0, worn: 0, broken: 0 };
     e.fact.tools.textContent = t.count + ' tools' + (t.worn ? ', ' + t.worn + ' worn' : '') + (t.broken ? ', ' + t.broken + ' broken' : '');
@@ -277,7 +279,7 @@
           const r = el('tr');
           r.append(el('td', null, c.station), el('td', c.online ? 'ok' : 'bad', c.online ? 'yes' : 'no'),
                    el('td', c.fault ? 'bad' : null, c.fault ? 'FAULT' : 'no'), el('td', null, dur(c.backlog_s)),
-                   el('td', c.missing_tools ? 'bad' : null, c.missing_tools || '—'),
+                   el('td', c.missing_tools.length ? 'bad' : null, c.missing_tools.join(', ') || '—'),
                    el('td', c.eligible ? 'ok' : 'bad', c.eligible ? 'yes' : 'no'));
           t.append(r);
         }

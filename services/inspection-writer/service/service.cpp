@@ -8,18 +8,11 @@
 
 #include "cell/bus/topics.h"
 #include "cell/health/health.h"
+#include "cell/records/time.h"
 
 namespace cell::inspection {
 
 namespace {
-
-std::string Iso(int64_t ns) {
-  if (ns <= 0) return "";
-  std::time_t t = static_cast<std::time_t>(ns / 1000000000);
-  char buf[32];
-  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", std::gmtime(&t));
-  return buf;
-}
 
 // The last lines of a file, up to `n` bytes, starting at a line.
 std::string Tail(const std::string& text, size_t n) {
@@ -77,8 +70,8 @@ cell::InspectionReply Service::Handle(const cell::InspectionRequest& r) {
                           {"programs", programs},
                           {"completed", x.completed()},
                           {"reason", x.reason().to_string()},
-                          {"started", Iso(x.started_ns())},
-                          {"finished", Iso(x.finished_ns())},
+                          {"started", records::IsoTime(x.started_ns())},
+                          {"finished", records::IsoTime(x.finished_ns())},
                           {"machine_s", x.machine_s()}};
       std::string name = records_.StoreRun(j);
       spdlog::info("stored {}", name);

@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "cell/error/error.h"
+#include "cell/records/entries.h"
 
 namespace cell::inspection {
 
@@ -77,12 +78,9 @@ nlohmann::json Records::List(const std::string& pattern) const {
     if (!e.is_regular_file() || e.path().extension() == ".tmp") continue;
     std::string rel = fs::relative(e.path(), dir_).string();
     if (!Match(pattern.c_str(), rel.c_str())) continue;
-    bool run = rel.rfind("run-", 0) == 0;
-    std::string station = run ? rel.substr(4, rel.find('-', 4) - 4) : rel.substr(0, rel.find('/'));
-    rows.push_back({{"name", rel},
-                    {"station", station},
-                    {"kind", run ? "run" : "inspection"},
-                    {"size", static_cast<long>(e.file_size())}});
+    cell::records::InspectionEntry entry = cell::records::InspectionEntryOf(rel);
+    entry.size = static_cast<std::int64_t>(e.file_size());
+    rows.push_back(cell::records::InspectionRow(entry));
   }
   std::sort(rows.begin(), rows.end(), [](auto& a, auto& b) { return a["name"] < b["name"]; });
   return rows;

@@ -4,15 +4,22 @@
 
 #include <nlohmann/json.hpp>
 
+#include "cell/records/names.h"
+
 namespace cell::station {
 
 namespace {
 
+// The station's run states are the wire's (cell/run/status), stored by their records names.
+static_assert(static_cast<int>(RunState::kQueued) == static_cast<int>(cell::RUN_QUEUED) &&
+              static_cast<int>(RunState::kActive) == static_cast<int>(cell::RUN_ACTIVE) &&
+              static_cast<int>(RunState::kCompleted) == static_cast<int>(cell::RUN_COMPLETED) &&
+              static_cast<int>(RunState::kFailed) == static_cast<int>(cell::RUN_FAILED) &&
+              static_cast<int>(RunState::kCancelled) == static_cast<int>(cell::RUN_CANCELLED));
+
 RunState StateFromText(const std::string& s) {
-  if (s == "ACTIVE") return RunState::kActive;
-  if (s == "COMPLETED") return RunState::kCompleted;
-  if (s == "FAILED") return RunState::kFailed;
-  if (s == "CANCELLED") return RunState::kCancelled;
+  for (auto r : {RunState::kActive, RunState::kCompleted, RunState::kFailed, RunState::kCancelled})
+    if (RunStateName(r) == s) return r;
   return RunState::kQueued;
 }
 
@@ -32,19 +39,7 @@ constexpr const char* kDispatchColumns = "dispatch_id, job_id, pallet, node, pro
 }  // namespace
 
 std::string_view RunStateName(RunState s) {
-  switch (s) {
-    case RunState::kQueued:
-      return "QUEUED";
-    case RunState::kActive:
-      return "ACTIVE";
-    case RunState::kCompleted:
-      return "COMPLETED";
-    case RunState::kFailed:
-      return "FAILED";
-    case RunState::kCancelled:
-      return "CANCELLED";
-  }
-  return "QUEUED";
+  return records::RunStateName(static_cast<cell::RunState>(s));
 }
 
 std::vector<store::Migration> StationDb::Migrations() {

@@ -10,26 +10,34 @@
 
 #include "cell/bus/topics.h"
 #include "cell/program_store/client.h"
+#include "cell/records/entries.h"
 
 namespace cell::program_store {
 
+namespace {
+records::ProgramEntry Entry(const FileInfo& f) {
+  return {f.name,
+          f.node,
+          std::string(FileTypeName(f.metadata.type)),
+          std::string(DialectName(f.metadata.dialect)),
+          f.revision,
+          f.metadata.size,
+          f.is_protected,
+          f.is_selected,
+          f.is_hidden};
+}
+}  // namespace
+
+// `program show`: the `program ls` row and the rest of what the store knows.
 nlohmann::json FileJson(const FileInfo& f) {
   const Metadata& m = f.metadata;
-  nlohmann::json j = {{"name", f.name},
-                      {"node", f.node},
-                      {"type", std::string(FileTypeName(m.type))},
-                      {"dialect", std::string(DialectName(m.dialect))},
-                      {"revision", f.revision},
-                      {"head_revision", f.head_revision},
-                      {"size", m.size},
-                      {"lines", m.lines},
-                      {"protected", f.is_protected},
-                      {"selected", f.is_selected},
-                      {"hidden", f.is_hidden},
-                      {"sha256", f.sha256},
-                      {"created_at", f.created_at},
-                      {"dialect_detected", m.dialect_detected},
-                      {"warnings", m.warnings}};
+  nlohmann::json j = records::ProgramRow(Entry(f));
+  j["head_revision"] = f.head_revision;
+  j["lines"] = m.lines;
+  j["sha256"] = f.sha256;
+  j["created_at"] = f.created_at;
+  j["dialect_detected"] = m.dialect_detected;
+  j["warnings"] = m.warnings;
   if (!m.nam.empty()) j["nam"] = m.nam;
   if (!m.utl.empty()) j["utl"] = m.utl;
   if (m.ucy_s) j["ucy_s"] = *m.ucy_s;
@@ -320,20 +328,8 @@ cell::ProgramReply Service::List(const cell::ProgramRequest& r) {
   cell::ProgramReply rep;
   const std::string name = r.name().to_string();
   std::vector<std::string> rows;
-  for (auto& f : store_.List(r.node().to_string(), name.empty() ? "*" : name)) {
-    nlohmann::json j = FileJson(f);
-    rows.push_back(nlohmann::json{
-        {"name", j["name"]},
-        {"node", j["node"]},
-        {"type", j["type"]},
-        {"dialect", j["dialect"]},
-        {"revision", j["revision"]},
-        {"size", j["size"]},
-        {"protected", j["protected"]},
-        {"selected", j["selected"]},
-        {"hidden",
-         j["hidden"]}}.dump());
-  }
+  for (auto& f : store_.List(r.node().to_string(), name.empty() ? "*" : name))
+    rows.push_back(records::ProgramRow(Entry(f)).dump());
   std::vector<size_t> page_start = {0};
   size_t bytes = 2;
   for (size_t i = 0; i < rows.size(); ++i) {

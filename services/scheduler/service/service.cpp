@@ -18,80 +18,10 @@ namespace cell::scheduler {
 
 namespace {
 
-cell::JobState Wire(JobState s) {
-  switch (s) {
-    case JobState::kQueued:
-      return cell::JOB_QUEUED;
-    case JobState::kWaiting:
-      return cell::JOB_WAITING;
-    case JobState::kDispatched:
-      return cell::JOB_DISPATCHED;
-    case JobState::kRunning:
-      return cell::JOB_RUNNING;
-    case JobState::kCompleted:
-      return cell::JOB_COMPLETED;
-    case JobState::kFailed:
-      return cell::JOB_FAILED;
-    case JobState::kCancelled:
-      return cell::JOB_CANCELLED;
-  }
-  return cell::JOB_QUEUED;
-}
-
-std::string Cut(const std::string& s, size_t n) {
-  return s.size() <= n ? s : s.substr(0, n - 3) + "...";
-}
-
-// `job show` as a JobInfo sample (the latest 16 decisions).
+// `job show` as a JobInfo sample: the job record's wire form (records::ToWire), in its slot.
 cell::JobInfo ToWire(const JobView& v) {
-  cell::JobInfo w;
+  cell::JobInfo w = records::ToWire(ToRecord(v, true));
   w.slot(static_cast<int32_t>(v.id % bus::topics::kJobSlots));
-  w.job_id(static_cast<int32_t>(v.id));
-  w.state(Wire(v.state));
-  w.kind(Cut(v.kind, 16));
-  w.route(Cut(v.route, 64));
-  w.schedule(Cut(v.schedule, 64));
-  w.pallet(v.pallet);
-  w.station(v.station);
-  w.reason(Cut(v.reason, 1024));
-  w.started_ns(v.started_ms * 1000000);
-  w.finished_ns(v.finished_ms * 1000000);
-  w.cycle_s(v.cycle_s.value_or(-1));
-  w.op_index(v.op_index + 1);
-  w.op_count(v.op_count);
-  w.decision_count(static_cast<uint32_t>(v.decisions.size()));
-  const size_t first = v.decisions.size() > 16 ? v.decisions.size() - 16 : 0;
-  for (size_t i = first; i < v.decisions.size(); ++i) {
-    const Decision& d = v.decisions[i];
-    cell::JobDecision x;
-    x.seq(d.seq);
-    x.time_ns(d.time_ms * 1000000);
-    x.op(d.op_index + 1);
-    x.trigger(Cut(d.trigger, 256));
-    for (size_t c = 0; c < d.considered.size() && c < 16; ++c) {
-      const Candidate& k = d.considered[c];
-      cell::DecisionStation ds;
-      ds.station(k.station);
-      ds.online(k.online);
-      ds.fault(k.fault);
-      ds.backlog_s(k.backlog_s);
-      std::string tools;
-      size_t shown = 0;
-      for (auto& t : k.missing_tools) {
-        if (tools.size() + t.size() + 16 > 256) break;
-        tools += (tools.empty() ? "" : ",") + t;
-        ++shown;
-      }
-      if (shown < k.missing_tools.size()) tools += fmt::format(" +{} more", k.missing_tools.size() - shown);
-      ds.missing_tools(tools);
-      ds.eligible(k.eligible);
-      x.considered().push_back(ds);
-    }
-    x.winner(d.winner);
-    x.why(Cut(d.why, 1024));
-    x.added_backlog_s(d.added_backlog_s);
-    w.decisions().push_back(x);
-  }
   w.updated_ns(health::WallNs());
   return w;
 }
@@ -425,7 +355,7 @@ void Service::Apply(const Effects& e) {
     auto v = sched_.Job(c.job_id, false);
     cell::JobStatus s;
     s.job_id(static_cast<int32_t>(c.job_id));
-    s.state(Wire(c.state));
+    s.state(WireState(c.state));
     names::AssignText(s.reason(), c.reason);
     if (v) {
       names::Assign(s.route(), v->route, "route name");

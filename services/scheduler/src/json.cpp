@@ -1,71 +1,52 @@
 #include "cell/scheduler/json.h"
 
+#include "cell/records/values.h"
+
 namespace cell::scheduler {
 
 using nlohmann::json;
 
-namespace {
-json OrNull(const std::string& s) {
-  return s.empty() ? json(nullptr) : json(s);
+records::Decision ToRecord(const Decision& d) {
+  records::Decision r;
+  r.seq = d.seq;
+  r.time_ns = d.time_ms * 1000000;
+  r.op = d.op_index + 1;
+  r.trigger = d.trigger;
+  r.winner = d.winner;
+  r.why = d.why;
+  r.added_backlog_s = d.added_backlog_s;
+  for (const auto& c : d.considered)
+    r.considered.push_back({c.station, c.online, c.fault, c.eligible, c.backlog_s, c.missing_tools});
+  return r;
 }
-json TimeOrNull(std::int64_t ms) {
-  return ms == 0 ? json(nullptr) : json(IsoTime(ms));
-}
-}  // namespace
 
-json ToJson(const Decision& d) {
-  json considered = json::array();
-  for (const auto& c : d.considered) {
-    considered.push_back({{"station", c.station},
-                          {"online", c.online},
-                          {"fault", c.fault},
-                          {"backlog_s", c.backlog_s},
-                          {"missing_tools", c.missing_tools},
-                          {"eligible", c.eligible}});
-  }
-  return {{"seq", d.seq},
-          {"time", TimeOrNull(d.time_ms)},
-          {"op", d.op_index + 1},
-          {"trigger", d.trigger},
-          {"considered", considered},
-          {"winner", OrNull(d.winner)},
-          {"why", d.why},
-          {"added_backlog_s", d.added_backlog_s}};
+records::Job ToRecord(const JobView& j, bool with_decisions) {
+  records::Job r;
+  r.id = j.id;
+  r.state = std::string(JobStateName(j.state));
+  r.kind = j.kind;
+  r.route = j.route;
+  r.schedule = j.schedule;
+  r.pallet = j.pallet;
+  r.station = j.station;
+  r.reason = j.reason;
+  r.started_ns = j.started_ms * 1000000;
+  r.finished_ns = j.finished_ms * 1000000;
+  r.cycle_s = j.cycle_s;
+  r.op_index = j.op_index + 1;
+  r.op_count = j.op_count;
+  r.decision_count = static_cast<std::uint32_t>(j.decisions.size());
+  if (with_decisions)
+    for (const auto& d : j.decisions) r.decisions.push_back(ToRecord(d));
+  return r;
 }
 
 json ToJson(const JobView& j, bool with_decisions) {
-  json out = {{"id", j.id},
-              {"state", std::string(JobStateName(j.state))},
-              {"route", OrNull(j.route)},
-              {"pallet", j.pallet},
-              {"station", OrNull(j.station)},
-              {"reason", OrNull(j.reason)},
-              {"started", TimeOrNull(j.started_ms)},
-              {"finished", TimeOrNull(j.finished_ms)},
-              {"cycle_s", j.cycle_s ? json(*j.cycle_s) : json(nullptr)},
-              {"kind", j.kind},
-              {"schedule", OrNull(j.schedule)},
-              {"op_index", j.op_index + 1},
-              {"op_count", j.op_count}};
-  if (with_decisions) {
-    json d = json::array();
-    for (const auto& x : j.decisions) d.push_back(ToJson(x));
-    out["decisions"] = d;
-  }
-  return out;
+  return records::JobJson(ToRecord(j, with_decisions), with_decisions);
 }
 
-json ToJson(const StationView& s) {
-  return {{"id", s.id},
-          {"dialect", s.dialect},
-          {"online", s.online},
-          {"condition", s.fault ? "FAULT" : "NORMAL"},
-          {"alarm_code", OrNull(s.alarm_code)},
-          {"alarm_text", OrNull(s.alarm_text)},
-          {"backlog_s", s.backlog_s},
-          {"pallet", s.pallet == 0 ? json(nullptr) : json(s.pallet)},
-          {"program", OrNull(s.program)},
-          {"queue", s.queue}};
+json ToJson(const Decision& d) {
+  return records::DecisionJson(ToRecord(d));
 }
 
 json ToJson(const RouteView& r) {
@@ -79,7 +60,10 @@ json ToJson(const RouteView& r) {
                    {"ucy_sum_s", sum},
                    {"tools", op.tools}});
   }
-  return {{"name", r.name}, {"valid", r.valid}, {"invalid_reason", OrNull(r.invalid_reason)}, {"ops", ops}};
+  return {{"name", r.name},
+          {"valid", r.valid},
+          {"invalid_reason", records::TextOrNull(r.invalid_reason)},
+          {"ops", ops}};
 }
 
 json ToolsJson(const tooltable::ToolTable& t) {

@@ -11,44 +11,39 @@
 #include "cell/error/error.h"
 #include "cell/interp/interp.h"
 #include "cell/names/names.h"
+#include "cell/records/names.h"
 #include "scheduler_impl.h"
 
 namespace cell::scheduler {
 
 using json = nlohmann::json;
 
-std::string_view JobStateName(JobState s) {
+cell::JobState WireState(JobState s) {
   switch (s) {
     case JobState::kQueued:
-      return "QUEUED";
+      return cell::JOB_QUEUED;
     case JobState::kWaiting:
-      return "WAITING";
+      return cell::JOB_WAITING;
     case JobState::kDispatched:
-      return "DISPATCHED";
+      return cell::JOB_DISPATCHED;
     case JobState::kRunning:
-      return "RUNNING";
+      return cell::JOB_RUNNING;
     case JobState::kCompleted:
-      return "COMPLETED";
+      return cell::JOB_COMPLETED;
     case JobState::kFailed:
-      return "FAILED";
+      return cell::JOB_FAILED;
     case JobState::kCancelled:
-      return "CANCELLED";
+      return cell::JOB_CANCELLED;
   }
-  return "?";
+  return cell::JOB_QUEUED;
+}
+
+std::string_view JobStateName(JobState s) {
+  return records::JobStateName(WireState(s));
 }
 
 bool IsTerminal(JobState s) {
   return s == JobState::kCompleted || s == JobState::kFailed || s == JobState::kCancelled;
-}
-
-std::string IsoTime(std::int64_t ms) {
-  if (ms == 0) return "";
-  const std::time_t t = static_cast<std::time_t>(ms / 1000);
-  std::tm tm{};
-  gmtime_r(&t, &tm);
-  char buf[32];
-  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
-  return buf;
 }
 
 namespace {

@@ -93,6 +93,14 @@ MachineConfig LoadMachineConfig(const std::filesystem::path& file);
 // Same from text; `source` names the text in messages and resolves relative part-model paths.
 MachineConfig ParseMachineConfig(std::string_view toml_text, const std::string& source);
 
+// The machine kinds a station file may name ([machine] kind) and the words a person reads for each (the
+// dashboard's page takes them from here through /api/state).
+struct KindInfo {
+  std::string_view name;   // "hmc"
+  std::string_view title;  // "horizontal machining centre"
+};
+const std::vector<KindInfo>& MachineKinds();
+
 // A built-in machine for tests and benchmarks, by machine kind: "hmc" (X Y Z + B index, like KT01) or
 // "lathe" (X as a diameter, Z, like OK01). Throws cell::Error(kInvalidArgument) for another kind.
 MachineConfig DefaultMachineConfig(std::string_view kind);

@@ -22,26 +22,16 @@
 #include "cell/dashboard/mtconnect.h"
 #include "cell/dashboard/sequence_buffer.h"
 #include "cell/dashboard/stations.h"
+#include "cell/records/job.h"
+#include "cell/records/station.h"
 #include "cell/tooltable/tooltable.h"
 
 namespace cell::dashboard {
 
 // ---- inputs: plain copies of the cell's topics (feed.h converts the DDS types) ----
-struct StatusIn {  // cell/station/status
-  std::string station;
-  std::string execution = "READY";   // MTConnect vocabulary: READY, ACTIVE, FEED_HOLD, ...
-  std::string condition = "NORMAL";  // NORMAL, WARNING, FAULT
-  std::string alarm_code, alarm_text;
-  std::string status_text;  // what a WAIT or a program stop waits for, else the program's last message
-  std::string program;
-  int line = 0;
-  int pallet = 0;
-  std::uint32_t part_count = 0;
-  std::string tool;
-  int dispatch_id = 0;
-  int queued = 0;
-  std::int64_t time_ns = 0;
-};
+// The station's status, the job and its decisions are the cell's records (common/records): the page and
+// MTConnect render them through the same module as `cellctl` and the scheduler.
+using StatusIn = records::StationStatus;  // cell/station/status
 
 struct AxesIn {  // cell/motion/axes
   std::string station;
@@ -51,30 +41,9 @@ struct AxesIn {  // cell/motion/axes
   std::int64_t time_ns = 0;
 };
 
-struct DecisionStationIn {
-  std::string station;
-  bool online = false, fault = false, eligible = false;
-  std::int64_t backlog_s = 0;
-  std::string missing_tools;  // comma-separated
-};
-struct DecisionIn {
-  std::int64_t seq = 0, time_ns = 0;
-  int op = 1;
-  std::string trigger, winner, why;
-  std::int64_t added_backlog_s = 0;
-  std::vector<DecisionStationIn> considered;
-};
-struct JobIn {  // cell/job/state
-  int id = 0;
-  std::string state;  // QUEUED, WAITING, DISPATCHED, RUNNING, COMPLETED, FAILED, CANCELLED
-  std::string kind, route, schedule, station, reason;
-  int pallet = 0;
-  std::int64_t started_ns = 0, finished_ns = 0;
-  double cycle_s = -1;
-  int op_index = 1, op_count = 1;
-  std::uint32_t decision_count = 0;
-  std::vector<DecisionIn> decisions;
-};
+using DecisionStationIn = records::DecisionStation;
+using DecisionIn = records::Decision;
+using JobIn = records::Job;  // cell/job/state
 
 struct RunIn {  // cell/run/status
   int dispatch_id = 0;
@@ -109,6 +78,9 @@ struct ViewOptions {
   double axis_window_s = 60;         // the page's axis plot
   double axis_period_s = 0.2;        // one page point per station per period
   double mtc_axis_period_s = 0.1;    // MTConnect position samples at most this often per station
+  // The page's words for what the station files name: {"dialects": {name: title}, "kinds": {kind: title}}
+  // (the interpreter registry's and the machine tables' own; the page keeps no list of them).
+  nlohmann::json vocabulary = nlohmann::json::object();
 };
 
 class CellView {
@@ -117,7 +89,8 @@ class CellView {
 
   // ---- inputs (any thread) ----
   void Status(const StatusIn& s);
-  void Online(const std::string& station, bool online);      // the interpreter's heartbeat
+  void Online(const std::string& station, bool online);                    // the interpreter's heartbeat
+  void Alarm(const std::string& station, const records::StationAlarm& a);  // cell/alarm on a station
   void Service(const std::string& service_id, bool online);  // host services, for the page's header
   void Tools(const std::string& station, const tooltable::ToolTable& tools);  // cell/station/tools
   void Backlog(const std::map<std::string, double>& backlog_s);
@@ -159,6 +132,7 @@ class CellView {
     bool online = false;
     bool seen = false;  // a status sample arrived
     StatusIn status;
+    std::optional<records::StationAlarm> alarm;  // the latest raised on the station
     double backlog_s = 0;
     std::vector<tooltable::ToolEntry> tools;
     std::int64_t tools_ns = 0;  // when the table last arrived (the assets' timestamp)
@@ -185,8 +159,8 @@ class CellView {
   void ObserveStatus(int s, std::int64_t t);
   void Push(nlohmann::json ev);  // with mu_ held
   void PushStations();           // station cards that changed, with mu_ held
+  records::StationFacts Facts(int s) const;
   nlohmann::json StationJson(int s) const;
-  nlohmann::json JobJson(const JobIn& j, bool decisions) const;
   nlohmann::json StoredJson(const StoredIn& s) const;
   static nlohmann::json EventJson(const EventIn& e);
   std::vector<mtc::ToolAsset> ToolAssets() const;
@@ -198,7 +172,7 @@ class CellView {
   mutable std::condition_variable cv_;
   std::vector<StationState> st_;
   std::map<std::string, bool> services_;
-  std::map<int, JobIn> jobs_;
+  std::map<std::int64_t, JobIn> jobs_;
   std::map<int, RunTrack> runs_;
   std::deque<CycleTime> cycles_;
   std::deque<StoredIn> stored_;

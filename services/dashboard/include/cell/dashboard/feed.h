@@ -15,6 +15,7 @@
 #include "cell/bus/bus.h"
 #include "cell/dashboard/cell_view.h"
 #include "cell/health/health.h"
+#include "cell/idl/health.h"
 #include "cell/idl/inspection.h"
 #include "cell/idl/motion.h"
 #include "cell/idl/run.h"
@@ -51,6 +52,7 @@ class Feed {
   bus::Reader<cell::StationStatus> status_;
   bus::Reader<cell::ToolTable> tools_;
   bus::Reader<cell::SchedulerState> backlog_;
+  bus::Reader<cell::Alarm> alarms_;  // conditions raised on a station (station ls shows them too)
   bus::Reader<cell::JobInfo> jobs_;
   bus::Reader<cell::RunStatus> runs_;
   bus::Reader<cell::InspectionStored> stored_;
@@ -69,13 +71,5 @@ Heard HeardStations(const std::vector<std::string>& ids, const health::Liveness&
 // The stations a settled scheduler reports without a heartbeat (SchedulerState.settled: it has watched
 // longer than its discovery window).
 std::set<std::string> OfflineBySettledScheduler(const cell::SchedulerState& s);
-
-// Conversions (exposed for tests).
-const char* ExecutionName(cell::Execution e);
-const char* ConditionName(cell::Condition c);
-const char* JobStateName(cell::JobState s);
-const char* RunStateName(cell::RunState s);
-StatusIn FromWire(const cell::StationStatus& s);
-JobIn FromWire(const cell::JobInfo& j);
 
 }  // namespace cell::dashboard

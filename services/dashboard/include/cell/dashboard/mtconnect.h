@@ -73,7 +73,8 @@ struct ToolAsset {
 };
 std::string AssetId(const ToolAsset& t);  // "KT01.T1001"
 
-std::string IsoTime(std::int64_t ns);  // 2026-11-24T03:00:00.123456Z
+// A timestamp: records::IsoTimeMicros, of now for ns <= 0 (2026-11-24T03:00:00.123456Z).
+std::string IsoTime(std::int64_t ns);
 std::string XmlEscape(std::string_view s);
 
 // /probe (device < 0: every device).

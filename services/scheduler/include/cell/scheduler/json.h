@@ -1,22 +1,23 @@
-// JSON forms of the scheduler's views, with the keys of DESIGN §6 (`job ls`/`job show`, `station ls`,
+// JSON forms of the scheduler's views, with the keys of DESIGN §6 (`job ls`/`job show`, `route show`,
 // `station tools`). Keys may be added, never renamed.
 #pragma once
 
 #include <nlohmann/json.hpp>
 
+#include "cell/records/job.h"
 #include "cell/scheduler/scheduler.h"
 #include "cell/tooltable/tooltable.h"
 
 namespace cell::scheduler {
 
-// {id, state, route, pallet, station, reason, started, finished, cycle_s, kind, op_index, op_count}
-// plus `decisions` when with_decisions. route/station/reason/started/finished/cycle_s are null when unset
-// (reason is set only while WAITING and when FAILED or CANCELLED).
+// The job as a record (common/records): 1-based op_index, times in ns. The decisions are copied only when
+// with_decisions (job ls leaves them out); decision_count counts them either way.
+records::Job ToRecord(const JobView& job, bool with_decisions);
+records::Decision ToRecord(const Decision& d);
+// records::JobJson of the job: the form the page's job takes too. reason is set only while WAITING and
+// when FAILED or CANCELLED.
 nlohmann::json ToJson(const JobView& job, bool with_decisions);
 nlohmann::json ToJson(const Decision& d);
-// The scheduler's share of a `station ls` row: {id, dialect, online, condition, alarm_code, alarm_text,
-// backlog_s, pallet, program, queue}. execution and line come from the station's own state topic.
-nlohmann::json ToJson(const StationView& s);
 nlohmann::json ToJson(const RouteView& r);
 // `station tools ID`: an array of {tool, socket, length, diameter, life_left_min, worn, broken}.
 nlohmann::json ToolsJson(const tooltable::ToolTable& t);

@@ -18,6 +18,7 @@
 #include <string_view>
 #include <vector>
 
+#include "cell/idl/scheduler.h"
 #include "cell/scheduler/program_source.h"
 #include "cell/scheduler/route.h"
 #include "cell/scheduler/schedule_program.h"
@@ -26,7 +27,8 @@
 namespace cell::scheduler {
 
 enum class JobState { kQueued, kWaiting, kDispatched, kRunning, kCompleted, kFailed, kCancelled };
-std::string_view JobStateName(JobState s);  // "QUEUED", "WAITING", ...
+cell::JobState WireState(JobState s);       // the state on cell/job/state
+std::string_view JobStateName(JobState s);  // records::JobStateName: "QUEUED", "WAITING", ...
 bool IsTerminal(JobState s);
 
 // A pallet visit handed to a station: run `programs` in order on pallet `pallet`.
@@ -240,7 +242,5 @@ class Scheduler {
  private:
   std::unique_ptr<Impl> impl_;
 };
-
-std::string IsoTime(std::int64_t ms);  // "2026-11-22T02:40:00Z"; "" for 0
 
 }  // namespace cell::scheduler
