@@ -35,7 +35,7 @@ records::Job ToRecord(const JobView& j, bool with_decisions) {
   r.cycle_s = j.cycle_s;
   r.op_index = j.op_index + 1;
   r.op_count = j.op_count;
-  r.decision_count = static_cast<std::uint32_t>(j.decisions.size());
+  r.decision_count = static_cast<std::uint32_t>(j.decision_count);
   if (with_decisions)
     for (const auto& d : j.decisions) r.decisions.push_back(ToRecord(d));
   return r;

@@ -21,6 +21,7 @@ JobView Scheduler::Impl::View(const JobRec& j, bool with_decisions) const {
   v.cycle_s = j.cycle;
   v.op_index = j.op;
   v.op_count = static_cast<int>(j.ops->size());
+  v.decision_count = static_cast<int>(j.decisions.size());
   if (with_decisions) {
     for (const auto& r : j.decisions) {
       Decision d;

@@ -700,6 +700,8 @@ TEST(Views, JsonShapesOfDesignSection6) {
   EXPECT_EQ(job["started"], "2026-11-18T11:06:40Z");
   EXPECT_EQ(job["cycle_s"], 95.5);
   EXPECT_FALSE(job.contains("decisions"));
+  // job ls asks for no decisions (Jobs(false)); each row still counts them.
+  EXPECT_EQ(ToJson(c.sched->Jobs(false).at(0), false)["decision_count"], 1);
   // The station row is the records module's (station ls and the dashboard print it); the scheduler's view
   // gives it the backlog and the online state it keeps.
   auto st = c.sched->Station("KT01").value();

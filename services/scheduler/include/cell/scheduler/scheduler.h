@@ -111,7 +111,8 @@ struct JobView {
   std::optional<double> cycle_s;  // sum of the stations' reported machine seconds
   int op_index = 0;
   int op_count = 0;
-  std::vector<Decision> decisions;
+  int decision_count = 0;           // all of the job's decisions, listed in `decisions` or not
+  std::vector<Decision> decisions;  // filled only when asked for (job ls leaves them out)
 };
 
 struct StationView {
