@@ -266,23 +266,23 @@ void KtRun::LinearMotion(const Words& words, const BlockCodes& k, const BlockMCo
   const bool exact = !mode_.contouring;
   if (k.probe) {
     ProbeMove(k, axis_mask, target, rapid, feed, fm);
-  } else if (mode_.obstruction_detection) [[unlikely]] {
-    if (b_moves && b_index_ && (axis_mask & (1u << kZ)) && std::fabs(target[kZ] - pos_[kZ]) > 1e-9) {
-      AxisArray first = target;  // the index order holds in G28 too: B (with X, Y), then Z
-      first[kZ] = pos_[kZ];
-      GuardedMove(axis_mask & ~(1u << kZ), first, rapid, feed, fm, exact, travel, travel_mask, motion_col);
-      GuardedMove(1u << kZ, target, rapid, feed, fm, exact, {}, 0, motion_col);
-    } else {
-      GuardedMove(axis_mask, target, rapid, feed, fm, exact, travel, travel_mask, motion_col);
-    }
-  } else if (b_moves && b_index_ && (axis_mask & (1u << kZ)) && std::fabs(target[kZ] - pos_[kZ]) > 1e-9) {
-    // Index B (with X, Y) first, then Z.
+    return;
+  }
+  // Under G28 every straight move is the guarded probe move (obstruction detection), else a plain move.
+  auto move = [&](uint32_t mask, const AxisArray& to, const AxisArray& tr, uint32_t tr_mask) {
+    if (mode_.obstruction_detection) [[unlikely]]
+      GuardedMove(mask, to, rapid, feed, fm, exact, tr, tr_mask, motion_col);
+    else
+      EmitMove(to, mask, rapid, feed, fm, exact, tr, tr_mask);
+  };
+  if (b_moves && b_index_ && (axis_mask & (1u << kZ)) && std::fabs(target[kZ] - pos_[kZ]) > 1e-9) {
+    // Index B (with X, Y) first, then Z; in G28 too.
     AxisArray first = target;
     first[kZ] = pos_[kZ];
-    EmitMove(first, axis_mask & ~(1u << kZ), rapid, feed, fm, exact, travel, travel_mask);
-    EmitMove(target, 1u << kZ, rapid, feed, fm, exact, {}, 0);
+    move(axis_mask & ~(1u << kZ), first, travel, travel_mask);
+    move(1u << kZ, target, {}, 0);
   } else {
-    EmitMove(target, axis_mask, rapid, feed, fm, exact, travel, travel_mask);
+    move(axis_mask, target, travel, travel_mask);
   }
 }
 
