@@ -254,6 +254,12 @@ TEST_F(Hardening, ProgramsForTheWrongControllerAreRefused) {
       << route.err;
   ExpectOneShortLine(route, "route define WRONG");
   EXPECT_NE(Ctl({"route", "show", "WRONG"}).code, 0);  // not defined
+  // Issue 39 item 5: a map naming a program the store does not hold is refused at `pallet set`, not later.
+  auto missing = Ctl({"pallet", "set", "6", "PUMP1", "NOPROG"});
+  EXPECT_EQ(missing.code, 1) << missing.err;
+  EXPECT_NE(missing.err.find("pallet 6: program 'NOPROG' not found"), std::string::npos) << missing.err;
+  ExpectOneShortLine(missing, "pallet set 6 NOPROG");
+  EXPECT_NE(Ctl({"pallet", "show", "6"}).code, 0);  // nothing mapped
   ASSERT_EQ(Ctl({"pallet", "set", "9", "PUMP1"}).code, 0);
   auto run = Ctl({"pallet", "run", "9", "--station", "OK01"});
   EXPECT_EQ(run.code, 1) << run.err;

@@ -549,7 +549,13 @@ void Scheduler::SetPalletMap(std::string_view key, int pallet, const std::vector
       throw Error(Errc::kInvalidArgument, fmt::format("pallet {}: a pallet map holds 1-75 programs, got {}",
                                                       pallet, programs.size()));
     }
-    for (const auto& p : programs) names::CheckProgram(p);
+    // A map naming a program the store does not hold is refused here, not at `pallet run` (issue 39 item 5).
+    for (const auto& p : programs) {
+      names::CheckProgram(p);
+      if (!m.programs.Lookup(p)) {
+        throw Error(Errc::kNotFound, fmt::format("pallet {}: program {} not found", pallet, names::Shown(p)));
+      }
+    }
     m.pallet_maps[pallet] = programs;
     m.dirty_pallets.insert(pallet);
     m.Remember(key, command, pallet);

@@ -472,6 +472,7 @@ TEST(Jobs, AnIdempotencyKeyBindsTheWholeCommand) {
 TEST(PalletMaps, OneToSeventyFivePrograms) {
   FakeCell c;
   std::vector<std::string> progs;
+  for (int i = 0; i < 76; ++i) c.Program("P" + std::to_string(i), {}, 10);
   for (int i = 0; i < 75; ++i) progs.push_back("P" + std::to_string(i));
   c.sched->SetPalletMap("m1", 12, progs);
   EXPECT_EQ(c.sched->PalletMap(12)->size(), 75u);
@@ -481,6 +482,23 @@ TEST(PalletMaps, OneToSeventyFivePrograms) {
   EXPECT_EQ(CodeOf([&] { c.sched->SetPalletMap("m4", 256, {"A"}); }), Errc::kInvalidArgument);
   EXPECT_EQ(c.sched->PalletMap(12)->size(), 75u);
   EXPECT_FALSE(c.sched->PalletMap(13));
+}
+
+// Issue 39 item 5: `pallet set 6 NOPROG` was accepted and refused only at `pallet run`. A map is refused
+// when the store does not hold one of its programs, and nothing is mapped.
+TEST(PalletMaps, AProgramTheStoreDoesNotHoldIsRefusedAtSet) {
+  FakeCell c;
+  c.Program("A", {}, 10);
+  try {
+    c.sched->SetPalletMap("m", 6, {"A", "NOPROG"});
+    ADD_FAILURE() << "a map naming a missing program was accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), Errc::kNotFound);
+    EXPECT_EQ(std::string(e.what()), "pallet 6: program 'NOPROG' not found");
+  }
+  EXPECT_FALSE(c.sched->PalletMap(6));
+  c.sched->SetPalletMap("m2", 6, {"A"});
+  EXPECT_EQ(c.sched->PalletMap(6)->size(), 1u);
 }
 
 TEST(PalletMaps, RunPalletOnAStation) {
