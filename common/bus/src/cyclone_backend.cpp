@@ -356,6 +356,34 @@ class CycloneBackend : public Backend {
   }
   std::string Name() const override { return "cyclonedds"; }
 
+  // The DCPSParticipant builtin topic holds one instance per participant alive on the domain, this one's
+  // included; the reader is made on first use (cellctl asks, services never do).
+  int RemoteParticipants() const override {
+    std::lock_guard lk(mu_);
+    if (participants_ == 0) {
+      participants_ = dds_create_reader(pp_, DDS_BUILTIN_TOPIC_DCPSPARTICIPANT, nullptr, nullptr);
+      if (participants_ < 0) {
+        participants_ = 0;
+        return -1;
+      }
+    }
+    dds_guid_t own{};
+    if (dds_get_guid(pp_, &own) != DDS_RETCODE_OK) return -1;
+    constexpr int kMax = 256;
+    void* samples[kMax] = {};
+    dds_sample_info_t infos[kMax];
+    const int n = dds_read_mask(participants_, samples, infos, kMax, kMax,
+                                DDS_ANY_SAMPLE_STATE | DDS_ANY_VIEW_STATE | DDS_ALIVE_INSTANCE_STATE);
+    if (n < 0) return -1;
+    int others = 0;
+    for (int i = 0; i < n; ++i) {
+      const auto* p = static_cast<const dds_builtintopic_participant_t*>(samples[i]);
+      if (infos[i].valid_data && std::memcmp(&p->key, &own, sizeof own) != 0) ++others;
+    }
+    dds_return_loan(participants_, samples, n);
+    return others;
+  }
+
   std::unique_ptr<RawWriter> CreateWriter(const std::string& topic, const TypeSupport& type,
                                           QosKind q) override {
     dds_entity_t t = TopicFor(topic, type);
@@ -393,7 +421,8 @@ class CycloneBackend : public Backend {
     Check(t, "Cyclone topic " + name);
     return t;
   }
-  std::mutex mu_;
+  mutable std::mutex mu_;
+  mutable dds_entity_t participants_ = 0;  // the DCPSParticipant reader, made on first use
   int domain_;
   std::string partition_;
   dds_entity_t pp_ = 0;

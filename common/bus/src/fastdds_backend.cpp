@@ -168,6 +168,19 @@ class WriterPartitions : public dds::DomainParticipantListener {
     const auto names = info.info.m_qos.m_partition.names();
     by_writer_[info.info.guid()] = names.size() == 1 ? names.front() : std::string();
   }
+  void on_participant_discovery(dds::DomainParticipant*, rtps::ParticipantDiscoveryInfo&& info) override {
+    using S = rtps::ParticipantDiscoveryInfo;
+    std::lock_guard lk(mu_);
+    if (info.status == S::DISCOVERED_PARTICIPANT) {
+      participants_.insert(info.info.m_guid.guidPrefix);
+    } else if (info.status == S::REMOVED_PARTICIPANT || info.status == S::DROPPED_PARTICIPANT) {
+      participants_.erase(info.info.m_guid.guidPrefix);
+    }
+  }
+  int Participants() const {
+    std::lock_guard lk(mu_);
+    return static_cast<int>(participants_.size());
+  }
   std::string Of(const rtps::InstanceHandle_t& publication) {
     const rtps::GUID_t g = rtps::iHandle2GUID(publication);
     std::lock_guard lk(mu_);
@@ -177,10 +190,11 @@ class WriterPartitions : public dds::DomainParticipantListener {
   }
 
  private:
-  std::mutex mu_;
+  mutable std::mutex mu_;
   std::string own_;
   rtps::GuidPrefix_t own_prefix_;
   std::map<rtps::GUID_t, std::string> by_writer_;
+  std::set<rtps::GuidPrefix_t> participants_;  // remote participants discovered and not lost
 };
 
 class FastReader : public RawReader, public dds::DataReaderListener {
@@ -286,6 +300,7 @@ class FastBackend : public Backend {
   }
 
   std::string Name() const override { return "fastdds"; }
+  int RemoteParticipants() const override { return writers_.Participants(); }
 
   std::unique_ptr<RawWriter> CreateWriter(const std::string& topic, const TypeSupport& type,
                                           QosKind q) override {

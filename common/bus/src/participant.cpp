@@ -112,6 +112,7 @@ bool WaitUntil(const std::function<bool()>& cond, Millis timeout) {
 
 Participant::Participant(const ParticipantOptions& opts) {
   domain_ = opts.domain ? *opts.domain : cell::config::Domain();
+  lone_means_down_ = opts.lone_means_down;
   vendor_ = opts.backend.empty() ? cell::config::DdsVendor().vendor : opts.backend;
   if (!cell::config::IsDdsVendor(vendor_))
     throw Error(Errc::kInvalidArgument,

@@ -16,13 +16,21 @@
 #include <fmt/format.h>
 
 #include "cell/bus/topics.h"
+#include "cell/config/config.h"
 #include "cell/error/error.h"
 #include "cell/names/names.h"
+#include "processes.h"
 
 namespace cellctl {
 
 bus::Participant& Context::Bus() {
-  if (!bus_) bus_ = std::make_unique<bus::Participant>("cellctl");
+  if (!bus_) {
+    bus::ParticipantOptions o = bus::Named("cellctl");
+    // A cell that is down is said so at once (issue 39 item 6), unless one of its services runs here: then
+    // discovery, however slow, is waited out.
+    o.lone_means_down = !LocalServiceMayRun(cell::config::Domain());
+    bus_ = std::make_unique<bus::Participant>(o);
+  }
   return *bus_;
 }
 

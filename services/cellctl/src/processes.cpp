@@ -8,10 +8,13 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <climits>
 #include <cstring>
 #include <fstream>
+#include <iterator>
+#include <optional>
 #include <thread>
 
 #include "cell/config/config.h"
@@ -85,6 +88,50 @@ RecordLock::RecordLock() {
 
 RecordLock::~RecordLock() {
   if (fd_ >= 0) close(fd_);  // releases the lock
+}
+
+namespace {
+
+// The domain in a NUL-separated environment block: CELL_DOMAIN's value, 101 (config::Domain's default)
+// without it, nullopt when it is not a number.
+std::optional<int> DomainIn(const std::string& environ) {
+  std::size_t at = 0;
+  while (at < environ.size()) {
+    std::size_t end = environ.find('\0', at);
+    if (end == std::string::npos) end = environ.size();
+    if (environ.compare(at, 12, "CELL_DOMAIN=") == 0) {
+      try {
+        return std::stoi(environ.substr(at + 12, end - at - 12));
+      } catch (const std::exception&) {
+        return std::nullopt;
+      }
+    }
+    at = end + 1;
+  }
+  return 101;
+}
+
+}  // namespace
+
+bool LocalServiceMayRun(int domain) {
+  // /proc/PID/comm holds the first 15 characters of the executable's name.
+  static const char* const kServices[] = {"cell-scheduler",  "cell-program-st", "cell-interprete",
+                                          "cell-axis-servo", "cell-inspection", "cell-dashboard"};
+  std::error_code ec;
+  for (const auto& entry : fs::directory_iterator("/proc", ec)) {
+    const std::string pid = entry.path().filename().string();
+    if (pid.empty() || pid.find_first_not_of("0123456789") != std::string::npos) continue;
+    std::string comm;
+    std::getline(std::ifstream(entry.path() / "comm"), comm);
+    if (std::none_of(std::begin(kServices), std::end(kServices), [&](const char* s) { return comm == s; }))
+      continue;
+    std::ifstream env(entry.path() / "environ", std::ios::binary);
+    if (!env) return true;  // another user's service: it may be on our domain
+    std::string block((std::istreambuf_iterator<char>(env)), std::istreambuf_iterator<char>());
+    const std::optional<int> d = DomainIn(block);
+    if (!d || *d == domain) return true;
+  }
+  return false;
 }
 
 bool IsRunning(const CellProcess& p) {

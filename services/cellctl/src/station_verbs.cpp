@@ -111,11 +111,23 @@ void AddStationLs(CLI::App& st, Context& ctx) {
       bool waiting = heard == cell::dashboard::Heard::kWaiting;
       if (live.Online("cell-scheduler") && !sched_seen) waiting = true;
       auto waited = std::chrono::steady_clock::now() - t0;
+      const bool lone = ctx.Bus().lone_means_down() && ctx.Bus().RemoteParticipants() == 0;
+      if (waited >= bus::kLoneWindow && lone) break;  // nothing on the domain
       if (!waiting &&
           (heard == cell::dashboard::Heard::kComplete || waited >= std::chrono::milliseconds(1500)))
         break;
       if (waited >= std::chrono::milliseconds(4000)) break;
       std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+    // A table of offline stations would say the cell runs without them (issue 39 item 6): without its
+    // scheduler and its program store there is no cell to list.
+    auto cell_up = [&] { return live.Online("cell-scheduler") || live.Online("cell-program-store"); };
+    if (!cell_up() && !(ctx.Bus().lone_means_down() && ctx.Bus().RemoteParticipants() == 0))
+      bus::WaitUntil(cell_up, bus::Millis(2000));
+    if (!cell_up()) {
+      throw Exit{1, fmt::format("no cell on DDS domain {}: neither the scheduler nor the program store runs "
+                                "(cellctl up starts the cell)",
+                                ctx.Bus().domain())};
     }
     nlohmann::json arr = nlohmann::json::array();
     for (auto& id : ids) {

@@ -74,6 +74,10 @@ class Backend {
                                                   QosKind qos) = 0;
   virtual std::unique_ptr<RawReader> CreateReader(const std::string& topic, const TypeSupport& type,
                                                   QosKind qos, RawCallback cb) = 0;
+  // Other participants this one has discovered on its domain and not lost, or -1 when the backend cannot
+  // tell. Zero shortly after joining means nothing else is on the domain: a client says "no cell" at once
+  // instead of waiting out the discovery bound (issue 39 item 6).
+  virtual int RemoteParticipants() const { return -1; }
 };
 
 // DDS Security (the builtin PKI-DH, Access-Permissions and AES-GCM-GMAC plugins): the identity's files as

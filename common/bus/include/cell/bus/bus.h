@@ -37,6 +37,10 @@ struct ParticipantOptions {
   // operator, "cell-dashboard" -> viewer).
   std::string identity;
   std::string security_dir;  // default: cell::security::SecurityDir()
+  // A client of this participant that finds no other participant on the domain within kLoneWindow reports
+  // its service absent at once (cellctl: a cell that is down is said so in under a second). Services leave
+  // it off: at a cell's start a process may be alone for a while and waits out discovery.
+  bool lone_means_down = false;
 };
 
 // Options naming the participant (and its vendor), everything else by default. (GCC 12 warns about the
@@ -83,6 +87,7 @@ class Participant {
   // The DDS Security identity it joined as; empty when unsecured (CELL_SECURITY off).
   const std::string& identity() const { return identity_; }
   int domain() const { return domain_; }
+  bool lone_means_down() const { return lone_means_down_; }
   const std::string& vendor() const { return vendor_; }  // "fastdds" or "cyclonedds"
   Backend& backend() { return *backend_; }
   void Post(std::function<void()> fn);
@@ -96,6 +101,11 @@ class Participant {
   // an injected backend, which cannot be made again.
   bool Rejoin();
   uint64_t rejoins() const { return rejoins_.load(); }
+  // Backend::RemoteParticipants (-1: cannot tell).
+  int RemoteParticipants() {
+    std::shared_lock lk(ep_mu_);
+    return backend_->RemoteParticipants();
+  }
 
  private:
   void Run();
@@ -103,6 +113,7 @@ class Participant {
   std::string id_;
   std::string identity_;
   int domain_;
+  bool lone_means_down_ = false;
   std::string vendor_;
   std::function<std::unique_ptr<Backend>()> make_backend_;  // empty for an injected backend
   std::unique_ptr<Backend> backend_;
@@ -354,6 +365,12 @@ void ThrowIfError(const Rep& rep) {
     throw Error(static_cast<Errc>(rep.hdr().code() - 1), rep.hdr().error().to_string());
 }
 
+// How long a client waits for any other participant before it concludes that nothing runs on the domain.
+// Fast DDS finds a running process in a median 80 ms, a third of single pairs in 0.6-1 s
+// (docs/architecture.md, "Discovery latency"); a cell is several processes, and one found is enough to wait
+// on.
+inline constexpr Millis kLoneWindow{800};
+
 // Request/reply over two command topics. Requests carry (client id, request id); the client
 // re-sends until answered, the server answers a duplicate from its reply cache, so a request
 // written before discovery completed is not lost and never runs twice.
@@ -412,10 +429,15 @@ class Client : public Rejoinable {
   // returned as is (see ThrowIfError).
   Rep Call(Req req, Millis timeout, Millis resend = Millis(250)) {
     auto deadline = std::chrono::steady_clock::now() + timeout;
-    // Discovery takes milliseconds (1 s across vendors); a server missing after 5 s is down.
-    if (!WaitForServer(std::min(timeout, Millis(5000))))
-      throw Error(Errc::kUnavailable,
-                  "no " + service_ + " service on DDS domain " + std::to_string(p_.domain()));
+    // Discovery takes milliseconds (1 s across vendors); a server missing after 5 s is down. When no other
+    // participant at all has answered after kLoneWindow, nothing runs on the domain: say so at once.
+    const Millis lone = p_.lone_means_down() ? std::min(timeout, kLoneWindow) : Millis(0);
+    if (!WaitForServer(lone)) {
+      const std::string none = "no " + service_ + " service on DDS domain " + std::to_string(p_.domain());
+      if (p_.lone_means_down() && p_.RemoteParticipants() == 0)
+        throw Error(Errc::kUnavailable, none + " (nothing else runs on the domain: is the cell up?)");
+      if (!WaitForServer(std::min(timeout, Millis(5000)) - lone)) throw Error(Errc::kUnavailable, none);
+    }
     uint64_t id = ++state_->next_id;
     req.hdr().client(p_.id());
     req.hdr().request_id(id);
