@@ -241,6 +241,22 @@ TEST_F(Hardening, AnIdempotencyKeyBindsTheWholeCommand) {
   EXPECT_EQ(Ctl({"program", "put", a}, k4).code, 0);
   EXPECT_EQ(Ctl({"program", "put", b}, k4).code, 1);
   EXPECT_NE(Ctl({"program", "show", "KEYB"}).code, 0);
+  // Issue 39 item 4: a 70 KB put (chunked) repeated under its key replays; it failed "already exists".
+  const std::map<std::string, std::string> k5{{"CELLCTL_IDEMPOTENCY_KEY", "s11"}};
+  std::string big = cell_.data_dir() + "/BIG70.apl";
+  {
+    std::ofstream out(big);
+    out << "%\n(NAM,BIG70)\n(UCY,1)\nN10 G71 G90 G01\n";
+    for (int i = 0; i < 3000; ++i) out << "N20 X" << (i % 100) << ". Y0 Z100. F2000.\n";
+    out << "N40 M30\n%\n";
+  }
+  ASSERT_GT(fs::file_size(big), 70000u);
+  auto put1 = Ctl({"program", "put", big}, k5);
+  ASSERT_EQ(put1.code, 0) << put1.err;
+  auto put2 = Ctl({"program", "put", big}, k5);
+  EXPECT_EQ(put2.code, 0) << put2.err;
+  EXPECT_EQ(put2.out, put1.out);
+  EXPECT_EQ(cell_.Json({"program", "show", "BIG70", "--json"})["revisions"].size(), 1u) << "stored twice";
 }
 
 // Items 2 and 3 against the services: the names the tests above refuse locally, refused by the scheduler and

@@ -260,6 +260,13 @@ std::optional<json> Replay(Database& db, std::string_view key, std::string_view 
   return json::parse(st.ColumnText(1));
 }
 
+bool KeyUsed(Database& db, std::string_view key) {
+  if (key.empty()) return false;
+  Statement st = db.Prepare("SELECT 1 FROM idempotency WHERE key = ?");
+  st.BindText(1, key);
+  return st.Step();
+}
+
 void Remember(Database& db, std::string_view key, std::string_view fingerprint, const json& result) {
   if (key.empty()) return;
   Statement st =
@@ -800,7 +807,10 @@ void ProgramStore::BeginPut(const std::string& stream_id, const PutRequest& head
     Transaction tx(db, Transaction::Mode::kDeferred);
     std::optional<Located> existing = Find(db, header.node, header.name, 0);
     if (existing) RefuseLocked(existing->info);
-    if (existing && !header.force) {
+    // A put retried under its idempotency key finds its own file: the commit replays the first result (or
+    // refuses a different request under the key), so "already exists" must not stop it here (issue 39 item 4:
+    // puts over one chunk failed the second time).
+    if (existing && !header.force && !KeyUsed(db, header.idempotency_key)) {
       Fail(Errc::kAlreadyExists,
            fmt::format("{} already exists (revision {}); use --force to store a new revision",
                        Quote(header.node, header.name), existing->info.head_revision));

@@ -677,6 +677,30 @@ TEST(ProgramStore, ChunkedPutIsAtomic) {
   EXPECT_EQ(StagedFiles(ps.database_path()), 0);
 }
 
+// Issue 39 item 4: a chunked put (over one chunk: cellctl's path above 30 KB) repeated under the same
+// idempotency key, as a supervisor retries after a crash, replays the first result; it failed "already
+// exists" at BeginPut. The same key with other content is refused; without a key, "already exists" stands.
+TEST(ProgramStore, AChunkedPutRetriedUnderItsKeyReplays) {
+  TempDir tmp;
+  ProgramStore ps(Options(tmp.path()));
+  auto chunked = [&](const std::string& stream, const std::string& key, const std::string& tail) {
+    ps.BeginPut(stream, Req("HOST", "BIG", "", false, key));
+    ps.PutChunk(stream, 0, "%\n(NAM,BIG)\n");
+    ps.PutChunk(stream, 1, "N10 G71\n" + tail + "N20 M30\n%\n");
+    return ps.CommitPut(stream);
+  };
+  const PutResult first = chunked("put-a", "big-1", "");
+  EXPECT_TRUE(first.created);
+  const PutResult again = chunked("put-b", "big-1", "");  // a new stream id: a new cellctl process
+  EXPECT_TRUE(again.replayed);
+  EXPECT_EQ(again.file.head_revision, first.file.head_revision);
+  EXPECT_EQ(ps.Show("HOST", "BIG", 0).revisions.size(), 1u);
+  ExpectError([&] { chunked("put-c", "big-1", "N15 G90\n"); }, Errc::kFailedPrecondition,
+              "already used for a different request");
+  ExpectError([&] { ps.BeginPut("put-d", Req("HOST", "BIG", "")); }, Errc::kAlreadyExists, "--force");
+  EXPECT_EQ(ps.Show("HOST", "BIG", 0).revisions.size(), 1u);
+}
+
 TEST(ProgramStore, BrokenStreamsLeaveTheStoreAsItWas) {
   TempDir tmp;
   std::string before;
