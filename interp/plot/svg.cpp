@@ -334,10 +334,9 @@ void Moves(std::string& out, const std::vector<Plot::Move>& moves, const View& v
   out += plunges;
 }
 
-// Probe end points (filled where the probe touched), the start, tool changes and indexing: labels at one
-// place are stacked.
-void Marks(std::string& out, const std::vector<Plot::Move>& moves, const std::vector<Plot::Label>& labels,
-           const P3& start, const View& v, const Frame& f) {
+// Probe end points (filled where the probe touched) and the start.
+void Marks(std::string& out, const std::vector<Plot::Move>& moves, const P3& start, const View& v,
+           const Frame& f) {
   for (const auto& m : moves) {
     if (m.kind != MoveKind::kProbe) continue;
     out += fmt::format(
@@ -349,16 +348,27 @@ void Marks(std::string& out, const std::vector<Plot::Move>& moves, const std::ve
       "<circle class=\"start\" cx=\"{:.2f}\" cy=\"{:.2f}\" r=\"5\" fill=\"none\" "
       "stroke=\"#27ae60\" stroke-width=\"2\"><title>start</title></circle>\n",
       f.X(start[v.h]), f.Y(start[v.v]));
+}
+
+// Tool changes and indexing where they happen; one off the view (a turret indexing far out) is held at the
+// view's edge in its direction, with an open mark. Labels at one place are stacked.
+void Labels(std::string& out, const std::vector<Plot::Label>& labels, const View& v, const Frame& f) {
   std::map<std::pair<long, long>, int> stacked;
   for (const auto& l : labels) {
-    const double x = f.X(l.at[v.h]), y = f.Y(l.at[v.v]);
+    const double x0 = f.X(l.at[v.h]), y0 = f.Y(l.at[v.v]);
+    const double x = std::clamp(x0, f.left + 6, f.left + f.width - 6);
+    const double y = std::clamp(y0, f.top + 12, f.top + f.height - 4);
+    const bool off = x != x0 || y != y0;
     const int n = stacked[{std::lround(x / 6), std::lround(y / 6)}]++;
     // Near the right edge the text goes to the left of its mark (about 7 px per character).
     const bool left = x + 6 + 7 * static_cast<double>(l.text.size()) > f.left + f.width;
+    // Near the top edge a stack grows downwards, not into the view's title.
+    const double ty = y < f.top + 48 ? y + 12 + 13 * n : y - 9 - 13 * n;
     out += fmt::format(
-        "<g class=\"label\"><path d=\"M {0:.2f} {1:.2f} l -4 -8 h 8 z\" fill=\"#222\"/>"
+        "<g class=\"label\"><path d=\"M {0:.2f} {1:.2f} l -4 -8 h 8 z\" fill=\"{6}\" stroke=\"#222\"/>"
         "<text x=\"{2:.2f}\" y=\"{3:.2f}\" fill=\"#222\" font-size=\"11\"{5}>{4}</text></g>\n",
-        x, y, left ? x - 6 : x + 6, y - 9 - 13 * n, Escape(l.text), left ? " text-anchor=\"end\"" : "");
+        x, y, left ? x - 6 : x + 6, ty, Escape(off ? l.text + " (off view)" : l.text),
+        left ? " text-anchor=\"end\"" : "", off ? "#fff" : "#222");
   }
 }
 
@@ -379,8 +389,9 @@ void DrawView(std::string& out, const View& v, const Frame& f, bool zoomed,
   Grid(out, v, f);
   out += fmt::format("<g clip-path=\"url(#clip-{})\">\n", v.name);
   Moves(out, moves, v, f);
-  Marks(out, moves, labels, start, v, f);
+  Marks(out, moves, start, v, f);
   out += "</g>\n";
+  Labels(out, labels, v, f);
   ScaleBar(out, f);
   out += "</g>\n";
 }
