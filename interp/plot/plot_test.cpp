@@ -106,8 +106,7 @@ TEST(Plot, OnePathElementPerMoveAndView) {
   // three times that away), so the label of the tool changed there is held at the view's edge.
   EXPECT_EQ(Count(svg, ">T1001</text>"), 1);
   EXPECT_EQ(Count(svg, ">T1001 (off view)</text>"), 1);
-  EXPECT_NE(svg.find("elevation XZ (X right, Z up) · fitted to the cutting moves: rapids run off"),
-            std::string::npos);
+  EXPECT_NE(svg.find("elevation XZ (X right, Z up) · fitted to the cuts"), std::string::npos);
   EXPECT_EQ(Count(svg, ">T1002</text>"), 2);
   EXPECT_NE(
       svg.find("5 moves drawn: 1 rapid, 2 feed, 1 arc, 0 thread, 1 probe (0 in cycles) · 2 tool changes"),

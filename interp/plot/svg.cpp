@@ -201,10 +201,10 @@ void Grid(std::string& out, const View& v, const Frame& f) {
         f.Y(0), f.left, f.left + f.width, v.lathe ? " stroke-dasharray=\"14 3 2 3\"" : "");
 }
 
-// A bar of a round length near 100 px in the area's lower right corner.
+// A bar of a round length (1, 2 or 5 x 10^n mm, 60-160 px) in the area's lower right corner.
 void ScaleBar(std::string& out, const Frame& f) {
   double len = NiceStep(100 / f.scale);
-  while (len * f.scale > 130) {
+  while (len * f.scale > 160) {
     // One step down the 1-2-5 sequence: 5 -> 2, 2 -> 1, 1 -> 0.5.
     const double mantissa = len / std::pow(10.0, std::floor(std::log10(len) + 1e-9));
     len *= mantissa > 3 ? 0.4 : 0.5;
@@ -378,7 +378,7 @@ void DrawView(std::string& out, const View& v, const Frame& f, bool zoomed,
   std::string title = v.lathe ? "half-section XZ (Z right, X as radius up, labelled Ø)"
                       : std::string(v.name) == "plan" ? "plan XY (X right, Y up)"
                                                       : "elevation XZ (X right, Z up)";
-  if (zoomed) title += " · fitted to the cutting moves: rapids run off";
+  if (zoomed) title += " · fitted to the cuts";  // rapids beyond are clipped (docs/plot.md)
   out += fmt::format("<text x=\"{:.2f}\" y=\"{:.2f}\" font-size=\"13\" font-weight=\"bold\">{}</text>\n",
                      f.left, f.top - 9, Escape(title));
   out += fmt::format(
