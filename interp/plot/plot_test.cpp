@@ -179,6 +179,9 @@ TEST(Plot, CycleMovesAreMarked) {
   const std::string svg = p.Svg();
   EXPECT_NE(svg.find("(3 in cycles)"), std::string::npos) << svg;
   EXPECT_EQ(Count(svg, "data-cycle=\"true\""), 4);  // rapids and feeds of the cycle, in two views
+  // The drill's feed along Z is seen end-on in the plan only: one plunge circle; the Y move of line 3 is
+  // seen end-on in the elevation, and is no plunge.
+  EXPECT_EQ(Count(svg, "<circle class=\"plunge\""), 1);
 }
 
 TEST(Plot, NoMotion) {

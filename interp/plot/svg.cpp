@@ -126,26 +126,27 @@ Box Extents(const View& v, const std::vector<Plot::Move>& moves, const P3& start
 
 // What a view fits to: its extents, except that along an axis where they reach over three times as far as the
 // cutting moves' (a lathe's turret indexing at X800 for a part of 60 mm), the cutting moves' with a margin;
-// the rapids out there then leave the view (it is clipped). `zoomed` says so.
+// the rapids out there then leave the view (it is clipped). `full` gets every move's extents.
 Box FitBox(const View& v, const std::vector<Plot::Move>& moves, const P3& start,
-           const std::vector<Plot::Label>& labels, bool& zoomed) {
-  Box full = Extents(v, moves, start, labels), cut;
+           const std::vector<Plot::Label>& labels, Box& full) {
+  full = Extents(v, moves, start, labels);
+  Box fit = full, cut;
   for (const auto& m : moves)
     if (m.kind != MoveKind::kRapid)
       for (const P3& p : Samples(m)) cut.Add(p[v.h], p[v.v]);
-  zoomed = false;
-  if (cut.Empty()) return full;
+  if (cut.Empty()) return fit;
   if (v.lathe) cut.Add(cut.lo_h, 0);
   const double rh = std::max(cut.hi_h - cut.lo_h, 10.0), rv = std::max(cut.hi_v - cut.lo_v, 10.0);
-  if (full.hi_h - full.lo_h > 3 * rh) {
-    full.lo_h = cut.lo_h - rh / 4, full.hi_h = cut.hi_h + rh / 4;
-    zoomed = true;
-  }
-  if (full.hi_v - full.lo_v > 3 * rv) {
-    full.lo_v = cut.lo_v - rv / 4, full.hi_v = cut.hi_v + rv / 4;
-    zoomed = true;
-  }
-  return full;
+  if (full.hi_h - full.lo_h > 3 * rh) fit.lo_h = cut.lo_h - rh / 4, fit.hi_h = cut.hi_h + rh / 4;
+  if (full.hi_v - full.lo_v > 3 * rv) fit.lo_v = cut.lo_v - rv / 4, fit.hi_v = cut.hi_v + rv / 4;
+  return fit;
+}
+
+// True when some of `full` lies outside the frame (the view's title then says it is fitted to the cuts).
+bool Clipped(const Box& full, const Frame& f) {
+  const double eps = 1e-6;
+  return full.lo_h < f.h0 - eps || full.hi_h > f.h0 + f.width / f.scale + eps || full.hi_v > f.v0 + eps ||
+         full.lo_v < f.v0 - f.height / f.scale - eps;
 }
 
 // The pixels per mm at which every view's extents (padded by 5 %) fit its area.
@@ -300,7 +301,8 @@ std::string MovePath(const Plot::Move& m, const View& v, const Frame& f) {
 // A cutting move seen end-on (a drill's or an end mill's plunge in the plan) would be invisible: a small
 // circle marks where it goes in.
 std::string Plunge(const Plot::Move& m, bool cycle, const View& v, const Frame& f) {
-  if (m.kind == MoveKind::kRapid) return "";
+  // Only along the spindle (Z) seen from above: a Y move seen end-on in the elevation is no plunge.
+  if (m.kind == MoveKind::kRapid || v.h == kZ || v.v == kZ) return "";
   const double dx = f.X(m.to[v.h]) - f.X(m.from[v.h]), dy = f.Y(m.to[v.v]) - f.Y(m.from[v.v]);
   if (std::hypot(dx, dy) >= 1 ||
       std::hypot(m.to[0] - m.from[0], m.to[1] - m.from[1], m.to[2] - m.from[2]) < 1e-6)
@@ -449,6 +451,8 @@ std::string Legend() {
   item(line(MoveKind::kProbe, false) +
            fmt::format("<circle cx=\"{:.0f}\" cy=\"0\" r=\"3.5\" fill=\"#e67e22\"/>", x + 28),
        "probe (filled: touched)");
+  item(fmt::format("<circle cx=\"{:.0f}\" cy=\"0\" r=\"3\" fill=\"none\" stroke=\"#1f4e9c\"/>", x + 14),
+       "plunge");
   item(fmt::format("<path d=\"M {:.0f} 4 l -4 -8 h 8 z\" fill=\"#222\"/>", x + 14), "tool change, index");
   item(fmt::format("<circle cx=\"{:.0f}\" cy=\"0\" r=\"5\" fill=\"none\" stroke=\"#27ae60\" "
                    "stroke-width=\"2\"/>",
@@ -475,21 +479,17 @@ std::string Plot::Svg() const {
   const std::vector<View> views =
       lathe ? std::vector<View>{{"half-section", kZ, kX, true}}
             : std::vector<View>{{"plan", kX, kY, false}, {"elevation", kX, kZ, false}};
-  std::vector<Box> boxes;
-  std::vector<bool> zoomed;
-  for (const View& v : views) {
-    bool z = false;
-    boxes.push_back(FitBox(v, moves_, start_, labels_, z));
-    zoomed.push_back(z);
-  }
+  std::vector<Box> boxes, full(views.size());
+  for (std::size_t i = 0; i < views.size(); ++i)
+    boxes.push_back(FitBox(views[i], moves_, start_, labels_, full[i]));
   const double n = static_cast<double>(views.size());
   const double view_width = (kWidth - 2 * kSide - kGap * (n - 1)) / n;
   const double width = view_width - kLeft - kRight, height = kHeight - kTop - kBottom - kAbove - kBelow;
   const double scale = FitScale(boxes, width, height);  // one scale for every view: X reads alike in both
   for (std::size_t i = 0; i < views.size(); ++i) {
     const double left = kSide + static_cast<double>(i) * (view_width + kGap) + kLeft;
-    DrawView(out, views[i], PlaceFrame(boxes[i], left, kTop + kAbove, width, height, scale), zoomed[i],
-             moves_, labels_, start_);
+    const Frame f = PlaceFrame(boxes[i], left, kTop + kAbove, width, height, scale);
+    DrawView(out, views[i], f, Clipped(full[i], f), moves_, labels_, start_);
   }
   out += Legend();
   return out + "</svg>\n";
