@@ -1,25 +1,28 @@
 // cell-interp: the offline front door of the interpreter (DESIGN §4 "Offline CLI contract").
 //   cell-interp --dialect D [--tools FILE] [--params FILE] [--lib DIR] [--probe-model FILE] [--listing]
-//   PROGRAM
+//   [--svg FILE] PROGRAM
+// --svg also draws the run's toolpath into FILE (docs/plot.md), also for a run that stops with an error.
 // Exit 0: ran to its end; 1: program error (diagnostic on stderr); 2: usage error or unimplemented dialect.
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
 
 #include "cell/error/error.h"
 #include "cell/interp/interp.h"
+#include "cell/interp/plot.h"
 #include "offline_environment.h"
 
 namespace {
 
 std::string UsageLine() {
   return "usage: cell-interp --dialect " + cell::interp::DialectChoices() +
-         " [--tools FILE] [--params FILE] [--lib DIR] [--probe-model FILE] [--listing] PROGRAM";
+         " [--tools FILE] [--params FILE] [--lib DIR] [--probe-model FILE] [--listing] [--svg FILE] PROGRAM";
 }
 
 int Usage(const std::string& why) {
@@ -39,10 +42,18 @@ bool ReadFile(const std::string& path, std::string& out) {
   return static_cast<bool>(in) || in.eof();
 }
 
+// The plot of the run so far into `path`; false when it cannot be written.
+bool WriteSvg(const std::string& path, const cell::interp::Plot& plot) {
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  out << plot.Svg();
+  out.close();
+  return static_cast<bool>(out);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string dialect, tools, params, lib, probe_model, program;
+  std::string dialect, tools, params, lib, probe_model, program, svg;
   bool listing = false;
   for (int i = 1; i < argc; ++i) {
     std::string a = argv[i];
@@ -64,6 +75,8 @@ int main(int argc, char** argv) {
       if (!value(lib)) return Usage("--lib needs a directory");
     } else if (a == "--probe-model") {
       if (!value(probe_model)) return Usage("--probe-model needs a file");
+    } else if (a == "--svg") {
+      if (!value(svg)) return Usage("--svg needs a file");
     } else if (a == "--listing") {
       listing = true;
     } else if (a.size() > 1 && a[0] == '-') {
@@ -164,22 +177,35 @@ int main(int argc, char** argv) {
     std::fwrite(out.data(), 1, out.size(), stdout);
     out.clear();
   };
+  // The plot draws in the station's view of the dialect's machine kind (a lathe's half-section).
+  std::optional<cell::interp::Plot> plot;
+  if (!svg.empty())
+    plot.emplace(cell::interp::PlotOptions{d->machine(), std::filesystem::path(program).filename().string() +
+                                                             " (" + std::string(d->name()) + ")"});
+  auto finish = [&](int code) {
+    flush();
+    std::fflush(stdout);
+    if (plot && !WriteSvg(svg, *plot)) {
+      std::cerr << "cell-interp: cannot write " << svg << "\n";
+      return 2;
+    }
+    return code;
+  };
   cell::interp::Step s;
   for (;;) {
     run->NextInto(s);
     if (s.kind == cell::interp::Step::kCanon) {
       cell::interp::AppendJsonLine(out, s.canon);
       out += '\n';
+      if (plot) plot->Add(s.canon);
       if (out.size() > (1 << 16)) flush();
     } else if (s.kind == cell::interp::Step::kEnd) {
-      flush();
-      std::fflush(stdout);
-      return 0;
+      return finish(0);
     } else {
-      flush();
-      std::fflush(stdout);
+      if (plot) plot->SetNote(s.diag.Format());
+      const int code = finish(1);
       std::cerr << s.diag.Format() << "\n";
-      return 1;
+      return code;
     }
   }
 }

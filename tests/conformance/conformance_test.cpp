@@ -15,6 +15,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
@@ -111,10 +112,9 @@ std::vector<std::string> Cases() {
 
 class Corpus : public ::testing::TestWithParam<std::string> {};
 
-TEST_P(Corpus, MatchesHandDerivedExpectation) {
-  const std::string name = GetParam();
+// The shell command that runs case `name` with its inputs, in the corpus folder, up to the program's name.
+std::string CaseCommand(const std::string& name) {
   const fs::path dir = CorpusDir();
-  ASSERT_TRUE(fs::exists(dir / (name + ".expected"))) << name << ": no .expected file";
   std::string cmd =
       "cd '" + dir.string() + "' && '" + Env("CELL_BIN_DIR") + "/cell-interp' --dialect " + Dialect();
   if (fs::exists(dir / (name + ".args"))) {
@@ -125,6 +125,14 @@ TEST_P(Corpus, MatchesHandDerivedExpectation) {
   if (fs::exists(dir / (name + ".tools"))) cmd += " --tools " + name + ".tools";
   if (fs::exists(dir / (name + ".lib"))) cmd += " --lib " + name + ".lib";
   if (fs::exists(dir / (name + ".probe"))) cmd += " --probe-model " + name + ".probe";
+  return cmd;
+}
+
+TEST_P(Corpus, MatchesHandDerivedExpectation) {
+  const std::string name = GetParam();
+  const fs::path dir = CorpusDir();
+  ASSERT_TRUE(fs::exists(dir / (name + ".expected"))) << name << ": no .expected file";
+  std::string cmd = CaseCommand(name);
   fs::path err =
       fs::temp_directory_path() / (Dialect() + "_conf_" + name + "_" + std::to_string(::getpid()) + ".err");
   cmd += " '" + name + "." + Dialect() + "' 2>'" + err.string() + "'";
@@ -203,6 +211,49 @@ TEST(CellInterpCli, UsageErrorsExitTwo) {
   EXPECT_EQ(RunCli("--dialect fanuc x.nc", nullptr), 2);
   EXPECT_EQ(RunCli("--dialect ktapl --bogus x.nc", nullptr), 2);
   EXPECT_EQ(RunCli("--dialect ktapl /nonexistent/program.nc", nullptr), 2);
+}
+
+int Count(const std::string& text, const std::string& what) {
+  int n = 0;
+  for (std::size_t at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
+  return n;
+}
+
+// cell-interp --svg (docs/plot.md) on one corpus program of the dialect: every motion op of the hand-derived
+// expectation but the first (it only says where the path starts) is one path element of its kind in each view
+// (a lathe's half-section; a machining centre's plan and elevation), and xmllint reads the page.
+TEST(CellInterpSvg, PlotsACorpusProgram) {
+  const std::map<std::string, std::pair<std::string, int>> kCase = {
+      {"ktapl", {"p2_9_01_bolt_hole_circle", 2}},
+      {"okuma", {"p8_lap_copy_turning_g86", 1}},
+      {"emco", {"e57_thread_hands", 1}},
+      {"balt", {"gtl_example_4", 2}}};
+  const auto it = kCase.find(Dialect());
+  ASSERT_NE(it, kCase.end()) << "no plot case for " << Dialect();
+  const auto& [name, views] = it->second;
+  const fs::path svg =
+      fs::temp_directory_path() / (Dialect() + "_plot_" + std::to_string(::getpid()) + ".svg");
+  const std::string cmd =
+      CaseCommand(name) + " --svg '" + svg.string() + "' '" + name + "." + Dialect() + "' >/dev/null";
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  const std::string page = Slurp(svg);
+  std::map<std::string, int> ops;
+  bool first = true;
+  for (const auto& line : Lines(Slurp(CorpusDir() / (name + ".expected")))) {
+    const std::string op = nlohmann::json::parse(line).value("op", "");
+    const std::map<std::string, std::string> kClass = {
+        {"rapid", "rapid"}, {"linear", "feed"}, {"arc", "arc"}, {"thread", "thread"}, {"probe", "probe"}};
+    if (!kClass.count(op)) continue;
+    if (!first) ++ops[kClass.at(op)];
+    first = false;
+  }
+  ASSERT_FALSE(ops.empty());
+  for (const char* kind : {"rapid", "feed", "arc", "thread", "probe"})
+    EXPECT_EQ(Count(page, std::string("<path class=\"") + kind + "\""), views * ops[kind]) << kind;
+  EXPECT_EQ(Count(page, "<g class=\"view\""), views);
+  EXPECT_EQ(page.find("<script"), std::string::npos);
+  EXPECT_EQ(std::system(("xmllint --noout --nonet '" + svg.string() + "'").c_str()), 0);
+  fs::remove(svg);
 }
 
 INSTANTIATE_TEST_SUITE_P(Dialect, Corpus, ::testing::ValuesIn(Cases()),

@@ -10,6 +10,7 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <sstream>
 #include <string>
 #include <thread>
 #include <tuple>
@@ -401,6 +402,55 @@ TEST_F(ProgramStoreTest, BadInputIsRefusedWithOneLineAndChangesNothing) {
   // Overwrite without --force, of a name that exists.
   Ok({"program", "put", f, "--name", "EXISTS"});
   ExpectRefused({"program", "put", f, "--name", "EXISTS"}, "--force");
+}
+
+// `program plot` (docs/plot.md) fetches a stored program, runs it through its dialect offline and draws it:
+// a turned corpus program in the lathe's half-section, from HOST by its dialect and from a station's
+// namespace with --station; a milled one in plan and elevation. Every arc op of the hand-derived expectation
+// is one arc element per view (the first motion op, not an arc in either, only says where the path starts).
+TEST_F(ProgramStoreTest, PlotDrawsAStoredProgramInItsMachinesView) {
+  const std::string corpus = cell::testing::SourceDir() + "/tests/conformance/";
+  auto arcs = [&](const std::string& expected) {
+    int n = 0;
+    for (std::istringstream in(cell::testing::ReadFile(corpus + expected)); !in.eof();) {
+      std::string line;
+      std::getline(in, line);
+      n += line.find("\"op\":\"arc\"") != std::string::npos;
+    }
+    return n;
+  };
+  auto count = [](const std::string& text, const std::string& what) {
+    int n = 0;
+    for (auto at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
+    return n;
+  };
+  const std::string turned = corpus + "okuma/p8_lap_copy_turning_g86.okuma";
+  Ok({"program", "put", turned, "--name", "LAP.MIN", "--dialect", "okuma"});
+  Ok({"program", "put", turned, "--name", "LAP.MIN", "--dialect", "okuma", "--node", "OK01"});
+  Ok({"program", "put", corpus + "balt/gtl_example_4.balt", "--name", "GTL4", "--dialect", "balt"});
+  const std::string svg = *dir_ + "/plot.svg";
+
+  Ok({"program", "plot", "LAP.MIN", "-o", svg});
+  std::string page = cell::testing::ReadFile(svg);
+  EXPECT_EQ(count(page, "data-view=\"half-section\""), 1);
+  EXPECT_EQ(count(page, "<path class=\"arc\""), arcs("okuma/p8_lap_copy_turning_g86.expected"));
+  EXPECT_NE(page.find("LAP.MIN (okuma, HOST)"), std::string::npos);
+
+  Ok({"program", "plot", "LAP.MIN", "--station", "OK01", "-o", svg});
+  page = cell::testing::ReadFile(svg);
+  EXPECT_NE(page.find("LAP.MIN (okuma, OK01, station OK01)"), std::string::npos);
+  EXPECT_EQ(count(page, "<path class=\"arc\""), arcs("okuma/p8_lap_copy_turning_g86.expected"));
+
+  Ok({"program", "plot", "GTL4", "-o", svg});
+  page = cell::testing::ReadFile(svg);
+  EXPECT_EQ(count(page, "<g class=\"view\""), 2);
+  EXPECT_EQ(count(page, "<path class=\"arc\""), 2 * arcs("balt/gtl_example_4.expected"));
+  EXPECT_EQ(RunCommand({"xmllint", "--noout", "--nonet", svg}).code, 0);
+
+  ExpectRefused({"program", "plot", "NO SUCH", "-o", svg}, "NO SUCH");
+  Ok({"program", "put", Write("notes.txt", "just words\n"), "--name", "NOTES", "--type", "data"});
+  ExpectRefused({"program", "plot", "NOTES", "-o", svg}, "no dialect");
+  fs::remove(svg);
 }
 
 TEST_F(ProgramStoreTest, TwentyMegabytesRoundTripInChunks) {

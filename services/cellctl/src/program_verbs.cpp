@@ -1,15 +1,20 @@
-// cellctl program put|get|show|rm|ls|cp|mv|protect|unprotect|import|export|memory
+// cellctl program put|get|show|plot|rm|ls|cp|mv|protect|unprotect|import|export|memory
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <optional>
 #include <sstream>
 
 #include "cell/config/config.h"
 #include "cell/interp/interp.h"
+#include "cell/interp/plot.h"
+#include "cell/interp/station_rules.h"
+#include "cell/machine/machine_config.h"
 #include "cell/names/names.h"
 #include "cell/program_store/client.h"
 #include "cell/program_store/memory_commands.h"
 #include "cell/program_store/metadata.h"
+#include "cell/tooltable/wire.h"
 #include "context.h"
 
 namespace cellctl {
@@ -89,7 +94,8 @@ class ClientMemory : public cell::program_store::MemoryBackend {
 
 // The options of every program verb: one invocation parses one verb.
 struct Opts {
-  std::string file, name, node = "HOST", from = "HOST", to = "HOST", dialect, type, out, pattern = "*", a, b;
+  std::string file, name, node = "HOST", from = "HOST", to = "HOST", dialect, type, out, pattern = "*", a, b,
+                          station;
   bool force = false;
   uint32_t revision = 0;
 };
@@ -173,6 +179,98 @@ void AddProgramShow(CLI::App& prog, Context& ctx, const OptsPtr& o) {
     for (auto& r : j["revisions"])
       std::cout << "  " << r["revision"] << "  " << r["created_at"].get<std::string>() << "  " << r["size"]
                 << " bytes  " << r["sha256"].get<std::string>().substr(0, 16) << "\n";
+  });
+}
+
+// What `program plot` runs: the program's text and where its subprograms are looked for, its dialect, and
+// with a station what that station would start it with.
+struct PlotRun {
+  std::vector<std::string> namespaces;  // the program's and its subprograms', in order
+  std::string found_in;
+  cell::interp::RunOptions opt;
+  cell::interp::MachineKind machine = cell::interp::MachineKind::kMachiningCentre;
+};
+
+// A station draws in its own machine's view ([machine] kind); a station file without one, in its dialect's.
+cell::interp::MachineKind StationMachine(const cell::config::StationConfig& st,
+                                         const cell::interp::Dialect& d) {
+  try {
+    const auto kind = cell::machine::LoadMachineConfig(st.file).kind;
+    return kind == cell::interp::MachineKindName(cell::interp::MachineKind::kLathe)
+               ? cell::interp::MachineKind::kLathe
+               : cell::interp::MachineKind::kMachiningCentre;
+  } catch (const cell::Error&) {
+    return d.machine();
+  }
+}
+
+// The station's tool table and kept variables as it publishes them (2 s), else its file's tools: a plot
+// never needs the station to be up.
+void StationMemory(Context& ctx, const cell::config::StationConfig& st, cell::interp::RunOptions& opt) {
+  opt.tools = cell::tooltable::ToolTable(st.tools);
+  if (auto t = ctx.Tools(st.id, bus::Millis(2000))) opt.tools = cell::tooltable::FromWire(*t);
+  if (auto v = ctx.Variables(st.id, bus::Millis(500)))
+    for (const auto& x : v->variables()) opt.variables[x.name().to_string()] = x.value();
+  opt.params = st.params;
+}
+
+PlotRun PreparePlot(Context& ctx, const Opts& o, bool node_given) {
+  PlotRun r;
+  std::optional<cell::config::StationConfig> st;
+  if (!o.station.empty()) st = cell::interp::LoadStation(o.station);
+  // As the station looks programs up: its namespace, then HOST (docs/station.md); --node names one.
+  r.namespaces =
+      st && !node_given ? std::vector<std::string>{st->id, "HOST"} : std::vector<std::string>{o.node};
+  for (const auto& ns : r.namespaces) {
+    if (auto text = ctx.Programs().Get(ns, o.name)) {
+      r.opt.program_text = std::move(*text);
+      r.found_in = ns;
+      break;
+    }
+  }
+  if (r.found_in.empty()) {
+    ctx.Programs().Show(r.namespaces.front(), o.name);  // the store's own reason, when it has one
+    throw Exit{1, "no program '" + o.name + "' in " + r.namespaces.front()};
+  }
+  std::string dialect =
+      st ? st->dialect : ctx.Programs().Show(r.found_in, o.name).value("dialect", std::string());
+  if (dialect.empty()) throw Exit{1, o.name + " has no dialect: not a program to plot (give --station)"};
+  const cell::interp::Dialect& d = cell::interp::DialectOrThrow(dialect);
+  r.opt.dialect = std::string(d.name());
+  r.opt.program_name = o.name;
+  r.machine = st ? StationMachine(*st, d) : d.machine();
+  if (st) StationMemory(ctx, *st, r.opt);
+  auto namespaces = r.namespaces;
+  r.opt.library = [&ctx, namespaces](const std::string& lib) -> std::optional<std::string> {
+    for (const auto& ns : namespaces)
+      if (auto text = ctx.Programs().Get(ns, lib)) return text;
+    return std::nullopt;
+  };
+  return r;
+}
+
+// The program run through its dialect offline (no machine: probes never touch, inputs are there at once)
+// and drawn; a run that stops with an error is drawn up to there and fails the verb.
+void AddProgramPlot(CLI::App& prog, Context& ctx, const OptsPtr& o) {
+  auto* plot = prog.add_subcommand("plot", "draw a program's toolpath as SVG (docs/plot.md)");
+  plot->add_option("NAME", o->name)->required();
+  auto* node =
+      plot->add_option("--node", o->node, "namespace (default HOST; with --station: its own, then HOST)");
+  plot->add_option("--station", o->station, "as this station runs it: its dialect, machine, tools, settings");
+  plot->add_option("-o,--output", o->out, "the SVG file to write")->required();
+  plot->callback([o, &ctx, node] {
+    CheckAddress(o->node, o->name);
+    if (!o->station.empty()) cell::names::CheckStation(o->station);
+    PlotRun r = PreparePlot(ctx, *o, node->count() > 0);
+    cell::interp::Plot plot({r.machine, o->name + " (" + r.opt.dialect + ", " + r.found_in +
+                                            (o->station.empty() ? "" : ", station " + o->station) + ")"});
+    auto run = cell::interp::StartRun(r.opt);
+    cell::interp::Step s;
+    for (run->NextInto(s); s.kind == cell::interp::Step::kCanon; run->NextInto(s)) plot.Add(s.canon);
+    if (s.kind == cell::interp::Step::kError) plot.SetNote(s.diag.Format());
+    WriteLocalFile(o->out, plot.Svg());
+    if (s.kind == cell::interp::Step::kError) throw Exit{1, s.diag.Format()};
+    std::cout << "wrote " << o->out << "\n";
   });
 }
 
@@ -339,6 +437,7 @@ void AddProgramVerbs(CLI::App& app, Context& ctx) {
   AddProgramPut(*prog, ctx, o);
   AddProgramGet(*prog, ctx, o);
   AddProgramShow(*prog, ctx, o);
+  AddProgramPlot(*prog, ctx, o);
   AddProgramRm(*prog, ctx, o);
   AddProgramLs(*prog, ctx, o);
   AddProgramCopyMove(*prog, ctx, o);
