@@ -353,6 +353,33 @@ TEST_F(Fms, InterpreterStoppedPastItsLeaseRejoinsAndTheStationGoesOn) {
   EXPECT_EQ(RunRecords(13).size(), 1u) << "the held run's record was not filed";
 }
 
+// (e2) kill -9 of a station's interpreter in the middle of a run: the job fails as documented (the station
+// went offline), and the restarted interpreter files the lost run's record, so there is one record per
+// dispatch, failed ones included (docs/inspection-writer.md; issue 39 item 7: there was none).
+TEST_F(Fms, InterpreterKilledMidRunLeavesOneFailedRunRecord) {
+  const std::string job = HeldMidRun("KILL2", 20, 15);
+  const pid_t interp = Pid("cell-interpreter/KT01");
+  ASSERT_GT(interp, 0);
+  ASSERT_EQ(kill(interp, SIGKILL), 0);
+  auto failed = WaitJob(job, [](const json& j) { return j["state"] == "FAILED"; });
+  EXPECT_NE(failed["reason"].get<std::string>().find("went offline while running pallet 15"),
+            std::string::npos)
+      << failed;
+  auto restart = Ctl({"restart", "cell-interpreter/KT01"});
+  ASSERT_EQ(restart.code, 0) << restart.err;
+  auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+  while (RunRecords(15).empty() && std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  auto recs = RunRecords(15);
+  ASSERT_EQ(recs.size(), 1u) << "the killed run left no record";
+  EXPECT_EQ(recs[0]["completed"], false);
+  EXPECT_EQ(recs[0]["reason"], "station restarted during the run");
+  EXPECT_EQ(recs[0]["station"], "KT01");
+  Resume("KT01");  // the panel's hold outlives the restart
+  ExpectCompleted(Operate("RKILL2", 16));
+  EXPECT_EQ(RunRecords(15).size(), 1u);
+}
+
 // (f) `job cancel` of a pallet in the middle of its run (held by the feed hold) stops it on the machine
 // as well: the job ends CANCELLED, the servo aborts the run, and the station takes the next pallet.
 TEST_F(Fms, CancelStopsARunningPalletOnTheMachine) {

@@ -122,17 +122,7 @@ void Station::Execute(const Dispatch& d) {
   end.reason = reason;
   end.machine_s = stream_.RunMachineSeconds();
   end.finished_ns = clock_.WallNs();
-  end.record = nlohmann::json{{"dispatch_id", d.dispatch_id},
-                              {"station", cfg_.id},
-                              {"job_id", d.job_id},
-                              {"pallet", d.pallet},
-                              {"programs", d.programs},
-                              {"completed", ok},
-                              {"reason", reason},
-                              {"started_ns", run.started_ns},
-                              {"finished_ns", end.finished_ns},
-                              {"machine_s", end.machine_s}}
-                   .dump();
+  end.record = RunRecord(d, cfg_.id, end, run.started_ns);
   db_.EndRun(end);
   if (ok) {
     spdlog::info("dispatch {} completed: {:.3f} machine seconds", d.dispatch_id, end.machine_s);

@@ -216,6 +216,10 @@ void Station::Recover() {
     end.end = RunState::kFailed;
     end.reason = "station restarted during the run";
     end.finished_ns = clock_.WallNs();
+    // One run record per dispatch, a lost run's too (issue 39 item 7: a killed interpreter left none).
+    const auto [started_ns, done] = db_.Progress(d.dispatch_id);
+    end.programs_done = done;
+    end.record = RunRecord(d, cfg_.id, end, started_ns);
     db_.EndRun(end);
     cell::RunStatus s;
     s.dispatch_id(d.dispatch_id);

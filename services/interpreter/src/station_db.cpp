@@ -189,6 +189,29 @@ int StationDb::Count(RunState state) {
   return static_cast<int>(q.ColumnInt64(0));
 }
 
+std::pair<std::int64_t, int> StationDb::Progress(std::int32_t dispatch_id) {
+  std::lock_guard lk(mu_);
+  auto q = db_.Prepare("SELECT started_ns, programs_done FROM runs WHERE dispatch_id=?");
+  q.BindInt64(1, dispatch_id);
+  if (!q.Step()) return {0, 0};
+  return {q.ColumnInt64(0), static_cast<int>(q.ColumnInt64(1))};
+}
+
+std::string RunRecord(const Dispatch& d, std::string_view station, const RunProgress& end,
+                      std::int64_t started_ns) {
+  return nlohmann::json{{"dispatch_id", d.dispatch_id},
+                        {"station", station},
+                        {"job_id", d.job_id},
+                        {"pallet", d.pallet},
+                        {"programs", d.programs},
+                        {"completed", end.end == RunState::kCompleted},
+                        {"reason", end.reason},
+                        {"started_ns", started_ns},
+                        {"finished_ns", end.finished_ns},
+                        {"machine_s", end.machine_s}}
+      .dump();
+}
+
 void StationDb::MarkActive(std::int32_t dispatch_id, std::int64_t started_ns) {
   std::lock_guard lk(mu_);
   auto u = db_.Prepare("UPDATE runs SET state='ACTIVE', started_ns=? WHERE dispatch_id=?");

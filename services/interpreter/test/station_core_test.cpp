@@ -357,6 +357,13 @@ TEST_F(StationCore, ACopyOfTheDatabaseAtAnyMomentOpensConsistent) {
     ASSERT_TRUE(last) << s;
     EXPECT_EQ(last->state(), cell::RUN_FAILED);
     EXPECT_EQ(last->reason(), "station restarted during the run");
+    // Issue 39 item 7: the lost run has its record too (one per dispatch), saying why it did not complete.
+    restarted.FlushOutbox();
+    ASSERT_EQ(io.records.size(), 1u) << s;
+    EXPECT_FALSE(io.records[0].run().completed());
+    EXPECT_EQ(io.records[0].run().reason(), "station restarted during the run");
+    EXPECT_EQ(io.records[0].run().dispatch_id(), 1);
+    EXPECT_GT(io.records[0].run().started_ns(), 0);
   }
   EXPECT_TRUE(saw_between);  // some copy was taken between the programs
 }

@@ -55,11 +55,13 @@ TEST_F(StationDbFixture, AVersion2DatabaseMigratesWithEverythingItHeld) {
   ASSERT_TRUE(io_.LastRun(3));
   EXPECT_EQ(io_.LastRun(3)->state(), cell::RUN_FAILED);
   EXPECT_FALSE(station_->RunNext());
-  // The record the old process could not hand over goes now.
+  // The record the old process could not hand over goes now, and the failed run's own (one per dispatch).
   station_->FlushOutbox();
-  ASSERT_EQ(io_.records.size(), 1u);
+  ASSERT_EQ(io_.records.size(), 2u);
   EXPECT_EQ(io_.records[0].run().dispatch_id(), 2);
   EXPECT_TRUE(io_.records[0].run().completed());
+  EXPECT_EQ(io_.records[1].run().dispatch_id(), 3);
+  EXPECT_FALSE(io_.records[1].run().completed());
   // A re-sent old dispatch is recognised.
   EXPECT_EQ(Dispatch(1, {"P"}).state(), cell::RUN_COMPLETED);
   // Programs run on it, starting from the migrated memory.

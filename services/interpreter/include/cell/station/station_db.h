@@ -63,6 +63,11 @@ struct RunProgress {
   std::string record;
 };
 
+// The run record the outbox hands to the inspection writer (JSON): one per dispatch that ended, completed or
+// not (docs/inspection-writer.md). `end` gives its state, reason, machine seconds and end time.
+std::string RunRecord(const Dispatch& d, std::string_view station, const RunProgress& end,
+                      std::int64_t started_ns);
+
 class StationDb {
  public:
   // Opens (creating) the file and migrates it to the current schema. Throws cell::Error.
@@ -89,6 +94,8 @@ class StationDb {
   std::vector<Dispatch> Runs(RunState state);
   int Count(RunState state);
   void MarkActive(std::int32_t dispatch_id, std::int64_t started_ns);
+  // When the run was marked active (0: never) and how many programs of its map it finished.
+  std::pair<std::int64_t, int> Progress(std::int32_t dispatch_id);
   // A run's end without memory changes (cancelled while queued, lost at a restart); a record, when given,
   // goes to the outbox in the same transaction.
   void EndRun(const RunProgress& run);
