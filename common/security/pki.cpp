@@ -6,14 +6,18 @@
 
 #include <cerrno>
 #include <chrono>
+#include <cstdlib>
 #include <cstring>
 #include <ctime>
 #include <fstream>
+#include <optional>
 #include <random>
 #include <sstream>
+#include <vector>
 
 #include "cell/config/config.h"
 #include "cell/error/error.h"
+#include "cell/security/permissions.h"
 #include "openssl.h"
 
 namespace cell::security {
@@ -310,20 +314,72 @@ IdentityFiles FindIdentityFiles(const fs::path& dir, std::string_view name) {
   return f;
 }
 
-std::string DiagnoseIdentity(const fs::path& ca, const fs::path& governance, const fs::path& certificate,
-                             const fs::path& permissions) {
+namespace {
+
+// openssl's output of `args` (which end in "-out"), through a private temporary file; nullopt when it fails.
+std::optional<std::string> OpensslOutput(const fs::path& openssl, std::vector<std::string> args) {
+  std::string dir = (fs::temp_directory_path() / "cell-diagnose-XXXXXX").string();
+  if (::mkdtemp(dir.data()) == nullptr) return std::nullopt;
+  const fs::path out = fs::path(dir) / "out";
+  args.push_back(out.string());
+  std::optional<std::string> text;
+  try {
+    detail::RunOpenssl(openssl, args);
+    std::ifstream in(out, std::ios::binary);
+    std::stringstream ss;
+    ss << in.rdbuf();
+    text = ss.str();
+  } catch (const Error&) {
+  }
+  std::error_code ec;
+  fs::remove_all(dir, ec);
+  return text;
+}
+
+std::string Trimmed(std::string s) {
+  while (!s.empty() && (s.back() == '\n' || s.back() == '\r' || s.back() == ' ')) s.pop_back();
+  return s;
+}
+
+// The certificate's own checks: issued by the CA, the identity's subject, the private key's pair.
+std::string DiagnoseCertificate(const fs::path& openssl, const std::string& identity, const fs::path& ca,
+                                const fs::path& certificate, const fs::path& key) {
+  const std::string cert = certificate.filename().string() + " (" + identity + ")";
+  try {
+    detail::RunOpenssl(openssl, {"verify", "-CAfile", ca.string(), certificate.string()});
+  } catch (const Error&) {
+    return cert + ": not a certificate issued by " + ca.string();
+  }
+  // A certificate swapped for another identity's verifies against the CA; its subject gives it away.
+  if (auto subject = OpensslOutput(openssl, {"x509", "-in", certificate.string(), "-noout", "-subject",
+                                             "-nameopt", "RFC2253", "-out"})) {
+    std::string got = Trimmed(*subject);
+    if (got.rfind("subject=", 0) == 0) got = got.substr(8);
+    if (!identity.empty() && got != SubjectName(identity))
+      return fmt::format(
+          "{}: the certificate of {}, not of {} (a certificate swapped for another's: copy the "
+          "identity's own files back, or `cellctl pki init` issues them again)",
+          cert, got, identity);
+  }
+  auto cert_key = OpensslOutput(openssl, {"x509", "-in", certificate.string(), "-noout", "-pubkey", "-out"});
+  auto own_key = OpensslOutput(openssl, {"pkey", "-in", key.string(), "-pubout", "-out"});
+  if (cert_key && own_key && *cert_key != *own_key)
+    return fmt::format("{}: {} is not the private key of this certificate", cert, key.string());
+  return "";
+}
+
+}  // namespace
+
+std::string DiagnoseIdentity(const std::string& identity, const fs::path& ca, const fs::path& governance,
+                             const fs::path& certificate, const fs::path& key, const fs::path& permissions) {
   fs::path openssl;
   try {
     openssl = detail::FindProgram("openssl");
   } catch (const Error&) {
     return "";
   }
-  try {
-    detail::RunOpenssl(openssl, {"verify", "-CAfile", ca.string(), certificate.string()});
-  } catch (const Error&) {
-    return certificate.filename().string() + " (" + certificate.parent_path().filename().string() +
-           "): not a certificate issued by " + ca.string();
-  }
+  if (std::string why = DiagnoseCertificate(openssl, identity, ca, certificate, key); !why.empty())
+    return why;
   for (const fs::path& doc : {governance, permissions}) {
     try {
       detail::RunOpenssl(openssl, {"smime", "-verify", "-text", "-in", doc.string(), "-CAfile", ca.string(),

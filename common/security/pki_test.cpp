@@ -128,6 +128,28 @@ TEST_F(Pki, CertificatesAndSignaturesVerifyAgainstTheCaAndNoOther) {
   EXPECT_THROW(VerifiedText(p7s, ca), Error);
 }
 
+// Issue 39 item 9: a station's certificate swapped for another's verifies against the CA, so the stack's
+// refusal said only "cannot create a DDS participant"; the diagnosis names the identity and what is wrong.
+TEST_F(Pki, DiagnoseNamesASwappedCertificateAndAForeignKey) {
+  InitPki(opts_);
+  const fs::path ca = opts_.dir / "ca.pem", gov = opts_.dir / "governance.p7s";
+  auto diagnose = [&](const std::string& id) {
+    return DiagnoseIdentity(id, ca, gov, Id(id) / "cert.pem", Id(id) / "key.pem", Id(id) / "permissions.p7s");
+  };
+  EXPECT_EQ(diagnose("interpreter-KT01"), "");  // the control: its own files
+  fs::copy_file(Id("axis-servo-KT01") / "cert.pem", Id("interpreter-KT01") / "cert.pem",
+                fs::copy_options::overwrite_existing);
+  EXPECT_EQ(
+      diagnose("interpreter-KT01"),
+      "cert.pem (interpreter-KT01): the certificate of " + SubjectName("axis-servo-KT01") +
+          ", not of interpreter-KT01 (a certificate swapped for another's: copy the identity's own files "
+          "back, or `cellctl pki init` issues them again)");
+  fs::copy_file(Id("axis-servo-KT01") / "key.pem", Id("viewer") / "key.pem",
+                fs::copy_options::overwrite_existing);
+  EXPECT_EQ(diagnose("viewer"), "cert.pem (viewer): " + (Id("viewer") / "key.pem").string() +
+                                    " is not the private key of this certificate");
+}
+
 TEST_F(Pki, ARerunKeepsEveryKeyAndAddsNewStations) {
   InitPki(opts_);
   const std::string ca_key = Read(opts_.dir / "ca.key"), key = Read(Id("interpreter-KT01") / "key.pem");

@@ -113,6 +113,26 @@ TEST_F(SecureCell, AnIdentityThatMayNotReadIsRefusedInOneLine) {
   EXPECT_EQ(ls.err.find('\n'), ls.err.size() - 1) << "one line: " << ls.err;
 }
 
+// Issue 39 item 9: a certificate swapped for another identity's (it still verifies against the cell's CA) was
+// refused with "cannot create a DDS participant (Fast DDS's log says why)"; the one line names the identity
+// and the reason.
+TEST_F(SecureCell, ASwappedCertificateIsNamedInTheRefusal) {
+  const std::filesystem::path ids = std::filesystem::path(cell_.data_dir()) / "security" / "identities";
+  ASSERT_TRUE(std::filesystem::exists(ids / "operator" / "cert.pem"));
+  const std::string own = ReadFile((ids / "operator" / "cert.pem").string());
+  std::filesystem::copy_file(ids / "viewer" / "cert.pem", ids / "operator" / "cert.pem",
+                             std::filesystem::copy_options::overwrite_existing);
+  auto r = As("operator", {"job", "ls"});
+  std::ofstream(ids / "operator" / "cert.pem", std::ios::trunc) << own;  // cellctl's identity, restored
+  EXPECT_EQ(r.code, 1) << r.out << r.err;
+  EXPECT_NE(r.err.find("DDS Security refused identity 'operator'"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("cert.pem (operator): the certificate of CN=viewer,O=cell, not of operator"),
+            std::string::npos)
+      << r.err;
+  EXPECT_EQ(r.err.find('\n'), r.err.size() - 1) << "one line: " << r.err;
+  EXPECT_EQ(As("operator", {"job", "ls", "--json"}).code, 0);  // the control: its own certificate again
+}
+
 TEST_F(SecureCell, AnUnsecuredCellctlFindsNobody) {
   auto secured = As("", {"job", "ls", "--json"});
   EXPECT_EQ(secured.code, 0) << secured.err;  // control

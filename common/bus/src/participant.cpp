@@ -137,8 +137,9 @@ Participant::Participant(const ParticipantOptions& opts) {
   } catch (const Error& e) {
     if (bo.security.identity.empty()) throw;
     // The stack says little (Fast DDS logs, Cyclone returns an error code): check the documents ourselves.
-    const std::string why = cell::security::DiagnoseIdentity(
-        bo.security.ca, bo.security.governance, bo.security.certificate, bo.security.permissions);
+    const std::string why =
+        cell::security::DiagnoseIdentity(bo.security.identity, bo.security.ca, bo.security.governance,
+                                         bo.security.certificate, bo.security.key, bo.security.permissions);
     throw Error(Errc::kPermissionDenied,
                 fmt::format("DDS Security refused identity '{}' ({}): {}", bo.security.identity,
                             std::filesystem::path(bo.security.ca).parent_path().string(),

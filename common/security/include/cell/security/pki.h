@@ -70,11 +70,14 @@ struct IdentityFiles {
 // name that is no identity (ParseIdentity), kNotFound naming the first missing file.
 IdentityFiles FindIdentityFiles(const std::filesystem::path& dir, std::string_view name);
 
-// Why a DDS stack may have refused these files, checked with openssl: "" when the certificate verifies
-// against the CA and both documents carry a valid signature by it, else a one-line reason naming the file
-// ("permissions.p7s: its signature does not verify against ca.pem"). "" too when openssl cannot be run.
-std::string DiagnoseIdentity(const std::filesystem::path& ca, const std::filesystem::path& governance,
-                             const std::filesystem::path& certificate,
+// Why a DDS stack may have refused identity `identity`'s files, checked with openssl: "" when the certificate
+// verifies against the CA, is the identity's own (its subject is SubjectName(identity), the name its grant
+// carries), matches the private key, and both documents carry a valid signature by the CA; else a one-line
+// reason naming the file ("cert.pem (interpreter-KT01): the certificate of CN=interpreter-KT02,O=cell, not of
+// interpreter-KT01"). "" too when openssl cannot be run.
+std::string DiagnoseIdentity(const std::string& identity, const std::filesystem::path& ca,
+                             const std::filesystem::path& governance,
+                             const std::filesystem::path& certificate, const std::filesystem::path& key,
                              const std::filesystem::path& permissions);
 
 }  // namespace cell::security
