@@ -305,8 +305,9 @@ IdentityFiles FindIdentityFiles(const fs::path& dir, std::string_view name) {
                     "viewer, interpreter-<station>, axis-servo-<station>)",
                     name));
   const fs::path d = dir / "identities" / std::string(name);
-  IdentityFiles f{dir / "ca.pem", dir / "governance.p7s", d / "cert.pem", d / "key.pem",
-                  d / "permissions.p7s"};
+  IdentityFiles f{dir / "ca.pem",        dir / "governance.p7s",
+                  d / "cert.pem",        d / "key.pem",
+                  d / "permissions.p7s", Exists(dir / "crl.pem") ? dir / "crl.pem" : fs::path()};
   for (const fs::path* p : {&f.ca, &f.governance, &f.certificate, &f.key, &f.permissions})
     if (!Exists(*p))
       throw Error(Errc::kNotFound,
@@ -343,12 +344,20 @@ std::string Trimmed(std::string s) {
 
 // The certificate's own checks: issued by the CA, the identity's subject, the private key's pair.
 std::string DiagnoseCertificate(const fs::path& openssl, const std::string& identity, const fs::path& ca,
-                                const fs::path& certificate, const fs::path& key) {
+                                const fs::path& certificate, const fs::path& key, const fs::path& crl) {
   const std::string cert = certificate.filename().string() + " (" + identity + ")";
   try {
     detail::RunOpenssl(openssl, {"verify", "-CAfile", ca.string(), certificate.string()});
   } catch (const Error&) {
     return cert + ": not a certificate issued by " + ca.string();
+  }
+  if (!crl.empty()) {
+    try {
+      detail::RunOpenssl(openssl, {"verify", "-crl_check", "-CRLfile", crl.string(), "-CAfile", ca.string(),
+                                   certificate.string()});
+    } catch (const Error&) {
+      return fmt::format("{}: revoked ({} lists it)", cert, crl.string());
+    }
   }
   // A certificate swapped for another identity's verifies against the CA; its subject gives it away.
   if (auto subject = OpensslOutput(openssl, {"x509", "-in", certificate.string(), "-noout", "-subject",
@@ -370,15 +379,50 @@ std::string DiagnoseCertificate(const fs::path& openssl, const std::string& iden
 
 }  // namespace
 
+std::string RevokeIdentity(const fs::path& dir, std::string_view name, const std::string& openssl_name) {
+  const fs::path cert = dir / "identities" / std::string(name) / "cert.pem";
+  const fs::path ca = dir / "ca.pem", ca_key = dir / "ca.key";
+  for (const fs::path* p : {&cert, &ca, &ca_key})
+    if (!Exists(*p))
+      throw Error(Errc::kNotFound, fmt::format("cannot revoke {}: {} is missing", name, p->string()));
+  const fs::path openssl = detail::FindProgram(openssl_name);
+  const auto serial = OpensslOutput(openssl, {"x509", "-in", cert.string(), "-noout", "-serial", "-out"});
+  if (!serial) throw Error(Errc::kInvalidArgument, fmt::format("cannot read {}", cert.string()));
+  // openssl ca keeps revoked serials in a text database beside the CA; the CRL is signed from it.
+  const fs::path index = dir / "crl-index.txt", cnf = dir / "crl.cnf";
+  if (!Exists(index)) std::ofstream(index).close();
+  std::ofstream(cnf, std::ios::trunc)
+      << "[ca]\ndefault_ca = cell\n[cell]\ndatabase = " << index.string()
+      << "\ndefault_md = sha256\ndefault_crl_days = 3650\nunique_subject = no\n";
+  try {
+    detail::RunOpenssl(openssl, {"ca", "-config", cnf.string(), "-revoke", cert.string(), "-keyfile",
+                                 ca_key.string(), "-cert", ca.string()});
+  } catch (const Error& e) {
+    // Revoked before: openssl says so and changes nothing; the CRL is signed again below all the same.
+    if (std::string(e.what()).find("lready revoked") == std::string::npos) throw;
+  }
+  const fs::path staged = dir / "crl.pem.new";
+  detail::RunOpenssl(openssl, {"ca", "-config", cnf.string(), "-gencrl", "-keyfile", ca_key.string(), "-cert",
+                               ca.string(), "-out", staged.string()});
+  // Public like ca.pem: every process of the cell reads it.
+  fs::permissions(staged, fs::perms::owner_read | fs::perms::owner_write | fs::perms::group_read |
+                              fs::perms::others_read);
+  fs::rename(staged, dir / "crl.pem");
+  std::string text = Trimmed(*serial);
+  if (text.rfind("serial=", 0) == 0) text = text.substr(7);
+  return text;
+}
+
 std::string DiagnoseIdentity(const std::string& identity, const fs::path& ca, const fs::path& governance,
-                             const fs::path& certificate, const fs::path& key, const fs::path& permissions) {
+                             const fs::path& certificate, const fs::path& key, const fs::path& permissions,
+                             const fs::path& crl) {
   fs::path openssl;
   try {
     openssl = detail::FindProgram("openssl");
   } catch (const Error&) {
     return "";
   }
-  if (std::string why = DiagnoseCertificate(openssl, identity, ca, certificate, key); !why.empty())
+  if (std::string why = DiagnoseCertificate(openssl, identity, ca, certificate, key, crl); !why.empty())
     return why;
   for (const fs::path& doc : {governance, permissions}) {
     try {

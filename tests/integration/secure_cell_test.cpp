@@ -133,6 +133,26 @@ TEST_F(SecureCell, ASwappedCertificateIsNamedInTheRefusal) {
   EXPECT_EQ(As("operator", {"job", "ls", "--json"}).code, 0);  // the control: its own certificate again
 }
 
+// Issue 39 item 8: one identity revoked without reissuing the PKI (`cellctl pki revoke`, a CRL both stacks
+// read): it can no longer join (one line naming it and the CRL), and the others keep working.
+TEST_F(SecureCell, ARevokedIdentityIsRefusedAndTheOthersKeepWorking) {
+  auto before = As("interpreter-KT01", {"station", "ls"});  // joins; its grant does not cover station ls
+  EXPECT_NE(before.err.find("may not subscribe to"), std::string::npos) << before.err;
+  auto revoke = As("", {"pki", "revoke", "interpreter-KT01"});
+  ASSERT_EQ(revoke.code, 0) << revoke.err;
+  EXPECT_NE(revoke.out.find("revoked interpreter-KT01"), std::string::npos) << revoke.out;
+  auto after = As("interpreter-KT01", {"station", "ls"});
+  EXPECT_EQ(after.code, 1) << after.out << after.err;
+  EXPECT_NE(after.err.find("DDS Security refused identity 'interpreter-KT01'"), std::string::npos)
+      << after.err;
+  EXPECT_NE(after.err.find("cert.pem (interpreter-KT01): revoked"), std::string::npos) << after.err;
+  EXPECT_EQ(after.err.find('\n'), after.err.size() - 1) << "one line: " << after.err;
+  // The others, started after the revocation (they load the CRL too), still work with the running cell.
+  auto ls = As("", {"job", "ls", "--json"});
+  EXPECT_EQ(ls.code, 0) << ls.err;
+  EXPECT_EQ(As("viewer", {"station", "ls", "--json"}).code, 0);
+}
+
 TEST_F(SecureCell, AnUnsecuredCellctlFindsNobody) {
   auto secured = As("", {"job", "ls", "--json"});
   EXPECT_EQ(secured.code, 0) << secured.err;  // control

@@ -305,6 +305,8 @@ void Secure(const SecurityFiles& f, dds_qos_t* qos) {
   dds_qset_prop(qos, "dds.sec.auth.identity_ca", file(f.ca).c_str());
   dds_qset_prop(qos, "dds.sec.auth.identity_certificate", file(f.certificate).c_str());
   dds_qset_prop(qos, "dds.sec.auth.private_key", file(f.key).c_str());
+  // Cyclone's own property for a CRL (0.10: org.eclipse.cyclonedds.sec.auth.crl).
+  if (!f.crl.empty()) dds_qset_prop(qos, "org.eclipse.cyclonedds.sec.auth.crl", file(f.crl).c_str());
   dds_qset_prop(qos, "dds.sec.access.permissions_ca", file(f.ca).c_str());
   dds_qset_prop(qos, "dds.sec.access.governance", file(f.governance).c_str());
   dds_qset_prop(qos, "dds.sec.access.permissions", file(f.permissions).c_str());

@@ -432,6 +432,7 @@ class FastBackend : public Backend {
     props.emplace_back("dds.sec.auth.builtin.PKI-DH.identity_ca", file(f.ca));
     props.emplace_back("dds.sec.auth.builtin.PKI-DH.identity_certificate", file(f.certificate));
     props.emplace_back("dds.sec.auth.builtin.PKI-DH.private_key", file(f.key));
+    if (!f.crl.empty()) props.emplace_back("dds.sec.auth.builtin.PKI-DH.identity_crl", file(f.crl));
     props.emplace_back("dds.sec.access.plugin", "builtin.Access-Permissions");
     props.emplace_back("dds.sec.access.builtin.Access-Permissions.permissions_ca", file(f.ca));
     props.emplace_back("dds.sec.access.builtin.Access-Permissions.governance", file(f.governance));

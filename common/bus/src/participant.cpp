@@ -92,8 +92,8 @@ SecurityFiles SecurityFor(const ParticipantOptions& opts) {
       opts.security_dir.empty() ? cell::security::SecurityDir() : std::filesystem::path(opts.security_dir);
   try {
     const auto f = cell::security::FindIdentityFiles(dir, identity);
-    return {identity,       f.ca.string(),         f.governance.string(), f.certificate.string(),
-            f.key.string(), f.permissions.string()};
+    return {identity,       f.ca.string(),          f.governance.string(), f.certificate.string(),
+            f.key.string(), f.permissions.string(), f.crl.string()};
   } catch (const Error& e) {
     throw Error(e.code(), "CELL_SECURITY=on: " + std::string(e.what()));
   }
@@ -137,9 +137,9 @@ Participant::Participant(const ParticipantOptions& opts) {
   } catch (const Error& e) {
     if (bo.security.identity.empty()) throw;
     // The stack says little (Fast DDS logs, Cyclone returns an error code): check the documents ourselves.
-    const std::string why =
-        cell::security::DiagnoseIdentity(bo.security.identity, bo.security.ca, bo.security.governance,
-                                         bo.security.certificate, bo.security.key, bo.security.permissions);
+    const std::string why = cell::security::DiagnoseIdentity(
+        bo.security.identity, bo.security.ca, bo.security.governance, bo.security.certificate,
+        bo.security.key, bo.security.permissions, bo.security.crl);
     throw Error(Errc::kPermissionDenied,
                 fmt::format("DDS Security refused identity '{}' ({}): {}", bo.security.identity,
                             std::filesystem::path(bo.security.ca).parent_path().string(),

@@ -1,4 +1,4 @@
-// cellctl pki init: the cell's CA, identities and signed documents (docs/security.md). No bus.
+// cellctl pki init|revoke: the cell's CA, identities and signed documents (docs/security.md). No bus.
 #include <algorithm>
 
 #include "cell/config/config.h"
@@ -30,6 +30,7 @@ void AddPkiVerbs(CLI::App& app, Context&) {
     std::string dir;
     bool force = false;
     std::vector<std::string> stations;
+    std::string name;
   };
   auto o = std::make_shared<Opts>();
   auto* pki =
@@ -55,6 +56,23 @@ void AddPkiVerbs(CLI::App& app, Context&) {
     for (const auto& [name, outcome] : r.identities)
       std::cout << name << ": " << cell::security::OutcomeName(outcome) << "\n";
     std::cout << "pki in " << po.dir.string() << " (" << r.identities.size() << " identities)\n";
+  });
+
+  // Issue 39 item 8: one identity out, the rest of the PKI kept.
+  auto* revoke = pki->add_subcommand(
+      "revoke",
+      "revoke one identity's certificate (crl.pem, read by every process at its start): it can no longer "
+      "join the cell, nor is it accepted by processes started afterwards");
+  revoke->add_option("NAME", o->name, "the identity (interpreter-KT02, viewer, ...)")->required();
+  revoke->add_option("--dir", o->dir, "the PKI (default: where the cell's processes find it)");
+  revoke->callback([o] {
+    const std::filesystem::path dir =
+        o->dir.empty() ? cell::security::SecurityDir() : std::filesystem::path(o->dir);
+    if (!cell::security::ParseIdentity(o->name))
+      throw Exit{2, "'" + o->name + "' is no cell identity (docs/security.md)"};
+    const std::string serial = cell::security::RevokeIdentity(dir, o->name);
+    std::cout << "revoked " << o->name << " (serial " << serial << "): " << (dir / "crl.pem").string()
+              << "; restart the cell's processes to apply it to those already running\n";
   });
 }
 

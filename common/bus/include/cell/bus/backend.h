@@ -86,6 +86,7 @@ struct SecurityFiles {
   std::string identity;  // "scheduler", "interpreter-KT01": named in messages
   std::string ca;        // identity CA and permissions CA
   std::string governance, certificate, key, permissions;  // signed documents: *.p7s
+  std::string crl;                                        // the CA's certificate revocation list; empty: none
 };
 
 struct BackendOptions {

@@ -64,11 +64,20 @@ struct IdentityFiles {
   std::filesystem::path certificate;  // identities/<name>/cert.pem
   std::filesystem::path key;          // identities/<name>/key.pem
   std::filesystem::path permissions;  // identities/<name>/permissions.p7s
+  std::filesystem::path crl;          // crl.pem, the CA's revocation list; empty when none was made
 };
 
 // The files of identity `name` in `dir`, each checked to exist. Throws cell::Error: kInvalidArgument for a
 // name that is no identity (ParseIdentity), kNotFound naming the first missing file.
 IdentityFiles FindIdentityFiles(const std::filesystem::path& dir, std::string_view name);
+
+// Revokes identity `name`'s certificate in the PKI at `dir` (which holds the CA's key): its serial joins the
+// CA's revocation database (crl-index.txt) and crl.pem is signed again, listing every revoked certificate.
+// Every participant started afterwards loads crl.pem: the revoked identity cannot join, nor is it accepted by
+// the others (their authentication checks the peer's certificate against it). The rest of the PKI is kept.
+// Throws cell::Error: kNotFound without the certificate or the CA key. Returns the revoked serial (hex).
+std::string RevokeIdentity(const std::filesystem::path& dir, std::string_view name,
+                           const std::string& openssl = "openssl");
 
 // Why a DDS stack may have refused identity `identity`'s files, checked with openssl: "" when the certificate
 // verifies against the CA, is the identity's own (its subject is SubjectName(identity), the name its grant
@@ -78,6 +87,6 @@ IdentityFiles FindIdentityFiles(const std::filesystem::path& dir, std::string_vi
 std::string DiagnoseIdentity(const std::string& identity, const std::filesystem::path& ca,
                              const std::filesystem::path& governance,
                              const std::filesystem::path& certificate, const std::filesystem::path& key,
-                             const std::filesystem::path& permissions);
+                             const std::filesystem::path& permissions, const std::filesystem::path& crl = {});
 
 }  // namespace cell::security
