@@ -786,3 +786,52 @@ c.rapid("N19", u=60)
 c.thread("N20", 3, z=-45)
 c.rapid("N21", u=50)
 c.rapid("N22", z=20)
+
+# K14 (ln 4195-4205): "@ SYVARn.mCH" runs the ISO text held in a SYVAR string as a block; the manual's two
+# examples, the second with no count (`@ SYVAR12.CH` runs the 8 characters stored there, judgement call 40).
+# N4 is G1 X30 Z20 F100 from X50 Y20 Z10 C90 (G27: exact stop); N5 is G0 X0 C0 Z0; N7 runs "X5Y5" in the
+# modal G0 of N5.
+c = Case("p5_14_syvar_iso_blocks", """
+; ln 4195-4205 @ SYVARn.mCH runs the ISO blocks held in SYVAR (the manual's examples)
+N1 G X50 Y20 C90
+N2 Z10
+N3 SYVAR0.12CH="G1X30Z20F100"
+N4 SYVAR12.8CH="G0X0C0Z0"
+N5 @ SYVAR0.12CH
+N6 @ SYVAR12.CH
+N7 SYVAR20.4CH="X5Y5"
+N8 @ SYVAR20.4CH
+""", "L4195")
+c.units("N1")
+c.rapid("N1", travel={"c": 90.0}, x=50, y=20, c=90)  # C from 0 to 90: travel +90
+c.rapid("N2", z=10)
+c.lin("N5", 100, x=30, z=20)
+c.rapid("N6", travel={"c": -90.0}, x=0, c=0, z=0)  # C back by 90
+c.rapid("N8", x=5, y=5)
+
+# Table 4.3 (ln 2159-2177) and DTL (ln 6606-6630): the values the cell runs with are accepted and read back
+# (judgement calls 38, 41-43): ERF=.05 (G27 still stops at every block end: no form error), MCD=1 (90
+# degrees), UVR=0 (programmed feed), URL=0, RAP=0, UEP=1, DTL 0 = the configured tolerance. E30=ERF*100 = 5,
+# E31=MCD = 1, E0=UVR+URL+RAP+UEP = 1; N11 feeds to X10 at F100 with exact stop.
+c = Case("p5_14_panel_switches", """
+; ln 2159-2177 ERF MCD UVR URL RAP UEP, ln 6606-6630 DTL with the configured tolerance
+N1 ERF=.05
+N2 MCD=1
+N3 UVR=0
+N4 URL=0
+N5 RAP=0
+N6 UEP=1
+N7 (DTL,X0,Y0)
+N8 E30=ERF*100
+N9 E31=MCD
+N10 E0=UVR+URL+RAP+UEP
+N11 (DIS,E30)
+N12 (DIS,E31)
+N13 (DIS,E0)
+N14 G1 X10 F100
+""", "L2159")
+c.units("N11")
+c.op("message", "N11", text="E30=5")
+c.op("message", "N12", text="E31=1")
+c.op("message", "N13", text="E0=1")
+c.lin("N14", 100, x=10)

@@ -287,6 +287,9 @@ void BaltRun::CmdDtl(const Command& c) {
     if (seen & (1u << a.axis)) Fail(o.col, 24, "an axis twice");
     seen |= 1u << a.axis;
     if (a.v < 0) Fail(o.col, 13, "a tolerance is not negative");
+    // 0 is the configured tolerance (ln 6623): the servo's one in-position window, which the cell always
+    // uses. Another value would need a per-axis window the canon does not carry (judgement call 42).
+    if (a.v != 0) Fail(o.col, 103, "a positioning tolerance other than 0 (the configured one)");
   }
 }
 

@@ -268,6 +268,8 @@ class BaltRun final : public RunBase {
   void StepOnce() override;
   void ExecLine(const Line& line);
   void ExecBlock(const ParsedBlock& pb);
+  void ExecSyvar(const ParsedBlock& pb);
+  void PanelFlag(std::string_view name, double v, int col);
   void EndOfText();
   void FinishProgram(int m);
   void CheckEndOfFile(bool main);
@@ -483,7 +485,6 @@ class BaltRun final : public RunBase {
   // Global variables (ln 2146-2182, 4052-4361).
   double tmr_ = 0, uov_ = 0, rta_ = 0, rto_ = 0, erf_ = 0, mcd_ = 0;
   int rms_ = 100, err_ = 0, iosta_ = 0;
-  bool uvr_ = false, url_ = false, rap_ = false, uep_ = false;
   std::array<double, 7> tim_{}, tot_{};
   std::vector<unsigned char> sa_, sk_, syvar_;
   std::vector<double> e_;
