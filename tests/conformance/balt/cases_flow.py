@@ -835,3 +835,20 @@ c.op("message", "N11", text="E30=5")
 c.op("message", "N12", text="E31=1")
 c.op("message", "N13", text="E0=1")
 c.lin("N14", 100, x=10)
+
+# Table 5.3 machine-logic M codes (ln 2569-2586) and H functions (ln 420-422, 2502) go to the machine logic as
+# `aux` / `output` ops, in the block's order: M10 (lock the axes not involved) and M41 (gear range 1) at the
+# start of the motion, M40 (cancel the gear range) at its end; H5 before the motion.
+c = Case("p5_07_machine_logic", """
+; ln 2569-2586 M10 M11 M40 M41, ln 420-422 H functions
+N1 G1 X10 F100 M10 M41 H5
+N2 Y10 M11 M40
+""", "L2569")
+c.units("N1")
+c.op("aux", "N1", m=10)
+c.op("aux", "N1", m=41)
+c.op("output", "N1", spec="H05")
+c.lin("N1", 100, x=10)
+c.op("aux", "N2", m=11)
+c.lin("N2", 100, y=10)
+c.op("aux", "N2", m=40)

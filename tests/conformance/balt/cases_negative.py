@@ -171,3 +171,31 @@ neg("neg_dtl_with_compensation", "; ln 6627-6630\nT1.1 M6\nG41 G1 X10 Y10 F100\n
     "BLOCK DOES NOT MATCH: DTL is not allowed in a GTL profile or with compensation", "L6627",
     ops=[units(2), lambda c: c.op("tool_select", 2, tool="1"), lambda c: c.op("tool_change", 2, tool="1", offset=1)],
     tools="1 Z100 K10\n")
+# FILMS4 51 UNKNOWN M OR H CODES (ln 10065): M and H codes are the machine builder's (ln 2500, 420-422).
+# Offline the machine has Table 5.3's M10-M12 and M40-M45 (ln 2555-2589) and every H code; M50 is none of
+# them. A station lists its own (M_CODES, H_CODES; BS01: none, judgement call 45).
+neg("neg_m_code_unknown", "; ln 2555-2589, 10065\nS100 M3\nG1 X10 F100 M50\n", 3, 13, 51,
+    "UNKNOWN M OR H CODES: M50 is not a function of this machine (M_CODES)", "L10065",
+    ops=[units(2), lambda c: c.spindle(2, "cw", 100), lambda c: c.lin(3, 100, x=10)])
+neg("neg_m_code_not_on_machine", "; ln 2569, 10065 (M_CODES=NONE, as BS01)\nG1 X10 F100 M10\n", 2, 13, 51,
+    "UNKNOWN M OR H CODES: M10 is not a function of this machine (M_CODES)", "L2569", params="M_CODES=NONE\n")
+neg("neg_h_code_not_on_machine", "; ln 420-422, 10065 (H_CODES=NONE, as BS01)\nG1 X10 F100 H5\n", 2, 13, 51,
+    "UNKNOWN M OR H CODES: H05 is not a function of this machine (H_CODES)", "L420", params="H_CODES=NONE\n")
+# FILMS4 103 for the console functions the cell does not have (judgement call 44): graphics (ln 6772-6818),
+# the ASSET screen and keyboard (ln 1022-1040, 7711), multi-process (ln 2264-2266), table files (ln 1004-1017),
+# virtual axes (ln 7588-7762).
+for name, prog, cite, why in (
+        ("neg_graphics_ucg", "(UCG,1,X0 X100,Y0 Y100)", "L6772", "is graphics: the cell has no CNC screen"),
+        ("neg_graphics_clg", "(CLG)", "L6806", "is graphics: the cell has no CNC screen"),
+        ("neg_asset_inp", "(INP,\"DEPTH\",E30)", "L7711",
+         "is the ASSET operator screen and keyboard, which the cell does not have"),
+        ("neg_asset_scr", "(SCR,ON)", "L1031", "is the ASSET operator screen and keyboard, which the cell does not have"),
+        ("neg_process_wai", "(WAI,2)", "L2264", "is multi-process: the station runs one process"),
+        ("neg_process_snd", "(SND,2)", "L2265", "is multi-process: the station runs one process"),
+        ("neg_process_exe", "(EXE,2,PROG1)", "L2266", "is multi-process: the station runs one process"),
+        ("neg_table_file_opn", "(OPN,TAB1)", "L1004", "is an ASSET table file, which the cell does not have"),
+        ("neg_virtual_axes_uav", "(UAV,2,B,Y,50)", "L7588", "is virtual or dual axes, which no Balt-System station has"),
+):
+    mne = prog[1:4]
+    neg(name, f"; ln {cite[1:]}\n{prog}\n", 2, 1, 103, f"FUNCTION NOT CONFIGURED: ({mne}) {why} (see docs/dialects/balt.md)",
+        cite)
