@@ -240,6 +240,10 @@ void BaltRun::ExecLine(const Line& line) {
 
 void BaltRun::ExecBlock(const ParsedBlock& pb) {
   cur_sync_ = pb.sync == '#';
+  // '#' (ln 2346, 7536-7586): the block is analysed only once the blocks before it have been executed.
+  // Offline every block already is; on a station the environment waits for the servo.
+  if (cur_sync_) [[unlikely]]
+    env_->Synchronize();
   switch (pb.kind) {
     case BlockKind::kEmpty:
       break;
