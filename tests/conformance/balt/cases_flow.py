@@ -852,3 +852,36 @@ c.lin("N1", 100, x=10)
 c.op("aux", "N2", m=11)
 c.lin("N2", 100, y=10)
 c.op("aux", "N2", m=40)
+
+# Globals and functions not shown elsewhere (ln 4245-4315, 2157-2158, 6712-6732, 6084-6131, 5460-5462, 5510):
+# TIM1=5 and TOT2=1.5 (RE) display as set; RTA=.5 RTO=-.25 mm; (DLY,2) is a 2 s dwell; E30=LOG(1000) = 3,
+# E31=MOD(17,5) = 2; l1 through X0 Y0 at 30 degrees: FEL(1,1) = sin 30 = 0.5; the branches: 3 <> 2 (BNE taken,
+# skips N13), 2 >= 2 (BGE taken, skips N15), 2 <= 3 (BLE taken, skips N17); E1=1 then GE1 X5 is G01 X5 at
+# F100. A DIS list is shown as one text, its items side by side (ln 6700-6710, `(DIS,"RTA=",E40,...)`).
+c = Case("p5_14_timers_functions", """
+; ln 4245-4315 TIM TOT, ln 2157 RTA RTO, ln 6712 DLY, ln 5460-5462 LOG MOD FEL, ln 6084-6131 BNE BGE BLE, ln 5510 GE1
+N1 TIM1=5
+N2 TOT2=1.5
+N3 RTA=.5
+N4 RTO=-.25
+N5 (DIS,TIM1,TOT2,RTA,RTO)
+N6 #(DLY,2)
+N7 E30=LOG(1000)
+N8 E31=MOD(17,5)
+N9 l1=X0Y0,a30
+N10 E32=FEL(1,1)
+N11 (DIS,E30,E31,E32)
+N12 (BNE,E30,E31,A)
+N13 (DIS,"NOT HERE")
+"A" N14 (BGE,E31,2,B)
+N15 (DIS,"NOT HERE")
+"B" N16 (BLE,E31,E30,C)
+N17 (DIS,"NOT HERE")
+"C" N18 E1=1
+N19 GE1 X5 F100
+""", "L4245")
+c.units("N5")
+c.op("message", "N5", text="TIM1=5TOT2=1.5RTA=0.5RTO=-0.25")
+c.op("dwell", "N6", seconds=2)
+c.op("message", "N11", text="E30=3E31=2E32=0.5")
+c.lin("N19", 100, x=5)
