@@ -625,3 +625,15 @@ c.lin("N2", 100, x=10)
 c.op("coolant", "N3", m=9, mode="off")
 c.op("coolant", "N4", m=14, mode="flood")
 c.op("end", "N5", m=2, shuttle=False)
+
+# A stored GTL point gives the plane's abscissa and ordinate of an ISO move (ln 2701): p1 = X5 Y5, then G1 p1
+# feeds from X10 Y20 to X5 Y5.
+c = Case("p5_08_point_as_coordinates", """
+; ln 2701 a stored point gives the coordinates of a G01 move
+N1 G1 X10 Y20 F100
+N2 p1=X5Y5
+N3 G1 p1
+""", "L2701")
+c.units("N1")
+c.lin("N1", 100, x=10, y=20)
+c.lin("N3", 100, x=5, y=5)

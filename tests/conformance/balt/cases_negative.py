@@ -199,3 +199,7 @@ for name, prog, cite, why in (
     mne = prog[1:4]
     neg(name, f"; ln {cite[1:]}\n{prog}\n", 2, 1, 103, f"FUNCTION NOT CONFIGURED: ({mne}) {why} (see docs/dialects/balt.md)",
         cite)
+# Keyboard-only commands (Tables 1.7/4.4, ln 1141-1166, 2184-2217: ORA, CAO, VOA, SPG, REL, PTM, EVA, ...) are
+# not part-program commands: FILMS4 17 at the bracket.
+neg("neg_keyboard_command", "; ln 2184-2217 SPG is a keyboard command\n(SPG,PROG1)\n", 2, 1, 17,
+    "NON EXISTENT FUNCTION: (SPG,...) is not a command of this control", "L2184")
