@@ -281,8 +281,10 @@ void BaltRun::ExecBlock(const ParsedBlock& pb) {
 void BaltRun::ExecSyvar(const ParsedBlock& pb) {
   std::string_view e = pb.exec;
   if (e.rfind("SYVAR", 0) != 0) Fail(pb.exec_col, 24, "@ executes a SYVAR string");
-  ParsedBlock ref =
-      ParseBlock(std::string(e) + "=0");  // the assignment reader reads the target's index/format
+  // The assignment reader reads the target's index and format; its views point into `target`, which must
+  // outlive `ref`.
+  const std::string target = std::string(e) + "=0";
+  ParsedBlock ref = ParseBlock(target);
   if (ref.kind != BlockKind::kAssign || ref.assign.name != "SYVAR" || !ref.assign.has_index)
     Fail(pb.exec_col, 11, "@ SYVARn.mCH expected");
   const Assignment& a = ref.assign;
