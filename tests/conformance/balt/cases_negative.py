@@ -163,6 +163,8 @@ neg("neg_rap_auto_return", "; ln 2170\nRAP=1\n", 2, 5, 5,
     "return from", "L2170")
 neg("neg_uep_off", "; ln 2177\nUEP=0\n", 2, 5, 103,
     "FUNCTION NOT CONFIGURED: UEP=0: the servo always checks the following error", "L2177")
+neg("neg_erf_negative", "; ln 4317-4329 ERF is a form error in mm\nERF=-.1\n", 2, 5, 13,
+    "FORMAT ERROR: ERF (a form error) is not negative", "L4319")
 neg("neg_mcd_range", "; ln 4333 MCD is 0 to 2\nMCD=2.5\n", 2, 5, 13, "FORMAT ERROR: MCD is 0-2", "L4333")
 # DTL (ln 6606-6630): a tolerance other than 0 (judgement call 42), and DTL with compensation (ln 6627-6630).
 neg("neg_dtl_tolerance", "; ln 6619\n(DTL,X.1,Y.05)\n", 2, 6, 103,

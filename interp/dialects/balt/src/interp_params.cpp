@@ -572,6 +572,7 @@ void BaltRun::AssignGlobal(const Assignment& a) {
   } else if (name == "RTO") {
     rto_ = ToMm(v);
   } else if (name == "ERF") {
+    if (v < 0) Fail(a.rhs_col, 13, "ERF (a form error) is not negative");
     erf_ = ToMm(v);
   } else if (name == "MCD") {
     if (v < 0 || v > 2) Fail(a.rhs_col, 13, "MCD is 0-2");
