@@ -369,7 +369,6 @@ void BaltRun::CmdCtl(const Command& c) {
   if (!c.ops.empty()) Fail(c.col, 103, "the lathe configuration (CTL,T) is not characterized here");
 }
 
-// Graphics (UCG, CLG, DCG): the display's business, accepted without effect.
 // Functions of the control's console, screen and processes that the cell does not have: refused with FILMS4
 // 103 rather than run without their effect (docs/dialects/balt.md, judgement call 44).
 void BaltRun::CmdUnsupported(const Command& c) {
