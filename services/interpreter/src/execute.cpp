@@ -56,6 +56,8 @@ class Station::RunEnvironment : public interp::Environment {
     return stream_.Probe(seg).contact();
   }
   std::vector<tooltable::ToolWear> TakeToolWear() override { return stream_.TakeWear(); }
+  // Balt-System '#': the block waits for the motion before it.
+  void Synchronize() override { stream_.WaitDrained(); }
 
   // Every file the program writes leaves the run here, to the inspection writer (program_files.h).
   interp::FileResult FileOperation(const interp::Canon& op) override { return files_.Apply(op); }

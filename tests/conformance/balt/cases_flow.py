@@ -786,3 +786,102 @@ c.rapid("N19", u=60)
 c.thread("N20", 3, z=-45)
 c.rapid("N21", u=50)
 c.rapid("N22", z=20)
+
+# K14 (ln 4195-4205): "@ SYVARn.mCH" runs the ISO text held in a SYVAR string as a block; the manual's two
+# examples, the second with no count (`@ SYVAR12.CH` runs the 8 characters stored there, judgement call 40).
+# N4 is G1 X30 Z20 F100 from X50 Y20 Z10 C90 (G27: exact stop); N5 is G0 X0 C0 Z0; N7 runs "X5Y5" in the
+# modal G0 of N5.
+c = Case("p5_14_syvar_iso_blocks", """
+; ln 4195-4205 @ SYVARn.mCH runs the ISO blocks held in SYVAR (the manual's examples)
+N1 G X50 Y20 C90
+N2 Z10
+N3 SYVAR0.12CH="G1X30Z20F100"
+N4 SYVAR12.8CH="G0X0C0Z0"
+N5 @ SYVAR0.12CH
+N6 @ SYVAR12.CH
+N7 SYVAR20.4CH="X5Y5"
+N8 @ SYVAR20.4CH
+""", "L4195")
+c.units("N1")
+c.rapid("N1", travel={"c": 90.0}, x=50, y=20, c=90)  # C from 0 to 90: travel +90
+c.rapid("N2", z=10)
+c.lin("N5", 100, x=30, z=20)
+c.rapid("N6", travel={"c": -90.0}, x=0, c=0, z=0)  # C back by 90
+c.rapid("N8", x=5, y=5)
+
+# Table 4.3 (ln 2159-2177) and DTL (ln 6606-6630): the values the cell runs with are accepted and read back
+# (judgement calls 38, 41-43): ERF=.05 (G27 still stops at every block end: no form error), MCD=1 (90
+# degrees), UVR=0 (programmed feed), URL=0, RAP=0, UEP=1, DTL 0 = the configured tolerance. E30=ERF*100 = 5,
+# E31=MCD = 1, E0=UVR+URL+RAP+UEP = 1; N11 feeds to X10 at F100 with exact stop.
+c = Case("p5_14_panel_switches", """
+; ln 2159-2177 ERF MCD UVR URL RAP UEP, ln 6606-6630 DTL with the configured tolerance
+N1 ERF=.05
+N2 MCD=1
+N3 UVR=0
+N4 URL=0
+N5 RAP=0
+N6 UEP=1
+N7 (DTL,X0,Y0)
+N8 E30=ERF*100
+N9 E31=MCD
+N10 E0=UVR+URL+RAP+UEP
+N11 (DIS,E30)
+N12 (DIS,E31)
+N13 (DIS,E0)
+N14 G1 X10 F100
+""", "L2159")
+c.units("N11")
+c.op("message", "N11", text="E30=5")
+c.op("message", "N12", text="E31=1")
+c.op("message", "N13", text="E0=1")
+c.lin("N14", 100, x=10)
+
+# Table 5.3 machine-logic M codes (ln 2569-2586) and H functions (ln 420-422, 2502) go to the machine logic as
+# `aux` / `output` ops, in the block's order: M10 (lock the axes not involved) and M41 (gear range 1) at the
+# start of the motion, M40 (cancel the gear range) at its end; H5 before the motion.
+c = Case("p5_07_machine_logic", """
+; ln 2569-2586 M10 M11 M40 M41, ln 420-422 H functions
+N1 G1 X10 F100 M10 M41 H5
+N2 Y10 M11 M40
+""", "L2569")
+c.units("N1")
+c.op("aux", "N1", m=10)
+c.op("aux", "N1", m=41)
+c.op("output", "N1", spec="H05")
+c.lin("N1", 100, x=10)
+c.op("aux", "N2", m=11)
+c.lin("N2", 100, y=10)
+c.op("aux", "N2", m=40)
+
+# Globals and functions not shown elsewhere (ln 4245-4315, 2157-2158, 6712-6732, 6084-6131, 5460-5462, 5510):
+# TIM1=5 and TOT2=1.5 (RE) display as set; RTA=.5 RTO=-.25 mm; (DLY,2) is a 2 s dwell; E30=LOG(1000) = 3,
+# E31=MOD(17,5) = 2; l1 through X0 Y0 at 30 degrees: FEL(1,1) = sin 30 = 0.5; the branches: 3 <> 2 (BNE taken,
+# skips N13), 2 >= 2 (BGE taken, skips N15), 2 <= 3 (BLE taken, skips N17); E1=1 then GE1 X5 is G01 X5 at
+# F100. A DIS list is shown as one text, its items side by side (ln 6700-6710, `(DIS,"RTA=",E40,...)`).
+c = Case("p5_14_timers_functions", """
+; ln 4245-4315 TIM TOT, ln 2157 RTA RTO, ln 6712 DLY, ln 5460-5462 LOG MOD FEL, ln 6084-6131 BNE BGE BLE, ln 5510 GE1
+N1 TIM1=5
+N2 TOT2=1.5
+N3 RTA=.5
+N4 RTO=-.25
+N5 (DIS,TIM1,TOT2,RTA,RTO)
+N6 #(DLY,2)
+N7 E30=LOG(1000)
+N8 E31=MOD(17,5)
+N9 l1=X0Y0,a30
+N10 E32=FEL(1,1)
+N11 (DIS,E30,E31,E32)
+N12 (BNE,E30,E31,A)
+N13 (DIS,"NOT HERE")
+"A" N14 (BGE,E31,2,B)
+N15 (DIS,"NOT HERE")
+"B" N16 (BLE,E31,E30,C)
+N17 (DIS,"NOT HERE")
+"C" N18 E1=1
+N19 GE1 X5 F100
+""", "L4245")
+c.units("N5")
+c.op("message", "N5", text="TIM1=5TOT2=1.5RTA=0.5RTO=-0.25")
+c.op("dwell", "N6", seconds=2)
+c.op("message", "N11", text="E30=3E31=2E32=0.5")
+c.lin("N19", 100, x=5)

@@ -556,3 +556,84 @@ c.spindle(2, "cw", 500)
 c.lin(3, 0.2, mode="per_rev", x=10)
 c.lin(4, 100, mode="deg_per_min", travel={"b": 90}, b=90)
 c.spindle(5, "cw", 0, css=120)
+
+# G09 (ln 3643-3644; Table 5.2 ln 2545 says "acceleration", judgement call 19): in G28 (blended) the G09 block
+# alone decelerates to 0 at its end; the blocks around it stay blended.
+c = Case("p5_08_g09_block_stop", """
+; ln 3643-3644 G09 decelerates to 0 at the end of its block only (here in G28)
+N1 G28 G1 X10 F100
+N2 G9 X20
+N3 X30
+""", "L3643")
+c.units("N1")
+c.lin("N1", 100, exact=False, x=10)
+c.lin("N2", 100, exact=True, x=20)
+c.lin("N3", 100, exact=False, x=30)
+
+# Table 5.6 (ln 3300-3313): G85 feeds in and feeds out to R1, then rapids to R2 (here R1 2, R2 10); G86 stops
+# the spindle at the bottom and rapids out to R1 (the spindle turns again for the next hole); G89 dwells TMR
+# (1 s) at the bottom and feeds out. Each hole: rapid to X Y, rapid to R1, feed to Z-10 at F100 (G27: exact).
+c = Case("p5_8_7_g85_g86_g89", """
+; ln 3300-3313 Table 5.6 G85 reaming, G86 boring with spindle stop, G89 boring with dwell
+N1 S500 F100 M3
+N2 TMR=1
+N3 G85 R2 R10 Z-10
+N4 X10 Y10
+N5 G80
+N6 G86 R2 Z-10
+N7 X20
+N8 G80
+N9 G89 R2 Z-10
+N10 X30
+N11 G80 Z50 M5
+""", "L3300")
+c.units("N1")
+c.spindle("N1", "cw", 500)
+c.rapid("N4", x=10, y=10)
+c.rapid("N4", z=2)
+c.lin("N4", 100, z=-10)
+c.lin("N4", 100, z=2)
+c.rapid("N4", z=10)
+c.rapid("N7", x=20)
+c.rapid("N7", z=2)
+c.lin("N7", 100, z=-10)
+c.spindle("N7", "stop", 500)
+c.rapid("N7", z=2)
+c.spindle("N7", "cw", 500)
+c.rapid("N10", x=30)  # G86 left the spindle at R1 (z 2): no approach move for G89's hole
+c.lin("N10", 100, z=-10)
+c.op("dwell", "N10", seconds=1)
+c.lin("N10", 100, z=2)
+c.rapid("N11", z=50)
+c.spindle("N11", "stop", 500)
+
+# Table 5.3 (ln 2561-2578): M04 spindle CCW at the start of its block, M08 coolant at the start, M09 coolant
+# off at the end, M14 spindle CCW + coolant (the spindle already turns CCW: only the coolant changes), M02 end
+# of program without rewind.
+c = Case("p5_07_m04_m14_m02", """
+; ln 2561-2578 M04 M08 M09 M14 M02
+N1 S300 M4
+N2 G1 X10 F100 M8
+N3 M9
+N4 M14
+N5 M2
+""", "L2561")
+c.units("N1")
+c.spindle("N1", "ccw", 300)
+c.op("coolant", "N2", m=8, mode="flood")
+c.lin("N2", 100, x=10)
+c.op("coolant", "N3", m=9, mode="off")
+c.op("coolant", "N4", m=14, mode="flood")
+c.op("end", "N5", m=2, shuttle=False)
+
+# A stored GTL point gives the plane's abscissa and ordinate of an ISO move (ln 2701): p1 = X5 Y5, then G1 p1
+# feeds from X10 Y20 to X5 Y5.
+c = Case("p5_08_point_as_coordinates", """
+; ln 2701 a stored point gives the coordinates of a G01 move
+N1 G1 X10 Y20 F100
+N2 p1=X5Y5
+N3 G1 p1
+""", "L2701")
+c.units("N1")
+c.lin("N1", 100, x=10, y=20)
+c.lin("N3", 100, x=5, y=5)

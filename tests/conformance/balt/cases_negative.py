@@ -146,3 +146,62 @@ neg("neg_helix_without_axis", "; ln 10171\nG3 X10 Y0 I5 J0 K2 F100\n", 2, 17, 96
 # FILMS4 103 the lathe configuration (CTL,T) (ln 6666-6679), virtual axes (UAV).
 neg("neg_lathe_configuration", "; ln 6673\n(CTL,T)\n", 2, 1, 103,
     "FUNCTION NOT CONFIGURED: the lathe configuration (CTL,T) is not characterized here", "L6673")
+# K14 @ (ln 4195-4205): only a SYVAR string runs (FILMS4 24 at the operand); an error in the text is reported
+# at the @ operand with the text; a SYVAR never written holds no text (FILMS4 22).
+neg("neg_exec_not_syvar", "; ln 4203\n@ SK5.4CH\n", 2, 3, 24, "OPERAND NOT ALLOWED: @ executes a SYVAR string", "L4203")
+neg("neg_exec_bad_text", "; ln 4203\nSYVAR0.5CH=\"G45X1\"\n@ SYVAR0.5CH\n", 3, 3, 17,
+    "NON EXISTENT FUNCTION: in \"G45X1\": G45 does not exist on this control", "L4203")
+neg("neg_exec_empty", "; ln 4203\n@ SYVAR40.CH\n", 2, 3, 22, "OPERAND NOT PROVIDED: SYVAR40 holds no text", "L4203")
+# Table 4.3 switches the cell cannot honour (judgement call 41): UVR=1, URL=1, UEP=0 are FILMS4 103; RAP=1 is
+# the control's own FILMS4 05. The column is the value's.
+neg("neg_uvr_rapid_test", "; ln 2166\nUVR=1\n", 2, 5, 103,
+    "FUNCTION NOT CONFIGURED: UVR=1 (feed moves at rapid for testing): not on the cell", "L2166")
+neg("neg_url_jog_rapid", "; ln 2167\nURL=1\n", 2, 5, 103,
+    "FUNCTION NOT CONFIGURED: URL=1 (rapid under the JOG selector): the cell has no JOG", "L2167")
+neg("neg_rap_auto_return", "; ln 2170\nRAP=1\n", 2, 5, 5,
+    "AUTO RETURN TO PROFILE ILLEGAL: RAP=1: a feed hold on the cell stays on the profile, there is no jog to "
+    "return from", "L2170")
+neg("neg_uep_off", "; ln 2177\nUEP=0\n", 2, 5, 103,
+    "FUNCTION NOT CONFIGURED: UEP=0: the servo always checks the following error", "L2177")
+neg("neg_erf_negative", "; ln 4317-4329 ERF is a form error in mm\nERF=-.1\n", 2, 5, 13,
+    "FORMAT ERROR: ERF (a form error) is not negative", "L4319")
+neg("neg_mcd_range", "; ln 4333 MCD is 0 to 2\nMCD=2.5\n", 2, 5, 13, "FORMAT ERROR: MCD is 0-2", "L4333")
+# DTL (ln 6606-6630): a tolerance other than 0 (judgement call 42), and DTL with compensation (ln 6627-6630).
+neg("neg_dtl_tolerance", "; ln 6619\n(DTL,X.1,Y.05)\n", 2, 6, 103,
+    "FUNCTION NOT CONFIGURED: a positioning tolerance other than 0 (the configured one)", "L6619")
+neg("neg_dtl_with_compensation", "; ln 6627-6630\nT1.1 M6\nG41 G1 X10 Y10 F100\n(DTL,X0)\n", 4, 1, 25,
+    "BLOCK DOES NOT MATCH: DTL is not allowed in a GTL profile or with compensation", "L6627",
+    ops=[units(2), lambda c: c.op("tool_select", 2, tool="1"), lambda c: c.op("tool_change", 2, tool="1", offset=1)],
+    tools="1 Z100 K10\n")
+# FILMS4 51 UNKNOWN M OR H CODES (ln 10065): M and H codes are the machine builder's (ln 2500, 420-422).
+# Offline the machine has Table 5.3's M10-M12 and M40-M45 (ln 2555-2589) and every H code; M50 is none of
+# them. A station lists its own (M_CODES, H_CODES; BS01: none, judgement call 45).
+neg("neg_m_code_unknown", "; ln 2555-2589, 10065\nS100 M3\nG1 X10 F100 M50\n", 3, 13, 51,
+    "UNKNOWN M OR H CODES: M50 is not a function of this machine (M_CODES)", "L10065",
+    ops=[units(2), lambda c: c.spindle(2, "cw", 100), lambda c: c.lin(3, 100, x=10)])
+neg("neg_m_code_not_on_machine", "; ln 2569, 10065 (M_CODES=NONE, as BS01)\nG1 X10 F100 M10\n", 2, 13, 51,
+    "UNKNOWN M OR H CODES: M10 is not a function of this machine (M_CODES)", "L2569", params="M_CODES=NONE\n")
+neg("neg_h_code_not_on_machine", "; ln 420-422, 10065 (H_CODES=NONE, as BS01)\nG1 X10 F100 H5\n", 2, 13, 51,
+    "UNKNOWN M OR H CODES: H05 is not a function of this machine (H_CODES)", "L420", params="H_CODES=NONE\n")
+# FILMS4 103 for the console functions the cell does not have (judgement call 44): graphics (ln 6772-6818),
+# the ASSET screen and keyboard (ln 1022-1040, 7711), multi-process (ln 2264-2266), table files (ln 1004-1017),
+# virtual axes (ln 7588-7762).
+for name, prog, cite, why in (
+        ("neg_graphics_ucg", "(UCG,1,X0 X100,Y0 Y100)", "L6772", "is graphics: the cell has no CNC screen"),
+        ("neg_graphics_clg", "(CLG)", "L6806", "is graphics: the cell has no CNC screen"),
+        ("neg_asset_inp", "(INP,\"DEPTH\",E30)", "L7711",
+         "is the ASSET operator screen and keyboard, which the cell does not have"),
+        ("neg_asset_scr", "(SCR,ON)", "L1031", "is the ASSET operator screen and keyboard, which the cell does not have"),
+        ("neg_process_wai", "(WAI,2)", "L2264", "is multi-process: the station runs one process"),
+        ("neg_process_snd", "(SND,2)", "L2265", "is multi-process: the station runs one process"),
+        ("neg_process_exe", "(EXE,2,PROG1)", "L2266", "is multi-process: the station runs one process"),
+        ("neg_table_file_opn", "(OPN,TAB1)", "L1004", "is an ASSET table file, which the cell does not have"),
+        ("neg_virtual_axes_uav", "(UAV,2,B,Y,50)", "L7588", "is virtual or dual axes, which no Balt-System station has"),
+):
+    mne = prog[1:4]
+    neg(name, f"; ln {cite[1:]}\n{prog}\n", 2, 1, 103, f"FUNCTION NOT CONFIGURED: ({mne}) {why} (see docs/dialects/balt.md)",
+        cite)
+# Keyboard-only commands (Tables 1.7/4.4, ln 1141-1166, 2184-2217: ORA, CAO, VOA, SPG, REL, PTM, EVA, ...) are
+# not part-program commands: FILMS4 17 at the bracket.
+neg("neg_keyboard_command", "; ln 2184-2217 SPG is a keyboard command\n(SPG,PROG1)\n", 2, 1, 17,
+    "NON EXISTENT FUNCTION: (SPG,...) is not a command of this control", "L2184")

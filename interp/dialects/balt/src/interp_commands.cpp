@@ -19,9 +19,9 @@ const std::map<std::string_view, BaltRun::CommandFn>& BaltRun::CommandTable() {
       {"CLS", &BaltRun::CmdCls},         {"EPP", &BaltRun::CmdEpp},         {"DIS", &BaltRun::CmdDis},
       {"DLY", &BaltRun::CmdDly},         {"DPI", &BaltRun::CmdDpi},         {"DTL", &BaltRun::CmdDtl},
       {"DLO", &BaltRun::CmdDlo},         {"DSA", &BaltRun::CmdDsa},         {"ASC", &BaltRun::CmdAreaSwitch},
-      {"DSC", &BaltRun::CmdAreaSwitch},  {"CTL", &BaltRun::CmdCtl},         {"UCG", &BaltRun::CmdIgnored},
-      {"CLG", &BaltRun::CmdIgnored},     {"DCG", &BaltRun::CmdIgnored},     {"INP", &BaltRun::CmdInp},
-      {"WAI", &BaltRun::CmdProcess},     {"SND", &BaltRun::CmdProcess},     {"EXE", &BaltRun::CmdUnsupported},
+      {"DSC", &BaltRun::CmdAreaSwitch},  {"CTL", &BaltRun::CmdCtl},         {"UCG", &BaltRun::CmdUnsupported},
+      {"CLG", &BaltRun::CmdUnsupported}, {"DCG", &BaltRun::CmdUnsupported}, {"INP", &BaltRun::CmdUnsupported},
+      {"WAI", &BaltRun::CmdUnsupported}, {"SND", &BaltRun::CmdUnsupported}, {"EXE", &BaltRun::CmdUnsupported},
       {"UAV", &BaltRun::CmdUnsupported}, {"SCR", &BaltRun::CmdUnsupported}, {"DEF", &BaltRun::CmdUnsupported},
       {"OUT", &BaltRun::CmdUnsupported}, {"OPN", &BaltRun::CmdUnsupported}, {"DER", &BaltRun::CmdUnsupported},
       {"RED", &BaltRun::CmdUnsupported}, {"WRT", &BaltRun::CmdUnsupported}, {"CLO", &BaltRun::CmdUnsupported},
@@ -287,6 +287,9 @@ void BaltRun::CmdDtl(const Command& c) {
     if (seen & (1u << a.axis)) Fail(o.col, 24, "an axis twice");
     seen |= 1u << a.axis;
     if (a.v < 0) Fail(o.col, 13, "a tolerance is not negative");
+    // 0 is the configured tolerance (ln 6623): the servo's one in-position window, which the cell always
+    // uses. Another value would need a per-axis window the canon does not carry (judgement call 42).
+    if (a.v != 0) Fail(o.col, 103, "a positioning tolerance other than 0 (the configured one)");
   }
 }
 
@@ -366,29 +369,23 @@ void BaltRun::CmdCtl(const Command& c) {
   if (!c.ops.empty()) Fail(c.col, 103, "the lathe configuration (CTL,T) is not characterized here");
 }
 
-// Graphics (UCG, CLG, DCG): the display's business, accepted without effect.
-void BaltRun::CmdIgnored(const Command& c) {
-  (void)c;
-}
-
-// (INP,"prompt",Evar): an operator input; offline it is recorded and the variable keeps its value.
-void BaltRun::CmdInp(const Command& c) {
-  CheckOperands(c, 2, 2);
-  if (c.ops[1].text.empty() || c.ops[1].text[0] != 'E')
-    Fail(c.ops[1].col, 24, "INP stores into an E parameter");
-  Out<WaitInputOp>().spec = fmt::format("INP,{},{}", c.ops[0].text, c.ops[1].text);
-}
-
-// (WAI,n) / (SND,n): process synchronisation; one process here, recorded as a wait.
-void BaltRun::CmdProcess(const Command& c) {
-  CheckOperands(c, 1, 1);
-  int n = OperandInt(c.ops[0], 1, 5);
-  Out<WaitInputOp>().spec = fmt::format("{},{}", c.mnemonic, n);
-}
-
+// Functions of the control's console, screen and processes that the cell does not have: refused with FILMS4
+// 103 rather than run without their effect (docs/dialects/balt.md, judgement call 44).
 void BaltRun::CmdUnsupported(const Command& c) {
-  Fail(c.col, 103,
-       fmt::format("({}) is not characterized on this control (see docs/dialects/balt.md)", c.mnemonic));
+  const std::string_view m = c.mnemonic;
+  std::string_view why = "is not characterized on this control";
+  if (m == "EXE" || m == "WAI" || m == "SND") {
+    why = "is multi-process: the station runs one process";
+  } else if (m == "UCG" || m == "CLG" || m == "DCG") {
+    why = "is graphics: the cell has no CNC screen";
+  } else if (m == "INP" || m == "SCR" || m == "DEF" || m == "OUT") {
+    why = "is the ASSET operator screen and keyboard, which the cell does not have";
+  } else if (m == "OPN" || m == "DER" || m == "RED" || m == "WRT" || m == "CLO" || m == "CRE" || m == "CAN") {
+    why = "is an ASSET table file, which the cell does not have";
+  } else if (m == "UAV") {
+    why = "is virtual or dual axes, which no Balt-System station has";
+  }
+  Fail(c.col, 103, fmt::format("({}) {} (see docs/dialects/balt.md)", m, why));
 }
 
 }  // namespace cell::interp::balt

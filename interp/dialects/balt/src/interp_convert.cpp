@@ -399,6 +399,9 @@ void BaltRun::AuxBefore(const ParsedBlock& pb, bool moves) {
       double h = ValueOf(w.v, w.col);
       if (h < 0 || h > 99 || h != std::floor(h))
         Fail(w.col, 18, fmt::format("H{:g} (H codes are H00-H99)", h));
+      if (!logic_h_.test(static_cast<std::size_t>(h)))
+        Fail(w.col, 51,
+             fmt::format("H{:02} is not a function of this machine (H_CODES)", static_cast<int>(h)));
       Out<OutputOp>().spec = fmt::format("H{:02}", static_cast<int>(h));
       continue;
     }
@@ -442,7 +445,7 @@ void BaltRun::AuxBefore(const ParsedBlock& pb, bool moves) {
         break;
       }
       default:
-        Out<AuxOp>().m = m;  // M10-M12 axis locks, M41-M45 gear ranges
+        MachineLogicM(m, w.col);  // M10-M12 axis locks, M41-M45 gear ranges
         break;
     }
   }
@@ -496,11 +499,20 @@ void BaltRun::AuxAfter(const ParsedBlock& pb) {
         Out<PalletOp>().m = 60;
         break;
       default:
-        Out<AuxOp>().m = m;
+        MachineLogicM(m, w.col);
         break;
     }
   }
   if (end_m) FinishProgram(end_m);
+}
+
+// An M code the canon has no op of its own for goes to the machine logic as an `aux` op when the machine
+// builder assigned it (Table 5.3, ln 2555-2589: "normally assigned by the machine builder", ln 2500); any
+// other is FILMS4 51 UNKNOWN M OR H CODES (ln 10065).
+void BaltRun::MachineLogicM(int m, int col) {
+  if (!logic_m_.test(static_cast<std::size_t>(m)))
+    Fail(col, 51, fmt::format("M{:02} is not a function of this machine (M_CODES)", m));
+  Out<AuxOp>().m = m;
 }
 
 void BaltRun::ExecIso(const ParsedBlock& pb) {

@@ -14,6 +14,8 @@ const char* FilmsText(int code) {
   switch (code) {
     case 3:
       return "OUT OF OPERATING LIMITS";
+    case 5:
+      return "AUTO RETURN TO PROFILE ILLEGAL";
     case 8:
       return "MEASUREMENT MISMATCH";
     case 9:
@@ -238,27 +240,19 @@ void BaltRun::ExecLine(const Line& line) {
 
 void BaltRun::ExecBlock(const ParsedBlock& pb) {
   cur_sync_ = pb.sync == '#';
+  // '#' (ln 2346, 7536-7586): the block is analysed only once the blocks before it have been executed.
+  // Offline every block already is; on a station the environment waits for the servo.
+  if (cur_sync_) [[unlikely]]
+    env_->Synchronize();
   switch (pb.kind) {
     case BlockKind::kEmpty:
       break;
     case BlockKind::kAssign:
       Assign(pb.assign);
       break;
-    case BlockKind::kExec: {
-      // K14 (ln 4195-4205): the ISO text held in a SYVAR string runs as a block.
-      std::string_view e = pb.exec;
-      if (e.rfind("SYVAR", 0) != 0) Fail(pb.exec_col, 24, "@ executes a SYVAR string");
-      ParsedBlock ref = ParseBlock(std::string("E0=") + std::string(e));  // reuse the target reader
-      const Assignment& a = ref.assign;
-      std::string text = GlobalString("SYVAR", a.has_index ? static_cast<int>(a.gindex.num) : 0,
-                                      a.fmt.empty() ? std::string_view("CH") : a.fmt, pb.exec_col);
-      while (!text.empty() && text.back() == ' ') text.pop_back();
-      exec_text_ = text;
-      ParsedBlock inner = ParseBlock(exec_text_);
-      if (inner.kind == BlockKind::kExec) Fail(pb.exec_col, 24, "@ inside @");
-      ExecBlock(inner);
+    case BlockKind::kExec:
+      ExecSyvar(pb);
       break;
-    }
     case BlockKind::kIso: {
       for (const Command& c : pb.commands) {
         if (!IsFlowCommand(c.mnemonic)) ExecCommand(c);
@@ -277,6 +271,46 @@ void BaltRun::ExecBlock(const ParsedBlock& pb) {
     } catch (const ContourError& e) {
       ContourFail(e);
     }
+  }
+}
+
+// K14 (ln 4195-4205): "@ SYVARn.mCH" runs the ISO text held in m characters from SYVARn as a block of its
+// own line. Without a count (`@ SYVAR12.CH`, the manual's second example, which runs the 8 characters stored
+// there) the text runs to the first byte never written, at most 32 characters (judgement call 40). An error
+// in that text is reported at the @ operand, naming the text.
+void BaltRun::ExecSyvar(const ParsedBlock& pb) {
+  std::string_view e = pb.exec;
+  if (e.rfind("SYVAR", 0) != 0) Fail(pb.exec_col, 24, "@ executes a SYVAR string");
+  // The assignment reader reads the target's index and format; its views point into `target`, which must
+  // outlive `ref`.
+  const std::string target = std::string(e) + "=0";
+  ParsedBlock ref = ParseBlock(target);
+  if (ref.kind != BlockKind::kAssign || ref.assign.name != "SYVAR" || !ref.assign.has_index)
+    Fail(pb.exec_col, 11, "@ SYVARn.mCH expected");
+  const Assignment& a = ref.assign;
+  const int index = static_cast<int>(a.gindex.num);
+  std::string_view f = a.fmt.empty() ? std::string_view("CH") : a.fmt;
+  std::string text;
+  if (f == "CH") {
+    if (index < 0 || static_cast<std::size_t>(index) >= syvar_.size())
+      Fail(pb.exec_col, 18, fmt::format("SYVAR{} is outside the area", index));
+    const std::size_t n = std::min<std::size_t>(32, syvar_.size() - static_cast<std::size_t>(index));
+    text.assign(reinterpret_cast<const char*>(syvar_.data()) + index, n);
+  } else {
+    text = GlobalString("SYVAR", index, f, pb.exec_col);
+  }
+  if (std::size_t nul = text.find('\0'); nul != std::string::npos) text.resize(nul);
+  while (!text.empty() && text.back() == ' ') text.pop_back();
+  if (text.empty()) Fail(pb.exec_col, 22, fmt::format("SYVAR{} holds no text", index));
+  exec_text_ = text;
+  try {
+    ParsedBlock inner = ParseBlock(exec_text_);
+    if (inner.kind == BlockKind::kExec) Fail(1, 24, "@ inside @");
+    ExecBlock(inner);
+  } catch (RunError& err) {
+    err.col = pb.exec_col;
+    err.text = fmt::format("in \"{}\": {}", exec_text_, err.text);
+    throw;
   }
 }
 

@@ -19,6 +19,7 @@
 #pragma once
 
 #include <array>
+#include <bitset>
 #include <cstdint>
 #include <map>
 #include <memory>
@@ -268,6 +269,9 @@ class BaltRun final : public RunBase {
   void StepOnce() override;
   void ExecLine(const Line& line);
   void ExecBlock(const ParsedBlock& pb);
+  void ExecSyvar(const ParsedBlock& pb);
+  void PanelFlag(std::string_view name, double v, int col);
+  void MachineLogicM(int m, int col);
   void EndOfText();
   void FinishProgram(int m);
   void CheckEndOfFile(bool main);
@@ -317,9 +321,6 @@ class BaltRun final : public RunBase {
   void CmdDsa(const Command& c);
   void CmdAreaSwitch(const Command& c);
   void CmdCtl(const Command& c);
-  void CmdIgnored(const Command& c);
-  void CmdInp(const Command& c);
-  void CmdProcess(const Command& c);
   void CmdUnsupported(const Command& c);
   void CmdUao(const Command& c);
   void CmdUot(const Command& c);
@@ -446,6 +447,10 @@ class BaltRun final : public RunBase {
   bool optional_stop_ = false;         // USO
   std::uint32_t rollover_mask_ = 0;
   std::uint32_t spindle_axes_ = (1u << kX) | (1u << kY) | (1u << kZ);
+  // The machine-logic M and H codes the machine builder assigned (settings M_CODES, H_CODES; judgement call
+  // 45): Table 5.3's M10-M12 and M40-M45, every H code, unless the station says otherwise.
+  std::bitset<100> logic_m_{(1ull << 10) | (1ull << 11) | (1ull << 12) | (0x3Full << 40)};
+  std::bitset<100> logic_h_ = std::bitset<100>().set();
   std::array<double, kAxisCount> index_step_{};  // indexing axes: degrees per index (0: not indexing)
   bool transducer_ = true;
   double peck_clearance_ = 1.0;
@@ -483,7 +488,6 @@ class BaltRun final : public RunBase {
   // Global variables (ln 2146-2182, 4052-4361).
   double tmr_ = 0, uov_ = 0, rta_ = 0, rto_ = 0, erf_ = 0, mcd_ = 0;
   int rms_ = 100, err_ = 0, iosta_ = 0;
-  bool uvr_ = false, url_ = false, rap_ = false, uep_ = false;
   std::array<double, 7> tim_{}, tot_{};
   std::vector<unsigned char> sa_, sk_, syvar_;
   std::vector<double> e_;

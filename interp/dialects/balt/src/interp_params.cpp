@@ -505,14 +505,28 @@ double BaltRun::Global(std::string_view name, bool has_index, int index, std::st
   if (name == "MCD") return mcd_;
   if (name == "USB") return block_delete_enabled_ ? 1 : 0;
   if (name == "USO") return optional_stop_ ? 1 : 0;
-  if (name == "UVR") return uvr_ ? 1 : 0;
-  if (name == "URL") return url_ ? 1 : 0;
-  if (name == "RAP") return rap_ ? 1 : 0;
-  if (name == "UEP") return uep_ ? 1 : 0;
+  if (name == "UVR" || name == "URL" || name == "RAP")
+    return 0;  // the only values the cell takes (PanelFlag)
+  if (name == "UEP") return 1;
   if (name == "RMS") return rms_;
   if (name == "ERR") return err_;
   if (name == "IOSTA") return iosta_;
   Fail(col, 15, fmt::format("{} is not a variable", name));
+}
+
+// Table 4.3 (ln 2166-2177) operator-panel switches a program may set. The cell takes the value that describes
+// it and refuses the other (judgement call 41): feed moves always at the programmed feed (UVR=0: the canon
+// has no "feed at rapid" test mode), no JOG and so no rapid under the jog selector (URL=0), a feed hold that
+// stays on the path with no jog away and so nothing to return from (RAP=0; RAP=1 is the control's own FILMS4
+// 05), the servo's following-error check always on (UEP=1: alarm 410 "DIFF over").
+void BaltRun::PanelFlag(std::string_view name, double v, int col) {
+  if (v != 0 && v != 1) Fail(col, 13, fmt::format("{} is 0 or 1", name));
+  const bool on = v != 0;
+  if (name == "UVR" && on) Fail(col, 103, "UVR=1 (feed moves at rapid for testing): not on the cell");
+  if (name == "URL" && on) Fail(col, 103, "URL=1 (rapid under the JOG selector): the cell has no JOG");
+  if (name == "RAP" && on)
+    Fail(col, 5, "RAP=1: a feed hold on the cell stays on the profile, there is no jog to return from");
+  if (name == "UEP" && !on) Fail(col, 103, "UEP=0: the servo always checks the following error");
 }
 
 void BaltRun::AssignGlobal(const Assignment& a) {
@@ -558,6 +572,7 @@ void BaltRun::AssignGlobal(const Assignment& a) {
   } else if (name == "RTO") {
     rto_ = ToMm(v);
   } else if (name == "ERF") {
+    if (v < 0) Fail(a.rhs_col, 13, "ERF (a form error) is not negative");
     erf_ = ToMm(v);
   } else if (name == "MCD") {
     if (v < 0 || v > 2) Fail(a.rhs_col, 13, "MCD is 0-2");
@@ -566,14 +581,8 @@ void BaltRun::AssignGlobal(const Assignment& a) {
     flag(block_delete_enabled_);
   } else if (name == "USO") {
     flag(optional_stop_);
-  } else if (name == "UVR") {
-    flag(uvr_);
-  } else if (name == "URL") {
-    flag(url_);
-  } else if (name == "RAP") {
-    flag(rap_);
-  } else if (name == "UEP") {
-    flag(uep_);
+  } else if (name == "UVR" || name == "URL" || name == "RAP" || name == "UEP") {
+    PanelFlag(name, v, a.rhs_col);
   } else if (name == "ERR") {
     bool b = false;
     flag(b);

@@ -54,6 +54,26 @@ std::uint32_t Axes(const std::string& key, const std::string& v, bool rotary_onl
   return m;
 }
 
+// M_CODES / H_CODES: the machine-logic codes the machine builder assigned (ln 2500, 420-422), as numbers
+// 0-99 separated by commas or spaces; NONE (or empty) for none.
+std::bitset<100> Codes(const std::string& key, const std::string& v) {
+  std::bitset<100> b;
+  if (v == "NONE") return b;
+  std::size_t i = 0;
+  while (i < v.size()) {
+    if (v[i] == ',' || v[i] == ' ') {
+      ++i;
+      continue;
+    }
+    std::size_t j = i;
+    while (j < v.size() && IsDigit(v[j])) ++j;
+    if (j == i || j - i > 2) BadSetting(key, fmt::format("'{}' is not a list of codes 0-99", v));
+    b.set(static_cast<std::size_t>(std::stoi(v.substr(i, j - i))));
+    i = j;
+  }
+  return b;
+}
+
 }  // namespace
 
 BaltRun::BaltRun(const RunOptions& o) : RunBase(o) {
@@ -84,6 +104,10 @@ BaltRun::BaltRun(const RunOptions& o) : RunBase(o) {
       index_step_[a] = step;
     } else if (key == "SPINDLE_AXES") {
       spindle_axes_ = Axes(key, val, false);
+    } else if (key == "M_CODES") {
+      logic_m_ = Codes(key, val);
+    } else if (key == "H_CODES") {
+      logic_h_ = Codes(key, val);
     } else if (key == "TRANSDUCER") {
       transducer_ = Number(key, val) != 0;
     } else if (key == "PECK_CLEARANCE") {

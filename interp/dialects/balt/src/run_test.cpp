@@ -126,6 +126,32 @@ TEST(BaltRun, ProbeThroughTheEnvironment) {
   EXPECT_NEAR(run->Variables()["E41"], 0, 1e-9);
 }
 
+// '#' (ln 7536-7586): the block waits for the machine to finish what came before it. The environment is asked
+// once, after the moves before the block have been handed out, and not for blocks without '#'.
+class SyncLog : public Environment {
+ public:
+  explicit SyncLog(const std::vector<Canon>& out) : out_(out) {}
+  void Synchronize() override { seen.push_back(out_.size()); }
+  std::vector<std::size_t> seen;
+
+ private:
+  const std::vector<Canon>& out_;
+};
+
+TEST(BaltRun, SynchronisedBlockWaitsForTheMachine) {
+  std::vector<Canon> out;
+  SyncLog log(out);
+  RunOptions opt;
+  opt.env = &log;
+  opt.program_name = "test";
+  opt.program_text = "G1 X10 F100\nN20 #(DLY,1)\nG1 X20\n&SK5=1\n";
+  auto run = BaltDialect().StartRun(opt);
+  for (Step st = run->Next(); st.kind == Step::kCanon; st = run->Next()) out.push_back(st.canon);
+  ASSERT_EQ(log.seen.size(), 1u);
+  EXPECT_EQ(log.seen[0], 2u);  // units and the X10 move were out before the '#' block ran
+  EXPECT_EQ(out.size(), 5u);   // then its dwell, the X20 move, the SK5 output
+}
+
 TEST(BaltRun, ReportsTheFirstErrorWithItsAlarm) {
   RunOptions opt;
   opt.program_text = "G1 X10 F100\n(BNC,NOWHR)\n";

@@ -88,6 +88,10 @@ class Environment {
   virtual std::vector<tooltable::ToolWear> TakeToolWear() { return {}; }
   // Wall clock: year, month, day, hour, minute, second.
   virtual std::array<int, 6> Now();
+  // A synchronised block (Balt-System '#', ln 7536-7586) waits here until the machine has finished every move
+  // output before it, so that what it reads (the clock, a delay's start) follows the motion. Offline: at
+  // once.
+  virtual void Synchronize() {}
   // Every file effect of a program, the op as it is output: file_open, file_write, file_close, file_op
   // (copy, delete, print, remote copy, fixture tables). Returns when the machine has done it; offline at
   // once.
