@@ -14,6 +14,7 @@
 #include <gtest/gtest.h>
 
 #include "cell/idl/health.h"
+#include "cell/idl/program_store.h"
 #include "cell/idl/run.h"
 #include "cell/idl/station.h"
 
@@ -202,6 +203,28 @@ TEST_P(BusTest, RequestReplyCarriesResultAndErrors) {
     EXPECT_STREQ(e.what(), "unknown station NOPE");
   }
   EXPECT_EQ(calls, 2);
+}
+
+// Issue 39 item 1: the reply cache keeps what a re-sent request needs, bounded in bytes as well as entries
+// (4096 replies of 60 KB each grew the program store by a quarter of a gigabyte).
+TEST_P(BusTest, TheReplyCacheIsBoundedInBytes) {
+  Participant a(A("bus-test-cache")), b(B("bus-test-cache-client"));
+  Server<cell::ProgramRequest, cell::ProgramReply> server(a, "test/cache", [](const cell::ProgramRequest&) {
+    cell::ProgramReply rep;
+    rep.data().assign(60000, 0x25);
+    return rep;
+  });
+  using Big = Server<cell::ProgramRequest, cell::ProgramReply>;
+  Client<cell::ProgramRequest, cell::ProgramReply> client(b, "test/cache");
+  for (int i = 0; i < 100; ++i) {
+    auto rep = client.Call(cell::ProgramRequest(), kMatch);
+    ASSERT_EQ(rep.data().size(), 60000u);
+  }
+  const auto [entries, bytes] = server.CacheUse();
+  EXPECT_LE(bytes, Big::kCacheBytes);
+  EXPECT_GE(bytes, Big::kCacheBytes - 61000);  // full, with the newest replies
+  EXPECT_LT(entries, 100u);
+  EXPECT_GT(entries, 60u);
 }
 
 // A participant that rejoins (what its watch thread does after the process stood still past the lease)

@@ -506,13 +506,48 @@ class Server {
              [this](const Req& r, const SampleInfo& si) { Handle(r, si); }) {}
 
   int Matched() const { return req_.Matched(); }
+  // The reply cache as it stands (tests): entries and their serialized bytes.
+  std::pair<size_t, size_t> CacheUse() const {
+    std::lock_guard lk(cache_mu_);
+    return {cache_.size(), cache_bytes_};
+  }
+
+  // A re-sent request is answered from the cache only while its requester may still re-send (every 250 ms
+  // until its Call times out): the newest replies are kept, up to kCacheSize entries and kCacheBytes. Bounded
+  // by count alone, 4096 program-store chunks of 60 KB were a quarter of a gigabyte (issue 39 item 1).
+  static constexpr size_t kCacheSize = 4096;
+  static constexpr size_t kCacheBytes = size_t{4} << 20;
 
  private:
+  void Remember(const std::pair<std::string, uint64_t>& key, const Rep& rep) {
+    std::lock_guard lk(cache_mu_);
+    const size_t bytes = Rep::getCdrSerializedSize(rep, 0);
+    auto [it, inserted] = cache_.try_emplace(key);
+    if (inserted) {
+      order_.push_back(key);
+    } else {
+      cache_bytes_ -= it->second.second;
+    }
+    it->second = {rep, bytes};
+    cache_bytes_ += bytes;
+    while (order_.size() > 1 && (order_.size() > kCacheSize || cache_bytes_ > kCacheBytes)) {
+      auto old = cache_.find(order_.front());
+      cache_bytes_ -= old->second.second;
+      cache_.erase(old);
+      order_.pop_front();
+    }
+  }
+  std::optional<Rep> Cached(const std::pair<std::string, uint64_t>& key) const {
+    std::lock_guard lk(cache_mu_);
+    auto it = cache_.find(key);
+    if (it == cache_.end()) return std::nullopt;
+    return it->second.first;
+  }
+
   void Handle(const Req& r, const SampleInfo& si) {
     auto key = std::make_pair(std::string(r.hdr().client()), r.hdr().request_id());
-    auto it = cache_.find(key);
-    if (it != cache_.end()) {  // a re-sent request: answer again, do not run again
-      rep_.Write(it->second);
+    if (std::optional<Rep> cached = Cached(key)) {  // a re-sent request: answer again, do not run again
+      rep_.Write(*cached);
       return;
     }
     Rep rep;
@@ -536,12 +571,7 @@ class Server {
     }
     rep.hdr().client(r.hdr().client());
     rep.hdr().request_id(r.hdr().request_id());
-    cache_[key] = rep;
-    order_.push_back(key);
-    if (order_.size() > kCacheSize) {
-      cache_.erase(order_.front());
-      order_.pop_front();
-    }
+    Remember(key, rep);
     try {
       rep_.Write(rep);  // to a vanished requester this goes nowhere, which is fine
     } catch (const Error& e) {
@@ -552,7 +582,7 @@ class Server {
       err.hdr() = rep.hdr();
       err.hdr().code(static_cast<int32_t>(e.code()) + 1);
       err.hdr().error(std::string(e.what()).substr(0, 511));
-      cache_[key] = err;
+      Remember(key, err);
       try {
         rep_.Write(err);
       } catch (const Error&) {  // as above: the re-sent request gets it from the cache
@@ -560,13 +590,14 @@ class Server {
     }
   }
 
-  static constexpr size_t kCacheSize = 4096;
   Participant& p_;
   std::string service_;
   Handler handler_;
   Describe describe_;
-  std::map<std::pair<std::string, uint64_t>, Rep> cache_;
+  mutable std::mutex cache_mu_;  // CacheUse() reads from another thread
+  std::map<std::pair<std::string, uint64_t>, std::pair<Rep, size_t>> cache_;  // reply, its CDR bytes
   std::deque<std::pair<std::string, uint64_t>> order_;
+  size_t cache_bytes_ = 0;
   Writer<Rep> rep_;
   Reader<Req> req_;
 };
