@@ -223,9 +223,8 @@ void OkRun::ReadNcGCodes(const BlockWords& w, NcGCodes& k) {
         break;
       case 18:
       case 28:
-      case 29:
       case 136:
-        break;  // the turning plane; torque limit (no torque model: accepted, no effect); G136 (G137 unused)
+        break;  // the turning plane; torque limit cancel and G136: the cell's only states (G29, G137 refused)
       case 40:
       case 41:
       case 42:
@@ -282,9 +281,7 @@ void OkRun::ReadNcGCodes(const BlockWords& w, NcGCodes& k) {
         if (!w.Has('S')) Fail(g.col, fmt::format("a G{} block must contain S", g.code));
         break;
       case 110:
-      case 111:
-        modal_.css_turret_b = g.code == 111;
-        break;
+        break;  // constant surface speed on turret A: the cell's only state (G111 refused)
       default:
         break;
     }
@@ -408,6 +405,62 @@ void OkRun::ExecNc(const Block& b) {
   if (!ended_ && motion_block) TriggerModin();
 }
 
+// Torque limits (G29 with PZ=/PW=, ln 1504-1531) have no torque model in the servo; G111 (constant surface
+// speed on turret B, ln 1827, 7075) belongs to the two-saddle model (judgement 45). G28 (torque limit cancel)
+// and G110 are the cell's only states and run.
+void OkRun::RefuseTorqueAndTurretB(const BlockWords& w) {
+  if (const auto* g29 = w.FindG(29)) {
+    Fail(g29->col,
+         "G29 (torque limit, ln 1504-1519) is not supported by the cell's OSP-E100L dialect: no torque "
+         "model");
+  }
+  if (const auto* g111 = w.FindG(111)) {
+    Fail(g111->col,
+         "G111 (constant surface speed on turret B of the two-saddle model, ln 1827, 7075) is not supported: "
+         "one "
+         "saddle");
+  }
+  for (const char* name : {"PZ", "PW"}) {
+    const int i = ExtIndex(MakeAddr(name[0], name[1]));
+    if (w.HasExt(i)) {
+      Fail(w.ext_col[static_cast<size_t>(i)],
+           fmt::format(
+               "{}= (torque, ln 1504-1519, 1594-1614) is not supported by the cell's OSP-E100L dialect: "
+               "no torque model",
+               name));
+    }
+  }
+}
+
+// M codes that switch a function of the control the cell does not have (judgement 49): their OFF/cancel
+// partner is the cell's only state and goes out as `aux`.
+const char* OkRun::RefusedControlM(int m) {
+  switch (m) {
+    case 29:
+      return "tool interference check ON, ln 9520";
+    case 49:
+      return "spindle speed override fixed at 100 %, ln 1964-1968";
+    case 124:
+      return "STM time-over check ON, ln 1985-1986, 2142-2175";
+    case 161:
+      return "feedrate override fixed at 100 %, ln 2002-2003";
+    case 163:
+      return "M-tool spindle override fixed at 100 %, ln 2004-2005";
+    case 165:
+      return "slide hold and single block ignored, ln 2006-2007";
+    case 194:
+      return "thread phase matching ON, ln 2025-2026";
+    case 196:
+      return "store of the manual phase-matching move, ln 2027-2029";
+    case 197:
+      return "clear of the phase-matching amount, ln 2030-2031";
+    case 203:
+      return "turret unclamp during G00, ln 9144-9167";
+    default:
+      return nullptr;
+  }
+}
+
 // Codes and words the manual defines that the cell cannot do, refused before the block does anything.
 void OkRun::RefuseUnsupported(const BlockWords& w) {
   // P is the 2S synchronisation code (ln 6960-6990): the cell runs one program on one saddle (judgement 45).
@@ -422,7 +475,11 @@ void OkRun::RefuseUnsupported(const BlockWords& w) {
          "M-tool "
          "spindle");
   }
+  RefuseTorqueAndTurretB(w);
   for (const auto& m : w.m) {
+    if (const char* what = RefusedControlM(m.code)) {
+      Fail(m.col, fmt::format("M{} ({}) is not supported by the cell's OSP-E100L dialect", m.code, what));
+    }
     switch (m.code) {
       case 13:
       case 14:

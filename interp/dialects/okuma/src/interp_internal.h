@@ -113,7 +113,6 @@ struct Modal {
   bool incremental = false;                // G91 (G90 at reset)
   bool per_rev = true;                     // G95 (power-on and reset) / G94
   bool css = false;                        // G96 / G97
-  bool css_turret_b = false;               // G111 / G110
   bool turret_b = false;                   // G14 / G13 (reset)
   bool droop = false;                      // G65 / G64
   bool chuck_barrier = false;              // M25 / M24 (off at power-on and reset, ln 9108)
@@ -203,6 +202,8 @@ class OkRun final : public RunBase, public VarReader {
   // NC blocks (interp_convert.cpp)
   void ExecNc(const Block& b);
   void RefuseUnsupported(const BlockWords& w);
+  void RefuseTorqueAndTurretB(const BlockWords& w);
+  static const char* RefusedControlM(int m);
   // The G codes of an NC block as they act (ReadNcGCodes -> the rest of ExecNc).
   struct NcGCodes {
     int motion_g = -1, motion_col = 1, comp_g = 0;
