@@ -457,6 +457,10 @@ const char* OkRun::RefusedControlM(int m) {
     case 203:
       return "turret unclamp during G00, ln 9144-9167";
     default:
+      if ((m >= 321 && m <= 325) || (m >= 341 && m <= 360)) {
+        return "M code macro: CALL of a fixed subprogram, ln 9836-9878, whose format the manual does not "
+               "give";
+      }
       return nullptr;
   }
 }
