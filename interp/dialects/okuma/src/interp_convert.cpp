@@ -365,6 +365,7 @@ void OkRun::ExecNc(const Block& b) {
     EndBlockStages(false);
     return;
   }
+  RefuseUnusedAddresses(w, k);
   if (!b.label.empty() && !k.lap) Fail(b.label_col, "a sequence name argument is taken only by G85-G88");
   if (k.lap && b.label.empty())
     Fail(k.cycle_col, fmt::format("G{} needs the contour's sequence name", k.lap));
@@ -403,6 +404,75 @@ void OkRun::ExecNc(const Block& b) {
   EndBlockStages(xz);
   StopAndEnd(w);
   if (!ended_ && motion_block) TriggerModin();
+}
+
+// The single-letter addresses the block's function reads (each function's programming format: ln 1147-1300,
+// 1642-1707, 3239-3414, 3640-4071, 5124-5252, 2235-2447 for I/K with G40-G42); F, S and T belong to any
+// block. `what` names the function for the alarm.
+uint32_t OkRun::UsedAddresses(const NcGCodes& k, std::string* what) const {
+  auto bits = [](std::string_view s) {
+    uint32_t m = 0;
+    for (char c : s) m |= 1u << (c - 'A');
+    return m;
+  };
+  const uint32_t any = bits("FST") | ((lap_.active || lap_.finish) ? bits("E") : 0);  // E: a contour's feed
+  auto named = [&](int g, std::string_view letters) {
+    *what = fmt::format("a G{:02} block", g);
+    return any | bits(letters);
+  };
+  if (k.dwell) return named(4, "");
+  if (k.g50) return named(50, "XZC");
+  if (k.lap) return named(k.lap, k.lap == 88 ? "DUWEHB" : "DUWE");
+  switch (k.cycle) {
+    case 71:
+      return named(71, "XZAIBDUHLEJQ");
+    case 72:
+      return named(72, "XZAKBDWHLEJQ");
+    case 73:
+    case 74:
+      return named(k.cycle, "XZIKDLE");
+    case 77:
+    case 78:
+      return named(k.cycle, "XZK");
+    default:
+      break;
+  }
+  const int motion = k.motion_g >= 0 ? k.motion_g : modal_.motion;
+  uint32_t used = named(motion, "XZY");  // Y: Motion names the missing axis itself
+  if (k.comp_g) used |= bits("IK");      // the entry or exit vector of G40/G41/G42
+  switch (motion) {
+    case 0:
+    case 1:
+      used |= bits("CA") | (k.chamfer ? bits("L") : 0);
+      break;
+    case 2:
+    case 3:
+      used |= bits("IKL");
+      break;
+    case 31:
+    case 32:
+    case 33:
+      used |= bits("CIKAELJ");
+      break;
+    default:  // G34/G35
+      used |= bits("CAEJ");
+      break;
+  }
+  return used;
+}
+
+// A word the block's function does not read (a stray Q5 on a G01 block, K on a G00) is refused, not ignored
+// (judgement 51); the manual prints no alarm number for it.
+void OkRun::RefuseUnusedAddresses(const BlockWords& w, const NcGCodes& k) const {
+  std::string what;
+  const uint32_t unused = w.has & ~UsedAddresses(k, &what);
+  if (unused == 0) return;
+  char a = 'A';
+  while (!((unused >> (a - 'A')) & 1u)) ++a;
+  if (k.chamfer == 0 && a == 'L' && (modal_.motion == 0 || modal_.motion == 1) && k.cycle == 0 && !k.lap) {
+    what += " without G75/G76";
+  }
+  Fail(w.Col(a), fmt::format("address {} is not used by {}", a, what));
 }
 
 // Torque limits (G29 with PZ=/PW=, ln 1504-1531) have no torque model in the servo; G111 (constant surface
