@@ -25,6 +25,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "block.h"
@@ -309,9 +310,16 @@ class OkRun final : public RunBase, public VarReader {
   std::array<double, kAxisCount> zero_shift_{};   // VZSH* (G50; cleared by reset)
   double f_ = 0;                                  // F (mm/rev or mm/min)
   double e_ = 0;                                  // E: LAP roughing feed along the contour
-  double s_ = 0;                                  // S as last programmed (rpm)
-  double css_ = 0;                                // G96 S (m/min)
-  double max_rpm_ = 0;                            // G50 S
+  // The spindle phase at the end of the last thread when nothing has gone out after it (G65 starts a thread
+  // that follows it at this phase: it no longer continues the chain).
+  struct ThreadPhase {
+    bool valid = false;
+    AxisArray at{};
+    double angle = 0;
+  } thread_phase_;
+  double s_ = 0;        // S as last programmed (rpm)
+  double css_ = 0;      // G96 S (m/min)
+  double max_rpm_ = 0;  // G50 S
   ThreadChain chain_;
   std::array<double, kAxisCount> pos_limit_{}, neg_limit_{};  // VPVL*, VNVL* (machine); set flags below
   uint32_t pos_limit_set_ = 0, neg_limit_set_ = 0;
@@ -373,6 +381,7 @@ template <class T>
 T& OkRun::Out() {
   EmitUnitsOnce();
   idle_ = 0;
+  if constexpr (!std::is_same_v<T, ThreadOp>) thread_phase_.valid = false;
   if (!StagesEngaged()) [[likely]]
     return out_.Emplace<T>(cur_line_);
   if (staged_) Commit();
