@@ -466,6 +466,19 @@ uint32_t OkRun::UsedAddresses(const NcGCodes& k, std::string* what) const {
 void OkRun::RefuseUnusedAddresses(const BlockWords& w, const NcGCodes& k) const {
   std::string what;
   const uint32_t unused = w.has & ~UsedAddresses(k, &what);
+  // Extended addresses: QA= with a C word (ln 2075), DA= in G73/G74 (ln 3933), the G84 change points of a
+  // G85/G86 call (ln 5145-5173); SA= belongs to the M-tool cycles (refused). SB=, PZ=, PW= are refused
+  // before.
+  uint32_t ext_used = 0;
+  if (k.lap == 85 || k.lap == 86) ext_used |= 0xFFu << 3;  // DA DB FA FB XA XB ZA ZB
+  if (k.cycle == 73 || k.cycle == 74) ext_used |= 1u << 3;
+  if (w.Has('C')) ext_used |= 1u << 2;
+  for (int i = 0; i < 13; ++i) {
+    if (!w.HasExt(i) || ((ext_used >> i) & 1u)) continue;
+    const int col = w.ext_col[static_cast<size_t>(i)];
+    if (i == 2) Fail(col, "QA= (C-axis revolutions, ln 2075) needs a C word in its block");
+    Fail(col, fmt::format("address {}= is not used by {}", AddrName(kExt[i]), what));
+  }
   if (unused == 0) return;
   char a = 'A';
   while (!((unused >> (a - 'A')) & 1u)) ++a;
