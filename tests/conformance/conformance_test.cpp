@@ -10,11 +10,13 @@
 #include <sys/wait.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iostream>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <sstream>
@@ -254,6 +256,200 @@ TEST(CellInterpSvg, PlotsACorpusProgram) {
   EXPECT_EQ(page.find("<script"), std::string::npos);
   EXPECT_EQ(std::system(("xmllint --noout --nonet '" + svg.string() + "'").c_str()), 0);
   fs::remove(svg);
+}
+
+// The coverage table of docs/dialects/<dialect>.md (one section headed "## Coverage ...", header row
+// `| Element | Manual ln | Status | Corpus |`): every row names the manual's lines, says yes / refused /
+// issue N, and its corpus column names cases that exist and show it (a yes row a case with .expected, a
+// refused row one with .diag). Each breach names the doc line, the element and the rule.
+struct CaseFiles {
+  std::string name;
+  bool expected = false;
+  bool diag = false;
+};
+
+std::vector<CaseFiles> CaseFileList() {
+  std::vector<CaseFiles> out;
+  for (const auto& name : Cases()) {
+    out.push_back(
+        {name, fs::exists(CorpusDir() / (name + ".expected")), fs::exists(CorpusDir() / (name + ".diag"))});
+  }
+  return out;
+}
+
+std::string Trim(const std::string& s) {
+  size_t b = s.find_first_not_of(" \t");
+  if (b == std::string::npos) return "";
+  return s.substr(b, s.find_last_not_of(" \t") - b + 1);
+}
+
+// "| a | b |" -> {"a", "b"}.
+std::vector<std::string> Cells(const std::string& row) {
+  std::vector<std::string> out;
+  std::string t = Trim(row);
+  if (t.size() < 2 || t.front() != '|' || t.back() != '|') return out;
+  std::string cell;
+  for (size_t i = 1; i < t.size(); ++i) {
+    if (t[i] == '|') {
+      out.push_back(Trim(cell));
+      cell.clear();
+    } else {
+      cell += t[i];
+    }
+  }
+  return out;
+}
+
+bool IsDigit(char c) {
+  return c >= '0' && c <= '9';
+}
+
+// Digits, ranges `1539-1545` and comma lists of them.
+bool ValidLines(const std::string& s) {
+  size_t i = 0;
+  auto number = [&] {
+    size_t b = i;
+    while (i < s.size() && IsDigit(s[i])) ++i;
+    return i > b;
+  };
+  auto blanks = [&] {
+    while (i < s.size() && s[i] == ' ') ++i;
+  };
+  for (;;) {
+    if (!number()) return false;
+    if (i < s.size() && s[i] == '-') {
+      ++i;
+      if (!number()) return false;
+    }
+    blanks();
+    if (i == s.size()) return true;
+    if (s[i] != ',') return false;
+    ++i;
+    blanks();
+  }
+}
+
+// "" when the status is allowed; else the rule it breaks.
+std::string StatusRule(const std::string& status, std::string& word) {
+  size_t i = 0;
+  while (i < status.size() && std::isalpha(static_cast<unsigned char>(status[i]))) ++i;
+  word = status.substr(0, i);
+  if (i < status.size() && IsDigit(status[i])) word.clear();
+  if (word == "yes" || word == "refused") return "";
+  if (word != "issue") return "status must start with yes, refused or issue N (found '" + status + "')";
+  size_t j = i;
+  while (j < status.size() && status[j] == ' ') ++j;
+  size_t k = j;
+  while (k < status.size() && IsDigit(status[k])) ++k;
+  if (k == j || k == i) return "status 'issue' must be followed by an issue number";
+  std::string rest = Trim(status.substr(k));
+  if (rest.size() < 2) return "status 'issue N' must say whether the cell refuses it today";
+  return "";
+}
+
+// Case references of the Corpus column: tokens of [A-Za-z0-9_*] that contain '_'.
+std::vector<std::string> CaseRefs(const std::string& corpus) {
+  std::vector<std::string> out;
+  std::string tok;
+  auto flush = [&] {
+    if (tok.find('_') != std::string::npos) out.push_back(tok);
+    tok.clear();
+  };
+  for (char c : corpus) {
+    if (std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '*') {
+      tok += c;
+    } else {
+      flush();
+    }
+  }
+  flush();
+  return out;
+}
+
+bool RefMatches(const std::string& ref, const std::string& name) {
+  if (!ref.empty() && ref.back() == '*') return name.rfind(ref.substr(0, ref.size() - 1), 0) == 0;
+  return name == ref || name.rfind(ref + "_", 0) == 0;
+}
+
+// The failures of one row ("" cells already split); `where` names it in each message.
+std::vector<std::string> RowFailures(const std::vector<std::string>& c, const std::vector<CaseFiles>& cases,
+                                     const std::string& where) {
+  std::vector<std::string> out;
+  if (c.size() != 4) return {where + ": a row must have 4 cells, has " + std::to_string(c.size())};
+  if (c[0].empty()) out.push_back(where + ": Element is empty");
+  if (!ValidLines(c[1])) out.push_back(where + ": Manual ln must be line numbers (found '" + c[1] + "')");
+  std::string word;
+  std::string rule = StatusRule(c[2], word);
+  if (!rule.empty()) out.push_back(where + ": " + rule);
+  if (c[3].find("no case") != std::string::npos)
+    out.push_back(where + ": 'no case' is not allowed: write the case and name it");
+  bool has_expected = false;
+  bool has_diag = false;
+  for (const auto& ref : CaseRefs(c[3])) {
+    bool any = false;
+    for (const auto& k : cases) {
+      if (!RefMatches(ref, k.name)) continue;
+      any = true;
+      has_expected = has_expected || k.expected;
+      has_diag = has_diag || k.diag;
+    }
+    if (!any) out.push_back(where + ": corpus reference '" + ref + "' matches no case in " + Dialect());
+  }
+  if (word == "yes" && !has_expected)
+    out.push_back(where + ": a yes row must reference a case with a .expected (a run that shows it)");
+  if (word == "refused" && !has_diag)
+    out.push_back(where + ": a refused row must reference a case with a .diag (the alarm)");
+  return out;
+}
+
+// Checks the coverage section of `doc`; returns the failures and counts the rows checked.
+std::vector<std::string> CoverageFailures(const std::string& doc_name, const std::string& doc,
+                                          const std::vector<CaseFiles>& cases, size_t& rows) {
+  const std::string header = "| Element | Manual ln | Status | Corpus |";
+  std::vector<std::string> out;
+  std::istringstream in(doc);
+  std::string l;
+  int line = 0, sections = 0;
+  bool in_section = false, in_table = false, header_seen = false;
+  rows = 0;
+  while (std::getline(in, l)) {
+    ++line;
+    if (l.rfind("## ", 0) == 0) {
+      in_section = l.rfind("## Coverage", 0) == 0;
+      sections += in_section ? 1 : 0;
+      in_table = false;
+      continue;
+    }
+    if (!in_section) continue;
+    if (Trim(l) == header) {
+      header_seen = in_table = true;
+      continue;
+    }
+    if (!in_table) continue;
+    if (Trim(l).rfind('|', 0) != 0) {
+      in_table = false;
+      continue;
+    }
+    auto c = Cells(l);
+    if (!c.empty() && c[0].find_first_not_of("-: ") == std::string::npos) continue;  // |---|---|
+    ++rows;
+    std::string where = doc_name + ":" + std::to_string(line) + " row '" + (c.empty() ? "" : c[0]) + "'";
+    for (auto& f : RowFailures(c, cases, where)) out.push_back(f);
+  }
+  if (sections != 1) out.push_back(doc_name + ": needs exactly one section headed '## Coverage'");
+  if (!header_seen) out.push_back(doc_name + ": no coverage table with the header " + header);
+  if (header_seen && rows == 0) out.push_back(doc_name + ": the coverage table is empty");
+  return out;
+}
+
+TEST(Coverage, TableRowsNameTheManualAndExistingCases) {
+  fs::path doc = fs::path(Env("CELL_SOURCE_DIR")) / "docs" / "dialects" / (Dialect() + ".md");
+  ASSERT_TRUE(fs::exists(doc)) << doc;
+  size_t rows = 0;
+  auto failures = CoverageFailures("docs/dialects/" + Dialect() + ".md", Slurp(doc), CaseFileList(), rows);
+  std::cout << "[ coverage ] " << Dialect() << ": " << rows << " rows checked, " << failures.size()
+            << " failures\n";
+  for (const auto& f : failures) ADD_FAILURE() << f;
 }
 
 INSTANTIATE_TEST_SUITE_P(Dialect, Corpus, ::testing::ValuesIn(Cases()),

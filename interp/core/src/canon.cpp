@@ -314,6 +314,7 @@ struct Writer {
     }
     Key(out, "start_angle");
     Num(out, t.start_angle);
+    if (t.exact_stop) out += ",\"exact_stop\":true";
   }
   void operator()(const DwellOp& d) const {
     Key(out, "seconds");

@@ -85,7 +85,7 @@ bool Machine::PlanThread(const Segment& s, const AxisVector& start, const AxisVe
     }
   }
   const double angle = std::fmod(std::fmod(s.thread_start_angle, 360.0) + 360.0, 360.0);
-  planner_.AddThread(end, l0, dl, travel, angle, s.id);
+  planner_.AddThread(end, l0, dl, travel, angle, s.exact_stop, s.id);
   return true;
 }
 

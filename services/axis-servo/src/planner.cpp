@@ -98,11 +98,13 @@ void Planner::AddLine(const AxisVector& end, Feed feed, bool rapid, bool exact_s
 }
 
 void Planner::AddThread(const AxisVector& end, double lead, double lead_change, double major,
-                        double start_angle, std::uint64_t seg) {
+                        double start_angle, bool exact_stop, std::uint64_t seg) {
   // Full tangential acceleration: a thread starts and ends at rest, or passes into the next thread at
   // the spindle's pace whatever the corner (the lead wins, as on a real lathe).
   PathElement e = LineElement(end, false, true);
-  e.stop_end = e.wait_in_position = false;  // Link() decides: stop, or go on into a chained thread
+  // Link() decides: stop, or go on into a chained thread; exact_stop always stops (the next thread waits for
+  // its own start angle).
+  e.stop_end = e.wait_in_position = exact_stop;
   e.seg = seg;
   e.sync = true;
   e.vfeed = kInf;

@@ -491,6 +491,32 @@ TEST(Lathe, ChainedThreadsContinueWithoutWaiting) {
   EXPECT_NEAR(r1 - r0, 1.2 / 1.5, 1e-6);
 }
 
+TEST(Lathe, ExactStopThreadsStopAndTheNextWaitsForItsStartAngle) {
+  // Okuma G65 (droop control) on G31-G35: each thread ends in position, so a thread after it starts from
+  // rest at its own start angle instead of continuing the chain.
+  Machine m = Lathe();
+  m.Push(Rapid(1, 40, 5));
+  m.Push(Spindle(2, 600));
+  Segment first = Thread(3, 40, -20, 1.5, 0, 45);
+  first.exact_stop = true;
+  m.Push(first);
+  m.Push(Thread(4, 43, -22, 1.5, 0, 270));
+  m.Push(Rapid(5, 50, -22));
+  std::vector<Event> ev;
+  const std::vector<Sample> all = RunSampled(m, ev);
+  ASSERT_EQ(m.alarm().code, AlarmCode::kNone) << m.alarm().text;
+  const std::vector<Sample> th = Of(all, 4);
+  ASSERT_FALSE(th.empty());
+  // The path stops at the junction: the second thread starts at rest.
+  EXPECT_LT(th.front().path_feed, 1) << "t " << th.front().t;
+  // It begins to move when the spindle passes 270 degrees (3.6 degrees per tick at 600 rpm).
+  std::size_t moving = 0;
+  while (moving < th.size() && th[moving].zi == -20) ++moving;
+  ASSERT_LT(moving, th.size());
+  EXPECT_GT(th[moving].angle, 270);
+  EXPECT_LE(th[moving].angle, 270 + 3.6 + 1e-9);
+}
+
 TEST(Lathe, ThreadIgnoresFeedHoldAndOverrideUntilItsEnd) {
   // Feed hold during a thread is deferred to the end of the thread block; the feed override does not
   // change the lead (Okuma: feed override ignored, slide hold finishes the pass; EMCO: FEEDHOLD waits

@@ -58,7 +58,7 @@ std::optional<cell::MotionSegment> ToSegment(const interp::Canon& c) {
       const auto& t = c.As<interp::ThreadOp>();
       s.kind(cell::SEGMENT_THREAD);
       SetTarget(s, t.to);
-      s.exact_stop(false);
+      s.exact_stop(t.exact_stop);
       s.thread_lead(t.lead);
       s.thread_lead_change(t.lead_change);
       s.thread_start_angle(t.start_angle);

@@ -28,6 +28,9 @@ TEST(ToSegment, ThreadCarriesLeadLeadChangeAndStartAngle) {
   EXPECT_DOUBLE_EQ(s->thread_lead(), 1.5);
   EXPECT_DOUBLE_EQ(s->thread_lead_change(), 0.05);
   EXPECT_DOUBLE_EQ(s->thread_start_angle(), 180);
+  EXPECT_FALSE(s->exact_stop());
+  t.exact_stop = true;  // Okuma G65: the thread ends in position even when a thread follows
+  EXPECT_TRUE(ToSegment(c)->exact_stop());
 }
 
 TEST(ToSegment, SpindleCarriesConstantSurfaceSpeedAndTheLimit) {

@@ -223,9 +223,8 @@ void OkRun::ReadNcGCodes(const BlockWords& w, NcGCodes& k) {
         break;
       case 18:
       case 28:
-      case 29:
       case 136:
-        break;  // the turning plane; torque limit (no torque model: accepted, no effect); G136 (G137 unused)
+        break;  // the turning plane; torque limit cancel and G136: the cell's only states (G29, G137 refused)
       case 40:
       case 41:
       case 42:
@@ -282,9 +281,7 @@ void OkRun::ReadNcGCodes(const BlockWords& w, NcGCodes& k) {
         if (!w.Has('S')) Fail(g.col, fmt::format("a G{} block must contain S", g.code));
         break;
       case 110:
-      case 111:
-        modal_.css_turret_b = g.code == 111;
-        break;
+        break;  // constant surface speed on turret A: the cell's only state (G111 refused)
       default:
         break;
     }
@@ -368,6 +365,7 @@ void OkRun::ExecNc(const Block& b) {
     EndBlockStages(false);
     return;
   }
+  RefuseUnusedAddresses(w, k);
   if (!b.label.empty() && !k.lap) Fail(b.label_col, "a sequence name argument is taken only by G85-G88");
   if (k.lap && b.label.empty())
     Fail(k.cycle_col, fmt::format("G{} needs the contour's sequence name", k.lap));
@@ -408,6 +406,148 @@ void OkRun::ExecNc(const Block& b) {
   if (!ended_ && motion_block) TriggerModin();
 }
 
+// The single-letter addresses the block's function reads (each function's programming format: ln 1147-1300,
+// 1642-1707, 3239-3414, 3640-4071, 5124-5252, 2235-2447 for I/K with G40-G42); F, S and T belong to any
+// block. `what` names the function for the alarm.
+uint32_t OkRun::UsedAddresses(const NcGCodes& k, std::string* what) const {
+  auto bits = [](std::string_view s) {
+    uint32_t m = 0;
+    for (char c : s) m |= 1u << (c - 'A');
+    return m;
+  };
+  const uint32_t any = bits("FST") | ((lap_.active || lap_.finish) ? bits("E") : 0);  // E: a contour's feed
+  auto named = [&](int g, std::string_view letters) {
+    *what = fmt::format("a G{:02} block", g);
+    return any | bits(letters);
+  };
+  if (k.dwell) return named(4, "");
+  if (k.g50) return named(50, "XZC");
+  if (k.lap) return named(k.lap, k.lap == 88 ? "DUWEHB" : "DUWE");
+  switch (k.cycle) {
+    case 71:
+      return named(71, "XZAIBDUHLEJQ");
+    case 72:
+      return named(72, "XZAKBDWHLEJQ");
+    case 73:
+    case 74:
+      return named(k.cycle, "XZIKDLE");
+    case 77:
+    case 78:
+      return named(k.cycle, "XZK");
+    default:
+      break;
+  }
+  const int motion = k.motion_g >= 0 ? k.motion_g : modal_.motion;
+  uint32_t used = named(motion, "XZY");  // Y: Motion names the missing axis itself
+  if (k.comp_g) used |= bits("IK");      // the entry or exit vector of G40/G41/G42
+  switch (motion) {
+    case 0:
+    case 1:
+      used |= bits("CA") | (k.chamfer ? bits("L") : 0);
+      break;
+    case 2:
+    case 3:
+      used |= bits("IKL");
+      break;
+    case 31:
+    case 32:
+    case 33:
+      used |= bits("CIKAELJ");
+      break;
+    default:  // G34/G35
+      used |= bits("CAEJ");
+      break;
+  }
+  return used;
+}
+
+// A word the block's function does not read (a stray Q5 on a G01 block, K on a G00) is refused, not ignored
+// (judgement 51); the manual prints no alarm number for it.
+void OkRun::RefuseUnusedAddresses(const BlockWords& w, const NcGCodes& k) const {
+  std::string what;
+  const uint32_t unused = w.has & ~UsedAddresses(k, &what);
+  // Extended addresses: QA= with a C word (ln 2075), DA= in G73/G74 (ln 3933), the G84 change points of a
+  // G85/G86 call (ln 5145-5173); SA= belongs to the M-tool cycles (refused). SB=, PZ=, PW= are refused
+  // before.
+  uint32_t ext_used = 0;
+  if (k.lap == 85 || k.lap == 86) ext_used |= 0xFFu << 3;  // DA DB FA FB XA XB ZA ZB
+  if (k.cycle == 73 || k.cycle == 74) ext_used |= 1u << 3;
+  if (w.Has('C')) ext_used |= 1u << 2;
+  for (int i = 0; i < 13; ++i) {
+    if (!w.HasExt(i) || ((ext_used >> i) & 1u)) continue;
+    const int col = w.ext_col[static_cast<size_t>(i)];
+    if (i == 2) Fail(col, "QA= (C-axis revolutions, ln 2075) needs a C word in its block");
+    Fail(col, fmt::format("address {}= is not used by {}", AddrName(kExt[i]), what));
+  }
+  if (unused == 0) return;
+  char a = 'A';
+  while (!((unused >> (a - 'A')) & 1u)) ++a;
+  if (k.chamfer == 0 && a == 'L' && (modal_.motion == 0 || modal_.motion == 1) && k.cycle == 0 && !k.lap) {
+    what += " without G75/G76";
+  }
+  Fail(w.Col(a), fmt::format("address {} is not used by {}", a, what));
+}
+
+// Torque limits (G29 with PZ=/PW=, ln 1504-1531) have no torque model in the servo; G111 (constant surface
+// speed on turret B, ln 1827, 7075) belongs to the two-saddle model (judgement 45). G28 (torque limit cancel)
+// and G110 are the cell's only states and run.
+void OkRun::RefuseTorqueAndTurretB(const BlockWords& w) {
+  if (const auto* g29 = w.FindG(29)) {
+    Fail(g29->col,
+         "G29 (torque limit, ln 1504-1519) is not supported by the cell's OSP-E100L dialect: no torque "
+         "model");
+  }
+  if (const auto* g111 = w.FindG(111)) {
+    Fail(g111->col,
+         "G111 (constant surface speed on turret B of the two-saddle model, ln 1827, 7075) is not supported: "
+         "one "
+         "saddle");
+  }
+  for (const char* name : {"PZ", "PW"}) {
+    const int i = ExtIndex(MakeAddr(name[0], name[1]));
+    if (w.HasExt(i)) {
+      Fail(w.ext_col[static_cast<size_t>(i)],
+           fmt::format(
+               "{}= (torque, ln 1504-1519, 1594-1614) is not supported by the cell's OSP-E100L dialect: "
+               "no torque model",
+               name));
+    }
+  }
+}
+
+// M codes that switch a function of the control the cell does not have (judgement 49): their OFF/cancel
+// partner is the cell's only state and goes out as `aux`.
+const char* OkRun::RefusedControlM(int m) {
+  switch (m) {
+    case 29:
+      return "tool interference check ON, ln 9520";
+    case 49:
+      return "spindle speed override fixed at 100 %, ln 1964-1968";
+    case 124:
+      return "STM time-over check ON, ln 1985-1986, 2142-2175";
+    case 161:
+      return "feedrate override fixed at 100 %, ln 2002-2003";
+    case 163:
+      return "M-tool spindle override fixed at 100 %, ln 2004-2005";
+    case 165:
+      return "slide hold and single block ignored, ln 2006-2007";
+    case 194:
+      return "thread phase matching ON, ln 2025-2026";
+    case 196:
+      return "store of the manual phase-matching move, ln 2027-2029";
+    case 197:
+      return "clear of the phase-matching amount, ln 2030-2031";
+    case 203:
+      return "turret unclamp during G00, ln 9144-9167";
+    default:
+      if ((m >= 321 && m <= 325) || (m >= 341 && m <= 360)) {
+        return "M code macro: CALL of a fixed subprogram, ln 9836-9878, whose format the manual does not "
+               "give";
+      }
+      return nullptr;
+  }
+}
+
 // Codes and words the manual defines that the cell cannot do, refused before the block does anything.
 void OkRun::RefuseUnsupported(const BlockWords& w) {
   // P is the 2S synchronisation code (ln 6960-6990): the cell runs one program on one saddle (judgement 45).
@@ -422,7 +562,11 @@ void OkRun::RefuseUnsupported(const BlockWords& w) {
          "M-tool "
          "spindle");
   }
+  RefuseTorqueAndTurretB(w);
   for (const auto& m : w.m) {
+    if (const char* what = RefusedControlM(m.code)) {
+      Fail(m.col, fmt::format("M{} ({}) is not supported by the cell's OSP-E100L dialect", m.code, what));
+    }
     switch (m.code) {
       case 13:
       case 14:

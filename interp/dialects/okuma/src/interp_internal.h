@@ -25,6 +25,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "block.h"
@@ -113,7 +114,6 @@ struct Modal {
   bool incremental = false;                // G91 (G90 at reset)
   bool per_rev = true;                     // G95 (power-on and reset) / G94
   bool css = false;                        // G96 / G97
-  bool css_turret_b = false;               // G111 / G110
   bool turret_b = false;                   // G14 / G13 (reset)
   bool droop = false;                      // G65 / G64
   bool chuck_barrier = false;              // M25 / M24 (off at power-on and reset, ln 9108)
@@ -203,6 +203,8 @@ class OkRun final : public RunBase, public VarReader {
   // NC blocks (interp_convert.cpp)
   void ExecNc(const Block& b);
   void RefuseUnsupported(const BlockWords& w);
+  void RefuseTorqueAndTurretB(const BlockWords& w);
+  static const char* RefusedControlM(int m);
   // The G codes of an NC block as they act (ReadNcGCodes -> the rest of ExecNc).
   struct NcGCodes {
     int motion_g = -1, motion_col = 1, comp_g = 0;
@@ -210,6 +212,8 @@ class OkRun final : public RunBase, public VarReader {
     int chamfer = 0, cycle = 0, lap = 0, cycle_col = 1;
   };
   void ReadNcGCodes(const BlockWords& w, NcGCodes& k);
+  uint32_t UsedAddresses(const NcGCodes& k, std::string* what) const;
+  void RefuseUnusedAddresses(const BlockWords& w, const NcGCodes& k) const;
   void MotionGCode(int motion_g, int motion_col);
   void NcAction(const BlockWords& w, const Block& b, const NcGCodes& k, bool xz);
   double WordValue(const Block& b, const Word& w);
@@ -306,9 +310,16 @@ class OkRun final : public RunBase, public VarReader {
   std::array<double, kAxisCount> zero_shift_{};   // VZSH* (G50; cleared by reset)
   double f_ = 0;                                  // F (mm/rev or mm/min)
   double e_ = 0;                                  // E: LAP roughing feed along the contour
-  double s_ = 0;                                  // S as last programmed (rpm)
-  double css_ = 0;                                // G96 S (m/min)
-  double max_rpm_ = 0;                            // G50 S
+  // The spindle phase at the end of the last thread when nothing has gone out after it (G65 starts a thread
+  // that follows it at this phase: it no longer continues the chain).
+  struct ThreadPhase {
+    bool valid = false;
+    AxisArray at{};
+    double angle = 0;
+  } thread_phase_;
+  double s_ = 0;        // S as last programmed (rpm)
+  double css_ = 0;      // G96 S (m/min)
+  double max_rpm_ = 0;  // G50 S
   ThreadChain chain_;
   std::array<double, kAxisCount> pos_limit_{}, neg_limit_{};  // VPVL*, VNVL* (machine); set flags below
   uint32_t pos_limit_set_ = 0, neg_limit_set_ = 0;
@@ -370,6 +381,7 @@ template <class T>
 T& OkRun::Out() {
   EmitUnitsOnce();
   idle_ = 0;
+  if constexpr (!std::is_same_v<T, ThreadOp>) thread_phase_.valid = false;
   if (!StagesEngaged()) [[likely]]
     return out_.Emplace<T>(cur_line_);
   if (staged_) Commit();

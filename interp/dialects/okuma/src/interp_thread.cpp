@@ -17,6 +17,13 @@ double Sign(double v) {
   return v < 0 ? -1.0 : 1.0;
 }
 
+// Spindle revolutions of a thread `travel` long along its major axis: lead x rho + change x rho^2 / 2 =
+// travel.
+double Revolutions(double travel, double lead, double change) {
+  if (std::fabs(change) < 1e-12) return travel / lead;
+  return (-lead + std::sqrt(std::max(0.0, lead * lead + 2 * change * travel))) / change;
+}
+
 }  // namespace
 
 // One thread move from the current position to `to` with `lead` mm per revolution along Z (or X when
@@ -33,6 +40,11 @@ void OkRun::EmitThread(const AxisArray& to, double lead, double lead_change, dou
   const double k = major / along;
   used_ |= (1u << kX) | (1u << kZ);
   const AxisArray from = pos_;
+  // Under G65 (droop control, ln 1741-1746) a thread after a thread stops between them, so it starts at the
+  // phase the spindle reached at the end of the first: the same groove (judgement 44).
+  const bool continues = modal_.droop && thread_phase_.valid && thread_phase_.at[kX] == from[kX] &&
+                         thread_phase_.at[kZ] == from[kZ];
+  if (continues) start_angle = thread_phase_.angle;
   pos_[kX] = to[kX];
   pos_[kZ] = to[kZ];
   ThreadOp& t = Out<ThreadOp>();
@@ -41,7 +53,10 @@ void OkRun::EmitThread(const AxisArray& to, double lead, double lead_change, dou
   t.lead = lead * k;
   t.lead_change = lead_change * k;
   t.start_angle = std::fmod(std::fmod(start_angle, 360.0) + 360.0, 360.0);
+  t.exact_stop = modal_.droop;
   if (staged_) stage_.from = from;
+  thread_phase_ = {true, pos_,
+                   std::fmod(t.start_angle + 360.0 * Revolutions(major, t.lead, t.lead_change), 360.0)};
 }
 
 void OkRun::ThreadCycle(const BlockWords& w, int g, int col) {
@@ -208,6 +223,8 @@ void OkRun::ThreadBlock(const BlockWords& w, int g, int col) {
     t.lead = lead;  // along Z or X: the axes' share is known only at the corner; Z lead kept as given
     t.lead_change = e;
     t.start_angle = chain_.start_angle;
+    t.exact_stop = modal_.droop;
+    thread_phase_.valid = false;  // the lead along the axes is known only at the corner
     if (staged_) {
       stage_.from = from;
       stage_.corner = spec;

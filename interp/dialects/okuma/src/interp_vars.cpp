@@ -36,6 +36,15 @@ bool ReadOnly(const std::string& n) {
   return std::find(std::begin(kReadOnly), std::end(kReadOnly), n) != std::end(kReadOnly);
 }
 
+// System variables that set the servo (droop amount ln 7779-7784, pitch-error compensation ln 7786-7796, the
+// T axis' rapid ln 9911).
+const char* ServoParameter(const std::string& stem) {
+  if (stem == "VINP") return "droop amount, ln 7779-7784";
+  if (stem == "VPFV" || stem == "VPCH") return "pitch-error compensation, ln 7786-7796";
+  if (stem == "VTRT") return "T-axis rapid feedrate, ln 9911";
+  return nullptr;
+}
+
 int IndexOf(const std::string& name, const Value* index, int col, int lo, int hi) {
   if (!index) Fail(col, fmt::format("{} needs a suffix [n]", name));
   double v = index->v;
@@ -178,8 +187,15 @@ void OkRun::SetSystem(uint64_t packed, const Value* index, double v, int col) {
   const bool indexed = Indexed(name);
   if (!indexed && index) Fail(col, fmt::format("{} takes no suffix", name));
   if (ReadOnly(name)) Fail(col, fmt::format("{} is read-only", name));
-  const int axis = AxisOfSuffix(name.back());
   const std::string stem = name.substr(0, 4);
+  if (const char* what = ServoParameter(stem)) {
+    // The servo keeps its own in-position band, pitch-error table and rapid rates: a write would be accepted
+    // and change nothing (judgement 49); reading gives the value stored, 0 at the start.
+    Fail(col,
+         fmt::format("{} ({}) is the servo's: writing it is not supported by the cell's OSP-E100L dialect",
+                     name, what));
+  }
+  const int axis = AxisOfSuffix(name.back());
   if ((stem == "VZOF" || stem == "VZSH") && axis >= 0) {
     if (axis != kX && axis != kZ && axis != kC)
       Fail(col, fmt::format("{}: no such axis on this lathe", name));

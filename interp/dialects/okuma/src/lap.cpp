@@ -604,6 +604,15 @@ std::vector<LapMove> BarCopying(const LapParams& p, const Setup& st) {
     }
     return best;
   };
+  // Whether the straight line a-b stays on or above the contour (sampled as contour_at is).
+  auto clear_of_contour = [&](Vec2 a, Vec2 c) {
+    for (int k = 0; k <= 32; ++k) {
+      const double t = k / 32.0;
+      const Vec2 q{a.x + (c.x - a.x) * t, a.y + (c.y - a.y) * t};
+      if (q.y < contour_at(q.x) - kEps) return false;
+    }
+    return true;
+  };
   int guard = 0;
   for (int n = 1;; ++n) {
     if (++guard > 10000) Fail(1, "LAP: more than 10000 passes: the depth of cut D is too small");
@@ -625,6 +634,13 @@ std::vector<LapMove> BarCopying(const LapParams& p, const Setup& st) {
         const bool above = q.end.y > contour_at(q.end.x) + kEps && q.start.y > contour_at(q.start.x) - kEps;
         if (above) {
           if (!cutting) {
+            // A pass that starts (or starts again) past the blank's start reaches the first point above the
+            // contour from over the blank: a straight feed from the approach point could cross the part.
+            if (!clear_of_contour(b.at(), q.start)) {
+              const double top = std::max(b.at().y, blank_top + 0.1);
+              b.Rapid({b.at().x, top});
+              b.Rapid({q.start.x, top});
+            }
             if (geom::Norm(b.at() - q.start) > kEps) b.Feed(q.start, f);
             cutting = true;
           }

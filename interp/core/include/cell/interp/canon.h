@@ -137,9 +137,10 @@ struct ArcOp {
 struct ThreadOp {
   static constexpr Op kOp = Op::kThread;
   Target to;
-  double lead = 0;         // mm per revolution
-  double lead_change = 0;  // mm per revolution, per revolution (variable lead); 0 normally
-  double start_angle = 0;  // degrees
+  double lead = 0;          // mm per revolution
+  double lead_change = 0;   // mm per revolution, per revolution (variable lead); 0 normally
+  double start_angle = 0;   // degrees
+  bool exact_stop = false;  // stop in position at the end: never chained into the next thread (Okuma G65)
 };
 struct DwellOp {
   static constexpr Op kOp = Op::kDwell;

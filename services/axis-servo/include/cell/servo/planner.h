@@ -91,9 +91,10 @@ class Planner {
   // changing by `lead_change` per revolution) along an axis whose travel is `major` units. A thread
   // directly after a thread continues its synchronisation; otherwise the path stops before it, waits for
   // the index pulse at `start_angle` (IndexPulse), accelerates and then tracks the spindle exactly. It ends
-  // at rest (unless a thread follows), decelerating over the last v²/2a: the incomplete thread.
+  // at rest (unless a thread follows and `exact_stop` is false), decelerating over the last v²/2a: the
+  // incomplete thread.
   void AddThread(const AxisVector& end, double lead, double lead_change, double major, double start_angle,
-                 std::uint64_t seg);
+                 bool exact_stop, std::uint64_t seg);
   // Builds an arc element from programme data; returns false (and leaves `why`) when radii disagree.
   bool MakeArc(const AxisVector& start, const AxisVector& end, const std::array<double, 3>& center,
                ArcPlane plane, ArcDirection dir, std::uint32_t turns, PathElement& out,
