@@ -277,8 +277,8 @@ std::unique_ptr<bus::Backend> Impersonating(const std::string& identity, const s
   bus::BackendOptions o;
   o.domain = std::atoi(std::getenv("CELL_DOMAIN"));
   o.participant_name = "bus-security-test/impersonator";
-  o.security = {identity,       f.ca.string(),         f.governance.string(), f.certificate.string(),
-                f.key.string(), f.permissions.string()};
+  o.security = {identity,       f.ca.string(),          f.governance.string(), f.certificate.string(),
+                f.key.string(), f.permissions.string(), f.crl.string()};
   o.partition = partition;
   return bus::MakeFastDdsBackend(o);
 }
