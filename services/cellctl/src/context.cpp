@@ -153,6 +153,16 @@ CLI::Validator Real() {
       "NUMBER");
 }
 
+void AddPaging(CLI::App* verb, Paging& paging, bool numeric_cursor) {
+  verb->add_option("--limit", paging.limit, "at most N rows (default 1000)")
+      ->transform(Decimal())
+      ->check(CLI::Range(1u, 999999999u));
+  auto* after = verb->add_option("--after", paging.after,
+                                 numeric_cursor ? "rows after this job id (the last of the previous page)"
+                                                : "rows after this name (the last of the previous page)");
+  if (numeric_cursor) after->transform(Decimal());
+}
+
 void PrintWarnings(const nlohmann::json& reply) {
   for (auto& w : reply.value("warnings", nlohmann::json::array()))
     std::cerr << "warning: " << w.get<std::string>() << "\n";

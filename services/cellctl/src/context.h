@@ -60,6 +60,16 @@ std::string ReadLocalFile(const std::string& path, std::uint64_t max_bytes, cons
 CLI::Validator Decimal();
 CLI::Validator Real();
 
+// A listing's `--limit N` (default 1000, at least 1) and `--after CURSOR` (the last id or name of the
+// previous page; a job id is decimal) (DESIGN §6). The verb fetches page after page with
+// records::CollectPages until it has `limit` rows or the listing ends; the table and --json print the same
+// rows.
+struct Paging {
+  std::uint32_t limit = 1000;
+  std::string after;
+};
+void AddPaging(CLI::App* verb, Paging& paging, bool numeric_cursor);
+
 void Print(const Context& ctx, const nlohmann::json& j, const std::vector<std::string>& columns);
 // The store's warnings of a put reply ("warnings": [...]), one "warning: " line each on stderr.
 void PrintWarnings(const nlohmann::json& reply);
