@@ -48,6 +48,15 @@ cell::SchedulerReply Context::Scheduler(cell::SchedulerRequest req, bus::Millis 
   return rep;
 }
 
+cell::InspectionReply Context::Inspection(cell::InspectionRequest req, bus::Millis timeout) {
+  if (!inspection_)
+    inspection_ = std::make_unique<bus::Client<cell::InspectionRequest, cell::InspectionReply>>(
+        Bus(), bus::topics::kInspection);
+  auto rep = inspection_->Call(std::move(req), timeout);
+  bus::ThrowIfError(rep);
+  return rep;
+}
+
 std::optional<cell::ToolTable> Context::Tools(const std::string& station, bus::Millis timeout) {
   bus::Reader<cell::ToolTable> r(Bus(), bus::topics::kToolTable, bus::QosKind::kState);
   return r.WaitFor([&](const cell::ToolTable& t) { return t.station() == station; }, timeout);

@@ -127,15 +127,12 @@ void AddInspectVerbs(CLI::App& app, Context& ctx) {
   auto name = std::make_shared<std::string>("*");
   auto* ins = app.add_subcommand("inspect", "run records and inspection files")->require_subcommand(1);
   auto ask = [&ctx](cell::InspectionOp op, const std::string& n, const cell::PageRequest& page) {
-    bus::Client<cell::InspectionRequest, cell::InspectionReply> c(ctx.Bus(), bus::topics::kInspection);
     cell::InspectionRequest r;
     r.op(op);
     cell::names::CheckRecord(n);
     cell::names::Assign(r.name(), n, "record name");
     r.page(page);
-    auto rep = c.Call(r, bus::Millis(10000));
-    bus::ThrowIfError(rep);
-    return rep;
+    return ctx.Inspection(r);
   };
   auto call = [ask](cell::InspectionOp op, const std::string& n) {
     return ask(op, n, {}).info().to_string();
