@@ -236,8 +236,8 @@ TEST_F(ProgramStoreTest, ListWildcards) {
 }
 
 // `program ls` pages (DESIGN §6, issue 39 item 2): 520 files with 32-character names (the KT-APL limit) are
-// more than one 64 KiB reply;
-// the client and cellctl follow the cursor by name, and --limit/--after take the same slice of the whole.
+// more than one 64 KiB reply; the client and cellctl follow the cursor by name, and --limit/--after take the
+// same slice of the whole.
 TEST_F(ProgramStoreTest, ListPagesThroughANamespaceLargerThanAReply) {
   cell::program_store::Client::PutOptions po;
   po.node = "KT04";
