@@ -1,8 +1,10 @@
 #include <gtest/gtest.h>
 
+#include "cell/error/error.h"
 #include "cell/records/entries.h"
 #include "cell/records/job.h"
 #include "cell/records/names.h"
+#include "cell/records/page.h"
 #include "cell/records/station.h"
 #include "cell/records/time.h"
 
@@ -128,6 +130,54 @@ TEST(Entries, InspectionNamesTellStationAndKind) {
   auto row = ProgramRow(p);
   EXPECT_EQ(row["protected"], true);
   EXPECT_EQ(row["revision"], 2);
+}
+
+// A page holds `limit` rows or what fits in the bound, whichever is less; the refused row starts the next.
+TEST(Page, ShrinksToFitItsBoundAndStopsAtItsLimit) {
+  PageBuilder by_limit(2);
+  EXPECT_TRUE(by_limit.Add({{"id", 1}}));
+  EXPECT_TRUE(by_limit.Add({{"id", 2}}));
+  EXPECT_FALSE(by_limit.Add({{"id", 3}}));
+  EXPECT_TRUE(by_limit.more());
+  EXPECT_EQ(by_limit.Text(), R"([{"id":1},{"id":2}])");
+  // {"id":1} is 8 bytes: "[" + 8 + "," + 8 + "]" = 19 fits 19, a third row would need 28.
+  PageBuilder by_bytes(0, 19);
+  EXPECT_TRUE(by_bytes.Add({{"id", 1}}));
+  EXPECT_TRUE(by_bytes.Add({{"id", 2}}));
+  EXPECT_FALSE(by_bytes.Add({{"id", 3}}));
+  EXPECT_EQ(by_bytes.Text().size(), 19u);
+  PageBuilder empty(5);
+  EXPECT_EQ(empty.Text(), "[]");
+  EXPECT_FALSE(empty.more());
+  PageBuilder tiny(0, 4);
+  EXPECT_THROW(tiny.Add({{"id", 1}}), Error);
+}
+
+// The client follows the cursor of each page's last row until it has `limit` rows or the service is done.
+TEST(Page, CollectFollowsTheCursorToTheLimitOrTheEnd) {
+  std::vector<std::string> asked;
+  auto service = [&](const std::string& after, std::uint32_t want) {  // ids 1..10, 3 per page at most
+    asked.push_back(after + "/" + std::to_string(want));
+    Page p;
+    int id = after.empty() ? 1 : std::stoi(after) + 1;
+    for (; id <= 10 && p.rows.size() < 3 && (want == 0 || p.rows.size() < want); ++id)
+      p.rows.push_back({{"id", id}});
+    p.more = id <= 10;
+    return p;
+  };
+  nlohmann::json all = CollectPages(0, "", "id", service);
+  ASSERT_EQ(all.size(), 10u);
+  EXPECT_EQ(all.back()["id"], 10);
+  EXPECT_EQ(asked, (std::vector<std::string>{"/0", "3/0", "6/0", "9/0"}));
+  asked.clear();
+  all = CollectPages(5, "2", "id", service);
+  ASSERT_EQ(all.size(), 5u);
+  EXPECT_EQ(all.front()["id"], 3);
+  EXPECT_EQ(all.back()["id"], 7);
+  EXPECT_EQ(asked, (std::vector<std::string>{"2/5", "5/2"}));
+  EXPECT_TRUE(CollectPages(0, "10", "id", service).empty());  // after the last
+  auto liar = [](const std::string&, std::uint32_t) { return Page{nlohmann::json::array(), true}; };
+  EXPECT_THROW(CollectPages(0, "", "name", liar), Error);
 }
 
 }  // namespace

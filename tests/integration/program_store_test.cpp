@@ -235,6 +235,30 @@ TEST_F(ProgramStoreTest, ListWildcards) {
   EXPECT_NE(table.find("WC BOX"), std::string::npos);
 }
 
+// `program ls` pages (DESIGN §6, issue 39 item 2): 520 files with 32-character names (the KT-APL limit) are
+// more than one 64 KiB reply; the client and cellctl follow the cursor by name, and --limit/--after take the
+// same slice of the whole.
+TEST_F(ProgramStoreTest, ListPagesThroughANamespaceLargerThanAReply) {
+  cell::program_store::Client::PutOptions po;
+  po.node = "KT04";
+  for (int i = 0; i < 520; ++i) client_->Put(fmt::format("PAGE{:03} {}", i, std::string(24, 'L')), kGear, po);
+  json all = client_->List("KT04", "PAGE*");
+  ASSERT_EQ(all.size(), 520u);
+  EXPECT_GT(all.dump().size(), 65536u);
+  for (size_t i = 1; i < all.size(); ++i) ASSERT_LT(all[i - 1]["name"], all[i]["name"]);
+  EXPECT_EQ(Ls("KT04", "PAGE*"), all);  // cellctl: the default --limit 1000 holds them all
+  const std::string after = all[299]["name"].get<std::string>();
+  RunResult r =
+      Cellctl({"program", "ls", "PAGE*", "--node", "KT04", "--json", "--limit", "220", "--after", after});
+  ASSERT_EQ(r.code, 0) << r.err;
+  json slice = json::parse(r.out);
+  ASSERT_EQ(slice.size(), 220u);
+  EXPECT_EQ(slice.front(), all[300]);
+  EXPECT_EQ(slice.back(), all[519]);
+  EXPECT_TRUE(client_->List("KT04", "PAGE*", 0, all[519]["name"].get<std::string>()).empty());
+  EXPECT_EQ(client_->List("KT04", "PAGE*", 3).size(), 3u);
+}
+
 TEST_F(ProgramStoreTest, CopyAndMoveBetweenNamespacesThenRemove) {
   Ok({"program", "put", Write("rcp.apl", kGear), "--name", "RCP PART"});
   // KT-APL RCP: HOST -> station, station -> station, back to HOST under another name.

@@ -48,6 +48,15 @@ cell::SchedulerReply Context::Scheduler(cell::SchedulerRequest req, bus::Millis 
   return rep;
 }
 
+cell::InspectionReply Context::Inspection(cell::InspectionRequest req, bus::Millis timeout) {
+  if (!inspection_)
+    inspection_ = std::make_unique<bus::Client<cell::InspectionRequest, cell::InspectionReply>>(
+        Bus(), bus::topics::kInspection);
+  auto rep = inspection_->Call(std::move(req), timeout);
+  bus::ThrowIfError(rep);
+  return rep;
+}
+
 std::optional<cell::ToolTable> Context::Tools(const std::string& station, bus::Millis timeout) {
   bus::Reader<cell::ToolTable> r(Bus(), bus::topics::kToolTable, bus::QosKind::kState);
   return r.WaitFor([&](const cell::ToolTable& t) { return t.station() == station; }, timeout);
@@ -151,6 +160,16 @@ CLI::Validator Real() {
         return "";
       },
       "NUMBER");
+}
+
+void AddPaging(CLI::App* verb, Paging& paging, bool numeric_cursor) {
+  verb->add_option("--limit", paging.limit, "at most N rows (default 1000)")
+      ->transform(Decimal())
+      ->check(CLI::Range(1u, 999999999u));
+  auto* after = verb->add_option("--after", paging.after,
+                                 numeric_cursor ? "rows after this job id (the last of the previous page)"
+                                                : "rows after this name (the last of the previous page)");
+  if (numeric_cursor) after->transform(Decimal());
 }
 
 void PrintWarnings(const nlohmann::json& reply) {

@@ -14,6 +14,7 @@
 #include "cell/bus/bus.h"
 #include "cell/error/error.h"
 #include "cell/health/health.h"
+#include "cell/idl/inspection.h"
 #include "cell/idl/scheduler.h"
 #include "cell/idl/station.h"
 #include "cell/program_store/client.h"
@@ -33,7 +34,10 @@ class Context {
   bool json = false;
   bus::Participant& Bus();
   cell::program_store::Client& Programs();
+  // One client per service for the whole command: the service replays a reply to the same client and
+  // request id, and a second client on the same participant would count its requests from 1 again.
   cell::SchedulerReply Scheduler(cell::SchedulerRequest req, bus::Millis timeout = bus::Millis(30000));
+  cell::InspectionReply Inspection(cell::InspectionRequest req, bus::Millis timeout = bus::Millis(10000));
   std::optional<cell::ToolTable> Tools(const std::string& station, bus::Millis timeout);
   std::optional<cell::StationVariables> Variables(const std::string& station, bus::Millis timeout);
   cell::StationReply StationCommand(const std::string& station, cell::StationRequest req);
@@ -47,6 +51,7 @@ class Context {
   std::unique_ptr<bus::Participant> bus_;
   std::unique_ptr<cell::program_store::Client> programs_;
   std::unique_ptr<bus::Client<cell::SchedulerRequest, cell::SchedulerReply>> scheduler_;
+  std::unique_ptr<bus::Client<cell::InspectionRequest, cell::InspectionReply>> inspection_;
 };
 
 // The whole content of a local file. Exit{1, reason} when it cannot be read (a directory, a read error such
@@ -59,6 +64,16 @@ std::string ReadLocalFile(const std::string& path, std::uint64_t max_bytes, cons
 // discarded). Real allows one decimal point, no exponent, no hexadecimal float.
 CLI::Validator Decimal();
 CLI::Validator Real();
+
+// A listing's `--limit N` (default 1000, at least 1) and `--after CURSOR` (the last id or name of the
+// previous page; a job id is decimal) (DESIGN §6). The verb fetches page after page with
+// records::CollectPages until it has `limit` rows or the listing ends; the table and --json print the same
+// rows.
+struct Paging {
+  std::uint32_t limit = 1000;
+  std::string after;
+};
+void AddPaging(CLI::App* verb, Paging& paging, bool numeric_cursor);
 
 void Print(const Context& ctx, const nlohmann::json& j, const std::vector<std::string>& columns);
 // The store's warnings of a put reply ("warnings": [...]), one "warning: " line each on stderr.

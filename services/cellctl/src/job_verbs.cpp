@@ -7,6 +7,7 @@
 #include "cell/inspection/inspection_file.h"
 #include "cell/names/names.h"
 #include "cell/records/names.h"
+#include "cell/records/page.h"
 #include "context.h"
 
 namespace cellctl {
@@ -31,18 +32,36 @@ void AddJobVerbs(CLI::App& app, Context& ctx) {
   struct Opts {
     int id = 0;
     double timeout = -1;
-    std::string name, pattern = "*";
+    std::string name, pattern = "*", state, station;
   };
   auto o = std::make_shared<Opts>();
   auto* job =
       app.add_subcommand("job", "jobs: pallets on routes, pallet runs, schedule runs")->require_subcommand(1);
 
-  auto* ls = job->add_subcommand("ls", "every job");
+  auto* ls = job->add_subcommand("ls", "jobs by id");
+  auto page = std::make_shared<Paging>();
+  AddPaging(ls, *page, true);
+  ls->add_option("--state", o->state, "only jobs in this state (QUEUED ... CANCELLED)")
+      ->check(CLI::Validator(
+          [](std::string& s) -> std::string {
+            return cell::records::JobStateFromName(s) ? "" : "not a job state: " + cell::names::Shown(s);
+          },
+          "STATE"));
+  ls->add_option("--station", o->station, "only jobs whose current or last visit is on this station");
   ls->add_flag("--json", ctx.json);
-  ls->callback([&ctx] {
+  ls->callback([o, page, &ctx] {
+    if (!o->station.empty()) cell::names::CheckStation(o->station);
     cell::SchedulerRequest r;
     r.op(cell::SCHED_JOB_LIST);
-    Print(ctx, nlohmann::json::parse(ctx.Scheduler(r).info().to_string()),
+    cell::names::Assign(r.station(), o->station, "station id");
+    cell::names::Assign(r.state(), o->state, "job state");
+    auto fetch = [&](const std::string& after, std::uint32_t want) {
+      cell::names::Assign(r.page().after(), after, "--after");
+      r.page().limit(want);
+      cell::SchedulerReply rep = ctx.Scheduler(r);
+      return cell::records::Page{nlohmann::json::parse(rep.info().to_string()), rep.more()};
+    };
+    Print(ctx, cell::records::CollectPages(page->limit, page->after, "id", fetch),
           {"id", "state", "route", "pallet", "station", "reason", "started", "finished", "cycle_s"});
   });
 
@@ -107,21 +126,31 @@ void AddJobVerbs(CLI::App& app, Context& ctx) {
 void AddInspectVerbs(CLI::App& app, Context& ctx) {
   auto name = std::make_shared<std::string>("*");
   auto* ins = app.add_subcommand("inspect", "run records and inspection files")->require_subcommand(1);
-  auto call = [&ctx](cell::InspectionOp op, const std::string& n) {
-    bus::Client<cell::InspectionRequest, cell::InspectionReply> c(ctx.Bus(), bus::topics::kInspection);
+  auto ask = [&ctx](cell::InspectionOp op, const std::string& n, const cell::PageRequest& page) {
     cell::InspectionRequest r;
     r.op(op);
     cell::names::CheckRecord(n);
     cell::names::Assign(r.name(), n, "record name");
-    auto rep = c.Call(r, bus::Millis(10000));
-    bus::ThrowIfError(rep);
-    return rep.info().to_string();
+    r.page(page);
+    return ctx.Inspection(r);
   };
-  auto* ls = ins->add_subcommand("ls", "records and files");
+  auto call = [ask](cell::InspectionOp op, const std::string& n) {
+    return ask(op, n, {}).info().to_string();
+  };
+  auto* ls = ins->add_subcommand("ls", "records and files by name");
   ls->add_option("PATTERN", *name);
+  auto page = std::make_shared<Paging>();
+  AddPaging(ls, *page, false);
   ls->add_flag("--json", ctx.json);
-  ls->callback([name, call, &ctx] {
-    Print(ctx, nlohmann::json::parse(call(cell::INSPECTION_LIST, *name)),
+  ls->callback([name, ask, page, &ctx] {
+    auto fetch = [&](const std::string& after, std::uint32_t want) {
+      cell::PageRequest p;
+      cell::names::Assign(p.after(), after, "--after");
+      p.limit(want);
+      auto rep = ask(cell::INSPECTION_LIST, *name, p);
+      return cell::records::Page{nlohmann::json::parse(rep.info().to_string()), rep.more()};
+    };
+    Print(ctx, cell::records::CollectPages(page->limit, page->after, "name", fetch),
           {"name", "station", "kind", "size"});
   });
   auto* cat = ins->add_subcommand("cat", "print one record or file");

@@ -288,17 +288,25 @@ void AddProgramLs(CLI::App& prog, Context& ctx, const OptsPtr& o) {
   auto* ls = prog.add_subcommand("ls", "list programs matching PATTERN (* and ?)");
   ls->add_option("PATTERN", o->pattern);
   ls->add_option("--node", o->node);
+  auto page = std::make_shared<Paging>();
+  AddPaging(ls, *page, false);
   ls->add_flag("--json", ctx.json);
-  ls->callback([o, &ctx] {
+  ls->callback([o, page, &ctx] {
     cell::names::CheckNode(o->node);
     cell::names::CheckPattern(o->pattern);
-    // A viewer may not use the store's request topic: it lists what the store publishes (docs/security.md).
+    // A viewer may not use the store's request topic: it lists what the store publishes (docs/security.md),
+    // all of it by name, and takes the same page of it here.
     const bool viewer = cell::config::IdentityOverride() == "viewer";
-    Print(ctx,
-          viewer
-              ? cell::program_store::ListPublished(ctx.Bus(), o->node, o->pattern, cell::bus::Millis(10000))
-              : ctx.Programs().List(o->node, o->pattern),
-          {"name", "node", "type", "dialect", "revision", "size", "protected"});
+    nlohmann::json rows;
+    if (viewer) {
+      rows = nlohmann::json::array();
+      for (auto& f :
+           cell::program_store::ListPublished(ctx.Bus(), o->node, o->pattern, cell::bus::Millis(10000)))
+        if (f.value("name", std::string()) > page->after && rows.size() < page->limit) rows.push_back(f);
+    } else {
+      rows = ctx.Programs().List(o->node, o->pattern, page->limit, page->after);
+    }
+    Print(ctx, rows, {"name", "node", "type", "dialect", "revision", "size", "protected"});
   });
 }
 

@@ -8,6 +8,8 @@
 
 #include "cell/bus/topics.h"
 #include "cell/health/health.h"
+#include "cell/records/entries.h"
+#include "cell/records/page.h"
 #include "cell/records/time.h"
 
 namespace cell::inspection {
@@ -91,10 +93,12 @@ cell::InspectionReply Service::Handle(const cell::InspectionRequest& r) {
       ev.excerpt(Tail(r.file().text().to_string(), 4000));
       ev.text(r.file().text());  // the whole file, for viewers (docs/security.md)
       break;
-    case cell::INSPECTION_LIST: {
-      std::string s = records_.List(r.name().to_string().empty() ? "*" : r.name().to_string()).dump();
-      if (s.size() > 65536) throw Error(Errc::kFailedPrecondition, "listing too large; give a pattern");
-      rep.info(s);
+    case cell::INSPECTION_LIST: {  // one page by name within the reply's bound
+      records::PageBuilder page(r.page().limit());
+      records_.List(r.name().to_string().empty() ? "*" : r.name().to_string(), r.page().after().to_string(),
+                    [&](const records::InspectionEntry& e) { return page.Add(records::InspectionRow(e)); });
+      rep.info(page.Text());
+      rep.more(page.more());
       break;
     }
     case cell::INSPECTION_CAT: {

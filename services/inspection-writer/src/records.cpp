@@ -73,17 +73,30 @@ std::string Records::StoreFile(const std::string& station, const std::string& na
 }
 
 nlohmann::json Records::List(const std::string& pattern) const {
-  std::vector<nlohmann::json> rows;
+  nlohmann::json rows = nlohmann::json::array();
+  List(pattern, "", [&](const cell::records::InspectionEntry& e) {
+    rows.push_back(cell::records::InspectionRow(e));
+    return true;
+  });
+  return rows;
+}
+
+void Records::List(const std::string& pattern, const std::string& after,
+                   const std::function<bool(const cell::records::InspectionEntry&)>& visit) const {
+  std::vector<std::string> names;
   for (auto& e : fs::recursive_directory_iterator(dir_)) {
     if (!e.is_regular_file() || e.path().extension() == ".tmp") continue;
     std::string rel = fs::relative(e.path(), dir_).string();
-    if (!Match(pattern.c_str(), rel.c_str())) continue;
-    cell::records::InspectionEntry entry = cell::records::InspectionEntryOf(rel);
-    entry.size = static_cast<std::int64_t>(e.file_size());
-    rows.push_back(cell::records::InspectionRow(entry));
+    if (rel > after && Match(pattern.c_str(), rel.c_str())) names.push_back(std::move(rel));
   }
-  std::sort(rows.begin(), rows.end(), [](auto& a, auto& b) { return a["name"] < b["name"]; });
-  return rows;
+  std::sort(names.begin(), names.end());
+  for (const auto& name : names) {
+    cell::records::InspectionEntry entry = cell::records::InspectionEntryOf(name);
+    std::error_code ec;  // a file removed meanwhile is listed without its size
+    const auto size = fs::file_size(dir_ / name, ec);
+    if (!ec) entry.size = static_cast<std::int64_t>(size);
+    if (!visit(entry)) return;
+  }
 }
 
 std::optional<std::string> Records::Cat(const std::string& name) const {

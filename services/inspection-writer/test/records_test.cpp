@@ -41,6 +41,31 @@ TEST(Records, StoresListsAndReadsRunRecords) {
   EXPECT_FALSE(r.Cat("../etc/passwd"));
 }
 
+// `inspect ls --after NAME` (DESIGN §6): by name in byte order, the cursor exclusive, sizes of what is shown;
+// after the last name and in an empty directory there is nothing.
+TEST(Records, ListPagesAfterACursorByName) {
+  Records r(TempDir());
+  auto page = [&](const std::string& pattern, const std::string& after, std::size_t limit) {
+    std::vector<std::string> out;
+    r.List(pattern, after, [&](const cell::records::InspectionEntry& e) {
+      if (out.size() == limit) return false;
+      EXPECT_TRUE(e.size.has_value()) << e.name;
+      out.push_back(e.name);
+      return true;
+    });
+    return out;
+  };
+  EXPECT_TRUE(page("*", "", 10).empty());
+  for (long id : {9, 10, 11}) r.StoreRun(RunRecord(id));
+  r.StoreFile("KT01", "PUMP341", "1 2 3\n");
+  // "KT01/PUMP341" < "run-KT01-10.json" < "run-KT01-11.json" < "run-KT01-9.json" (bytes, not numbers).
+  using V = std::vector<std::string>;
+  EXPECT_EQ(page("*", "", 2), (V{"KT01/PUMP341", "run-KT01-10.json"}));
+  EXPECT_EQ(page("*", "run-KT01-10.json", 2), (V{"run-KT01-11.json", "run-KT01-9.json"}));
+  EXPECT_EQ(page("run-*", "a", 1), (V{"run-KT01-10.json"}));
+  EXPECT_TRUE(page("*", "run-KT01-9.json", 10).empty());
+}
+
 TEST(Records, RejectsIncompleteRecordsAndBadNames) {
   Records r(TempDir());
   EXPECT_THROW(r.StoreRun({{"station", "KT01"}}), cell::Error);

@@ -11,6 +11,7 @@
 #include "cell/bus/topics.h"
 #include "cell/names/names.h"
 #include "cell/program_store/program_store.h"
+#include "cell/records/page.h"
 
 namespace cell::program_store {
 
@@ -128,22 +129,17 @@ nlohmann::json Client::Show(const std::string& node, const std::string& name) {
   return Info(Call(req));
 }
 
-nlohmann::json Client::List(const std::string& node, const std::string& pattern) {
+nlohmann::json Client::List(const std::string& node, const std::string& pattern, std::uint32_t limit,
+                            const std::string& after) {
   cell::ProgramRequest req;
   req.op(cell::PROGRAM_LIST);
   Address(req, node, pattern);
-  // Paged: the service answers page chunk_index of chunk_count (a reply is bounded to 64 KiB).
-  nlohmann::json all = nlohmann::json::array();
-  uint32_t pages = 1;
-  for (uint32_t i = 0; i < pages; ++i) {
-    req.chunk_index(i);
+  return records::CollectPages(limit, after, "name", [&](const std::string& from, std::uint32_t want) {
+    names::Assign(req.page().after(), from, "--after");
+    req.page().limit(want);
     cell::ProgramReply r = Call(req);
-    pages = std::max<uint32_t>(1, r.chunk_count());
-    nlohmann::json page = Info(r);
-    if (!page.is_array()) throw Error(Errc::kInternal, "program store sent a malformed listing");
-    for (auto& e : page) all.push_back(std::move(e));
-  }
-  return all;
+    return records::Page{Info(r), r.more()};
+  });
 }
 
 nlohmann::json Client::Copy(const std::string& from_node, const std::string& from, const std::string& to_node,

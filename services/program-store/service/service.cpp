@@ -11,6 +11,7 @@
 #include "cell/bus/topics.h"
 #include "cell/program_store/client.h"
 #include "cell/records/entries.h"
+#include "cell/records/page.h"
 
 namespace cell::program_store {
 
@@ -57,8 +58,6 @@ PutRequest PutFrom(const cell::ProgramRequest& r) {
   p.idempotency_key = r.hdr().idempotency_key().to_string();
   return p;
 }
-
-constexpr size_t kListPageBytes = 60000;  // below the 65,536 bound of ProgramReply::info
 
 void SetInfo(cell::ProgramReply& rep, const nlohmann::json& j) {
   std::string s = j.dump();
@@ -322,33 +321,15 @@ cell::ProgramReply Service::Show(const cell::ProgramRequest& r) {
   return rep;
 }
 
-// A listing is paged: page chunk_index of chunk_count, each at most kListPageBytes of JSON, so a namespace of
-// any size can be listed (one reply's info is bounded to 64 KiB).
+// `program ls`: one page of the namespace by name after the request's cursor, within the reply's bound
+// (records::PageBuilder), so a namespace of any size can be listed.
 cell::ProgramReply Service::List(const cell::ProgramRequest& r) {
   cell::ProgramReply rep;
-  const std::string name = r.name().to_string();
-  std::vector<std::string> rows;
-  for (auto& f : store_.List(r.node().to_string(), name.empty() ? "*" : name))
-    rows.push_back(records::ProgramRow(Entry(f)).dump());
-  std::vector<size_t> page_start = {0};
-  size_t bytes = 2;
-  for (size_t i = 0; i < rows.size(); ++i) {
-    if (bytes + rows[i].size() + 1 > kListPageBytes && i > page_start.back()) {
-      page_start.push_back(i);
-      bytes = 2;
-    }
-    bytes += rows[i].size() + 1;
-  }
-  if (r.chunk_index() >= page_start.size())
-    throw Error(Errc::kInvalidArgument, "listing page " + std::to_string(r.chunk_index()) + " past the end");
-  size_t begin = page_start[r.chunk_index()];
-  size_t end = r.chunk_index() + 1 < page_start.size() ? page_start[r.chunk_index() + 1] : rows.size();
-  std::string page = "[";
-  for (size_t i = begin; i < end; ++i) page += (i > begin ? "," : "") + rows[i];
-  page += "]";
-  rep.info(page);
-  rep.chunk_index(r.chunk_index());
-  rep.chunk_count(static_cast<uint32_t>(page_start.size()));
+  records::PageBuilder page(r.page().limit());
+  store_.List(r.node().to_string(), r.name().to_string(), r.page().after().to_string(),
+              [&](const FileInfo& f) { return page.Add(records::ProgramRow(Entry(f))); });
+  rep.info(page.Text());
+  rep.more(page.more());
   return rep;
 }
 

@@ -602,19 +602,29 @@ ShowResult ProgramStore::Show(std::string_view node, std::string_view name, std:
 }
 
 std::vector<FileInfo> ProgramStore::List(std::string_view node, std::string_view pattern) {
+  std::vector<FileInfo> out;
+  List(node, pattern, "", [&](const FileInfo& f) {
+    out.push_back(f);
+    return true;
+  });
+  return out;
+}
+
+void ProgramStore::List(std::string_view node, std::string_view pattern, std::string_view after,
+                        const std::function<bool(const FileInfo&)>& visit) {
   std::lock_guard lock(mutex_);
   RequireNamespace(*this, node);
   if (pattern.empty()) pattern = "*";
+  // SQLite's default BINARY collation orders names by their bytes, as std::string compares them.
   Statement st = db_->Prepare(fmt::format(
       "SELECT {} FROM files f JOIN revisions r ON r.file_id = f.id AND r.rev = f.head WHERE f.node = ? "
-      "ORDER BY f.name",
+      "AND f.name > ? ORDER BY f.name",
       kFileColumns));
   st.BindText(1, node);
-  std::vector<FileInfo> out;
+  st.BindText(2, after);
   while (st.Step()) {
-    if (WildcardMatch(pattern, st.ColumnText(1))) out.push_back(ReadFileInfo(st));
+    if (WildcardMatch(pattern, st.ColumnText(1)) && !visit(ReadFileInfo(st))) return;
   }
-  return out;
 }
 
 PutResult ProgramStore::Copy(const CopyRequest& request) {

@@ -313,6 +313,37 @@ TEST(ProgramStore, IdempotentRetriesReturnTheFirstResult) {
   EXPECT_EQ(ps.List("HOST").size(), 1u);
 }
 
+// `program ls --after NAME` (DESIGN §6): by name in byte order, the cursor exclusive (it need not exist),
+// the visit stops where the page is full; after the last name and in an empty namespace there is nothing.
+TEST(ProgramStore, ListPagesAfterACursorByName) {
+  TempDir tmp;
+  ProgramStore ps(Options(tmp.path()));
+  for (const char* name : {"GEAR HOUSING", "GEAR BOX", "PALLET38;FXT", "A1", "B1", "a1"})
+    ps.Put(Req("KT01", name, std::string(name).find(";FXT") != std::string::npos ? "(FXC,H1 X0)\n" : kGear));
+  auto page = [&](std::string_view pattern, std::string_view after, std::size_t limit) {
+    std::vector<std::string> out;
+    ps.List("KT01", pattern, after, [&](const FileInfo& f) {
+      if (out.size() == limit) return false;
+      out.push_back(f.name);
+      return true;
+    });
+    return out;
+  };
+  EXPECT_THAT(page("*", "", 2), ElementsAre("A1", "B1"));
+  EXPECT_THAT(page("*", "B1", 2), ElementsAre("GEAR BOX", "GEAR HOUSING"));
+  EXPECT_THAT(page("*", "GEAR HOUSING", 9), ElementsAre("PALLET38;FXT", "a1"));  // 'a' sorts after 'P'
+  EXPECT_THAT(page("*", "C", 1), ElementsAre("GEAR BOX"));
+  EXPECT_THAT(page("GEAR*", "GEAR BOX", 9), ElementsAre("GEAR HOUSING"));
+  EXPECT_THAT(page("*", "a1", 9), IsEmpty());
+  EXPECT_THAT(page("*", "", 0), IsEmpty());
+  std::vector<std::string> none;
+  ps.List("KT02", "*", "", [&](const FileInfo& f) {
+    none.push_back(f.name);
+    return true;
+  });
+  EXPECT_THAT(none, IsEmpty());
+}
+
 TEST(ProgramStore, ListWithWildcards) {
   TempDir tmp;
   ProgramStore ps(Options(tmp.path()));

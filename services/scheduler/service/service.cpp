@@ -4,12 +4,14 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
+#include <charconv>
 
 #include "cell/bus/topics.h"
 #include "cell/config/config.h"
 #include "cell/idl/health.h"
 #include "cell/interp/station_rules.h"
 #include "cell/names/names.h"
+#include "cell/records/page.h"
 #include "cell/scheduler/json.h"
 #include "cell/scheduler/route.h"
 #include "cell/tooltable/wire.h"
@@ -302,12 +304,9 @@ cell::SchedulerReply Service::Handle(const cell::SchedulerRequest& r) {
       rep.job_id(static_cast<int32_t>(j.job_id));
       break;
     }
-    case cell::SCHED_JOB_LIST: {
-      nlohmann::json arr = nlohmann::json::array();
-      for (auto& j : sched_.Jobs(false)) arr.push_back(ToJson(j, false));
-      info(arr);
+    case cell::SCHED_JOB_LIST:
+      ListJobs(r, rep);
       break;
-    }
     case cell::SCHED_JOB_SHOW: {
       auto j = sched_.Job(r.job_id(), true);
       if (!j) throw Error(Errc::kNotFound, "unknown job " + std::to_string(r.job_id()));
@@ -321,6 +320,25 @@ cell::SchedulerReply Service::Handle(const cell::SchedulerRequest& r) {
       break;
   }
   return rep;
+}
+
+// `job ls`: one page, by id, within the reply's bound (records::PageBuilder). Called with mu_ held.
+void Service::ListJobs(const cell::SchedulerRequest& r, cell::SchedulerReply& rep) const {
+  JobQuery q;
+  const std::string after = r.page().after().to_string(), state = r.state().to_string();
+  if (!after.empty()) {
+    const auto [end, ec] = std::from_chars(after.data(), after.data() + after.size(), q.after);
+    if (ec != std::errc() || end != after.data() + after.size() || q.after < 0)
+      throw Error(Errc::kInvalidArgument,
+                  "--after: a job id is a decimal number, not " + names::Shown(after));
+  }
+  if (!state.empty() && !(q.state = JobStateFromName(state)))
+    throw Error(Errc::kInvalidArgument, "--state: no job state " + names::Shown(state));
+  q.station = r.station().to_string();
+  records::PageBuilder page(r.page().limit());
+  sched_.ForJobs(q, [&](const JobView& j) { return page.Add(ToJson(j, false)); });
+  rep.info(page.Text());
+  rep.more(page.more());
 }
 
 // Called with mu_ held.

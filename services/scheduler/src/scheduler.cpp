@@ -42,6 +42,13 @@ std::string_view JobStateName(JobState s) {
   return records::JobStateName(WireState(s));
 }
 
+std::optional<JobState> JobStateFromName(std::string_view name) {
+  for (JobState st : {JobState::kQueued, JobState::kWaiting, JobState::kDispatched, JobState::kRunning,
+                      JobState::kCompleted, JobState::kFailed, JobState::kCancelled})
+    if (JobStateName(st) == name) return st;
+  return std::nullopt;
+}
+
 bool IsTerminal(JobState s) {
   return s == JobState::kCompleted || s == JobState::kFailed || s == JobState::kCancelled;
 }

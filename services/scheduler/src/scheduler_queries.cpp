@@ -103,6 +103,16 @@ std::vector<JobView> Scheduler::Jobs(bool with_decisions) const {
   return out;
 }
 
+void Scheduler::ForJobs(const JobQuery& q, const std::function<bool(const JobView&)>& visit) const {
+  int station = -1;
+  if (!q.station.empty() && (station = impl_->FindStation(q.station)) < 0) return;  // no job was there
+  for (auto it = impl_->jobs.upper_bound(q.after); it != impl_->jobs.end(); ++it) {
+    const JobRec& j = it->second;
+    if ((q.state && j.state != *q.state) || (station >= 0 && j.station != station)) continue;
+    if (!visit(impl_->View(j, false))) return;
+  }
+}
+
 std::vector<StationView> Scheduler::Stations() const {
   std::vector<StationView> out;
   for (std::size_t s = 0; s < impl_->stations.size(); ++s)

@@ -54,10 +54,7 @@ ALTER TABLE stations ADD COLUMN pending_vars TEXT NOT NULL DEFAULT '{}';
 }
 
 JobState ParseJobState(std::string_view s) {
-  for (JobState st : {JobState::kQueued, JobState::kWaiting, JobState::kDispatched, JobState::kRunning,
-                      JobState::kCompleted, JobState::kFailed, JobState::kCancelled}) {
-    if (JobStateName(st) == s) return st;
-  }
+  if (auto st = JobStateFromName(s)) return *st;
   throw Error(Errc::kInternal, "scheduler database: unknown job state '" + std::string(s) + "'");
 }
 

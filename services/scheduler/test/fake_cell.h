@@ -4,8 +4,12 @@
 
 #include <gtest/gtest.h>
 
+#include <stdlib.h>
+
+#include <filesystem>
 #include <map>
 #include <memory>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -36,6 +40,28 @@ inline tooltable::ToolTable Tools(const std::vector<std::string>& tools) {
   }
   return table;
 }
+
+// A scheduler database directory of its own, removed at the end.
+class TempDir {
+ public:
+  TempDir() {
+    // A process crash (kill -9) is what these tests simulate, not a power cut: tmpfs keeps them fast.
+    const std::filesystem::path base = std::filesystem::is_directory("/dev/shm")
+                                           ? std::filesystem::path("/dev/shm")
+                                           : std::filesystem::temp_directory_path();
+    std::string pattern = (base / "cell-sched-test-XXXXXX").string();
+    if (mkdtemp(pattern.data()) == nullptr) throw std::runtime_error("mkdtemp failed");
+    path_ = pattern;
+  }
+  ~TempDir() {
+    std::error_code ec;
+    std::filesystem::remove_all(path_, ec);
+  }
+  std::string db() const { return (path_ / "scheduler.db").string(); }
+
+ private:
+  std::filesystem::path path_;
+};
 
 class FakeCell {
  public:

@@ -23,25 +23,7 @@ namespace {
 
 namespace fs = std::filesystem;
 using testing::FakeCell;
-
-class TempDir {
- public:
-  TempDir() {
-    // A process crash (kill -9) is what these tests simulate, not a power cut: tmpfs keeps them fast.
-    const fs::path base = fs::is_directory("/dev/shm") ? fs::path("/dev/shm") : fs::temp_directory_path();
-    std::string pattern = (base / "cell-sched-test-XXXXXX").string();
-    if (mkdtemp(pattern.data()) == nullptr) throw std::runtime_error("mkdtemp failed");
-    path_ = pattern;
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  std::string db() const { return (path_ / "scheduler.db").string(); }
-
- private:
-  fs::path path_;
-};
+using testing::TempDir;
 
 TEST(Recovery, EverythingSurvivesARestart) {
   TempDir tmp;

@@ -3,11 +3,14 @@
 #pragma once
 
 #include <filesystem>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include <nlohmann/json.hpp>
+
+#include "cell/records/entries.h"
 
 namespace cell::inspection {
 
@@ -23,6 +26,10 @@ class Records {
   std::string StoreFile(const std::string& station, const std::string& name, const std::string& text);
   // [{name, station, kind, size}] for names matching the pattern (* and ?).
   nlohmann::json List(const std::string& pattern) const;
+  // `inspect ls --after NAME`: the entries of those names that sort after `after` (exclusive, byte order; ""
+  // from the first), by name, one at a time until visit returns false. Only a visited entry's size is read.
+  void List(const std::string& pattern, const std::string& after,
+            const std::function<bool(const records::InspectionEntry&)>& visit) const;
   std::optional<std::string> Cat(const std::string& name) const;
 
  private:

@@ -151,6 +151,11 @@ class ProgramStore {
   ShowResult Show(std::string_view node, std::string_view name, std::uint32_t revision = 0);
   // Files whose name matches `pattern` (`*` any run, `?` one character; "" matches all), by name.
   std::vector<FileInfo> List(std::string_view node, std::string_view pattern = "*");
+  // The same files after `after` (exclusive, in the byte order of names; "" from the first), one at a time
+  // until visit returns false: a page of a large namespace (`program ls --after`) reads only what it shows.
+  // visit runs under the store's lock and must not call back into the store.
+  void List(std::string_view node, std::string_view pattern, std::string_view after,
+            const std::function<bool(const FileInfo&)>& visit);
 
   PutResult Copy(const CopyRequest& request);
   OpResult Rename(const RenameRequest& request);

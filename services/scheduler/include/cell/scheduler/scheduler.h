@@ -29,6 +29,7 @@ namespace cell::scheduler {
 enum class JobState { kQueued, kWaiting, kDispatched, kRunning, kCompleted, kFailed, kCancelled };
 cell::JobState WireState(JobState s);       // the state on cell/job/state
 std::string_view JobStateName(JobState s);  // records::JobStateName: "QUEUED", "WAITING", ...
+std::optional<JobState> JobStateFromName(std::string_view name);  // nullopt for a word that is no state
 bool IsTerminal(JobState s);
 
 // A pallet visit handed to a station: run `programs` in order on pallet `pallet`.
@@ -113,6 +114,14 @@ struct JobView {
   int op_count = 0;
   int decision_count = 0;           // all of the job's decisions, listed in `decisions` or not
   std::vector<Decision> decisions;  // filled only when asked for (job ls leaves them out)
+};
+
+// `job ls` (DESIGN §6): the jobs after `after` (exclusive) in id order, only those in `state` and those whose
+// current or last visit is on `station`, when given.
+struct JobQuery {
+  std::int64_t after = 0;
+  std::optional<JobState> state;
+  std::string station;  // "" any
 };
 
 struct StationView {
@@ -227,6 +236,9 @@ class Scheduler {
   // ---- queries ----
   std::optional<JobView> Job(std::int64_t id, bool with_decisions = true) const;
   std::vector<JobView> Jobs(bool with_decisions = false) const;
+  // The jobs of q without their decisions, one at a time, until visit returns false (a page is full): a
+  // listing of any size costs only the page it shows.
+  void ForJobs(const JobQuery& q, const std::function<bool(const JobView&)>& visit) const;
   std::vector<StationView> Stations() const;
   std::optional<StationView> Station(std::string_view id) const;
   // False once a dispatch was revoked or ended: the service drops it instead of handing it out late.

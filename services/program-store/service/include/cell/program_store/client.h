@@ -44,7 +44,10 @@ class Client {
   std::optional<std::string> GetWithFallback(const std::string& node, const std::string& name);
   std::optional<File> FetchWithFallback(const std::string& node, const std::string& name);
   nlohmann::json Show(const std::string& node, const std::string& name);
-  nlohmann::json List(const std::string& node, const std::string& pattern);
+  // Files by name after `after` (exclusive; "" from the first), at most `limit` (0: all), page by page
+  // (records::CollectPages: one reply is bounded to 64 KiB).
+  nlohmann::json List(const std::string& node, const std::string& pattern, std::uint32_t limit = 0,
+                      const std::string& after = "");
   nlohmann::json Copy(const std::string& from_node, const std::string& from, const std::string& to_node,
                       const std::string& to, bool force, const std::string& key = "");
   nlohmann::json Rename(const std::string& from_node, const std::string& from, const std::string& to_node,

@@ -37,6 +37,7 @@ class Service {
 
  private:
   cell::SchedulerReply Handle(const cell::SchedulerRequest& r);
+  void ListJobs(const cell::SchedulerRequest& r, cell::SchedulerReply& rep) const;
   void Apply(const Effects& e);
   void OnRun(const cell::RunStatus& s);
   void Sender(std::stop_token st);
