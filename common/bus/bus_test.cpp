@@ -205,6 +205,24 @@ TEST_P(BusTest, RequestReplyCarriesResultAndErrors) {
   EXPECT_EQ(calls, 2);
 }
 
+// Two clients of one service in one process share the participant's client id: each must get its own
+// replies, never the other's cached ones (a second Client counted request ids from 1 again).
+TEST_P(BusTest, TwoClientsOfOneServiceGetTheirOwnReplies) {
+  Participant a(A("bus-test-two-server")), b(B("bus-test-two-clients"));
+  Server<Req, Rep> server(a, "test/two", [](const Req& r) {
+    Rep rep;
+    rep.station(r.station());
+    return rep;
+  });
+  Client<Req, Rep> first(b, "test/two");
+  Req req;
+  req.station("KT01");
+  ASSERT_EQ(first.Call(req, kMatch).station(), "KT01");
+  Client<Req, Rep> second(b, "test/two");
+  req.station("KT02");
+  EXPECT_EQ(second.Call(req, kMatch).station(), "KT02");
+}
+
 // Issue 39 item 1: the reply cache keeps what a re-sent request needs, bounded in bytes as well as entries
 // (4096 replies of 60 KB each grew the program store by a quarter of a gigabyte).
 TEST_P(BusTest, TheReplyCacheIsBoundedInBytes) {

@@ -371,6 +371,14 @@ void ThrowIfError(const Rep& rep) {
 // on.
 inline constexpr Millis kLoneWindow{800};
 
+// A request id unique in the process. A server keeps replies by (client id, request id) and the client id
+// is the participant's, shared by every Client of the process: ids counted per Client from 1 made a second
+// client of the same service get the first one's cached replies (`inspect ls` got page 1 again).
+inline uint64_t NextRequestId() {
+  static std::atomic<uint64_t> next{0};
+  return ++next;
+}
+
 // Request/reply over two command topics. Requests carry (client id, request id); the client
 // re-sends until answered, the server answers a duplicate from its reply cache, so a request
 // written before discovery completed is not lost and never runs twice.
@@ -438,7 +446,7 @@ class Client : public Rejoinable {
         throw Error(Errc::kUnavailable, none + " (nothing else runs on the domain: is the cell up?)");
       if (!WaitForServer(std::min(timeout, Millis(5000)) - lone)) throw Error(Errc::kUnavailable, none);
     }
-    uint64_t id = ++state_->next_id;
+    uint64_t id = NextRequestId();
     req.hdr().client(p_.id());
     req.hdr().request_id(id);
     {
@@ -478,7 +486,6 @@ class Client : public Rejoinable {
     std::recursive_mutex call_mu;  // held while the callback runs
     std::condition_variable cv;
     std::map<uint64_t, std::optional<Rep>> pending;
-    std::atomic<uint64_t> next_id{0};
   };
   Participant& p_;
   std::string service_;
