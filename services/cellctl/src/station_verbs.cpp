@@ -92,6 +92,9 @@ void AddStationLs(CLI::App& st, Context& ctx) {
     // discovery, under an overall bound.
     bool sched_seen = false;
     std::set<std::string> sched_offline;  // stations a settled scheduler reports without a heartbeat
+    // Nothing else on the domain, when cellctl may conclude that (Context::Bus): asked only once the
+    // discovery window has passed, not on every pass of the loop.
+    auto lone = [&] { return ctx.Bus().lone_means_down() && ctx.Bus().RemoteParticipants() == 0; };
     const auto t0 = std::chrono::steady_clock::now();
     for (;;) {
       while (auto st = status.Take(bus::Millis(0)))
@@ -111,8 +114,7 @@ void AddStationLs(CLI::App& st, Context& ctx) {
       bool waiting = heard == cell::dashboard::Heard::kWaiting;
       if (live.Online("cell-scheduler") && !sched_seen) waiting = true;
       auto waited = std::chrono::steady_clock::now() - t0;
-      const bool lone = ctx.Bus().lone_means_down() && ctx.Bus().RemoteParticipants() == 0;
-      if (waited >= bus::kLoneWindow && lone) break;  // nothing on the domain
+      if (waited >= bus::kLoneWindow && lone()) break;  // nothing on the domain
       if (!waiting &&
           (heard == cell::dashboard::Heard::kComplete || waited >= std::chrono::milliseconds(1500)))
         break;
@@ -122,8 +124,7 @@ void AddStationLs(CLI::App& st, Context& ctx) {
     // A table of offline stations would say the cell runs without them (issue 39 item 6): without its
     // scheduler and its program store there is no cell to list.
     auto cell_up = [&] { return live.Online("cell-scheduler") || live.Online("cell-program-store"); };
-    if (!cell_up() && !(ctx.Bus().lone_means_down() && ctx.Bus().RemoteParticipants() == 0))
-      bus::WaitUntil(cell_up, bus::Millis(2000));
+    if (!cell_up() && !lone()) bus::WaitUntil(cell_up, bus::Millis(2000));
     if (!cell_up()) {
       throw Exit{1, fmt::format("no cell on DDS domain {}: neither the scheduler nor the program store runs "
                                 "(cellctl up starts the cell)",
