@@ -27,7 +27,7 @@ int main(int argc, char** argv) {
     if (!e.message.empty()) std::cerr << "cellctl: " << e.message << "\n";
     return e.code;
   } catch (const cell::Error& e) {
-    std::cerr << "cellctl: " << e.what() << "\n";
+    std::cerr << "cellctl: " << ctx.Explain(e) << "\n";
     return e.code() == cell::Errc::kInvalidArgument ? 2 : 1;
   } catch (const std::exception& e) {
     std::cerr << "cellctl: " << e.what() << "\n";

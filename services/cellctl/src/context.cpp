@@ -28,10 +28,23 @@ bus::Participant& Context::Bus() {
     bus::ParticipantOptions o = bus::Named("cellctl");
     // A cell that is down is said so at once (issue 39 item 6), unless one of its services runs here: then
     // discovery, however slow, is waited out.
-    o.lone_means_down = !LocalServiceMayRun(cell::config::Domain());
+    local_service_ = LocalServiceOn(cell::config::Domain());
+    o.lone_means_down = !local_service_;
     bus_ = std::make_unique<bus::Participant>(o);
   }
   return *bus_;
+}
+
+std::string Context::Explain(const cell::Error& e) {
+  std::string what = e.what();
+  // A service missing after the whole discovery bound: say what kept the answer from coming at once.
+  if (e.code() != cell::Errc::kUnavailable || !bus_ || what.find("is the cell up?") != std::string::npos)
+    return what;
+  if (local_service_) return what + " (" + *local_service_ + " runs on this host on the domain)";
+  const int others = bus_->RemoteParticipants();
+  if (others > 0)
+    return what + fmt::format(" ({} other participant{} on the domain)", others, others == 1 ? "" : "s");
+  return what;
 }
 
 cell::program_store::Client& Context::Programs() {

@@ -46,8 +46,12 @@ class Context {
   // service, which compares the request's arguments; without the variable, a key unique to this invocation.
   // A key that breaks the rule (docs/operations.md "Names") is an error, never cut.
   std::string IdempotencyKey(const std::string& verb) const;
+  // The one-line reason for a failed command: e's message, and for a service that is absent after the
+  // discovery bound, what was on the domain instead.
+  std::string Explain(const cell::Error& e);
 
  private:
+  std::optional<std::string> local_service_;  // a local cell service on our domain (LocalServiceOn)
   std::unique_ptr<bus::Participant> bus_;
   std::unique_ptr<cell::program_store::Client> programs_;
   std::unique_ptr<bus::Client<cell::SchedulerRequest, cell::SchedulerReply>> scheduler_;

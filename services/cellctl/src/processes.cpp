@@ -113,7 +113,7 @@ std::optional<int> DomainIn(const std::string& environ) {
 
 }  // namespace
 
-bool LocalServiceMayRun(int domain) {
+std::optional<std::string> LocalServiceOn(int domain) {
   // /proc/PID/comm holds the first 15 characters of the executable's name.
   static const char* const kServices[] = {"cell-scheduler",  "cell-program-st", "cell-interprete",
                                           "cell-axis-servo", "cell-inspection", "cell-dashboard"};
@@ -121,17 +121,43 @@ bool LocalServiceMayRun(int domain) {
   for (const auto& entry : fs::directory_iterator("/proc", ec)) {
     const std::string pid = entry.path().filename().string();
     if (pid.empty() || pid.find_first_not_of("0123456789") != std::string::npos) continue;
-    std::string comm;
-    std::getline(std::ifstream(entry.path() / "comm"), comm);
-    if (std::none_of(std::begin(kServices), std::end(kServices), [&](const char* s) { return comm == s; }))
+    const std::string what = [&] {
+      std::string comm;
+      std::getline(std::ifstream(entry.path() / "comm"), comm);
+      return comm + " (pid " + pid + ")";
+    }();
+    if (std::none_of(std::begin(kServices), std::end(kServices),
+                     [&](const char* s) { return what.rfind(std::string(s) + " (", 0) == 0; }))
       continue;
-    std::ifstream env(entry.path() / "environ", std::ios::binary);
-    if (!env) return true;  // another user's service: it may be on our domain
-    std::string block((std::istreambuf_iterator<char>(env)), std::istreambuf_iterator<char>());
-    const std::optional<int> d = DomainIn(block);
-    if (!d || *d == domain) return true;
+    // A process that exits between the listing and here is no service (a test tearing its cell down next
+    // to ours made every verb wait out discovery); one whose environment is not ours to read may be on our
+    // domain. Briefly unreadable (mid-exec), it is read again.
+    std::optional<std::string> block;
+    for (int attempt = 0; attempt < 3 && !block; ++attempt) {
+      if (attempt > 0) usleep(2000);
+      int fd = open((entry.path() / "environ").c_str(), O_RDONLY | O_CLOEXEC);
+      if (fd < 0 && (errno == ENOENT || errno == ESRCH)) break;
+      if (fd < 0) continue;
+      std::string text;
+      char buf[4096];
+      ssize_t n;
+      while ((n = read(fd, buf, sizeof buf)) > 0) text.append(buf, static_cast<std::size_t>(n));
+      close(fd);
+      if (n == 0) block = std::move(text);
+    }
+    if (!block) {
+      struct stat st {};
+      if (stat(entry.path().c_str(), &st) != 0) continue;  // gone
+      return what + ", whose environment cannot be read";
+    }
+    const std::optional<int> d = DomainIn(*block);
+    if (!d || *d == domain) return what;
   }
-  return false;
+  return std::nullopt;
+}
+
+bool LocalServiceMayRun(int domain) {
+  return LocalServiceOn(domain).has_value();
 }
 
 bool IsRunning(const CellProcess& p) {

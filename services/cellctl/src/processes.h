@@ -64,6 +64,8 @@ bool IsRunning(const CellProcess& p);
 // or may (its environment is not ours to read). cellctl concludes "the cell is down" from an empty domain
 // only when this is false: discovery can take a second, the process table cannot.
 bool LocalServiceMayRun(int domain);
+// The same, naming the first such process ("cell-scheduler (pid 4711)"), nullopt when there is none.
+std::optional<std::string> LocalServiceOn(int domain);
 
 // The environment of this process as "NAME=value" strings.
 std::vector<std::string> CurrentEnvironment();
