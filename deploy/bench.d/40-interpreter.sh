@@ -77,6 +77,7 @@ moves=$("$INTERP" --dialect ktapl "$work/bench.ktapl" | grep -c '"op":"\(linear\
 
 read -r kt_cpu kt_wall kt_rss < <(measure kt "$INTERP" --dialect ktapl "$work/bench.ktapl")
 read -r _ _ small_rss < <(measure small "$INTERP" --dialect ktapl "$work/small.ktapl")
+bench_figure interp.ktapl.peak_rss_mb "$((kt_rss / 1024))" lower
 kt_bps=$(per_s "$kt_blocks" "$kt_cpu")
 echo "cell-interp: $kt_blocks KT-APL blocks ($moves moves) in ${kt_cpu} s CPU (${kt_wall} s wall) = $kt_bps blocks/s"
 echo "cell-interp peak RSS: $((kt_rss / 1024)) MB at $kt_blocks blocks, $((small_rss / 1024)) MB at $(wc -l <"$work/small.ktapl") blocks (target < 64 MB, flat)"
@@ -94,5 +95,6 @@ ngc_bps=$(per_s "$ngc_blocks" "$ngc_cpu")
 echo "rs274 (LinuxCNC $(rs274_version)): $ngc_blocks NGC lines, same toolpath, in ${ngc_cpu} s CPU (${ngc_wall} s wall) = $ngc_bps blocks/s, peak RSS $((ngc_rss / 1024)) MB"
 ratio=$(awk -v a="$ngc_cpu" -v b="$kt_cpu" 'BEGIN {printf "%.1f", a / (b > 0 ? b : 0.001)}')
 echo "ratio: cell-interp is ${ratio}x rs274 on the same toolpath (target >= 12x)"
+bench_figure interp.ktapl.vs_rs274 "$ratio" higher
 awk -v r="$ratio" 'BEGIN {exit !(r >= 12)}' || echo "40-interpreter: TARGET MISSED: ratio ${ratio}x < 12x"
 exit $rc

@@ -85,6 +85,7 @@ moves=$("$INTERP" --dialect okuma --lib "$work/big/lib" "$work/big/bench.okuma" 
 
 read -r ok_cpu ok_wall ok_rss < <(measure ok "$INTERP" --dialect okuma --lib "$work/big/lib" "$work/big/bench.okuma")
 read -r _ _ small_rss < <(measure small "$INTERP" --dialect okuma --lib "$work/small/lib" "$work/small/bench.okuma")
+bench_figure interp.okuma.peak_rss_mb "$((ok_rss / 1024))" lower
 ok_bps=$(per_s "$ok_blocks" "$ok_cpu")
 echo "cell-interp: $ok_blocks Okuma blocks ($moves moves) in ${ok_cpu} s CPU (${ok_wall} s wall) = $ok_bps blocks/s"
 echo "cell-interp peak RSS: $((ok_rss / 1024)) MB at $ok_blocks blocks, $((small_rss / 1024)) MB at one tenth (target < 64 MB, flat)"
@@ -99,5 +100,6 @@ echo "rs274 (LinuxCNC $(rs274_version)): $ngc_blocks NGC lines, same toolpath, i
 ratio=$(awk -v a="$ngc_cpu" -v b="$ok_cpu" -v na="$ngc_blocks" -v nb="$ok_blocks" \
   'BEGIN {printf "%.1f", (nb / (b > 0 ? b : 0.001)) / (na / (a > 0 ? a : 0.001))}')
 echo "ratio: cell-interp (Okuma) is ${ratio}x rs274 in blocks/s on the same toolpath (target >= 10x)"
+bench_figure interp.okuma.vs_rs274 "$ratio" higher
 awk -v r="$ratio" 'BEGIN {exit !(r >= 10)}' || echo "41-okuma: TARGET MISSED: ratio ${ratio}x < 10x"
 exit $rc

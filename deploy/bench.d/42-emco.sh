@@ -70,6 +70,7 @@ moves=$("$INTERP" --dialect emco "$work/bench.emco" | grep -c '"op":"\(linear\|a
 
 read -r em_cpu em_wall em_rss < <(measure em "$INTERP" --dialect emco "$work/bench.emco")
 read -r _ _ small_rss < <(measure small "$INTERP" --dialect emco "$work/small.emco")
+bench_figure interp.emco.peak_rss_mb "$((em_rss / 1024))" lower
 em_bps=$(per_s "$em_blocks" "$em_cpu")
 echo "cell-interp: $em_blocks EMCO blocks ($moves moves) in ${em_cpu} s CPU (${em_wall} s wall) = $em_bps blocks/s"
 echo "cell-interp peak RSS: $((em_rss / 1024)) MB at $em_blocks blocks, $((small_rss / 1024)) MB at $((small_rss > 0 ? $(wc -l <"$work/small.emco") - 5 : 0)) blocks (flat: at most 2 MB more)"
@@ -81,4 +82,5 @@ ngc_bps=$(per_s "$ngc_blocks" "$ngc_cpu")
 echo "rs274 (LinuxCNC $(rs274_version)): $ngc_blocks NGC blocks, same toolpath, in ${ngc_cpu} s CPU (${ngc_wall} s wall) = $ngc_bps blocks/s, peak RSS $((ngc_rss / 1024)) MB"
 ratio=$(awk -v a="$ngc_cpu" -v b="$em_cpu" 'BEGIN {printf "%.1f", a / (b > 0 ? b : 0.001)}')
 echo "ratio: cell-interp (EMCO) is ${ratio}x rs274 on the same toolpath (target >= 10x)"
+bench_figure interp.emco.vs_rs274 "$ratio" higher
 awk -v r="$ratio" 'BEGIN {exit !(r >= 10)}' || echo "42-emco: TARGET MISSED: ratio ${ratio}x < 10x"

@@ -74,6 +74,7 @@ moves=$("$INTERP" --dialect balt --lib "$work/lib" "$work/bench.balt" | grep -c 
 
 read -r b_cpu b_wall b_rss < <(measure balt "$INTERP" --dialect balt --lib "$work/lib" "$work/bench.balt")
 read -r _ _ small_rss < <(measure small "$INTERP" --dialect balt --lib "$work/lib" "$work/small.balt")
+bench_figure interp.balt.peak_rss_mb "$((b_rss / 1024))" lower
 b_bps=$(per_s "$balt_blocks" "$b_cpu")
 echo "cell-interp: $balt_blocks Balt-System blocks ($moves moves) in ${b_cpu} s CPU (${b_wall} s wall) = $b_bps blocks/s"
 echo "cell-interp peak RSS: $((b_rss / 1024)) MB at $balt_blocks blocks, $((small_rss / 1024)) MB at $(wc -l <"$work/small.balt") blocks (target < 64 MB, flat)"
@@ -87,5 +88,6 @@ ngc_bps=$(per_s "$ngc_blocks" "$ngc_cpu")
 echo "rs274 (LinuxCNC $(rs274_version)): $ngc_blocks NGC lines, same toolpath, in ${ngc_cpu} s CPU (${ngc_wall} s wall) = $ngc_bps blocks/s, peak RSS $((ngc_rss / 1024)) MB"
 ratio=$(awk -v a="$ngc_cpu" -v b="$b_cpu" 'BEGIN {printf "%.1f", a / (b > 0 ? b : 0.001)}')
 echo "ratio: cell-interp (Balt-System) is ${ratio}x rs274 on the same toolpath (target >= 10x)"
+bench_figure interp.balt.vs_rs274 "$ratio" higher
 awk -v r="$ratio" 'BEGIN {exit !(r >= 10)}' || echo "43-balt: TARGET MISSED: ratio ${ratio}x < 10x"
 exit $rc

@@ -8,6 +8,8 @@
 # Env: CELL_BUILD_DIR (default build/), CELL_BENCH_DOMAIN_PS (default 96), CELL_BENCH_PROGRAMS (default 10000).
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
+# shellcheck source=lib/figures.sh
+source "$ROOT/deploy/bench.d/lib/figures.sh"
 BIN="${CELL_BUILD_DIR:-$ROOT/build}/bin"
 for exe in cell-program-store program_store_bus_bench; do
   [ -x "$BIN/$exe" ] || { echo "50-program-store: $BIN/$exe not built" >&2; exit 1; }
@@ -57,6 +59,7 @@ printf 'sqlite3 CLI: %d inserts (one commit each) %.2f s (%.0f/s); 20 MB insert 
 printf 'program store over the bus: %d puts %.2f s (%.0f/s), %d gets %.2f s (%.0f/s)\n' \
   "$PROGRAMS" "$put_s" "$(echo "$PROGRAMS / $put_s" | bc -l)" "$PROGRAMS" "$get_s" "$(echo "$PROGRAMS / $get_s" | bc -l)"
 ratio=$(echo "$put_s / $sqlite_s" | bc -l)
+bench_figure program_store.put_vs_sqlite3 "$(printf %.2f "$ratio")" lower
 printf 'ratio put/sqlite3: %.2fx (target <= 3x): %s\n' "$ratio" "$(echo "$ratio <= 3" | bc -l | sed 's/1/met/;s/0/MISSED/')"
 printf '20 MB round trip: put %.2f s + get %.2f s = %.2f s (sqlite3 insert alone %.2f s)\n' \
   "$big_put_s" "$big_get_s" "$(echo "$big_put_s + $big_get_s" | bc -l)" "$sqlite_big_s"

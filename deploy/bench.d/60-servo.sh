@@ -23,8 +23,19 @@ trap 'rm -f "$out"' EXIT
 }
 sed 's/^/  /' "$out"
 echo "servo summary (target ${TARGET}x real time):"
+# The guard's figures (lib/figures.sh): x real time per CPU second and the (b)/(c) ratios, per scenario.
 awk -v target="$TARGET" '
-  /^[^ ]/ && /:$/ { name = $0; sub(/:$/, "", name); sub(/ \(.*/, "", name) }
+  function figure(what, value, better) {
+    if (ENVIRON["CELL_BENCH_FIGURES"] == "" || value == "") return;
+    printf "{\"name\": \"servo.%s.%s\", \"value\": %s, \"better\": \"%s\"}\n", slug, what, value, better \
+      >> ENVIRON["CELL_BENCH_FIGURES"];
+  }
+  function ratio_of(line) { return (match(line, /ratio [0-9.]+/) ? substr(line, RSTART + 6, RLENGTH - 6) : "") }
+  /^[^ ]/ && /:$/ {
+    name = $0; sub(/:$/, "", name); sub(/ \(.*/, "", name);
+    slug = (name ~ /contour/) ? "contour" : (name ~ /^drilling/) ? "drilling" : (name ~ /^long line/) ? "line" : \
+           (name ~ /^circle/) ? "circle" : "other";
+  }
   /\(a\)/ {
     wall = ""; cpu = "";
     for (i = 1; i <= NF; i++) {
@@ -37,14 +48,17 @@ awk -v target="$TARGET" '
     printf "  %s: %sx per wall second (%.1f x target, %s), %sx per CPU second (%.1f x target)\n",
            name, wall, wall / target, ok, cpu, cpu / target;
     if (wall + 0 < target) below = 1;
+    figure("x_realtime_cpu", cpu, "higher");
   }
   /\(b\)/ {
     line = $0; sub(/^ *\(b\) */, "", line);
     printf "  %s: planned %s\n", name, line;
+    figure("cycle_ratio", ratio_of(line), "lower");
   }
   /\(c\)/ {
     line = $0; sub(/^ *\(c\) */, "", line);
     printf "  %s: %s\n", name, line;
+    figure("error_vs_tolerance", ratio_of(line), "lower");
   }
   /^BM_ServoTick/ { printf "  one servo tick: %s %s CPU\n", $4, $5 }
   END { if (below) print "  note: below the wall-clock target; on a shared, loaded machine compare the CPU figure" }

@@ -11,6 +11,8 @@
 # CELL_BENCH_VERB_RUNS (default 15).
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
+# shellcheck source=lib/figures.sh
+source "$ROOT/deploy/bench.d/lib/figures.sh"
 BIN="${CELL_BUILD_DIR:-$ROOT/build}/bin"
 for exe in cellctl dispatch_latency_bench cell-scheduler cell-program-store cell-interpreter cell-axis-servo \
            cell-inspection-writer cell-dashboard; do
@@ -44,7 +46,12 @@ N50 M30
 APL
 "$BIN/cellctl" program put "$work/lat1.apl" >/dev/null
 "$BIN/cellctl" route define BENCH --op KT01,KT02:LAT1
-"$BIN/dispatch_latency_bench" --route BENCH --cellctl "$BIN/cellctl" --stations KT01,KT02 --pallets "$PALLETS"
+"$BIN/dispatch_latency_bench" --route BENCH --cellctl "$BIN/cellctl" --stations KT01,KT02 --pallets "$PALLETS" |
+  tee "$work/dispatch.out"
+# ratio (median|p99) WHAT / bus round trip: N.Nx
+ratio_of() { sed -n "s/^ratio ($1) $2 .*: \([0-9.]*\)x\$/\1/p" "$work/dispatch.out"; }
+bench_figure dispatch.operate_p50.vs_round_trip "$(ratio_of median 'OPERATE request')" lower
+bench_figure dispatch.cellctl_p50.vs_round_trip "$(ratio_of median cellctl)" lower
 
 # median_ms RUNS CMD...: the median wall time of RUNS runs of CMD, in milliseconds.
 median_ms() {
@@ -65,4 +72,5 @@ for verb in "station ls" "job ls" "job show $job" "program ls"; do
   # shellcheck disable=SC2086
   m=$(median_ms "$RUNS" "$BIN/cellctl" $verb)
   awk -v v="$verb" -v m="$m" -v b="$base" 'BEGIN { printf "cellctl %-12s median %7.1f ms  (%.1fx --help)%s\n", v, m, m / b, (m > 150 ? "  TARGET MISSED (150 ms)" : "") }'
+  bench_figure "cellctl.$(echo "$verb" | awk '{ print $1 "_" $2 }').vs_help" "$(awk -v m="$m" -v b="$base" 'BEGIN { printf "%.2f", m / b }')" lower
 done

@@ -29,6 +29,9 @@ awk '
       printf "  %s (parse + export + write): %.2f ms CPU, %.1fx baseline, %s\n", (names[i] == "BM_CsvExport" ? "CSV" : "QIF 3.0"),
              t, t / base, (t < 1000 ? "meets the target" : "MISSES the target");
       if (t >= 1000) missed = 1;
+      if (ENVIRON["CELL_BENCH_FIGURES"] != "")
+        printf "{\"name\": \"inspection.%s_export.vs_fprintf\", \"value\": %.2f, \"better\": \"lower\"}\n",
+               (names[i] == "BM_CsvExport" ? "csv" : "qif"), t / base >> ENVIRON["CELL_BENCH_FIGURES"];
     }
     exit missed;
   }' "$out"

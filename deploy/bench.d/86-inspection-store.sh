@@ -34,4 +34,7 @@ awk '
     printf "  bare round trip (CAT, no file): median %.0f us, p99 %.0f us\n", med["bare"], p99["bare"];
     printf "  close, fsync, reply:    median %.0f us, p99 %.0f us (%.1fx, %.1fx the bare round trip)\n",
            med["store"], p99["store"], med["store"] / med["bare"], p99["store"] / p99["bare"];
+    if (ENVIRON["CELL_BENCH_FIGURES"] != "")
+      printf "{\"name\": \"inspection.store_file.vs_round_trip\", \"value\": %.2f, \"better\": \"lower\"}\n",
+             med["store"] / med["bare"] >> ENVIRON["CELL_BENCH_FIGURES"];
   }' "$work/out"

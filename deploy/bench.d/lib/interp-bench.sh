@@ -2,6 +2,9 @@
 # run): set-up, whole-process timing and the LinuxCNC rs274 baseline. The caller sets $ROOT and $BENCH (its name,
 # for messages) and calls bench_init.
 
+# shellcheck source=figures.sh
+source "$ROOT/deploy/bench.d/lib/figures.sh"
+
 # bench_init: what every interpreter bench starts with. INTERP (cell-interp of CELL_BUILD_DIR, default build/)
 # and BLOCKS (CELL_INTERP_BENCH_BLOCKS, default 1,000,000), both checked with /usr/bin/time, and $work, a scratch
 # directory removed at exit. The caller sets $ROOT and $BENCH first.
