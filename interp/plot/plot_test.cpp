@@ -184,6 +184,42 @@ TEST(Plot, CycleMovesAreMarked) {
   EXPECT_EQ(Count(svg, "<circle class=\"plunge\""), 1);
 }
 
+// What a live view (the dashboard) needs from the page: each path's index among the drawn moves
+// (data-seq, the same in every view) and each view's mapping from millimetres to the page, checked against
+// the move's own end point: the feed move to X100 Y50 ends at page x = left + (100 - h0) * scale.
+TEST(Plot, LiveViewAttributes) {
+  Plot plot({MachineKind::kMachiningCentre, "live"});
+  plot.Add(Units(false));
+  plot.Add(Move<RapidOp>(1, 0, 0, 50));
+  plot.Add(Move<LinearOp>(2, 100, 50, 0));
+  plot.Add(Move<RapidOp>(3, 0, 0, 50));
+  ASSERT_EQ(plot.moves().size(), 2u);
+  EXPECT_TRUE(plot.started());
+  EXPECT_EQ(plot.start()[2], 50);
+  const std::string svg = plot.Svg();
+  EXPECT_EQ(Count(svg, "data-seq=\"0\""), 2);  // plan and elevation
+  EXPECT_EQ(Count(svg, "data-seq=\"1\""), 2);
+  EXPECT_EQ(Count(svg, "data-seq=\"2\""), 0);
+  auto attr = [&](std::size_t from, const std::string& name) {
+    const std::size_t at = svg.find(name + "=\"", from) + name.size() + 2;
+    return std::stod(svg.substr(at, svg.find('"', at) - at));
+  };
+  const std::size_t plan = svg.find("data-view=\"plan\"");
+  ASSERT_NE(plan, std::string::npos);
+  EXPECT_EQ(attr(plan, "data-h"), kX);
+  EXPECT_EQ(attr(plan, "data-v"), kY);
+  const double x = attr(plan, "data-left") + (100 - attr(plan, "data-h0")) * attr(plan, "data-scale");
+  const double y = attr(plan, "data-top") + (attr(plan, "data-v0") - 50) * attr(plan, "data-scale");
+  // The feed move's path in the plan: "M x0 y0 L x y", its end where the mapping puts X100 Y50.
+  const std::size_t d = svg.find("data-seq=\"0\" d=\"M ", plan);
+  ASSERT_NE(d, std::string::npos) << svg;
+  double x0 = 0, y0 = 0, x1 = 0, y1 = 0;
+  ASSERT_EQ(std::sscanf(svg.c_str() + d, "data-seq=\"0\" d=\"M %lf %lf L %lf %lf", &x0, &y0, &x1, &y1), 4);
+  EXPECT_NEAR(x1, x, 0.01);
+  EXPECT_NEAR(y1, y, 0.01);
+  EXPECT_NEAR(x1 - x0, 100 * attr(plan, "data-scale"), 0.02);
+}
+
 TEST(Plot, NoMotion) {
   Plot p({MachineKind::kLathe, "EMPTY"});
   p.Add(Units(true));

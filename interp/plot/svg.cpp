@@ -323,8 +323,8 @@ void Moves(std::string& out, const std::vector<Plot::Move>& moves, const View& v
       std::string group;
       for (std::size_t i = 0; i < moves.size(); ++i) {
         if (moves[i].kind != k || cycle[i] != in_cycle) continue;
-        group += fmt::format("<path class=\"{}\" data-line=\"{}\" d=\"{}\"/>\n", KindName(k), moves[i].line,
-                             MovePath(moves[i], v, f));
+        group += fmt::format("<path class=\"{}\" data-line=\"{}\" data-seq=\"{}\" d=\"{}\"/>\n", KindName(k),
+                             moves[i].line, i, MovePath(moves[i], v, f));
         plunges += Plunge(moves[i], in_cycle, v, f);
       }
       if (group.empty()) continue;
@@ -376,7 +376,12 @@ void Labels(std::string& out, const std::vector<Plot::Label>& labels, const View
 
 void DrawView(std::string& out, const View& v, const Frame& f, bool zoomed,
               const std::vector<Plot::Move>& moves, const std::vector<Plot::Label>& labels, const P3& start) {
-  out += fmt::format("<g class=\"view\" data-view=\"{}\" data-scale=\"{:.6f}\">\n", v.name, f.scale);
+  // The mapping from millimetres to the page, for a live view that draws the tool over the plot: page x =
+  // left + (h - h0) * scale, page y = top + (v0 - v) * scale, h and v the X Y Z indices (X as a radius).
+  out += fmt::format(
+      "<g class=\"view\" data-view=\"{}\" data-scale=\"{:.6f}\" data-h=\"{}\" data-v=\"{}\" "
+      "data-left=\"{:.3f}\" data-top=\"{:.3f}\" data-h0=\"{:.6f}\" data-v0=\"{:.6f}\">\n",
+      v.name, f.scale, v.h, v.v, f.left, f.top, f.h0, f.v0);
   std::string title = v.lathe ? "half-section XZ (Z right, X as radius up, labelled Ø)"
                       : std::string(v.name) == "plan" ? "plan XY (X right, Y up)"
                                                       : "elevation XZ (X right, Z up)";

@@ -19,11 +19,12 @@ namespace {
 
 using namespace std::chrono_literals;
 
-// A KT-APL program whose cut takes a few seconds of real machine time (300 mm at 6000 mm/min).
+// A KT-APL program whose cut takes a few seconds of real machine time (300 mm at 3000 mm/min: 6 s, long
+// enough to watch the tool marker move on the toolpath). Three motion ops: N20, N30, N40.
 std::string Program(const std::string& name, const std::string& utl) {
   return "%\n(NAM," + name + ")\n(UTL," + utl +
          ")\n(UCY,60)\nN10 G71 G90 G01\nN20 X0 Y0 Z100. F0\n"
-         "N30 X300. Y40. Z20. F6000.\nN40 G00 X0 Y0 Z100. F0\nN45 (EVT," +
+         "N30 X300. Y40. Z20. F3000.\nN40 G00 X0 Y0 Z100. F0\nN45 (EVT," +
          name + " PART DONE)\nN50 M30\n%\n";
 }
 
@@ -90,6 +91,35 @@ TEST_F(DashboardBrowser, ThePageFollowsTheCellLive) {
       " && c.querySelector('.f-pallet').textContent === '4';",
       30s))
       << b.Exec("return document.querySelector('#station-KT01').outerHTML");
+  // Its card opens the running program's toolpath: the path as drawn from the program store's DASH1, one
+  // path per drawn motion op in each view (plan and elevation): DASH1's three motion ops are N20 (where the
+  // path starts, docs/plot.md) and the two drawn, N30 and N40. While the pallet runs the tool marker moves
+  // and the moves done turn bold; once the run ends, both are done.
+  b.Exec("document.querySelector('#station-KT01 .pathbtn').click(); return true;");
+  ASSERT_TRUE(b.WaitTrue(
+      "const v = document.querySelector('#pathview'); return v && v.dataset.state === 'drawn';", 15s))
+      << b.Exec(
+             "const v = document.querySelector('#pathview'); return v ? v.outerHTML.slice(0, 2000) : "
+             "'none';");
+  b.Exec(
+      "const v = document.querySelector('#pathview'); window.__marks = new Set(); window.__doneActive = 0;"
+      "window.__watch = setInterval(() => { "
+      "window.__marks.add(v.querySelector('g.tool').getAttribute('transform'));"
+      "  if (document.querySelector('#station-KT01').dataset.execution === 'ACTIVE')"
+      "    window.__doneActive = Math.max(window.__doneActive, Number(v.dataset.done)); }, 50); return "
+      "true;");
+  for (const char* view : {"plan", "elevation"})
+    EXPECT_EQ(b.Exec(std::string("return document.querySelectorAll('#pathview g.view[data-view=") + view +
+                     "] path[data-seq]').length;"),
+              2)
+        << view;
+  EXPECT_EQ(b.Exec("return document.querySelector('#pathview').dataset.moves;"), "2");
+  EXPECT_NE(b.Exec("return document.querySelector('#pathview .pathinfo').textContent;")
+                .get<std::string>()
+                .find("3 motion ops"),
+            std::string::npos);
+  EXPECT_TRUE(b.WaitTrue("return window.__marks.size >= 4;", 30s))
+      << b.Exec("return [...window.__marks].join(' | ');");
   EXPECT_TRUE(b.WaitTrue(
       "const r = document.querySelector('#job-" + job + "'); return r && r.dataset.state === 'RUNNING';",
       10s));
@@ -99,6 +129,15 @@ TEST_F(DashboardBrowser, ThePageFollowsTheCellLive) {
       << b.Exec("return document.querySelector('#jobs').outerHTML");
   EXPECT_TRUE(
       b.WaitTrue("return document.querySelector('#station-KT01').dataset.execution !== 'ACTIVE'", 10s));
+  // The toolpath followed the run: N30 was done while the pallet ran (the tool on N40's rapid back), both
+  // once it ended; a screenshot of the toolpath over the page, then the page alone.
+  EXPECT_GE(b.Exec("return window.__doneActive;").get<int>(), 1);
+  EXPECT_TRUE(b.WaitTrue(
+      "return document.querySelectorAll('#pathview g.view[data-view=plan] path.done').length === 2;", 10s))
+      << b.Exec("return document.querySelector('#pathview').dataset.done;");
+  b.Screenshot(CELL_ARTEFACT_DIR "/dashboard-toolpath.png");
+  b.Exec(
+      "clearInterval(window.__watch); document.querySelector('#pathview .pathclose').click(); return true;");
   // The run record and the cycle time reach the page too.
   EXPECT_TRUE(
       b.WaitTrue("return [...document.querySelectorAll('#inspections tr')].some(r => r.dataset.name === "

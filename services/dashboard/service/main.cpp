@@ -1,6 +1,7 @@
 // cell-dashboard: the shop-floor view. Subscribes to the cell's state and event topics and serves the live
 // page and the MTConnect agent interface over HTTP (CELL_HTTP, default 127.0.0.1:7878). Read-only: it
-// sends no request and writes nothing to the cell (only its own heartbeat, like every process).
+// writes nothing to the cell (only its own heartbeat, like every process); its one request is the program
+// store's GET of the program a station runs, to draw its toolpath (docs/dashboard.md, "Toolpath").
 #include <spdlog/spdlog.h>
 
 #include <cstdlib>
@@ -11,6 +12,7 @@
 #include "cell/config/config.h"
 #include "cell/daemon/daemon.h"
 #include "cell/dashboard/feed.h"
+#include "cell/dashboard/path.h"
 #include "cell/dashboard/server.h"
 #include "cell/health/health.h"
 #include "cell/identity/identity.h"
@@ -48,7 +50,12 @@ int main() {
       claim.Confirm();  // one dashboard per cell: before it binds its port and writes dashboard.url
     }
     cell::dashboard::Feed feed(bus, view);
+    cell::dashboard::Paths paths(bus);
     cell::dashboard::HttpServer http(view, http_opts);
+    http.SetPathSource([&paths](const std::string& station, const std::string& program) {
+      auto a = paths.Path(station, program);
+      return std::make_pair(a.status, std::move(a.body));
+    });
     http.Start();
     // Where a local cell's tools (cellctl up, ./cell demo, tests) find the page when the port was 0.
     std::ofstream(cell::config::DataDir() / "dashboard.url") << http.url() << "\n";

@@ -140,8 +140,39 @@ void HttpServer::Stop() {
   if (thread_.joinable()) thread_.join();
 }
 
+// The program a path route draws: ?program=, else the one the station reports (the last one stays).
+static std::string ProgramOf(const nlohmann::json& snapshot, const std::string& station,
+                             const httplib::Request& req) {
+  if (req.has_param("program")) return req.get_param_value("program");
+  for (const auto& st : snapshot.value("stations", nlohmann::json::array()))
+    if (st.value("id", std::string()) == station && st.contains("program") && st["program"].is_string())
+      return st["program"].get<std::string>();
+  return "";
+}
+
+void HttpServer::PathRoutes() {
+  auto answer = [this](const httplib::Request& req, bool svg, httplib::Response& res) {
+    const std::string station = req.matches[1];
+    std::pair<int, nlohmann::json> a{404, {{"error", "no toolpaths here"}}};
+    if (paths_) a = paths_(station, ProgramOf(view_.Snapshot(), station, req));
+    res.status = a.first;
+    res.set_header("Cache-Control", "no-store");
+    if (svg && a.first == 200)
+      res.set_content(a.second.value("svg", std::string()), "image/svg+xml; charset=utf-8");
+    else if (svg)
+      res.set_content(a.second.value("error", std::string()) + "\n", "text/plain; charset=utf-8");
+    else
+      res.set_content(a.second.dump(), "application/json");
+  };
+  srv_->Get(R"(/api/station/([A-Za-z0-9_-]+)/path)",
+            [answer](const httplib::Request& req, httplib::Response& res) { answer(req, false, res); });
+  srv_->Get(R"(/station/([A-Za-z0-9_-]+)/path\.svg)",
+            [answer](const httplib::Request& req, httplib::Response& res) { answer(req, true, res); });
+}
+
 void HttpServer::Routes() {
   auto& s = *srv_;
+  PathRoutes();
   s.Get("/", [this](const httplib::Request&, httplib::Response& res) {
     res.set_header("Cache-Control", "no-store");
     res.set_content(RenderPage(view_.Snapshot()), "text/html; charset=utf-8");

@@ -179,6 +179,44 @@ TEST_F(HttpTest, StateAndJobDetailAsJson) {
   EXPECT_EQ(none->status, 404);
 }
 
+// The toolpath routes hand the station and the program to the path source (cell-dashboard's Paths, which
+// draws from the program store): the program from ?program=, else the one the station reports; the JSON as
+// the source gives it, the SVG alone as image/svg+xml, and the source's error with its status.
+TEST_F(HttpTest, ToolpathRoutesAskThePathSourceForTheStationsProgram) {
+  srv_->Stop();
+  ServerOptions o;
+  o.listen = {"127.0.0.1", 0};
+  srv_ = std::make_unique<HttpServer>(*view_, o);
+  std::vector<std::pair<std::string, std::string>> asked;
+  srv_->SetPathSource([&asked](const std::string& station, const std::string& program) {
+    asked.emplace_back(station, program);
+    if (program == "GONE") return std::make_pair(404, nlohmann::json{{"error", "no program 'GONE'"}});
+    return std::make_pair(200, nlohmann::json{{"program", program}, {"svg", "<svg/>"}, {"moves", {1, 2}}});
+  });
+  srv_->Start();
+  view_->Online("KT01", true);
+  view_->Status(Status("KT01", "ACTIVE", "PUMP341", 12, 3));
+  auto j = Get("/api/station/KT01/path");
+  ASSERT_TRUE(j);
+  EXPECT_EQ(j->status, 200);
+  EXPECT_EQ(j->get_header_value("Content-Type"), "application/json");
+  EXPECT_EQ(nlohmann::json::parse(j->body)["program"], "PUMP341");
+  auto svg = Get("/station/KT01/path.svg?program=OTHER");
+  ASSERT_TRUE(svg);
+  EXPECT_EQ(svg->status, 200);
+  EXPECT_EQ(svg->get_header_value("Content-Type"), "image/svg+xml; charset=utf-8");
+  EXPECT_EQ(svg->body, "<svg/>");
+  auto gone = Get("/station/KT01/path.svg?program=GONE");
+  ASSERT_TRUE(gone);
+  EXPECT_EQ(gone->status, 404);
+  EXPECT_EQ(gone->body, "no program 'GONE'\n");
+  auto idle = Get("/api/station/KT02/path");  // KT02 has run nothing: the source says why
+  ASSERT_TRUE(idle);
+  const std::vector<std::pair<std::string, std::string>> want = {
+      {"KT01", "PUMP341"}, {"KT01", "OTHER"}, {"KT01", "GONE"}, {"KT02", ""}};
+  EXPECT_EQ(asked, want);
+}
+
 TEST_F(HttpTest, EventStreamPushesChangesAndResumesAfterLastEventId) {
   const auto start = view_->LastEvent();
   std::uint64_t seen = 0;

@@ -74,7 +74,13 @@
     const gap = el('span', 'gap');
     top.append(e.id, gap, e.cond, e.badge);
     const body = el('div', 'body');
-    body.append(e.kind, e.doing, e.facts, e.alarm, e.wait, e.queue, e.backlog, e.plot, e.motion);
+    // The program's toolpath, live (toolpath section below): opens over the page.
+    e.pathBtn = el('button', 'pathbtn', 'Toolpath');
+    e.pathBtn.type = 'button';
+    e.pathBtn.addEventListener('click', () => openPath(st.id));
+    e.kindRow = el('div', 'kindrow');
+    e.kindRow.append(e.kind, e.pathBtn);
+    body.append(e.kindRow, e.doing, e.facts, e.alarm, e.wait, e.queue, e.backlog, e.plot, e.motion);
     c.append(top, body);
     e.fact = {};
     for (const [k, label] of [['program', 'program'], ['line', 'line'], ['pallet', 'pallet'], ['tool', 'tool'],
@@ -185,6 +191,9 @@
     e.queue.textContent = queued.length ? 'Queued here: ' + queued.map((q) => 'pallet ' + q.pallet + ' (job ' + q.job + ')').join(', ') : '';
     e.backlogText.textContent = dur(st.backlog_s);
     for (const r of stations.values()) r.el.barFill.style.width = Math.min(100, (100 * (r.data.backlog_s || 0)) / maxBacklog()) + '%';
+    e.pathBtn.disabled = !st.program;
+    e.pathBtn.title = st.program ? 'the toolpath of ' + st.program + ', live' : 'no program run yet';
+    pathStation(st);
   }
 
   function pushAxes(id, t, pos, feed, rpm) {
@@ -192,6 +201,7 @@
     if (!rec) return;
     rec.trail.push([t, pos]);
     while (rec.trail.length && rec.trail[0][0] < t - 60) rec.trail.shift();
+    pathAxes(rec, pos);
     rec.el.motion.textContent = 'feed ' + Math.round(feed) + ' mm/min · spindle ' + Math.round(Math.abs(rpm)) + ' rpm' +
       (pos.length ? ' · ' + rec.data.axes.map((n, i) => n.split(' ')[0] + ' ' + pos[i].toFixed(3)).join('  ') : '');
   }
@@ -207,6 +217,197 @@
       rec.chart.options.scales.x.max = 0;
       rec.chart.update('none');
     }
+  }
+
+  // ---- toolpath (docs/dashboard.md "Toolpath") ----
+  // The server draws the program the station runs (/api/station/<ID>/path: the plot's SVG and its moves in
+  // order); the page marks the moves the machine has done and moves a tool marker with the axis positions it
+  // already receives. The moves done are found by position: from the last one done, the first move whose
+  // path passes within a tolerance of where the tool is (monotone: a run's moves happen in order).
+  let pv = null;  // {station, program, moves, paths: [[elements of seq i]], views, done, tol, idle}
+  const SVGNS = 'http://www.w3.org/2000/svg';
+
+  function pathBox() {
+    let box = byId('pathview');
+    if (box) return box;
+    box = el('div', 'pathview');
+    box.id = 'pathview';
+    const head = el('div', 'pathhead');
+    const title = el('b', 'pathtitle');
+    const info = el('span', 'pathinfo');
+    const key = el('span', 'pathkey', 'bold: done · faded: to come · red ring: the tool');
+    const link = el('a', 'pathsvg', 'SVG');
+    link.target = '_blank';
+    const close = el('button', 'pathclose', 'Close');
+    close.type = 'button';
+    close.addEventListener('click', closePath);
+    head.append(title, info, el('span', 'gap'), key, link, close);
+    box.append(head, el('div', 'pathbody'));
+    document.body.append(box);
+    document.addEventListener('keydown', (k) => { if (k.key === 'Escape') closePath(); });
+    return box;
+  }
+
+  function closePath() {
+    const box = byId('pathview');
+    if (box) box.style.display = 'none';
+    pv = null;
+  }
+
+  function openPath(id) {
+    const rec = stations.get(id);
+    if (!rec || !rec.data.program) return;
+    const box = pathBox();
+    box.style.display = '';
+    box.dataset.station = id;
+    pv = { station: id, program: rec.data.program, moves: [], paths: [], views: [], done: 0, tol: 1, idle: IDLE.has(rec.data.execution) };
+    loadPath();
+  }
+
+  function loadPath() {
+    const want = pv;
+    const box = byId('pathview');
+    const q = '?program=' + encodeURIComponent(want.program);
+    box.querySelector('.pathtitle').textContent = want.station + ' · ' + want.program;
+    box.querySelector('.pathinfo').textContent = 'drawing…';
+    box.querySelector('.pathsvg').href = '/station/' + want.station + '/path.svg' + q;
+    box.dataset.state = 'loading';
+    fetch('/api/station/' + want.station + '/path' + q).then((r) => r.json()).then((j) => {
+      if (pv !== want) return;
+      const body = box.querySelector('.pathbody');
+      if (j.error) {
+        box.dataset.state = 'error';
+        box.querySelector('.pathinfo').textContent = j.error;
+        body.replaceChildren();
+        return;
+      }
+      const doc = new DOMParser().parseFromString(j.svg, 'image/svg+xml');
+      const svg = document.importNode(doc.documentElement, true);
+      svg.removeAttribute('width');
+      svg.removeAttribute('height');
+      body.replaceChildren(svg);
+      want.moves = j.moves;
+      want.paths = j.moves.map(() => []);
+      for (const p of svg.querySelectorAll('path[data-seq]')) want.paths[Number(p.dataset.seq)].push(p);
+      want.views = [...svg.querySelectorAll('g.view')].map(viewOf);
+      want.tol = tolerance(j);
+      box.querySelector('.pathinfo').textContent = j.dialect + ' · ' + j.machine + ' · from ' + j.node +
+        ' revision ' + j.revision + ' · ' + j.motion_ops + ' motion ops' + (j.note ? ' · ' + j.note : '');
+      box.dataset.moves = j.moves.length;
+      box.dataset.state = 'drawn';
+      setDone(0);
+      const last = stations.get(want.station).trail.slice(-1)[0];
+      if (last) pathAxes(stations.get(want.station), last[1]);
+    }).catch((err) => {
+      if (pv !== want) return;
+      box.dataset.state = 'error';
+      box.querySelector('.pathinfo').textContent = 'no toolpath: ' + err;
+    });
+  }
+
+  // A view's mapping from millimetres to the SVG page (interp/plot writes it on each g.view) and its marker.
+  function viewOf(g) {
+    const v = {};
+    for (const k of ['h', 'v', 'left', 'top', 'h0', 'v0', 'scale']) v[k] = Number(g.dataset[k]);
+    const clip = g.querySelector('g[clip-path]') || g;
+    v.tool = document.createElementNS(SVGNS, 'g');
+    v.tool.setAttribute('class', 'tool');
+    const ring = document.createElementNS(SVGNS, 'circle');
+    ring.setAttribute('r', '7');
+    const cross = document.createElementNS(SVGNS, 'path');
+    cross.setAttribute('d', 'M -12 0 H 12 M 0 -12 V 12');
+    v.tool.append(ring, cross);
+    clip.append(v.tool);
+    return v;
+  }
+
+  // Within 1 % of the path's size, at least 1 mm: the servo's following error and the 5 Hz samples.
+  function tolerance(j) {
+    const lo = [Infinity, Infinity, Infinity], hi = [-Infinity, -Infinity, -Infinity];
+    for (const m of j.moves) for (const p of [m.from, m.to]) p.forEach((x, i) => { lo[i] = Math.min(lo[i], x); hi[i] = Math.max(hi[i], x); });
+    const d = j.moves.length ? Math.hypot(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]) : 0;
+    return Math.max(1, d / 100);
+  }
+
+  // How far the tool at p is from a move's path, and the move's direction there (an arc's tangent).
+  function nearMove(p, m) {
+    if (m.center) {
+      const [f, s] = m.plane, n = 3 - f - s;
+      const r = Math.hypot(m.from[f] - m.center[f], m.from[s] - m.center[s]);
+      const rf = p[f] - m.center[f], rs = p[s] - m.center[s];
+      const radial = Math.abs(Math.hypot(rf, rs) - r);
+      const along = Math.max(0, Math.min(m.from[n], m.to[n]) - p[n], p[n] - Math.max(m.from[n], m.to[n]));
+      const dir = [0, 0, 0];
+      dir[f] = m.cw ? rs : -rs;
+      dir[s] = m.cw ? -rf : rf;
+      dir[n] = m.to[n] - m.from[n];
+      return { dist: Math.hypot(radial, along), dir };
+    }
+    const d = m.to.map((x, i) => x - m.from[i]);
+    const len2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+    const t = len2 ? Math.max(0, Math.min(1, ((p[0] - m.from[0]) * d[0] + (p[1] - m.from[1]) * d[1] + (p[2] - m.from[2]) * d[2]) / len2)) : 0;
+    return { dist: Math.hypot(...p.map((x, i) => x - (m.from[i] + t * d[i]))), dir: d };
+  }
+
+  // The move under way: from the current one, the first the tool is on and, when it moved since the last
+  // sample, moving along (a path that comes back over itself: the way back is the later move).
+  function moveUnderWay(p, step) {
+    const moving = Math.hypot(...step) > pv.tol / 4;
+    for (let i = pv.done; i < pv.moves.length; i++) {
+      const n = nearMove(p, pv.moves[i]);
+      if (n.dist > pv.tol) continue;
+      if (!moving || step[0] * n.dir[0] + step[1] * n.dir[1] + step[2] * n.dir[2] > 0) return i;
+    }
+    return pv.done;
+  }
+
+  function setDone(n) {
+    for (let i = pv.done; i < n; i++) for (const p of pv.paths[i]) p.classList.add('done');
+    for (let i = n; i < pv.done; i++) for (const p of pv.paths[i]) p.classList.remove('done');
+    pv.done = n;
+    byId('pathview').dataset.done = n;
+    liveLook();
+  }
+
+  // Once a run is followed (or has been), the moves to come fade and the moves done stand out.
+  function liveLook() {
+    const svg = byId('pathview').querySelector('svg');
+    if (svg) svg.classList.toggle('live', pv.done > 0 || !pv.idle);
+  }
+
+  // The station's axis positions (its axis_defs order) as the plot's X Y Z, X as a radius.
+  function pathAxes(rec, pos) {
+    if (!pv || pv.station !== rec.data.id || !pv.views.length) return;
+    const p = [0, 0, 0];
+    (rec.data.axis_defs || []).forEach((a, i) => {
+      const k = 'XYZ'.indexOf(a.name);
+      if (k >= 0 && pos[i] !== undefined && pos[i] !== null) p[k] = a.diameter ? pos[i] / 2 : pos[i];
+    });
+    for (const v of pv.views)
+      v.tool.setAttribute('transform', 'translate(' + (v.left + (p[v.h] - v.h0) * v.scale).toFixed(1) + ' ' + (v.top + (v.v0 - p[v.v]) * v.scale).toFixed(1) + ')');
+    const step = pv.at ? p.map((x, i) => x - pv.at[i]) : [0, 0, 0];
+    pv.at = p;
+    if (pv.idle) return;
+    const i = moveUnderWay(p, step);
+    if (i > pv.done) setDone(i);
+  }
+
+  // A new program on the station draws its path; a run that starts starts it over; one that ends without a
+  // fault is done. Between runs (READY, PROGRAM_COMPLETED) the marker moves and the moves done stay.
+  const IDLE = new Set(['READY', 'PROGRAM_COMPLETED', 'UNAVAILABLE']);
+  function pathStation(st) {
+    if (!pv || pv.station !== st.id) return;
+    const idle = IDLE.has(st.execution);
+    if (st.program && st.program !== pv.program) {
+      pv.program = st.program;
+      pv.idle = idle;
+      loadPath();
+      return;
+    }
+    if (!idle && pv.idle && pv.moves.length) setDone(0);
+    if (idle && !pv.idle && pv.moves.length && st.condition !== 'FAULT') setDone(pv.moves.length);
+    pv.idle = idle;
+    if (pv.moves.length) liveLook();
   }
 
   // ---- jobs ----

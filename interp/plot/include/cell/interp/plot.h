@@ -63,6 +63,11 @@ class Plot {
     std::array<double, 3> at{};
     std::string text;
   };
+  // What a live view overlays the page with (the dashboard): the drawn moves in order (the SVG's
+  // `data-seq` is the index here) and where the path starts; nothing when the run made no move.
+  const std::vector<Move>& moves() const { return moves_; }
+  bool started() const { return started_; }
+  const std::array<double, 3>& start() const { return start_; }
 
  private:
   void AddMove(const Canon& c, MoveKind kind, const Target& to);

@@ -1,17 +1,22 @@
 // The dashboard's HTTP side (cpp-httplib): the live page, its state and event stream (server-sent
-// events), and the MTConnect agent interface. Read-only: GET only, nothing reaches the cell.
+// events), the toolpath of what a station runs, and the MTConnect agent interface. Read-only: GET only,
+// nothing reaches the cell.
 //
 //   /                      the page, with the current state inside it (one GET renders it)
 //   /static/chart.js       Chart.js from Debian's libjs-chart.js
 //   /api/state             the state as JSON;  /api/job/<id>  one job with its decision log
 //   /api/events            server-sent events after Last-Event-ID (or ?after=N); `resync` when too old
+//   /api/station/<ID>/path[?program=]   the toolpath of what the station runs (cell/dashboard/path.h), JSON
+//   /station/<ID>/path.svg[?program=]   the same plot as a plain SVG page
 //   /probe /current /sample?from=&count= /assets /asset/<id>, and /<device>/probe|current|sample
 #pragma once
 
 #include <atomic>
+#include <functional>
 #include <memory>
 #include <string>
 #include <thread>
+#include <utility>
 
 #include "cell/dashboard/cell_view.h"
 
@@ -41,6 +46,11 @@ struct ServerOptions {
 // for a malformed address, or one beyond loopback without a certificate and key.
 ServerOptions ServerOptionsFromEnv();
 
+// What answers the path routes: an HTTP status and a JSON body (with "svg", or "error"), for a station and
+// program. The HTTP side knows no bus; cell-dashboard gives it cell::dashboard::Paths.
+using PathSource =
+    std::function<std::pair<int, nlohmann::json>(const std::string& station, const std::string& program)>;
+
 class HttpServer {
  public:
   HttpServer(CellView& view, ServerOptions opts);
@@ -50,6 +60,8 @@ class HttpServer {
 
   // Binds and serves on its own thread. Throws cell::Error(kUnavailable) when the address cannot be bound.
   void Start();
+  // Before Start. Without one the path routes answer 404.
+  void SetPathSource(PathSource source) { paths_ = std::move(source); }
   void Stop();
   int port() const { return port_; }
   std::string url() const;  // http(s)://host:port/
@@ -58,6 +70,8 @@ class HttpServer {
 
  private:
   void Routes();
+  void PathRoutes();
+  PathSource paths_;
   CellView& view_;
   ServerOptions opts_;
   std::unique_ptr<httplib::Server> srv_;
