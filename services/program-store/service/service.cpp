@@ -184,13 +184,12 @@ Service::Service(bus::Participant& p, ProgramStore& store, std::chrono::seconds 
 }
 
 // cell/program/list (ProgramEntry): what a viewer sees of the store. One file changed or gone: its entry and
-// its namespace's count, from one listing. A list that cannot be published (a namespace past the topic's 4096
+// its namespace's count, read as such (listing the whole namespace on every change cost a copy of every
+// file's metadata per put, issue 39). A list that cannot be published (a namespace past the topic's 4096
 // instances) is a warning, never a failed request.
 void Service::PublishEntry(const std::string& node, const std::string& name) {
-  const std::vector<FileInfo> files = store_.List(node);
-  auto it = std::find_if(files.begin(), files.end(), [&](const FileInfo& f) { return f.name == name; });
-  if (it != files.end()) {
-    WriteEntry(PresentEntry(*it));
+  if (std::optional<FileInfo> f = store_.Info(node, name)) {
+    WriteEntry(PresentEntry(*f));
   } else {
     cell::ProgramEntry e;  // deleted (or moved away)
     e.node(node);
@@ -198,7 +197,7 @@ void Service::PublishEntry(const std::string& node, const std::string& name) {
     e.present(false);
     WriteEntry(e);
   }
-  WriteSummary(node, files.size());
+  WriteSummary(node, store_.Count(node));
 }
 
 void Service::WriteSummary(const std::string& node, size_t files) {

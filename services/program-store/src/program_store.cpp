@@ -627,6 +627,22 @@ void ProgramStore::List(std::string_view node, std::string_view pattern, std::st
   }
 }
 
+std::optional<FileInfo> ProgramStore::Info(std::string_view node, std::string_view name) {
+  std::lock_guard lock(mutex_);
+  RequireNamespace(*this, node);
+  std::optional<Located> found = Find(*db_, node, name, 0);
+  if (!found) return std::nullopt;
+  return std::move(found->info);
+}
+
+std::size_t ProgramStore::Count(std::string_view node) {
+  std::lock_guard lock(mutex_);
+  RequireNamespace(*this, node);
+  Statement st = db_->Prepare("SELECT count(*) FROM files WHERE node = ?");
+  st.BindText(1, node);
+  return st.Step() ? static_cast<std::size_t>(st.ColumnInt64(0)) : 0;
+}
+
 PutResult ProgramStore::Copy(const CopyRequest& request) {
   PutResult result;
   {

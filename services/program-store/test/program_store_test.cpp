@@ -344,6 +344,31 @@ TEST(ProgramStore, ListPagesAfterACursorByName) {
   EXPECT_THAT(none, IsEmpty());
 }
 
+// What a change republishes (service.cpp PublishEntry): the one file and its namespace's count, without a
+// listing of the namespace (issue 39 item 1). The name is a name, not a pattern.
+TEST(ProgramStore, InfoAndCountReadOneFileAndTheNamespaceSize) {
+  TempDir tmp;
+  ProgramStore ps(Options(tmp.path()));
+  EXPECT_EQ(ps.Count("KT01"), 0u);
+  EXPECT_FALSE(ps.Info("KT01", "A1"));
+  for (const char* name : {"A1", "B1", "C1"}) ps.Put(Req("KT01", name, kGear));
+  ps.Put(Req("HOST", "A1", kGear));
+  PutRequest again = Req("KT01", "A1", std::string(kGear) + "N99 M30\n");
+  again.force = true;
+  ps.Put(again);
+  EXPECT_EQ(ps.Count("KT01"), 3u);
+  EXPECT_EQ(ps.Count("HOST"), 1u);
+  std::optional<FileInfo> a1 = ps.Info("KT01", "A1");
+  ASSERT_TRUE(a1);
+  EXPECT_EQ(a1->revision, 2u);  // the head
+  EXPECT_EQ(a1->node, "KT01");
+  EXPECT_FALSE(ps.Info("KT01", "A*"));
+  ps.Delete("KT01", "B1");
+  EXPECT_FALSE(ps.Info("KT01", "B1"));
+  EXPECT_EQ(ps.Count("KT01"), 2u);
+  ExpectError([&] { ps.Count("KT09"); }, Errc::kNotFound, "unknown namespace");
+}
+
 TEST(ProgramStore, ListWithWildcards) {
   TempDir tmp;
   ProgramStore ps(Options(tmp.path()));

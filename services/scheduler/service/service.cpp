@@ -96,10 +96,14 @@ void Service::Start() {
     for (auto& v : sched_.Stations())
       if (online_.count(v.id)) online_[v.id] = v.online;
     started_ = std::chrono::steady_clock::now();
-    // The job state topic starts empty in a new process: announce the newest jobs again.
-    auto jobs = sched_.Jobs(false);
-    const size_t first = jobs.size() > bus::topics::kJobSlots ? jobs.size() - bus::topics::kJobSlots : 0;
-    for (size_t i = first; i < jobs.size(); ++i) PublishJob(jobs[i].id);
+    // The job state topic starts empty in a new process: announce the newest jobs again, the last kJobSlots
+    // ids (one per slot), visited in place (a view of every job first was 100,000 views for 1024, issue 39).
+    JobQuery newest;
+    newest.after = std::max<std::int64_t>(0, sched_.NewestJobId() - bus::topics::kJobSlots);
+    sched_.ForJobs(newest, [this](const JobView& v) {
+      PublishJob(v.id);
+      return true;
+    });
   }
   // Observations are subscribed only now, with the stations configured and recovery done: samples that
   // arrive at once (state topics are transient-local) are not dropped as coming from unknown stations.

@@ -103,6 +103,10 @@ std::vector<JobView> Scheduler::Jobs(bool with_decisions) const {
   return out;
 }
 
+std::int64_t Scheduler::NewestJobId() const {
+  return impl_->jobs.empty() ? 0 : impl_->jobs.rbegin()->first;
+}
+
 void Scheduler::ForJobs(const JobQuery& q, const std::function<bool(const JobView&)>& visit) const {
   int station = -1;
   if (!q.station.empty() && (station = impl_->FindStation(q.station)) < 0) return;  // no job was there

@@ -51,7 +51,9 @@ TEST(JobListing, EmptyAndUnknownStationListNothing) {
   c.Program("P1", {}, 60);
   c.Online("KT01");
   c.Route("R", {"KT01:P1"});
+  EXPECT_EQ(c.sched->NewestJobId(), 0);
   c.Operate("R", 1);
+  EXPECT_EQ(c.sched->NewestJobId(), 1);
   EXPECT_TRUE(List(*c.sched, Where(std::nullopt, "KT09"), 1000).empty());
   EXPECT_EQ(List(*c.sched, Where(std::nullopt, "KT01"), 1000).size(), 1u);
   EXPECT_TRUE(List(*c.sched, Where(JobState::kCompleted), 1000).empty());

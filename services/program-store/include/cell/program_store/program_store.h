@@ -157,6 +157,11 @@ class ProgramStore {
   void List(std::string_view node, std::string_view pattern, std::string_view after,
             const std::function<bool(const FileInfo&)>& visit);
 
+  // One file at its head revision, or nullopt; and how many files a namespace holds. What a change
+  // republishes (one entry and its namespace's count) without listing the namespace.
+  std::optional<FileInfo> Info(std::string_view node, std::string_view name);
+  std::size_t Count(std::string_view node);
+
   PutResult Copy(const CopyRequest& request);
   OpResult Rename(const RenameRequest& request);
   OpResult Delete(std::string_view node, std::string_view name, std::string_view idempotency_key = {});

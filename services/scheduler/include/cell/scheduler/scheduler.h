@@ -236,6 +236,7 @@ class Scheduler {
   // ---- queries ----
   std::optional<JobView> Job(std::int64_t id, bool with_decisions = true) const;
   std::vector<JobView> Jobs(bool with_decisions = false) const;
+  std::int64_t NewestJobId() const;  // 0 when there is no job
   // The jobs of q without their decisions, one at a time, until visit returns false (a page is full): a
   // listing of any size costs only the page it shows.
   void ForJobs(const JobQuery& q, const std::function<bool(const JobView&)>& visit) const;

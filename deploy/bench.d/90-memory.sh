@@ -1,0 +1,56 @@
+#!/usr/bin/env bash
+# Resident memory of a cell's services as pallets go through it (issue 39 item 1: what a cell keeps per pallet
+# must be bounded; it runs for months). Starts a two-station cell (cellctl up, virtual machine clock) on its
+# own DDS domain and data directory with the demo's programs: routes PUMP and VALVE (either station) and PROBE
+# (KT01 probes its part, writes the inspection file BORE7 and copies it to HOST by RCP), operated
+# PUMP, VALVE, PUMP, PROBE in turn. memory_bench keeps 4 jobs live, asks `job show` of every finished job and
+# one page of `job ls`, `program ls`, `inspect ls` every 10th, runs `cellctl job show` as a process every 25th,
+# and prints every service's VmRSS (/proc/PID/status) at the checkpoints and after CELL_BENCH_MEMORY_IDLE
+# seconds idle. Targets: the program store, the scheduler and the inspection writer each grow by less than
+# 10 MB from pallet 50 to 450, and stay within 10% from pallet 1,000 to the last checkpoint.
+# About 3 minutes for 1,000 pallets (CELL_BENCH_MEMORY_PALLETS=10000: about 30 minutes) on a 2-core machine.
+# Env: CELL_BUILD_DIR (default build/), CELL_BENCH_DOMAIN (default 99), CELL_BENCH_MEMORY_PALLETS (1000 or
+# 10000, default 1000), CELL_BENCH_MEMORY_IDLE (default 30).
+set -euo pipefail
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
+BIN="${CELL_BUILD_DIR:-$ROOT/build}/bin"
+for exe in cellctl memory_bench cell-scheduler cell-program-store cell-interpreter cell-axis-servo \
+           cell-inspection-writer cell-dashboard; do
+  [ -x "$BIN/$exe" ] || { echo "90-memory: $BIN/$exe not built" >&2; exit 1; }
+done
+case "${CELL_BENCH_MEMORY_PALLETS:-1000}" in
+  1000) checkpoints=50,450,1000 ;;
+  10000) checkpoints=50,450,1000,2000,5000,10000 ;;
+  *) echo "90-memory: CELL_BENCH_MEMORY_PALLETS is 1000 or 10000" >&2; exit 2 ;;
+esac
+
+work="$(mktemp -d "${TMPDIR:-/tmp}/cell-memory-bench.XXXXXX")"
+export CELL_DATA_DIR="$work/data"
+export CELL_DOMAIN="${CELL_BENCH_DOMAIN:-99}"
+export CELL_HTTP="${CELL_HTTP:-127.0.0.1:0}"  # the cell's dashboard on any free port
+mkdir -p "$CELL_DATA_DIR"
+cleanup() {
+  "$BIN/cellctl" down >/dev/null 2>&1 || true
+  rm -rf "$work"
+}
+trap cleanup EXIT
+
+CTL="$BIN/cellctl"
+DEMO="$ROOT/deploy/demo.d"
+"$CTL" up --stations KT01,KT02 --clock virtual >/dev/null
+for f in PUMP341 VALVE12; do "$CTL" program put "$DEMO/$f.apl" >/dev/null; done
+# The demo's probe program names its inspection file (in KT01's namespace) and the copy in HOST as itself,
+# so after one pallet the station would find the file instead of the program: here the file is KT01:BORE7I
+# and the copy HOST:BORE7R (a new revision of each per probed pallet).
+sed -e 's/(OIF,BORE7)/(OIF,BORE7I)/' -e 's/(RCP,BORE7,TO,HOST,BORE7)/(RCP,BORE7I,TO,HOST,BORE7R)/' \
+  "$DEMO/PROBE7.apl" >"$work/PROBE7.apl"
+[ "$(grep -c 'BORE7I' "$work/PROBE7.apl")" = 2 ] || { echo "90-memory: PROBE7.apl not as expected" >&2; exit 1; }
+"$CTL" program put "$work/PROBE7.apl" >/dev/null
+"$CTL" program put "$DEMO/KT01-p7.toml" --name PART7 --type part_model >/dev/null
+"$CTL" tools load KT01 "$DEMO/T1-probe.tld" >/dev/null
+"$CTL" route define PUMP --op "KT01,KT02:PUMP341" >/dev/null
+"$CTL" route define VALVE --op "KT01,KT02:VALVE12" >/dev/null
+"$CTL" route define PROBE --op "KT01:PART7,BORE7" >/dev/null
+echo "RSS per service (MB), two stations on the virtual clock, checkpoints at pallets $checkpoints:"
+"$BIN/memory_bench" --routes PUMP,VALVE,PUMP,PROBE --cellctl "$CTL" --checkpoints "$checkpoints" \
+  --idle "${CELL_BENCH_MEMORY_IDLE:-30}"
