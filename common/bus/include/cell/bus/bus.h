@@ -190,10 +190,16 @@ class Writer : public Rejoinable {
 
   // Throws cell::Error(kInvalidArgument) when a sequence exceeds its IDL bound: Fast CDR would
   // send it and a Cyclone reader would drop it.
-  void Write(const T& v) {
+  void Write(const T& v) { WriteRaw(Serialize(v)); }
+  // Write in two steps: the sample as it goes on the wire (bounds checked as above), and sending it, again
+  // if need be (a Server's reply cache keeps replies serialized: a T with a bounded string<65536> is a 64 KiB
+  // array in memory, whatever its text).
+  RawSample Serialize(const T& v) const {
     std::string why;
     if (!cell::idl::CheckBounds(v, why)) throw Error(Errc::kInvalidArgument, topic_ + ": " + why);
-    RawSample s{ToCdr(v), KeyCdr(v)};
+    return RawSample{ToCdr(v), KeyCdr(v)};
+  }
+  void WriteRaw(const RawSample& s) {
     std::shared_lock lk(p_.endpoints_mu());
     w_->Write(s);
   }
@@ -520,41 +526,42 @@ class Server {
   }
 
   // A re-sent request is answered from the cache only while its requester may still re-send (every 250 ms
-  // until its Call times out): the newest replies are kept, up to kCacheSize entries and kCacheBytes. Bounded
-  // by count alone, 4096 program-store chunks of 60 KB were a quarter of a gigabyte (issue 39 item 1).
+  // until its Call times out): the newest replies are kept, up to kCacheSize entries and kCacheBytes, as the
+  // CDR they were sent as. Kept as Rep objects, each was the IDL type's full size (a string<65536> field is a
+  // 64 KiB array): 4096 cached replies were 268 MB, whatever their text (issue 39 item 1).
   static constexpr size_t kCacheSize = 4096;
   static constexpr size_t kCacheBytes = size_t{4} << 20;
 
  private:
-  void Remember(const std::pair<std::string, uint64_t>& key, const Rep& rep) {
+  void Remember(const std::pair<std::string, uint64_t>& key, RawSample s) {
     std::lock_guard lk(cache_mu_);
-    const size_t bytes = Rep::getCdrSerializedSize(rep, 0);
+    const size_t bytes = s.cdr.size() + s.key.size();
     auto [it, inserted] = cache_.try_emplace(key);
     if (inserted) {
       order_.push_back(key);
     } else {
-      cache_bytes_ -= it->second.second;
+      cache_bytes_ -= it->second.cdr.size() + it->second.key.size();
     }
-    it->second = {rep, bytes};
+    it->second = std::move(s);
     cache_bytes_ += bytes;
     while (order_.size() > 1 && (order_.size() > kCacheSize || cache_bytes_ > kCacheBytes)) {
       auto old = cache_.find(order_.front());
-      cache_bytes_ -= old->second.second;
+      cache_bytes_ -= old->second.cdr.size() + old->second.key.size();
       cache_.erase(old);
       order_.pop_front();
     }
   }
-  std::optional<Rep> Cached(const std::pair<std::string, uint64_t>& key) const {
+  std::optional<RawSample> Cached(const std::pair<std::string, uint64_t>& key) const {
     std::lock_guard lk(cache_mu_);
     auto it = cache_.find(key);
     if (it == cache_.end()) return std::nullopt;
-    return it->second.first;
+    return it->second;
   }
 
   void Handle(const Req& r, const SampleInfo& si) {
     auto key = std::make_pair(std::string(r.hdr().client()), r.hdr().request_id());
-    if (std::optional<Rep> cached = Cached(key)) {  // a re-sent request: answer again, do not run again
-      rep_.Write(*cached);
+    if (std::optional<RawSample> cached = Cached(key)) {  // a re-sent request: answer again, do not run again
+      rep_.WriteRaw(*cached);
       return;
     }
     Rep rep;
@@ -578,31 +585,34 @@ class Server {
     }
     rep.hdr().client(r.hdr().client());
     rep.hdr().request_id(r.hdr().request_id());
-    Remember(key, rep);
     try {
-      rep_.Write(rep);  // to a vanished requester this goes nowhere, which is fine
+      Send(key, rep_.Serialize(rep));
     } catch (const Error& e) {
-      // A transient failure (a writer that could not queue the reply): the requester re-sends and the
-      // cache answers. A reply that can never be sent (over an IDL bound) becomes an error reply.
+      // A reply that can never be sent (over an IDL bound, found here or by the DDS stack) becomes an error
+      // reply; a transient failure (a writer that could not queue it) is answered from the cache on re-send.
       if (e.code() != Errc::kInvalidArgument) return;
       Rep err;
       err.hdr() = rep.hdr();
       err.hdr().code(static_cast<int32_t>(e.code()) + 1);
       err.hdr().error(std::string(e.what()).substr(0, 511));
-      Remember(key, err);
       try {
-        rep_.Write(err);
+        Send(key, rep_.Serialize(err));
       } catch (const Error&) {  // as above: the re-sent request gets it from the cache
       }
     }
+  }
+  // Remembers the reply, then writes it (to a vanished requester this goes nowhere, which is fine).
+  void Send(const std::pair<std::string, uint64_t>& key, RawSample s) {
+    Remember(key, s);
+    rep_.WriteRaw(s);
   }
 
   Participant& p_;
   std::string service_;
   Handler handler_;
   Describe describe_;
-  mutable std::mutex cache_mu_;  // CacheUse() reads from another thread
-  std::map<std::pair<std::string, uint64_t>, std::pair<Rep, size_t>> cache_;  // reply, its CDR bytes
+  mutable std::mutex cache_mu_;                                  // CacheUse() reads from another thread
+  std::map<std::pair<std::string, uint64_t>, RawSample> cache_;  // the reply as sent
   std::deque<std::pair<std::string, uint64_t>> order_;
   size_t cache_bytes_ = 0;
   Writer<Rep> rep_;
