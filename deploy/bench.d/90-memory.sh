@@ -2,7 +2,7 @@
 # Resident memory of a cell's services as pallets go through it (issue 39 item 1: what a cell keeps per pallet
 # must be bounded; it runs for months). Starts a two-station cell (cellctl up, virtual machine clock) on its
 # own DDS domain and data directory with the demo's programs: routes PUMP and VALVE (either station) and PROBE
-# (KT01 probes its part, writes the inspection file BORE7 and copies it to HOST by RCP), operated
+# (KT01 probes its part, writes the inspection file INSP7 and copies it to HOST by RCP), operated
 # PUMP, VALVE, PUMP, PROBE in turn. memory_bench keeps 4 jobs live, asks `job show` of every finished job and
 # one page of `job ls`, `program ls`, `inspect ls` every 10th, runs `cellctl job show` as a process every 25th,
 # and prints every service's VmRSS (/proc/PID/status) at the checkpoints and after CELL_BENCH_MEMORY_IDLE
@@ -13,6 +13,8 @@
 # 10000, default 1000), CELL_BENCH_MEMORY_IDLE (default 30).
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
+# shellcheck source=lib/figures.sh
+source "$ROOT/deploy/bench.d/lib/figures.sh"
 BIN="${CELL_BUILD_DIR:-$ROOT/build}/bin"
 for exe in cellctl memory_bench cell-scheduler cell-program-store cell-interpreter cell-axis-servo \
            cell-inspection-writer cell-dashboard; do
@@ -39,13 +41,7 @@ CTL="$BIN/cellctl"
 DEMO="$ROOT/deploy/demo.d"
 "$CTL" up --stations KT01,KT02 --clock virtual >/dev/null
 for f in PUMP341 VALVE12; do "$CTL" program put "$DEMO/$f.apl" >/dev/null; done
-# The demo's probe program names its inspection file (in KT01's namespace) and the copy in HOST as itself,
-# so after one pallet the station would find the file instead of the program: here the file is KT01:BORE7I
-# and the copy HOST:BORE7R (a new revision of each per probed pallet).
-sed -e 's/(OIF,BORE7)/(OIF,BORE7I)/' -e 's/(RCP,BORE7,TO,HOST,BORE7)/(RCP,BORE7I,TO,HOST,BORE7R)/' \
-  "$DEMO/PROBE7.apl" >"$work/PROBE7.apl"
-[ "$(grep -c 'BORE7I' "$work/PROBE7.apl")" = 2 ] || { echo "90-memory: PROBE7.apl not as expected" >&2; exit 1; }
-"$CTL" program put "$work/PROBE7.apl" >/dev/null
+"$CTL" program put "$DEMO/PROBE7.apl" >/dev/null
 "$CTL" program put "$DEMO/KT01-p7.toml" --name PART7 --type part_model >/dev/null
 "$CTL" tools load KT01 "$DEMO/T1-probe.tld" >/dev/null
 "$CTL" route define PUMP --op "KT01,KT02:PUMP341" >/dev/null
@@ -53,4 +49,12 @@ sed -e 's/(OIF,BORE7)/(OIF,BORE7I)/' -e 's/(RCP,BORE7,TO,HOST,BORE7)/(RCP,BORE7I
 "$CTL" route define PROBE --op "KT01:PART7,BORE7" >/dev/null
 echo "RSS per service (MB), two stations on the virtual clock, checkpoints at pallets $checkpoints:"
 "$BIN/memory_bench" --routes PUMP,VALVE,PUMP,PROBE --cellctl "$CTL" --checkpoints "$checkpoints" \
-  --idle "${CELL_BENCH_MEMORY_IDLE:-30}"
+  --idle "${CELL_BENCH_MEMORY_IDLE:-30}" | tee "$work/memory.out"
+# The guard's figures (lib/figures.sh): each of the three services' RSS at pallet 1,000 over its RSS at
+# pallet 50 (a ratio: flat is 1.0; +10 MB on about 22 MB is 1.45).
+for svc in cell-program-store cell-scheduler cell-inspection-writer; do
+  bench_figure "memory.${svc#cell-}.rss_1000_vs_50" "$(awk -v svc="$svc" '
+    function rss(line,   i, n, f) { n = split(line, f, " "); for (i = 1; i < n; i++) if (f[i] == svc) return f[i + 1] }
+    /^pallet 50 / { a = rss($0) } /^pallet 1000 / { b = rss($0) }
+    END { if (a > 0 && b > 0) printf "%.3f", b / a }' "$work/memory.out")" lower
+done
