@@ -2,6 +2,8 @@
 // CNC's memory (KT-APL machine parameters and TLD, manual ln 8513-8525 and 3975-4097), at each step.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include "cell/store/sqlite.h"
 #include "harness.h"
 
@@ -475,6 +477,51 @@ TEST_F(StationCore, M00StopsTheRunUntilCycleStart) {
   for (const auto& seg : servo_.written)
     if (seg.kind() == cell::SEGMENT_LINEAR) last_x = Target(seg, 0);
   EXPECT_DOUBLE_EQ(last_x, 20.0);  // the run went on after the stop
+}
+
+// Balt-System (issue 35 item 4): START on an idle station runs the program SPG selected (ln 8873-8888) as a
+// run of the station's own (dispatch id below 1); nothing selected is FILMS4 54 (ln 10079-10080). A map's
+// "BS01/MP2:P9" is read from that memory alone, and never from another station's. A KT-APL station's START
+// with nothing running starts nothing.
+TEST_F(StationCore, BaltStartRunsTheSelectedProgram) {
+  Command(cell::STATION_CYCLE_START);
+  EXPECT_FALSE(station_->RunNext());
+  cfg_.id = "BS01";
+  cfg_.dialect = "balt";
+  cfg_.tools = {};
+  servo_.station_id = "BS01";
+  Make();
+  try {
+    Command(cell::STATION_CYCLE_START);
+    ADD_FAILURE() << "START without a selected program was accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), Errc::kFailedPrecondition);
+    EXPECT_EQ(std::string(e.what()).rfind("[FILMS4 54] NO PROGRAM HAS BEEN SELECTED", 0), 0u) << e.what();
+  }
+  EXPECT_FALSE(station_->RunNext());
+  Put("P9", "%:P9\nN1 G0 X10 Y20 Z30\nN2 G1 X40 F500\nM30\n", "BS01/MP2");
+  io_.selected = "BS01/MP2:P9";
+  Command(cell::STATION_CYCLE_START);
+  EXPECT_EQ(RunOne(-1).state(), cell::RUN_COMPLETED);
+  EXPECT_NE(std::find(io_.fetched.begin(), io_.fetched.end(), "BS01/MP2:P9"),
+            io_.fetched.end());  // MP2 alone
+  double last_x = 0;
+  for (const auto& seg : servo_.written)
+    if (seg.kind() == cell::SEGMENT_LINEAR) last_x = Target(seg, 0);
+  EXPECT_DOUBLE_EQ(last_x, 40.0);
+  Command(cell::STATION_CYCLE_START);  // the next START runs it again, under the next id
+  EXPECT_EQ(RunOne(-2).state(), cell::RUN_COMPLETED);
+  // A map names a memory's program: read there alone (not HOST's of the same name), never another station's.
+  Put("Q1", "%:Q1\nM30\n", "HOST");
+  Dispatch(1, {"BS01/MP2:Q1"});
+  cell::RunStatus missing = RunOne(1);
+  EXPECT_EQ(missing.state(), cell::RUN_FAILED);
+  EXPECT_EQ(missing.reason().to_string(), "program 'Q1' is not in BS01/MP2");
+  Put("Q1", "%:Q1\nM30\n", "BS02/MP2");
+  Dispatch(2, {"BS02/MP2:Q1"});
+  EXPECT_EQ(RunOne(2).reason().to_string(), "program 'BS02/MP2:Q1' is in BS02's memory: BS01 cannot read it");
+  Dispatch(3, {"BS01/MP2:P9", "HOST:Q1"});
+  EXPECT_EQ(RunOne(3).state(), cell::RUN_COMPLETED);
 }
 
 TEST_F(StationCore, ACancelEndsAProgramStop) {
