@@ -191,8 +191,7 @@ void AddToolsVerbs(CLI::App& app, Context& ctx, const OptsPtr& o) {
     }
     try {
       const auto cfg = cell::interp::LoadStation(o->station);
-      cell::interp::DialectOrThrow(cfg.dialect)
-          .ParseToolTable(text, o->file, cell::tooltable::ToolTable(cfg.tools));
+      cell::interp::ParseStationTools(cfg, text, o->file, cell::tooltable::ToolTable(cfg.tools));
     } catch (const cell::Error& e) {
       throw Exit{1, e.what()};
     }

@@ -221,6 +221,8 @@ void Station::RunProgram(ActiveRun& run, const std::string& entry) {
   opt.variables = start.image.variables;
   opt.params = cfg_.params;  // the station config's [params]: the dialect's machine settings (EMCO's monitor)
   opt.params["PALLET"] = std::to_string(run.d.pallet);
+  // A coded-pallet module's TLD W is 1-127 (KT-APL ln 4081-4083; the dialect's CODED_PALLETS setting).
+  if (cfg_.coded_pallets) opt.params["CODED_PALLETS"] = "1";
   opt.params["OPERATOR"] = "1";  // a station has an operator's cycle start: M99 M00 stops, as the manual says
   // The panel's [ENABLE OPTION STOP] switch, once the operator has set it, over the station file's default.
   if (const std::optional<bool> on = panel_.OptionalStop()) opt.params["OPTIONAL_STOP"] = *on ? "1" : "0";

@@ -7,6 +7,7 @@
 
 #include "cell/error/error.h"
 #include "cell/interp/interp.h"
+#include "cell/interp/station_rules.h"
 #include "cell/names/names.h"
 #include "cell/tooltable/wire.h"
 
@@ -158,11 +159,11 @@ cell::StationReply Station::OnCommand(const cell::StationRequest& r) {
   rep.station(cfg_.id);
   switch (r.op()) {
     case cell::STATION_LOAD_TOOLS: {
-      // The station's own tool-table form (KT-APL: a program of TLD statements), on top of the table.
-      const interp::Dialect& dialect = interp::DialectOrThrow(cfg_.dialect);
+      // The station's own tool-table form (KT-APL: a program of TLD statements), on top of the table; a
+      // coded-pallet station's pallets are 1-127 (station_rules.h).
       const std::string text = r.text().to_string();
       rep.revision(memory_.ChangeTools(
-          [&](tooltable::ToolTable& t) { t = dialect.ParseToolTable(text, "tools", t); }));
+          [&](tooltable::ToolTable& t) { t = interp::ParseStationTools(cfg_, text, "tools", t); }));
       const auto tools = memory_.Get().image.tools;
       spdlog::info("tool table loaded: {} tools, {} process compensations", tools.entries().size(),
                    tools.process_comps().size());

@@ -319,6 +319,26 @@ TEST_F(StationCore, ProcessCompensationOfThePalletOnTheTableApplies) {
   EXPECT_NEAR(Target(servo_.Ran(2, cell::SEGMENT_RAPID).back(), 2), 150.0, 1e-9);
 }
 
+// A coded-pallet module (KT04: `coded_pallets = true`) has pallets 1-127 (ln 4081-4083): a tool load or a
+// program's TLD naming W200 is refused, W127 applies while pallet 127 is on the table (150 + 2 = 152).
+TEST_F(StationCore, ACodedPalletModuleTakesProcessCompensationsFor1To127) {
+  cfg_.coded_pallets = true;
+  Make();
+  EXPECT_THROW(Command(cell::STATION_LOAD_TOOLS, "G71\n(TLD,S6T4001P50.)\n(TLD,T4001W200P2.)\n"), Error);
+  EXPECT_EQ(station_->MemoryState().image.tools.Find("4001"), nullptr);  // all or nothing
+  Command(cell::STATION_LOAD_TOOLS, "G71\n(TLD,S6T4001P50.)\n(TLD,T4001W127P2.)\n");
+  Put("USE", "G71\nT4001 M06\nG90 G01 X0 Y0 Z100. F0\nM30\n");
+  Dispatch(1, {"USE"}, 127);
+  ASSERT_EQ(RunOne(1).state(), cell::RUN_COMPLETED);
+  EXPECT_NEAR(Target(servo_.Ran(1, cell::SEGMENT_RAPID).back(), 2), 152.0, 1e-9);
+  Put("TLD", "G71\n(TLD,T4001W200P2.)\nM30\n");
+  Dispatch(2, {"TLD"}, 127);
+  cell::RunStatus refused = RunOne(2);
+  EXPECT_EQ(refused.state(), cell::RUN_FAILED);
+  EXPECT_NE(refused.reason().to_string().find("TLD W VALUE 200 OUTSIDE 1-127"), std::string::npos)
+      << refused.reason().to_string();
+}
+
 // kill -9 at any moment: a copy of the database files taken at every wait of the core is what a killed
 // process leaves. Each opens, its variables are those before or after a whole program (never half of a
 // program's changes), and a run it shows ACTIVE is reported failed by the next process.
