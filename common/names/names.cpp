@@ -1,4 +1,5 @@
 #include "cell/names/names.h"
+#include "cell/names/program_ref.h"
 
 #include <algorithm>
 
@@ -81,6 +82,30 @@ void CheckNode(std::string_view node, std::string_view what) {
     }
   }
   Bad(what, node, "must be HOST, a station id or a station's memory ID/MP0, ID/MP2 .. ID/MP6");
+}
+
+ProgramRef SplitProgramRef(std::string_view entry) {
+  const std::size_t colon = entry.find(':');
+  if (colon != std::string_view::npos && colon + 1 < entry.size()) {
+    try {
+      CheckNode(entry.substr(0, colon));
+      return {std::string(entry.substr(0, colon)), std::string(entry.substr(colon + 1))};
+    } catch (const Error&) {
+      // not a namespace: the whole entry is the name
+    }
+  }
+  return {"", std::string(entry)};
+}
+
+std::string NodeStation(std::string_view node) {
+  if (node == "HOST") return "";
+  return std::string(node.substr(0, node.find('/')));
+}
+
+void CheckProgramRef(std::string_view entry, std::string_view what) {
+  CheckLength(what, entry, kMaxProgram);  // the whole entry crosses the bus as one program name
+  const ProgramRef ref = SplitProgramRef(entry);
+  CheckProgram(ref.name, what);
 }
 
 void CheckRoute(std::string_view name) {

@@ -1,4 +1,5 @@
 #include "cell/names/names.h"
+#include "cell/names/program_ref.h"
 
 #include <gtest/gtest.h>
 
@@ -75,6 +76,28 @@ TEST(Rules, Stations) {
   EXPECT_THROW(CheckNode("BS01/MP7"), Error);
   EXPECT_THROW(CheckNode("BS01/HD"), Error);
   EXPECT_THROW(CheckNode("STATION-NAME-012/MP2"), Error);  // 20 characters: the node field holds 16
+}
+
+// "NODE:NAME" names a program in a namespace (a Balt-System station's memory); anything else is a plain name.
+TEST(ProgramRefs, SplitAtANamespaceOnly) {
+  auto r = SplitProgramRef("BS01/MP2:P9");
+  EXPECT_EQ(r.node, "BS01/MP2");
+  EXPECT_EQ(r.name, "P9");
+  EXPECT_EQ(NodeStation(r.node), "BS01");
+  r = SplitProgramRef("BS01:PROG1");
+  EXPECT_EQ(r.node, "BS01");
+  EXPECT_EQ(NodeStation(r.node), "BS01");
+  r = SplitProgramRef("HOST:A.MIN");
+  EXPECT_EQ(r.node, "HOST");
+  EXPECT_EQ(NodeStation(r.node), "");
+  for (const char* plain : {"P9", "A.B:C", "BS01/MP1:P9", "BS01/MP7:P9", "BS01:", ":P9", "O1000,O1,S.SUB"}) {
+    r = SplitProgramRef(plain);
+    EXPECT_EQ(r.node, "") << plain;
+    EXPECT_EQ(r.name, plain);
+  }
+  CheckProgramRef("BS01/MP2:P9");
+  EXPECT_THROW(CheckProgramRef("BS01/MP2:P/9"), Error);
+  EXPECT_THROW(CheckProgramRef("BS01/MP3/P9"), Error);
 }
 
 TEST(Rules, Routes) {

@@ -94,4 +94,26 @@ TEST_F(StationRulesTest, ToolsFitTheDialectsRanges) {
   EXPECT_EQ(LoadError("OK01"), "");
 }
 
+// Issue 35 item 4: a coded-pallet module (KT04, `coded_pallets = true`) takes process compensations for
+// pallets 1-127 only (KT-APL ln 4081-4083), in a tool load as in a program; a table machine 1-255.
+TEST_F(StationRulesTest, ACodedPalletStationTakesPallets1To127) {
+  cell::config::StationConfig cfg;
+  cfg.id = "KT04";
+  cfg.dialect = "ktapl";
+  cfg.coded_pallets = true;
+  const std::string ok = "G71\n(TLD,T1001P150.D20.)\n(TLD,T1001W127P.1)\n";
+  EXPECT_EQ(cell::interp::ParseStationTools(cfg, ok, "t.tld", {}).process_comps().size(), 1u);
+  const std::string coded = "G71\n(TLD,T1001P150.D20.)\n(TLD,T1001W200P.1)\n";
+  try {
+    cell::interp::ParseStationTools(cfg, coded, "t.tld", {});
+    ADD_FAILURE() << "W200 accepted on a coded-pallet station";
+  } catch (const cell::Error& e) {
+    EXPECT_EQ(
+        std::string(e.what()),
+        "t.tld:3:11: error: TLD W VALUE 200 OUTSIDE 1-127: KT04 has coded pallets (KT-APL ln 4081-4083)");
+  }
+  cfg.coded_pallets = false;
+  EXPECT_EQ(cell::interp::ParseStationTools(cfg, coded, "t.tld", {}).process_comps()[0].pallet, 200);
+}
+
 }  // namespace

@@ -182,4 +182,40 @@ TEST_F(BaltStation, MemoriesSelectionGtlProfileAndProbingThroughCellctl) {
   EXPECT_EQ(cell_.Json({"program", "ls", "--node", "BS01/MP2", "--json"}).size(), 0u);
 }
 
+// The operator's way (issue 35 item 4): a program in memory MP4, selected with SPG, runs on `cellctl station
+// start BS01` (ln 8873-8888); with nothing selected START is FILMS4 54 (ln 10079-10080). A pallet map and a
+// route name the same program as BS01/MP4:SEL, which the scheduler reads there and sends to BS01 only.
+// By hand: no tool is called, so the axes stand where the program says, X11 Y22 Z33, then X44.
+TEST_F(BaltStation, SelectedProgramRunsOnStartAndMapsNameAMemory) {
+  auto none = Ctl({"station", "start", "BS01"});
+  EXPECT_NE(none.code, 0);
+  EXPECT_NE(none.err.find("[FILMS4 54] NO PROGRAM HAS BEEN SELECTED"), std::string::npos) << none.err;
+  Put("%:SEL\nN1 G0 X11 Y22 Z33\nN2 M30\n", "SEL", "BS01/MP4");
+  ASSERT_EQ(Memory("SPG,SEL/MP4").code, 0);
+  cell::bus::Participant bus("balt-station-test");
+  cell::bus::Reader<cell::AxisState> axes(bus, cell::bus::topics::kAxisState, cell::bus::QosKind::kTelemetry);
+  auto stands_at = [&](double x) {
+    return axes.WaitFor(
+        [x](const cell::AxisState& a) {
+          return a.station() == "BS01" && std::abs(a.commanded()[0] - x) < 1e-3 &&
+                 std::abs(a.commanded()[1] - 22.0) < 1e-3 && std::abs(a.commanded()[2] - 33.0) < 1e-3;
+        },
+        cell::bus::Millis(10000));
+  };
+  auto start = Ctl({"station", "start", "BS01"});
+  ASSERT_EQ(start.code, 0) << start.err;
+  EXPECT_TRUE(stands_at(11.0).has_value()) << "START did not run the selected program";
+
+  // The same memory in a map and a route; another station may not be sent it.
+  Put("%:SEL2\nN1 G0 X44 Y22 Z33\nN2 M30\n", "SEL2", "BS01/MP4");
+  RunPallet("3", "BS01/MP4:SEL2");
+  EXPECT_TRUE(stands_at(44.0).has_value()) << "the map's BS01/MP4:SEL2 did not run";
+  auto route = Ctl({"route", "define", "R", "--op", "BS01:\"BS01/MP4:SEL2\""});
+  EXPECT_EQ(route.code, 0) << route.err;
+  auto other = Ctl({"route", "define", "R2", "--op", "KT01:\"BS01/MP4:SEL2\""});
+  EXPECT_NE(other.code, 0);
+  EXPECT_NE(other.err.find("is in BS01's memory: only BS01 runs it, not KT01"), std::string::npos)
+      << other.err;
+}
+
 }  // namespace

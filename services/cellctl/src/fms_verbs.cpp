@@ -6,6 +6,7 @@
 #include "cell/interp/interp.h"
 #include "cell/interp/station_rules.h"
 #include "cell/names/names.h"
+#include "cell/names/program_ref.h"
 #include "cell/program_store/metadata.h"
 #include "cell/scheduler/route.h"
 #include "cell/tooltable/tooltable.h"
@@ -54,7 +55,7 @@ void AddPalletVerbs(CLI::App& app, Context& ctx, const OptsPtr& o) {
   pset->callback([o, &ctx] {
     CheckPallet(o->pallet);
     if (o->programs.size() > 75) throw Exit{2, "a pallet map holds at most 75 programs"};
-    for (auto& p : o->programs) cell::names::CheckProgram(p);
+    for (auto& p : o->programs) cell::names::CheckProgramRef(p);  // "BS01/MP2:P9": a memory's program
     auto r = Req(cell::SCHED_PALLET_SET, ctx, "pallet-set");
     r.pallet(o->pallet);
     for (auto& p : o->programs) cell::names::Append(r.args(), p, "program name");
@@ -190,8 +191,7 @@ void AddToolsVerbs(CLI::App& app, Context& ctx, const OptsPtr& o) {
     }
     try {
       const auto cfg = cell::interp::LoadStation(o->station);
-      cell::interp::DialectOrThrow(cfg.dialect)
-          .ParseToolTable(text, o->file, cell::tooltable::ToolTable(cfg.tools));
+      cell::interp::ParseStationTools(cfg, text, o->file, cell::tooltable::ToolTable(cfg.tools));
     } catch (const cell::Error& e) {
       throw Exit{1, e.what()};
     }

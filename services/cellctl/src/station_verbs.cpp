@@ -335,9 +335,11 @@ void AddStationPanel(CLI::App& st, Context& ctx, const OptsPtr& o) {
   hold->add_option("ID", o->id)->required();
   hold->callback([o, &ctx] { Panel(ctx, o->id, true); });
   // One CYCLE START button, two names: `start` after a program stop (M00, M01, M99 M00), `resume` after a
-  // hold.
+  // hold. On an idle Balt-System station START runs the program SPG selected (docs/dialects/balt.md).
   auto* start =
-      st.add_subcommand("start", "cycle start: a run stopped at M00 / M01 goes on (and a hold is released)");
+      st.add_subcommand("start",
+                        "cycle start: a run stopped at M00 / M01 goes on (and a hold is released); an "
+                        "idle Balt-System station runs the program selected with SPG");
   start->add_option("ID", o->id)->required();
   start->callback([o, &ctx] { Panel(ctx, o->id, false); });
   auto* resume = st.add_subcommand("resume", "cycle start: release the feed hold (the same button as start)");

@@ -96,6 +96,24 @@ void Service::Stop() {
   cmd_srv_.reset();
 }
 
+// The memories MP1 (the station's namespace), MP0, MP2..MP6 (docs/dialects/balt.md, "Memories"), each
+// listed for the file SPG flagged; a memory the store has never held is skipped.
+std::optional<std::string> Service::SelectedProgram(const std::string& station) {
+  for (const char* memory : {"", "/MP0", "/MP2", "/MP3", "/MP4", "/MP5", "/MP6"}) {
+    const std::string node = station + memory;
+    nlohmann::json files;
+    try {
+      files = programs_.List(node, "*");
+    } catch (const Error& e) {
+      if (e.code() == Errc::kNotFound) continue;
+      throw;
+    }
+    for (const auto& f : files)
+      if (f.value("selected", false)) return node + ":" + f.value("name", std::string());
+  }
+  return std::nullopt;
+}
+
 std::optional<std::string> Service::PartModel(const std::string& node, const std::string& name) {
   auto f = programs_.FetchWithFallback(node, name);
   if (!f || !f->info.is_object() || f->info.value("type", std::string()) != "part_model") return std::nullopt;

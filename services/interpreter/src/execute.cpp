@@ -10,6 +10,7 @@
 #include "cell/error/error.h"
 #include "cell/interp/interp.h"
 #include "cell/names/names.h"
+#include "cell/names/program_ref.h"
 #include "cell/partmodel/part_model.h"
 #include "cell/station/program_files.h"
 #include "cell/station/station.h"
@@ -149,7 +150,8 @@ std::vector<bool> Station::SendPartModel(const Dispatch& d) {
   std::vector<bool> model(d.programs.size(), false);
   for (std::size_t i = 0; i < d.programs.size(); ++i) {
     const std::string& entry = d.programs[i];
-    if (entry.find(',') != std::string::npos) continue;  // a schedule run's PSELECT: a program
+    if (entry.find(',') != std::string::npos) continue;         // a schedule run's PSELECT: a program
+    if (!names::SplitProgramRef(entry).node.empty()) continue;  // "BS01/MP2:P9": a memory's program
     std::optional<std::string> text = io_.PartModel(d.node, entry);
     if (!text) continue;
     partmodel::ParsePartModel(*text, entry);  // "NAME:LINE:COL: ..." fails the run before any motion
@@ -164,6 +166,24 @@ std::vector<bool> Station::SendPartModel(const Dispatch& d) {
   return model;
 }
 
+// A map's entry (names/program_ref.h): "NODE:NAME" from NODE alone, which must be HOST or this station's own
+// (the scheduler sends another station's memory to nobody else); a plain NAME from `node`, then HOST.
+std::optional<std::string> Station::ReadProgram(const std::string& node, const std::string& entry) {
+  const names::ProgramRef ref = names::SplitProgramRef(entry);
+  if (ref.node.empty()) {
+    auto text = io_.Program(node, entry);
+    if (!text) throw Error(Errc::kNotFound, "program '" + entry + "' is not in " + node + " or HOST");
+    return text;
+  }
+  const std::string owner = names::NodeStation(ref.node);
+  if (!owner.empty() && owner != cfg_.id)
+    throw Error(Errc::kFailedPrecondition,
+                "program '" + entry + "' is in " + owner + "'s memory: " + cfg_.id + " cannot read it");
+  auto text = io_.ProgramIn(ref.node, ref.name);
+  if (!text) throw Error(Errc::kNotFound, "program '" + ref.name + "' is not in " + ref.node);
+  return text;
+}
+
 // One program of the dispatch. It starts from the CNC's memory as it stands; what it changed there (machine
 // parameters, TLD, ZTB) is committed after its end (with the servo drained) and at its failure, in one
 // transaction with the run's progress, so the next program starts from it and a kill -9 loses nothing that
@@ -173,8 +193,7 @@ void Station::RunProgram(ActiveRun& run, const std::string& entry) {
   // in it and the subprogram file, the dialect's PROGRAM and SUB_FILE.
   const std::size_t comma = entry.find(',');
   const std::string name = entry.substr(0, comma);
-  auto text = io_.Program(run.d.node, name);
-  if (!text) throw Error(Errc::kNotFound, "program '" + name + "' is not in " + run.d.node + " or HOST");
+  auto text = ReadProgram(run.d.node, name);
   const MemorySnapshot start = memory_.Get();
   interp::RunOptions opt;
   opt.dialect = cfg_.dialect;
@@ -202,6 +221,8 @@ void Station::RunProgram(ActiveRun& run, const std::string& entry) {
   opt.variables = start.image.variables;
   opt.params = cfg_.params;  // the station config's [params]: the dialect's machine settings (EMCO's monitor)
   opt.params["PALLET"] = std::to_string(run.d.pallet);
+  // A coded-pallet module's TLD W is 1-127 (KT-APL ln 4081-4083; the dialect's CODED_PALLETS setting).
+  if (cfg_.coded_pallets) opt.params["CODED_PALLETS"] = "1";
   opt.params["OPERATOR"] = "1";  // a station has an operator's cycle start: M99 M00 stops, as the manual says
   // The panel's [ENABLE OPTION STOP] switch, once the operator has set it, over the station file's default.
   if (const std::optional<bool> on = panel_.OptionalStop()) opt.params["OPTIONAL_STOP"] = *on ? "1" : "0";

@@ -1,10 +1,13 @@
 #include "cell/station/station.h"
 
+#include <algorithm>
+
 #include <spdlog/spdlog.h>
 #include <nlohmann/json.hpp>
 
 #include "cell/error/error.h"
 #include "cell/interp/interp.h"
+#include "cell/interp/station_rules.h"
 #include "cell/names/names.h"
 #include "cell/tooltable/wire.h"
 
@@ -156,11 +159,11 @@ cell::StationReply Station::OnCommand(const cell::StationRequest& r) {
   rep.station(cfg_.id);
   switch (r.op()) {
     case cell::STATION_LOAD_TOOLS: {
-      // The station's own tool-table form (KT-APL: a program of TLD statements), on top of the table.
-      const interp::Dialect& dialect = interp::DialectOrThrow(cfg_.dialect);
+      // The station's own tool-table form (KT-APL: a program of TLD statements), on top of the table; a
+      // coded-pallet station's pallets are 1-127 (station_rules.h).
       const std::string text = r.text().to_string();
       rep.revision(memory_.ChangeTools(
-          [&](tooltable::ToolTable& t) { t = dialect.ParseToolTable(text, "tools", t); }));
+          [&](tooltable::ToolTable& t) { t = interp::ParseStationTools(cfg_, text, "tools", t); }));
       const auto tools = memory_.Get().image.tools;
       spdlog::info("tool table loaded: {} tools, {} process compensations", tools.entries().size(),
                    tools.process_comps().size());
@@ -187,8 +190,12 @@ cell::StationReply Station::OnCommand(const cell::StationRequest& r) {
       board_.Reset();
       board_.Publish();
       return rep;
-    case cell::STATION_FEED_HOLD:
     case cell::STATION_CYCLE_START:
+      rep.revision(panel_.Press(r));
+      stream_.Wake();  // a run stopped at M00 looks again now
+      StartSelected();
+      return rep;
+    case cell::STATION_FEED_HOLD:
     case cell::STATION_OVERRIDE:
     case cell::STATION_BREAK_TOOL:
     case cell::STATION_OPTIONAL_STOP:
@@ -197,6 +204,32 @@ cell::StationReply Station::OnCommand(const cell::StationRequest& r) {
       return rep;
   }
   throw Error(Errc::kInvalidArgument, "unknown station command");
+}
+
+// Balt-System's START with nothing running executes the program SPG selected (manual ln 8873-8888), as a run
+// of the station's own: no job, no pallet, a dispatch id below every other (the scheduler's are positive and
+// it ignores these). Nothing selected is FILMS4 54 (ln 10079-10080). Other dialects run dispatches only.
+bool Station::StartSelected() {
+  if (cfg_.dialect != "balt") return false;
+  if (db_.Count(RunState::kActive) > 0 || db_.Count(RunState::kQueued) > 0) return false;  // START resumes
+  const std::optional<std::string> selected = io_.SelectedProgram(cfg_.id);
+  if (!selected)
+    throw Error(Errc::kFailedPrecondition,
+                "[FILMS4 54] NO PROGRAM HAS BEEN SELECTED: select one with SPG (cellctl program memory " +
+                    cfg_.id + " \"SPG,NAME/MPx\")");
+  Dispatch d;
+  d.dispatch_id = std::min(0, db_.LowestDispatchId()) - 1;
+  d.node = cfg_.id;
+  d.programs = {*selected};
+  d.repeat = 1;
+  db_.Enqueue(d, clock_.WallNs());
+  spdlog::info("START: run {} of the selected program {}", d.dispatch_id, *selected);
+  board_.Queued(db_.Count(RunState::kQueued));
+  board_.Publish();
+  std::lock_guard lk(work_mu_);
+  work_pending_ = true;
+  work_cv_.notify_all();
+  return true;
 }
 
 void Station::OnProgress(const cell::SegmentProgress& p) {

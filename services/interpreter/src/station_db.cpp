@@ -181,6 +181,13 @@ std::vector<Dispatch> StationDb::Runs(RunState state) {
   return out;
 }
 
+std::int32_t StationDb::LowestDispatchId() {
+  std::lock_guard lk(mu_);
+  auto q = db_.Prepare("SELECT COALESCE(MIN(dispatch_id), 0) FROM runs");
+  q.Step();
+  return static_cast<std::int32_t>(q.ColumnInt64(0));
+}
+
 int StationDb::Count(RunState state) {
   std::lock_guard lk(mu_);
   auto q = db_.Prepare("SELECT COUNT(*) FROM runs WHERE state=?");

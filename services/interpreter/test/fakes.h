@@ -218,6 +218,16 @@ class FakeIo final : public StationIo {
     }
     return std::nullopt;
   }
+  std::optional<std::string> SelectedProgram(const std::string& station) override {
+    (void)station;
+    return selected;
+  }
+  std::optional<std::string> ProgramIn(const std::string& node, const std::string& name) override {
+    fetched.push_back(node + ":" + name);
+    auto it = programs.find(node + "/" + name);
+    if (it == programs.end()) return std::nullopt;
+    return it->second;
+  }
   std::optional<std::string> PartModel(const std::string& node, const std::string& name) override {
     for (const std::string& n : {node, std::string("HOST")}) {
       auto it = part_models.find(n + "/" + name);
@@ -257,6 +267,7 @@ class FakeIo final : public StationIo {
   }
 
   std::map<std::string, std::string> programs;     // "NODE/NAME" -> text
+  std::optional<std::string> selected;             // SelectedProgram: "BS01/MP2:P9" (Balt-System SPG)
   std::map<std::string, std::string> part_models;  // "NODE/NAME" -> text, stored as type part_model
   std::vector<std::string> deleted;                // "NODE/NAME KEY" per DeleteFile
   std::map<std::string, SaveAs> saved_as;          // "NODE/NAME" -> how SaveFile declared it

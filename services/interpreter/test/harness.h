@@ -55,7 +55,7 @@ class StationHarness : public ::testing::Test {
   cell::RunRequest Request(std::int32_t dispatch, const std::vector<std::string>& programs, int pallet = 1,
                            int repeat = 1) {
     cell::RunRequest r;
-    r.station("KT01");
+    r.station(cfg_.id);
     r.dispatch_id(dispatch);
     r.job_id(100 + dispatch);
     r.pallet(pallet);

@@ -2,6 +2,8 @@
 // CNC's memory (KT-APL machine parameters and TLD, manual ln 8513-8525 and 3975-4097), at each step.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include "cell/store/sqlite.h"
 #include "harness.h"
 
@@ -317,6 +319,26 @@ TEST_F(StationCore, ProcessCompensationOfThePalletOnTheTableApplies) {
   EXPECT_NEAR(Target(servo_.Ran(2, cell::SEGMENT_RAPID).back(), 2), 150.0, 1e-9);
 }
 
+// A coded-pallet module (KT04: `coded_pallets = true`) has pallets 1-127 (ln 4081-4083): a tool load or a
+// program's TLD naming W200 is refused, W127 applies while pallet 127 is on the table (150 + 2 = 152).
+TEST_F(StationCore, ACodedPalletModuleTakesProcessCompensationsFor1To127) {
+  cfg_.coded_pallets = true;
+  Make();
+  EXPECT_THROW(Command(cell::STATION_LOAD_TOOLS, "G71\n(TLD,S6T4001P50.)\n(TLD,T4001W200P2.)\n"), Error);
+  EXPECT_EQ(station_->MemoryState().image.tools.Find("4001"), nullptr);  // all or nothing
+  Command(cell::STATION_LOAD_TOOLS, "G71\n(TLD,S6T4001P50.)\n(TLD,T4001W127P2.)\n");
+  Put("USE", "G71\nT4001 M06\nG90 G01 X0 Y0 Z100. F0\nM30\n");
+  Dispatch(1, {"USE"}, 127);
+  ASSERT_EQ(RunOne(1).state(), cell::RUN_COMPLETED);
+  EXPECT_NEAR(Target(servo_.Ran(1, cell::SEGMENT_RAPID).back(), 2), 152.0, 1e-9);
+  Put("TLD", "G71\n(TLD,T4001W200P2.)\nM30\n");
+  Dispatch(2, {"TLD"}, 127);
+  cell::RunStatus refused = RunOne(2);
+  EXPECT_EQ(refused.state(), cell::RUN_FAILED);
+  EXPECT_NE(refused.reason().to_string().find("TLD W VALUE 200 OUTSIDE 1-127"), std::string::npos)
+      << refused.reason().to_string();
+}
+
 // kill -9 at any moment: a copy of the database files taken at every wait of the core is what a killed
 // process leaves. Each opens, its variables are those before or after a whole program (never half of a
 // program's changes), and a run it shows ACTIVE is reported failed by the next process.
@@ -475,6 +497,51 @@ TEST_F(StationCore, M00StopsTheRunUntilCycleStart) {
   for (const auto& seg : servo_.written)
     if (seg.kind() == cell::SEGMENT_LINEAR) last_x = Target(seg, 0);
   EXPECT_DOUBLE_EQ(last_x, 20.0);  // the run went on after the stop
+}
+
+// Balt-System (issue 35 item 4): START on an idle station runs the program SPG selected (ln 8873-8888) as a
+// run of the station's own (dispatch id below 1); nothing selected is FILMS4 54 (ln 10079-10080). A map's
+// "BS01/MP2:P9" is read from that memory alone, and never from another station's. A KT-APL station's START
+// with nothing running starts nothing.
+TEST_F(StationCore, BaltStartRunsTheSelectedProgram) {
+  Command(cell::STATION_CYCLE_START);
+  EXPECT_FALSE(station_->RunNext());
+  cfg_.id = "BS01";
+  cfg_.dialect = "balt";
+  cfg_.tools = {};
+  servo_.station_id = "BS01";
+  Make();
+  try {
+    Command(cell::STATION_CYCLE_START);
+    ADD_FAILURE() << "START without a selected program was accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), Errc::kFailedPrecondition);
+    EXPECT_EQ(std::string(e.what()).rfind("[FILMS4 54] NO PROGRAM HAS BEEN SELECTED", 0), 0u) << e.what();
+  }
+  EXPECT_FALSE(station_->RunNext());
+  Put("P9", "%:P9\nN1 G0 X10 Y20 Z30\nN2 G1 X40 F500\nM30\n", "BS01/MP2");
+  io_.selected = "BS01/MP2:P9";
+  Command(cell::STATION_CYCLE_START);
+  EXPECT_EQ(RunOne(-1).state(), cell::RUN_COMPLETED);
+  EXPECT_NE(std::find(io_.fetched.begin(), io_.fetched.end(), "BS01/MP2:P9"),
+            io_.fetched.end());  // MP2 alone
+  double last_x = 0;
+  for (const auto& seg : servo_.written)
+    if (seg.kind() == cell::SEGMENT_LINEAR) last_x = Target(seg, 0);
+  EXPECT_DOUBLE_EQ(last_x, 40.0);
+  Command(cell::STATION_CYCLE_START);  // the next START runs it again, under the next id
+  EXPECT_EQ(RunOne(-2).state(), cell::RUN_COMPLETED);
+  // A map names a memory's program: read there alone (not HOST's of the same name), never another station's.
+  Put("Q1", "%:Q1\nM30\n", "HOST");
+  Dispatch(1, {"BS01/MP2:Q1"});
+  cell::RunStatus missing = RunOne(1);
+  EXPECT_EQ(missing.state(), cell::RUN_FAILED);
+  EXPECT_EQ(missing.reason().to_string(), "program 'Q1' is not in BS01/MP2");
+  Put("Q1", "%:Q1\nM30\n", "BS02/MP2");
+  Dispatch(2, {"BS02/MP2:Q1"});
+  EXPECT_EQ(RunOne(2).reason().to_string(), "program 'BS02/MP2:Q1' is in BS02's memory: BS01 cannot read it");
+  Dispatch(3, {"BS01/MP2:P9", "HOST:Q1"});
+  EXPECT_EQ(RunOne(3).state(), cell::RUN_COMPLETED);
 }
 
 TEST_F(StationCore, ACancelEndsAProgramStop) {

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <map>
 
 #include <fmt/format.h>
 
@@ -25,6 +26,7 @@ constexpr const char* kExecuted = "[FILMS2 03] COMMAND EXECUTED";
 constexpr const char* kExists = "[FILMS2 05] EXISTS DELETE??? (Y/N)";
 constexpr const char* kDisplayed = "[FILMS2 06] FILE DISPLAYED";
 constexpr const char* kContinue = "[FILMS2 09] DO YOU CONTINUE? (Y/N)";
+constexpr const char* kNoFreeSectors = "[FILMS3 15] NO FREE SECTORS";
 constexpr const char* kInvalidOperation = "[FILMS3 20] INVALID OPERATION";
 constexpr const char* kWriteProtected = "[FILMS3 26] WRITE PROTECTED FILE";
 
@@ -253,11 +255,29 @@ class Runner {
       }
       force.push_back(existing.has_value());
     }
+    CheckRoom(from, to, copies);
     for (std::size_t i = 0; i < copies.size(); ++i)
       store_.Copy(from, copies[i].first, to, copies[i].second, force[i]);
     MemoryCommandResult r = Done();
     for (const auto& [s, d] : copies) r.lines.push_back(s + " -> " + d);
     return r;
+  }
+
+  // The destination memory holds kMemoryCapacity characters (the user memory, ln 223; judgement call 35):
+  // a copy that would overfill it is FILMS3 15 "the specified destination device is full" (ln 9758-9759),
+  // checked before anything is copied. HOST (the control's hard disk) has no such bound.
+  void CheckRoom(const std::string& from, const std::string& to,
+                 const std::vector<std::pair<std::string, std::string>>& copies) {
+    if (IsHost(to)) return;
+    std::map<std::string, std::uint64_t> sizes;  // the destination memory after the copy, by name
+    for (const auto& e : store_.List(to, "*")) sizes[e.name] = e.size;
+    for (const auto& [s, d] : copies) sizes[d] = MustFind(from, Operand{s, "", false}).size;
+    std::uint64_t used = 0;
+    for (const auto& [name, size] : sizes) used += size;
+    if (used > kMemoryCapacity)
+      Refuse(Errc::kFailedPrecondition, kNoFreeSectors,
+             fmt::format("{}: the memory would hold {} characters, {} at most (ln 223)", command_, used,
+                         kMemoryCapacity));
   }
 
   // REN,OLD[/dev],NEW (ln 2084-2090, 7934-7939): in the same memory.

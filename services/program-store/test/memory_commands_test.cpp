@@ -218,5 +218,27 @@ TEST_F(Memories, DifferencesAndInitialise) {
   EXPECT_THAT(Names("BS01/MP2"), ElementsAre("PROG1"));
 }
 
+// A memory holds 64,000 characters (ln 223): a copy that would overfill the destination is FILMS3 15 NO FREE
+// SECTORS (ln 9758-9759) and copies nothing; HOST has no such bound. 40,000 + 20,000 = 60,000 fit, a third
+// file of 20,000 makes 80,000 > 64,000; replacing the 20,000 file by one of 24,000 makes exactly 64,000.
+TEST_F(Memories, CopyStopsAtTheMemorysCapacity) {
+  const std::string big = "%:BIG\n" + std::string(40000 - 7, 'X') + "\n";
+  const std::string mid = "%:MID\n" + std::string(20000 - 7, 'Y') + "\n";
+  const std::string more = "%:MORE\n" + std::string(24000 - 8, 'Z') + "\n";
+  ASSERT_EQ(big.size() + mid.size(), 60000u);
+  ASSERT_EQ(more.size(), 24000u);
+  Put("HOST", "BIG", big);
+  Put("HOST", "MID", mid);
+  Put("HOST", "MORE", more);
+  Cmd("COP,BIG/HOST,BIG/MP2");
+  Cmd("COP,MID/HOST,MID/MP2");
+  Refused("COP,MID/MP2,MID2/MP2", Errc::kFailedPrecondition, "[FILMS3 15] NO FREE SECTORS");
+  Refused("COP,*/HOST,/MP4", Errc::kFailedPrecondition, "[FILMS3 15]");  // 84,000 in all
+  EXPECT_TRUE(Names("BS01/MP4").empty());
+  EXPECT_THAT(Names("BS01/MP2"), ElementsAre("BIG", "MID"));
+  Cmd("COP,MORE/HOST,MID/MP2", true);  // 40,000 + 24,000 = 64,000: full, not over
+  Cmd("COP,*/MP2,/HOST", true);        // HOST is the hard disk: no bound
+}
+
 }  // namespace
 }  // namespace cell::program_store

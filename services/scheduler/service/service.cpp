@@ -11,6 +11,7 @@
 #include "cell/idl/health.h"
 #include "cell/interp/station_rules.h"
 #include "cell/names/names.h"
+#include "cell/names/program_ref.h"
 #include "cell/records/page.h"
 #include "cell/scheduler/json.h"
 #include "cell/scheduler/route.h"
@@ -62,7 +63,9 @@ Service::Service(bus::Participant& p, const std::filesystem::path& data_dir)
     : bus_(p),
       programs_(p),
       source_([this](std::string_view name) -> std::optional<StoredProgram> {
-        auto f = programs_.Fetch("HOST", std::string(name));
+        // "BS01/MP2:P9" is P9 in that namespace (names/program_ref.h); a plain name is HOST's.
+        const names::ProgramRef ref = names::SplitProgramRef(name);
+        auto f = programs_.Fetch(ref.node.empty() ? "HOST" : ref.node, ref.name);
         if (!f) return std::nullopt;
         std::string type = f->info.is_object() ? f->info.value("type", std::string()) : std::string();
         return StoredProgram{std::move(f->content), f->dialect(), std::move(type)};
@@ -404,7 +407,9 @@ void Service::PublishJob(std::int64_t id) {
 }
 
 void Service::OnRun(const cell::RunStatus& s) {
-  // Every sample, re-delivered ones included: the core applies only the steps not yet taken.
+  // Every sample, re-delivered ones included: the core applies only the steps not yet taken. A station's own
+  // runs (Balt-System SPG and START, ids below 1) are none of the scheduler's.
+  if (s.dispatch_id() <= 0) return;
   RunReport r;
   r.dispatch_id = s.dispatch_id();
   r.programs_done = s.programs_done();

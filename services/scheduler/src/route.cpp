@@ -4,6 +4,7 @@
 
 #include "cell/error/error.h"
 #include "cell/names/names.h"
+#include "cell/names/program_ref.h"
 
 namespace cell::scheduler {
 namespace {
@@ -41,7 +42,7 @@ std::vector<std::string> SplitList(std::string_view text, std::size_t base, cons
       if (std::string_view(what) == "station")
         names::CheckStation(item, "station");
       else
-        names::CheckProgram(item, "program");
+        names::CheckProgramRef(item, "program");  // "BS01/MP2:P9": a program in a station's memory
     } catch (const Error& e) {
       throw SpecError{item_col, e.what()};
     }

@@ -11,6 +11,7 @@
 #include "cell/error/error.h"
 #include "cell/interp/interp.h"
 #include "cell/names/names.h"
+#include "cell/names/program_ref.h"
 #include "cell/records/names.h"
 #include "scheduler_impl.h"
 
@@ -185,6 +186,42 @@ std::string Scheduler::Impl::DialectClash(const ProgramMeta& meta,
   return {};
 }
 
+// "NODE:NAME" is read from NODE alone, and a station's namespace (its memories) by that station only. A plain
+// NAME is read as the station reads it: its heading from HOST when HOST holds it, else each listed station
+// must hold it in its own namespace (a Balt-System program in the control's memory MP1).
+std::optional<ProgramMeta> Scheduler::Impl::LookupFor(const std::string& entry,
+                                                      const std::vector<std::string>& station_ids,
+                                                      std::string* refused) {
+  const names::ProgramRef ref = names::SplitProgramRef(entry);
+  if (!ref.node.empty()) {
+    const std::string owner = names::NodeStation(ref.node);
+    for (const auto& id : station_ids) {
+      if (owner.empty() || id == owner) continue;
+      *refused =
+          fmt::format("program '{}' is in {}'s memory: only {} runs it, not {}", entry, owner, owner, id);
+      return std::nullopt;
+    }
+    return programs.Lookup(entry);
+  }
+  if (auto host = programs.Lookup(entry)) return host;
+  std::optional<ProgramMeta> found;
+  for (const auto& id : station_ids) {
+    auto own = programs.Lookup(id + ":" + entry);
+    if (!own) return std::nullopt;
+    own->name = entry;
+    if (!found) found = std::move(own);
+  }
+  return found;
+}
+
+bool Scheduler::Impl::ProgramExists(const std::string& entry) {
+  if (programs.Lookup(entry)) return true;
+  if (!names::SplitProgramRef(entry).node.empty()) return false;
+  for (const auto& st : stations)
+    if (programs.Lookup(st.id + ":" + entry)) return true;
+  return false;
+}
+
 Op Scheduler::Impl::BuildOp(const OpSpec& spec, bool require_ucy, bool strict, std::string_view where) {
   if (spec.stations.empty()) throw Error(Errc::kInvalidArgument, fmt::format("{}: no station listed", where));
   if (spec.programs.empty() || spec.programs.size() > 75) {
@@ -198,13 +235,16 @@ Op Scheduler::Impl::BuildOp(const OpSpec& spec, bool require_ucy, bool strict, s
     std::optional<ProgramMeta> meta;
     std::string problem;
     try {
-      meta = programs.Lookup(name);
-      if (meta && meta->part_model) {
+      std::string refused;
+      meta = LookupFor(name, spec.stations, &refused);
+      if (!refused.empty()) {
+        problem = std::move(refused);
+        if (strict) throw Error(Errc::kFailedPrecondition, fmt::format("{}: {}", where, problem));
+      } else if (meta && meta->part_model) {
         models.push_back(name);
         op.ucy.push_back(0);
         continue;
-      }
-      if (!meta) {
+      } else if (!meta) {
         problem = fmt::format("program '{}' not found", name);
         if (strict) throw Error(Errc::kNotFound, fmt::format("{}: {}", where, problem));
       } else if (std::string clash = DialectClash(*meta, spec.stations); !clash.empty()) {
@@ -558,8 +598,8 @@ void Scheduler::SetPalletMap(std::string_view key, int pallet, const std::vector
     }
     // A map naming a program the store does not hold is refused here, not at `pallet run` (issue 39 item 5).
     for (const auto& p : programs) {
-      names::CheckProgram(p);
-      if (!m.programs.Lookup(p)) {
+      names::CheckProgramRef(p);
+      if (!m.ProgramExists(p)) {
         throw Error(Errc::kNotFound, fmt::format("pallet {}: program {} not found", pallet, names::Shown(p)));
       }
     }

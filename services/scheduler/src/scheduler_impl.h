@@ -39,6 +39,12 @@ struct Scheduler::Impl : State {
   std::string DialectClash(const ProgramMeta& meta, const std::vector<std::string>& station_ids) const;
   // Throws when `strict`; otherwise records the problem in Op::blocked.
   Op BuildOp(const OpSpec& spec, bool require_ucy, bool strict, std::string_view where);
+  // A map entry's program as the listed stations will read it (docs/scheduler.md, "Program names"); nullopt
+  // when one of them would not find it, or (`refused` says why) when one of them may not run it.
+  std::optional<ProgramMeta> LookupFor(const std::string& entry, const std::vector<std::string>& station_ids,
+                                       std::string* refused);
+  // A pallet map's entry, before any station is chosen: in HOST, its own namespace, or some station's.
+  bool ProgramExists(const std::string& entry);
   Ops BuildRouteOps(const RouteSpec& spec, bool strict);
 
   // ---- decisions ----

@@ -517,6 +517,41 @@ TEST(PalletMaps, RunPalletOnAStation) {
   EXPECT_EQ(CodeOf([&] { c.sched->RunPallet("y", 9, "KT09"); }), Errc::kNotFound);
 }
 
+// Balt-System keeps programs in the control's memories (issue 35 item 4): a map may name "BS01/MP2:P9" (P9 in
+// BS01's memory MP2, run by BS01 only) or a plain name a station holds in its own namespace (MP1) when HOST
+// does not hold it; the station reads it from there (docs/scheduler.md, "Program names").
+TEST(PalletMaps, ProgramsInAStationsMemory) {
+  FakeCell c;
+  const char* balt = "%:P9\nN1 G0 X10 Y10\nM30\n";
+  c.programs.Put("BS01/MP2:P9", balt, "balt");
+  c.programs.Put("BS01:PROG1", balt, "balt");
+  c.Take(c.sched->StationOnline("BS01", "balt"));
+  c.Take(c.sched->StationOnline("BS02", "balt"));
+  c.sched->SetPalletMap("m", 4, {"BS01/MP2:P9", "PROG1"});
+  JobResult r = c.sched->RunPallet("run4", 4, "BS01");
+  c.Take(r.effects);
+  EXPECT_EQ(c.State(r.job_id), JobState::kDispatched);
+  EXPECT_EQ(c.InHand("BS01").programs, (std::vector<std::string>{"BS01/MP2:P9", "PROG1"}));
+  // Another station reads neither BS01's memory nor BS01's namespace.
+  c.sched->SetPalletMap("m5", 5, {"BS01/MP2:P9"});
+  try {
+    c.sched->RunPallet("run5", 5, "BS02");
+    ADD_FAILURE() << "BS02 was sent a program in BS01's memory";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), Errc::kFailedPrecondition);
+    EXPECT_EQ(std::string(e.what()),
+              "pallet 5: program 'BS01/MP2:P9' is in BS01's memory: only BS01 runs it, not BS02");
+  }
+  c.sched->SetPalletMap("m6", 6, {"PROG1"});
+  EXPECT_EQ(CodeOf([&] { c.sched->RunPallet("run6", 6, "BS02"); }), Errc::kNotFound);
+  EXPECT_EQ(CodeOf([&] { c.sched->SetPalletMap("m7", 7, {"BS01/MP3:P9"}); }), Errc::kNotFound);
+  EXPECT_EQ(CodeOf([&] { c.sched->SetPalletMap("m8", 8, {"BS01/MP9:P9"}); }), Errc::kInvalidArgument);
+  // A route names them the same way, quoted for the ':' (route.h).
+  RouteView route = c.Route("R", {"BS01:\"BS01/MP2:P9\",PROG1"});
+  EXPECT_TRUE(route.valid);
+  EXPECT_EQ(CodeOf([&] { c.Route("R2", {"BS01,BS02:\"BS01/MP2:P9\""}); }), Errc::kFailedPrecondition);
+}
+
 // A pallet map may name the pallet's part model (type part_model in the store): it goes to the station
 // with the programs (the station hands it to its servo), adds no tools and no backlog; one per map, and not
 // alone (docs/scheduler.md, "Part models").

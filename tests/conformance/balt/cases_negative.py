@@ -205,3 +205,20 @@ for name, prog, cite, why in (
 # not part-program commands: FILMS4 17 at the bracket.
 neg("neg_keyboard_command", "; ln 2184-2217 SPG is a keyboard command\n(SPG,PROG1)\n", 2, 1, 17,
     "NON EXISTENT FUNCTION: (SPG,...) is not a command of this control", "L2184")
+
+# Random tool management (§6.7, ln 8523-8559; judgement call 47): a T the file FI1RAN does not hold is FILMS4
+# 82; RANDOM_TOOLS=1 without the file FILMS4 83 (ln 10144-10145); a standard tool programmed while a special
+# tool is on the spindle FILMS4 90 (ln 10158-10160).
+random_file = "0001-----\n0002-----\n9003-----\n9003-----\n9003-----\n0004-----\n"
+neg("neg_random_tool_not_in_file", "; ln 8551-8553, 10142\nT5.5 M6\n", 2, 1, 82,
+    "T NOT ALLOWED: tool 5 is not in the random tool file", "L8551",
+    **{"lib/FI1RAN": random_file})
+neg("neg_random_file_missing", "; ln 10144-10145 (RANDOM_TOOLS=1)\nT1.1 M6\n", 2, 1, 83,
+    "RANDOM TOOL FILE NOT FOUND: T1: FI1RAN is not on MP0 (RANDOM_TOOLS=1)", "L10144",
+    params="RANDOM_TOOLS=1\n")
+neg("neg_random_mixed_tool_change", "; ln 10158-10160\nT3.3 M6\nT1.1 M6\n", 3, 1, 90,
+    "MIXED TOOL CHANGE: standard tool 1 while special tool 3 is on the spindle", "L10158",
+    ops=(units(2), lambda c: c.op("tool_select", 2, tool="3"),
+         lambda c: c.op("tool_change", 2, tool="3", offset=3, socket=3)),
+    tools="1 Z100 K10\n3 Z130 K30\n", **{"lib/FI1RAN": random_file})
+

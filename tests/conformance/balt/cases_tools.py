@@ -326,3 +326,29 @@ c.probe("N150", 72, 500, "none", z=-15)
 c.rapid("N150", z=50)
 c.op("message", '"END"', text="WORKPIECE NOT FOUND")
 c.op("stop", "N1003", m=0, optional=False)
+
+# §6.7 (ln 8523-8559) random tool management: FI1RAN (the manual's records, ln 8541-8548, in NAME.lib/FI1RAN)
+# puts tool 1 in pocket 1, tool 2 in pocket 2, the special tool 3 in pockets 3-5 and tool 4 in pocket 6; the
+# tool change names the pocket of its record. T0 M6 (no tool) puts the special tool away before tool 4 (FILMS4
+# 90 otherwise, neg_random_mixed_tool_change). Lengths from FI1COR: offset 2 Z120, offset 4 Z140.
+random_file = "0001-----\n0002-----\n9003-----\n9003-----\n9003-----\n0004-----\n"
+c = Case("tools_random_pockets", """
+; ln 8523-8559 random tool file FI1RAN: the pocket of each tool, a special tool on 3 pockets
+T2.2 M6
+G X0 Y0 Z0
+T3.3 M6
+T0 M6
+T4.4 M6
+G Z0
+""", "L8523", tools="2 Z120 K10\n3 Z130 K30\n4 Z140 K10\n", **{"lib/FI1RAN": random_file})
+c.units(2)
+c.op("tool_select", 2, tool="2")
+c.op("tool_change", 2, tool="2", offset=2, socket=2)
+c.rapid(3, x=0, y=0, z=120)
+c.op("tool_select", 4, tool="3")
+c.op("tool_change", 4, tool="3", offset=3, socket=3)
+c.op("tool_change", 5, tool="0")
+c.op("tool_select", 6, tool="4")
+c.op("tool_change", 6, tool="4", offset=4, socket=6)
+c.rapid(7, z=140)
+

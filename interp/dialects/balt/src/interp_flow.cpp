@@ -104,6 +104,8 @@ const char* FilmsText(int code) {
       return "PROGRAM TOO COMPLEX TO CALCULATE";
     case 82:
       return "T NOT ALLOWED";
+    case 83:
+      return "RANDOM TOOL FILE NOT FOUND";
     case 84:
       return "VIOLATION OF PROTECTED AREA";
     case 86:
@@ -112,6 +114,8 @@ const char* FilmsText(int code) {
       return "DPT PARAMETERS MISSING";
     case 88:
       return "UNDEFINED CANNED CYCLE";
+    case 90:
+      return "MIXED TOOL CHANGE";
     case 91:
       return "WRONG OFFSET PARAMETERS";
     case 94:

@@ -391,6 +391,8 @@ class BaltRun final : public RunBase {
   void ToolWord(const Word& w);
   void ToolChange(int col);
   void LoadToolLife();
+  void LoadRandomTools();
+  int RandomPocket(int tool, int col);
   void SaveToolLife();
   const tooltable::ToolEntry* FindOffset(int n) const;
 
@@ -502,6 +504,11 @@ class BaltRun final : public RunBase {
   tooltable::ToolTable tools_;
   std::optional<ToolLifeFile> life_;
   bool life_changed_ = false;
+  // Random tool management (§6.7): the file FI1RAN when MP0 holds it; RANDOM_TOOLS=1 asks for it (FILMS4 83
+  // without it). The special tool on the spindle, 0 = none (FILMS4 90).
+  std::optional<RandomToolFile> random_;
+  bool random_required_ = false;
+  int spindle_special_ = 0;
   int next_tool_ = -1;  // the T word's tool, -1 = none yet
   int next_offset_ = 0;
   int next_tool_col_ = 1;

@@ -108,6 +108,8 @@ BaltRun::BaltRun(const RunOptions& o) : RunBase(o) {
       logic_m_ = Codes(key, val);
     } else if (key == "H_CODES") {
       logic_h_ = Codes(key, val);
+    } else if (key == "RANDOM_TOOLS") {
+      random_required_ = Number(key, val) != 0;
     } else if (key == "TRANSDUCER") {
       transducer_ = Number(key, val) != 0;
     } else if (key == "PECK_CLEARANCE") {
@@ -162,6 +164,7 @@ BaltRun::BaltRun(const RunOptions& o) : RunBase(o) {
   tools_ = o.tools;
   LoadOrigins();
   LoadToolLife();
+  LoadRandomTools();
   frames_ = std::make_unique<Frames>(o.program ? o.program : ProgramText::FromString(o.program_text));
 }
 

@@ -37,6 +37,7 @@ void BaltRun::ToolWord(const Word& w) {
   SplitTool(w.v, v, &tool, &offset, &has_offset);
   if (tool > 9999) Fail(w.col, 18, fmt::format("tool {} (tools are 1-9999)", tool));
   if (offset > 9999) Fail(w.col, 18, fmt::format("offset {} (offsets are 1-9999)", offset));
+  if (tool > 0) RandomPocket(tool, w.col);  // "the interface checks whether the programmed T is valid"
   next_tool_ = tool;
   next_offset_ = has_offset ? offset : 0;
   next_tool_col_ = w.col;
@@ -96,9 +97,41 @@ void BaltRun::ToolChange(int col) {
     }
   }
   FrameChanged();  // the new length applies with the next move of its axis
+  const int pocket = tool > 0 ? RandomPocket(tool, next_tool_col_) : 0;
+  if (random_) spindle_special_ = tool > 0 && random_->special.at(tool) ? tool : 0;
   ToolChangeOp& c = Out<ToolChangeOp>();
   c.tool = std::to_string(tool);
   c.offset = offset;
+  c.socket = pocket;  // with FI1RAN the pocket its record names (ln 8551-8553); else the station's table
+}
+
+// FI1RAN on memory MP0 (ln 8527); offline (--lib) under its bare name.
+void BaltRun::LoadRandomTools() {
+  auto text = opt_.library ? opt_.library("FI1RAN/MP0") : std::nullopt;
+  if (!text && opt_.library) text = opt_.library("FI1RAN");
+  if (!text) return;
+  try {
+    random_ = ParseRandomTools(*text);
+  } catch (const FileError& e) {
+    throw Error(Errc::kInvalidArgument, fmt::format("FI1RAN:{}:{}: error: [FILMS4 {:02}] {}: {}", e.line,
+                                                    e.col, e.code, FilmsText(e.code), e.text));
+  }
+}
+
+// The pocket of `tool` under random tool management, 0 without it. A tool the file does not hold is FILMS4
+// 82 (judgement call 47); RANDOM_TOOLS=1 without the file FILMS4 83 (ln 10144-10145); a standard tool while a
+// special one is on the spindle FILMS4 90 (ln 10158-10160: T0 M06 puts the special tool away first).
+int BaltRun::RandomPocket(int tool, int col) {
+  if (!random_) {
+    if (random_required_) Fail(col, 83, fmt::format("T{}: FI1RAN is not on MP0 (RANDOM_TOOLS=1)", tool));
+    return 0;
+  }
+  auto it = random_->pocket.find(tool);
+  if (it == random_->pocket.end()) Fail(col, 82, fmt::format("tool {} is not in the random tool file", tool));
+  if (spindle_special_ != 0 && tool != spindle_special_ && !random_->special.at(tool))
+    Fail(col, 90,
+         fmt::format("standard tool {} while special tool {} is on the spindle", tool, spindle_special_));
+  return it->second;
 }
 
 void BaltRun::LoadToolLife() {

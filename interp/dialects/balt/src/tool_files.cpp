@@ -338,4 +338,50 @@ std::string FormatOrigins(const OriginFile& file) {
   return out;
 }
 
+RandomToolFile ParseRandomTools(std::string_view text) {
+  RandomToolFile f;
+  int line_no = 0, pocket = 0, run_code = -1, run_length = 0, run_line = 0;
+  // A special tool's run of records ends: it must be exactly 3 long (ln 8557).
+  auto end_run = [&] {
+    if (run_code >= 9000 && run_length != 3)
+      throw FileError{run_line, 1, 71,
+                      fmt::format("special tool {} occupies 3 pockets, not {}", run_code - 9000, run_length)};
+  };
+  std::size_t start = 0;
+  while (start < text.size()) {
+    std::size_t nl = text.find('\n', start);
+    std::string_view line =
+        text.substr(start, nl == std::string_view::npos ? text.size() - start : nl - start);
+    start = nl == std::string_view::npos ? text.size() : nl + 1;
+    ++line_no;
+    while (!line.empty() && (line.back() == '\r' || line.back() == ' ' || line.back() == '\t'))
+      line.remove_suffix(1);
+    if (line.empty() || line == "%") continue;
+    if (line.size() < 4 ||
+        !std::all_of(line.begin(), line.begin() + 4, [](char c) { return c >= '0' && c <= '9'; }) ||
+        (line.size() > 4 && (line[4] >= '0' && line[4] <= '9')))
+      throw FileError{line_no, 1, 71, "a random tool record is 4 digits (ln 8527-8549)"};
+    const int code = std::stoi(std::string(line.substr(0, 4)));
+    ++pocket;
+    if (code == run_code && code >= 9000 && run_length < 3) {
+      ++run_length;
+      continue;
+    }
+    end_run();
+    run_code = code;
+    run_length = 1;
+    run_line = line_no;
+    if (code == 0) continue;  // an empty pocket
+    const int tool = code >= 9000 ? code - 9000 : code;
+    if (tool == 0 || f.pocket.count(tool))
+      throw FileError{
+          line_no, 1, 71,
+          fmt::format("tool {} is {} (pocket {})", tool, tool == 0 ? "not a tool" : "in two places", pocket)};
+    f.pocket[tool] = pocket;
+    f.special[tool] = code >= 9000;
+  }
+  end_run();
+  return f;
+}
+
 }  // namespace cell::interp::balt

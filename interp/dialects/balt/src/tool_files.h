@@ -1,7 +1,8 @@
 // Balt-System's data files on memory MP3 as text: the offsets file FI1COR (§6.4.1, ln 8049-8434), the tool
 // life file GE1TOL (§6.4.3 / §6.6, ln 8172-8226, 8436-8521) and the origins file FILEOR (ln 8116-8170,
-// 8641-8747). FI1COR is the dialect's tool-table form (cell-interp --tools, cellctl tools load); GE1TOL and
-// FILEOR are files a run reads by name (RunOptions::library: --lib offline, the station's program store).
+// 8641-8747); the random tool file FI1RAN on MP0 (§6.7, ln 8523-8559). FI1COR is the dialect's tool-table
+// form (cell-interp --tools, cellctl tools load); GE1TOL, FILEOR and FI1RAN are files a run reads by name
+// (RunOptions::library: --lib offline, the station's program store).
 #pragma once
 
 #include <map>
@@ -49,6 +50,17 @@ struct ToolLifeFile {
 };
 // Throws FileError.
 ToolLifeFile ParseToolLife(std::string_view text);
+
+// The random tool file FI1RAN on MP0 (§6.7, ln 8523-8559): one 4-digit record per magazine pocket, in pocket
+// order; "0001" a normal tool, "9003" a special tool (tool 3) on each of the 3 pockets it occupies, "0000" an
+// empty pocket; what follows the digits (the manual's "-----") is a comment.
+struct RandomToolFile {
+  std::map<int, int> pocket;  // tool -> its (first) pocket, 1-based
+  std::map<int, bool> special;
+};
+// Throws FileError (FILMS4 71) for a record that is not 4 digits, a tool in two places, or a special tool
+// not on exactly 3 consecutive pockets.
+RandomToolFile ParseRandomTools(std::string_view text);
 
 // Origin records "n X.. Y.. Z.." (1-3 axes, ln 8116-8170; n 0-99, negative n: alternative unit), mm.
 struct OriginRecord {

@@ -61,4 +61,28 @@ TEST(ToolFiles, Origins) {
 }
 
 }  // namespace
+// FI1RAN (ln 8541-8548): the manual's records; a special tool on exactly 3 consecutive pockets; FILMS4 71
+// for a record that is not 4 digits, a tool in two places, a special tool on 2 or 4 pockets.
+TEST(ToolFiles, RandomToolFile) {
+  RandomToolFile f =
+      ParseRandomTools("0001-----\n0002-----\n9003-----\n9003-----\n9003-----\n0000\n0004-----\n");
+  EXPECT_EQ(f.pocket, (std::map<int, int>{{1, 1}, {2, 2}, {3, 3}, {4, 7}}));
+  EXPECT_TRUE(f.special.at(3));
+  EXPECT_FALSE(f.special.at(4));
+  auto code_line = [](const std::string& text) {
+    try {
+      ParseRandomTools(text);
+    } catch (const FileError& e) {
+      return std::make_pair(e.code, e.line);
+    }
+    return std::make_pair(0, 0);
+  };
+  EXPECT_EQ(code_line("0001\n12\n"), std::make_pair(71, 2));
+  EXPECT_EQ(code_line("0001\n00012\n"), std::make_pair(71, 2));
+  EXPECT_EQ(code_line("0001\n0002\n0001\n"), std::make_pair(71, 3));
+  EXPECT_EQ(code_line("9003\n9003\n0001\n"), std::make_pair(71, 1));
+  EXPECT_EQ(code_line("9003\n9003\n9003\n9003\n"), std::make_pair(71, 4));
+  EXPECT_EQ(code_line("9003\n9003\n"), std::make_pair(71, 1));
+}
+
 }  // namespace cell::interp::balt

@@ -8,6 +8,7 @@
 #include <string_view>
 
 #include "cell/config/config.h"
+#include "cell/tooltable/tooltable.h"
 
 namespace cell::interp {
 
@@ -16,5 +17,17 @@ const config::DialectRules& StationRules();
 
 // config::LoadStation(id) with StationRules().
 config::StationConfig LoadStation(std::string_view id);
+
+// A tool load onto station `cfg` (`cellctl tools load`, the station's own check): the dialect's tool-table
+// form (Dialect::ParseToolTable onto `base`), then what the station file adds: on a coded-pallet station
+// (KT-APL FMS modules, `coded_pallets = true`) a process compensation's pallet W is 1-127 (KT-APL manual ln
+// 4081-4083), "SOURCE:LINE:COL: error: TLD W VALUE 200 OUTSIDE 1-127 ...". Throws cell::Error.
+tooltable::ToolTable ParseStationTools(const config::StationConfig& cfg, std::string_view text,
+                                       std::string_view source, const tooltable::ToolTable& base);
+
+// The coded-pallet limit (1-127) or the table's (1-255).
+inline int MaxPallet(const config::StationConfig& cfg) {
+  return cfg.coded_pallets ? 127 : 255;
+}
 
 }  // namespace cell::interp

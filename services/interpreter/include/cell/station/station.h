@@ -43,6 +43,12 @@ class StationIo {
   virtual void PublishControl(const cell::ServoControl& c) = 0;
   // A program's text from the program store: namespace `node`, then HOST; nullopt when in neither.
   virtual std::optional<std::string> Program(const std::string& node, const std::string& name) = 0;
+  // The program selected for execution in one of `station`'s memories (Balt-System SPG), as a map entry
+  // "BS01/MP2:P9" ("BS01:P9" for MP1); nullopt when none is. Throws cell::Error when the store did not
+  // answer.
+  virtual std::optional<std::string> SelectedProgram(const std::string& station) = 0;
+  // A program's text from namespace `node` alone (a pallet map's "BS01/MP2:P9"); nullopt when not there.
+  virtual std::optional<std::string> ProgramIn(const std::string& node, const std::string& name) = 0;
   // The text of `name` when the store keeps it as a part model (type part_model), `node` then HOST; nullopt
   // for any other file or none (a pallet map's entries: docs/station.md, "Part models").
   virtual std::optional<std::string> PartModel(const std::string& node, const std::string& name) = 0;
@@ -114,6 +120,8 @@ class Station {
 
   void Execute(const Dispatch& d);
   void RunProgram(ActiveRun& run, const std::string& entry);
+  bool StartSelected();
+  std::optional<std::string> ReadProgram(const std::string& node, const std::string& entry);
   std::vector<bool> SendPartModel(const Dispatch& d);
   void ProgramStop(const std::string& program, int line, const interp::StopOp& stop);
   // KT-APL WAI (interp::Environment::WaitInputs): after the motion before it, until the inputs match.

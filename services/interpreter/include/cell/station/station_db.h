@@ -93,6 +93,9 @@ class StationDb {
   std::optional<Dispatch> NextQueued();  // oldest first
   std::vector<Dispatch> Runs(RunState state);
   int Count(RunState state);
+  // The lowest dispatch id kept (0 when none): the operator's own runs take ids below it
+  // (Station::OnCommand).
+  std::int32_t LowestDispatchId();
   void MarkActive(std::int32_t dispatch_id, std::int64_t started_ns);
   // When the run was marked active (0: never) and how many programs of its map it finished.
   std::pair<std::int64_t, int> Progress(std::int32_t dispatch_id);

@@ -39,6 +39,10 @@ class Service final : public StationIo, public ServoLink {
   std::optional<std::string> Program(const std::string& node, const std::string& name) override {
     return programs_.GetWithFallback(node, name);
   }
+  std::optional<std::string> SelectedProgram(const std::string& station) override;
+  std::optional<std::string> ProgramIn(const std::string& node, const std::string& name) override {
+    return programs_.Get(node, name);
+  }
   std::optional<std::string> PartModel(const std::string& node, const std::string& name) override;
   bool DeleteFile(const std::string& node, const std::string& name, const std::string& key) override;
   void SaveFile(const std::string& node, const std::string& name, const std::string& text,
