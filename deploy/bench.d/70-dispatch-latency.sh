@@ -13,23 +13,10 @@ set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 # shellcheck source=lib/figures.sh
 source "$ROOT/deploy/bench.d/lib/figures.sh"
-BIN="${CELL_BUILD_DIR:-$ROOT/build}/bin"
-for exe in cellctl dispatch_latency_bench cell-scheduler cell-program-store cell-interpreter cell-axis-servo \
-           cell-inspection-writer cell-dashboard; do
-  [ -x "$BIN/$exe" ] || { echo "70-dispatch-latency: $BIN/$exe not built" >&2; exit 1; }
-done
+# shellcheck source=lib/cell.sh
+source "$ROOT/deploy/bench.d/lib/cell.sh"
+bench_cell 70-dispatch-latency 97 dispatch_latency_bench
 PALLETS="${CELL_BENCH_PALLETS:-30}"
-
-work="$(mktemp -d "${TMPDIR:-/tmp}/cell-dispatch-bench.XXXXXX")"
-export CELL_DATA_DIR="$work/data"
-export CELL_DOMAIN="${CELL_BENCH_DOMAIN:-97}"
-export CELL_HTTP="${CELL_HTTP:-127.0.0.1:0}"  # the cell's dashboard on any free port
-mkdir -p "$CELL_DATA_DIR"
-cleanup() {
-  "$BIN/cellctl" down >/dev/null 2>&1 || true
-  rm -rf "$work"
-}
-trap cleanup EXIT
 
 "$BIN/cellctl" up --stations KT01,KT02 --clock virtual
 cat >"$work/lat1.apl" <<'APL'

@@ -9,33 +9,20 @@
 # seconds idle. Targets: the program store, the scheduler and the inspection writer each grow by less than
 # 10 MB from pallet 50 to 450, and stay within 10% from pallet 1,000 to the last checkpoint.
 # About 3 minutes for 1,000 pallets (CELL_BENCH_MEMORY_PALLETS=10000: about 30 minutes) on a 2-core machine.
-# Env: CELL_BUILD_DIR (default build/), CELL_BENCH_DOMAIN (default 99), CELL_BENCH_MEMORY_PALLETS (1000 or
+# Env: CELL_BUILD_DIR (default build/), CELL_BENCH_DOMAIN (default 102), CELL_BENCH_MEMORY_PALLETS (1000 or
 # 10000, default 1000), CELL_BENCH_MEMORY_IDLE (default 30).
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 # shellcheck source=lib/figures.sh
 source "$ROOT/deploy/bench.d/lib/figures.sh"
-BIN="${CELL_BUILD_DIR:-$ROOT/build}/bin"
-for exe in cellctl memory_bench cell-scheduler cell-program-store cell-interpreter cell-axis-servo \
-           cell-inspection-writer cell-dashboard; do
-  [ -x "$BIN/$exe" ] || { echo "90-memory: $BIN/$exe not built" >&2; exit 1; }
-done
+# shellcheck source=lib/cell.sh
+source "$ROOT/deploy/bench.d/lib/cell.sh"
+bench_cell 90-memory 102 memory_bench  # outside the tests' domains (1-100)
 case "${CELL_BENCH_MEMORY_PALLETS:-1000}" in
   1000) checkpoints=50,450,1000 ;;
   10000) checkpoints=50,450,1000,2000,5000,10000 ;;
   *) echo "90-memory: CELL_BENCH_MEMORY_PALLETS is 1000 or 10000" >&2; exit 2 ;;
 esac
-
-work="$(mktemp -d "${TMPDIR:-/tmp}/cell-memory-bench.XXXXXX")"
-export CELL_DATA_DIR="$work/data"
-export CELL_DOMAIN="${CELL_BENCH_DOMAIN:-99}"
-export CELL_HTTP="${CELL_HTTP:-127.0.0.1:0}"  # the cell's dashboard on any free port
-mkdir -p "$CELL_DATA_DIR"
-cleanup() {
-  "$BIN/cellctl" down >/dev/null 2>&1 || true
-  rm -rf "$work"
-}
-trap cleanup EXIT
 
 CTL="$BIN/cellctl"
 DEMO="$ROOT/deploy/demo.d"
