@@ -11,8 +11,12 @@
 #include <mutex>
 #include <random>
 #include <set>
+#include <vector>
 
 #include <fastdds/rtps/common/Locator.h>
+#include <fastdds/rtps/transport/ChainingTransport.h>
+#include <fastdds/rtps/transport/ChainingTransportDescriptor.h>
+#include <fastdds/rtps/transport/UDPTransportDescriptor.h>
 #include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
 #include <fastrtps/utils/IPLocator.h>
 #include <fastrtps/utils/md5.h>
@@ -42,6 +46,72 @@ namespace {
 
 namespace dds = eprosima::fastdds::dds;
 namespace rtps = eprosima::fastrtps::rtps;
+
+namespace frtps = eprosima::fastdds::rtps;
+
+// Fast DDS 2.9 sends a new participant's first announcement (BuiltinProtocols::enable) before it starts
+// reception (RTPSParticipantImpl::enable registers its receivers only afterwards) and drops what arrives in
+// between (ReceiverResource::OnDataReceived without a receiver). A running participant answers a new one
+// once, at once (PDPListener: a new participant resets its announcement), so that answer was lost and the new
+// process waited for the running one's next periodic announcement, up to 1 s (cellctl: 0.5-1 s a verb). The
+// gate holds what arrives until the backend opens it, once create_participant has returned, and hands it on
+// then, in order (docs/architecture.md, "Discovery latency").
+class ReceiveGate {
+ public:
+  // True when held: Open() delivers it.
+  bool Hold(frtps::TransportReceiverInterface* next, const rtps::octet* data, uint32_t size,
+            const rtps::Locator_t& local, const rtps::Locator_t& remote) {
+    std::lock_guard lk(mu_);
+    if (open_) return false;
+    held_.push_back({next, std::vector<rtps::octet>(data, data + size), local, remote});
+    return true;
+  }
+  // Only while the participant lives: the receivers held here are its own.
+  void Open() {
+    std::lock_guard lk(mu_);  // a datagram arriving meanwhile waits behind the held ones
+    for (auto& h : held_)
+      h.next->OnDataReceived(h.data.data(), static_cast<uint32_t>(h.data.size()), h.local, h.remote);
+    held_.clear();
+    open_ = true;
+  }
+
+ private:
+  struct Held {
+    frtps::TransportReceiverInterface* next;
+    std::vector<rtps::octet> data;
+    rtps::Locator_t local, remote;
+  };
+  std::mutex mu_;
+  bool open_ = false;
+  std::vector<Held> held_;
+};
+
+class GatedTransport : public frtps::ChainingTransport {
+ public:
+  GatedTransport(const frtps::ChainingTransportDescriptor& d, std::shared_ptr<ReceiveGate> gate)
+      : ChainingTransport(d), gate_(std::move(gate)) {}
+  frtps::TransportDescriptorInterface* get_configuration() override {
+    return low_level_transport_->get_configuration();
+  }
+  bool send(rtps::SenderResource* low, const rtps::octet* buf, uint32_t size, rtps::LocatorsIterator* begin,
+            rtps::LocatorsIterator* end, const std::chrono::steady_clock::time_point& timeout) override {
+    return low->send(buf, size, begin, end, timeout);
+  }
+  void receive(frtps::TransportReceiverInterface* next, const rtps::octet* buf, uint32_t size,
+               const rtps::Locator_t& local, const rtps::Locator_t& remote) override {
+    if (!gate_->Hold(next, buf, size, local, remote)) next->OnDataReceived(buf, size, local, remote);
+  }
+
+ private:
+  std::shared_ptr<ReceiveGate> gate_;
+};
+
+struct GatedDescriptor : public frtps::ChainingTransportDescriptor {
+  GatedDescriptor(std::shared_ptr<frtps::TransportDescriptorInterface> low, std::shared_ptr<ReceiveGate> g)
+      : ChainingTransportDescriptor(std::move(low)), gate(std::move(g)) {}
+  frtps::TransportInterface* create_transport() const override { return new GatedTransport(*this, gate); }
+  std::shared_ptr<ReceiveGate> gate;
+};
 
 class CdrType : public dds::TopicDataType {
  public:
@@ -258,6 +328,11 @@ class FastBackend : public Backend {
         eprosima::fastrtps::Duration_t(0, 10000000);
     if (!o.security.identity.empty()) Secure(o.security, qos);
     identity_ = o.security.identity;
+    // Every UDP transport (built-in loopback profile and the shipped LAN profiles) behind the gate.
+    auto gate = std::make_shared<ReceiveGate>();
+    for (auto& t : qos.transport().user_transports)
+      if (std::dynamic_pointer_cast<frtps::UDPTransportDescriptor>(t))
+        t = std::make_shared<GatedDescriptor>(t, gate);
     {
       // One participant at a time per process, from choosing its slot until it has bound the slot's ports.
       SlotTable& slots = Slots();
@@ -275,6 +350,7 @@ class FastBackend : public Backend {
               (identity_.empty() ? ""
                                  : " as security identity '" + identity_ + "' (Fast DDS's log says why)"));
     writers_.SetOwnPrefix(p_->guid().guidPrefix);
+    gate->Open();  // create_participant has started reception: hand on what came before
     // docs/security.md, "Partitions": write in the identity's own partition, read every partition.
     dds::PublisherQos pq = dds::PUBLISHER_QOS_DEFAULT;
     pq.partition().push_back(partition_.c_str());
@@ -331,6 +407,10 @@ class FastBackend : public Backend {
     dds::DataReaderQos rq = dds::DATAREADER_QOS_DEFAULT;
     ApplyQos(q, rq.reliability(), rq.durability(), rq.history());
     rq.endpoint().history_memory_policy = rtps::DYNAMIC_REUSABLE_MEMORY_MODE;
+    // A reliable reader asks a newly matched writer for its history 5 ms after matching, not 70: when the
+    // writer's first data and heartbeat reached this side before the match (the two sides' endpoint
+    // announcements cross), the first sample or reply came 70 ms late.
+    rq.reliable_reader_qos().times.initialAcknackDelay = eprosima::fastrtps::Duration_t(0, 5000000);
     if (q == QosKind::kState || q == QosKind::kEvent) {
       rq.resource_limits().max_instances = 4096;
       rq.resource_limits().max_samples_per_instance = rq.history().depth;
