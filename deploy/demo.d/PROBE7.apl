@@ -4,8 +4,8 @@
 (UCY,60)
 ! Probe the part on KT01 (App. E probe cycles, shipped as KT-APL source):
 ! the top face with G26Z, the bore with G27X and G27Y, into the inspection
-! file INSP7 (G36 + OIF ... G37, manual ch. 7), copied to HOST by RCP (not named
-! as the program: the copy would replace it in HOST and the next run fail); the
+! file INSP7 (G36 + OIF ... G37, manual ch. 7), copied to HOST by RCP
+! (not named as the program: the copy would replace it in HOST); the
 ! measured centre becomes fixture offset H1 (FXC), as FINDBORE does (9-10).
 N10 G71 G90 G0 X150. Y100. Z40. F0 T1
 N20 M06
