@@ -218,22 +218,6 @@ void ScaleBar(std::string& out, const Frame& f) {
       x0, x1, y + 3, y, (x0 + x1) / 2, y - 6, Num(len));
 }
 
-const char* KindName(MoveKind k) {
-  switch (k) {
-    case MoveKind::kRapid:
-      return "rapid";
-    case MoveKind::kFeed:
-      return "feed";
-    case MoveKind::kArc:
-      return "arc";
-    case MoveKind::kThread:
-      return "thread";
-    case MoveKind::kProbe:
-      return "probe";
-  }
-  return "feed";
-}
-
 // Stroke attributes of a kind of move; cycle moves in their own colour, rapids dashed in every case.
 // Threads and probe moves keep their own colour inside a cycle too (a threading cycle's passes are threads).
 const char* Colour(MoveKind k, bool cycle) {
@@ -323,13 +307,13 @@ void Moves(std::string& out, const std::vector<Plot::Move>& moves, const View& v
       std::string group;
       for (std::size_t i = 0; i < moves.size(); ++i) {
         if (moves[i].kind != k || cycle[i] != in_cycle) continue;
-        group += fmt::format("<path class=\"{}\" data-line=\"{}\" data-seq=\"{}\" d=\"{}\"/>\n", KindName(k),
-                             moves[i].line, i, MovePath(moves[i], v, f));
+        group += fmt::format("<path class=\"{}\" data-line=\"{}\" data-seq=\"{}\" d=\"{}\"/>\n",
+                             Plot::KindName(k), moves[i].line, i, MovePath(moves[i], v, f));
         plunges += Plunge(moves[i], in_cycle, v, f);
       }
       if (group.empty()) continue;
-      out += fmt::format("<g class=\"moves\" data-kind=\"{}\" data-cycle=\"{}\" {}>\n", KindName(k), in_cycle,
-                         Stroke(k, in_cycle));
+      out += fmt::format("<g class=\"moves\" data-kind=\"{}\" data-cycle=\"{}\" {}>\n", Plot::KindName(k),
+                         in_cycle, Stroke(k, in_cycle));
       out += group + "</g>\n";
     }
   }
@@ -467,6 +451,22 @@ std::string Legend() {
 }
 
 }  // namespace
+
+const char* Plot::KindName(MoveKind k) {
+  switch (k) {
+    case MoveKind::kRapid:
+      return "rapid";
+    case MoveKind::kFeed:
+      return "feed";
+    case MoveKind::kArc:
+      return "arc";
+    case MoveKind::kThread:
+      return "thread";
+    case MoveKind::kProbe:
+      return "probe";
+  }
+  return "feed";
+}
 
 std::string Plot::Svg() const {
   std::string out = fmt::format(

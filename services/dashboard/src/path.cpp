@@ -20,22 +20,6 @@ using interp::Plot;
 // A run that never ends (a program looping on an input it never gets offline) stops being drawn here.
 constexpr int kMaxMoves = 20000;
 
-const char* KindName(Plot::MoveKind k) {
-  switch (k) {
-    case Plot::MoveKind::kRapid:
-      return "rapid";
-    case Plot::MoveKind::kFeed:
-      return "feed";
-    case Plot::MoveKind::kArc:
-      return "arc";
-    case Plot::MoveKind::kThread:
-      return "thread";
-    case Plot::MoveKind::kProbe:
-      return "probe";
-  }
-  return "feed";
-}
-
 nlohmann::json Xyz(const std::array<double, 3>& p) {
   return nlohmann::json::array({p[0], p[1], p[2]});
 }
@@ -61,7 +45,7 @@ nlohmann::json PathJson(const Plot& plot) {
   nlohmann::json moves = nlohmann::json::array();
   for (const Plot::Move& m : plot.moves()) {
     nlohmann::json j = {
-        {"kind", KindName(m.kind)}, {"line", m.line}, {"from", Xyz(m.from)}, {"to", Xyz(m.to)}};
+        {"kind", Plot::KindName(m.kind)}, {"line", m.line}, {"from", Xyz(m.from)}, {"to", Xyz(m.to)}};
     if (m.kind == Plot::MoveKind::kArc && m.first >= 0 && m.second >= 0 && m.first != m.second) {
       j["center"] = Xyz(m.center);
       j["plane"] = {m.first, m.second};

@@ -43,6 +43,8 @@ class Plot {
   std::string Svg() const;
 
   enum class MoveKind { kRapid, kFeed, kArc, kThread, kProbe };
+  // "rapid", "feed", "arc", "thread", "probe": the SVG's class names and the dashboard's JSON kinds.
+  static const char* KindName(MoveKind kind);
   // Motion ops drawn so far (each is one path element per view; the first motion op only sets where the
   // path starts: the position before it is the machine's, which the program does not say).
   int Drawn(MoveKind kind) const;
