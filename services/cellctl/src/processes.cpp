@@ -121,14 +121,11 @@ std::optional<std::string> LocalServiceOn(int domain) {
   for (const auto& entry : fs::directory_iterator("/proc", ec)) {
     const std::string pid = entry.path().filename().string();
     if (pid.empty() || pid.find_first_not_of("0123456789") != std::string::npos) continue;
-    const std::string what = [&] {
-      std::string comm;
-      std::getline(std::ifstream(entry.path() / "comm"), comm);
-      return comm + " (pid " + pid + ")";
-    }();
-    if (std::none_of(std::begin(kServices), std::end(kServices),
-                     [&](const char* s) { return what.rfind(std::string(s) + " (", 0) == 0; }))
+    std::string comm;
+    std::getline(std::ifstream(entry.path() / "comm"), comm);
+    if (std::none_of(std::begin(kServices), std::end(kServices), [&](const char* s) { return comm == s; }))
       continue;
+    const std::string what = comm + " (pid " + pid + ")";
     // A process that exits between the listing and here is no service (a test tearing its cell down next
     // to ours made every verb wait out discovery); one whose environment is not ours to read may be on our
     // domain. Briefly unreadable (mid-exec), it is read again.
@@ -154,10 +151,6 @@ std::optional<std::string> LocalServiceOn(int domain) {
     if (!d || *d == domain) return what;
   }
   return std::nullopt;
-}
-
-bool LocalServiceMayRun(int domain) {
-  return LocalServiceOn(domain).has_value();
 }
 
 bool IsRunning(const CellProcess& p) {

@@ -59,12 +59,11 @@ using cell::proc::StartTime;
 // an unrelated process that reused the PID.
 bool IsRunning(const CellProcess& p);
 
-// True when a cell service (cell-scheduler, cell-program-store, cell-interpreter, cell-axis-servo,
-// cell-inspection-writer, cell-dashboard) runs on this host on `domain` (its CELL_DOMAIN, 101 without one),
-// or may (its environment is not ours to read). cellctl concludes "the cell is down" from an empty domain
-// only when this is false: discovery can take a second, the process table cannot.
-bool LocalServiceMayRun(int domain);
-// The same, naming the first such process ("cell-scheduler (pid 4711)"), nullopt when there is none.
+// The first cell service (cell-scheduler, cell-program-store, cell-interpreter, cell-axis-servo,
+// cell-inspection-writer, cell-dashboard) that runs on this host on `domain` (its CELL_DOMAIN, 101 without
+// one), or may (its environment is not ours to read), named as "cell-scheduler (pid 4711)"; nullopt when
+// there is none. cellctl concludes "the cell is down" from an empty domain only when there is none: discovery
+// can take a second, the process table cannot.
 std::optional<std::string> LocalServiceOn(int domain);
 
 // The environment of this process as "NAME=value" strings.
