@@ -30,12 +30,15 @@ class ConfigTest : public ::testing::Test {
     ASSERT_NE(mkdtemp(tmpl), nullptr);
     root_ = tmpl;
     fs::create_directories(root_ / "etc" / "stations");
-    for (const char* v : {"CELL_CONFIG_DIR", "CELL_DATA_DIR", "CELL_DOMAIN", "XDG_STATE_HOME", "HOME",
-                          "CELL_DDS", "CELL_DDS_PROFILE", "CELL_TEST_A", "CELL_TEST_B"}) {
+    for (const char* v :
+         {"CELL_CONFIG_DIR", "CELL_DATA_DIR", "CELL_DOMAIN", "XDG_STATE_HOME", "HOME", "CELL_DDS",
+          "CELL_DDS_PROFILE", "CELL_DDS_PARTICIPANTS", "CELL_TEST_A", "CELL_TEST_B"}) {
       const char* old = getenv(v);
       saved_.emplace_back(v, old ? std::optional<std::string>(old) : std::nullopt);
     }
-    for (const char* v : {"CELL_DDS", "CELL_DDS_PROFILE", "CELL_TEST_A", "CELL_TEST_B"}) unsetenv(v);
+    for (const char* v :
+         {"CELL_DDS", "CELL_DDS_PROFILE", "CELL_DDS_PARTICIPANTS", "CELL_TEST_A", "CELL_TEST_B"})
+      unsetenv(v);
     setenv("CELL_CONFIG_DIR", (root_ / "etc").c_str(), 1);
   }
   void TearDown() override {
@@ -512,3 +515,42 @@ TEST(ShippedStations, Ok01ChuckAndTailstock) {
 }
 
 }  // namespace
+
+// Discovery sized to the cell (DESIGN §3, issue 43): two participants per station plus 16, at least 32, in
+// steps of 8, at most the 120 a domain's port range holds; CELL_DDS_PARTICIPANTS overrides, checked.
+TEST_F(ConfigTest, DdsParticipantsFollowTheConfiguredStations) {
+  using cell::config::DdsParticipants;
+  auto Id = [](int i) { return std::string(i < 10 ? "KT0" : "KT") + std::to_string(i); };
+  EXPECT_EQ(DdsParticipants(), 32);  // no station: the floor
+  for (int i = 1; i <= 8; ++i) Write(Id(i), "");
+  EXPECT_EQ(DdsParticipants(), 32);  // 2 * 8 + 16
+  for (int i = 9; i <= 32; ++i) Write(Id(i), "");
+  EXPECT_EQ(DdsParticipants(), 80);  // 2 * 32 + 16: the 32-station cell's 68 processes and its tools
+  for (int i = 33; i <= 45; ++i) Write(Id(i), "");
+  EXPECT_EQ(DdsParticipants(), 112);  // 2 * 45 + 16 = 106, rounded up to 112
+  for (int i = 46; i <= 60; ++i) Write(Id(i), "");
+  EXPECT_EQ(DdsParticipants(), 120);  // capped: (250 - 10) / 2 ports per participant in a domain
+  setenv("CELL_DDS_PARTICIPANTS", "48", 1);
+  EXPECT_EQ(DdsParticipants(), 48);
+  for (const char* bad : {"7", "121", "4x", "", " 40"}) {
+    setenv("CELL_DDS_PARTICIPANTS", bad, 1);
+    if (std::string(bad).empty()) {
+      EXPECT_EQ(DdsParticipants(), 120) << "empty is unset";
+      continue;
+    }
+    try {
+      DdsParticipants();
+      ADD_FAILURE() << "accepted CELL_DDS_PARTICIPANTS=" << bad;
+    } catch (const cell::Error& e) {
+      EXPECT_NE(std::string(e.what()).find("CELL_DDS_PARTICIPANTS"), std::string::npos) << e.what();
+    }
+  }
+}
+
+// The shipped LAN profiles size their peer ranges with ${CELL_DDS_PARTICIPANTS}: unset, it expands to what
+// the loopback profile would use.
+TEST_F(ConfigTest, ProfilesExpandTheParticipantRange) {
+  EXPECT_EQ(cell::config::ExpandEnvironment("<r>${CELL_DDS_PARTICIPANTS}</r>", "p"), "<r>32</r>");
+  setenv("CELL_DDS_PARTICIPANTS", "64", 1);
+  EXPECT_EQ(cell::config::ExpandEnvironment("<r>${CELL_DDS_PARTICIPANTS}</r>", "p"), "<r>64</r>");
+}

@@ -7,6 +7,7 @@
 #include <fstream>
 #include <optional>
 #include <sstream>
+#include <string>
 
 #include "cell/config/config.h"
 #include "cell/error/error.h"
@@ -74,6 +75,8 @@ std::string ExpandFrom(std::string_view text, size_t& i, std::string_view what, 
     }
     ++i;  // the closing '}'
     std::string value = Env(name);
+    // The profiles size their peer ranges with it; unset, it is what the loopback profile would use.
+    if (value.empty() && name == "CELL_DDS_PARTICIPANTS") value = std::to_string(DdsParticipants());
     if (!value.empty()) {
       out += value;
     } else if (dflt) {
@@ -148,6 +151,26 @@ std::string LoadDdsProfile(const fs::path& file) {
   std::stringstream ss;
   ss << in.rdbuf();
   return ExpandEnvironment(ss.str(), file.string());
+}
+
+int DdsParticipants() {
+  const std::string set = Env("CELL_DDS_PARTICIPANTS");
+  if (!set.empty()) {
+    const bool digits = set.size() <= 4 && set.find_first_not_of("0123456789") == std::string::npos;
+    const int n = digits ? std::stoi(set) : 0;
+    if (n < 8 || n > kMaxDdsParticipants)
+      throw Error(Errc::kInvalidArgument,
+                  fmt::format("CELL_DDS_PARTICIPANTS '{}': expected a number from 8 to {}", set,
+                              kMaxDdsParticipants));
+    return n;
+  }
+  size_t stations = 0;
+  try {
+    stations = ListStations().size();
+  } catch (const Error&) {  // no station directory: a tool or test outside a cell
+  }
+  const int wanted = static_cast<int>(std::min<size_t>(2 * stations + 16, kMaxDdsParticipants));
+  return std::min(kMaxDdsParticipants, std::max(32, (wanted + 7) / 8 * 8));
 }
 
 }  // namespace cell::config

@@ -73,14 +73,17 @@ CarrierType& Carriers() {
   return *t;
 }
 
-// DESIGN §3: loopback, unicast discovery with peer 127.0.0.1, no multicast, 32 participant indices (the
-// ports Fast DDS probes with maxInitialPeersRange 32), no shared memory (Cyclone uses iceoryx only when
-// configured).
-constexpr const char* kLoopbackXml =
-    "<CycloneDDS><Domain Id=\"any\"><General><Interfaces><NetworkInterface address=\"127.0.0.1\"/>"
-    "</Interfaces><AllowMulticast>false</AllowMulticast></General><Discovery>"
-    "<ParticipantIndex>auto</ParticipantIndex><MaxAutoParticipantIndex>32</MaxAutoParticipantIndex>"
-    "<Peers><Peer address=\"127.0.0.1\"/></Peers></Discovery></Domain></CycloneDDS>";
+// DESIGN §3: loopback, unicast discovery with peer 127.0.0.1, no multicast, as many participant indices as
+// the cell has participants (config::DdsParticipants: the ports Fast DDS probes with the same
+// maxInitialPeersRange), no shared memory (Cyclone uses iceoryx only when configured).
+std::string LoopbackXml(int participants) {
+  return "<CycloneDDS><Domain Id=\"any\"><General><Interfaces><NetworkInterface address=\"127.0.0.1\"/>"
+         "</Interfaces><AllowMulticast>false</AllowMulticast></General><Discovery>"
+         "<ParticipantIndex>auto</ParticipantIndex><MaxAutoParticipantIndex>" +
+         std::to_string(participants) +
+         "</MaxAutoParticipantIndex><Peers><Peer address=\"127.0.0.1\"/></Peers></Discovery></Domain>"
+         "</CycloneDDS>";
+}
 
 // Appended to every configuration, the built-in one or a profile (Cyclone merges consecutive <CycloneDDS>
 // documents, later ones winning): how much unacknowledged data a writer may hold before dds_write blocks.
@@ -319,8 +322,8 @@ class CycloneBackend : public Backend {
     // Always an explicit configuration: neither CYCLONEDDS_URI nor a file elsewhere can widen the default.
     const std::string what =
         o.profile_xml.empty() ? "the built-in loopback profile" : "DDS profile " + o.profile_path;
-    Domains::Acquire(domain_, (o.profile_xml.empty() ? std::string(kLoopbackXml) : o.profile_xml) + kCellXml,
-                     what);
+    Domains::Acquire(domain_,
+                     (o.profile_xml.empty() ? LoopbackXml(o.participants) : o.profile_xml) + kCellXml, what);
     // A vanished process is noticed in ~3 s, as with Fast DDS (the participant lease; Cyclone's default is 10
     // s and it announces itself at 4/5 of the lease).
     dds_qos_t* qos = dds_create_qos();

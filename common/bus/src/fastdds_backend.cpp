@@ -303,6 +303,8 @@ class FastReader : public RawReader, public dds::DataReaderListener {
   std::mutex mu_;
 };
 
+constexpr uint32_t kReceiveBuffer = 4u << 20;
+
 class FastBackend : public Backend {
  public:
   explicit FastBackend(const BackendOptions& o)
@@ -313,7 +315,7 @@ class FastBackend : public Backend {
     if (!o.profile_xml.empty())
       FromProfile(o, qos);
     else
-      LoopbackOnly(qos);
+      LoopbackOnly(qos, o.participants);
     qos.name(o.participant_name.empty() ? "cell" : o.participant_name);
     // A vanished process is noticed in ~3 s, not the 20 s default (station health, DESIGN §5).
     qos.wire_protocol().builtin.discovery_config.leaseDuration = eprosima::fastrtps::Duration_t(3, 0);
@@ -328,6 +330,7 @@ class FastBackend : public Backend {
         eprosima::fastrtps::Duration_t(0, 10000000);
     if (!o.security.identity.empty()) Secure(o.security, qos);
     identity_ = o.security.identity;
+    const int range = LoopbackRange(qos);  // before the gate wraps the transports
     // Every UDP transport (built-in loopback profile and the shipped LAN profiles) behind the gate.
     auto gate = std::make_shared<ReceiveGate>();
     for (auto& t : qos.transport().user_transports)
@@ -337,7 +340,7 @@ class FastBackend : public Backend {
       // One participant at a time per process, from choosing its slot until it has bound the slot's ports.
       SlotTable& slots = Slots();
       std::lock_guard lk(slots.mu);
-      slot_ = ChooseSlot(o.domain, qos, slots.held);
+      slot_ = ChooseSlot(o.domain, range, qos, slots.held);
       // The listener hears discovery only (no status: data goes to each reader's own listener).
       p_ = factory->create_participant(o.domain, qos, &writers_, dds::StatusMask::none());
       // Taken by p_, or, when it could not be made, kept by Fast DDS for the life of the process.
@@ -461,7 +464,8 @@ class FastBackend : public Backend {
 
   // Fast DDS 2.9 numbers the participants of a process 0, 1, 2, ... and never reuses a number, and a
   // participant's unicast ports follow its number (7410 + 250·domain + 2·n), while peers probe only the first
-  // 32 (maxInitialPeersRange). A process that has rejoined the bus 32 times (a VM paused again and again)
+  // `range` (maxInitialPeersRange, config::DdsParticipants). A process that has rejoined the bus that many
+  // times (a VM paused again and again)
   // would get ports no peer probes, and two such processes would never find each other; 4x as many
   // participants in bus_test showed it. So the backend takes the lowest slot whose ports no process (of
   // either stack: Cyclone uses the same formula) has bound, and a fresh random GUID prefix, because Fast DDS
@@ -469,9 +473,9 @@ class FastBackend : public Backend {
   // Free ports are not enough: Fast DDS keeps the number of a participant it failed to make (a refused
   // identity: RTPSDomainImpl::createParticipant returns before releasing it) and refuses it ever after
   // ("RTPSParticipant with the same ID already exists"). Hence `held`, the slots this process gave Fast DDS
-  // and not yet got back. Returns the slot, -1 when all 32 are taken (Fast DDS then numbers it).
-  static int ChooseSlot(int domain, dds::DomainParticipantQos& qos, const std::set<int>& held) {
-    for (int slot = 0; slot < 32; ++slot) {
+  // and not yet got back. Returns the slot, -1 when all are taken (Fast DDS then numbers it).
+  static int ChooseSlot(int domain, int range, dds::DomainParticipantQos& qos, const std::set<int>& held) {
+    for (int slot = 0; slot < range; ++slot) {
       const int port = 7400 + 250 * domain + 10 + 2 * slot;  // metatraffic unicast; user unicast is port + 1
       if (held.count(slot) || !PortFree(port) || !PortFree(port + 1)) continue;
       qos.wire_protocol().participant_id = slot;
@@ -520,11 +524,25 @@ class FastBackend : public Backend {
     props.emplace_back("dds.sec.crypto.plugin", "builtin.AES-GCM-GMAC");
   }
 
-  static void LoopbackOnly(dds::DomainParticipantQos& qos) {
-    // DESIGN §3: loopback, unicast discovery, no multicast, no shared memory, 32 peers.
+  // The peer range of the process's UDP transport: the ports its peers can have (a LAN profile's own
+  // maxInitialPeersRange, the loopback profile's config::DdsParticipants).
+  static int LoopbackRange(const dds::DomainParticipantQos& qos) {
+    int range = 4;  // Fast DDS's default
+    for (auto& t : qos.transport().user_transports)
+      if (auto udp = std::dynamic_pointer_cast<frtps::UDPTransportDescriptor>(t))
+        range = std::max<int>(range, static_cast<int>(udp->maxInitialPeersRange));
+    return range;
+  }
+
+  static void LoopbackOnly(dds::DomainParticipantQos& qos, int participants) {
+    // DESIGN §3: loopback, unicast discovery, no multicast, no shared memory, peers sized to the cell.
     auto udp = std::make_shared<eprosima::fastdds::rtps::UDPv4TransportDescriptor>();
     udp->interfaceWhiteList.emplace_back("127.0.0.1");
-    udp->maxInitialPeersRange = 32;
+    udp->maxInitialPeersRange = static_cast<uint32_t>(participants);
+    // A newcomer joining a large cell is answered by every participant at once: with the kernel's default
+    // 208 kB receive buffer, a 68-process cell dropped 34,000 datagrams while one process joined, and the
+    // retransmissions took seconds. The kernel caps this at net.core.rmem_max (deploy/install raises it).
+    udp->receiveBufferSize = kReceiveBuffer;
     qos.transport().use_builtin_transports = false;
     qos.transport().user_transports.push_back(udp);
     rtps::Locator_t lo;

@@ -101,11 +101,11 @@ SecurityFiles SecurityFor(const ParticipantOptions& opts) {
 
 }  // namespace
 
-bool WaitUntil(const std::function<bool()>& cond, Millis timeout) {
+bool WaitUntil(const std::function<bool()>& cond, Millis timeout, Millis period) {
   auto deadline = std::chrono::steady_clock::now() + timeout;
   while (!cond()) {
     if (std::chrono::steady_clock::now() >= deadline) return false;
-    std::this_thread::sleep_for(Millis(2));
+    std::this_thread::sleep_for(period);
   }
   return true;
 }
@@ -127,6 +127,7 @@ Participant::Participant(const ParticipantOptions& opts) {
   BackendOptions bo{domain_, profile.string(),  opts.name,
                     {},      SecurityFor(opts), cell::security::WritePartition(ClaimedIdentity(opts))};
   identity_ = bo.security.identity;
+  bo.participants = cell::config::DdsParticipants();
   if (!profile.empty()) bo.profile_xml = cell::config::LoadDdsProfile(profile);  // ${VAR}s expanded once
   if (vendor_ == "fastdds")
     make_backend_ = [bo] { return MakeFastDdsBackend(bo); };

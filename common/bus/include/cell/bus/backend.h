@@ -100,6 +100,9 @@ struct BackendOptions {
   // WritePartition); every reader subscribes to "*" (every partition but the default one). Empty:
   // "id/unknown".
   std::string partition;
+  // The participants one host's loopback discovery is sized for (config::DdsParticipants): the ports a
+  // participant probes and the slots it may take. The LAN profiles set their own.
+  int participants = 32;
 };
 
 // The identity a partition names ("" for a partition of another form). docs/security.md, "Partitions".

@@ -39,6 +39,16 @@ std::filesystem::path DdsProfile(std::string_view vendor);
 // has no default, or a reference is not closed.
 std::string ExpandEnvironment(std::string_view text, std::string_view what);
 
+// How many participants one host's discovery is sized for (DESIGN.md §3, docs/operations.md "A cell's size"):
+// the unicast ports every participant probes on loopback (Fast DDS maxInitialPeersRange, Cyclone
+// MaxAutoParticipantIndex) and the participant slots a process may take. CELL_DDS_PARTICIPANTS (8..kMaxDds-
+// Participants) when set; else two per configured station (interpreter and servo) plus 16 (host services,
+// the dashboard, cellctl and tools), at least 32, rounded up to a multiple of 8, at most kMaxDdsParticipants.
+// Every process of a cell reads the same configuration, so every one probes the same ports. Throws
+// cell::Error(kInvalidArgument) for a malformed CELL_DDS_PARTICIPANTS.
+inline constexpr int kMaxDdsParticipants = 120;  // (250 ports per domain - 10) / 2 ports per participant
+int DdsParticipants();
+
 // Reads a profile file and expands it (above). Throws cell::Error(kIo) when it cannot be read.
 std::string LoadDdsProfile(const std::filesystem::path& file);
 
