@@ -106,12 +106,16 @@ void Receiver::OnTools(const cell::ToolTable& t) {
   tooltable::ToolTable table = tooltable::FromWire(t);
   std::lock_guard lk(in_mu_);
   pending_tools_ = std::move(table);
+  wake_ = true;
+  in_cv_.notify_all();
 }
 
 void Receiver::OnControl(const cell::ServoControl& c) {
   if (c.station() != station_) return;
   std::lock_guard lk(in_mu_);
   pending_control_ = c;
+  wake_ = true;
+  in_cv_.notify_all();
 }
 
 void Receiver::OnPartModel(const cell::PartModel& p) {
@@ -127,16 +131,20 @@ void Receiver::OnPartModel(const cell::PartModel& p) {
   }
   std::lock_guard lk(in_mu_);
   pending_part_ = std::move(part);
+  wake_ = true;
+  in_cv_.notify_all();
 }
 
 void Receiver::WaitForSegment(std::chrono::steady_clock::duration d) {
   std::unique_lock lk(in_mu_);
-  in_cv_.wait_for(lk, d, [&] { return !arrived_.empty(); });
+  in_cv_.wait_for(lk, d, [&] { return !arrived_.empty() || wake_; });
 }
 
 Receiver::Turn Receiver::Tick(TimePoint now) {
+  if (resting_) machine_.CatchUp();  // the periods slept through, before anything new applies
   {
     std::lock_guard lk(in_mu_);
+    wake_ = false;
     if (pending_tools_) {
       machine_.SetToolTable(*pending_tools_);
       pending_tools_.reset();
@@ -155,6 +163,8 @@ Receiver::Turn Receiver::Tick(TimePoint now) {
     // Virtual clock only: wait (wall time) for the refill instead of running the machine into a stop
     // that the segments in flight would have avoided.
     turn.waiting = true;
+  } else if (machine_.Resting()) {
+    turn.resting = true;
   } else {
     // Every step: a reset (new run, alarm cleared) releases the planner's hold, never the operator's.
     if (feed_hold_) machine_.FeedHold();
@@ -162,7 +172,9 @@ Receiver::Turn Receiver::Tick(TimePoint now) {
     HandleEvents();
   }
   if (dirty_) PublishProgress();
+  // 50 Hz of wall time at rest too (DESIGN §3, servo_dds_test): a resting turn waits kRestWait at most.
   if (now - last_axes_ >= kAxisPeriod) PublishAxes(now);
+  resting_ = turn.resting;
   return turn;
 }
 

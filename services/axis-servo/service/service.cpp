@@ -1,5 +1,7 @@
 #include "cell/servo/service.h"
 
+#include <algorithm>
+
 #include "cell/bus/topics.h"
 #include "cell/health/health.h"
 
@@ -43,9 +45,12 @@ void Service::Loop(std::stop_token st) {
     const Receiver::Turn turn = rx_.Tick(std::chrono::steady_clock::now());
     if (turn.waiting) {
       rx_.WaitForSegment(std::chrono::milliseconds(1));
-    } else if (!turn.stepped) {
-      // Idle on the virtual clock: yield instead of spinning (the real clock sleeps inside Step()).
-      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    } else if (turn.resting || !turn.stepped) {
+      // Nothing moves (idle on the virtual clock, resting on the real one): sleep until something arrives
+      // or the next axis sample is due, instead of turning 1000 times a second.
+      const auto now = std::chrono::steady_clock::now();
+      rx_.WaitForSegment(std::clamp<std::chrono::steady_clock::duration>(
+          rx_.AxesDue() - now, std::chrono::milliseconds(1), Receiver::kRestWait));
     }
   }
   alive_ = false;

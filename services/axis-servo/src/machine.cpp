@@ -759,6 +759,22 @@ bool Machine::Idle() const {
   return true;
 }
 
+bool Machine::Resting() const {
+  return clock_kind_ == ClockKind::kReal && !spindle_.Active() && Idle();
+}
+
+std::uint64_t Machine::CatchUp() {
+  if (clock_kind_ != ClockKind::kReal) return 0;
+  std::uint64_t n = 0;
+  while (NextDeadline() <= std::chrono::steady_clock::now()) {
+    const std::uint64_t before = overruns_;
+    StepNow();
+    overruns_ = before;  // due while resting, not late
+    ++n;
+  }
+  return n;
+}
+
 std::chrono::steady_clock::time_point Machine::NextDeadline() {
   const auto now = std::chrono::steady_clock::now();
   if (!wall_started_) {

@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <thread>
 
 #include "cell/error/error.h"
 #include "cell/servo/machine.h"
@@ -209,6 +210,28 @@ TEST(Clock, VirtualAndRealAgreeOnCycleTime) {
   // load, not of the servo, so no upper bound here.
   EXPECT_GE(wall, 0.97 * cycle[1]);
   EXPECT_GT(cycle[0], 0.5);
+}
+
+// A resting machine on the real clock (idle, spindle stopped) may be left unstepped: CatchUp() then runs the
+// periods due, so machine time keeps pace with the wall clock, and none counts as late (issue 43: an idle
+// servo no longer wakes 1000 times a second).
+TEST(Clock, RestingOnTheRealClockCatchesUpWithoutOverruns) {
+  Machine m = Kt(ClockKind::kReal);
+  EXPECT_TRUE(m.Resting());
+  m.Step();
+  const double t0 = m.machine_time();
+  const auto w0 = std::chrono::steady_clock::now();
+  std::this_thread::sleep_for(std::chrono::milliseconds(30));
+  const std::uint64_t ran = m.CatchUp();
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - w0).count();
+  EXPECT_GE(ran, 25u);                             // ~30 periods of 1 ms were due
+  EXPECT_NEAR(m.machine_time() - t0, wall, 0.01);  // with the wall clock, within 10 ms
+  EXPECT_EQ(m.overruns(), 0u);
+  m.Push(Line(1, 10, 0, 0, 3000));
+  EXPECT_FALSE(m.Resting());  // work queued: stepped period by period again
+  Machine v = Kt(ClockKind::kVirtual);
+  EXPECT_FALSE(v.Resting());  // the virtual clock stands still instead
+  EXPECT_EQ(v.CatchUp(), 0u);
 }
 
 TEST(Devices, ToolChangeFromMagazine) {

@@ -133,7 +133,7 @@ class Participant {
 };
 
 // Polls a condition until it holds or the deadline passes (matching is asynchronous in DDS).
-bool WaitUntil(const std::function<bool()>& cond, Millis timeout);
+bool WaitUntil(const std::function<bool()>& cond, Millis timeout, Millis period = Millis(2));
 
 struct SampleInfo {
   int64_t received_ns = 0;  // steady clock, when the bus got it

@@ -80,6 +80,12 @@ class Machine {
   // Returns the number of periods run.
   std::uint64_t RunUntilIdle(double max_machine_s = 1e9);
   bool Idle() const;  // nothing queued, executing or settling
+  // Real clock, idle, spindle stopped: nothing moves, so a caller may sleep longer than a period and then
+  // CatchUp() (an idle servo woke 1000 times a second: with 24 stations, half a core for standing still).
+  bool Resting() const;
+  // Real clock: runs every period already due, without sleeping and without counting them as overruns.
+  // Machine time keeps running with the wall clock while the caller rests. Returns the periods run.
+  std::uint64_t CatchUp();
   double machine_time() const { return static_cast<double>(ticks_) * cfg_.servo_period_s; }
   std::uint64_t ticks() const { return ticks_; }
   std::uint64_t overruns() const { return overruns_; }  // real clock: periods that started late

@@ -42,7 +42,8 @@ class Receiver {
  public:
   using TimePoint = std::chrono::steady_clock::time_point;
   static constexpr auto kAxisPeriod =
-      std::chrono::milliseconds(20);  // 50 Hz in wall time, whatever the clock
+      std::chrono::milliseconds(20);                                // 50 Hz in wall time, whatever the clock
+  static constexpr auto kRestWait = std::chrono::milliseconds(20);  // a resting turn's sleep
   // Virtual clock: how long (wall) the machine waits for the producer to refill a look-ahead queue that is
   // less than half full before it runs on with what it has (see LookAheadStarved()).
   static constexpr auto kLookAheadWait = std::chrono::milliseconds(5);
@@ -61,12 +62,16 @@ class Receiver {
   struct Turn {
     bool stepped = false;  // the machine ran a servo period
     bool waiting = false;  // the look-ahead waits for the producer's refill (virtual clock): WaitForSegment
+    bool resting =
+        false;  // real clock, nothing moves (Machine::Resting): WaitForSegment, the periods run later
   };
   // One turn at wall time `now`: tools and panel applied, arrived segments taken, one servo period, events
   // reported.
   Turn Tick(TimePoint now);
-  // Waits up to `d` for a segment to arrive.
+  // Waits up to `d` for a segment, tools, a part model or a panel command to arrive.
   void WaitForSegment(std::chrono::steady_clock::duration d);
+  // When the next axis sample is due (a resting loop wakes for it).
+  TimePoint AxesDue() const { return last_axes_ + kAxisPeriod; }
   // Reports progress now (at start-up: run 0).
   void PublishProgress();
 
@@ -99,6 +104,7 @@ class Receiver {
     partmodel::PartModel model;
   };
   std::optional<RunPart> pending_part_;
+  bool wake_ = false;            // something besides a segment arrived: the resting loop turns now
   std::optional<RunPart> part_;  // the loop thread's: applied when its run starts
 
   // The loop thread's run bookkeeping.
@@ -117,6 +123,7 @@ class Receiver {
   Alarm alarm_;
   bool dirty_ = true;
   TimePoint last_axes_{};
+  bool resting_ = false;          // the last turn found the machine resting
   bool feed_hold_ = false;        // the operator's hold, re-applied after every reset
   std::int32_t aborted_run_ = 0;  // cancelled by the operator: its later segments are dropped
 };
