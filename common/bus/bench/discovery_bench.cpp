@@ -2,6 +2,7 @@
 // (deploy/bench.d/80-discovery.sh). Not a test.
 //
 //   bus_discovery_bench [--runs N]
+//   bus_discovery_bench --join EXPECTED   (a running cell on CELL_DOMAIN: when a newcomer has heard it)
 //
 // For each stack S a server process runs (a state writer with one sample, and a request/reply server); for
 // each stack P, N fresh probe processes on P each measure, from the start of main(), (a) the first sample of
@@ -17,11 +18,15 @@
 #include <cstdio>
 #include <cstdlib>
 #include <map>
+#include <mutex>
+#include <set>
 #include <string>
 #include <thread>
 #include <vector>
 
 #include "cell/bus/bus.h"
+#include "cell/bus/topics.h"
+#include "cell/idl/health.h"
 #include "cell/idl/station.h"
 
 namespace bus = cell::bus;
@@ -107,8 +112,39 @@ std::string Stats(std::vector<double> v, double base) {
 
 }  // namespace
 
+// A newcomer joining a running cell (issue 43, a large cell): ms from main() until it has heard the first
+// and then every one of `expected` services' heartbeats (state topic cell/health, transient-local), and the
+// remote participants it knows at each step.
+int Join(int expected) {
+  bus::Participant p(bus::Named("discovery-bench-join"));
+  std::mutex mu;
+  std::set<std::string> heard;
+  bus::Reader<cell::ServiceHealth> r(p, bus::topics::kHealth, bus::QosKind::kState,
+                                     [&](const cell::ServiceHealth& h, const bus::SampleInfo&) {
+                                       std::lock_guard lk(mu);
+                                       heard.insert(h.service_id().to_string());
+                                     });
+  size_t last = 0;
+  for (int i = 0; i < 6000; ++i) {
+    size_t n;
+    {
+      std::lock_guard lk(mu);
+      n = heard.size();
+    }
+    if (n != last && (last == 0 || n / 10 != last / 10 || n >= static_cast<size_t>(expected)))
+      std::printf("%8.0f ms: %3zu services heard, %3d participants\n", MsSinceStart(), n,
+                  p.RemoteParticipants());
+    last = n;
+    if (n >= static_cast<size_t>(expected)) return 0;
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  std::printf("gave up after %.0f ms: %zu of %d services heard\n", MsSinceStart(), last, expected);
+  return 1;
+}
+
 int main(int argc, char** argv) {
   std::vector<std::string> a(argv, argv + argc);
+  if (a.size() == 3 && a[1] == "--join") return Join(std::atoi(a[2].c_str()));
   if (a.size() == 3 && a[1] == "--serve") return Serve(a[2]);
   if (a.size() == 4 && a[1] == "--probe") return Probe(a[2], a[3]);
   int runs = 10;

@@ -91,7 +91,7 @@ void AddStationLs(CLI::App& st, Context& ctx) {
     // longer than this process could); only without a scheduler does a grace period stand in for
     // discovery, under an overall bound.
     bool sched_seen = false;
-    std::set<std::string> sched_offline;  // stations a settled scheduler reports without a heartbeat
+    cell::dashboard::SchedulerView sched_view;  // what a settled scheduler says of each station
     // Nothing else on the domain, when cellctl may conclude that (Context::Bus): asked only once the
     // discovery window has passed, not on every pass of the loop.
     auto lone = [&] { return ctx.Bus().lone_means_down() && ctx.Bus().RemoteParticipants() == 0; };
@@ -107,18 +107,22 @@ void AddStationLs(CLI::App& st, Context& ctx) {
         sched_seen = true;
         backlog.clear();
         for (auto& b : sc->backlog()) backlog[b.station().to_string()] = b.backlog_s();
-        sched_offline = cell::dashboard::OfflineBySettledScheduler(*sc);
+        sched_view = cell::dashboard::SettledSchedulerView(*sc);
       }
       const auto heard = cell::dashboard::HeardStations(
-          ids, live, [&](const std::string& id) { return by_id.count(id) > 0; }, sched_offline);
+          ids, live, [&](const std::string& id) { return by_id.count(id) > 0; }, sched_view);
       bool waiting = heard == cell::dashboard::Heard::kWaiting;
       if (live.Online("cell-scheduler") && !sched_seen) waiting = true;
+      // Participants found whose heartbeats have not arrived yet, and no scheduler's word: discovery is still
+      // under way (a newcomer to a 68-process cell hears the last heartbeat seconds after the first).
+      if (!sched_seen && static_cast<int>(live.Snapshot().size()) < ctx.Bus().RemoteParticipants())
+        waiting = true;
       auto waited = std::chrono::steady_clock::now() - t0;
       if (waited >= bus::kLoneWindow && lone()) break;  // nothing on the domain
       if (!waiting &&
           (heard == cell::dashboard::Heard::kComplete || waited >= std::chrono::milliseconds(1500)))
         break;
-      if (waited >= std::chrono::milliseconds(4000)) break;
+      if (waited >= std::chrono::milliseconds(8000)) break;  // a large cell: discovery takes seconds
       std::this_thread::sleep_for(std::chrono::milliseconds(20));
     }
     // A table of offline stations would say the cell runs without them (issue 39 item 6): without its

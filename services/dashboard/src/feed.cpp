@@ -31,7 +31,7 @@ Feed::Feed(bus::Participant& p, CellView& view, FeedOptions opts)
                  std::lock_guard lk(mu_);
                  if (!backlog_seen_) backlog_at_ = std::chrono::steady_clock::now();
                  backlog_seen_ = true;
-                 sched_offline_ = OfflineBySettledScheduler(s);
+                 sched_ = SettledSchedulerView(s);
                }),
       alarms_(p, topics::kAlarm, bus::QosKind::kEvent,
               [this](const cell::Alarm& a, const bus::SampleInfo&) {
@@ -109,7 +109,7 @@ bool Feed::Settled(std::chrono::milliseconds waited) const {
   std::vector<std::string> ids;
   for (auto& st : view_.model().stations()) ids.push_back(st.id);
   const Heard heard = HeardStations(
-      ids, live_, [this](const std::string& id) { return status_seen_.count(id) > 0; }, sched_offline_);
+      ids, live_, [this](const std::string& id) { return status_seen_.count(id) > 0; }, sched_);
   if (heard == Heard::kWaiting) return false;
   if (live_.Online("cell-scheduler")) {
     // The scheduler's job states come from another writer of the same process: matched, and the moment
@@ -121,24 +121,24 @@ bool Feed::Settled(std::chrono::milliseconds waited) const {
 }
 
 Heard HeardStations(const std::vector<std::string>& ids, const health::Liveness& live,
-                    const std::function<bool(const std::string&)>& has_status,
-                    const std::set<std::string>& sched_offline) {
+                    const std::function<bool(const std::string&)>& has_status, const SchedulerView& sched) {
   Heard heard = Heard::kComplete;
   for (auto& id : ids) {
     if (live.StationOnline(id)) {
       if (!has_status(id)) return Heard::kWaiting;
-    } else if (!sched_offline.count(id)) {
+    } else if (sched.online.count(id)) {
+      return Heard::kWaiting;
+    } else if (!sched.offline.count(id)) {
       heard = Heard::kPartial;
     }
   }
   return heard;
 }
 
-std::set<std::string> OfflineBySettledScheduler(const cell::SchedulerState& s) {
-  std::set<std::string> out;
+SchedulerView SettledSchedulerView(const cell::SchedulerState& s) {
+  SchedulerView out;
   if (!s.settled()) return out;
-  for (auto& b : s.backlog())
-    if (!b.online()) out.insert(b.station().to_string());
+  for (auto& b : s.backlog()) (b.online() ? out.online : out.offline).insert(b.station().to_string());
   return out;
 }
 

@@ -28,6 +28,11 @@ struct FeedOptions {
   bool axes = true;  // cellctl watch does not plot, so it skips the 50 Hz telemetry
 };
 
+// What a settled scheduler says of each station (SettledSchedulerView).
+struct SchedulerView {
+  std::set<std::string> online, offline;  // by a settled scheduler's heartbeats; both empty before it settles
+};
+
 class Feed {
  public:
   Feed(bus::Participant& p, CellView& view, FeedOptions opts = {});
@@ -46,7 +51,7 @@ class Feed {
   mutable std::mutex mu_;
   std::set<std::string> status_seen_;
   bool backlog_seen_ = false;
-  std::set<std::string> sched_offline_;
+  SchedulerView sched_;
   std::chrono::steady_clock::time_point backlog_at_;
   health::Liveness live_;
   bus::Reader<cell::StationStatus> status_;
@@ -65,11 +70,12 @@ class Feed {
 // offline by a settled scheduler (only discovery time, or a grace period without a scheduler, tells);
 // kComplete: every station is known, so an absent one is offline without waiting for discovery.
 enum class Heard { kWaiting, kPartial, kComplete };
+// A station a settled scheduler reports online that this reader has not heard yet is kWaiting too: in a
+// large cell a newcomer discovers the stations over seconds, and the scheduler's word says one is coming.
 Heard HeardStations(const std::vector<std::string>& ids, const health::Liveness& live,
-                    const std::function<bool(const std::string&)>& has_status,
-                    const std::set<std::string>& sched_offline);
-// The stations a settled scheduler reports without a heartbeat (SchedulerState.settled: it has watched
-// longer than its discovery window).
-std::set<std::string> OfflineBySettledScheduler(const cell::SchedulerState& s);
+                    const std::function<bool(const std::string&)>& has_status, const SchedulerView& sched);
+// What a settled scheduler says of each station (SchedulerState.settled: it has watched longer than its
+// discovery window).
+SchedulerView SettledSchedulerView(const cell::SchedulerState& s);
 
 }  // namespace cell::dashboard
