@@ -1,0 +1,126 @@
+// The LinuxCNC differential (issue 33 item 1): random programs in a dialect's own syntax and the same
+// toolpath as RS-274/NGC, run through cell-interp and LinuxCNC's rs274, compared move by move
+// (docs/testing.md).
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace cell::oracle {
+
+using Vec3 = std::array<double, 3>;  // x y z
+
+// The modes a generated motion block runs in (the generator picks them; each module writes them its way).
+struct Modes {
+  bool inch = false;         // program unit
+  bool incremental = false;  // G91-like distances
+  int plane = 17;            // 17 XY, 18 ZX, 19 YZ
+  bool per_rev = false;      // feed per revolution
+  int offset = 0;            // work offset 0 (none) .. kOffsets-1
+};
+
+enum class MoveKind { kRapid, kLine, kArc };
+
+// One generated motion block. Positions are program coordinates in the program unit, x as a radius (a lathe
+// module writes diameters); every coordinate lies on the unit's grid, so both programs state it exactly.
+struct Block {
+  Modes m;
+  MoveKind kind = MoveKind::kLine;
+  Vec3 start{};  // where the block starts (program coordinates of this block's offset)
+  Vec3 end{};
+  Vec3 center{};  // arcs: the centre (the plane's two axes; the third is the start's)
+  bool cw = false;
+  bool radius_form = false;
+  double radius = 0;            // radius form: the radius (negative beyond 180 degrees)
+  int turns = 0;                // helix: extra full turns
+  double pitch = 0;             // helix: travel of the third axis per turn (Balt K), 0 without turns
+  double feed = 0;              // unit/min or unit/rev
+  bool force_absolute = false;  // after a unit or offset change the next block states absolute values
+};
+
+// The work offsets every program may select (mm; x a radius). Offset 0 is the machine zero.
+inline constexpr int kOffsets = 3;
+inline constexpr std::array<Vec3, kOffsets> kOffsetTable{
+    {{0, 0, 0}, {12.5, -20.25, 5}, {-35.125, 14.5, -7.75}}};
+
+// What a dialect has: the generator draws only from these.
+struct Caps {
+  bool lathe = false;       // X is a diameter, XZ plane only (G18), no Y
+  bool inch = true;         // has an inch unit form
+  bool incremental = true;  // G91 (or U/W) distances
+  std::vector<int> planes{17, 18, 19};
+  bool radius_form = true;   // arcs by R
+  bool helix = true;         // the plane's third axis may move along an arc
+  bool helix_turns = false;  // multi-turn helices (and how the dialect writes them)
+  bool per_rev = true;
+  bool offsets = true;
+  int mm_decimals = 3;  // the grid of a coordinate word
+  int inch_decimals = 4;
+  int feed_decimals = 1;  // per minute feeds
+};
+
+struct Program {
+  std::string dialect_text;                 // the program in the dialect's syntax
+  std::string ngc_text;                     // the same toolpath as NGC
+  std::string params;                       // cell-interp --params file text (empty: none)
+  std::vector<std::string> blocks_dialect;  // per motion block, its text in each form (for reports)
+  std::vector<std::string> blocks_ngc;
+  bool inch_anywhere = false;  // the 2e-3 tolerance applies
+};
+
+// A dialect module: writes a generated block list as a program of its own.
+class Module {
+ public:
+  virtual ~Module() = default;
+  virtual std::string Name() const = 0;       // cell-interp --dialect
+  virtual std::string Extension() const = 0;  // program file extension
+  virtual Caps Capabilities(std::uint64_t seed) const = 0;
+  virtual Program Write(const std::vector<Block>& blocks, std::uint64_t seed) const = 0;
+};
+
+const Module* FindModule(const std::string& name);
+std::vector<std::string> ModuleNames();  // in priority order: balt ktapl emco okuma
+
+// The random block list for a dialect's capabilities (deterministic for a seed).
+std::vector<Block> Generate(const Caps& caps, std::uint64_t seed, int count);
+
+// The NGC form of a block list (lathe: G7 G18, diameters).
+struct NgcText {
+  std::string text;
+  std::vector<std::string> blocks;
+};
+NgcText WriteNgc(const std::vector<Block>& blocks, const Caps& caps);
+
+// Number formatting shared by the modules: fixed decimals with trailing zeros dropped; `point` keeps a
+// trailing decimal point on whole numbers ("10.").
+std::string Num(double v, int decimals, bool point = false);
+
+// One move as both interpreters report it, machine coordinates in mm, x a radius.
+struct Move {
+  MoveKind kind = MoveKind::kLine;
+  Vec3 end{};
+  Vec3 center{};
+  int plane = 17;   // the NGC plane the arc is in
+  bool cw = false;  // seen from the plane's normal (G17 +Z, G18 +Y, G19 +X)
+  int turns = 0;
+  double feed = 0;  // mm/min or mm/rev
+  bool per_rev = false;
+  int line = 0;
+};
+
+std::vector<Move> ParseCellInterp(const std::string& json_lines, bool lathe, std::string* error);
+std::vector<Move> ParseRs274(const std::string& canon, bool lathe, std::string* error);
+
+// Compare the two lists; empty when they agree, else the first disagreement in words.
+struct Disagreement {
+  std::size_t index = 0;  // move index
+  std::string field;
+  std::string detail;
+};
+std::optional<Disagreement> Compare(const std::vector<Move>& cell, const std::vector<Move>& ngc, double tol);
+std::string Describe(const Move& m);
+
+}  // namespace cell::oracle

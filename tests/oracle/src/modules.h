@@ -1,0 +1,10 @@
+// The dialect modules (one file each) the registry in modules.cpp lists.
+#pragma once
+
+#include "cell/oracle/oracle.h"
+
+namespace cell::oracle {
+
+const Module& BaltModule();
+
+}  // namespace cell::oracle
