@@ -169,7 +169,8 @@ bool Gen::Arc(Block& b) {
     b.kind = MoveKind::kArc;
     b.center = c;
     b.end = e;
-    if (caps.radius_form && b.turns == 0 && std::fabs(angle - 180) > 2 && rng.Chance(30)) {
+    bool r_here = !caps.radius_form_g17_absolute || (cur.plane == 17 && !cur.incremental);
+    if (caps.radius_form && r_here && b.turns == 0 && std::fabs(angle - 180) > 2 && rng.Chance(30)) {
       b.radius_form = true;
       b.radius = angle > 180 ? -r * s : r * s;
     }

@@ -6,5 +6,6 @@
 namespace cell::oracle {
 
 const Module& BaltModule();
+const Module& KtaplModule();
 
 }  // namespace cell::oracle

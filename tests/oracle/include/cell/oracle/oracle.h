@@ -52,9 +52,10 @@ struct Caps {
   bool inch = true;         // has an inch unit form
   bool incremental = true;  // G91 (or U/W) distances
   std::vector<int> planes{17, 18, 19};
-  bool radius_form = true;   // arcs by R
-  bool helix = true;         // the plane's third axis may move along an arc
-  bool helix_turns = false;  // multi-turn helices (and how the dialect writes them)
+  bool radius_form = true;                // arcs by R
+  bool radius_form_g17_absolute = false;  // R only in G90 G17 (KT-APL)
+  bool helix = true;                      // the plane's third axis may move along an arc
+  bool helix_turns = false;               // multi-turn helices (and how the dialect writes them)
   bool per_rev = true;
   bool offsets = true;
   int mm_decimals = 3;  // the grid of a coordinate word
