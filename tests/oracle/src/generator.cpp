@@ -54,6 +54,7 @@ struct Gen {
   Modes cur;
   Vec3 machine{};  // mm
   bool need_abs = true;
+  bool offset_changed = false;
   Box box;
 
   double Unit() const { return cur.inch ? kMm : 1.0; }
@@ -98,13 +99,15 @@ struct Gen {
 };
 
 void Gen::ChangeModes() {
-  if (caps.inch && rng.Chance(4)) {
+  if (caps.inch && caps.unit_switch && rng.Chance(4)) {
     cur.inch = !cur.inch;
     need_abs = true;
   }
   if (caps.offsets && rng.Chance(4)) {
-    cur.offset = rng.Int(0, kOffsets - 1);
-    need_abs = true;
+    int o = rng.Int(0, kOffsets - 1);
+    offset_changed = o != cur.offset;
+    need_abs = need_abs || offset_changed;
+    cur.offset = o;
   }
   if (caps.incremental && rng.Chance(10)) cur.incremental = !cur.incremental;
   if (caps.planes.size() > 1 && rng.Chance(8)) cur.plane = rng.Pick(caps.planes);
@@ -185,6 +188,8 @@ Block Gen::Next() {
   b.m = cur;
   b.start = ToProgram(machine);
   int pick = rng.Int(1, 100);
+  if (offset_changed && caps.rapid_after_offset) pick = 1;
+  offset_changed = false;
   bool arc = !need_abs && pick > 55 && Arc(b);
   if (!arc) {
     b.kind = pick <= 15 ? MoveKind::kRapid : MoveKind::kLine;
@@ -224,8 +229,9 @@ std::string Num(double v, int decimals, bool point) {
 }
 
 std::vector<Block> Generate(const Caps& caps, std::uint64_t seed, int count) {
-  Gen g{caps, Rng{seed}, {}, {}, true, {}};
+  Gen g{caps, Rng{seed}, {}, {}, true, false, {}};
   g.cur.plane = caps.planes.front();
+  if (caps.inch && !caps.unit_switch) g.cur.inch = g.rng.Chance(30);
   if (caps.lathe)
     g.box = Box{{2, 0, -120}, {80, 0, 20}};
   else
@@ -274,7 +280,7 @@ NgcText WriteNgc(const std::vector<Block>& blocks, const Caps& caps) {
   t = "%\nG21 G90 G94 G40 G49 G80 G54 G17\n";
   for (int k = 1; k < kOffsets; ++k) {
     const Vec3& o = kOffsetTable[static_cast<std::size_t>(k)];
-    t += "G10 L2 P" + std::to_string(k + 1) + " X" + Num(caps.lathe ? 2 * o[0] : o[0], 6) + " Y" +
+    t += "G10 L2 P" + std::to_string(k + 1) + " X" + Num(o[0], 6) + " Y" +  // before G7: a radius
          Num(caps.lathe ? 0 : o[1], 6) + " Z" + Num(o[2], 6) + "\n";
   }
   if (caps.lathe) t += "G7 G18\n";

@@ -5,7 +5,7 @@ namespace cell::oracle {
 
 namespace {
 std::vector<const Module*> All() {
-  return {&BaltModule(), &KtaplModule()};
+  return {&BaltModule(), &KtaplModule(), &EmcoModule()};
 }
 }  // namespace
 

@@ -7,5 +7,6 @@ namespace cell::oracle {
 
 const Module& BaltModule();
 const Module& KtaplModule();
+const Module& EmcoModule();
 
 }  // namespace cell::oracle

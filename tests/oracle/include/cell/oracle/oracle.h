@@ -48,9 +48,11 @@ inline constexpr std::array<Vec3, kOffsets> kOffsetTable{
 
 // What a dialect has: the generator draws only from these.
 struct Caps {
-  bool lathe = false;       // X is a diameter, XZ plane only (G18), no Y
-  bool inch = true;         // has an inch unit form
-  bool incremental = true;  // G91 (or U/W) distances
+  bool lathe = false;               // X is a diameter, XZ plane only (G18), no Y
+  bool inch = true;                 // has an inch unit form
+  bool unit_switch = true;          // the unit may change mid-program (else one per program, by the seed)
+  bool rapid_after_offset = false;  // a work offset change needs a G00 next (EMCO ALARM 490)
+  bool incremental = true;          // G91 (or U/W) distances
   std::vector<int> planes{17, 18, 19};
   bool radius_form = true;                // arcs by R
   bool radius_form_g17_absolute = false;  // R only in G90 G17 (KT-APL)
