@@ -231,7 +231,7 @@ std::string Num(double v, int decimals, bool point) {
 std::vector<Block> Generate(const Caps& caps, std::uint64_t seed, int count) {
   Gen g{caps, Rng{seed}, {}, {}, true, false, {}};
   g.cur.plane = caps.planes.front();
-  if (caps.inch && !caps.unit_switch) g.cur.inch = g.rng.Chance(30);
+  if (caps.inch && !caps.unit_switch) g.cur.inch = caps.inch_only || g.rng.Chance(30);
   if (caps.lathe)
     g.box = Box{{2, 0, -120}, {80, 0, 20}};
   else

@@ -5,7 +5,7 @@ namespace cell::oracle {
 
 namespace {
 std::vector<const Module*> All() {
-  return {&BaltModule(), &KtaplModule(), &EmcoModule()};
+  return {&BaltModule(), &KtaplModule(), &EmcoModule(), &OkumaModule()};
 }
 }  // namespace
 

@@ -8,5 +8,6 @@ namespace cell::oracle {
 const Module& BaltModule();
 const Module& KtaplModule();
 const Module& EmcoModule();
+const Module& OkumaModule();
 
 }  // namespace cell::oracle

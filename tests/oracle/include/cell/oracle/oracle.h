@@ -51,6 +51,7 @@ struct Caps {
   bool lathe = false;               // X is a diameter, XZ plane only (G18), no Y
   bool inch = true;                 // has an inch unit form
   bool unit_switch = true;          // the unit may change mid-program (else one per program, by the seed)
+  bool inch_only = false;           // with unit_switch off: every program in inch (Okuma's inch systems)
   bool rapid_after_offset = false;  // a work offset change needs a G00 next (EMCO ALARM 490)
   bool incremental = true;          // G91 (or U/W) distances
   std::vector<int> planes{17, 18, 19};
