@@ -37,13 +37,6 @@ std::vector<std::array<int, 2>> Representations(int r) {
   return out;
 }
 
-// The plane's (first, second, normal) axis indices: G17 X Y Z, G18 Z X Y, G19 Y Z X.
-std::array<int, 3> PlaneAxes(int plane) {
-  if (plane == 18) return {2, 0, 1};
-  if (plane == 19) return {1, 2, 0};
-  return {0, 1, 2};
-}
-
 struct Box {
   Vec3 lo, hi;  // mm, machine coordinates
 };
@@ -110,7 +103,10 @@ void Gen::ChangeModes() {
     cur.offset = o;
   }
   if (caps.incremental && rng.Chance(10)) cur.incremental = !cur.incremental;
-  if (caps.planes.size() > 1 && rng.Chance(8)) cur.plane = rng.Pick(caps.planes);
+  if (caps.planes.size() > 1 && rng.Chance(8)) {
+    cur.plane = rng.Pick(caps.planes);
+    cur.swapped = caps.swapped_planes && rng.Chance(40);
+  }
   if (caps.per_rev && rng.Chance(6)) cur.per_rev = !cur.per_rev;
   if (need_abs) cur.incremental = false;
 }
@@ -131,7 +127,7 @@ bool Gen::Arc(Block& b) {
   static const std::vector<int> radii{5, 25, 65, 85};
   static const std::vector<double> mm_scale{0.05, 0.1, 0.2, 0.25, 0.5, 1.0};
   static const std::vector<double> in_scale{0.002, 0.004, 0.005, 0.01, 0.02, 0.04};
-  auto ax = PlaneAxes(cur.plane);
+  auto ax = AxesOf(cur);
   for (int tries = 0; tries < 20; ++tries) {
     int r = rng.Pick(radii);
     double s = cur.inch ? rng.Pick(in_scale) : rng.Pick(mm_scale);
@@ -139,7 +135,7 @@ bool Gen::Arc(Block& b) {
     if (rmm < 0.3 || rmm > 70) continue;
     auto reps = Representations(r);
     auto v1 = rng.Pick(reps), v2 = rng.Pick(reps);
-    if (v1 == v2) continue;
+    if (v1 == v2 && !caps.full_circle) continue;
     Vec3 c = b.start, e = b.start;
     c[ax[0]] = Snap(b.start[ax[0]] - v1[0] * s);
     c[ax[1]] = Snap(b.start[ax[1]] - v1[1] * s);
@@ -151,6 +147,7 @@ bool Gen::Arc(Block& b) {
                  180 / M_PI;
     if (ccw <= 0) ccw += 360;
     double angle = b.cw ? 360 - ccw : ccw;
+    if (angle <= 0) angle = 360;  // a full circle
     // The whole circle stays inside the travel (and a lathe's x above the centre line).
     Vec3 lo = c, hi = c;
     lo[ax[0]] -= r * s, hi[ax[0]] += r * s, lo[ax[1]] -= r * s, hi[ax[1]] += r * s;
@@ -173,7 +170,8 @@ bool Gen::Arc(Block& b) {
     b.center = c;
     b.end = e;
     bool r_here = !caps.radius_form_g17_absolute || (cur.plane == 17 && !cur.incremental);
-    if (caps.radius_form && r_here && b.turns == 0 && std::fabs(angle - 180) > 2 && rng.Chance(30)) {
+    if (caps.radius_form && r_here && b.turns == 0 && v1 != v2 && std::fabs(angle - 180) > 2 &&
+        rng.Chance(30)) {
       b.radius_form = true;
       b.radius = angle > 180 ? -r * s : r * s;
     }
@@ -206,6 +204,7 @@ Block Gen::Next() {
     need_abs = false;
   }
   if (b.kind != MoveKind::kRapid) b.feed = Feed();
+  if (rng.Chance(40)) b.omit = static_cast<unsigned>(rng.Next() & 63);
   machine = ToMachine(b.end);
   return b;
 }
@@ -217,6 +216,23 @@ std::string Fmt(double v, int decimals) {
 }
 
 }  // namespace
+
+std::array<int, 3> AxesOf(const Modes& m) {
+  std::array<int, 3> a{0, 1, 2};
+  if (m.plane == 18) a = {2, 0, 1};
+  if (m.plane == 19) a = {1, 2, 0};
+  if (m.swapped) std::swap(a[0], a[1]);
+  return a;
+}
+
+bool OmitAxis(const Block& b, int axis) {
+  return (b.omit & (1u << axis)) && !b.radius_form && b.end[axis] == b.start[axis];
+}
+
+bool OmitCentre(const Block& b, int axis) {
+  return (b.omit & (8u << axis)) && b.kind == MoveKind::kArc && !b.radius_form &&
+         b.center[axis] == b.start[axis];
+}
 
 std::string Num(double v, int decimals, bool point) {
   std::string s = Fmt(v, decimals);
@@ -249,11 +265,11 @@ std::string NgcMove(const Block& b, const Caps& caps) {
   const int d = 6;
   std::string s;
   auto word = [&](char letter, double v) { s += " " + std::string(1, letter) + Num(v, d); };
-  auto ax = PlaneAxes(b.m.plane);
+  auto ax = AxesOf(b.m);
   const char* letters = "XYZ";
   if (b.kind == MoveKind::kRapid) s = "G0";
   if (b.kind == MoveKind::kLine) s = "G1";
-  if (b.kind == MoveKind::kArc) s = b.cw ? "G2" : "G3";
+  if (b.kind == MoveKind::kArc) s = b.cw != b.m.swapped ? "G2" : "G3";  // seen from the plane's normal
   for (int i = 0; i < 3; ++i) {
     if (caps.lathe && i == 1) continue;
     double v = b.m.incremental ? b.end[i] - b.start[i] : b.end[i];

@@ -15,6 +15,8 @@ class Balt final : public Module {
   Caps Capabilities(std::uint64_t) const override {
     Caps c;
     c.helix_turns = true;
+    c.swapped_planes = true;  // (DPI,a,o), judgement call 39
+    c.full_circle = true;     // ln 2732-2788
     return c;
   }
   Program Write(const std::vector<Block>& blocks, std::uint64_t seed) const override;
@@ -26,13 +28,13 @@ std::string Coord(const Block& b, double v) {
 
 // The motion words of one block.
 std::string Motion(const Block& b) {
-  static const std::array<std::array<int, 3>, 3> axes{{{0, 1, 2}, {2, 0, 1}, {1, 2, 0}}};
-  const auto& ax = axes[static_cast<std::size_t>(b.m.plane - 17)];
+  const auto ax = AxesOf(b.m);
   const char* letters = "XYZ";
   std::string s = b.kind == MoveKind::kRapid ? "G0" : b.kind == MoveKind::kLine ? "G1" : b.cw ? "G2" : "G3";
   for (int i = 0; i < 3; ++i) {
     bool moves = b.end[i] != b.start[i];
     if (b.kind == MoveKind::kArc && i == ax[2] && !moves) continue;
+    if (OmitAxis(b, i)) continue;  // an axis not programmed stays (ln 2680-2682)
     s += " " + std::string(1, letters[i]) + Coord(b, b.m.incremental ? b.end[i] - b.start[i] : b.end[i]);
   }
   if (b.kind == MoveKind::kArc) {
@@ -65,7 +67,12 @@ Program Balt::Write(const std::vector<Block>& blocks, std::uint64_t) const {
     if (b.m.offset != m.offset) pre += "(UAO," + std::to_string(b.m.offset) + ")\n";
     if (b.m.incremental != m.incremental) pre += b.m.incremental ? "G91\n" : "G90\n";
     if (b.m.per_rev != m.per_rev) pre += b.m.per_rev ? "G95\n" : "G94\n";
-    if (b.m.plane != m.plane) pre += "G" + std::to_string(b.m.plane) + "\n";
+    if (b.m.plane != m.plane || b.m.swapped != m.swapped) {
+      auto ax = AxesOf(b.m);
+      const char* letters = "XYZ";
+      pre += b.m.swapped ? std::string("(DPI,") + letters[ax[0]] + "," + letters[ax[1]] + ")\n"
+                         : "G" + std::to_string(b.m.plane) + "\n";
+    }
     p.inch_anywhere = p.inch_anywhere || b.m.inch;
     m = b.m;
     std::string line = Motion(b);

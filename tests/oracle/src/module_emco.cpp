@@ -46,11 +46,14 @@ std::string Motion(const Block& b, unsigned form) {
                   : b.kind == MoveKind::kLine ? "G01"
                   : b.cw                      ? "G02"
                                               : "G03";
-  if (b.m.incremental) {
-    s += " U" + Coord(b, b.end[0] - b.start[0], form & 1) + " W" + Coord(b, b.end[2] - b.start[2], form & 2);
-  } else {
-    s += " X" + Coord(b, 2 * b.end[0], form & 1) + " Z" + Coord(b, b.end[2], form & 2);
-  }
+  // X and Z keep their values between blocks (ln 1197-1210): a line may leave out an axis that stays.
+  bool line = b.kind != MoveKind::kArc;
+  if (!(line && OmitAxis(b, 0)))
+    s += b.m.incremental ? " U" + Coord(b, b.end[0] - b.start[0], form & 1)
+                         : " X" + Coord(b, 2 * b.end[0], form & 1);
+  if (!(line && OmitAxis(b, 2)))
+    s += b.m.incremental ? " W" + Coord(b, b.end[2] - b.start[2], form & 2)
+                         : " Z" + Coord(b, b.end[2], form & 2);
   if (b.kind == MoveKind::kArc)
     s += " I" + Coord(b, b.center[0] - b.start[0], form & 4) + " K" +
          Coord(b, b.center[2] - b.start[2], form & 8);

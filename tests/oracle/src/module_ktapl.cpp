@@ -16,6 +16,7 @@ class Ktapl final : public Module {
   Caps Capabilities(std::uint64_t) const override {
     Caps c;
     c.radius_form_g17_absolute = true;
+    c.full_circle = true;
     c.per_rev = false;  // G93 inverse time and G94 only
     c.offsets = false;  // fixture offsets (FXC) not generated yet
     return c;
@@ -39,6 +40,7 @@ std::string Motion(const Block& b) {
   for (int i = 0; i < 3; ++i) {
     bool moves = b.end[i] != b.start[i];
     if (b.kind == MoveKind::kArc && i == ax[2] && !moves) continue;
+    if (OmitAxis(b, i)) continue;
     s += std::string(1, letters[i]) + Coord(b, b.m.incremental ? b.end[i] - b.start[i] : b.end[i]);
   }
   if (b.kind == MoveKind::kArc) {
@@ -46,8 +48,9 @@ std::string Motion(const Block& b) {
       s += "R" + Coord(b, b.radius);
     } else {
       for (int k = 0; k < 2; ++k)
-        s += std::string(1, centre[ax[k]]) +
-             Coord(b, b.center[ax[k]] - (b.m.incremental ? b.start[ax[k]] : 0));
+        if (!OmitCentre(b, ax[k]))  // a missing centre word is the start's coordinate (judgement call 8)
+          s += std::string(1, centre[ax[k]]) +
+               Coord(b, b.center[ax[k]] - (b.m.incremental ? b.start[ax[k]] : 0));
     }
   }
   s += b.kind == MoveKind::kRapid ? "F0" : "F" + Num(b.feed, 1, true);

@@ -69,12 +69,16 @@ std::string Motion(const UnitSystem& u, const Block& b) {
   if (b.kind == MoveKind::kArc && b.radius_form && b.radius < 0) s += " CALRG";
   double x = 2 * (b.m.incremental ? b.end[0] - b.start[0] : b.end[0]);
   double z = b.m.incremental ? b.end[2] - b.start[2] : b.end[2];
-  s += " X" + Word(u, x) + " Z" + Word(u, z);
+  // A line may leave out an axis that stays; an arc keeps both (one quadrant only without, ln 1296).
+  bool line = b.kind != MoveKind::kArc;
+  if (!(line && OmitAxis(b, 0))) s += " X" + Word(u, x);
+  if (!(line && OmitAxis(b, 2))) s += " Z" + Word(u, z);
   if (b.kind == MoveKind::kArc) {
     if (b.radius_form)
       s += " L" + Word(u, std::fabs(b.radius));
     else
-      s += " I" + Word(u, b.center[0] - b.start[0]) + " K" + Word(u, b.center[2] - b.start[2]);
+      for (int a : {0, 2})  // I or K left out is 0 (ln 1293)
+        if (!OmitCentre(b, a)) s += (a == 0 ? " I" : " K") + Word(u, b.center[a] - b.start[a]);
   }
   if (b.kind != MoveKind::kRapid) s += " F" + Feed(u, b);
   return s;

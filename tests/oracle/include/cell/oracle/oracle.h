@@ -18,6 +18,7 @@ struct Modes {
   bool inch = false;         // program unit
   bool incremental = false;  // G91-like distances
   int plane = 17;            // 17 XY, 18 ZX, 19 YZ
+  bool swapped = false;      // the plane's two axes in the other order (Balt-System (DPI,X,Z) is ZX swapped)
   bool per_rev = false;      // feed per revolution
   int offset = 0;            // work offset 0 (none) .. kOffsets-1
 };
@@ -34,11 +35,12 @@ struct Block {
   Vec3 center{};  // arcs: the centre (the plane's two axes; the third is the start's)
   bool cw = false;
   bool radius_form = false;
-  double radius = 0;            // radius form: the radius (negative beyond 180 degrees)
-  int turns = 0;                // helix: extra full turns
-  double pitch = 0;             // helix: travel of the third axis per turn (Balt K), 0 without turns
-  double feed = 0;              // unit/min or unit/rev
-  bool force_absolute = false;  // after a unit or offset change the next block states absolute values
+  double radius = 0;  // radius form: the radius (negative beyond 180 degrees)
+  int turns = 0;      // helix: extra full turns
+  double pitch = 0;   // helix: travel of the third axis per turn (Balt K), 0 without turns
+  double feed = 0;    // unit/min or unit/rev
+  unsigned omit =
+      0;  // words a module may leave out where they change nothing: bits 0-2 axis x y z, 3-5 centre
 };
 
 // The work offsets every program may select (mm; x a radius). Offset 0 is the machine zero.
@@ -55,6 +57,8 @@ struct Caps {
   bool rapid_after_offset = false;  // a work offset change needs a G00 next (EMCO ALARM 490)
   bool incremental = true;          // G91 (or U/W) distances
   std::vector<int> planes{17, 18, 19};
+  bool swapped_planes = false;            // planes with their axes in either order
+  bool full_circle = false;               // a centre-form arc may end where it starts
   bool radius_form = true;                // arcs by R
   bool radius_form_g17_absolute = false;  // R only in G90 G17 (KT-APL)
   bool helix = true;                      // the plane's third axis may move along an arc
@@ -84,6 +88,14 @@ class Module {
   virtual Caps Capabilities(std::uint64_t seed) const = 0;
   virtual Program Write(const std::vector<Block>& blocks, std::uint64_t seed) const = 0;
 };
+
+// The (first, second, normal) axis indices of a block's plane: G17 X Y Z, G18 Z X Y, G19 Y Z X, the first two
+// exchanged when swapped.
+std::array<int, 3> AxesOf(const Modes& m);
+// Whether a module may leave out axis word `axis` (absolute: the value is the start's; incremental: 0) or the
+// centre word of `axis` (its offset from the start is 0), as the block's omit bits allow.
+bool OmitAxis(const Block& b, int axis);
+bool OmitCentre(const Block& b, int axis);
 
 const Module* FindModule(const std::string& name);
 std::vector<std::string> ModuleNames();  // in priority order: balt ktapl emco okuma
