@@ -9,6 +9,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -101,7 +102,12 @@ std::string FindRs274(const std::string& given) {
 std::uint64_t ProgramSeed(std::uint64_t seed, const std::string& dialect, int index) {
   std::uint64_t h = seed * 0x100000001B3ull;
   for (char c : dialect) h = (h ^ static_cast<unsigned char>(c)) * 0x100000001B3ull;
-  return h + static_cast<std::uint64_t>(index) * 0x9E3779B97F4A7C15ull;
+  // Mixed (murmur's finaliser): seeds a fixed step apart would give the generator's splitmix sequence
+  // shifted.
+  std::uint64_t z = h ^ (static_cast<std::uint64_t>(index) * 0xD6E8FEB86659FD93ull);
+  z = (z ^ (z >> 33)) * 0xFF51AFD7ED558CCDull;
+  z = (z ^ (z >> 33)) * 0xC4CEB9FE1A85EC53ull;
+  return z ^ (z >> 33);
 }
 
 struct Written {
@@ -127,6 +133,19 @@ Written WriteProgram(const Module& mod, std::uint64_t seed, int count, const fs:
   return w;
 }
 
+// The generated block a line of the dialect program belongs to (the header comes first, the end block last).
+std::size_t BlockOfLine(const Program& p, int line) {
+  auto lines = [](const std::string& t) { return static_cast<int>(std::count(t.begin(), t.end(), '\n')); };
+  int first = lines(p.dialect_text) - 1;
+  for (const auto& b : p.blocks_dialect) first -= lines(b) + 1;
+  int at = first + 1;  // 1-based line of block 0
+  for (std::size_t i = 0; i < p.blocks_dialect.size(); ++i) {
+    at += lines(p.blocks_dialect[i]) + 1;
+    if (line < at) return i;
+  }
+  return p.blocks_dialect.size();
+}
+
 struct Tally {
   long moves = 0, agreeing = 0;
   int programs = 0, disagreeing = 0;
@@ -135,6 +154,7 @@ struct Tally {
 // Runs both interpreters on one program; the agreeing moves are counted up to the first disagreement.
 bool CheckProgram(const Options& o, const Module& mod, const std::string& rs274, std::uint64_t seed,
                   int count, const fs::path& dir, Tally& t) {
+  for (const char* f : {"cell.out", "cell.err", "canon.out", "rs274.log"}) fs::remove(dir / f);
   Written w = WriteProgram(mod, seed, count, dir / "prog");
   std::string args =
       " --dialect " + mod.Name() + (w.params_file.empty() ? "" : " --params " + Quote(w.params_file));
@@ -148,6 +168,8 @@ bool CheckProgram(const Options& o, const Module& mod, const std::string& rs274,
   std::string err;
   auto cell = ParseCellInterp(Slurp(dir / "cell.out"), lathe, &err);
   auto ngc = ParseRs274(Slurp(dir / "canon.out"), lathe, &err);
+  DropStill(cell);
+  DropStill(ngc);
   if (o.plant && ngc.size() > 5) ngc[5].end[0] += 0.01;  // shows the comparer fails on a wrong value
   std::string log = Slurp(dir / "rs274.log");
   std::optional<Disagreement> d;
@@ -167,11 +189,10 @@ bool CheckProgram(const Options& o, const Module& mod, const std::string& rs274,
   }
   t.agreeing += static_cast<long>(d->index);
   if (t.disagreeing++ < o.show) {
-    auto block = [&](const std::vector<std::string>& v) {
-      return d->index < v.size() ? v[d->index] : "(none)";
-    };
-    std::cout << mod.Name() << ": program seed " << seed << ", block " << d->index + 1 << ": " << d->field
-              << " differs\n  " << mod.Name() << ": " << block(w.program.blocks_dialect)
+    std::size_t bi = d->index < cell.size() ? BlockOfLine(w.program, cell[d->index].line) : d->index;
+    auto block = [&](const std::vector<std::string>& v) { return bi < v.size() ? v[bi] : "(none)"; };
+    std::cout << mod.Name() << ": program seed " << seed << ", move " << d->index + 1 << " (block " << bi + 1
+              << "): " << d->field << " differs\n  " << mod.Name() << ": " << block(w.program.blocks_dialect)
               << "\n  NGC:  " << block(w.program.blocks_ngc) << "\n  " << d->detail << "\n";
     if (!o.keep.empty()) {
       fs::create_directories(o.keep);

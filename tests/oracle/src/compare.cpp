@@ -156,6 +156,18 @@ std::vector<Move> ParseRs274(const std::string& canon, bool lathe, std::string* 
   return out;
 }
 
+void DropStill(std::vector<Move>& moves) {
+  Vec3 pos{};
+  std::vector<Move> kept;
+  for (const Move& m : moves) {
+    bool still = m.kind == MoveKind::kRapid && std::fabs(m.end[0] - pos[0]) < 1e-9 &&
+                 std::fabs(m.end[1] - pos[1]) < 1e-9 && std::fabs(m.end[2] - pos[2]) < 1e-9;
+    pos = m.end;
+    if (!still) kept.push_back(m);
+  }
+  moves.swap(kept);
+}
+
 std::string Describe(const Move& m) {
   char buf[256];
   const char* kind = m.kind == MoveKind::kRapid ? "rapid" : m.kind == MoveKind::kArc ? "arc" : "linear";

@@ -88,6 +88,7 @@ struct Gen {
   void ChangeModes();
   double Feed();
   bool Arc(Block& b);
+  bool Cycle(Block& b);
   Block Next();
 };
 
@@ -180,6 +181,27 @@ bool Gen::Arc(Block& b) {
   return false;
 }
 
+// A drilling cycle at one to four holes: R below the start (no preliminary move), the bottom below R.
+bool Gen::Cycle(Block& b) {
+  const std::vector<int>& codes = cur.per_rev ? caps.cycles_per_rev : caps.cycles;
+  if (codes.empty() || cur.plane != 17 || cur.swapped || cur.incremental || need_abs || !rng.Chance(6))
+    return false;
+  b.kind = MoveKind::kCycle;
+  b.cycle = rng.Pick(codes);
+  b.r_level = b.start[2] - Snap(rng.Int(0, 50) / 10.0 / Unit());
+  b.bottom = b.r_level - Snap(rng.Int(10, 200) / 10.0 / Unit());
+  Vec3 deep = b.start;
+  deep[2] = b.bottom;
+  if (!Inside(deep)) return false;
+  int n = rng.Int(1, 4);
+  for (int i = 0; i < n; ++i) {
+    Vec3 p = RandomPoint();
+    b.holes.push_back({p[0], p[1]});
+  }
+  b.end = {b.holes.back()[0], b.holes.back()[1], b.r_level};
+  return true;
+}
+
 Block Gen::Next() {
   ChangeModes();
   Block b;
@@ -189,7 +211,8 @@ Block Gen::Next() {
   if (offset_changed && caps.rapid_after_offset) pick = 1;
   offset_changed = false;
   bool arc = !need_abs && pick > 55 && Arc(b);
-  if (!arc) {
+  bool cycle = !arc && Cycle(b);
+  if (!arc && !cycle) {
     b.kind = pick <= 15 ? MoveKind::kRapid : MoveKind::kLine;
     b.end = RandomPoint();
     if (cur.incremental && rng.Chance(70)) {  // a short step, still inside
@@ -270,6 +293,18 @@ std::string NgcMove(const Block& b, const Caps& caps) {
   if (b.kind == MoveKind::kRapid) s = "G0";
   if (b.kind == MoveKind::kLine) s = "G1";
   if (b.kind == MoveKind::kArc) s = b.cw != b.m.swapped ? "G2" : "G3";  // seen from the plane's normal
+  if (b.kind == MoveKind::kCycle) {
+    s = "G99 G" + std::to_string(b.cycle);
+    for (std::size_t h = 0; h < b.holes.size(); ++h) {
+      s += " X" + Num(b.holes[h][0], d) + " Y" + Num(b.holes[h][1], d);
+      if (h == 0) {
+        s += " Z" + Num(b.bottom, d) + " R" + Num(b.r_level, d) + " F" + Num(b.feed, d);
+        if (b.cycle == 82 || b.cycle == 86 || b.cycle == 89) s += " P1";  // rs274 asks P of G86 too
+      }
+      s += "\n";
+    }
+    return s + "G80";
+  }
   for (int i = 0; i < 3; ++i) {
     if (caps.lathe && i == 1) continue;
     double v = b.m.incremental ? b.end[i] - b.start[i] : b.end[i];

@@ -23,7 +23,7 @@ struct Modes {
   int offset = 0;            // work offset 0 (none) .. kOffsets-1
 };
 
-enum class MoveKind { kRapid, kLine, kArc };
+enum class MoveKind { kRapid, kLine, kArc, kCycle };
 
 // One generated motion block. Positions are program coordinates in the program unit, x as a radius (a lathe
 // module writes diameters); every coordinate lies on the unit's grid, so both programs state it exactly.
@@ -35,10 +35,14 @@ struct Block {
   Vec3 center{};  // arcs: the centre (the plane's two axes; the third is the start's)
   bool cw = false;
   bool radius_form = false;
-  double radius = 0;  // radius form: the radius (negative beyond 180 degrees)
-  int turns = 0;      // helix: extra full turns
-  double pitch = 0;   // helix: travel of the third axis per turn (Balt K), 0 without turns
-  double feed = 0;    // unit/min or unit/rev
+  double radius = 0;   // radius form: the radius (negative beyond 180 degrees)
+  int turns = 0;       // helix: extra full turns
+  double pitch = 0;    // helix: travel of the third axis per turn (Balt K), 0 without turns
+  double feed = 0;     // unit/min or unit/rev
+  int cycle = 0;       // kCycle: 81 82 85 86 89 at each of `holes` (x y), from the R plane to `bottom`
+  double r_level = 0;  // kCycle: the R plane; the tool returns there after each hole (G99)
+  double bottom = 0;
+  std::vector<std::array<double, 2>> holes;
   unsigned omit =
       0;  // words a module may leave out where they change nothing: bits 0-2 axis x y z, 3-5 centre
 };
@@ -57,9 +61,11 @@ struct Caps {
   bool rapid_after_offset = false;  // a work offset change needs a G00 next (EMCO ALARM 490)
   bool incremental = true;          // G91 (or U/W) distances
   std::vector<int> planes{17, 18, 19};
-  bool swapped_planes = false;            // planes with their axes in either order
-  bool full_circle = false;               // a centre-form arc may end where it starts
-  bool radius_form = true;                // arcs by R
+  bool swapped_planes = false;      // planes with their axes in either order
+  bool full_circle = false;         // a centre-form arc may end where it starts
+  std::vector<int> cycles;          // drilling cycles against LinuxCNC's G81-G89 (G17, G90, G99 retract)
+  std::vector<int> cycles_per_rev;  // those allowed in feed per revolution
+  bool radius_form = true;          // arcs by R
   bool radius_form_g17_absolute = false;  // R only in G90 G17 (KT-APL)
   bool helix = true;                      // the plane's third axis may move along an arc
   bool helix_turns = false;               // multi-turn helices (and how the dialect writes them)
@@ -126,6 +132,14 @@ struct Move {
   bool per_rev = false;
   int line = 0;
 };
+
+// Drops the moves that go nowhere (a cycle's rapid to the R plane it is already on: rs274 states it, a
+// dialect may not).
+void DropStill(std::vector<Move>& moves);
+
+// Drops the moves that go nowhere (a cycle's rapid to the R plane it is already on: rs274 states it, a
+// dialect may not).
+void DropStill(std::vector<Move>& moves);
 
 std::vector<Move> ParseCellInterp(const std::string& json_lines, bool lathe, std::string* error);
 std::vector<Move> ParseRs274(const std::string& canon, bool lathe, std::string* error);
