@@ -160,7 +160,7 @@ void DropStill(std::vector<Move>& moves) {
   Vec3 pos{};
   std::vector<Move> kept;
   for (const Move& m : moves) {
-    bool still = m.kind == MoveKind::kRapid && std::fabs(m.end[0] - pos[0]) < 1e-9 &&
+    bool still = m.kind != MoveKind::kArc && std::fabs(m.end[0] - pos[0]) < 1e-9 &&
                  std::fabs(m.end[1] - pos[1]) < 1e-9 && std::fabs(m.end[2] - pos[2]) < 1e-9;
     pos = m.end;
     if (!still) kept.push_back(m);

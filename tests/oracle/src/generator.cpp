@@ -220,7 +220,7 @@ Block Gen::Next() {
         if (caps.lathe && i == 1) continue;
         b.end[i] = b.start[i] + Snap(rng.Int(-300, 300) / 10.0 / Unit());
       }
-      if (!Inside(b.end)) b.end = RandomPoint();
+      if (!Inside(b.end) || b.end == b.start) b.end = RandomPoint();
     }
     // An incremental step from an off-grid start would round: the first move after a change is absolute.
     if (caps.lathe) b.end[1] = 0;

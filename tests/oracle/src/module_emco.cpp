@@ -54,9 +54,14 @@ std::string Motion(const Block& b, unsigned form) {
   if (!(line && OmitAxis(b, 2)))
     s += b.m.incremental ? " W" + Coord(b, b.end[2] - b.start[2], form & 2)
                          : " Z" + Coord(b, b.end[2], form & 2);
-  if (b.kind == MoveKind::kArc)
-    s += " I" + Coord(b, b.center[0] - b.start[0], form & 4) + " K" +
-         Coord(b, b.center[2] - b.start[2], form & 8);
+  if (b.kind == MoveKind::kArc) {
+    // The centre word of the axis with the longer travel may be left to the control (judgement 5, ln
+    // 2140-2149); only where one travel is over twice the other, so radius and diameter readings agree.
+    double tx = std::fabs(b.end[0] - b.start[0]), tz = std::fabs(b.end[2] - b.start[2]);
+    bool derive = (b.omit & 8u) != 0;
+    if (!(derive && tx > 2 * tz)) s += " I" + Coord(b, b.center[0] - b.start[0], form & 4);
+    if (!(derive && tz > 2 * tx)) s += " K" + Coord(b, b.center[2] - b.start[2], form & 8);
+  }
   if (b.kind != MoveKind::kRapid) s += " F" + Feed(b);
   return s;
 }

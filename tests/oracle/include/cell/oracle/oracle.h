@@ -133,11 +133,11 @@ struct Move {
   int line = 0;
 };
 
-// Drops the moves that go nowhere (a cycle's rapid to the R plane it is already on: rs274 states it, a
+// Drops the lines that go nowhere (a cycle's rapid to the R plane it is already on: rs274 states it, a
 // dialect may not).
 void DropStill(std::vector<Move>& moves);
 
-// Drops the moves that go nowhere (a cycle's rapid to the R plane it is already on: rs274 states it, a
+// Drops the lines that go nowhere (a cycle's rapid to the R plane it is already on: rs274 states it, a
 // dialect may not).
 void DropStill(std::vector<Move>& moves);
 
