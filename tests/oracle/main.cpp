@@ -162,7 +162,9 @@ bool CheckProgram(const Options& o, const Module& mod, const std::string& rs274,
                  " 2>" + Quote(dir / "cell.err"));
   Spit(dir / "tool.tbl", "");
   Spit(dir / "rs274ngc.var", "");
-  Shell("cd " + Quote(dir) + " && " + Quote(rs274) +
+  // HOME: rs274 maps its tool table at $HOME/.tool.mmap (truncated at start), so two runs with one HOME
+  // die of SIGBUS; each run gets its own.
+  Shell("cd " + Quote(dir) + " && HOME=" + Quote(dir) + " " + Quote(rs274) +
         " -g -t tool.tbl -v rs274ngc.var prog.ngc canon.out >rs274.log 2>&1");
   bool lathe = mod.Capabilities(seed).lathe;
   std::string err;
