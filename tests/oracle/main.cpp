@@ -172,6 +172,7 @@ bool CheckProgram(const Options& o, const Module& mod, const std::string& rs274,
   auto ngc = ParseRs274(Slurp(dir / "canon.out"), lathe, &err);
   DropStill(cell);
   DropStill(ngc);
+  InverseToPerMinute(cell);
   if (o.plant && ngc.size() > 5) ngc[5].end[0] += 0.01;  // shows the comparer fails on a wrong value
   std::string log = Slurp(dir / "rs274.log");
   std::optional<Disagreement> d;

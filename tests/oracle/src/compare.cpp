@@ -10,6 +10,9 @@
 namespace cell::oracle {
 namespace {
 
+// LinuxCNC raises an inverse-time move's rate to 0.1 in/min at least; a slower one is not compared.
+constexpr double kInverseFloor = 2.54;
+
 // cell-interp's plane names: the NGC plane and whether the pair is that plane's reverse (seen from the other
 // side, so the sense flips; DESIGN §4).
 bool PlaneOf(const std::string& name, int* plane, bool* flipped) {
@@ -34,6 +37,7 @@ Move CellMove(const nlohmann::json& j, bool lathe, Vec3& pos) {
   m.end = pos;
   m.feed = j.value("f", 0.0);
   m.per_rev = j.value("f_mode", std::string()) == "per_rev";
+  m.inverse = j.value("f_mode", std::string()) == "inverse_time";
   if (m.kind == MoveKind::kArc) {
     for (int i = 0; i < 3; ++i) m.center[i] = j["center"][static_cast<std::size_t>(i)].get<double>();
     if (lathe) m.center[0] /= 2;
@@ -168,6 +172,32 @@ void DropStill(std::vector<Move>& moves) {
   moves.swap(kept);
 }
 
+void InverseToPerMinute(std::vector<Move>& moves) {
+  Vec3 pos{};
+  for (Move& m : moves) {
+    if (m.inverse) {
+      double len = 0;
+      if (m.kind == MoveKind::kArc) {
+        static const std::array<std::array<int, 3>, 3> order{{{0, 1, 2}, {2, 0, 1}, {1, 2, 0}}};
+        const auto& o = order[static_cast<std::size_t>(m.plane - 17)];
+        double r = std::hypot(pos[o[0]] - m.center[o[0]], pos[o[1]] - m.center[o[1]]);
+        double a0 = std::atan2(pos[o[1]] - m.center[o[1]], pos[o[0]] - m.center[o[0]]);
+        double a1 = std::atan2(m.end[o[1]] - m.center[o[1]], m.end[o[0]] - m.center[o[0]]);
+        double sweep = m.cw ? a0 - a1 : a1 - a0;
+        while (sweep <= 1e-12) sweep += 2 * M_PI;
+        sweep += 2 * M_PI * m.turns;
+        len = std::hypot(r * sweep, m.end[o[2]] - pos[o[2]]);
+      } else {
+        len = std::hypot(std::hypot(m.end[0] - pos[0], m.end[1] - pos[1]), m.end[2] - pos[2]);
+      }
+      m.feed *= len;
+      m.inverse = false;
+      m.below_floor = m.feed < kInverseFloor;
+    }
+    pos = m.end;
+  }
+}
+
 std::string Describe(const Move& m) {
   char buf[256];
   const char* kind = m.kind == MoveKind::kRapid ? "rapid" : m.kind == MoveKind::kArc ? "arc" : "linear";
@@ -203,7 +233,8 @@ std::optional<std::string> FirstField(const Move& c, const Move& n, double tol) 
   }
   if (c.kind != MoveKind::kRapid) {
     if (c.per_rev != n.per_rev) return "feed mode";
-    if (std::fabs(c.feed - n.feed) > tol) return "feed";
+    bool floored = c.below_floor && std::fabs(n.feed - kInverseFloor) < tol;
+    if (std::fabs(c.feed - n.feed) > tol && !floored) return "feed";
   }
   return std::nullopt;
 }

@@ -108,11 +108,16 @@ void Gen::ChangeModes() {
     cur.plane = rng.Pick(caps.planes);
     cur.swapped = caps.swapped_planes && rng.Chance(40);
   }
-  if (caps.per_rev && rng.Chance(6)) cur.per_rev = !cur.per_rev;
+  if (rng.Chance(6)) {  // the feed mode: per minute, per revolution or inverse time, as the dialect has them
+    int pick = rng.Int(0, 2);
+    cur.per_rev = caps.per_rev && pick == 1;
+    cur.inverse = caps.inverse_time && pick == 2;
+  }
   if (need_abs) cur.incremental = false;
 }
 
 double Gen::Feed() {
+  if (cur.inverse) return rng.Int(5, 300) / 10.0;  // 1/min, one decimal
   if (cur.per_rev) {
     static const std::vector<double> mm{0.05, 0.1, 0.15, 0.2, 0.25, 0.3};
     static const std::vector<double> in{0.01, 0.02, 0.03};
@@ -136,7 +141,8 @@ bool Gen::Arc(Block& b) {
     if (rmm < 0.3 || rmm > 70) continue;
     auto reps = Representations(r);
     auto v1 = rng.Pick(reps), v2 = rng.Pick(reps);
-    if (v1 == v2 && !caps.full_circle) continue;
+    // rs274 times a whole-circle helix in G93 by its depth alone (its arc length of a full turn is 0).
+    if (v1 == v2 && (!caps.full_circle || cur.inverse)) continue;
     Vec3 c = b.start, e = b.start;
     c[ax[0]] = Snap(b.start[ax[0]] - v1[0] * s);
     c[ax[1]] = Snap(b.start[ax[1]] - v1[1] * s);
@@ -184,7 +190,8 @@ bool Gen::Arc(Block& b) {
 // A drilling cycle at one to four holes: R below the start (no preliminary move), the bottom below R.
 bool Gen::Cycle(Block& b) {
   const std::vector<int>& codes = cur.per_rev ? caps.cycles_per_rev : caps.cycles;
-  if (codes.empty() || cur.plane != 17 || cur.swapped || cur.incremental || need_abs || !rng.Chance(6))
+  if (codes.empty() || cur.inverse || cur.plane != 17 || cur.swapped || cur.incremental || need_abs ||
+      !rng.Chance(6))
     return false;
   b.kind = MoveKind::kCycle;
   b.cycle = rng.Pick(codes);
@@ -344,7 +351,8 @@ NgcText WriteNgc(const std::vector<Block>& blocks, const Caps& caps) {
     if (b.m.offset != m.offset) modes += "G" + std::to_string(54 + b.m.offset) + " ";
     if (b.m.incremental != m.incremental) modes += b.m.incremental ? "G91 " : "G90 ";
     if (b.m.plane != m.plane) modes += "G" + std::to_string(b.m.plane) + " ";
-    if (b.m.per_rev != m.per_rev) modes += b.m.per_rev ? "G95 " : "G94 ";
+    if (b.m.per_rev != m.per_rev || b.m.inverse != m.inverse)
+      modes += b.m.inverse ? "G93 " : b.m.per_rev ? "G95 " : "G94 ";
     m = b.m;
     // Modes on a line of their own: rs274 sets F before G20/G21 within a block (LinuxCNC's order of
     // execution).

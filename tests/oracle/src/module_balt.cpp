@@ -19,6 +19,7 @@ class Balt final : public Module {
     c.full_circle = true;     // ln 2732-2788
     c.cycles = {81, 82, 85, 86, 89};
     c.cycles_per_rev = {81, 82, 85};  // G86 G89 in G95: FILMS4 98
+    c.inverse_time = true;            // G93 (ln 3685-3725)
     return c;
   }
   Program Write(const std::vector<Block>& blocks, std::uint64_t seed) const override;
@@ -77,7 +78,8 @@ Program Balt::Write(const std::vector<Block>& blocks, std::uint64_t) const {
     if (b.m.inch != m.inch) pre += b.m.inch ? "G70\n" : "G71\n";
     if (b.m.offset != m.offset) pre += "(UAO," + std::to_string(b.m.offset) + ")\n";
     if (b.m.incremental != m.incremental) pre += b.m.incremental ? "G91\n" : "G90\n";
-    if (b.m.per_rev != m.per_rev) pre += b.m.per_rev ? "G95\n" : "G94\n";
+    if (b.m.per_rev != m.per_rev || b.m.inverse != m.inverse)
+      pre += b.m.inverse ? "G93\n" : b.m.per_rev ? "G95\n" : "G94\n";
     if (b.m.plane != m.plane || b.m.swapped != m.swapped) {
       auto ax = AxesOf(b.m);
       const char* letters = "XYZ";

@@ -21,6 +21,7 @@ class Ktapl final : public Module {
     // to it: not LinuxCNC's G82, so not compared.
     c.cycles = {81, 85, 86, 89};
     c.per_rev = false;  // G93 inverse time and G94 only
+    c.inverse_time = true;
     c.offsets = false;  // fixture offsets (FXC) not generated yet
     return c;
   }
@@ -79,6 +80,7 @@ Program Ktapl::Write(const std::vector<Block>& blocks, std::uint64_t) const {
   for (const Block& b : blocks) {
     std::string pre;
     if (b.m.inch != m.inch) pre += b.m.inch ? "G70" : "G71";
+    if (b.m.inverse != m.inverse) pre += b.m.inverse ? "G93" : "G94";
     if (b.m.incremental != m.incremental) pre += b.m.incremental ? "G91" : "G90";
     if (b.m.plane != m.plane) pre += "G" + std::to_string(b.m.plane);
     if (!pre.empty()) pre += "\n";

@@ -20,6 +20,7 @@ struct Modes {
   int plane = 17;            // 17 XY, 18 ZX, 19 YZ
   bool swapped = false;      // the plane's two axes in the other order (Balt-System (DPI,X,Z) is ZX swapped)
   bool per_rev = false;      // feed per revolution
+  bool inverse = false;      // inverse time feed (G93): F is 1/min of the move
   int offset = 0;            // work offset 0 (none) .. kOffsets-1
 };
 
@@ -70,6 +71,7 @@ struct Caps {
   bool helix = true;                      // the plane's third axis may move along an arc
   bool helix_turns = false;               // multi-turn helices (and how the dialect writes them)
   bool per_rev = true;
+  bool inverse_time = false;  // G93
   bool offsets = true;
   int mm_decimals = 3;  // the grid of a coordinate word
   int inch_decimals = 4;
@@ -130,16 +132,23 @@ struct Move {
   int turns = 0;
   double feed = 0;  // mm/min or mm/rev
   bool per_rev = false;
+  bool inverse = false;  // cell-interp: f is 1/min (InverseToPerMinute makes it mm/min as rs274 states it)
+  bool below_floor =
+      false;  // an inverse-time feed under LinuxCNC's floor of 0.1 in/min (rs274 states the floor)
   int line = 0;
 };
 
 // Drops the lines that go nowhere (a cycle's rapid to the R plane it is already on: rs274 states it, a
 // dialect may not).
 void DropStill(std::vector<Move>& moves);
+// Inverse-time feeds as mm/min: F x the move's length (LinuxCNC's reading of G93).
+void InverseToPerMinute(std::vector<Move>& moves);
 
 // Drops the lines that go nowhere (a cycle's rapid to the R plane it is already on: rs274 states it, a
 // dialect may not).
 void DropStill(std::vector<Move>& moves);
+// Inverse-time feeds as mm/min: F x the move's length (LinuxCNC's reading of G93).
+void InverseToPerMinute(std::vector<Move>& moves);
 
 std::vector<Move> ParseCellInterp(const std::string& json_lines, bool lathe, std::string* error);
 std::vector<Move> ParseRs274(const std::string& canon, bool lathe, std::string* error);
