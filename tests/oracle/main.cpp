@@ -175,15 +175,15 @@ bool CheckProgram(const Options& o, const Module& mod, const std::string& rs274,
   InverseToPerMinute(cell);
   if (o.plant && ngc.size() > 5) ngc[5].end[0] += 0.01;  // shows the comparer fails on a wrong value
   std::string log = Slurp(dir / "rs274.log");
-  std::optional<Disagreement> d;
+  // A move that differs before either side stopped is the finding; else the refusal is.
+  std::optional<Disagreement> d = Compare(cell, ngc, w.program.inch_anywhere ? 2e-3 : 1e-3);
+  bool before_stop = d && d->index < std::min(cell.size(), ngc.size());
   if (!err.empty())
     d = Disagreement{0, "output", err};
-  else if (log.find_first_not_of("executing\n") != std::string::npos)
+  else if (log.find_first_not_of("executing\n") != std::string::npos && !before_stop)
     d = Disagreement{ngc.size(), "rs274 refused", log};
-  else if (rc != 0)
+  else if (rc != 0 && !before_stop)
     d = Disagreement{cell.size(), "cell-interp refused", Slurp(dir / "cell.err")};
-  else
-    d = Compare(cell, ngc, w.program.inch_anywhere ? 2e-3 : 1e-3);
   t.programs++;
   t.moves += count;
   if (!d) {

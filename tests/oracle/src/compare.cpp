@@ -10,9 +10,6 @@
 namespace cell::oracle {
 namespace {
 
-// LinuxCNC raises an inverse-time move's rate to 0.1 in/min at least; a slower one is not compared.
-constexpr double kInverseFloor = 2.54;
-
 // cell-interp's plane names: the NGC plane and whether the pair is that plane's reverse (seen from the other
 // side, so the sense flips; DESIGN §4).
 bool PlaneOf(const std::string& name, int* plane, bool* flipped) {
@@ -145,6 +142,7 @@ std::vector<Move> ParseRs274(const std::string& canon, bool lathe, std::string* 
       m.kind = name == "STRAIGHT_TRAVERSE" ? MoveKind::kRapid : MoveKind::kLine;
       m.end = st.Machine({a[0], a[1], a[2]});
       m.feed = st.feed, m.per_rev = st.per_rev;
+      m.floor = 0.1 * st.unit;  // LinuxCNC raises an inverse-time rate to 0.1 unit/min at least
       out.push_back(m);
     }
     if (name == "ARC_FEED") {
@@ -154,6 +152,7 @@ std::vector<Move> ParseRs274(const std::string& canon, bool lathe, std::string* 
       }
       Move m = NgcArc(a, st);
       m.feed = st.feed, m.per_rev = st.per_rev;
+      m.floor = 0.1 * st.unit;  // LinuxCNC raises an inverse-time rate to 0.1 unit/min at least
       out.push_back(m);
     }
   }
@@ -192,7 +191,7 @@ void InverseToPerMinute(std::vector<Move>& moves) {
       }
       m.feed *= len;
       m.inverse = false;
-      m.below_floor = m.feed < kInverseFloor;
+      m.was_inverse = true;
     }
     pos = m.end;
   }
@@ -233,7 +232,7 @@ std::optional<std::string> FirstField(const Move& c, const Move& n, double tol) 
   }
   if (c.kind != MoveKind::kRapid) {
     if (c.per_rev != n.per_rev) return "feed mode";
-    bool floored = c.below_floor && std::fabs(n.feed - kInverseFloor) < tol;
+    bool floored = c.was_inverse && c.feed < n.floor && std::fabs(n.feed - n.floor) < tol;
     if (std::fabs(c.feed - n.feed) > tol && !floored) return "feed";
   }
   return std::nullopt;

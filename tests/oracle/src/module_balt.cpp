@@ -42,12 +42,17 @@ std::string Motion(const Block& b) {
   if (b.kind == MoveKind::kCycle) return Cycle(b);
   const auto ax = AxesOf(b.m);
   const char* letters = "XYZ";
-  std::string s = b.kind == MoveKind::kRapid ? "G0" : b.kind == MoveKind::kLine ? "G1" : b.cw ? "G2" : "G3";
+  std::string s = b.kind == MoveKind::kRapid  ? ((b.omit & 16u) ? "G" : "G0")
+                  : b.kind == MoveKind::kLine ? "G1"
+                  : b.cw                      ? "G2"
+                                              : "G3";
   for (int i = 0; i < 3; ++i) {
     bool moves = b.end[i] != b.start[i];
     if (b.kind == MoveKind::kArc && i == ax[2] && !moves) continue;
     if (OmitAxis(b, i)) continue;  // an axis not programmed stays (ln 2680-2682)
-    s += " " + std::string(1, letters[i]) + Coord(b, b.m.incremental ? b.end[i] - b.start[i] : b.end[i]);
+    double v = b.m.incremental ? b.end[i] - b.start[i] : b.end[i];
+    // An address without a value is 0 (ln 2680-2682).
+    s += " " + std::string(1, letters[i]) + (v == 0 && (b.omit & 32u) ? "" : Coord(b, v));
   }
   if (b.kind == MoveKind::kArc) {
     if (b.radius_form) {

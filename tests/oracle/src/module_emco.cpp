@@ -41,19 +41,25 @@ std::string Feed(const Block& b) {
   return Num(std::round(b.feed * (b.m.inch ? 100 : 1)), 0);  // 1/100 inch/min (ln 4841-4846)
 }
 
-std::string Motion(const Block& b, unsigned form) {
+std::string Motion(const Block& b, unsigned form, bool shift_changed) {
   std::string s = b.kind == MoveKind::kRapid  ? "G00"
                   : b.kind == MoveKind::kLine ? "G01"
                   : b.cw                      ? "G02"
                                               : "G03";
   // X and Z keep their values between blocks (ln 1197-1210): a line may leave out an axis that stays.
+  // Absolute and incremental mix in one block (ln 1027-1086): an axis whose start is on the grid may take
+  // the other form.
   bool line = b.kind != MoveKind::kArc;
+  double grid = std::pow(10.0, b.m.inch ? 4 : 3);
+  auto on_grid = [&](double v) { return std::fabs(v * grid - std::round(v * grid)) < 1e-6; };
+  // Not in the block after a shift change: there U/W count from before the shift (judgement 32).
+  bool mix = !shift_changed;
+  bool inc_x = b.m.incremental != (mix && (form & 16) && on_grid(b.start[0]));
+  bool inc_z = b.m.incremental != (mix && (form & 32) && on_grid(b.start[2]));
   if (!(line && OmitAxis(b, 0)))
-    s += b.m.incremental ? " U" + Coord(b, b.end[0] - b.start[0], form & 1)
-                         : " X" + Coord(b, 2 * b.end[0], form & 1);
+    s += inc_x ? " U" + Coord(b, b.end[0] - b.start[0], form & 1) : " X" + Coord(b, 2 * b.end[0], form & 1);
   if (!(line && OmitAxis(b, 2)))
-    s += b.m.incremental ? " W" + Coord(b, b.end[2] - b.start[2], form & 2)
-                         : " Z" + Coord(b, b.end[2], form & 2);
+    s += inc_z ? " W" + Coord(b, b.end[2] - b.start[2], form & 2) : " Z" + Coord(b, b.end[2], form & 2);
   if (b.kind == MoveKind::kArc) {
     // The centre word of the axis with the longer travel may be left to the control (judgement 5, ln
     // 2140-2149); only where one travel is over twice the other, so radius and diameter readings agree.
@@ -83,11 +89,12 @@ Program Emco::Write(const std::vector<Block>& blocks, std::uint64_t seed) const 
   unsigned forms = static_cast<unsigned>(seed);
   for (const Block& b : blocks) {
     std::string pre;
-    if (b.m.offset != m.offset) pre += b.m.offset == 0 ? "G53 " : b.m.offset == 1 ? "G54 " : "G55 ";
+    bool shifted = b.m.offset != m.offset;
+    if (shifted) pre += b.m.offset == 0 ? "G53 " : b.m.offset == 1 ? "G54 " : "G55 ";
     if (b.m.per_rev != m.per_rev) pre += b.m.per_rev ? "G95 " : "G94 ";
     m = b.m;
     forms = forms * 1103515245u + 12345u;
-    std::string line = pre + Motion(b, forms >> 16);
+    std::string line = pre + Motion(b, forms >> 16, shifted);
     p.blocks_dialect.push_back(line);
     p.dialect_text += line + "\n";
   }

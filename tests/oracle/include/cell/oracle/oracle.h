@@ -133,8 +133,8 @@ struct Move {
   double feed = 0;  // mm/min or mm/rev
   bool per_rev = false;
   bool inverse = false;  // cell-interp: f is 1/min (InverseToPerMinute makes it mm/min as rs274 states it)
-  bool below_floor =
-      false;  // an inverse-time feed under LinuxCNC's floor of 0.1 in/min (rs274 states the floor)
+  bool was_inverse = false;  // cell-interp: the feed was inverse time
+  double floor = 0;          // rs274: the least rate it gives an inverse-time move, 0.1 unit/min (in mm/min)
   int line = 0;
 };
 
