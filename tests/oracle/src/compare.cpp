@@ -23,7 +23,7 @@ bool PlaneOf(const std::string& name, int* plane, bool* flipped) {
   return true;
 }
 
-Move CellMove(const nlohmann::json& j, bool lathe, Vec3& pos) {
+Move CellMove(const nlohmann::json& j, bool lathe, Vec3& pos, Vec3& rot) {
   Move m;
   const std::string op = j["op"];
   m.kind = op == "rapid" ? MoveKind::kRapid : op == "arc" ? MoveKind::kArc : MoveKind::kLine;
@@ -32,6 +32,11 @@ Move CellMove(const nlohmann::json& j, bool lathe, Vec3& pos) {
   for (int i = 0; i < 3; ++i)
     if (j.contains(keys[i])) pos[i] = j[keys[i]].get<double>() / (lathe && i == 0 ? 2 : 1);
   m.end = pos;
+  const char* rkeys[] = {"a", "b", "c"};
+  for (int i = 0; i < 3; ++i)
+    if (j.contains(rkeys[i])) rot[i] = j[rkeys[i]].get<double>();
+  for (int i = 0; i < 3; ++i) m.travel[i] = j.value(std::string(rkeys[i]) + "_travel", 0.0);
+  m.rot = rot;
   m.feed = j.value("f", 0.0);
   m.per_rev = j.value("f_mode", std::string()) == "per_rev";
   m.inverse = j.value("f_mode", std::string()) == "inverse_time";
@@ -71,6 +76,8 @@ struct NgcState {
   Vec3 g5x{}, g92{};
   int plane = 17;
   double feed = 0;
+  double feed_raw = 0;  // as programmed: a rotary-only move's F is deg/min in either unit
+  Vec3 last{}, last_rot{};
   bool per_rev = false;
   Vec3 Machine(const Vec3& p) const {
     Vec3 m;
@@ -103,7 +110,7 @@ std::vector<Move> ParseCellInterp(const std::string& json_lines, bool lathe, std
   std::vector<Move> out;
   std::stringstream ss(json_lines);
   std::string line;
-  Vec3 pos{};
+  Vec3 pos{}, rot{};
   while (std::getline(ss, line)) {
     if (line.empty()) continue;
     auto j = nlohmann::json::parse(line, nullptr, false);
@@ -112,7 +119,7 @@ std::vector<Move> ParseCellInterp(const std::string& json_lines, bool lathe, std
       return out;
     }
     const std::string op = j["op"];
-    if (op == "rapid" || op == "linear" || op == "arc") out.push_back(CellMove(j, lathe, pos));
+    if (op == "rapid" || op == "linear" || op == "arc") out.push_back(CellMove(j, lathe, pos, rot));
   }
   return out;
 }
@@ -131,7 +138,7 @@ std::vector<Move> ParseRs274(const std::string& canon, bool lathe, std::string* 
     if (name == "SET_G92_OFFSET" && a.size() >= 3) st.g92 = {a[0] * st.unit, a[1] * st.unit, a[2] * st.unit};
     if (name == "SELECT_PLANE")
       st.plane = text.find("XZ") != std::string::npos ? 18 : text.find("YZ") != std::string::npos ? 19 : 17;
-    if (name == "SET_FEED_RATE" && !a.empty()) st.feed = a[0] * st.unit;
+    if (name == "SET_FEED_RATE" && !a.empty()) st.feed = a[0] * st.unit, st.feed_raw = a[0];
     if (name == "SET_FEED_MODE" && a.size() >= 2) st.per_rev = a[1] == 1;
     if (name == "STRAIGHT_TRAVERSE" || name == "STRAIGHT_FEED") {
       if (a.size() < 3) {
@@ -141,7 +148,12 @@ std::vector<Move> ParseRs274(const std::string& canon, bool lathe, std::string* 
       Move m;
       m.kind = name == "STRAIGHT_TRAVERSE" ? MoveKind::kRapid : MoveKind::kLine;
       m.end = st.Machine({a[0], a[1], a[2]});
-      m.feed = st.feed, m.per_rev = st.per_rev;
+      if (a.size() >= 6) m.rot = {a[3], a[4], a[5]};
+      for (int i = 0; i < 3; ++i) m.travel[i] = m.rot[i] - st.last_rot[i];
+      st.last_rot = m.rot;
+      bool rotary_only = m.end == st.last;
+      st.last = m.end;
+      m.feed = rotary_only ? st.feed_raw : st.feed, m.per_rev = st.per_rev;
       m.floor = 0.1 * st.unit;  // LinuxCNC raises an inverse-time rate to 0.1 unit/min at least
       out.push_back(m);
     }
@@ -151,6 +163,8 @@ std::vector<Move> ParseRs274(const std::string& canon, bool lathe, std::string* 
         return out;
       }
       Move m = NgcArc(a, st);
+      st.last = m.end;
+      if (a.size() >= 9) m.rot = {a[6], a[7], a[8]};
       m.feed = st.feed, m.per_rev = st.per_rev;
       m.floor = 0.1 * st.unit;  // LinuxCNC raises an inverse-time rate to 0.1 unit/min at least
       out.push_back(m);
@@ -160,12 +174,14 @@ std::vector<Move> ParseRs274(const std::string& canon, bool lathe, std::string* 
 }
 
 void DropStill(std::vector<Move>& moves) {
-  Vec3 pos{};
+  Vec3 pos{}, rot{};
   std::vector<Move> kept;
   for (const Move& m : moves) {
     bool still = m.kind != MoveKind::kArc && std::fabs(m.end[0] - pos[0]) < 1e-9 &&
-                 std::fabs(m.end[1] - pos[1]) < 1e-9 && std::fabs(m.end[2] - pos[2]) < 1e-9;
+                 std::fabs(m.end[1] - pos[1]) < 1e-9 && std::fabs(m.end[2] - pos[2]) < 1e-9 && m.rot == rot &&
+                 m.travel == Vec3{};
     pos = m.end;
+    rot = m.rot;
     if (!still) kept.push_back(m);
   }
   moves.swap(kept);
@@ -200,7 +216,8 @@ void InverseToPerMinute(std::vector<Move>& moves) {
 std::string Describe(const Move& m) {
   char buf[256];
   const char* kind = m.kind == MoveKind::kRapid ? "rapid" : m.kind == MoveKind::kArc ? "arc" : "linear";
-  std::snprintf(buf, sizeof buf, "%s to (%.4f, %.4f, %.4f)", kind, m.end[0], m.end[1], m.end[2]);
+  std::snprintf(buf, sizeof buf, "%s to (%.4f, %.4f, %.4f) abc (%.4f, %.4f, %.4f)", kind, m.end[0], m.end[1],
+                m.end[2], m.rot[0], m.rot[1], m.rot[2]);
   std::string s = buf;
   if (m.kind == MoveKind::kArc) {
     std::snprintf(buf, sizeof buf, " centre (%.4f, %.4f, %.4f) %s G%d turns %d", m.center[0], m.center[1],
@@ -221,6 +238,12 @@ std::optional<std::string> FirstField(const Move& c, const Move& n, double tol) 
   if (c.kind != n.kind) return "kind";
   for (int i = 0; i < 3; ++i)
     if (std::fabs(c.end[i] - n.end[i]) > tol) return std::string("end ") + axes[i];
+  // Rotary positions: cell-interp states them in [0, 360) with the signed travel beside.
+  for (int i = 0; i < 3; ++i) {
+    double d = std::remainder(c.rot[i] - n.rot[i], 360.0);
+    if (std::fabs(d) > tol) return std::string("end ") + "abc"[i];
+    if (std::fabs(c.travel[i] - n.travel[i]) > tol) return std::string("travel ") + "abc"[i];
+  }
   if (c.kind == MoveKind::kArc) {
     if (c.plane != n.plane) return "plane";
     // The centre in the plane: on a helix cell-interp states the normal axis at the start, rs274 at the end.

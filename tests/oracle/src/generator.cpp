@@ -46,6 +46,7 @@ struct Gen {
   Rng rng;
   Modes cur;
   Vec3 machine{};  // mm
+  Vec3 rot{};      // degrees
   bool need_abs = true;
   bool offset_changed = false;
   Box box;
@@ -89,6 +90,7 @@ struct Gen {
   double Feed();
   bool Arc(Block& b);
   bool Cycle(Block& b);
+  bool Rotary(Block& b);
   Block Next();
 };
 
@@ -209,17 +211,32 @@ bool Gen::Cycle(Block& b) {
   return true;
 }
 
+// A move of one to three rotary axes alone (Balt-System: at most three axes in a block), F in deg/min.
+bool Gen::Rotary(Block& b) {
+  if (!caps.rotary || cur.per_rev || cur.inverse || need_abs || !rng.Chance(8)) return false;
+  b.kind = rng.Chance(25) ? MoveKind::kRapid : MoveKind::kLine;
+  b.end = b.start;
+  for (int a = 0; a < 3; ++a)
+    if (rng.Chance(50) || a == 2) {
+      double v = rng.Int(-3600, 3600) / 10.0;
+      b.rot_end[a] = cur.incremental ? b.rot_start[a] + v : v;
+    }
+  return b.rot_end != b.rot_start;
+}
+
 Block Gen::Next() {
   ChangeModes();
   Block b;
   b.m = cur;
   b.start = ToProgram(machine);
+  b.rot_start = b.rot_end = rot;
   int pick = rng.Int(1, 100);
   if (offset_changed && caps.rapid_after_offset) pick = 1;
   offset_changed = false;
   bool arc = !need_abs && pick > 55 && Arc(b);
   bool cycle = !arc && Cycle(b);
-  if (!arc && !cycle) {
+  bool rotary = !arc && !cycle && Rotary(b);
+  if (!arc && !cycle && !rotary) {
     b.kind = pick <= 15 ? MoveKind::kRapid : MoveKind::kLine;
     b.end = RandomPoint();
     if (cur.incremental && rng.Chance(70)) {  // a short step, still inside
@@ -236,6 +253,7 @@ Block Gen::Next() {
   if (b.kind != MoveKind::kRapid) b.feed = Feed();
   if (rng.Chance(40)) b.omit = static_cast<unsigned>(rng.Next() & 63);
   machine = ToMachine(b.end);
+  rot = b.rot_end;
   return b;
 }
 
@@ -275,7 +293,7 @@ std::string Num(double v, int decimals, bool point) {
 }
 
 std::vector<Block> Generate(const Caps& caps, std::uint64_t seed, int count) {
-  Gen g{caps, Rng{seed}, {}, {}, true, false, {}};
+  Gen g{caps, Rng{seed}, {}, {}, {}, true, false, {}};
   g.cur.plane = caps.planes.front();
   if (caps.inch && !caps.unit_switch) g.cur.inch = caps.inch_only || g.rng.Chance(30);
   if (caps.lathe)
@@ -326,6 +344,10 @@ std::string NgcMove(const Block& b, const Caps& caps) {
     }
     if (b.turns) s += " P" + std::to_string(b.turns + 1);
   }
+  const char* rotary = "ABC";
+  for (int i = 0; i < 3; ++i)
+    if (b.rot_end[i] != b.rot_start[i])
+      word(rotary[i], b.m.incremental ? b.rot_end[i] - b.rot_start[i] : b.rot_end[i]);
   if (b.kind != MoveKind::kRapid) word('F', b.feed);
   return s;
 }

@@ -20,6 +20,7 @@ class Balt final : public Module {
     c.cycles = {81, 82, 85, 86, 89};
     c.cycles_per_rev = {81, 82, 85};  // G86 G89 in G95: FILMS4 98
     c.inverse_time = true;            // G93 (ln 3685-3725)
+    c.rotary = true;                  // A B C (ln 3909-4038)
     return c;
   }
   Program Write(const std::vector<Block>& blocks, std::uint64_t seed) const override;
@@ -49,11 +50,16 @@ std::string Motion(const Block& b) {
   for (int i = 0; i < 3; ++i) {
     bool moves = b.end[i] != b.start[i];
     if (b.kind == MoveKind::kArc && i == ax[2] && !moves) continue;
-    if (OmitAxis(b, i)) continue;  // an axis not programmed stays (ln 2680-2682)
+    if (OmitAxis(b, i)) continue;                      // an axis not programmed stays (ln 2680-2682)
+    if (b.rot_end != b.rot_start && !moves) continue;  // a rotary move: at most three axes (ln 2699)
     double v = b.m.incremental ? b.end[i] - b.start[i] : b.end[i];
     // An address without a value is 0 (ln 2680-2682).
     s += " " + std::string(1, letters[i]) + (v == 0 && (b.omit & 32u) ? "" : Coord(b, v));
   }
+  for (int i = 0; i < 3; ++i)  // rotary axes in degrees, F in deg/min when alone (ln 3909-4038, call 21)
+    if (b.rot_end[i] != b.rot_start[i])
+      s += " " + std::string(1, "ABC"[i]) +
+           Num(b.m.incremental ? b.rot_end[i] - b.rot_start[i] : b.rot_end[i], 3);
   if (b.kind == MoveKind::kArc) {
     if (b.radius_form) {
       s += " R" + Coord(b, b.radius);

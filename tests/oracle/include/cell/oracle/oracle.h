@@ -33,7 +33,8 @@ struct Block {
   MoveKind kind = MoveKind::kLine;
   Vec3 start{};  // where the block starts (program coordinates of this block's offset)
   Vec3 end{};
-  Vec3 center{};  // arcs: the centre (the plane's two axes; the third is the start's)
+  Vec3 center{};                // arcs: the centre (the plane's two axes; the third is the start's)
+  Vec3 rot_start{}, rot_end{};  // a b c in degrees (a rotary-only move: end == start)
   bool cw = false;
   bool radius_form = false;
   double radius = 0;   // radius form: the radius (negative beyond 180 degrees)
@@ -64,6 +65,7 @@ struct Caps {
   std::vector<int> planes{17, 18, 19};
   bool swapped_planes = false;      // planes with their axes in either order
   bool full_circle = false;         // a centre-form arc may end where it starts
+  bool rotary = false;              // A B C moves alone (degrees; F in deg/min)
   std::vector<int> cycles;          // drilling cycles against LinuxCNC's G81-G89 (G17, G90, G99 retract)
   std::vector<int> cycles_per_rev;  // those allowed in feed per revolution
   bool radius_form = true;          // arcs by R
@@ -127,6 +129,8 @@ struct Move {
   MoveKind kind = MoveKind::kLine;
   Vec3 end{};
   Vec3 center{};
+  Vec3 rot{};       // a b c, degrees
+  Vec3 travel{};    // a b c signed degrees of this move (cell-interp states positions in [0, 360))
   int plane = 17;   // the NGC plane the arc is in
   bool cw = false;  // seen from the plane's normal (G17 +Z, G18 +Y, G19 +X)
   int turns = 0;
