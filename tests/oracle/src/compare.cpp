@@ -110,7 +110,7 @@ std::vector<Move> ParseCellInterp(const std::string& json_lines, bool lathe, std
   std::vector<Move> out;
   std::stringstream ss(json_lines);
   std::string line;
-  Vec3 pos{}, rot{};
+  Vec3 pos{}, rot{}, regrid{};
   while (std::getline(ss, line)) {
     if (line.empty()) continue;
     auto j = nlohmann::json::parse(line, nullptr, false);
@@ -119,7 +119,20 @@ std::vector<Move> ParseCellInterp(const std::string& json_lines, bool lathe, std
       return out;
     }
     const std::string op = j["op"];
-    if (op == "rapid" || op == "linear" || op == "arc") out.push_back(CellMove(j, lathe, pos, rot));
+    if (op == "rapid" || op == "linear" || op == "arc") {
+      Move m = CellMove(j, lathe, pos, rot);
+      for (int i = 0; i < 3; ++i) m.end[i] += regrid[i], m.center[i] += regrid[i];
+      out.push_back(m);
+    }
+    if (op == "regrid") {  // KT-APL G92: the present position is renamed; positions after it are in that grid
+      const char* keys[] = {"x", "y", "z"};
+      for (int i = 0; i < 3; ++i)
+        if (j.contains(keys[i])) {
+          double v = j[keys[i]].get<double>() / (lathe && i == 0 ? 2 : 1);
+          regrid[i] += pos[i] - v;
+          pos[i] = v;
+        }
+    }
   }
   return out;
 }

@@ -47,6 +47,7 @@ struct Gen {
   Modes cur;
   Vec3 machine{};  // mm
   Vec3 rot{};      // degrees
+  Vec3 g92{};      // mm: the position-set offset (LinuxCNC G92)
   bool need_abs = true;
   bool offset_changed = false;
   Box box;
@@ -56,6 +57,7 @@ struct Gen {
   double Snap(double v) const { return std::round(v / Grid()) * Grid(); }
   Vec3 Offset() const {  // a lathe has no Y
     Vec3 o = kOffsetTable[static_cast<std::size_t>(cur.offset)];
+    for (int i = 0; i < 3; ++i) o[i] += g92[i];
     if (caps.lathe) o[1] = 0;
     return o;
   }
@@ -236,6 +238,17 @@ Block Gen::Next() {
   bool arc = !need_abs && pick > 55 && Arc(b);
   bool cycle = !arc && Cycle(b);
   bool rotary = !arc && !cycle && Rotary(b);
+  if (!arc && !cycle && !rotary && !caps.position_set.empty() && !need_abs && rng.Chance(3)) {
+    // The present position becomes a random point of the grid (G92); the machine stays.
+    b.kind = MoveKind::kSet;
+    Vec3 p = RandomPoint();
+    if (caps.lathe) p[1] = 0;
+    b.end = p;
+    Vec3 base = kOffsetTable[static_cast<std::size_t>(cur.offset)];
+    if (caps.lathe) base[1] = 0;
+    for (int i = 0; i < 3; ++i) g92[i] = machine[i] - base[i] - p[i] * Unit();
+    return b;
+  }
   if (!arc && !cycle && !rotary) {
     b.kind = pick <= 15 ? MoveKind::kRapid : MoveKind::kLine;
     b.end = RandomPoint();
@@ -293,7 +306,7 @@ std::string Num(double v, int decimals, bool point) {
 }
 
 std::vector<Block> Generate(const Caps& caps, std::uint64_t seed, int count) {
-  Gen g{caps, Rng{seed}, {}, {}, {}, true, false, {}};
+  Gen g{caps, Rng{seed}, {}, {}, {}, {}, true, false, {}};
   g.cur.plane = caps.planes.front();
   if (caps.inch && !caps.unit_switch) g.cur.inch = caps.inch_only || g.rng.Chance(30);
   if (caps.lathe)
@@ -318,6 +331,12 @@ std::string NgcMove(const Block& b, const Caps& caps) {
   if (b.kind == MoveKind::kRapid) s = "G0";
   if (b.kind == MoveKind::kLine) s = "G1";
   if (b.kind == MoveKind::kArc) s = b.cw != b.m.swapped ? "G2" : "G3";  // seen from the plane's normal
+  if (b.kind == MoveKind::kSet) {
+    s = "G92";
+    for (int i = 0; i < 3; ++i)
+      if (!(caps.lathe && i == 1)) word(letters[i], caps.lathe && i == 0 ? 2 * b.end[i] : b.end[i]);
+    return s;
+  }
   if (b.kind == MoveKind::kCycle) {
     s = "G99 G" + std::to_string(b.cycle);
     for (std::size_t h = 0; h < b.holes.size(); ++h) {

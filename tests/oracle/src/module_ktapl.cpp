@@ -22,7 +22,8 @@ class Ktapl final : public Module {
     c.cycles = {81, 85, 86, 89};
     c.per_rev = false;  // G93 inverse time and G94 only
     c.inverse_time = true;
-    c.offsets = false;  // fixture offsets (FXC) not generated yet
+    c.position_set = "G92";  // regrid (ln 1579)
+    c.offsets = false;       // fixture offsets (FXC) not generated yet
     return c;
   }
   Program Write(const std::vector<Block>& blocks, std::uint64_t seed) const override;
@@ -44,6 +45,8 @@ std::string Cycle(const Block& b) {
 }
 
 std::string Motion(const Block& b) {
+  if (b.kind == MoveKind::kSet)
+    return "G92X" + Coord(b, b.end[0]) + "Y" + Coord(b, b.end[1]) + "Z" + Coord(b, b.end[2]);
   if (b.kind == MoveKind::kCycle) return Cycle(b);
   static const std::array<std::array<int, 3>, 3> axes{{{0, 1, 2}, {2, 0, 1}, {1, 2, 0}}};
   const auto& ax = axes[static_cast<std::size_t>(b.m.plane - 17)];

@@ -42,6 +42,7 @@ class Okuma final : public Module {
     c.inch = u.inch;
     c.inch_only = u.inch;
     c.unit_switch = false;
+    c.position_set = "G50";  // G50 X Z: zero shift by the present position (ln 1663-1705)
     c.mm_decimals = u.decimals;
     c.inch_decimals = u.decimals;
     return c;
@@ -62,6 +63,7 @@ std::string Feed(const UnitSystem& u, const Block& b) {
 }
 
 std::string Motion(const UnitSystem& u, const Block& b) {
+  if (b.kind == MoveKind::kSet) return "G50 X" + Word(u, 2 * b.end[0]) + " Z" + Word(u, b.end[2]);
   std::string s = b.kind == MoveKind::kRapid  ? "G00"
                   : b.kind == MoveKind::kLine ? "G01"
                   : b.cw                      ? "G02"

@@ -24,7 +24,7 @@ struct Modes {
   int offset = 0;            // work offset 0 (none) .. kOffsets-1
 };
 
-enum class MoveKind { kRapid, kLine, kArc, kCycle };
+enum class MoveKind { kRapid, kLine, kArc, kCycle, kSet };  // kSet: the position is `end` (G92), no motion
 
 // One generated motion block. Positions are program coordinates in the program unit, x as a radius (a lathe
 // module writes diameters); every coordinate lies on the unit's grid, so both programs state it exactly.
@@ -65,6 +65,7 @@ struct Caps {
   std::vector<int> planes{17, 18, 19};
   bool swapped_planes = false;      // planes with their axes in either order
   bool full_circle = false;         // a centre-form arc may end where it starts
+  std::string position_set;         // the code that sets the present position (Okuma G50, KT-APL G92 regrid)
   bool rotary = false;              // A B C moves alone (degrees; F in deg/min)
   std::vector<int> cycles;          // drilling cycles against LinuxCNC's G81-G89 (G17, G90, G99 retract)
   std::vector<int> cycles_per_rev;  // those allowed in feed per revolution
