@@ -20,6 +20,7 @@
 #include <sstream>
 
 #include "cell/oracle/oracle.h"
+#include "run.h"
 
 namespace fs = std::filesystem;
 using namespace cell::oracle;
@@ -67,28 +68,6 @@ bool ParseArgs(int argc, char** argv, Options& o) {
   return (o.command == "gen" || o.command == "check") && o.blocks > 0 && o.chunk > 0;
 }
 
-std::string Slurp(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
-void Spit(const fs::path& p, const std::string& text) {
-  std::ofstream(p) << text;
-}
-
-std::string Quote(const std::string& s) {
-  std::string q = "'";
-  for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return q + "'";
-}
-
-int Shell(const std::string& cmd) {
-  int rc = std::system(cmd.c_str());
-  return WIFEXITED(rc) ? WEXITSTATUS(rc) : 128;
-}
-
 std::string FindRs274(const std::string& given) {
   if (!given.empty()) return access(given.c_str(), X_OK) == 0 ? given : "";
   std::stringstream path(std::getenv("PATH") ? std::getenv("PATH") : "/usr/bin");
@@ -96,18 +75,6 @@ std::string FindRs274(const std::string& given) {
   while (std::getline(path, dir, ':'))
     if (access((dir + "/rs274").c_str(), X_OK) == 0) return dir + "/rs274";
   return "";
-}
-
-// A seed per program: the run's seed, the dialect and the program's index.
-std::uint64_t ProgramSeed(std::uint64_t seed, const std::string& dialect, int index) {
-  std::uint64_t h = seed * 0x100000001B3ull;
-  for (char c : dialect) h = (h ^ static_cast<unsigned char>(c)) * 0x100000001B3ull;
-  // Mixed (murmur's finaliser): seeds a fixed step apart would give the generator's splitmix sequence
-  // shifted.
-  std::uint64_t z = h ^ (static_cast<std::uint64_t>(index) * 0xD6E8FEB86659FD93ull);
-  z = (z ^ (z >> 33)) * 0xFF51AFD7ED558CCDull;
-  z = (z ^ (z >> 33)) * 0xC4CEB9FE1A85EC53ull;
-  return z ^ (z >> 33);
 }
 
 struct Written {
@@ -243,12 +210,15 @@ int Check(const Options& o) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (argc > 1 && std::string(argv[1]) == "prop") return Properties(argc, argv);
   Options o;
   if (!ParseArgs(argc, argv, o)) {
     std::cerr
         << "usage: cell-oracle-gen gen --dialect D --seed S --blocks N --out PREFIX\n"
            "       cell-oracle-gen check --dialect D|all --seed S --blocks N [--chunk M] [--interp PATH]\n"
-           "                       [--rs274 PATH] [--report] [--keep DIR] [--show N] [--plant]\n";
+           "                       [--rs274 PATH] [--report] [--keep DIR] [--show N] [--plant]\n"
+           "       cell-oracle-gen prop --property absinc|units|all --dialect D|all --seed S --blocks N\n"
+           "                       [--chunk M] [--interp PATH] [--keep DIR]\n";
     return 2;
   }
   if (o.command == "gen") {

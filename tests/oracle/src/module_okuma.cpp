@@ -47,7 +47,23 @@ class Okuma final : public Module {
     c.inch_decimals = u.decimals;
     return c;
   }
-  Program Write(const std::vector<Block>& blocks, std::uint64_t seed) const override;
+  Program Write(const std::vector<Block>& blocks, std::uint64_t seed) const override {
+    return WriteIn(blocks, SystemOf(seed));
+  }
+  std::vector<std::string> Forms() const override {
+    std::vector<std::string> names;
+    for (const auto& u : kSystems) names.push_back(u.name);
+    return names;
+  }
+  Program WriteForm(const std::vector<Block>& blocks, std::uint64_t seed,
+                    const std::string& form) const override {
+    for (const auto& u : kSystems)
+      if (form == u.name) return WriteIn(blocks, u);
+    return Write(blocks, seed);
+  }
+
+ private:
+  static Program WriteIn(const std::vector<Block>& blocks, const UnitSystem& u);
 };
 
 std::string Word(const UnitSystem& u, double v) {
@@ -86,8 +102,7 @@ std::string Motion(const UnitSystem& u, const Block& b) {
   return s;
 }
 
-Program Okuma::Write(const std::vector<Block>& blocks, std::uint64_t seed) const {
-  const UnitSystem& u = SystemOf(seed);
+Program Okuma::WriteIn(const std::vector<Block>& blocks, const UnitSystem& u) {
   Program p;
   p.params = std::string("UNIT_SYSTEM=") + u.name + "\n";
   p.inch_anywhere = u.inch;

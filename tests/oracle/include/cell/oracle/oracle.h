@@ -98,6 +98,15 @@ class Module {
   virtual std::string Extension() const = 0;  // program file extension
   virtual Caps Capabilities(std::uint64_t seed) const = 0;
   virtual Program Write(const std::vector<Block>& blocks, std::uint64_t seed) const = 0;
+  // The named forms Write can state one block list in (the units property: Okuma's unit systems, EMCO's
+  // micrometre and decimal words); empty: the blocks' own unit is the only form.
+  virtual std::vector<std::string> Forms() const { return {}; }
+  // Write in `form` (one of Forms(); "" is Write's own choice by the seed).
+  virtual Program WriteForm(const std::vector<Block>& blocks, std::uint64_t seed,
+                            const std::string& form) const {
+    (void)form;
+    return Write(blocks, seed);
+  }
 };
 
 // The (first, second, normal) axis indices of a block's plane: G17 X Y Z, G18 Z X Y, G19 Y Z X, the first two
@@ -149,11 +158,22 @@ void DropStill(std::vector<Move>& moves);
 // Inverse-time feeds as mm/min: F x the move's length (LinuxCNC's reading of G93).
 void InverseToPerMinute(std::vector<Move>& moves);
 
-// Drops the lines that go nowhere (a cycle's rapid to the R plane it is already on: rs274 states it, a
-// dialect may not).
-void DropStill(std::vector<Move>& moves);
-// Inverse-time feeds as mm/min: F x the move's length (LinuxCNC's reading of G93).
-void InverseToPerMinute(std::vector<Move>& moves);
+// Properties every program keeps (issue 33 item 2, docs/testing.md "Properties"): rewrites of a generated
+// block list that state the same motion another way.
+// Every block absolute.
+std::vector<Block> Absolute(std::vector<Block> blocks);
+// Every block incremental where the dialect writes it so and its start is on its unit's grid (the unit and
+// offset of the block before; not a cycle, not a position set, not KT-APL's R form: G90 only).
+std::vector<Block> Incremental(std::vector<Block> blocks, const Caps& caps);
+// Per-minute inch feeds on a step whose mm value lies on the dialect's feed grid (5 x 10^-feed_decimals
+// in/min: 0.5 in/min is 12.7 mm/min), so a unit conversion states the feed exactly.
+std::vector<Block> ConvertibleFeeds(std::vector<Block> blocks, const Caps& caps);
+// Arcs whose start and end lie at different distances from the centre on a grid of `decimals` (the
+// generator's snapping on a coarse grid) become lines to their end: an interpreter may mend such an arc.
+std::vector<Block> ExactArcs(std::vector<Block> blocks, int decimals);
+// Inch blocks in mm where `convert(index)`: positions x 25.4 rounded to the caps' mm grid (at most 5e-4 mm
+// off), feeds x 25.4 (inverse time unchanged).
+std::vector<Block> InchToMm(std::vector<Block> blocks, const Caps& caps, bool (*convert)(std::size_t));
 
 std::vector<Move> ParseCellInterp(const std::string& json_lines, bool lathe, std::string* error);
 std::vector<Move> ParseRs274(const std::string& canon, bool lathe, std::string* error);

@@ -1,0 +1,219 @@
+// `cell-oracle-gen prop`: properties every program keeps (issue 33 item 2, docs/testing.md "Properties").
+// Each property rewrites a generated block list into variants that state one motion in different words
+// (absolute and incremental; inch and mm; a dialect's unit forms); cell-interp runs every variant and the
+// moves must agree with the first variant's within the tolerance. No rs274 is needed.
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <iostream>
+#include <map>
+
+#include "cell/oracle/oracle.h"
+#include "run.h"
+
+namespace fs = std::filesystem;
+
+namespace cell::oracle {
+namespace {
+
+struct Variant {
+  std::string name;
+  std::vector<Block> blocks;
+  std::string form;  // Module::WriteForm's form ("" the seed's)
+};
+
+struct Case {
+  Caps caps;
+  std::vector<Variant> variants;
+  double tol = 1e-3;
+};
+
+// Absolute = incremental: the generated mix, every block absolute, every block incremental it can be.
+Case AbsInc(const Module& mod, std::uint64_t seed, int count) {
+  Case c{mod.Capabilities(seed), {}, 1e-3};
+  auto blocks = Generate(c.caps, seed, count);
+  c.variants = {{"absolute", Absolute(blocks), ""},
+                {"generated", blocks, ""},
+                {"incremental", Incremental(blocks, c.caps), ""}};
+  for (const Block& b : blocks)
+    if (b.m.inch) c.tol = 2e-3;  // rs274-free, but a program mixing units states positions on two grids
+  return c;
+}
+
+// The unit forms of a dialect: which forms state an inch block list and which its mm conversion; `switching`:
+// the unit may change mid-program (G70/G71 every 16 blocks); `mm_only`: forms compared on a mm grid of
+// `mm_decimals` with no conversion (Okuma's 10 um system and its two exact mm twins).
+struct UnitPlan {
+  bool switching = false;
+  std::vector<std::string> inch_forms{""}, mm_forms{""};
+  std::vector<std::string> mm_only;
+  int mm_decimals = 2;
+};
+
+UnitPlan PlanOf(const Module& mod) {
+  if (mod.Name() == "emco") return {false, {"um", "decimal"}, {"um", "decimal"}, {}, 2};
+  if (mod.Name() == "okuma")
+    return {false, {"INCH", "0.0001INCH"}, {"1MM", "1UM"}, {"10UM", "1MM", "1UM"}, 2};
+  return {true, {""}, {""}, {}, 2};
+}
+
+bool Every(std::size_t) {
+  return true;
+}
+bool Alternate(std::size_t i) {
+  return (i / 16) % 2 == 1;
+}
+
+// Units: an inch program and the same in mm. Inch positions on a 0.01 in grid (0.254 mm) and feeds on
+// ConvertibleFeeds' step state the same numbers exactly in mm, so nothing rounds and 1e-3 mm holds (a 1e-4 in
+// grid rounds by 5e-4 mm, and an interpreter mends an arc whose radii then differ by moving its centre).
+// Odd seeds of a dialect with mm-only forms compare those.
+Case Units(const Module& mod, std::uint64_t seed, int count) {
+  UnitPlan plan = PlanOf(mod);
+  Case c{mod.Capabilities(seed), {}, 1e-3};
+  c.caps.unit_switch = false;
+  if (!plan.mm_only.empty() && seed % 2 == 1) {
+    c.caps.inch = false, c.caps.inch_only = false, c.caps.mm_decimals = plan.mm_decimals;
+    auto blocks = Generate(c.caps, seed, count);
+    for (const auto& f : plan.mm_only) c.variants.push_back({f, blocks, f});
+    return c;
+  }
+  c.caps.inch = true, c.caps.inch_only = true, c.caps.inch_decimals = 2, c.caps.mm_decimals = 3;
+  auto inch = ExactArcs(ConvertibleFeeds(Generate(c.caps, seed, count), c.caps), 2);
+  auto mm = InchToMm(inch, c.caps, Every);
+  for (const auto& f : plan.inch_forms) c.variants.push_back({"inch " + f, inch, f});
+  for (const auto& f : plan.mm_forms) c.variants.push_back({"mm " + f, mm, f});
+  if (plan.switching) c.variants.push_back({"switching", InchToMm(inch, c.caps, Alternate), ""});
+  return c;
+}
+
+using Property = Case (*)(const Module&, std::uint64_t, int);
+const std::map<std::string, Property>& PropertyTable() {
+  static const std::map<std::string, Property> table{{"absinc", AbsInc}, {"units", Units}};
+  return table;
+}
+
+struct Options {
+  std::string property = "all", dialect = "all", interp = "cell-interp", keep;
+  std::uint64_t seed = 1;
+  int blocks = 1000, chunk = 250;
+  bool plant = false;  // move one end point of each later variant by 0.01 mm: the check must fail
+};
+
+bool ParseArgs(int argc, char** argv, Options& o) {
+  for (int i = 2; i < argc; ++i) {
+    std::string a = argv[i];
+    std::string v = i + 1 < argc ? argv[++i] : "";
+    if (a == "--plant") {
+      o.plant = true;
+      --i;
+    } else if (a == "--property")
+      o.property = v;
+    else if (a == "--dialect")
+      o.dialect = v;
+    else if (a == "--seed")
+      o.seed = std::strtoull(v.c_str(), nullptr, 10);
+    else if (a == "--blocks")
+      o.blocks = std::atoi(v.c_str());
+    else if (a == "--chunk")
+      o.chunk = std::atoi(v.c_str());
+    else if (a == "--interp")
+      o.interp = v;
+    else if (a == "--keep")
+      o.keep = v;
+    else
+      return false;
+  }
+  return o.blocks > 0 && o.chunk > 0 && (o.property == "all" || PropertyTable().count(o.property));
+}
+
+// One variant through cell-interp: its moves, or the refusal in `error`.
+std::vector<Move> Run(const Options& o, const Module& mod, const Program& p, const fs::path& dir,
+                      const std::string& stem, std::string* error) {
+  fs::path prog = dir / (stem + "." + mod.Extension()), params = dir / (stem + ".params");
+  Spit(prog, p.dialect_text);
+  Spit(params, p.params);
+  fs::path out = dir / (stem + ".out"), err = dir / (stem + ".err");
+  int rc = Shell(Quote(o.interp) + " --dialect " + mod.Name() +
+                 (p.params.empty() ? "" : " --params " + Quote(params)) + " " + Quote(prog) + " >" +
+                 Quote(out) + " 2>" + Quote(err));
+  auto moves = ParseCellInterp(Slurp(out), mod.Capabilities(0).lathe, error);
+  if (rc != 0 && error->empty()) *error = "cell-interp refused: " + Slurp(err);
+  DropStill(moves);
+  return moves;
+}
+
+// Every variant against the first; prints the first disagreement of each and keeps the programs.
+bool CheckCase(const Options& o, const Module& mod, const std::string& prop, std::uint64_t seed,
+               const Case& c, const fs::path& dir) {
+  std::vector<Move> first;
+  bool ok = true;
+  for (std::size_t v = 0; v < c.variants.size(); ++v) {
+    const Variant& var = c.variants[v];
+    Program p = mod.WriteForm(var.blocks, seed, var.form);
+    std::string error;
+    auto moves = Run(o, mod, p, dir, "v" + std::to_string(v), &error);
+    std::optional<Disagreement> d;
+    if (!error.empty()) d = Disagreement{moves.size(), "refusal", error};
+    if (v == 0) first = moves;
+    if (o.plant && v > 0 && moves.size() > 5) moves[5].end[0] += 0.01;
+    if (!d && v > 0) d = Compare(first, moves, c.tol);
+    if (!d) continue;
+    if (d->index <
+        std::min(first.size(), moves.size()))  // the comparer names its sides cell-interp and rs274
+      d->detail = c.variants[0].name + ": " + Describe(first[d->index]) + "\n  " + var.name + ": " +
+                  Describe(moves[d->index]);
+    ok = false;
+    std::cout << mod.Name() << " " << prop << ": program seed " << seed << ", variant '" << var.name
+              << "' against '" << c.variants[0].name << "', move " << d->index + 1 << ": " << d->field
+              << " differs\n  " << d->detail << "\n";
+    if (!o.keep.empty()) {
+      fs::create_directories(o.keep);
+      for (std::size_t k : {std::size_t{0}, v})
+        Spit(fs::path(o.keep) / (mod.Name() + "-" + prop + "-" + std::to_string(seed) + "-v" +
+                                 std::to_string(k) + "." + mod.Extension()),
+             mod.WriteForm(c.variants[k].blocks, seed, c.variants[k].form).dialect_text);
+    }
+  }
+  return ok;
+}
+
+}  // namespace
+
+int Properties(int argc, char** argv) {
+  Options o;
+  if (!ParseArgs(argc, argv, o)) {
+    std::cerr
+        << "usage: cell-oracle-gen prop --property absinc|units|all --dialect D|all --seed S --blocks N "
+           "[--chunk M] [--interp PATH] [--keep DIR] [--plant]\n";
+    return 2;
+  }
+  std::vector<std::string> names = o.dialect == "all" ? ModuleNames() : std::vector<std::string>{o.dialect};
+  char tmpl[] = "/tmp/cell-oracle-prop.XXXXXX";
+  if (!mkdtemp(tmpl)) return 2;
+  bool all = true;
+  for (const auto& [prop, fn] : PropertyTable()) {
+    if (o.property != "all" && o.property != prop) continue;
+    for (const std::string& name : names) {
+      const Module* mod = FindModule(name);
+      if (!mod) {
+        std::cout << "oracle: no module for dialect " << name << "\n";
+        return 2;
+      }
+      int programs = 0, failing = 0;
+      for (int done = 0, i = 0; done < o.blocks; done += o.chunk, ++i, ++programs) {
+        std::uint64_t seed = ProgramSeed(o.seed, name + "/" + prop, i);
+        Case c = fn(*mod, seed, std::min(o.chunk, o.blocks - done));
+        if (!CheckCase(o, *mod, prop, seed, c, tmpl)) ++failing;
+      }
+      std::printf("%s %s: %d of %d programs keep the property\n", name.c_str(), prop.c_str(),
+                  programs - failing, programs);
+      all = all && failing == 0;
+    }
+  }
+  fs::remove_all(tmpl);
+  return all ? 0 : 1;
+}
+
+}  // namespace cell::oracle
