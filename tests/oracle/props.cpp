@@ -21,6 +21,8 @@ struct Variant {
   std::string name;
   std::vector<Block> blocks;
   std::string form;  // Module::WriteForm's form ("" the seed's)
+  // Blocks [sub_first, sub_last) moved into the dialect's subprogram, called where they were (none: equal).
+  std::size_t sub_first = 0, sub_last = 0;
 };
 
 struct Case {
@@ -88,9 +90,50 @@ Case Units(const Module& mod, std::uint64_t seed, int count) {
   return c;
 }
 
+// Subprogram = inline: the blocks of a stretch moved into the dialect's subprogram and called once (the
+// modes they set carry on after the call, as they would inline). Dialects without one: no variants.
+Case Subprogram(const Module& mod, std::uint64_t seed, int count) {
+  Case c{mod.Capabilities(seed), {}, 1e-3};
+  auto blocks = Generate(c.caps, seed, count);
+  for (const Block& b : blocks)
+    if (b.m.inch) c.tol = 2e-3;
+  std::size_t n = blocks.size();
+  if (!mod.Subprogram() || n < 8) return c;
+  c.variants = {{"inline", blocks, ""},
+                {"early stretch called", blocks, "", n / 4, n / 2},
+                {"late stretch called", blocks, "", n / 2, n - 2}};  // not the last block (EMCO ALARM 340)
+  return c;
+}
+
+// The program text with blocks [first, last) in the dialect's subprogram, from the text Write gave: its
+// header, its blocks (each with the mode words it needs) and its end.
+std::string WithSubprogram(const Program& p, const SubprogramForm& f, std::size_t first, std::size_t last) {
+  const auto& b = p.blocks_dialect;
+  std::size_t blocks_len = 0;
+  for (const auto& t : b) blocks_len += t.size() + 1;
+  std::size_t after = p.dialect_text.rfind(b.back() + "\n") + b.back().size() + 1;
+  std::string end = p.dialect_text.substr(after);
+  std::string out = p.dialect_text.substr(0, p.dialect_text.size() - end.size() - blocks_len);
+  std::string body;
+  for (std::size_t i = first; i < last; ++i) body += b[i] + "\n";
+  std::string definition = f.head + body + f.tail;
+  for (std::size_t i = 0; i < b.size(); ++i) {
+    if (i == first) out += (f.in_place ? definition : "") + f.call + "\n";
+    if (i < first || i >= last) out += b[i] + "\n";
+  }
+  return out + end + (f.in_place ? "" : definition);
+}
+
+std::string VariantText(const Module& mod, std::uint64_t seed, const Variant& v) {
+  Program p = mod.WriteForm(v.blocks, seed, v.form);
+  if (v.sub_last <= v.sub_first) return p.dialect_text;
+  return WithSubprogram(p, *mod.Subprogram(), v.sub_first, v.sub_last);
+}
+
 using Property = Case (*)(const Module&, std::uint64_t, int);
 const std::map<std::string, Property>& PropertyTable() {
-  static const std::map<std::string, Property> table{{"absinc", AbsInc}, {"units", Units}};
+  static const std::map<std::string, Property> table{
+      {"absinc", AbsInc}, {"units", Units}, {"subprogram", Subprogram}};
   return table;
 }
 
@@ -152,6 +195,7 @@ bool CheckCase(const Options& o, const Module& mod, const std::string& prop, std
   for (std::size_t v = 0; v < c.variants.size(); ++v) {
     const Variant& var = c.variants[v];
     Program p = mod.WriteForm(var.blocks, seed, var.form);
+    p.dialect_text = VariantText(mod, seed, var);
     std::string error;
     auto moves = Run(o, mod, p, dir, "v" + std::to_string(v), &error);
     std::optional<Disagreement> d;
@@ -173,7 +217,7 @@ bool CheckCase(const Options& o, const Module& mod, const std::string& prop, std
       for (std::size_t k : {std::size_t{0}, v})
         Spit(fs::path(o.keep) / (mod.Name() + "-" + prop + "-" + std::to_string(seed) + "-v" +
                                  std::to_string(k) + "." + mod.Extension()),
-             mod.WriteForm(c.variants[k].blocks, seed, c.variants[k].form).dialect_text);
+             VariantText(mod, seed, c.variants[k]));
     }
   }
   return ok;
@@ -184,9 +228,9 @@ bool CheckCase(const Options& o, const Module& mod, const std::string& prop, std
 int Properties(int argc, char** argv) {
   Options o;
   if (!ParseArgs(argc, argv, o)) {
-    std::cerr
-        << "usage: cell-oracle-gen prop --property absinc|units|all --dialect D|all --seed S --blocks N "
-           "[--chunk M] [--interp PATH] [--keep DIR] [--plant]\n";
+    std::cerr << "usage: cell-oracle-gen prop --property absinc|units|subprogram|all --dialect D|all --seed "
+                 "S --blocks N "
+                 "[--chunk M] [--interp PATH] [--keep DIR] [--plant]\n";
     return 2;
   }
   std::vector<std::string> names = o.dialect == "all" ? ModuleNames() : std::vector<std::string>{o.dialect};

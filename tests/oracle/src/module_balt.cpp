@@ -23,6 +23,11 @@ class Balt final : public Module {
     c.rotary = true;                  // A B C (ln 3909-4038)
     return c;
   }
+  // Several %:NAME programs in one file, CLS finds them by name (ln 7647-7667, judgement call 26); a called
+  // program returns at its end (call 28).
+  std::optional<SubprogramForm> Subprogram() const override {
+    return SubprogramForm{"(CLS,SUB1)", "%\n%:SUB1\n", "%\n", false};
+  }
   Program Write(const std::vector<Block>& blocks, std::uint64_t seed) const override;
 };
 

@@ -26,6 +26,11 @@ class Emco final : public Module {
     c.feed_decimals = 0;
     return c;
   }
+  // G25 L<number><two digits of runs> calls a subroutine of the same file (from O80,
+  // monitor O22's default, to O255), M17 returns (ln 2179-2273, 5852-5862).
+  std::optional<SubprogramForm> Subprogram() const override {
+    return SubprogramForm{"G25 L8101", "O81\n", "M17\n", false};
+  }
   Program Write(const std::vector<Block>& blocks, std::uint64_t seed) const override {
     return WriteIn(blocks, static_cast<unsigned>(seed), true);
   }

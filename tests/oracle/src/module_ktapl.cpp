@@ -26,6 +26,10 @@ class Ktapl final : public Module {
     c.offsets = false;       // fixture offsets (FXC) not generated yet
     return c;
   }
+  // (DFS,NAME) ... (END) defines, (CLS,NAME) runs it once (ln 3262-3287, 3329-3379).
+  std::optional<SubprogramForm> Subprogram() const override {
+    return SubprogramForm{"(CLS,SUB1)", "(DFS,SUB1)\n", "(END)\n", true};
+  }
   Program Write(const std::vector<Block>& blocks, std::uint64_t seed) const override;
 };
 

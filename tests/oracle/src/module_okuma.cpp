@@ -47,6 +47,10 @@ class Okuma final : public Module {
     c.inch_decimals = u.decimals;
     return c;
   }
+  // CALL O name runs a subprogram of the same file up to its RTS (ln 7962-8229).
+  std::optional<SubprogramForm> Subprogram() const override {
+    return SubprogramForm{"CALL O1001", "O1001\n", "RTS\n", false};
+  }
   Program Write(const std::vector<Block>& blocks, std::uint64_t seed) const override {
     return WriteIn(blocks, SystemOf(seed));
   }

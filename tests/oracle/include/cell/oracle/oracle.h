@@ -90,6 +90,14 @@ struct Program {
   bool inch_anywhere = false;  // the 2e-3 tolerance applies
 };
 
+// How a dialect calls blocks as a subprogram (the subprogram property): `call` replaces the blocks in the
+// main program; `head` + the blocks + `tail` define them, just before the call (`in_place`, e.g. KT-APL's
+// DFS) or after the main program's end.
+struct SubprogramForm {
+  std::string call, head, tail;
+  bool in_place = false;
+};
+
 // A dialect module: writes a generated block list as a program of its own.
 class Module {
  public:
@@ -107,6 +115,8 @@ class Module {
     (void)form;
     return Write(blocks, seed);
   }
+  // The dialect's subprogram (called once); none: the property does not apply.
+  virtual std::optional<SubprogramForm> Subprogram() const { return std::nullopt; }
 };
 
 // The (first, second, normal) axis indices of a block's plane: G17 X Y Z, G18 Z X Y, G19 Y Z X, the first two
