@@ -72,4 +72,26 @@ std::vector<Block> InchToMm(std::vector<Block> blocks, const Caps& caps, bool (*
   return blocks;
 }
 
+void MirrorMoves(std::vector<Move>& moves, unsigned axes) {
+  static const std::array<std::array<int, 2>, 3> in_plane{{{0, 1}, {2, 0}, {1, 2}}};
+  for (Move& m : moves) {
+    for (int i = 0; i < 3; ++i)
+      if (axes & (1u << i)) m.end[i] = -m.end[i], m.center[i] = -m.center[i];
+    if (m.kind != MoveKind::kArc) continue;
+    const auto& ax = in_plane[static_cast<std::size_t>(m.plane - 17)];
+    if (((axes >> ax[0]) & 1u) != ((axes >> ax[1]) & 1u)) m.cw = !m.cw;
+  }
+}
+
+void RotateMoves(std::vector<Move>& moves, double degrees) {
+  const double c = std::cos(degrees * M_PI / 180), s = std::sin(degrees * M_PI / 180);
+  auto turn = [&](Vec3& v) { v = {c * v[0] - s * v[1], s * v[0] + c * v[1], v[2]}; };
+  for (Move& m : moves) turn(m.end), turn(m.center);
+}
+
+void ScaleMoves(std::vector<Move>& moves, double factor) {
+  for (Move& m : moves)
+    for (int i = 0; i < 3; ++i) m.end[i] *= factor, m.center[i] *= factor;
+}
+
 }  // namespace cell::oracle

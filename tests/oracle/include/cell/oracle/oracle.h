@@ -185,6 +185,13 @@ std::vector<Block> ExactArcs(std::vector<Block> blocks, int decimals);
 // off), feeds x 25.4 (inverse time unchanged).
 std::vector<Block> InchToMm(std::vector<Block> blocks, const Caps& caps, bool (*convert)(std::size_t));
 
+// Moves as a transform of the program makes them (about the machine zero, which is the program zero without
+// offsets): mirrored in the axes of `axes` (bits x y z; an arc's sense flips when one of its plane's axes
+// is), turned by `degrees` counterclockwise in the XY plane, scaled by `factor` in x y z.
+void MirrorMoves(std::vector<Move>& moves, unsigned axes);
+void RotateMoves(std::vector<Move>& moves, double degrees);
+void ScaleMoves(std::vector<Move>& moves, double factor);
+
 std::vector<Move> ParseCellInterp(const std::string& json_lines, bool lathe, std::string* error);
 std::vector<Move> ParseRs274(const std::string& canon, bool lathe, std::string* error);
 
