@@ -217,7 +217,8 @@ int main(int argc, char** argv) {
         << "usage: cell-oracle-gen gen --dialect D --seed S --blocks N --out PREFIX\n"
            "       cell-oracle-gen check --dialect D|all --seed S --blocks N [--chunk M] [--interp PATH]\n"
            "                       [--rs274 PATH] [--report] [--keep DIR] [--show N] [--plant]\n"
-           "       cell-oracle-gen prop --property absinc|units|subprogram|transforms|nogouge|all --dialect D|all "
+           "       cell-oracle-gen prop --property absinc|units|subprogram|transforms|nogouge|all --dialect "
+           "D|all "
            "--seed S "
            "--blocks N\n"
            "                       [--chunk M] [--interp PATH] [--keep DIR]\n";
