@@ -36,6 +36,25 @@ for n, (x, y) in zip(("N34", "N35", "N36", "N37"), ((15, 15), (15, 60), (80, 60)
 c.rapid("N38", z=50)
 c.spindle("N38", "stop", 1100)
 
+# ln 2494-2496 (G95: F per revolution, judgement call 18) with ln 3349-3356 (G81): a cycle declared in G95
+# feeds per revolution. Found by the LinuxCNC differential (tests/oracle): the cycle's feed moves were output
+# per minute (F0.2 as 0.2 mm/min). Hole at (10, 20) from Z0: rapid to the hole, rapid to R1 = 2, F0.2 mm/rev
+# to Z-10, rapid back to R1 = 2.
+c = Case("cycle_g81_per_rev", """
+; ln 2494-2496 G95 feed per revolution, ln 3349-3356 G81: the cycle feeds 0.2 mm/rev
+N1 S1000 M3
+N2 G95
+N3 G81 R2 Z-10 F0.2
+N4 X10 Y20
+N5 G80
+""", "ln 2494")
+c.units("N1")
+c.spindle("N1", "cw", 1000)
+c.rapid("N4", x=10, y=20)
+c.rapid("N4", z=2)
+c.lin("N4", 0.2, exact=True, mode="per_rev", z=-10)
+c.rapid("N4", z=2)
+
 # L3362-3368: G82 dwells TMR (2 s) at the bottom. (The manual's N34 has M13 without any S: S600 F80 are
 # given before it.)
 c = Case("p5_8_7_g82_spotface", """

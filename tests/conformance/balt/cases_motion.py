@@ -497,6 +497,23 @@ c.lin(3, 100, x=20, y=20)
 c.lin(5, 100, x=30, y=10)
 c.lin(7, 100, x=10, y=10)
 
+# ln 5730-5765 SCF scales the programmed axes' dimensions; ln 2790-2836 a helix's depth is n K. K is a length
+# on the perpendicular axis and scales with it (judgement call 48, found by the transforms property of
+# tests/oracle): (SCF,2) makes X10 20, the centre I0 J0 stays 0 0, the depth Z6 12 and K3 6, so n = 12 / 6 = 2
+# whole circles = 720 degrees (K unscaled would give n = 12 / 3 = 4, 1440 degrees: twice the turns).
+c = Case("p5_17_scale_helix_pitch", """
+; ln 5730-5765 SCF scales the helix pitch K with the depth (ln 2790-2836, judgement call 48)
+(SCF,2)
+G X10 Y0 Z0
+G3 X10 Y0 Z6 I0 J0 K3 F100
+(SCF)
+G X10 Y0 Z6
+""", "L5730")
+c.units(3)
+c.rapid(3, x=20, y=0, z=0)
+c.arc(4, 100, (0, 0), False, 720, x=20, y=0, z=12)
+c.rapid(6, x=10, y=0, z=6)
+
 # ln 2326-2333, 2165: a slashed block is a comment while USB=0 (the default), executed with USB=1.
 c = Case("p5_04_slashed_blocks", """
 ; ln 2326-2333 slashed blocks and USB

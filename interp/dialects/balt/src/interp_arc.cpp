@@ -102,7 +102,8 @@ void BaltRun::ArcMove(const ParsedBlock& pb, const BlockG& g, const Targets& t_i
   if (wk) {
     if (pn < 0 || !(t.mask & (1u << pn)))
       Fail(wk->col, 96, "a helix needs the axis perpendicular to the plane");
-    double pitch = ValueOf(wk->v, wk->col) * unit;
+    // K is a length on the perpendicular axis: SCF scales it with that axis (judgement call 48).
+    double pitch = ValueOf(wk->v, wk->col) * unit * scale_[static_cast<std::size_t>(pn)];
     if (pitch <= 0) Fail(wk->col, 13, "the helix pitch K is positive");
     double depth = std::fabs(mach[pn] - pos_[pn]);
     turns = std::round(depth / pitch - sol.sweep / 360.0);

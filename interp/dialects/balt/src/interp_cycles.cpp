@@ -87,6 +87,10 @@ void BaltRun::SpindleAxisMove(double prog_value, bool rapid, double feed) {
   none.start = none.end = {pos_[mode_.p1], pos_[mode_.p2]};
   Feed f;
   f.rate = feed;
+  // In G95 F is per revolution (ln 2494-2496, judgement call 18), in a cycle too; G84's transducer feed
+  // K x rpm (ln 3484-3496) is already per minute.
+  bool transducer = cycle_.g == 84 && cycle_.has_k;
+  f.mode = mode_.feed == FeedCode::kG95 && !transducer ? FeedMode::kPerRev : FeedMode::kPerMinute;
   f.exact_stop = true;
   CheckLimits(pos_, mach, nullptr, 1);
   EmitMotion(rapid ? Op::kRapid : Op::kLinear, mach, 1u << cycle_.axis, f, none, {}, 0, 0);

@@ -1,0 +1,207 @@
+// The LinuxCNC differential (issue 33 item 1): random programs in a dialect's own syntax and the same
+// toolpath as RS-274/NGC, run through cell-interp and LinuxCNC's rs274, compared move by move
+// (docs/testing.md).
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace cell::oracle {
+
+using Vec3 = std::array<double, 3>;  // x y z
+
+// The modes a generated motion block runs in (the generator picks them; each module writes them its way).
+struct Modes {
+  bool inch = false;         // program unit
+  bool incremental = false;  // G91-like distances
+  int plane = 17;            // 17 XY, 18 ZX, 19 YZ
+  bool swapped = false;      // the plane's two axes in the other order (Balt-System (DPI,X,Z) is ZX swapped)
+  bool per_rev = false;      // feed per revolution
+  bool inverse = false;      // inverse time feed (G93): F is 1/min of the move
+  int offset = 0;            // work offset 0 (none) .. kOffsets-1
+};
+
+enum class MoveKind { kRapid, kLine, kArc, kCycle, kSet };  // kSet: the position is `end` (G92), no motion
+
+// One generated motion block. Positions are program coordinates in the program unit, x as a radius (a lathe
+// module writes diameters); every coordinate lies on the unit's grid, so both programs state it exactly.
+struct Block {
+  Modes m;
+  MoveKind kind = MoveKind::kLine;
+  Vec3 start{};  // where the block starts (program coordinates of this block's offset)
+  Vec3 end{};
+  Vec3 center{};                // arcs: the centre (the plane's two axes; the third is the start's)
+  Vec3 rot_start{}, rot_end{};  // a b c in degrees (a rotary-only move: end == start)
+  bool cw = false;
+  bool radius_form = false;
+  double radius = 0;   // radius form: the radius (negative beyond 180 degrees)
+  int turns = 0;       // helix: extra full turns
+  double pitch = 0;    // helix: travel of the third axis per turn (Balt K), 0 without turns
+  double feed = 0;     // unit/min or unit/rev
+  int cycle = 0;       // kCycle: 81 82 85 86 89 at each of `holes` (x y), from the R plane to `bottom`
+  double r_level = 0;  // kCycle: the R plane; the tool returns there after each hole (G99)
+  double bottom = 0;
+  std::vector<std::array<double, 2>> holes;
+  unsigned omit =
+      0;  // words a module may leave out where they change nothing: bits 0-2 axis x y z, 3-5 centre
+};
+
+// The work offsets every program may select (mm; x a radius). Offset 0 is the machine zero.
+inline constexpr int kOffsets = 3;
+inline constexpr std::array<Vec3, kOffsets> kOffsetTable{
+    {{0, 0, 0}, {12.5, -20.25, 5}, {-35.125, 14.5, -7.75}}};
+
+// What a dialect has: the generator draws only from these.
+struct Caps {
+  bool lathe = false;               // X is a diameter, XZ plane only (G18), no Y
+  bool inch = true;                 // has an inch unit form
+  bool unit_switch = true;          // the unit may change mid-program (else one per program, by the seed)
+  bool inch_only = false;           // with unit_switch off: every program in inch (Okuma's inch systems)
+  bool rapid_after_offset = false;  // a work offset change needs a G00 next (EMCO ALARM 490)
+  bool incremental = true;          // G91 (or U/W) distances
+  std::vector<int> planes{17, 18, 19};
+  bool swapped_planes = false;      // planes with their axes in either order
+  bool full_circle = false;         // a centre-form arc may end where it starts
+  std::string position_set;         // the code that sets the present position (Okuma G50, KT-APL G92 regrid)
+  bool rotary = false;              // A B C moves alone (degrees; F in deg/min)
+  std::vector<int> cycles;          // drilling cycles against LinuxCNC's G81-G89 (G17, G90, G99 retract)
+  std::vector<int> cycles_per_rev;  // those allowed in feed per revolution
+  bool radius_form = true;          // arcs by R
+  bool radius_form_g17_absolute = false;  // R only in G90 G17 (KT-APL)
+  bool helix = true;                      // the plane's third axis may move along an arc
+  bool helix_turns = false;               // multi-turn helices (and how the dialect writes them)
+  bool per_rev = true;
+  bool inverse_time = false;  // G93
+  bool offsets = true;
+  int mm_decimals = 3;  // the grid of a coordinate word
+  int inch_decimals = 4;
+  int feed_decimals = 1;  // per minute feeds
+};
+
+struct Program {
+  std::string dialect_text;                 // the program in the dialect's syntax
+  std::string ngc_text;                     // the same toolpath as NGC
+  std::string params;                       // cell-interp --params file text (empty: none)
+  std::vector<std::string> blocks_dialect;  // per motion block, its text in each form (for reports)
+  std::vector<std::string> blocks_ngc;
+  bool inch_anywhere = false;  // the 2e-3 tolerance applies
+};
+
+// How a dialect calls blocks as a subprogram (the subprogram property): `call` replaces the blocks in the
+// main program; `head` + the blocks + `tail` define them, just before the call (`in_place`, e.g. KT-APL's
+// DFS) or after the main program's end.
+struct SubprogramForm {
+  std::string call, head, tail;
+  bool in_place = false;
+};
+
+// A dialect module: writes a generated block list as a program of its own.
+class Module {
+ public:
+  virtual ~Module() = default;
+  virtual std::string Name() const = 0;       // cell-interp --dialect
+  virtual std::string Extension() const = 0;  // program file extension
+  virtual Caps Capabilities(std::uint64_t seed) const = 0;
+  virtual Program Write(const std::vector<Block>& blocks, std::uint64_t seed) const = 0;
+  // The named forms Write can state one block list in (the units property: Okuma's unit systems, EMCO's
+  // micrometre and decimal words); empty: the blocks' own unit is the only form.
+  virtual std::vector<std::string> Forms() const { return {}; }
+  // Write in `form` (one of Forms(); "" is Write's own choice by the seed).
+  virtual Program WriteForm(const std::vector<Block>& blocks, std::uint64_t seed,
+                            const std::string& form) const {
+    (void)form;
+    return Write(blocks, seed);
+  }
+  // The dialect's subprogram (called once); none: the property does not apply.
+  virtual std::optional<SubprogramForm> Subprogram() const { return std::nullopt; }
+};
+
+// The (first, second, normal) axis indices of a block's plane: G17 X Y Z, G18 Z X Y, G19 Y Z X, the first two
+// exchanged when swapped.
+std::array<int, 3> AxesOf(const Modes& m);
+// Whether a module may leave out axis word `axis` (absolute: the value is the start's; incremental: 0) or the
+// centre word of `axis` (its offset from the start is 0), as the block's omit bits allow.
+bool OmitAxis(const Block& b, int axis);
+bool OmitCentre(const Block& b, int axis);
+
+const Module* FindModule(const std::string& name);
+std::vector<std::string> ModuleNames();  // in priority order: balt ktapl emco okuma
+
+// The random block list for a dialect's capabilities (deterministic for a seed).
+std::vector<Block> Generate(const Caps& caps, std::uint64_t seed, int count);
+
+// The NGC form of a block list (lathe: G7 G18, diameters).
+struct NgcText {
+  std::string text;
+  std::vector<std::string> blocks;
+};
+NgcText WriteNgc(const std::vector<Block>& blocks, const Caps& caps);
+
+// Number formatting shared by the modules: fixed decimals with trailing zeros dropped; `point` keeps a
+// trailing decimal point on whole numbers ("10.").
+std::string Num(double v, int decimals, bool point = false);
+
+// One move as both interpreters report it, machine coordinates in mm, x a radius.
+struct Move {
+  MoveKind kind = MoveKind::kLine;
+  Vec3 end{};
+  Vec3 center{};
+  Vec3 rot{};       // a b c, degrees
+  Vec3 travel{};    // a b c signed degrees of this move (cell-interp states positions in [0, 360))
+  int plane = 17;   // the NGC plane the arc is in
+  bool cw = false;  // seen from the plane's normal (G17 +Z, G18 +Y, G19 +X)
+  int turns = 0;
+  double feed = 0;  // mm/min or mm/rev
+  bool per_rev = false;
+  bool inverse = false;  // cell-interp: f is 1/min (InverseToPerMinute makes it mm/min as rs274 states it)
+  bool was_inverse = false;  // cell-interp: the feed was inverse time
+  double floor = 0;          // rs274: the least rate it gives an inverse-time move, 0.1 unit/min (in mm/min)
+  int line = 0;
+};
+
+// Drops the lines that go nowhere (a cycle's rapid to the R plane it is already on: rs274 states it, a
+// dialect may not).
+void DropStill(std::vector<Move>& moves);
+// Inverse-time feeds as mm/min: F x the move's length (LinuxCNC's reading of G93).
+void InverseToPerMinute(std::vector<Move>& moves);
+
+// Properties every program keeps (issue 33 item 2, docs/testing.md "Properties"): rewrites of a generated
+// block list that state the same motion another way.
+// Every block absolute.
+std::vector<Block> Absolute(std::vector<Block> blocks);
+// Every block incremental where the dialect writes it so and its start is on its unit's grid (the unit and
+// offset of the block before; not a cycle, not a position set, not KT-APL's R form: G90 only).
+std::vector<Block> Incremental(std::vector<Block> blocks, const Caps& caps);
+// Per-minute inch feeds on a step whose mm value lies on the dialect's feed grid (5 x 10^-feed_decimals
+// in/min: 0.5 in/min is 12.7 mm/min), so a unit conversion states the feed exactly.
+std::vector<Block> ConvertibleFeeds(std::vector<Block> blocks, const Caps& caps);
+// Arcs whose start and end lie at different distances from the centre on a grid of `decimals` (the
+// generator's snapping on a coarse grid) become lines to their end: an interpreter may mend such an arc.
+std::vector<Block> ExactArcs(std::vector<Block> blocks, int decimals);
+// Inch blocks in mm where `convert(index)`: positions x 25.4 rounded to the caps' mm grid (at most 5e-4 mm
+// off), feeds x 25.4 (inverse time unchanged).
+std::vector<Block> InchToMm(std::vector<Block> blocks, const Caps& caps, bool (*convert)(std::size_t));
+
+// Moves as a transform of the program makes them (about the machine zero, which is the program zero without
+// offsets): mirrored in the axes of `axes` (bits x y z; an arc's sense flips when one of its plane's axes
+// is), turned by `degrees` counterclockwise in the XY plane, scaled by `factor` in x y z.
+void MirrorMoves(std::vector<Move>& moves, unsigned axes);
+void RotateMoves(std::vector<Move>& moves, double degrees);
+void ScaleMoves(std::vector<Move>& moves, double factor);
+
+std::vector<Move> ParseCellInterp(const std::string& json_lines, bool lathe, std::string* error);
+std::vector<Move> ParseRs274(const std::string& canon, bool lathe, std::string* error);
+
+// Compare the two lists; empty when they agree, else the first disagreement in words.
+struct Disagreement {
+  std::size_t index = 0;  // move index
+  std::string field;
+  std::string detail;
+};
+std::optional<Disagreement> Compare(const std::vector<Move>& cell, const std::vector<Move>& ngc, double tol);
+std::string Describe(const Move& m);
+
+}  // namespace cell::oracle

@@ -1,0 +1,52 @@
+// The command line's shared helpers: files, the shell, the per-program seeds (main.cpp, props.cpp).
+#pragma once
+
+#include <sys/wait.h>
+
+#include <cstdint>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+namespace cell::oracle {
+
+inline std::string Slurp(const std::filesystem::path& p) {
+  std::ifstream in(p);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+inline void Spit(const std::filesystem::path& p, const std::string& text) {
+  std::ofstream(p) << text;
+}
+
+inline std::string Quote(const std::string& s) {
+  std::string q = "'";
+  for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return q + "'";
+}
+
+inline int Shell(const std::string& cmd) {
+  int rc = std::system(cmd.c_str());
+  return WIFEXITED(rc) ? WEXITSTATUS(rc) : 128;
+}
+
+// A seed per program: the run's seed, the dialect and the program's index.
+inline std::uint64_t ProgramSeed(std::uint64_t seed, const std::string& dialect, int index) {
+  std::uint64_t h = seed * 0x100000001B3ull;
+  for (char c : dialect) h = (h ^ static_cast<unsigned char>(c)) * 0x100000001B3ull;
+  // Mixed (murmur's finaliser): seeds a fixed step apart would give the generator's splitmix sequence
+  // shifted.
+  std::uint64_t z = h ^ (static_cast<std::uint64_t>(index) * 0xD6E8FEB86659FD93ull);
+  z = (z ^ (z >> 33)) * 0xFF51AFD7ED558CCDull;
+  z = (z ^ (z >> 33)) * 0xC4CEB9FE1A85EC53ull;
+  return z ^ (z >> 33);
+}
+
+// `cell-oracle-gen prop`: the properties every program keeps (props.cpp).
+int Properties(int argc, char** argv);
+
+}  // namespace cell::oracle

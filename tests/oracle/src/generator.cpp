@@ -1,0 +1,409 @@
+// The random block list and its NGC form. Every coordinate is on the program unit's grid and every arc's two
+// radii are equal exactly (Pythagorean vectors), so neither interpreter rounds and both see one toolpath.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+#include "cell/oracle/oracle.h"
+
+namespace cell::oracle {
+namespace {
+
+constexpr double kMm = 25.4;
+
+// splitmix64: the same sequence on every platform (std distributions are implementation-defined).
+struct Rng {
+  std::uint64_t s;
+  std::uint64_t Next() {
+    std::uint64_t z = (s += 0x9E3779B97F4A7C15ull);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    return z ^ (z >> 31);
+  }
+  int Int(int lo, int hi) { return lo + static_cast<int>(Next() % static_cast<std::uint64_t>(hi - lo + 1)); }
+  bool Chance(int percent) { return Int(1, 100) <= percent; }
+  template <class T>
+  const T& Pick(const std::vector<T>& v) {
+    return v[Next() % v.size()];
+  }
+};
+
+// Integer vectors of one length (a*a + b*b = r*r): the arcs' start and end radii.
+std::vector<std::array<int, 2>> Representations(int r) {
+  std::vector<std::array<int, 2>> out;
+  for (int a = -r; a <= r; ++a)
+    for (int b = -r; b <= r; ++b)
+      if (a * a + b * b == r * r) out.push_back({a, b});
+  return out;
+}
+
+struct Box {
+  Vec3 lo, hi;  // mm, machine coordinates
+};
+
+struct Gen {
+  const Caps& caps;
+  Rng rng;
+  Modes cur;
+  Vec3 machine{};  // mm
+  Vec3 rot{};      // degrees
+  Vec3 g92{};      // mm: the position-set offset (LinuxCNC G92)
+  bool need_abs = true;
+  bool offset_changed = false;
+  Box box;
+
+  double Unit() const { return cur.inch ? kMm : 1.0; }
+  double Grid() const { return std::pow(10.0, -(cur.inch ? caps.inch_decimals : caps.mm_decimals)); }
+  double Snap(double v) const { return std::round(v / Grid()) * Grid(); }
+  Vec3 Offset() const {  // a lathe has no Y
+    Vec3 o = kOffsetTable[static_cast<std::size_t>(cur.offset)];
+    for (int i = 0; i < 3; ++i) o[i] += g92[i];
+    if (caps.lathe) o[1] = 0;
+    return o;
+  }
+  Vec3 ToProgram(const Vec3& mm) const {
+    Vec3 p;
+    for (int i = 0; i < 3; ++i) p[i] = (mm[i] - Offset()[i]) / Unit();
+    return p;
+  }
+  Vec3 ToMachine(const Vec3& p) const {
+    Vec3 m;
+    for (int i = 0; i < 3; ++i) m[i] = p[i] * Unit() + Offset()[i];
+    return m;
+  }
+  bool Inside(const Vec3& p) const {  // program coordinates
+    Vec3 m = ToMachine(p);
+    for (int i = 0; i < 3; ++i)
+      if (m[i] < box.lo[i] || m[i] > box.hi[i]) return false;
+    return true;
+  }
+  Vec3 RandomPoint() {
+    for (;;) {
+      Vec3 p{};
+      for (int i = 0; i < 3; ++i) {
+        if (caps.lathe && i == 1) continue;
+        double mm = box.lo[i] + (box.hi[i] - box.lo[i]) * (rng.Int(0, 10000) / 10000.0);
+        p[i] = Snap((mm - Offset()[i]) / Unit());
+      }
+      if (Inside(p)) return p;
+    }
+  }
+  void ChangeModes();
+  double Feed();
+  bool Arc(Block& b);
+  bool Cycle(Block& b);
+  bool Rotary(Block& b);
+  Block Next();
+};
+
+void Gen::ChangeModes() {
+  if (caps.inch && caps.unit_switch && rng.Chance(4)) {
+    cur.inch = !cur.inch;
+    need_abs = true;
+  }
+  if (caps.offsets && rng.Chance(4)) {
+    int o = rng.Int(0, kOffsets - 1);
+    offset_changed = o != cur.offset;
+    need_abs = need_abs || offset_changed;
+    cur.offset = o;
+  }
+  if (caps.incremental && rng.Chance(10)) cur.incremental = !cur.incremental;
+  if (caps.planes.size() > 1 && rng.Chance(8)) {
+    cur.plane = rng.Pick(caps.planes);
+    cur.swapped = caps.swapped_planes && rng.Chance(40);
+  }
+  if (rng.Chance(6)) {  // the feed mode: per minute, per revolution or inverse time, as the dialect has them
+    int pick = rng.Int(0, 2);
+    cur.per_rev = caps.per_rev && pick == 1;
+    cur.inverse = caps.inverse_time && pick == 2;
+  }
+  if (need_abs) cur.incremental = false;
+}
+
+double Gen::Feed() {
+  if (cur.inverse) return rng.Int(5, 300) / 10.0;  // 1/min, one decimal
+  if (cur.per_rev) {
+    static const std::vector<double> mm{0.05, 0.1, 0.15, 0.2, 0.25, 0.3};
+    static const std::vector<double> in{0.01, 0.02, 0.03};
+    return cur.inch ? rng.Pick(in) : rng.Pick(mm);
+  }
+  double scale = std::pow(10.0, caps.feed_decimals);
+  if (cur.inch) return rng.Int(20, 800) / 10.0;
+  return std::round(rng.Int(50, 2000) * scale / (1 + rng.Int(0, 1) * 9)) / scale;
+}
+
+// An arc from the current position: centre and end from two integer vectors of one length.
+bool Gen::Arc(Block& b) {
+  static const std::vector<int> radii{5, 25, 65, 85};
+  static const std::vector<double> mm_scale{0.05, 0.1, 0.2, 0.25, 0.5, 1.0};
+  static const std::vector<double> in_scale{0.002, 0.004, 0.005, 0.01, 0.02, 0.04};
+  auto ax = AxesOf(cur);
+  for (int tries = 0; tries < 20; ++tries) {
+    int r = rng.Pick(radii);
+    double s = cur.inch ? rng.Pick(in_scale) : rng.Pick(mm_scale);
+    double rmm = r * s * Unit();
+    if (rmm < 0.3 || rmm > 70) continue;
+    auto reps = Representations(r);
+    auto v1 = rng.Pick(reps), v2 = rng.Pick(reps);
+    // rs274 times a whole-circle helix in G93 by its depth alone (its arc length of a full turn is 0).
+    if (v1 == v2 && (!caps.full_circle || cur.inverse)) continue;
+    Vec3 c = b.start, e = b.start;
+    c[ax[0]] = Snap(b.start[ax[0]] - v1[0] * s);
+    c[ax[1]] = Snap(b.start[ax[1]] - v1[1] * s);
+    e[ax[0]] = Snap(c[ax[0]] + v2[0] * s);
+    e[ax[1]] = Snap(c[ax[1]] + v2[1] * s);
+    b.cw = rng.Chance(50);
+    double ccw = std::atan2(double(v1[0]) * v2[1] - double(v1[1]) * v2[0],
+                            double(v1[0]) * v2[0] + double(v1[1]) * v2[1]) *
+                 180 / M_PI;
+    if (ccw <= 0) ccw += 360;
+    double angle = b.cw ? 360 - ccw : ccw;
+    if (angle <= 0) angle = 360;  // a full circle
+    // The whole circle stays inside the travel (and a lathe's x above the centre line).
+    Vec3 lo = c, hi = c;
+    lo[ax[0]] -= r * s, hi[ax[0]] += r * s, lo[ax[1]] -= r * s, hi[ax[1]] += r * s;
+    if (caps.helix && rng.Chance(30)) {
+      double delta = Snap((rng.Int(-100, 100) / 10.0) / Unit());
+      if (caps.helix_turns && rng.Chance(40) && angle > 20 && angle < 340) {
+        b.turns = rng.Int(1, 2);
+        b.pitch = Snap(rng.Int(5, 40) / 10.0 / Unit());
+        double depth = Snap(b.pitch * (b.turns + angle / 360));
+        delta = rng.Chance(50) ? depth : -depth;
+      }
+      e[ax[2]] = b.start[ax[2]] + delta;
+    }
+    if (!Inside(lo) || !Inside(hi) || !Inside(e)) {
+      b.turns = 0, b.pitch = 0;
+      continue;
+    }
+    if (caps.lathe && (lo[0] * Unit() + Offset()[0]) < 0.5) continue;
+    b.kind = MoveKind::kArc;
+    b.center = c;
+    b.end = e;
+    bool r_here = !caps.radius_form_g17_absolute || (cur.plane == 17 && !cur.incremental);
+    if (caps.radius_form && r_here && b.turns == 0 && v1 != v2 && std::fabs(angle - 180) > 2 &&
+        rng.Chance(30)) {
+      b.radius_form = true;
+      b.radius = angle > 180 ? -r * s : r * s;
+    }
+    return true;
+  }
+  return false;
+}
+
+// A drilling cycle at one to four holes: R below the start (no preliminary move), the bottom below R.
+bool Gen::Cycle(Block& b) {
+  const std::vector<int>& codes = cur.per_rev ? caps.cycles_per_rev : caps.cycles;
+  if (codes.empty() || cur.inverse || cur.plane != 17 || cur.swapped || cur.incremental || need_abs ||
+      !rng.Chance(6))
+    return false;
+  b.kind = MoveKind::kCycle;
+  b.cycle = rng.Pick(codes);
+  b.r_level = b.start[2] - Snap(rng.Int(0, 50) / 10.0 / Unit());
+  b.bottom = b.r_level - Snap(rng.Int(10, 200) / 10.0 / Unit());
+  Vec3 deep = b.start;
+  deep[2] = b.bottom;
+  if (!Inside(deep)) return false;
+  int n = rng.Int(1, 4);
+  for (int i = 0; i < n; ++i) {
+    Vec3 p = RandomPoint();
+    b.holes.push_back({p[0], p[1]});
+  }
+  b.end = {b.holes.back()[0], b.holes.back()[1], b.r_level};
+  return true;
+}
+
+// A move of one to three rotary axes alone (Balt-System: at most three axes in a block), F in deg/min.
+bool Gen::Rotary(Block& b) {
+  if (!caps.rotary || cur.per_rev || cur.inverse || need_abs || !rng.Chance(8)) return false;
+  b.kind = rng.Chance(25) ? MoveKind::kRapid : MoveKind::kLine;
+  b.end = b.start;
+  for (int a = 0; a < 3; ++a)
+    if (rng.Chance(50) || a == 2) {
+      double v = rng.Int(-3600, 3600) / 10.0;
+      b.rot_end[a] = cur.incremental ? b.rot_start[a] + v : v;
+    }
+  return b.rot_end != b.rot_start;
+}
+
+Block Gen::Next() {
+  ChangeModes();
+  Block b;
+  b.m = cur;
+  b.start = ToProgram(machine);
+  b.rot_start = b.rot_end = rot;
+  int pick = rng.Int(1, 100);
+  if (offset_changed && caps.rapid_after_offset) pick = 1;
+  offset_changed = false;
+  bool arc = !need_abs && pick > 55 && Arc(b);
+  bool cycle = !arc && Cycle(b);
+  bool rotary = !arc && !cycle && Rotary(b);
+  if (!arc && !cycle && !rotary && !caps.position_set.empty() && !need_abs && rng.Chance(3)) {
+    // The present position becomes a random point of the grid (G92); the machine stays.
+    b.kind = MoveKind::kSet;
+    Vec3 p = RandomPoint();
+    if (caps.lathe) p[1] = 0;
+    b.end = p;
+    Vec3 base = kOffsetTable[static_cast<std::size_t>(cur.offset)];
+    if (caps.lathe) base[1] = 0;
+    for (int i = 0; i < 3; ++i) g92[i] = machine[i] - base[i] - p[i] * Unit();
+    return b;
+  }
+  if (!arc && !cycle && !rotary) {
+    b.kind = pick <= 15 ? MoveKind::kRapid : MoveKind::kLine;
+    b.end = RandomPoint();
+    if (cur.incremental && rng.Chance(70)) {  // a short step, still inside
+      for (int i = 0; i < 3; ++i) {
+        if (caps.lathe && i == 1) continue;
+        b.end[i] = b.start[i] + Snap(rng.Int(-300, 300) / 10.0 / Unit());
+      }
+      if (!Inside(b.end) || b.end == b.start) b.end = RandomPoint();
+    }
+    // An incremental step from an off-grid start would round: the first move after a change is absolute.
+    if (caps.lathe) b.end[1] = 0;
+    need_abs = false;
+  }
+  if (b.kind != MoveKind::kRapid) b.feed = Feed();
+  if (rng.Chance(40)) b.omit = static_cast<unsigned>(rng.Next() & 63);
+  machine = ToMachine(b.end);
+  rot = b.rot_end;
+  return b;
+}
+
+std::string Fmt(double v, int decimals) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
+  return buf;
+}
+
+}  // namespace
+
+std::array<int, 3> AxesOf(const Modes& m) {
+  std::array<int, 3> a{0, 1, 2};
+  if (m.plane == 18) a = {2, 0, 1};
+  if (m.plane == 19) a = {1, 2, 0};
+  if (m.swapped) std::swap(a[0], a[1]);
+  return a;
+}
+
+bool OmitAxis(const Block& b, int axis) {
+  return (b.omit & (1u << axis)) && !b.radius_form && b.end[axis] == b.start[axis];
+}
+
+bool OmitCentre(const Block& b, int axis) {
+  return (b.omit & (8u << axis)) && b.kind == MoveKind::kArc && !b.radius_form &&
+         b.center[axis] == b.start[axis];
+}
+
+std::string Num(double v, int decimals, bool point) {
+  std::string s = Fmt(v, decimals);
+  if (s.find('.') != std::string::npos) {
+    while (s.back() == '0') s.pop_back();
+    if (s.back() == '.' && !point) s.pop_back();
+  }
+  if (s == "-0" || s == "-0.") s = s.substr(1);
+  return s;
+}
+
+std::vector<Block> Generate(const Caps& caps, std::uint64_t seed, int count) {
+  Gen g{caps, Rng{seed}, {}, {}, {}, {}, true, false, {}};
+  g.cur.plane = caps.planes.front();
+  if (caps.inch && !caps.unit_switch) g.cur.inch = caps.inch_only || g.rng.Chance(30);
+  if (caps.lathe)
+    g.box = Box{{2, 0, -120}, {80, 0, 20}};
+  else
+    g.box = Box{{-120, -120, -80}, {120, 120, 60}};
+  std::vector<Block> out;
+  out.reserve(static_cast<std::size_t>(count));
+  for (int i = 0; i < count; ++i) out.push_back(g.Next());
+  return out;
+}
+
+namespace {
+
+// One NGC block's words for a move (modes are written by the caller).
+std::string NgcMove(const Block& b, const Caps& caps) {
+  const int d = 6;
+  std::string s;
+  auto word = [&](char letter, double v) { s += " " + std::string(1, letter) + Num(v, d); };
+  auto ax = AxesOf(b.m);
+  const char* letters = "XYZ";
+  if (b.kind == MoveKind::kRapid) s = "G0";
+  if (b.kind == MoveKind::kLine) s = "G1";
+  if (b.kind == MoveKind::kArc) s = b.cw != b.m.swapped ? "G2" : "G3";  // seen from the plane's normal
+  if (b.kind == MoveKind::kSet) {
+    s = "G92";
+    for (int i = 0; i < 3; ++i)
+      if (!(caps.lathe && i == 1)) word(letters[i], caps.lathe && i == 0 ? 2 * b.end[i] : b.end[i]);
+    return s;
+  }
+  if (b.kind == MoveKind::kCycle) {
+    s = "G99 G" + std::to_string(b.cycle);
+    for (std::size_t h = 0; h < b.holes.size(); ++h) {
+      s += " X" + Num(b.holes[h][0], d) + " Y" + Num(b.holes[h][1], d);
+      if (h == 0) {
+        s += " Z" + Num(b.bottom, d) + " R" + Num(b.r_level, d) + " F" + Num(b.feed, d);
+        if (b.cycle == 82 || b.cycle == 86 || b.cycle == 89) s += " P1";  // rs274 asks P of G86 too
+      }
+      s += "\n";
+    }
+    return s + "G80";
+  }
+  for (int i = 0; i < 3; ++i) {
+    if (caps.lathe && i == 1) continue;
+    double v = b.m.incremental ? b.end[i] - b.start[i] : b.end[i];
+    word(letters[i], caps.lathe && i == 0 ? 2 * v : v);
+  }
+  if (b.kind == MoveKind::kArc) {
+    if (b.radius_form) {
+      word('R', b.radius);
+    } else {
+      const char* centre = "IJK";
+      for (int k = 0; k < 2; ++k) word(centre[ax[k]], b.center[ax[k]] - b.start[ax[k]]);
+    }
+    if (b.turns) s += " P" + std::to_string(b.turns + 1);
+  }
+  const char* rotary = "ABC";
+  for (int i = 0; i < 3; ++i)
+    if (b.rot_end[i] != b.rot_start[i])
+      word(rotary[i], b.m.incremental ? b.rot_end[i] - b.rot_start[i] : b.rot_end[i]);
+  if (b.kind != MoveKind::kRapid) word('F', b.feed);
+  return s;
+}
+
+}  // namespace
+
+NgcText WriteNgc(const std::vector<Block>& blocks, const Caps& caps) {
+  NgcText out;
+  std::string& t = out.text;
+  t = "%\nG21 G90 G94 G40 G49 G80 G54 G17\n";
+  for (int k = 1; k < kOffsets; ++k) {
+    const Vec3& o = kOffsetTable[static_cast<std::size_t>(k)];
+    t += "G10 L2 P" + std::to_string(k + 1) + " X" + Num(o[0], 6) + " Y" +  // before G7: a radius
+         Num(caps.lathe ? 0 : o[1], 6) + " Z" + Num(o[2], 6) + "\n";
+  }
+  if (caps.lathe) t += "G7 G18\n";
+  t += "S1000 M3\n";
+  Modes m;
+  m.plane = caps.lathe ? 18 : 17;
+  for (const Block& b : blocks) {
+    std::string modes;
+    if (b.m.inch != m.inch) modes += b.m.inch ? "G20 " : "G21 ";
+    if (b.m.offset != m.offset) modes += "G" + std::to_string(54 + b.m.offset) + " ";
+    if (b.m.incremental != m.incremental) modes += b.m.incremental ? "G91 " : "G90 ";
+    if (b.m.plane != m.plane) modes += "G" + std::to_string(b.m.plane) + " ";
+    if (b.m.per_rev != m.per_rev || b.m.inverse != m.inverse)
+      modes += b.m.inverse ? "G93 " : b.m.per_rev ? "G95 " : "G94 ";
+    m = b.m;
+    // Modes on a line of their own: rs274 sets F before G20/G21 within a block (LinuxCNC's order of
+    // execution).
+    if (!modes.empty()) modes.back() = '\n';
+    std::string line = modes + NgcMove(b, caps);
+    out.blocks.push_back(line);
+    t += line + "\n";
+  }
+  t += "M2\n%\n";
+  return out;
+}
+
+}  // namespace cell::oracle
