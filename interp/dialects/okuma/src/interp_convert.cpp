@@ -473,6 +473,8 @@ void OkRun::RefuseUnusedAddresses(const BlockWords& w, const NcGCodes& k) const 
   if (k.lap == 85 || k.lap == 86) ext_used |= 0xFFu << 3;  // DA DB FA FB XA XB ZA ZB
   if (k.cycle == 73 || k.cycle == 74) ext_used |= 1u << 3;
   if (w.Has('C')) ext_used |= 1u << 2;
+  ext_used |= 1u << 1;                                   // SB=, like S, in any block (ln 1863-1871)
+  if (k.cycle >= 185 && k.cycle <= 188) ext_used |= 1u;  // SA=, the C speed of G185-G188 (ln 4234)
   for (int i = 0; i < 13; ++i) {
     if (!w.HasExt(i) || ((ext_used >> i) & 1u)) continue;
     const int col = w.ext_col[static_cast<size_t>(i)];
@@ -555,26 +557,12 @@ void OkRun::RefuseUnsupported(const BlockWords& w) {
     Fail(w.Col('P'),
          "P (two-turret synchronisation, ln 6960-6990) is not supported: one program, one saddle");
   }
-  const int sb = ExtIndex(MakeAddr('S', 'B'));
-  if (w.HasExt(sb)) {
-    Fail(w.ext_col[static_cast<size_t>(sb)],
-         "SB= (M-tool spindle speed, ln 1863-1871) is not supported by the cell's OSP-E100L dialect: no "
-         "M-tool "
-         "spindle");
-  }
   RefuseTorqueAndTurretB(w);
   for (const auto& m : w.m) {
     if (const char* what = RefusedControlM(m.code)) {
       Fail(m.col, fmt::format("M{} ({}) is not supported by the cell's OSP-E100L dialect", m.code, what));
     }
     switch (m.code) {
-      case 13:
-      case 14:
-        // One spindle and no M-tool spindle speed in the canonical output (judgement 46).
-        Fail(m.col,
-             fmt::format("M{} (M-tool spindle {}) is not supported by the cell's OSP-E100L dialect: no "
-                         "M-tool spindle",
-                         m.code, m.code == 13 ? "CW" : "CCW"));
       case 61:
       case 63:
         // The servo's spindle segment completes at speed and the move waits for it: the overlap these codes
@@ -683,6 +671,7 @@ void OkRun::SpindleAndM(const BlockWords& w, bool before_motion) {
     sp.css = modal_.css ? css_ : 0;
     sp.max_rpm = max_rpm_;
   }
+  MToolSpindle(w);
   for (const auto& m : w.m) {
     const int c = m.code;
     switch (c) {
@@ -734,12 +723,12 @@ void OkRun::SpindleAndM(const BlockWords& w, bool before_motion) {
         break;
       case 109:
       case 110:
-        if (c == 110 && (w.has != 0 || w.g.size() + w.m.size() > 1)) {
-          Fail(m.col, "M110 must be alone in its block");
-        }
-        modal_.c_joined = c == 110;
-        Out<AuxOp>().m = c;
+        CAxisJoint(w, m);
         break;
+      case 12:
+      case 13:
+      case 14:
+        break;  // the M-tool spindle (MToolSpindle, with the main spindle)
       case 146:
       case 147:
         modal_.c_clamped = c == 147;
@@ -761,6 +750,63 @@ void OkRun::SpindleAndM(const BlockWords& w, bool before_motion) {
         break;
     }
   }
+}
+
+// The M-tool (live tool) spindle (ln 1863-1871, 1945-1946, 2036-2060, 4732-4744): SB= its speed (kept through
+// reset), M13 CW, M14 CCW, M12 stop. Rotating it needs the C axis joined (M110) unless the interlock is
+// released (M153); the manual gives that alarm no number. A new SB= while it turns changes its speed.
+void OkRun::MToolSpindle(const BlockWords& w) {
+  const int sb = ExtIndex(MakeAddr('S', 'B'));
+  bool speed_change = false;
+  if (w.HasExt(sb)) {
+    const double v = w.ext[static_cast<size_t>(sb)];
+    if (v < 0 || v > 65535 || v != std::floor(v))
+      Fail(w.ext_col[static_cast<size_t>(sb)], "SB is 0-65535 (M-tool spindle rpm)");
+    speed_change = v != sb_;
+    sb_ = v;
+  }
+  const BlockWords::Code* code = nullptr;
+  for (const auto& m : w.m) {
+    if (m.code != 12 && m.code != 13 && m.code != 14) continue;
+    if (code) Fail(m.col, "two of M12/M13/M14 in one block");
+    code = &m;
+  }
+  const bool released = (modal_.mtool_release || w.HasM(153)) && !w.HasM(152);
+  if (code && code->code != 12 && !modal_.c_joined && !released) {
+    Fail(code->col,
+         fmt::format("M{}: the M-tool spindle cannot rotate while the C axis is not joined (M110); "
+                     "M153 releases the interlock",
+                     code->code));
+  }
+  const SpindleDir d = !code              ? modal_.mtool
+                       : code->code == 12 ? SpindleDir::kStop
+                       : code->code == 13 ? SpindleDir::kCw
+                                          : SpindleDir::kCcw;
+  const bool running = d == SpindleDir::kCw || d == SpindleDir::kCcw;
+  if (code || (speed_change && running)) EmitMTool(d);
+}
+
+void OkRun::EmitMTool(SpindleDir d) {
+  modal_.mtool = d;
+  SpindleOp& sp = Out<SpindleOp>();
+  sp.spindle = SpindleId::kLiveTool;
+  sp.dir = d;
+  sp.rpm = sb_;
+}
+
+// M110 joins the spindle as the C axis (alone in its block, not cleared by reset); M109 returns it to spindle
+// control, stopped (ln 1983-1984, 2057-2069). Both are the main spindle's state: `spindle` ops.
+void OkRun::CAxisJoint(const BlockWords& w, const BlockWords::Code& m) {
+  if (m.code == 110 && (w.has != 0 || w.ext_has != 0 || w.g.size() + w.m.size() > 1)) {
+    Fail(m.col, "M110 must be alone in its block");
+  }
+  modal_.c_joined = m.code == 110;
+  modal_.spindle = m.code == 110 ? SpindleDir::kAxis : SpindleDir::kStop;
+  SpindleOp& sp = Out<SpindleOp>();
+  sp.dir = modal_.spindle;
+  sp.rpm = s_;
+  sp.css = modal_.css ? css_ : 0;
+  sp.max_rpm = max_rpm_;
 }
 
 void OkRun::StopAndEnd(const BlockWords& w) {

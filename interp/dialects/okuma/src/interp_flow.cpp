@@ -634,6 +634,7 @@ void OkRun::ResetProgramState() {
   modal_.turret_b = false;
   modal_.comp = 40;
   modal_.chuck_barrier = modal_.tail_barrier = false;  // barrier off at reset (ln 9108)
+  modal_.mtool_release = false;                        // M152 at reset (ln 4741)
   f_ = 0;
 }
 

@@ -128,6 +128,7 @@ struct Modal {
   int thread_mode = 32;                    // M32 M33 M34
   int infeed = 73;                         // M73 M74 M75
   bool mtool_release = false;              // M153 / M152
+  SpindleDir mtool = SpindleDir::kStop;    // M13 M14 / M12: the live (M-tool) spindle
 };
 
 // The thread chain in progress (repeated G31/G32/G33 blocks, G34/G35 chains).
@@ -221,6 +222,9 @@ class OkRun final : public RunBase, public VarReader {
   void ApplyModalG(const BlockWords& w, bool* motion_code, int* motion_col);
   void ToolWord(const BlockWords& w);
   void SpindleAndM(const BlockWords& w, bool before_motion);
+  void MToolSpindle(const BlockWords& w);
+  void EmitMTool(SpindleDir d);
+  void CAxisJoint(const BlockWords& w, const BlockWords::Code& m);
   void StopAndEnd(const BlockWords& w);
   double Scale(char addr, double v, bool feed_per_rev) const;
   double ScaleLength(double v) const;
@@ -318,6 +322,7 @@ class OkRun final : public RunBase, public VarReader {
     double angle = 0;
   } thread_phase_;
   double s_ = 0;        // S as last programmed (rpm)
+  double sb_ = 0;       // SB= as last programmed (M-tool rpm; kept through reset, ln 1877)
   double css_ = 0;      // G96 S (m/min)
   double max_rpm_ = 0;  // G50 S
   ThreadChain chain_;
