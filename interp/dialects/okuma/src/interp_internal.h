@@ -153,6 +153,8 @@ struct MToolCycle {
   bool after_cancel = false;  // G180 ran: the next block needs both X and Z (ln 4527)
   bool zigzag = false;        // G190: M212 (M211, one direction, by default: ln 4505)
   bool equal = false;         // G190: M214 (M213, the designated infeed D, by default)
+  long budget = 0;            // moves one block may still make (a guard, judgement 38)
+  int col = 1;                // the block's cycle column (for the guard's alarm)
 };
 
 class OkRun final : public RunBase, public VarReader {

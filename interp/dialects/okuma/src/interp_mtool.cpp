@@ -34,6 +34,11 @@ void OkRun::MToolChecks(const BlockWords& w, int g, bool fresh, int col) {
   if (mc_.need_g180) Fail(col, "a block with Q (the repeat count) must be followed by G180");
   if (modal_.incremental) Fail(col, "no incremental data (G91) in an M-tool compound fixed cycle");
   if (!modal_.c_joined) Fail(col, "the M-tool compound fixed cycles need the C axis joined (M110)");
+  if (lap_.active || lap_.finish) Fail(col, "an M-tool compound fixed cycle cannot be part of a LAP contour");
+  if (modal_.comp != 40)
+    Fail(col, "M-tool compound fixed cycles are not allowed in nose radius compensation mode");
+  if (open_line_)
+    Fail(col, "after a line given by an angle only, the next block must be a line with X, Z and A");
   if (fresh && mc_.g == 0 && modal_.c_clamped) {
     Fail(col, "the C axis must be unclamped (M146) before an M-tool compound fixed cycle");
   }
@@ -94,6 +99,8 @@ void OkRun::MToolBlock(const BlockWords& w, int g, bool fresh, int col) {
   }
   if (fresh && g != mc_.g) mc_.chained = false;
   mc_.g = g;
+  mc_.budget = 200000;
+  mc_.col = col;
   if (w.HasM(211) || w.HasM(212)) mc_.zigzag = w.HasM(212);
   if (w.HasM(213) || w.HasM(214)) mc_.equal = w.HasM(214);
   MToolMerge(w);
@@ -123,6 +130,9 @@ void OkRun::MToolIndex(AxisArray target, uint32_t moved, double c_prog) {
 }
 
 void OkRun::MToolMove(int axis, double v, bool rapid, double feed) {
+  if (--mc_.budget < 0) {
+    Fail(mc_.col, "more than 200000 moves in one M-tool cycle block: D is too small or Q too large");
+  }
   AxisArray t = pos_;
   t[static_cast<size_t>(axis)] = v;
   EmitMove(t, 1u << axis, rapid, feed, FeedMode::kPerMinute, {}, 0, nullptr);
@@ -262,6 +272,7 @@ void OkRun::MToolKeyway(const BlockWords& m, double c, int col) {
   const double e = m.Has('E') && m.Get('E') > 0 ? Scale('F', m.Get('E'), false) : f_;
   std::vector<double> levels;
   const double total = std::fabs(rough - ds), d = m.Get('D');
+  if (total / d > 10000) Fail(col, "more than 10000 key way passes: D is too small");
   const int n = static_cast<int>(std::ceil(total / d - 1e-9));
   if (n > 10000) Fail(col, "more than 10000 key way passes: D is too small");
   for (int i = 1; i <= n; ++i)
