@@ -28,8 +28,8 @@ constexpr int kSa = 0;  // BlockWords::ext index of SA=
 }  // namespace
 
 // What a block in M-tool cycle mode may hold (ln 4746, 4801-4803, 4523, 4095-4098): no incremental data, no
-// S, M or T (the cycle's own M136, M140, M141, M211-M214 in its G block), C joined and unclamped at the
-// start, G94 for the drilling family and G95 for the threads, and after a Q block only G180.
+// S, M or T (the cycle's own M136, M141, M211-M214 in its G block; M140 is refused before), C joined and
+// unclamped at the start, G94 for the drilling family and G95 for the threads, and after a Q block only G180.
 void OkRun::MToolChecks(const BlockWords& w, int g, bool fresh, int col) {
   if (mc_.need_g180) Fail(col, "a block with Q (the repeat count) must be followed by G180");
   if (modal_.incremental) Fail(col, "no incremental data (G91) in an M-tool compound fixed cycle");
@@ -50,7 +50,7 @@ void OkRun::MToolChecks(const BlockWords& w, int g, bool fresh, int col) {
          "no SB= in M-tool compound fixed cycle mode");
   }
   for (const auto& m : w.m) {
-    const bool own = m.code == 136 || m.code == 140 || m.code == 141 || (m.code >= 211 && m.code <= 214);
+    const bool own = m.code == 136 || m.code == 141 || (m.code >= 211 && m.code <= 214);
     if (!own || !fresh)
       Fail(m.col, fmt::format("no M code (M{}) in M-tool compound fixed cycle mode", m.code));
   }
@@ -69,6 +69,7 @@ void OkRun::MToolChecks(const BlockWords& w, int g, bool fresh, int col) {
 void OkRun::MToolMerge(const BlockWords& w) {
   BlockWords& m = mc_.words;
   if (w.Has('I') && w.Has('K')) Fail(w.Col('K'), "I and K in one M-tool cycle block: give one of them");
+  if (w.Has('C') && std::fabs(w.Get('C')) > 359.999 + 1e-9) Fail(w.Col('C'), "C is 0 to +-359.999 degrees");
   const uint32_t keep = Bits("XZCRIKDELUW");
   if (w.Has('I')) m.has &= ~Bits("K");
   if (w.Has('K')) m.has &= ~Bits("I");
