@@ -321,6 +321,10 @@ struct Writer {
     Num(out, d.seconds);
   }
   void operator()(const SpindleOp& s) const {
+    if (s.spindle != SpindleId::kMain) {  // the main spindle's ops keep their form
+      Key(out, "spindle");
+      Str(out, SpindleIdName(s.spindle));
+    }
     Key(out, "dir");
     Str(out, SpindleDirName(s.dir));
     Key(out, "s");
@@ -471,8 +475,14 @@ const char* SpindleDirName(SpindleDir d) {
       return "ccw";
     case SpindleDir::kOrient:
       return "orient";
+    case SpindleDir::kAxis:
+      return "axis";
   }
   return "stop";
+}
+
+const char* SpindleIdName(SpindleId s) {
+  return s == SpindleId::kLiveTool ? "live_tool" : "main";
 }
 
 const char* CoolantModeName(CoolantMode m) {

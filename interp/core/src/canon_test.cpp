@@ -134,6 +134,14 @@ TEST(CanonJson, LatheOps) {
   s.max_rpm = 2500;
   EXPECT_EQ(ToJsonLine(c),
             R"({"op":"spindle","line":1,"dir":"cw","s":0.0000,"css":150.0000,"max_rpm":2500.0000})");
+  // Turn-mills: the work spindle joined as the C axis, and the live tool's own spindle by name.
+  s = SpindleOp{};
+  s.dir = SpindleDir::kAxis;
+  EXPECT_EQ(ToJsonLine(c), R"({"op":"spindle","line":1,"dir":"axis","s":0.0000})");
+  s.spindle = SpindleId::kLiveTool;
+  s.dir = SpindleDir::kCcw;
+  s.rpm = 400;
+  EXPECT_EQ(ToJsonLine(c), R"({"op":"spindle","line":1,"spindle":"live_tool","dir":"ccw","s":400.0000})");
   ThreadOp& t = c.Set<ThreadOp>();
   t.to.pos[kX] = 38.2;
   t.to.pos[kZ] = -30;

@@ -374,7 +374,15 @@ void Station::ExecuteIo(const std::string& program, const interp::Canon& c, AuxI
     }
   };
   if (const auto* sp = c.If<interp::SpindleOp>()) {
-    aux.Spindle(*sp);
+    if (sp->spindle == interp::SpindleId::kMain) {
+      aux.Spindle(*sp);
+    } else if (sp->dir == interp::SpindleDir::kCw || sp->dir == interp::SpindleDir::kCcw) {
+      // The axis servo has no live-tool spindle yet (issue 36): refused rather than cut with a still tool.
+      checked([] {
+        throw Error(Errc::kFailedPrecondition,
+                    "the live-tool (M-tool) spindle cannot start: the axis servo has no live-tool spindle");
+      });
+    }
   } else if (const auto* o = c.If<interp::OutputOp>()) {
     const auto spec = checked([&] { return ParseOutputSpec(o->spec); });
     if (!spec) {

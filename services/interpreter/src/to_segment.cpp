@@ -70,6 +70,8 @@ std::optional<cell::MotionSegment> ToSegment(const interp::Canon& c) {
       return s;
     case interp::Op::kSpindle: {
       const auto& sp = c.As<interp::SpindleOp>();
+      // The segment's spindle is the work spindle; a live tool's op is the station's (Station::ExecuteIo).
+      if (sp.spindle != interp::SpindleId::kMain) return std::nullopt;
       s.kind(cell::SEGMENT_SPINDLE);
       s.spindle_rpm(sp.rpm);
       s.spindle_mode(sp.dir == interp::SpindleDir::kCw       ? 1

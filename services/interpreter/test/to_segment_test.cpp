@@ -33,6 +33,20 @@ TEST(ToSegment, ThreadCarriesLeadLeadChangeAndStartAngle) {
   EXPECT_TRUE(ToSegment(c)->exact_stop());
 }
 
+// A live tool's op never drives the work spindle: the station handles it (Station::ExecuteIo).
+TEST(ToSegment, LiveToolSpindleIsNoSegment) {
+  Canon c;
+  interp::SpindleOp& sp = c.Set<interp::SpindleOp>();
+  sp.spindle = interp::SpindleId::kLiveTool;
+  sp.dir = interp::SpindleDir::kCw;
+  sp.rpm = 400;
+  EXPECT_FALSE(ToSegment(c));
+  sp.spindle = interp::SpindleId::kMain;
+  sp.dir = interp::SpindleDir::kAxis;  // joined as C: the spindle no longer turns as a spindle
+  ASSERT_TRUE(ToSegment(c));
+  EXPECT_EQ(ToSegment(c)->spindle_mode(), 0);
+}
+
 TEST(ToSegment, SpindleCarriesConstantSurfaceSpeedAndTheLimit) {
   Canon c;
   interp::SpindleOp& sp = c.Set<interp::SpindleOp>();

@@ -76,15 +76,20 @@ const char* UnsupportedG(int g) {
     default:
       if (g >= 161 && g <= 171) return "G code macro";
       if (g >= 205 && g <= 214) return "G code macro";
-      if (g >= 178 && g <= 191) return "M-tool compound fixed cycle";
+      if (g == 178 || g == 179) {
+        return "M-tool synchronized tapping: the canonical output has no move synchronised with the live "
+               "tool";
+      }
+      if (g == 191) return "longitudinal key-way cutting cycle: listed in the appendix only, no format";
       return nullptr;
   }
 }
 
 bool KnownG(int g) {
-  static constexpr int kKnown[] = {0,  1,  2,  3,  4,  13, 14, 18, 28, 29, 31, 32, 33,  34,  35, 40,
-                                   41, 42, 50, 64, 65, 71, 72, 73, 74, 75, 76, 77, 78,  80,  81, 82,
-                                   83, 84, 85, 86, 87, 88, 90, 91, 94, 95, 96, 97, 110, 111, 136};
+  static constexpr int kKnown[] = {0,   1,   2,   3,   4,   13,  14,  18,  28,  29,  31,  32,  33, 34, 35,
+                                   40,  41,  42,  50,  64,  65,  71,  72,  73,  74,  75,  76,  77, 78, 80,
+                                   81,  82,  83,  84,  85,  86,  87,  88,  90,  91,  94,  95,  96, 97, 110,
+                                   111, 136, 180, 181, 182, 183, 184, 185, 186, 187, 188, 189, 190};
   return std::find(std::begin(kKnown), std::end(kKnown), g) != std::end(kKnown);
 }
 
@@ -282,6 +287,24 @@ void OkRun::ReadNcGCodes(const BlockWords& w, NcGCodes& k) {
         break;
       case 110:
         break;  // constant surface speed on turret A: the cell's only state (G111 refused)
+      case 180:
+        k.g180 = true;
+        break;
+      case 181:
+      case 182:
+      case 183:
+      case 184:
+      case 185:
+      case 186:
+      case 187:
+      case 188:
+      case 189:
+      case 190:
+        if (k.cycle) Fail(g.col, "two cycle G codes in one block");
+        k.cycle = g.code;
+        k.cycle_col = g.col;
+        k.mtool_fresh = true;
+        break;
       default:
         break;
     }
@@ -316,6 +339,8 @@ void OkRun::NcAction(const BlockWords& w, const Block& b, const NcGCodes& k, boo
     Grooving(w, k.cycle, k.cycle_col);
   } else if (k.cycle == 77 || k.cycle == 78) {
     Tapping(w, k.cycle, k.cycle_col);
+  } else if (k.cycle >= 181 && k.cycle <= 190) {
+    MToolBlock(w, k.cycle, k.mtool_fresh, k.cycle_col);
   } else {
     if (k.chamfer && modal_.motion != 1) {
       Fail(w.FindG(k.chamfer)->col, fmt::format("G{} is effective only in G01 mode", k.chamfer));
@@ -352,6 +377,10 @@ void OkRun::ExecNc(const Block& b) {
   if (k.g90 && k.g91) Fail(w.FindG(91)->col, "G90 and G91 in one block");
   if (k.g90) modal_.incremental = false;
   if (k.g91) modal_.incremental = true;
+  if (MToolMode(w, k)) {
+    EndBlockStages(false);
+    return;
+  }
   if (k.g13 || k.g14) {
     // Turret selection (ln 7156-7361): alone in its block; refused during G41/G42, G91, LAP and G96.
     const bool b_turret = k.g14;
@@ -406,6 +435,50 @@ void OkRun::ExecNc(const Block& b) {
   if (!ended_ && motion_block) TriggerModin();
 }
 
+// The M-tool cycle mode's side of a block (ln 4073-4130, 4521-4528): G180 alone ends it (true: the block is
+// done), the block after G180 needs X and Z, and a block without a G code of its own runs the cycle in force.
+bool OkRun::MToolMode(const BlockWords& w, NcGCodes& k) {
+  if (k.g180) {
+    const int col = w.FindG(180)->col;
+    if (w.has != 0 || w.ext_has != 0 || !w.m.empty() || w.g.size() > 1) {
+      Fail(col, "G180 must be alone in its block");
+    }
+    MToolCancel(col);
+    return true;
+  }
+  int col = !w.g.empty() ? w.g.front().col : (!w.m.empty() ? w.m.front().col : 0);
+  for (int i = 0; i < 26 && col == 0; ++i) {  // no G or M: the block's first word
+    if ((w.has >> i) & 1u) col = w.col[static_cast<size_t>(i)];
+  }
+  for (int i = 0; i < 26 && w.g.empty() && w.m.empty(); ++i) {
+    if ((w.has >> i) & 1u) col = std::min(col, w.col[static_cast<size_t>(i)]);
+  }
+  if (col == 0) col = 1;
+  if (mc_.after_cancel) {
+    if (!w.Has('X') || !w.Has('Z')) {
+      Fail(col, "the block after G180 must contain both X and Z");
+    }
+    mc_.after_cancel = false;
+  }
+  if (k.cycle == 0 && mc_.g != 0) {
+    if (k.motion_g >= 0 || k.lap || k.dwell || k.g50) {
+      Fail(col, "cancel the M-tool compound fixed cycle with G180 first");
+    }
+    k.cycle = mc_.g;
+    k.cycle_col = col;
+  }
+  if (k.cycle >= 181 && k.cycle <= 190) MToolChecks(w, k.cycle, k.mtool_fresh, k.cycle_col);
+  if (!k.mtool_fresh) {
+    for (const auto& m : w.m) {
+      if (m.code == 136 || m.code == 141 || (m.code >= 211 && m.code <= 214)) {
+        Fail(m.col,
+             fmt::format("M{} acts only in the block of an M-tool compound fixed cycle (G181-G190)", m.code));
+      }
+    }
+  }
+  return false;
+}
+
 // The single-letter addresses the block's function reads (each function's programming format: ln 1147-1300,
 // 1642-1707, 3239-3414, 3640-4071, 5124-5252, 2235-2447 for I/K with G40-G42); F, S and T belong to any
 // block. `what` names the function for the alarm.
@@ -434,7 +507,17 @@ uint32_t OkRun::UsedAddresses(const NcGCodes& k, std::string* what) const {
     case 77:
     case 78:
       return named(k.cycle, "XZK");
+    case 183:
+      return named(183, "XZCRIKQDEL");
+    case 185:
+    case 186:
+    case 187:
+    case 188:
+      return named(k.cycle, "XZCIK");
+    case 190:
+      return named(190, "XZCIKQDUWE");
     default:
+      if (k.cycle >= 181 && k.cycle <= 189) return named(k.cycle, "XZCRIKQE");
       break;
   }
   const int motion = k.motion_g >= 0 ? k.motion_g : modal_.motion;
@@ -467,12 +550,13 @@ void OkRun::RefuseUnusedAddresses(const BlockWords& w, const NcGCodes& k) const 
   std::string what;
   const uint32_t unused = w.has & ~UsedAddresses(k, &what);
   // Extended addresses: QA= with a C word (ln 2075), DA= in G73/G74 (ln 3933), the G84 change points of a
-  // G85/G86 call (ln 5145-5173); SA= belongs to the M-tool cycles (refused). SB=, PZ=, PW= are refused
-  // before.
+  // G85/G86 call (ln 5145-5173), SA= in G185-G188, SB= anywhere; PZ=, PW= are refused before.
   uint32_t ext_used = 0;
   if (k.lap == 85 || k.lap == 86) ext_used |= 0xFFu << 3;  // DA DB FA FB XA XB ZA ZB
   if (k.cycle == 73 || k.cycle == 74) ext_used |= 1u << 3;
   if (w.Has('C')) ext_used |= 1u << 2;
+  ext_used |= 1u << 1;                                   // SB=, like S, in any block (ln 1863-1871)
+  if (k.cycle >= 185 && k.cycle <= 188) ext_used |= 1u;  // SA=, the C speed of G185-G188 (ln 4234)
   for (int i = 0; i < 13; ++i) {
     if (!w.HasExt(i) || ((ext_used >> i) & 1u)) continue;
     const int col = w.ext_col[static_cast<size_t>(i)];
@@ -555,26 +639,19 @@ void OkRun::RefuseUnsupported(const BlockWords& w) {
     Fail(w.Col('P'),
          "P (two-turret synchronisation, ln 6960-6990) is not supported: one program, one saddle");
   }
-  const int sb = ExtIndex(MakeAddr('S', 'B'));
-  if (w.HasExt(sb)) {
-    Fail(w.ext_col[static_cast<size_t>(sb)],
-         "SB= (M-tool spindle speed, ln 1863-1871) is not supported by the cell's OSP-E100L dialect: no "
-         "M-tool "
-         "spindle");
-  }
   RefuseTorqueAndTurretB(w);
   for (const auto& m : w.m) {
     if (const char* what = RefusedControlM(m.code)) {
       Fail(m.col, fmt::format("M{} ({}) is not supported by the cell's OSP-E100L dialect", m.code, what));
     }
     switch (m.code) {
-      case 13:
-      case 14:
-        // One spindle and no M-tool spindle speed in the canonical output (judgement 46).
+      case 140:
+        // Ignoring the live tool's speed answer in tapping (ln 1989-1990, 4172-4173) asks for the overlap
+        // M61/M63 ask for (judgement 44).
         Fail(m.col,
-             fmt::format("M{} (M-tool spindle {}) is not supported by the cell's OSP-E100L dialect: no "
-                         "M-tool spindle",
-                         m.code, m.code == 13 ? "CW" : "CCW"));
+             "M140 (tapping cycle M-tool speed answer ignore) is not supported by the cell's OSP-E100L "
+             "dialect: "
+             "the axes always wait for the spindle");
       case 61:
       case 63:
         // The servo's spindle segment completes at speed and the move waits for it: the overlap these codes
@@ -683,6 +760,7 @@ void OkRun::SpindleAndM(const BlockWords& w, bool before_motion) {
     sp.css = modal_.css ? css_ : 0;
     sp.max_rpm = max_rpm_;
   }
+  MToolSpindle(w);
   for (const auto& m : w.m) {
     const int c = m.code;
     switch (c) {
@@ -715,6 +793,12 @@ void OkRun::SpindleAndM(const BlockWords& w, bool before_motion) {
       case 27:
       case 85:
       case 60:
+      case 136:
+      case 141:
+      case 211:
+      case 212:
+      case 213:
+      case 214:
         break;  // read by the blocks that use them; M60 (wait for the surface speed) is what the servo does
       case 32:
       case 33:
@@ -734,12 +818,12 @@ void OkRun::SpindleAndM(const BlockWords& w, bool before_motion) {
         break;
       case 109:
       case 110:
-        if (c == 110 && (w.has != 0 || w.g.size() + w.m.size() > 1)) {
-          Fail(m.col, "M110 must be alone in its block");
-        }
-        modal_.c_joined = c == 110;
-        Out<AuxOp>().m = c;
+        CAxisJoint(w, m);
         break;
+      case 12:
+      case 13:
+      case 14:
+        break;  // the M-tool spindle (MToolSpindle, with the main spindle)
       case 146:
       case 147:
         modal_.c_clamped = c == 147;
@@ -761,6 +845,63 @@ void OkRun::SpindleAndM(const BlockWords& w, bool before_motion) {
         break;
     }
   }
+}
+
+// The M-tool (live tool) spindle (ln 1863-1871, 1945-1946, 2036-2060, 4732-4744): SB= its speed (kept through
+// reset), M13 CW, M14 CCW, M12 stop. Rotating it needs the C axis joined (M110) unless the interlock is
+// released (M153); the manual gives that alarm no number. A new SB= while it turns changes its speed.
+void OkRun::MToolSpindle(const BlockWords& w) {
+  const int sb = ExtIndex(MakeAddr('S', 'B'));
+  bool speed_change = false;
+  if (w.HasExt(sb)) {
+    const double v = w.ext[static_cast<size_t>(sb)];
+    if (v < 0 || v > 65535 || v != std::floor(v))
+      Fail(w.ext_col[static_cast<size_t>(sb)], "SB is 0-65535 (M-tool spindle rpm)");
+    speed_change = v != sb_;
+    sb_ = v;
+  }
+  const BlockWords::Code* code = nullptr;
+  for (const auto& m : w.m) {
+    if (m.code != 12 && m.code != 13 && m.code != 14) continue;
+    if (code) Fail(m.col, "two of M12/M13/M14 in one block");
+    code = &m;
+  }
+  const bool released = (modal_.mtool_release || w.HasM(153)) && !w.HasM(152);
+  if (code && code->code != 12 && !modal_.c_joined && !released) {
+    Fail(code->col,
+         fmt::format("M{}: the M-tool spindle cannot rotate while the C axis is not joined (M110); "
+                     "M153 releases the interlock",
+                     code->code));
+  }
+  const SpindleDir d = !code              ? modal_.mtool
+                       : code->code == 12 ? SpindleDir::kStop
+                       : code->code == 13 ? SpindleDir::kCw
+                                          : SpindleDir::kCcw;
+  const bool running = d == SpindleDir::kCw || d == SpindleDir::kCcw;
+  if (code || (speed_change && running)) EmitMTool(d);
+}
+
+void OkRun::EmitMTool(SpindleDir d) {
+  modal_.mtool = d;
+  SpindleOp& sp = Out<SpindleOp>();
+  sp.spindle = SpindleId::kLiveTool;
+  sp.dir = d;
+  sp.rpm = sb_;
+}
+
+// M110 joins the spindle as the C axis (alone in its block, not cleared by reset); M109 returns it to spindle
+// control, stopped (ln 1983-1984, 2057-2069). Both are the main spindle's state: `spindle` ops.
+void OkRun::CAxisJoint(const BlockWords& w, const BlockWords::Code& m) {
+  if (m.code == 110 && (w.has != 0 || w.ext_has != 0 || w.g.size() + w.m.size() > 1)) {
+    Fail(m.col, "M110 must be alone in its block");
+  }
+  modal_.c_joined = m.code == 110;
+  modal_.spindle = m.code == 110 ? SpindleDir::kAxis : SpindleDir::kStop;
+  SpindleOp& sp = Out<SpindleOp>();
+  sp.dir = modal_.spindle;
+  sp.rpm = s_;
+  sp.css = modal_.css ? css_ : 0;
+  sp.max_rpm = max_rpm_;
 }
 
 void OkRun::StopAndEnd(const BlockWords& w) {

@@ -96,6 +96,10 @@ OkRun::OkRun(const RunOptions& o) : RunBase(o) {
       arc_tolerance_ = std::max(0.0, ParamNumber(val, 0.01));
     } else if (key == "PECK_RETRACT") {
       peck_retract_ = std::max(0.0, ParamNumber(val, 0.5));
+    } else if (key == "MULTI_PECK_RETRACT") {
+      multi_peck_ = std::max(0.0, ParamNumber(val, 0.5));
+    } else if (key == "MULTI_RETURN_POINT") {
+      multi_return_start_ = ParamNumber(val, 0) != 0;
     } else if (key == "LAP_RELIEF") {
       lap_relief_ = std::max(0.0, ParamNumber(val, 0.1));
     } else if (key == "LAP_CLEARANCE") {
@@ -634,6 +638,8 @@ void OkRun::ResetProgramState() {
   modal_.turret_b = false;
   modal_.comp = 40;
   modal_.chuck_barrier = modal_.tail_barrier = false;  // barrier off at reset (ln 9108)
+  modal_.mtool_release = false;                        // M152 at reset (ln 4741)
+  mc_ = MToolCycle();
   f_ = 0;
 }
 

@@ -12,9 +12,10 @@
 //   nose_comp.cpp        tool-nose radius compensation G40/G41/G42 on the core's offset geometry
 //   interp_thread.cpp    thread cutting G31-G35 and the compound thread cycles G71/G72
 //   interp_cycles.cpp    grooving G73/G74, tapping G77/G78
-//   lap.cpp              LAP tool paths (AP modes I-V) from a captured contour
-//   interp_lap.cpp       the executor's side of LAP: contour capture, G84-G88 calls, modal restore
-//   tool_data.cpp        Okuma tool data (tool offsets, nose radius) in the manual's variables
+//   interp_mtool.cpp     the M-tool compound fixed cycles G181-G190 (drilling, boring, tapping, threads, key
+//   ways) lap.cpp              LAP tool paths (AP modes I-V) from a captured contour interp_lap.cpp       the
+//   executor's side of LAP: contour capture, G84-G88 calls, modal restore tool_data.cpp        Okuma tool
+//   data (tool offsets, nose radius) in the manual's variables
 #pragma once
 
 #include <array>
@@ -128,6 +129,7 @@ struct Modal {
   int thread_mode = 32;                    // M32 M33 M34
   int infeed = 73;                         // M73 M74 M75
   bool mtool_release = false;              // M153 / M152
+  SpindleDir mtool = SpindleDir::kStop;    // M13 M14 / M12: the live (M-tool) spindle
 };
 
 // The thread chain in progress (repeated G31/G32/G33 blocks, G34/G35 chains).
@@ -138,6 +140,21 @@ struct ThreadChain {
   AxisArray start{};       // G31-G33: the cycle start point (machine)
   bool cycle = false;      // G31-G33: a pass ran; the next blocks repeat it with new X (Z)
   double last_x = 0, last_z = 0, taper = 0, shift = 0, lead_change = 0;
+};
+
+// The M-tool compound fixed cycle in force (G181-G190 until G180, ln 4073-4937): its words are modal within
+// the mode (a block gives only what changes, ln 4797-4799).
+struct MToolCycle {
+  int g = 0;                  // 181-190; 0 = none
+  AxisArray start{};          // the cycle start point (X0, Z0: where the mode began), machine
+  BlockWords words;           // the words in force
+  bool need_g180 = false;     // a Q block ran: only G180 may follow (ln 4651-4657)
+  bool chained = false;       // G187/G188: a thread ran; the next block continues from its end (ln 4400-4433)
+  bool after_cancel = false;  // G180 ran: the next block needs both X and Z (ln 4527)
+  bool zigzag = false;        // G190: M212 (M211, one direction, by default: ln 4505)
+  bool equal = false;         // G190: M214 (M213, the designated infeed D, by default)
+  long budget = 0;            // moves one block may still make (a guard, judgement 38)
+  int col = 1;                // the block's cycle column (for the guard's alarm)
 };
 
 class OkRun final : public RunBase, public VarReader {
@@ -209,6 +226,7 @@ class OkRun final : public RunBase, public VarReader {
   struct NcGCodes {
     int motion_g = -1, motion_col = 1, comp_g = 0;
     bool dwell = false, g50 = false, g90 = false, g91 = false, g13 = false, g14 = false, g80 = false;
+    bool g180 = false, mtool_fresh = false;  // G180; a G181-G190 code in this block
     int chamfer = 0, cycle = 0, lap = 0, cycle_col = 1;
   };
   void ReadNcGCodes(const BlockWords& w, NcGCodes& k);
@@ -221,6 +239,9 @@ class OkRun final : public RunBase, public VarReader {
   void ApplyModalG(const BlockWords& w, bool* motion_code, int* motion_col);
   void ToolWord(const BlockWords& w);
   void SpindleAndM(const BlockWords& w, bool before_motion);
+  void MToolSpindle(const BlockWords& w);
+  void EmitMTool(SpindleDir d);
+  void CAxisJoint(const BlockWords& w, const BlockWords::Code& m);
   void StopAndEnd(const BlockWords& w);
   double Scale(char addr, double v, bool feed_per_rev) const;
   double ScaleLength(double v) const;
@@ -260,6 +281,23 @@ class OkRun final : public RunBase, public VarReader {
   void Grooving(const BlockWords& w, int g, int col);
   void Tapping(const BlockWords& w, int g, int col);
 
+  // M-tool compound fixed cycles (interp_mtool.cpp)
+  void MToolBlock(const BlockWords& w, int g, bool fresh, int col);
+  bool MToolMode(const BlockWords& w, NcGCodes& k);
+  void MToolMerge(const BlockWords& w);
+  void MToolChecks(const BlockWords& w, int g, bool fresh, int col);
+  void MToolDrill(const BlockWords& w, int g, int col);
+  void MToolHole(const BlockWords& w, int g, double c, int col);
+  void MToolPecks(int axis, double from, double bottom, double dir, int col);
+  void MToolKeyway(const BlockWords& w, double c, int col);
+  void MToolThread(const BlockWords& w, int g, int col);
+  void MToolCancel(int col);
+  void MToolIndex(AxisArray target, uint32_t moved, double c_prog);
+  void MToolMove(int axis, double v, bool rapid, double feed);
+  void MToolClamp(bool clamp);
+  void MToolStart();
+  double CTravelTo(double t) const;
+
   // LAP (interp_lap.cpp)
   void LapCall(const BlockWords& w, const Block& b, int g, int col);
   void LapBlock(const Block& b, const BlockWords& w);
@@ -292,11 +330,13 @@ class OkRun final : public RunBase, public VarReader {
   bool inch_ = false;
   bool block_delete_ = false;
   bool optional_stop_ = false;
-  double arc_tolerance_ = 0.01;     // OTHER FUNCTION 1 No. 6, mm
-  double peck_retract_ = 0.5;       // long word No. 7, mm
-  double lap_relief_ = 0.1;         // LAP bar turning relief, mm
-  double lap_clearance_ = 2.0;      // LAP4 clearance Lc, mm
-  double thread_chamfer_feed_ = 0;  // OTHER FUNCTION 1, unused offline
+  double arc_tolerance_ = 0.01;      // OTHER FUNCTION 1 No. 6, mm
+  double peck_retract_ = 0.5;        // long word No. 7, mm
+  double multi_peck_ = 0.5;          // MULTIPLE MACHINING pecking amount alpha of G183 (mm; X a diameter)
+  bool multi_return_start_ = false;  // MULTIPLE MACHINING multi cycle return point: the cycle start point
+  double lap_relief_ = 0.1;          // LAP bar turning relief, mm
+  double lap_clearance_ = 2.0;       // LAP4 clearance Lc, mm
+  double thread_chamfer_feed_ = 0;   // OTHER FUNCTION 1, unused offline
   int m75_pattern_ = 3;
 
   // Modal state and positions (machine coordinates, X a diameter).
@@ -318,9 +358,11 @@ class OkRun final : public RunBase, public VarReader {
     double angle = 0;
   } thread_phase_;
   double s_ = 0;        // S as last programmed (rpm)
+  double sb_ = 0;       // SB= as last programmed (M-tool rpm; kept through reset, ln 1877)
   double css_ = 0;      // G96 S (m/min)
   double max_rpm_ = 0;  // G50 S
   ThreadChain chain_;
+  MToolCycle mc_;
   std::array<double, kAxisCount> pos_limit_{}, neg_limit_{};  // VPVL*, VNVL* (machine); set flags below
   uint32_t pos_limit_set_ = 0, neg_limit_set_ = 0;
 

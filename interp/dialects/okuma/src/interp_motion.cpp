@@ -148,8 +148,7 @@ void OkRun::CTarget(const BlockWords& w, AxisArray& target, AxisArray& travel, u
     if (std::fabs(c) > 359.999 + 1e-9) Fail(col, "C is 0 to +-359.999 degrees");
     t = std::fmod(c + Offset(kC), 360.0);
     if (t < 0) t += 360.0;
-    // M15: the positive direction, M16: the negative one (ln 1947-1948, 2073-2077).
-    tr = modal_.c_negative ? -std::fmod(cur - t + 720.0, 360.0) : std::fmod(t - cur + 720.0, 360.0);
+    tr = CTravelTo(t);
   }
   if (t < 0) t += 360.0;
   if (w.HasExt(2)) {  // QA= full revolutions, 1-1999
@@ -163,6 +162,13 @@ void OkRun::CTarget(const BlockWords& w, AxisArray& target, AxisArray& travel, u
     travel[kC] = tr;
     *travel_mask |= kCBit;
   }
+}
+
+// The travel of a C positioning to t (0-360) from where C is: M15 the positive direction, M16 the negative
+// one (ln 1947-1948, 2073-2077).
+double OkRun::CTravelTo(double t) const {
+  const double cur = pos_[kC];
+  return modal_.c_negative ? -std::fmod(cur - t + 720.0, 360.0) : std::fmod(t - cur + 720.0, 360.0);
 }
 
 void OkRun::LineMotion(const BlockWords& w, const Block& b, bool rapid, int motion_col) {

@@ -70,7 +70,12 @@ const char* OpName(Op op);
 
 enum class FeedMode : std::uint8_t { kPerMinute, kInverseTime, kPerRev, kDegPerMinute };
 enum class XMode : std::uint8_t { kRadius, kDiameter };  // lathes program X as a diameter
-enum class SpindleDir : std::uint8_t { kStop, kCw, kCcw, kOrient };
+// kAxis: the spindle is position-controlled as the rotary axis C (a lathe's C-axis joint, Okuma M110); it
+// does not rotate as a spindle until a stop (M109) returns it to speed control.
+enum class SpindleDir : std::uint8_t { kStop, kCw, kCcw, kOrient, kAxis };
+// Which spindle a spindle op drives: the work (main) spindle, or a turn-mill's live (rotary) tool on the
+// turret (Okuma M12-M14 with SB=).
+enum class SpindleId : std::uint8_t { kMain, kLiveTool };
 enum class CoolantMode : std::uint8_t {
   kOff,
   kMist,
@@ -84,6 +89,7 @@ enum class CoolantMode : std::uint8_t {
 enum class ProbeOutcome : std::uint8_t { kContact, kBreak, kNone, kAlready, kToolOk, kToolBroken };
 
 const char* SpindleDirName(SpindleDir d);
+const char* SpindleIdName(SpindleId s);
 const char* CoolantModeName(CoolantMode m);
 const char* ProbeOutcomeName(ProbeOutcome r);
 
@@ -148,6 +154,7 @@ struct DwellOp {
 };
 struct SpindleOp {
   static constexpr Op kOp = Op::kSpindle;
+  SpindleId spindle = SpindleId::kMain;  // which spindle: its state below is that spindle's alone
   SpindleDir dir = SpindleDir::kStop;
   double rpm = 0;      // programmed speed (constant rpm mode; the last speed for stop / orient)
   double angle = 0;    // orient: keylock angle, degrees
