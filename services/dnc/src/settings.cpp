@@ -26,7 +26,7 @@ E Pick(std::string_view key, const std::string& value,
   Refuse(key, fmt::format("\"{}\"", value), "one of " + all);
 }
 
-void ApplyNames(Serial& s, const SerialKeys& k) {
+void ApplyNames(Serial& s, const config::SerialTable& k) {
   using P = std::pair<std::string_view, Parity>;
   using C = std::pair<std::string_view, Code>;
   using F = std::pair<std::string_view, Flow>;
@@ -110,7 +110,7 @@ Serial Defaults(Control c) {
   return s;
 }
 
-Serial Resolve(Control c, const SerialKeys& k) {
+Serial Resolve(Control c, const config::SerialTable& k) {
   Serial s = Defaults(c);
   if (k.device.empty())
     throw Error(Errc::kInvalidArgument, "[serial] device: required (e.g. \"/dev/ttyS0\")");

@@ -245,7 +245,7 @@ TEST(DncSettings, DefaultsAndRefusals) {
   EXPECT_EQ(Defaults(Control::kEmco).baud, 2400);
   EXPECT_EQ(Defaults(Control::kBalt).baud, 9600);
   EXPECT_EQ(Defaults(Control::kOkuma).format.end, End::kPercent);
-  SerialKeys k;
+  config::SerialTable k;
   k.device = "/dev/ttyS0";
   k.baud = 4800;
   EXPECT_EQ(Resolve(Control::kEmco, k).baud, 4800);
@@ -257,7 +257,7 @@ TEST(DncSettings, DefaultsAndRefusals) {
     EXPECT_STREQ(e.what(),
                  "[serial] baud = 9600: EMCOTRONIC D00 accepts 150-4800 (ln 5315, alarm 870 ln 7225)");
   }
-  SerialKeys eia;
+  config::SerialTable eia;
   eia.device = "/dev/ttyS1";
   eia.code = "eia";
   Serial s = Resolve(Control::kKtApl, eia);
@@ -265,7 +265,7 @@ TEST(DncSettings, DefaultsAndRefusals) {
   EXPECT_EQ(s.format.parity, Parity::kOdd);
   eia.parity = "even";
   EXPECT_THROW(Resolve(Control::kKtApl, eia), Error);
-  SerialKeys bad;
+  config::SerialTable bad;
   bad.device = "/dev/ttyS0";
   bad.flow = "dtr";
   try {
@@ -274,7 +274,7 @@ TEST(DncSettings, DefaultsAndRefusals) {
   } catch (const Error& e) {
     EXPECT_STREQ(e.what(), "[serial] flow = \"dtr\": one of xonxoff | rtscts | none");
   }
-  EXPECT_THROW(Resolve(Control::kBalt, SerialKeys{}), Error);  // no device
+  EXPECT_THROW(Resolve(Control::kBalt, config::SerialTable{}), Error);  // no device
 }
 
 }  // namespace

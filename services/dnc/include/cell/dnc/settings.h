@@ -6,6 +6,7 @@
 #include <string>
 #include <string_view>
 
+#include "cell/config/config.h"
 #include "cell/dnc/codes.h"
 
 namespace cell::dnc {
@@ -24,17 +25,10 @@ struct Serial {
 // The control's defaults (device empty).
 Serial Defaults(Control c);
 
-// The keys of a `[serial]` table as written (absent: nullopt), before defaults.
-struct SerialKeys {
-  std::string device;
-  std::optional<int> baud, data_bits, stop_bits, leader;
-  std::optional<std::string> parity, code, flow, end;
-};
-
-// The control's defaults overlaid with `keys`, checked: the baud one termios knows and the control accepts
-// (EMCO 150-4800, alarm 870 ln 7225), 7 or 8 data bits, 1 or 2 stop bits, EIA with 8 data bits and odd or
-// no parity and no ctrl-Z, leader 0-1000. Throws Error(kInvalidArgument) naming the key, the value and
-// what is allowed.
-Serial Resolve(Control c, const SerialKeys& keys);
+// The control's defaults overlaid with a station file's [serial] table (common/config reads it), checked: the
+// baud one termios knows and the control accepts (EMCO 150-4800, alarm 870 ln 7225), 7 or 8 data bits, 1 or 2
+// stop bits, EIA with 8 data bits and odd or no parity and no ctrl-Z, leader 0-1000. Throws
+// Error(kInvalidArgument) naming the key, the value and what is allowed.
+Serial Resolve(Control c, const config::SerialTable& keys);
 
 }  // namespace cell::dnc
