@@ -71,6 +71,28 @@ void SimControl::Flow(bool stop) {
   }
 }
 
+void SimControl::Execute(std::deque<uint8_t>& buffer, double& executed, double& pause_until,
+                         size_t& since_pause, double rate, double t, double fifo) {
+  // Execution empties the buffer through the control's decoder (parity and code checks).
+  while (!buffer.empty() && executed + 1 <= rate * t && t >= pause_until && !decoder_.complete()) {
+    uint8_t b = buffer.front();
+    buffer.pop_front();
+    executed += 1;
+    try {
+      decoder_.Feed(std::span<const uint8_t>(&b, 1));
+    } catch (const std::exception& e) {
+      error_ = e.what();
+      return;
+    }
+    if (o_.pause_every && ++since_pause >= o_.pause_every) {
+      since_pause = 0;
+      pause_until = t + o_.pause_s;
+    }
+  }
+  if (buffer.empty() || t < pause_until)
+    executed = std::max(executed, rate * t - fifo);  // idle: owes nothing
+}
+
 void SimControl::ReadLoop() {
   std::deque<uint8_t> buffer;
   auto start = Clock::now();
@@ -79,40 +101,31 @@ void SimControl::ReadLoop() {
   while (!stop_ && !decoder_.complete() && error_.empty()) {
     Tick();
     double t = Since(start);
-    // The line delivers at most its rate; what it did not deliver while idle is not owed (a FIFO's worth).
-    pulled = std::max(pulled, o_.line_bytes_per_s * t - 16);
-    size_t room = static_cast<size_t>(o_.line_bytes_per_s * t - pulled);
-    uint8_t in[512];
-    ssize_t n = room > 0 ? ::read(pty_.master(), in, std::min(room, sizeof in)) : 0;
+    // The line delivers at most its rate. A late tick of ours is owed (what the line carried meanwhile
+    // arrives now); an idle line owes nothing beyond a FIFO's worth.
+    const double fifo = std::max(16.0, o_.line_bytes_per_s * 0.002);
+    double room = o_.line_bytes_per_s * t - pulled;
+    uint8_t in[4096];
+    size_t want = room >= 1 ? std::min(static_cast<size_t>(room), sizeof in) : 0;
+    ssize_t n = want > 0 ? ::read(pty_.master(), in, want) : 0;
+    // Each byte arrives at its own moment on the line; the control executes up to that moment before it
+    // lands (its UART and its execution run side by side, whenever this thread gets the processor).
+    double rate = o_.exec_bytes_per_s > 0 ? o_.exec_bytes_per_s : o_.line_bytes_per_s;
     for (ssize_t i = 0; i < n; ++i) {
+      double arrives = std::min(t, (pulled + static_cast<double>(i) + 1) / o_.line_bytes_per_s);
+      Execute(buffer, executed, pause_until, since_pause, rate, arrives, fifo);
       wire_.push_back(in[i]);
       if (buffer.size() >= o_.buffer) {
         ++lost_;
       } else {
         buffer.push_back(in[i]);
       }
+      max_fill_ = std::max(max_fill_, buffer.size());
     }
     if (n > 0) pulled += static_cast<double>(n);
-    max_fill_ = std::max(max_fill_, buffer.size());
+    if (n < static_cast<ssize_t>(want)) pulled = std::max(pulled, o_.line_bytes_per_s * t - fifo);
     if (buffer.size() >= o_.high) Flow(true);
-    // Execution empties the buffer through the control's decoder (parity and code checks).
-    double rate = o_.exec_bytes_per_s > 0 ? o_.exec_bytes_per_s : o_.line_bytes_per_s;
-    executed = std::max(executed, rate * t - 16);
-    while (!buffer.empty() && executed + 1 <= rate * t && t >= pause_until && !decoder_.complete()) {
-      uint8_t b = buffer.front();
-      buffer.pop_front();
-      executed += 1;
-      try {
-        decoder_.Feed(std::span<const uint8_t>(&b, 1));
-      } catch (const std::exception& e) {
-        error_ = e.what();
-        break;
-      }
-      if (o_.pause_every && ++since_pause >= o_.pause_every) {
-        since_pause = 0;
-        pause_until = t + o_.pause_s;
-      }
-    }
+    Execute(buffer, executed, pause_until, since_pause, rate, t, fifo);
     if (buffer.size() <= o_.low) Flow(false);
     if (o_.hangup_after && wire_.size() >= o_.hangup_after) {
       pty_.CloseMaster();

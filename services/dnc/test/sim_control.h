@@ -7,6 +7,7 @@
 
 #include <atomic>
 #include <cstdint>
+#include <deque>
 #include <mutex>
 #include <string>
 #include <thread>
@@ -71,6 +72,8 @@ class SimControl {
   void PunchLoop(std::vector<uint8_t> bytes);
   void Flow(bool stop);
   void RunOutTrailer();
+  void Execute(std::deque<uint8_t>& buffer, double& executed, double& pause_until, size_t& since_pause,
+               double rate, double t, double fifo);
 
   Pty& pty_;
   SimOptions o_;
