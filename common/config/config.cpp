@@ -249,6 +249,46 @@ std::vector<config::AuxOutput> ParseIo(const fs::path& file, const toml::node& i
   return out;
 }
 
+// [serial]: the keys and their types; the values against the control are cell-dnc's (cell::dnc::Resolve).
+config::SerialTable ParseSerial(const fs::path& file, const toml::node& node) {
+  const toml::table* t = node.as_table();
+  if (t == nullptr) Fail(file, &node, "serial must be a table [serial]");
+  static const std::set<std::string, std::less<>> kInts = {"baud", "data_bits", "stop_bits", "leader"};
+  static const std::set<std::string, std::less<>> kTexts = {"device", "parity", "code", "flow", "end"};
+  config::SerialTable s;
+  for (auto&& [k, v] : *t) {
+    std::string key(k.str());
+    if (kInts.contains(key)) {
+      if (!v.is_integer())
+        Fail(file, &v, fmt::format("[serial] {} must be an integer, not {}", key, TypeName(v)));
+      int64_t n = *v.value<int64_t>();
+      if (n < 0 || n > 1000000) Fail(file, &v, fmt::format("[serial] {} = {}: out of range", key, n));
+      std::optional<int>& slot = key == "baud"        ? s.baud
+                                 : key == "data_bits" ? s.data_bits
+                                 : key == "stop_bits" ? s.stop_bits
+                                                      : s.leader;
+      slot = static_cast<int>(n);
+    } else if (kTexts.contains(key)) {
+      std::string text = GetString(file, v, "[serial] " + key);
+      if (key == "device") {
+        s.device = text;
+      } else {
+        (key == "parity" ? s.parity : key == "code" ? s.code : key == "flow" ? s.flow : s.end) = text;
+      }
+    } else {
+      Fail(file, &v,
+           fmt::format(
+               "[serial]: unknown key '{}' (allowed: device, baud, data_bits, parity, stop_bits, code, "
+               "flow, end, leader)",
+               key));
+    }
+  }
+  if (s.device.empty() || s.device[0] != '/') {
+    Fail(file, &node, "[serial]: device must be the line's absolute path (device = \"/dev/ttyS0\")");
+  }
+  return s;
+}
+
 std::string BaseTool(const std::string& tool) {
   return tool.substr(0, tool.find('.'));
 }
@@ -473,6 +513,7 @@ StationConfig LoadStationFile(const fs::path& file, const DialectRules* rules) {
     }
   }
   if (const toml::node* io = root.get("io")) cfg.aux = ParseIo(file, *io);
+  if (const toml::node* sn = root.get("serial")) cfg.serial = ParseSerial(file, *sn);
   if (const toml::node* tn = root.get("tools")) {
     const toml::array* arr = tn->as_array();
     if (arr == nullptr) Fail(file, tn, "tools must be an array of tables [[tools]]");

@@ -501,6 +501,31 @@ TEST_F(ConfigTest, IoAuxRefusals) {
             std::string::npos);
 }
 
+TEST_F(ConfigTest, SerialTable) {
+  const std::string head = "[station]\nid = \"EM05\"\ndialect = \"emco\"\n";
+  Write("EM05", head);
+  EXPECT_FALSE(LoadStation("EM05").serial);
+  Write("EM05", head + "[serial]\ndevice = \"/dev/ttyS1\"\nbaud = 4800\nparity = \"odd\"\nend = \"%\"\n");
+  auto s = LoadStation("EM05").serial;
+  ASSERT_TRUE(s);
+  cell::config::SerialTable want;
+  want.device = "/dev/ttyS1";
+  want.baud = 4800;
+  want.parity = "odd";
+  want.end = "%";
+  EXPECT_EQ(*s, want);
+  auto error = [&](const std::string& rest) {
+    Write("EM05", head + "[serial]\n" + rest);
+    return LoadError("EM05");
+  };
+  EXPECT_NE(error("device = \"/dev/ttyS1\"\nbaudrate = 4800\n")
+                .find("EM05.toml:6: [serial]: unknown key 'baudrate'"),
+            std::string::npos);
+  EXPECT_NE(error("device = \"/dev/ttyS1\"\nbaud = \"fast\"\n").find("[serial] baud must be an integer"),
+            std::string::npos);
+  EXPECT_NE(error("baud = 2400\n").find("device must be the line's absolute path"), std::string::npos);
+}
+
 // OK01 ships the chuck and the tailstock of the OSP-E100L manual (ln 1969-1978, 2008-2023).
 TEST(ShippedStations, Ok01ChuckAndTailstock) {
   const char* src = getenv("CELL_SOURCE_DIR");

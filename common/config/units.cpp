@@ -320,7 +320,7 @@ std::vector<std::string> ExecStartFor(const fs::path& unit_file, std::string_vie
 }
 
 std::vector<UnitCommand> CellCommands(const fs::path& unit_dir, const std::vector<std::string>& stations,
-                                      const fs::path& bin_dir) {
+                                      const fs::path& bin_dir, const StationHasTable& has_table) {
   std::vector<fs::path> plain, templates;
   std::error_code ec;
   for (const auto& e : fs::directory_iterator(unit_dir, ec)) {
@@ -335,8 +335,13 @@ std::vector<UnitCommand> CellCommands(const fs::path& unit_dir, const std::vecto
   std::sort(templates.begin(), templates.end());
   std::vector<UnitCommand> out;
   for (const auto& f : plain) out.push_back({UnitName(f, ""), ExecStartFor(f, "", bin_dir)});
+  std::vector<std::optional<std::string>> needs;  // each template's X-CellStationTable
+  for (const auto& f : templates) needs.push_back(ParseUnitFile(f).Value("Unit", "X-CellStationTable"));
   for (const auto& station : stations) {
-    for (const auto& f : templates) out.push_back({UnitName(f, station), ExecStartFor(f, station, bin_dir)});
+    for (size_t i = 0; i < templates.size(); ++i) {
+      if (needs[i] && !(has_table && has_table(station, *needs[i]))) continue;
+      out.push_back({UnitName(templates[i], station), ExecStartFor(templates[i], station, bin_dir)});
+    }
   }
   return out;
 }

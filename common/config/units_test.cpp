@@ -74,6 +74,17 @@ TEST(RealUnits, CellCommandsForTwoStations) {
   EXPECT_EQ(cmds[7].argv, (Argv{"/b/cell-interpreter", "--station", "KT02"}));
   EXPECT_EQ(cmds[2].argv, (Argv{"/b/cell-program-store"}));
   EXPECT_THROW(cell::config::CellCommands("/nonexistent", {}, "/b"), cell::Error);
+  // cell-dnc@ runs for the stations with a [serial] table only.
+  auto with_serial = [](const std::string& station, const std::string& table) {
+    return station == "EM01" && table == "serial";
+  };
+  units.clear();
+  for (const auto& c : cell::config::CellCommands(UnitDir(), {"KT01", "EM01"}, "/b", with_serial))
+    units.push_back(c.unit);
+  EXPECT_EQ(units,
+            (Argv{"cell-dashboard.service", "cell-inspection-writer.service", "cell-program-store.service",
+                  "cell-scheduler.service", "cell-axis-servo@KT01.service", "cell-interpreter@KT01.service",
+                  "cell-axis-servo@EM01.service", "cell-dnc@EM01.service", "cell-interpreter@EM01.service"}));
 }
 
 TEST_F(TempUnit, QuotingSpecifiersVariablesAndContinuation) {

@@ -3,9 +3,11 @@
 // Binaries: each unit's ExecStart names /usr/local/bin/<service>. The tests use the real executable in
 // $CELL_BIN_DIR when it has been built, else the stand-in cell-daemon-probe (the smallest service on
 // cell_daemon), and say which on stdout ("[binary] ..."), so a green run tells what it covered.
+#include <fcntl.h>
 #include <gtest/gtest.h>
 #include <stdlib.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <array>
 #include <chrono>
@@ -14,6 +16,7 @@
 #include <fstream>
 #include <iostream>
 #include <map>
+#include <optional>
 #include <set>
 #include <sstream>
 #include <string>
@@ -40,6 +43,7 @@ const std::vector<Unit> kUnits = {
     {"cell-dashboard.service", "cell-dashboard", false},
     {"cell-interpreter@.service", "cell-interpreter", true},
     {"cell-axis-servo@.service", "cell-axis-servo", true},
+    {"cell-dnc@.service", "cell-dnc", true},
 };
 
 std::string EnvOr(const char* name, const std::string& fallback) {
@@ -287,10 +291,32 @@ TEST(Install, DestdirPrefixIdempotentAndVerified) {
 // Each unit's own command line (as `cellctl up` runs it: install path mapped to the build tree, %i to the
 // station) under a test-owned NOTIFY_SOCKET with WATCHDOG_USEC=200000: READY=1, at least two WATCHDOG=1,
 // and after SIGTERM, STOPPING=1 and exit code 0. (The dashboard listens on any free port: CELL_HTTP.)
+// A configuration directory whose KT01 has a [serial] table on a pseudo-terminal, for cell-dnc@KT01 (a
+// station without one has no DNC line; docs/dnc.md).
+class SerialStation {
+ public:
+  explicit SerialStation(const fs::path& dir) {
+    master_ = posix_openpt(O_RDWR | O_NOCTTY | O_CLOEXEC);
+    if (master_ < 0 || grantpt(master_) != 0 || unlockpt(master_) != 0)
+      throw std::runtime_error("posix_openpt");
+    fs::copy(SourceDir() / "deploy", dir, fs::copy_options::recursive);
+    std::ofstream(dir / "stations" / "KT01.toml", std::ios::app)
+        << "\n[serial]\ndevice = \"" << ptsname(master_) << "\"\n";
+  }
+  ~SerialStation() { close(master_); }
+
+ private:
+  int master_ = -1;
+};
+
 TEST(Notify, EveryUnitCommandLineIsReadyWatchdogAndStops) {
   TempDir data;
+  SerialStation serial(data.path() / "config-serial");
   for (const auto& u : kUnits) {
     SCOPED_TRACE(u.file);
+    bool needs_serial = cell::config::ParseUnitFile(UnitDir() / u.file).Value("Unit", "X-CellStationTable") ==
+                        std::optional<std::string>("serial");
+    fs::path config = needs_serial ? data.path() / "config-serial" : SourceDir() / "deploy";
     std::vector<std::string> argv = cell::config::ExecStartFor(UnitDir() / u.file, "KT01", BinDir());
     fs::path chosen = BinaryFor(u.service);  // reports which binary runs
     if (!fs::exists(argv[0])) argv[0] = chosen;
@@ -300,7 +326,7 @@ TEST(Notify, EveryUnitCommandLineIsReadyWatchdogAndStops) {
                                                     {"WATCHDOG_PID", "self"},
                                                     {"CELL_DATA_DIR", (data.path() / u.service).string()},
                                                     {"CELL_HTTP", "127.0.0.1:0"},
-                                                    {"CELL_CONFIG_DIR", (SourceDir() / "deploy").string()}});
+                                                    {"CELL_CONFIG_DIR", config.string()}});
     std::vector<std::string> seen;
     bool ready = l.WaitFor("READY=1", 30s, seen);
     EXPECT_TRUE(ready) << argv[0] << ": no READY=1 within 30 s (READY must not wait for other services)";

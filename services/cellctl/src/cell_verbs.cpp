@@ -55,6 +55,11 @@ std::string Env(const CellProcess& p, const std::string& name) {
   return "";
 }
 
+// A station's table that a unit asks for (X-CellStationTable): [serial] makes cell-dnc@ID run.
+bool HasTable(const std::string& station, const std::string& table) {
+  return table == "serial" && cell::interp::LoadStation(station).serial.has_value();
+}
+
 // The cell's processes as this invocation would start them.
 std::vector<CellProcess> Planned(const std::vector<std::string>& stations, const std::string& clock) {
   fs::path bin = fs::read_symlink("/proc/self/exe").parent_path();
@@ -64,8 +69,8 @@ std::vector<CellProcess> Planned(const std::vector<std::string>& stations, const
             env.end());
   env.push_back("CELL_CLOCK=" + clock);
   std::vector<CellProcess> out;
-  for (auto& c :
-       cell::config::CellCommands(cell::config::SourceTreeDir() / "deploy/systemd", stations, bin)) {
+  for (auto& c : cell::config::CellCommands(cell::config::SourceTreeDir() / "deploy/systemd", stations, bin,
+                                            HasTable)) {
     CellProcess p;
     p.unit = c.unit;
     p.service = ServiceId(c.argv);

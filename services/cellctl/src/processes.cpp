@@ -116,7 +116,8 @@ std::optional<int> DomainIn(const std::string& environ) {
 std::optional<std::string> LocalServiceOn(int domain) {
   // /proc/PID/comm holds the first 15 characters of the executable's name.
   static const char* const kServices[] = {"cell-scheduler",  "cell-program-st", "cell-interprete",
-                                          "cell-axis-servo", "cell-inspection", "cell-dashboard"};
+                                          "cell-axis-servo", "cell-inspection", "cell-dashboard",
+                                          "cell-dnc"};
   std::error_code ec;
   for (const auto& entry : fs::directory_iterator("/proc", ec)) {
     const std::string pid = entry.path().filename().string();

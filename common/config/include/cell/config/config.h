@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <functional>
 #include <map>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -75,6 +76,17 @@ std::string IdentityOverride();
 //   interlock_off = 185      #   ON again at every program start (the control's reset state)
 //   note = "OSP-E100L ln 2015-2023"  # optional (up to 80 characters): the source, quoted in the refusal
 //
+//   [serial]                 # optional: the station's DNC line (DESIGN §6b, docs/dnc.md); with it `cellctl
+//   up` device = "/dev/ttyS0"    # and systemd run cell-dnc@ID. device is required (an absolute path); every
+//   other baud = 9600              # key defaults to the control's manual and is checked against it by
+//   cell-dnc data_bits = 7            # (cell::dnc::Resolve): data_bits, stop_bits, leader integers; parity
+//   parity = "even"          # none|even|odd, code eia|iso, flow xonxoff|rtscts|none, end nul|ctrl-z|%
+//   stop_bits = 1
+//   code = "iso"
+//   flow = "xonxoff"
+//   end = "nul"
+//   leader = 50              # NUL characters before and after a program
+//
 // With DialectRules, each [[tools]] entry must also fit the station dialect's own ranges (check_tool;
 // KT-APL: the TLD statement's, socket 1-999, length and diameter +-999.999 mm, life up to 99 h 59 min).
 // Unknown keys inside [station], [[tools]] and [[io.aux]] are errors (typos must not pass silently); other
@@ -93,6 +105,14 @@ struct AuxOutput {
   bool operator==(const AuxOutput&) const = default;
 };
 
+// A [serial] table as written: an absent key is nullopt (its default is the control's, cell::dnc).
+struct SerialTable {
+  std::string device;
+  std::optional<int> baud, data_bits, stop_bits, leader;
+  std::optional<std::string> parity, code, flow, end;
+  bool operator==(const SerialTable&) const = default;
+};
+
 struct StationConfig {
   std::string id;
   std::string dialect;
@@ -102,6 +122,7 @@ struct StationConfig {
   std::vector<tooltable::ToolEntry> tools;
   std::map<std::string, std::string> params;  // [params]
   std::vector<AuxOutput> aux;                 // [[io.aux]]
+  std::optional<SerialTable> serial;          // [serial]
   std::filesystem::path file;                 // the file it was read from
 };
 

@@ -13,6 +13,7 @@
 #pragma once
 
 #include <filesystem>
+#include <functional>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -73,11 +74,17 @@ struct UnitCommand {
   std::vector<std::string> argv;  // ExecStartFor(...)
 };
 
+// Whether a station's file has a table (`[serial]`): a template whose [Unit] has `X-CellStationTable=T`
+// runs only for the stations with table T (cell-dnc@.service: the stations with a serial line).
+using StationHasTable = std::function<bool(const std::string& station, const std::string& table)>;
+
 // Every service of a cell from the units in `unit_dir` (e.g. <source>/deploy/systemd): each plain
-// *.service once, then for each station in order each template *@.service; files in name order.
+// *.service once, then for each station in order each template *@.service; files in name order. A
+// template with X-CellStationTable runs for the stations `has_table` says have it (none without it).
 // Throws like ExecStartFor, and cell::Error(kNotFound) when unit_dir has no *.service.
 std::vector<UnitCommand> CellCommands(const std::filesystem::path& unit_dir,
                                       const std::vector<std::string>& stations,
-                                      const std::filesystem::path& bin_dir);
+                                      const std::filesystem::path& bin_dir,
+                                      const StationHasTable& has_table = {});
 
 }  // namespace cell::config
