@@ -130,6 +130,15 @@ void Contour::Out(Canon&& c) {
   ready_.push_back(std::move(c));
 }
 
+std::vector<Canon> Contour::TakeChecked() {
+  if (!held_) Checked();  // nothing waits for a later element: everything is settled
+  std::vector<Canon> out(std::make_move_iterator(ready_.begin()),
+                         std::make_move_iterator(ready_.begin() + static_cast<std::ptrdiff_t>(checked_)));
+  ready_.erase(ready_.begin(), ready_.begin() + static_cast<std::ptrdiff_t>(checked_));
+  checked_ = 0;
+  return out;
+}
+
 void Contour::ReleaseAfter() {
   while (!after_.empty()) {
     Canon c = std::move(after_.front());
@@ -302,6 +311,7 @@ void Contour::Join(Pending& next) {
   if (RemainingLength(next.path, r, side_, k.b_trim, 0) < -kTiny) {
     Undefined("the element is shorter than the compensation needs");
   }
+  Checked();  // the held element is long enough: the corner before it stands
   next.start = k.b_start;
   next.trim_start = k.b_trim;
   const Vec2 corner = a.path.end;
@@ -474,6 +484,7 @@ void Contour::Release() {
 
 void Contour::Reset() {
   ready_.clear();
+  checked_ = 0;
   after_.clear();
   on_ = residual_ = held_ = ramp_ = corner_ = after_corner_ = false;
   plan_ = kNoPlan;

@@ -7,7 +7,7 @@
 // held for a corner word or a GTL profile, a residual offset after G40): moves with their programmed trace in
 // the plane (machine coordinates), other commands as they are. A move's compensated end depends on the next
 // move, so it is held (with the commands after it) until that move, G40 or the end is known; finished
-// commands collect in Ready().
+// commands collect until TakeChecked() hands out those whose geometry is settled.
 //
 // The rules (ln 3080-3216): the start move (the G41/G42 block, or the first move in the plane after it) is
 // linear and ends with the cutter at 90 degrees to the next element; corners join at the intersection of the
@@ -35,7 +35,12 @@ struct ContourError {
 
 class Contour {
  public:
-  std::vector<Canon>& Ready() { return ready_; }
+  // The commands whose geometry is settled, for the executor to write; the rest of what has been computed
+  // waits until the element after it has been checked too. A corner is written only once the element it
+  // starts is known to be long enough for the compensation: an element found too short when the one after it
+  // arrives (FILMS4 77) used to leave the corner before it already written, up to a millimetre inside the
+  // contour (issue 33's no-gouge property). The control reads that block ahead before it moves.
+  std::vector<Canon> TakeChecked();
   // Anything to do: compensation on or planned, a held move, a corner word, a residual offset.
   bool engaged() const { return on_ || residual_ || held_ || plan_ != kNoPlan || corner_; }
   bool on() const { return on_; }  // G41/G42 in effect
@@ -98,7 +103,9 @@ class Contour {
                std::uint32_t used) const;
   Canon Straight(const Canon& like, geom::Vec2 to) const;
 
+  void Checked() { checked_ = ready_.size(); }  // everything written so far is settled
   std::vector<Canon> ready_;
+  std::size_t checked_ = 0;  // ready_[0, checked_) is settled
   std::deque<Canon> after_;  // commands after the held move: written when it is
   bool on_ = false;
   bool residual_ = false;

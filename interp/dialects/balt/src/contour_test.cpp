@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 namespace cell::interp::balt {
@@ -34,8 +35,7 @@ struct Fixture {
   Contour k;
   std::vector<Canon> out;
   void Drain() {
-    for (auto& c : k.Ready()) out.push_back(std::move(c));
-    k.Ready().clear();
+    for (auto& c : k.TakeChecked()) out.push_back(std::move(c));
   }
   void Move(Vec2 a, Vec2 b, int line, bool hold = false) {
     Path p = Seg(a, b);
@@ -151,6 +151,31 @@ TEST(Contour, InsideArcSmallerThanTheCutterIsAnError) {
   arc.sweep = 180;
   Canon c = Line(10, 6, 2);
   EXPECT_THROW(f.k.Take(std::move(c), &arc, false), ContourError);
+}
+
+// An element long enough for either corner's trim but not for both (ln 3080-3216, FILMS4 77): found when the
+// element after it arrives. With the cutter (radius 5) on the left of A (10,0)->(50,0), B (50,0)->(50,8) and
+// C (50,8)->(30,8), A would end at the corner (45,5), 3 mm from C: 2 mm inside the contour. It is not handed
+// out; the start move to (10,5), far from C, is.
+TEST(Contour, AnElementTooShortForBothCornersLeavesTheCornerBeforeItUnwritten) {
+  Fixture f;
+  f.k.Sync({});
+  f.k.Start(geom::kLeft, 5, 41);
+  f.Move({0, 0}, {10, 0}, 1);   // start move
+  f.Move({10, 0}, {50, 0}, 2);  // A
+  f.Move({50, 0}, {50, 8}, 3);  // B: 8 mm, trimmed by 5 at each end
+  Path c = Seg({50, 8}, {30, 8});
+  EXPECT_THROW(f.k.Take(Line(30, 8, 4), &c, false), ContourError);
+  f.Drain();
+  for (std::size_t i = 0; i < f.out.size(); ++i) {
+    const Vec2 p = f.At(i);
+    const double dx = std::max({30 - p.x, 0.0, p.x - 50});
+    EXPECT_GE(std::hypot(dx, 8 - p.y), 5 - 2e-3)
+        << "move " << i << " ends inside the contour at " << p.x << "," << p.y;
+  }
+  ASSERT_EQ(f.out.size(), 1u);  // the start move only: A's end at the corner waits for B, which fails
+  EXPECT_NEAR(f.At(0).x, 10, 1e-9);
+  EXPECT_NEAR(f.At(0).y, 5, 1e-9);
 }
 
 }  // namespace

@@ -82,10 +82,7 @@ void BaltRun::CommitStage() {
 }
 
 void BaltRun::ContourDrain() {
-  auto& ready = contour_.Ready();
-  if (ready.empty()) return;
-  for (auto& c : ready) out_.push_back(std::move(c));
-  ready.clear();
+  for (auto& c : contour_.TakeChecked()) out_.push_back(std::move(c));
 }
 
 void BaltRun::ContourFail(const ContourError& e) {

@@ -203,9 +203,10 @@ void BaltRun::StepOnce() {
         }
       }
     }
-    // What the run produced before the error stays (DESIGN §4).
-    for (auto& c : contour_.Ready()) out_.push_back(std::move(c));
-    contour_.Ready().clear();
+    // What the run produced before the error stays (DESIGN §4); what compensation had not settled (a corner
+    // whose next element the error left unchecked) is not produced.
+    for (auto& c : contour_.TakeChecked()) out_.push_back(std::move(c));
+    contour_.Reset();
     staged_ = false;
     EndWithError(std::move(d));
   }
