@@ -4,6 +4,7 @@
 // their access formats (ln 4171-4243).
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 
@@ -322,7 +323,8 @@ Access ParseFormat(std::string_view name, std::string_view f, int col) {
   }
   std::size_t k = 0;
   int n = 0;
-  while (k < f.size() && IsDigit(f[k])) n = n * 10 + (f[k++] - '0');
+  // Saturates: any count past 32 is refused below, and a long run of digits must not overflow (fuzz).
+  while (k < f.size() && IsDigit(f[k])) n = std::min(n * 10 + (f[k++] - '0'), 1000);
   std::string_view t = f.substr(k);
   if (t == "CH") {
     a.kind = 'C';
