@@ -55,6 +55,17 @@ std::string Env(const CellProcess& p, const std::string& name) {
   return "";
 }
 
+// The station whose interpreter a service id names ("cell-interpreter/KT01" -> "KT01"); "" for any other.
+std::string InterpreterStation(const std::string& service) {
+  const std::string prefix = "cell-interpreter/";
+  return service.rfind(prefix, 0) == 0 ? service.substr(prefix.size()) : std::string();
+}
+
+bool RunsScheduler(const std::vector<CellProcess>& procs) {
+  return std::any_of(procs.begin(), procs.end(),
+                     [](const CellProcess& p) { return p.service == "cell-scheduler"; });
+}
+
 // A station's table that a unit asks for (X-CellStationTable): [serial] makes cell-dnc@ID run.
 bool HasTable(const std::string& station, const std::string& table) {
   return table == "serial" && cell::interp::LoadStation(station).serial.has_value();
@@ -112,8 +123,7 @@ std::vector<std::string> WaitReady(Context& ctx, const std::vector<CellProcess>&
                                    const std::set<std::string>& started, bus::Millis timeout) {
   // The bus is joined only now, after every fork: no DDS socket or thread of cellctl's reaches a service.
   cell::health::Liveness live(ctx.Bus());
-  const bool scheduled = std::any_of(procs.begin(), procs.end(),
-                                     [](const CellProcess& p) { return p.service == "cell-scheduler"; });
+  const bool scheduled = RunsScheduler(procs);
   std::mutex sched_mu;
   std::map<std::string, bool> sched_online;  // station -> online in the scheduler's latest state
   std::optional<bus::Reader<cell::SchedulerState>> sched;
@@ -150,8 +160,8 @@ std::vector<std::string> WaitReady(Context& ctx, const std::vector<CellProcess>&
           auto it = seen.find(p.service);
           if (!live.Online(p.service) || it == seen.end() || it->second.pid() != p.pid) {
             missing.push_back(p.unit);
-          } else if (scheduled && p.service.rfind("cell-interpreter/", 0) == 0) {
-            const std::string station = p.service.substr(std::string("cell-interpreter/").size());
+          } else if (const std::string station = InterpreterStation(p.service);
+                     scheduled && !station.empty()) {
             std::lock_guard lk(sched_mu);
             auto on = sched_online.find(station);
             if (on == sched_online.end() || !on->second)
@@ -277,12 +287,10 @@ void AddCellUp(CLI::App& app, Context& ctx, const OptsPtr& o) {
       throw Exit{1, "cell did not come up: " + Join(missing, "; ")};
     }
     std::cout << "cell up on domain " << ctx.Bus().domain() << ": " << procs.size() << " processes ready";
-    const bool scheduled = std::any_of(procs.begin(), procs.end(),
-                                       [](const CellProcess& p) { return p.service == "cell-scheduler"; });
     const auto station_count = std::count_if(procs.begin(), procs.end(), [](const CellProcess& p) {
-      return p.service.rfind("cell-interpreter/", 0) == 0;
+      return !InterpreterStation(p.service).empty();
     });
-    if (scheduled) std::cout << ", " << station_count << " stations online to the scheduler";
+    if (RunsScheduler(procs)) std::cout << ", " << station_count << " stations online to the scheduler";
     if (started.size() != procs.size()) std::cout << ", " << started.size() << " of them started now";
     std::cout << " (" << Env(procs.front(), "CELL_CLOCK") << " clock), logs in "
               << (cell::config::DataDir() / "logs").string() << "\n";

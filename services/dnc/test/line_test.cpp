@@ -47,6 +47,14 @@ Serial OnPty(Control c, const Pty& pty) {
   return s;
 }
 
+// The simulated control for a line: the line's format, bytes pulled at the emulated rate.
+SimOptions SimFor(const Serial& s) {
+  SimOptions so;
+  so.format = s.format;
+  so.line_bytes_per_s = kEmulatedBytesPerS;
+  return so;
+}
+
 std::vector<Serial> EveryFormat(const Pty& pty) {
   std::vector<Serial> out;
   for (Control c : {Control::kKtApl, Control::kBalt, Control::kEmco, Control::kOkuma}) {
@@ -76,9 +84,7 @@ TEST(DncLine, SendsEveryControlsFormatByteExactIntoASlowControl) {
     std::string text = Program(s.format.control);
     auto bytes = Encode(s.format, text);
     auto port = TtyPort::Open(s);
-    SimOptions so;
-    so.format = s.format;
-    so.line_bytes_per_s = kEmulatedBytesPerS;
+    SimOptions so = SimFor(s);
     so.exec_bytes_per_s = so.line_bytes_per_s / 2;  // executes slower than the line: XOFF after XOFF
     SimControl sim(pty, so);
     sim.StartReading();
@@ -113,9 +119,7 @@ TEST(DncLine, ReceivesEveryControlsFormatByteExact) {
     std::string text = Program(s.format.control);
     auto bytes = Encode(s.format, text);
     auto port = TtyPort::Open(s);
-    SimOptions so;
-    so.format = s.format;
-    so.line_bytes_per_s = kEmulatedBytesPerS;
+    SimOptions so = SimFor(s);
     SimControl sim(pty, so);
     sim.StartPunching(bytes);
     ReceiveOptions o;
@@ -137,9 +141,7 @@ TEST(DncLine, AParityErrorInAReceiveNamesDeviceAndByte) {
   Serial s = OnPty(Control::kEmco, pty);
   auto bytes = Encode(s.format, Program(Control::kEmco));
   auto port = TtyPort::Open(s);
-  SimOptions so;
-  so.format = s.format;
-  so.line_bytes_per_s = kEmulatedBytesPerS;
+  SimOptions so = SimFor(s);
   so.damage_at = 123;
   SimControl sim(pty, so);
   sim.StartPunching(bytes);
@@ -156,9 +158,7 @@ TEST(DncLine, AHangUpMidSendAndMidReceiveNamesDeviceAndByte) {
     Pty pty;
     Serial s = OnPty(Control::kBalt, pty);
     auto port = TtyPort::Open(s);
-    SimOptions so;
-    so.format = s.format;
-    so.line_bytes_per_s = kEmulatedBytesPerS;
+    SimOptions so = SimFor(s);
     so.hangup_after = 300;
     SimControl sim(pty, so);
     sim.StartReading();
@@ -176,9 +176,7 @@ TEST(DncLine, AHangUpMidSendAndMidReceiveNamesDeviceAndByte) {
     Pty pty;
     Serial s = OnPty(Control::kOkuma, pty);
     auto port = TtyPort::Open(s);
-    SimOptions so;
-    so.format = s.format;
-    so.line_bytes_per_s = kEmulatedBytesPerS;
+    SimOptions so = SimFor(s);
     so.hangup_after = 200;
     SimControl sim(pty, so);
     sim.StartPunching(Encode(s.format, Program(Control::kOkuma)));
@@ -195,9 +193,7 @@ TEST(DncLine, AControlThatStopsAnsweringIsAnError) {
   Pty pty;
   Serial s = OnPty(Control::kKtApl, pty);
   auto port = TtyPort::Open(s);
-  SimOptions so;
-  so.format = s.format;
-  so.line_bytes_per_s = kEmulatedBytesPerS;
+  SimOptions so = SimFor(s);
   so.stop_after = 100;
   SimControl sim(pty, so);
   sim.StartReading();

@@ -76,12 +76,12 @@ std::string IdentityOverride();
 //   interlock_off = 185      #   ON again at every program start (the control's reset state)
 //   note = "OSP-E100L ln 2015-2023"  # optional (up to 80 characters): the source, quoted in the refusal
 //
-//   [serial]                 # optional: the station's DNC line (DESIGN §6b, docs/dnc.md); with it `cellctl
-//   up` device = "/dev/ttyS0"    # and systemd run cell-dnc@ID. device is required (an absolute path); every
-//   other baud = 9600              # key defaults to the control's manual and is checked against it by
-//   cell-dnc data_bits = 7            # (cell::dnc::Resolve): data_bits, stop_bits, leader integers; parity
-//   parity = "even"          # none|even|odd, code eia|iso, flow xonxoff|rtscts|none, end nul|ctrl-z|%
-//   stop_bits = 1
+//   [serial]                 # optional: the station's DNC line (DESIGN §6b, docs/dnc.md); with it
+//   device = "/dev/ttyS0"    # `cellctl up` and systemd run cell-dnc@ID. device is required (an absolute
+//   baud = 9600              # path); every other key defaults to the control's manual and is checked
+//   data_bits = 7            # against it by cell-dnc (cell::dnc::Resolve): data_bits, stop_bits, leader
+//   parity = "even"          # integers; parity none|even|odd, code eia|iso, flow xonxoff|rtscts|none,
+//   stop_bits = 1            # end nul|ctrl-z|%
 //   code = "iso"
 //   flow = "xonxoff"
 //   end = "nul"

@@ -62,8 +62,8 @@ class Receiver {
   struct Turn {
     bool stepped = false;  // the machine ran a servo period
     bool waiting = false;  // the look-ahead waits for the producer's refill (virtual clock): WaitForSegment
-    bool resting =
-        false;  // real clock, nothing moves (Machine::Resting): WaitForSegment, the periods run later
+    // Real clock, nothing moves (Machine::Resting): WaitForSegment, the periods run later.
+    bool resting = false;
   };
   // One turn at wall time `now`: tools and panel applied, arrived segments taken, one servo period, events
   // reported.
