@@ -219,14 +219,19 @@ TEST(Clock, RestingOnTheRealClockCatchesUpWithoutOverruns) {
   Machine m = Kt(ClockKind::kReal);
   EXPECT_TRUE(m.Resting());
   m.Step();
+  const std::uint64_t late = m.overruns();  // that first step may start late on a loaded host: not CatchUp's
   const double t0 = m.machine_time();
   const auto w0 = std::chrono::steady_clock::now();
   std::this_thread::sleep_for(std::chrono::milliseconds(30));
   const std::uint64_t ran = m.CatchUp();
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - w0).count();
-  EXPECT_GE(ran, 25u);                             // ~30 periods of 1 ms were due
-  EXPECT_NEAR(m.machine_time() - t0, wall, 0.01);  // with the wall clock, within 10 ms
-  EXPECT_EQ(m.overruns(), 0u);
+  // A host that stalls this thread past 100 ms makes the machine re-anchor (NextDeadline: a stall, counted),
+  // which is not what this checks; a full CI run once saw the first step counted late.
+  if (wall < 0.1) {
+    EXPECT_GE(ran, 25u);                             // ~30 periods of 1 ms were due
+    EXPECT_NEAR(m.machine_time() - t0, wall, 0.01);  // with the wall clock, within 10 ms
+    EXPECT_EQ(m.overruns(), late);                   // none of the periods caught up counts as late
+  }
   m.Push(Line(1, 10, 0, 0, 3000));
   EXPECT_FALSE(m.Resting());  // work queued: stepped period by period again
   Machine v = Kt(ClockKind::kVirtual);
