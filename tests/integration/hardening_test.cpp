@@ -4,7 +4,9 @@
 // DDS participant and no descriptor of its own in the services, `restart`, `up` of a partly-down cell, `down`
 // that only stops its own processes, owner-only data).
 #include <signal.h>
+#include <sys/prctl.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -121,6 +123,31 @@ TEST_F(Offline, ACellThatIsDownIsSaidSoAtOnce) {
     // the sanitizers on a loaded machine).
     EXPECT_LT(took, 4500ms) << what;
   }
+}
+
+// Issue 44: a service of another test on its way out (a zombie, its /proc files root's) made every verb
+// wait out discovery, taking it for a service that may be on our domain. A zombie named cell-scheduler
+// stands for it here.
+TEST_F(Offline, AServiceOnItsWayOutIsNoCell) {
+  const pid_t zombie = fork();
+  ASSERT_GE(zombie, 0);
+  if (zombie == 0) {
+    prctl(PR_SET_NAME, "cell-scheduler");
+    _exit(0);
+  }
+  // Not reaped until the verb has run: wait until it is a zombie.
+  siginfo_t info{};
+  ASSERT_EQ(waitid(P_PID, static_cast<id_t>(zombie), &info, WEXITED | WNOWAIT), 0);
+  const auto t0 = std::chrono::steady_clock::now();
+  auto r = Ctl({"route", "show", "R"});
+  const auto took = std::chrono::steady_clock::now() - t0;
+  waitpid(zombie, nullptr, 0);
+  EXPECT_EQ(r.code, 1) << r.err;
+  EXPECT_EQ(r.err.find("cell-scheduler (pid"), std::string::npos) << r.err;
+  EXPECT_TRUE(r.err.find("is the cell up?") != std::string::npos ||
+              r.err.find("neither the scheduler nor the program store runs") != std::string::npos)
+      << r.err;
+  EXPECT_LT(took, 4500ms);
 }
 
 // Item 10: integers are decimal; an over-size put is refused from the file's size, before streaming.

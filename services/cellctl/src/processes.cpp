@@ -15,6 +15,7 @@
 #include <fstream>
 #include <iterator>
 #include <optional>
+#include <sstream>
 #include <thread>
 
 #include "cell/config/config.h"
@@ -111,6 +112,21 @@ std::optional<int> DomainIn(const std::string& environ) {
   return 101;
 }
 
+// Whether the process of /proc/PID is exiting or a zombie: /proc/PID/stat (readable by anyone) gives its
+// state (field 3) and its flags (field 9), PF_EXITING being 0x4.
+bool Exiting(const fs::path& proc_pid) {
+  std::string stat;
+  std::getline(std::ifstream(proc_pid / "stat"), stat);
+  const std::size_t paren = stat.rfind(')');
+  if (paren == std::string::npos) return true;  // gone between the calls
+  std::istringstream fields(stat.substr(paren + 1));
+  std::string state, skip;
+  unsigned long flags = 0;
+  fields >> state >> skip >> skip >> skip >> skip >> skip >> flags;
+  constexpr unsigned long kPfExiting = 0x4;
+  return state == "Z" || state == "X" || (flags & kPfExiting) != 0;
+}
+
 }  // namespace
 
 std::optional<std::string> LocalServiceOn(int domain) {
@@ -129,7 +145,8 @@ std::optional<std::string> LocalServiceOn(int domain) {
     const std::string what = comm + " (pid " + pid + ")";
     // A process that exits between the listing and here is no service (a test tearing its cell down next
     // to ours made every verb wait out discovery); one whose environment is not ours to read may be on our
-    // domain. Briefly unreadable (mid-exec), it is read again.
+    // domain. Briefly unreadable (mid-exec), it is read again. An exiting process has released its memory:
+    // its environment reads empty or fails, and it is skipped too.
     std::optional<std::string> block;
     for (int attempt = 0; attempt < 3 && !block; ++attempt) {
       if (attempt > 0) usleep(2000);
@@ -143,9 +160,14 @@ std::optional<std::string> LocalServiceOn(int domain) {
       close(fd);
       if (n == 0) block = std::move(text);
     }
-    if (!block) {
+    if (!block || block->empty()) {
       struct stat st {};
       if (stat(entry.path().c_str(), &st) != 0) continue;  // gone
+      // Without its memory (exiting, a zombie) a process's /proc files belong to root, so its environment
+      // cannot be read even by its owner (issue 44's flake: a test's service on its way out made `route
+      // show` wait out discovery). A process on its way out is no service.
+      if (Exiting(entry.path())) continue;
+      if (block) return what + ", whose environment is empty";
       return what + ", whose environment cannot be read";
     }
     const std::optional<int> d = DomainIn(*block);
