@@ -21,7 +21,8 @@ InspectionEntry InspectionEntryOf(const std::string& name) {
   e.name = name;
   const bool run = name.rfind("run-", 0) == 0;
   e.kind = run ? "run" : "inspection";
-  e.station = run ? name.substr(4, name.find('-', 4) - 4) : name.substr(0, name.find('/'));
+  // run-STATION-DISPATCH.json: a station id may itself hold '-', the dispatch id never does.
+  e.station = run ? name.substr(4, name.rfind('-') - 4) : name.substr(0, name.find('/'));
   return e;
 }
 

@@ -120,6 +120,7 @@ TEST(Entries, InspectionNamesTellStationAndKind) {
   auto run = InspectionEntryOf("run-KT01-12.json");
   EXPECT_EQ(run.station, "KT01");
   EXPECT_EQ(run.kind, "run");
+  EXPECT_EQ(InspectionEntryOf("run-CELL-A-7.json").station, "CELL-A");  // a station id may hold '-'
   auto file = InspectionEntryOf("KT02/PROBE1");
   EXPECT_EQ(file.station, "KT02");
   EXPECT_EQ(file.kind, "inspection");

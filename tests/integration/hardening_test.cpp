@@ -312,6 +312,35 @@ TEST_F(Hardening, ListingsPageThroughAnySize) {
                           files[kFiles - 3]["name"].get<std::string>()});
   ASSERT_EQ(next.size(), 2u);
   EXPECT_EQ(next[1], files[kFiles - 1]);
+  // One station's records and files (DESIGN §6 `inspect ls --station ID`): the whole listing filtered, and
+  // pages of it; KT02's two files sort after KT01's 560, so KT02's first page reads past a reply of others.
+  {
+    cell::bus::Participant bus("hardening-station");
+    cell::bus::Client<cell::InspectionRequest, cell::InspectionReply> ins(bus,
+                                                                          cell::bus::topics::kInspection);
+    for (const char* f : {"PROBE1", "PROBE2"}) {
+      cell::InspectionRequest r;
+      r.op(cell::INSPECTION_STORE_FILE);
+      r.file().station("KT02");
+      r.file().file(f);
+      r.file().text("1 2 3\n");
+      ASSERT_EQ(ins.Call(r, 30000ms).hdr().code(), 0) << f;
+    }
+  }
+  json every = cell_.Json({"inspect", "ls", "--json"});
+  for (const char* id : {"KT01", "KT02"}) {
+    json want = json::array();
+    for (auto& f : every)
+      if (f["station"] == id) want.push_back(f);
+    EXPECT_EQ(cell_.Json({"inspect", "ls", "--station", id, "--json"}), want) << id;
+  }
+  json kt02files = cell_.Json({"inspect", "ls", "KT02/*", "--station", "KT02", "--json", "--limit", "1"});
+  ASSERT_EQ(kt02files.size(), 1u);
+  EXPECT_EQ(kt02files[0]["name"], "KT02/PROBE1");
+  EXPECT_EQ(cell_.Json({"inspect", "ls", "KT01/*", "--station", "KT02", "--json"}), json::array());
+  auto bad = Ctl({"inspect", "ls", "--station", "KT 01"});
+  EXPECT_EQ(bad.code, 2) << bad.err;
+  ExpectOneShortLine(bad, "inspect ls --station");
   // Programs by name, after a cursor that need not exist.
   Put("VALVE1");
   json progs = cell_.Json({"program", "ls", "--json", "--limit", "1", "--after", "PUMP1"});

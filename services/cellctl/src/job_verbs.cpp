@@ -126,12 +126,15 @@ void AddJobVerbs(CLI::App& app, Context& ctx) {
 void AddInspectVerbs(CLI::App& app, Context& ctx) {
   auto name = std::make_shared<std::string>("*");
   auto* ins = app.add_subcommand("inspect", "run records and inspection files")->require_subcommand(1);
-  auto ask = [&ctx](cell::InspectionOp op, const std::string& n, const cell::PageRequest& page) {
+  // A listing's station filter rides in the request's file record, which LIST leaves unused otherwise.
+  auto ask = [&ctx](cell::InspectionOp op, const std::string& n, const cell::PageRequest& page,
+                    const std::string& station = {}) {
     cell::InspectionRequest r;
     r.op(op);
     cell::names::CheckRecord(n);
     cell::names::Assign(r.name(), n, "record name");
     r.page(page);
+    if (!station.empty()) cell::names::Assign(r.file().station(), station, "station id");
     return ctx.Inspection(r);
   };
   auto call = [ask](cell::InspectionOp op, const std::string& n) {
@@ -139,15 +142,18 @@ void AddInspectVerbs(CLI::App& app, Context& ctx) {
   };
   auto* ls = ins->add_subcommand("ls", "records and files by name");
   ls->add_option("PATTERN", *name);
+  auto station = std::make_shared<std::string>();
+  ls->add_option("--station", *station, "only the run records and inspection files of station ID");
   auto page = std::make_shared<Paging>();
   AddPaging(ls, *page, false);
   ls->add_flag("--json", ctx.json);
-  ls->callback([name, ask, page, &ctx] {
+  ls->callback([name, station, ask, page, &ctx] {
+    if (!station->empty()) cell::names::CheckStation(*station);
     auto fetch = [&](const std::string& after, std::uint32_t want) {
       cell::PageRequest p;
       cell::names::Assign(p.after(), after, "--after");
       p.limit(want);
-      auto rep = ask(cell::INSPECTION_LIST, *name, p);
+      auto rep = ask(cell::INSPECTION_LIST, *name, p, *station);
       return cell::records::Page{nlohmann::json::parse(rep.info().to_string()), rep.more()};
     };
     Print(ctx, cell::records::CollectPages(page->limit, page->after, "name", fetch),

@@ -93,10 +93,14 @@ cell::InspectionReply Service::Handle(const cell::InspectionRequest& r) {
       ev.excerpt(Tail(r.file().text().to_string(), 4000));
       ev.text(r.file().text());  // the whole file, for viewers (docs/security.md)
       break;
-    case cell::INSPECTION_LIST: {  // one page by name within the reply's bound
+    case cell::INSPECTION_LIST: {  // one page by name within the reply's bound; file.station filters
       records::PageBuilder page(r.page().limit());
+      const std::string station = r.file().station().to_string();
       records_.List(r.name().to_string().empty() ? "*" : r.name().to_string(), r.page().after().to_string(),
-                    [&](const records::InspectionEntry& e) { return page.Add(records::InspectionRow(e)); });
+                    [&](const records::InspectionEntry& e) {
+                      return (!station.empty() && e.station != station) ||
+                             page.Add(records::InspectionRow(e));
+                    });
       rep.info(page.Text());
       rep.more(page.more());
       break;
