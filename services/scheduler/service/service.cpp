@@ -317,7 +317,7 @@ cell::SchedulerReply Service::Handle(const cell::SchedulerRequest& r) {
     case cell::SCHED_JOB_SHOW: {
       auto j = sched_.Job(r.job_id(), true);
       if (!j) throw Error(Errc::kNotFound, "unknown job " + std::to_string(r.job_id()));
-      info(ToJson(*j, true));
+      info(FitJobShow(ToJson(*j, true), 65536));
       break;
     }
     case cell::SCHED_JOB_CANCEL:

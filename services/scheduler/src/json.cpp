@@ -45,6 +45,31 @@ json ToJson(const JobView& j, bool with_decisions) {
   return records::JobJson(ToRecord(j, with_decisions), with_decisions);
 }
 
+json FitJobShow(json job, std::size_t bound) {
+  if (job.dump().size() <= bound || !job.contains("decisions")) return job;
+  json all = std::move(job["decisions"]);
+  job["decisions"] = json::array();
+  job["decisions_omitted"] = all.size();
+  // The key itself and the array's commas: a margin, so that the sum of the parts bounds the whole.
+  std::size_t used = job.dump().size() + 32;
+  std::vector<json> kept_tail;
+  auto fits = [&](const json& d) {
+    const std::size_t n = d.dump().size() + 1;
+    if (used + n > bound) return false;
+    used += n;
+    return true;
+  };
+  const bool first = !all.empty() && fits(all.front());
+  for (std::size_t i = all.size(); i-- > (first ? 1u : 0u);) {
+    if (!fits(all[i])) break;
+    kept_tail.push_back(std::move(all[i]));
+  }
+  if (first) job["decisions"].push_back(std::move(all.front()));
+  for (auto it = kept_tail.rbegin(); it != kept_tail.rend(); ++it) job["decisions"].push_back(std::move(*it));
+  job["decisions_omitted"] = all.size() - job["decisions"].size();
+  return job;
+}
+
 json ToJson(const Decision& d) {
   return records::DecisionJson(ToRecord(d));
 }

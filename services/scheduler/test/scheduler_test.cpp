@@ -732,6 +732,23 @@ TEST(Schedules, AlarmsFailTheJobAndBadProgramsAreRefused) {
   EXPECT_EQ(c.State(e.job_id), JobState::kCompleted);
 }
 
+// Issue 39: `job show` of a job that waited through many changes failed "reply too large". The first
+// decision and the newest that fit are kept, with a count of those left out between them.
+TEST(Views, AJobShowKeepsTheFirstAndNewestDecisionsWithinTheBound) {
+  nlohmann::json job = {{"id", 7}, {"state", "WAITING"}, {"decisions", nlohmann::json::array()}};
+  for (int i = 1; i <= 100; ++i) job["decisions"].push_back({{"seq", i}, {"why", std::string(90, 'w')}});
+  EXPECT_EQ(FitJobShow(job, 1u << 20), job);  // fits: unchanged, no count
+  const nlohmann::json fit = FitJobShow(job, 2000);
+  EXPECT_LE(fit.dump().size(), 2000u);
+  const auto& kept = fit["decisions"];
+  ASSERT_GE(kept.size(), 3u);
+  EXPECT_EQ(kept.front()["seq"], 1);
+  EXPECT_EQ(kept.back()["seq"], 100);
+  for (std::size_t i = 2; i < kept.size(); ++i) EXPECT_EQ(kept[i]["seq"], kept[i - 1]["seq"].get<int>() + 1);
+  EXPECT_EQ(fit["decisions_omitted"], 100 - static_cast<int>(kept.size()));
+  EXPECT_EQ(fit["state"], "WAITING");
+}
+
 TEST(Views, JsonShapesOfDesignSection6) {
   FakeCell c;
   c.Program("A", {"3"}, 100);

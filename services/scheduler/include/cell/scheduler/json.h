@@ -18,6 +18,11 @@ records::Decision ToRecord(const Decision& d);
 // when FAILED or CANCELLED.
 nlohmann::json ToJson(const JobView& job, bool with_decisions);
 nlohmann::json ToJson(const Decision& d);
+// `job show` within a reply's bound: a job that waited through many changes of a large cell has a decision
+// log past 64 KiB. The first decision and the newest that fit are kept; `decisions_omitted` counts the ones
+// between them that were left out (absent when none was). A job whose fields alone do not fit is returned
+// as is, for the caller's bound to refuse.
+nlohmann::json FitJobShow(nlohmann::json job, std::size_t bound);
 nlohmann::json ToJson(const RouteView& r);
 // `station tools ID`: an array of {tool, socket, length, diameter, life_left_min, worn, broken}.
 nlohmann::json ToolsJson(const tooltable::ToolTable& t);
