@@ -2,10 +2,13 @@
 #include <iostream>
 
 #include "cell/bus/backend.h"
+#include "cell/bus/exit.h"
 #include "context.h"
 
-int main(int argc, char** argv) {
-  cell::bus::SilenceDdsLog();  // stdout is the command's output, stderr its one-line reason
+namespace {
+
+// The verb, with the context (and its bus participant) gone when it returns.
+int Run(int argc, char** argv) {
   CLI::App app{"cellctl: supervise a DDS machining cell"};
   app.require_subcommand(1);
   cellctl::Context ctx;
@@ -34,4 +37,12 @@ int main(int argc, char** argv) {
     return 1;
   }
   return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  cell::bus::SilenceDdsLog();  // stdout is the command's output, stderr its one-line reason
+  // Run's participant has said goodbye; the DDS library's exit-time teardown has nothing left to do.
+  cell::bus::ExitProcess(Run(argc, argv));
 }
