@@ -153,9 +153,10 @@ void State::ClearDirty() {
 // Decision core
 Scheduler::Impl::Impl(Options o, ProgramSource& p) : opt(std::move(o)), programs(p) {
   if (!opt.clock) opt.clock = [] { return std::chrono::system_clock::now(); };
+  opt.kept_ended_jobs = std::max<std::size_t>(opt.kept_ended_jobs, 1);
   if (!opt.db_path.empty()) {
     store.emplace(opt.db_path);
-    store->Load(*this);
+    store->Load(*this, opt.kept_ended_jobs);
   }
 }
 
@@ -517,9 +518,15 @@ void Scheduler::Impl::Interrupt(int s, const std::string& why) {
 // A key binds the whole command (`command`, a canonical JSON text of the verb and every argument): the same
 // command again returns the first outcome; another command under a used key is refused, never taken for a
 // replay (docs/scheduler.md §8).
-std::optional<std::int64_t> Scheduler::Impl::Seen(std::string_view key, const std::string& command) const {
+std::optional<std::int64_t> Scheduler::Impl::Seen(std::string_view key, const std::string& command) {
   if (key.empty()) return std::nullopt;
   auto it = idem.find(std::string(key));
+  if (it == idem.end() && store) {  // memory keeps the newest keys; the database has every one
+    if (auto k = store->Idempotency(std::string(key))) {
+      it = idem.emplace(std::string(key), std::move(*k)).first;
+      idem_order.emplace_back(key);
+    }
+  }
   if (it == idem.end()) return std::nullopt;
   if (!it->second.command.empty() && it->second.command != command) {
     throw Error(
@@ -531,7 +538,7 @@ std::optional<std::int64_t> Scheduler::Impl::Seen(std::string_view key, const st
 }
 void Scheduler::Impl::Remember(std::string_view key, const std::string& command, std::int64_t result) {
   if (key.empty()) return;
-  idem.emplace(std::string(key), Keyed{result, command});
+  if (idem.emplace(std::string(key), Keyed{result, command}).second) idem_order.emplace_back(key);
   new_idem.emplace_back(std::string(key), Keyed{result, command});
 }
 
@@ -540,12 +547,37 @@ void Scheduler::Impl::Reload() {
   ClearDirty();
   if (!store) return;  // in-memory only: nothing to go back to; state stays as it is
   static_cast<State&>(*this) = State{};
-  store->Load(*this);
+  store->Load(*this, opt.kept_ended_jobs);
 }
 
 void Scheduler::Impl::Flush() {
-  if (store) store->Flush(*this);
+  if (!store) return ClearDirty();
+  store->Flush(*this);
   ClearDirty();
+  Trim();
+}
+
+// Once `kept_ended_jobs` more jobs are held, the ended jobs past the newest `kept_ended_jobs` go, with their
+// ended dispatches and the oldest idempotency keys: all of it is in the database, which the views read back
+// (a sweep per kept_ended_jobs new jobs, so its cost is spread over them).
+void Scheduler::Impl::Trim() {
+  if (jobs.size() < trim_at) return;
+  std::vector<std::int64_t> gone;
+  std::size_t ended = 0;
+  for (auto it = jobs.rbegin(); it != jobs.rend(); ++it)
+    if (IsTerminal(it->second.state) && ++ended > opt.kept_ended_jobs) gone.push_back(it->first);
+  for (std::int64_t id : gone) jobs.erase(id);
+  if (!gone.empty()) {
+    for (auto it = dispatches.begin(); it != dispatches.end();) {
+      const bool keep = Live(it->second.state) || jobs.count(it->second.job);
+      it = keep ? std::next(it) : dispatches.erase(it);
+    }
+  }
+  while (idem_order.size() > 4 * opt.kept_ended_jobs) {
+    idem.erase(idem_order.front());
+    idem_order.pop_front();
+  }
+  trim_at = jobs.size() + opt.kept_ended_jobs;
 }
 
 // ---------------------------------------------------------------------------------------------------------
@@ -746,7 +778,13 @@ Effects Scheduler::Cancel(std::string_view key, std::int64_t job_id, std::string
   m.Call([&] {
     if (m.Seen(key, command)) return;
     auto it = m.jobs.find(job_id);
-    if (it == m.jobs.end()) throw Error(Errc::kNotFound, fmt::format("no job {}", job_id));
+    if (it == m.jobs.end()) {
+      // Only ended jobs leave memory: one the database still has is already over.
+      const auto stored = m.store ? m.store->Job(job_id, false) : std::nullopt;
+      if (!stored) throw Error(Errc::kNotFound, fmt::format("no job {}", job_id));
+      throw Error(Errc::kFailedPrecondition,
+                  fmt::format("job {} is already {}", job_id, JobStateName(stored->state)));
+    }
     JobRec& j = it->second;
     if (IsTerminal(j.state)) {
       throw Error(Errc::kFailedPrecondition,

@@ -67,7 +67,7 @@ struct Scheduler::Impl : State {
   void Interrupt(int s, const std::string& why);
 
   // ---- idempotency ----
-  std::optional<std::int64_t> Seen(std::string_view key, const std::string& command) const;
+  std::optional<std::int64_t> Seen(std::string_view key, const std::string& command);
   void Remember(std::string_view key, const std::string& command, std::int64_t result);
 
   // ---- call framing: commit or roll back, then hand out effects ----
@@ -98,6 +98,8 @@ struct Scheduler::Impl : State {
   void Reload();
   // Commits the call's changes.
   void Flush();
+  // Lets go of what the database holds and the cell no longer needs in memory (with a database only).
+  void Trim();
 
   // ---- views ----
   JobView View(const JobRec& j, bool with_decisions) const;

@@ -93,13 +93,17 @@ std::map<int, double> Scheduler::StationCommonVariables(std::string_view id) con
 
 std::optional<JobView> Scheduler::Job(std::int64_t id, bool with_decisions) const {
   auto it = impl_->jobs.find(id);
-  if (it == impl_->jobs.end()) return std::nullopt;
-  return impl_->View(it->second, with_decisions);
+  if (it != impl_->jobs.end()) return impl_->View(it->second, with_decisions);
+  if (impl_->store) return impl_->store->Job(id, with_decisions);  // an ended job memory let go of
+  return std::nullopt;
 }
 
 std::vector<JobView> Scheduler::Jobs(bool with_decisions) const {
   std::vector<JobView> out;
-  for (const auto& [id, j] : impl_->jobs) out.push_back(impl_->View(j, with_decisions));
+  ForJobs({}, [&](const JobView& v) {
+    out.push_back(with_decisions ? *Job(v.id, true) : v);
+    return true;
+  });
   return out;
 }
 
@@ -107,7 +111,24 @@ std::int64_t Scheduler::NewestJobId() const {
   return impl_->jobs.empty() ? 0 : impl_->jobs.rbegin()->first;
 }
 
+std::size_t Scheduler::HeldJobs() const {
+  return impl_->jobs.size();
+}
+
+std::size_t Scheduler::HeldDispatches() const {
+  return impl_->dispatches.size();
+}
+
 void Scheduler::ForJobs(const JobQuery& q, const std::function<bool(const JobView&)>& visit) const {
+  if (impl_->store) {
+    // The database holds every job, and what memory holds is flushed: the stored rows in order, each seen
+    // as memory has it where memory still has it.
+    impl_->store->ForJobs(q, [&](std::int64_t id, JobView&& stored) {
+      auto it = impl_->jobs.find(id);
+      return visit(it == impl_->jobs.end() ? stored : impl_->View(it->second, false));
+    });
+    return;
+  }
   int station = -1;
   if (!q.station.empty() && (station = impl_->FindStation(q.station)) < 0) return;  // no job was there
   for (auto it = impl_->jobs.upper_bound(q.after); it != impl_->jobs.end(); ++it) {

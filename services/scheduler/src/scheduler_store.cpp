@@ -124,11 +124,6 @@ void LoadCounters(store::Database& db, State& state) {
   }
 }
 
-void LoadIdempotency(store::Database& db, State& state) {
-  auto q = db.Prepare("SELECT key, result, command FROM idempotency");
-  while (q.Step()) state.idem.emplace(q.ColumnText(0), Keyed{q.ColumnInt64(1), q.ColumnText(2)});
-}
-
 void LoadStations(store::Database& db, State& state) {
   auto q = db.Prepare(
       "SELECT id, dialect, online, fault, alarm_code, alarm_text, tools, program, vars, pending_vars FROM "
@@ -174,10 +169,16 @@ void LoadRoutes(store::Database& db, State& state) {
   }
 }
 
-void LoadJobs(store::Database& db, State& state) {
+// The states a job ends in, as stored.
+constexpr const char* kEndedStates = "('COMPLETED', 'FAILED', 'CANCELLED')";
+
+void LoadJobs(store::Database& db, State& state, std::size_t kept_ended) {
   auto q = db.Prepare(
-      "SELECT id, state, kind, route, pallet, op, station, reason, started_ms, finished_ms, cycle_s, "
-      "dispatch, ops, schedule FROM jobs");
+      std::string("SELECT id, state, kind, route, pallet, op, station, reason, started_ms, finished_ms, "
+                  "cycle_s, dispatch, ops, schedule FROM jobs WHERE state NOT IN ") +
+      kEndedStates + " OR id IN (SELECT id FROM jobs WHERE state IN " + kEndedStates +
+      " ORDER BY id DESC LIMIT ?1)");
+  q.BindInt64(1, static_cast<std::int64_t>(kept_ended));
   while (q.Step()) {
     JobRec j;
     j.id = q.ColumnInt64(0);
@@ -234,6 +235,7 @@ void LoadDispatches(store::Database& db, State& state) {
     r.programs = json::parse(q.ColumnText(6)).get<std::vector<std::string>>();
     r.ucy = json::parse(q.ColumnText(7)).get<std::vector<std::int64_t>>();
     r.done = static_cast<int>(q.ColumnInt64(8));
+    if (!Live(r.state) && !state.jobs.count(r.job)) continue;  // its job's record is read when asked for
     // Backlog and station queues are rebuilt from the live dispatches.
     if (Live(r.state)) {
       StationRec& st = state.stations[static_cast<std::size_t>(r.station)];
@@ -248,7 +250,9 @@ void LoadDispatches(store::Database& db, State& state) {
 }
 
 void LoadDecisions(store::Database& db, State& state) {
-  auto q = db.Prepare("SELECT seq, job, body FROM decisions ORDER BY seq");
+  if (state.jobs.empty()) return;
+  auto q = db.Prepare("SELECT seq, job, body FROM decisions WHERE job >= ?1 ORDER BY seq");
+  q.BindInt64(1, state.jobs.begin()->first);
   while (q.Step()) {
     auto it = state.jobs.find(q.ColumnInt64(1));
     if (it == state.jobs.end()) continue;
@@ -277,6 +281,54 @@ void LoadDecisions(store::Database& db, State& state) {
     }
     it->second.decisions.push_back(std::move(r));
   }
+}
+
+// ---- read back what memory let go of ----
+// The columns StoredJob reads, in its order.
+constexpr const char* kJobViewColumns =
+    "id, state, kind, route, pallet, op, station, reason, started_ms, finished_ms, cycle_s, ops, schedule, "
+    "(SELECT COUNT(*) FROM decisions WHERE decisions.job = jobs.id)";
+
+JobView StoredJob(store::Statement& q) {
+  JobView v;
+  v.id = q.ColumnInt64(0);
+  v.state = ParseJobState(q.ColumnText(1));
+  v.kind = q.ColumnText(2);
+  v.route = q.ColumnText(3);
+  v.pallet = static_cast<int>(q.ColumnInt64(4));
+  v.op_index = static_cast<int>(q.ColumnInt64(5));
+  v.station = q.ColumnText(6);
+  v.reason = q.ColumnText(7);
+  v.started_ms = q.ColumnInt64(8);
+  v.finished_ms = q.ColumnInt64(9);
+  if (!q.IsNull(10)) v.cycle_s = q.ColumnDouble(10);
+  v.op_count = static_cast<int>(json::parse(q.ColumnText(11)).size());
+  if (const std::string sched = q.ColumnText(12); !sched.empty()) v.schedule = json::parse(sched).at("name");
+  v.decision_count = static_cast<int>(q.ColumnInt64(13));
+  return v;
+}
+
+// A decision as FlushDecisions stored it, in the view's form.
+Decision StoredDecision(std::int64_t seq, const json& b) {
+  Decision d;
+  d.seq = seq;
+  d.time_ms = b.at("time_ms");
+  d.op_index = b.at("op");
+  d.trigger = b.at("trigger");
+  d.why = b.at("why");
+  d.added_backlog_s = b.at("added");
+  d.winner = b.at("winner");
+  for (const auto& c : b.at("considered")) {
+    Candidate cv;
+    cv.station = c.at("station");
+    cv.online = c.at("online");
+    cv.fault = c.at("fault");
+    cv.backlog_s = c.at("backlog_s");
+    cv.missing_tools = c.at("missing").get<std::vector<std::string>>();
+    cv.eligible = cv.online && !cv.fault && cv.missing_tools.empty();  // CandidateRec::eligible
+    d.considered.push_back(std::move(cv));
+  }
+  return d;
 }
 
 // ---- flush, one table each; Store::Flush calls them in this order ----
@@ -447,16 +499,48 @@ Store::Store(const std::string& path) : db_(store::Database::Open(path)) {
   store::Migrate(db_, Migrations());
 }
 
-void Store::Load(State& state) {
+void Store::Load(State& state, std::size_t kept_ended) {
   LoadCounters(db_, state);
-  LoadIdempotency(db_, state);
   LoadStations(db_, state);
   LoadPalletMaps(db_, state);
   LoadRoutes(db_, state);
-  LoadJobs(db_, state);
+  LoadJobs(db_, state, kept_ended);
   LoadDispatches(db_, state);
   LoadDecisions(db_, state);
   state.ClearDirty();
+}
+
+std::optional<JobView> Store::Job(std::int64_t id, bool with_decisions) {
+  auto q = db_.Prepare(std::string("SELECT ") + kJobViewColumns + " FROM jobs WHERE id = ?1");
+  q.BindInt64(1, id);
+  if (!q.Step()) return std::nullopt;
+  JobView v = StoredJob(q);
+  if (with_decisions) {
+    auto d = db_.Prepare("SELECT seq, body FROM decisions WHERE job = ?1 ORDER BY seq");
+    d.BindInt64(1, id);
+    while (d.Step()) v.decisions.push_back(StoredDecision(d.ColumnInt64(0), json::parse(d.ColumnText(1))));
+  }
+  return v;
+}
+
+void Store::ForJobs(const JobQuery& q, const std::function<bool(std::int64_t, JobView&&)>& visit) {
+  auto s = db_.Prepare(std::string("SELECT ") + kJobViewColumns +
+                       " FROM jobs WHERE id > ?1 AND (?2 = '' OR state = ?2) AND (?3 = '' OR station = ?3) "
+                       "ORDER BY id");
+  s.BindInt64(1, q.after)
+      .BindText(2, q.state ? std::string(JobStateName(*q.state)) : std::string())
+      .BindText(3, q.station);
+  while (s.Step()) {
+    JobView v = StoredJob(s);
+    if (!visit(v.id, std::move(v))) return;
+  }
+}
+
+std::optional<Keyed> Store::Idempotency(const std::string& key) {
+  auto q = db_.Prepare("SELECT result, command FROM idempotency WHERE key = ?1");
+  q.BindText(1, key);
+  if (!q.Step()) return std::nullopt;
+  return Keyed{q.ColumnInt64(0), q.ColumnText(1)};
 }
 
 void Store::Flush(const State& state) {

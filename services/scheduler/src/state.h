@@ -128,8 +128,11 @@ struct State {
   std::unordered_map<std::int64_t, DispatchRec> dispatches;
   std::set<std::int64_t> waiting;                      // job ids in WAITING
   std::unordered_map<int, std::int64_t> busy_pallets;  // pallet -> live job
+  // With a database, a cache of the keys (the newest, in idem_order); the database holds them all.
   std::unordered_map<std::string, Keyed> idem;
+  std::deque<std::string> idem_order;
   std::int64_t next_job = 1, next_dispatch = 1, next_seq = 1;
+  std::size_t trim_at = 0;  // jobs.size() at which ended jobs are next let go (Scheduler::Impl::Trim)
 
   // Changes of the call in progress, flushed in one transaction.
   std::set<std::int64_t> dirty_jobs, dirty_dispatches;

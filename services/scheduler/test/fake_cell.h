@@ -140,13 +140,15 @@ class FakeCell {
   std::vector<DispatchAction> all;
   std::vector<CancelAction> cancels;
   std::vector<std::string> notes;
-  std::int64_t now_ms = 1'795'000'000'000;  // 2026-11-18
+  std::int64_t now_ms = 1'795'000'000'000;             // 2026-11-18
+  std::size_t kept_ended = Options{}.kept_ended_jobs;  // applied at the next Restart()
 
  private:
   void Open() {
     Options o;
     o.db_path = db_path_;
     o.coded_pallets = coded_;
+    o.kept_ended_jobs = kept_ended;
     o.clock = [this] { return std::chrono::system_clock::time_point(std::chrono::milliseconds(now_ms)); };
     sched = std::make_unique<Scheduler>(o, programs);
   }

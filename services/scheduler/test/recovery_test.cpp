@@ -14,6 +14,7 @@
 #include <set>
 #include <sstream>
 
+#include "cell/scheduler/json.h"
 #include "cell/scheduler/scheduler.h"
 #include "cell/store/sqlite.h"
 #include "fake_cell.h"
@@ -84,6 +85,64 @@ TEST(Recovery, EverythingSurvivesARestart) {
 }
 
 // The command a key was used for is durable: after a restart the same command replays and another is refused.
+// Issue 39 item 1: the scheduler kept every job, dispatch and idempotency key in memory (1.2 kB a pallet,
+// +49 % from pallet 1,000 to 10,000). With a database, ended jobs past the newest kept_ended leave memory and
+// every view reads them back as they were; keys past four times as many are read back when used again.
+TEST(Recovery, EndedJobsLeaveMemoryAndAreReadBackAsTheyWere) {
+  TempDir tmp;
+  FakeCell c(tmp.db());
+  c.kept_ended = 3;
+  c.Restart();
+  c.Program("A", {"1"}, 100);
+  c.Online("KT01", {"1"});
+  c.Route("R", {"KT01:A"});
+  std::vector<std::int64_t> ids;
+  std::vector<nlohmann::json> seen;  // each job's view while memory held it
+  for (int i = 1; i <= 30; ++i) {
+    ids.push_back(c.Operate("R", i % 5 + 1, "key-" + std::to_string(i)));
+    c.Complete(c.InHand("KT01").dispatch_id, 10.0 + i);
+    seen.push_back(ToJson(c.sched->Job(ids.back(), true).value(), true));
+    EXPECT_LE(c.sched->HeldJobs(), 2 * c.kept_ended) << i;  // kept, plus those since the last sweep
+    EXPECT_LE(c.sched->HeldDispatches(), 2 * c.kept_ended) << i;
+  }
+  const std::int64_t live = c.Operate("R", 1, "key-live");  // dispatched, not ended: never let go
+  auto check = [&](const char* when) {
+    for (std::size_t i = 0; i < ids.size(); ++i)
+      EXPECT_EQ(ToJson(c.sched->Job(ids[i], true).value(), true), seen[i]) << when << " job " << ids[i];
+    const auto all = c.sched->Jobs();
+    ASSERT_EQ(all.size(), ids.size() + 1) << when;
+    for (std::size_t i = 0; i < ids.size(); ++i) EXPECT_EQ(all[i].id, ids[i]) << when;
+    EXPECT_EQ(c.State(live), JobState::kDispatched) << when;
+    // job ls filters read the stored rows: 30 completed on KT01, after a cursor.
+    JobQuery q;
+    q.state = JobState::kCompleted;
+    q.station = "KT01";
+    q.after = ids[9];
+    std::vector<std::int64_t> listed;
+    c.sched->ForJobs(q, [&](const JobView& v) {
+      listed.push_back(v.id);
+      return true;
+    });
+    EXPECT_EQ(listed, std::vector<std::int64_t>(ids.begin() + 10, ids.end())) << when;
+    // The first key left memory long ago: it still replays its job, and still binds its command.
+    JobResult again = c.sched->Operate("key-1", "R", 2);
+    EXPECT_TRUE(again.replayed) << when;
+    EXPECT_EQ(again.job_id, ids[0]) << when;
+    EXPECT_THROW(c.sched->Operate("key-1", "R", 3), Error) << when;
+    // Cancelling an ended job memory let go of says it is over, as for one it holds.
+    try {
+      c.sched->Cancel("cancel-" + std::string(when), ids[0]);
+      ADD_FAILURE() << when << ": cancel of an ended job was accepted";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("is already COMPLETED"), std::string::npos) << e.what();
+    }
+  };
+  check("running");
+  c.Restart();
+  EXPECT_LE(c.sched->HeldJobs(), c.kept_ended + 1);  // the newest ended ones and the live one
+  check("after a restart");
+}
+
 TEST(Recovery, AKeyStillBindsItsCommandAfterARestart) {
   TempDir tmp;
   FakeCell c(tmp.db());

@@ -168,6 +168,10 @@ struct Options {
   // Pallet numbers 1-255, or 1-127 on coded-pallet FMS modules (KT-APL seed lines 852, 4081-4083).
   bool coded_pallets = false;
   std::function<std::chrono::system_clock::time_point()> clock;  // default: system_clock::now
+  // With a database, the ended jobs kept in memory beyond the live ones (the newest, by id); the others are
+  // read back from the database when asked for, so memory stays flat over months of pallets (issue 39).
+  // Idempotency keys are kept four times as many. At least 1. Without a database everything stays.
+  std::size_t kept_ended_jobs = 1024;
 };
 
 // The outcome of a job-creating command.
@@ -235,8 +239,11 @@ class Scheduler {
 
   // ---- queries ----
   std::optional<JobView> Job(std::int64_t id, bool with_decisions = true) const;
-  std::vector<JobView> Jobs(bool with_decisions = false) const;
-  std::int64_t NewestJobId() const;  // 0 when there is no job
+  std::vector<JobView> Jobs(bool with_decisions = false) const;  // every job, in id order (tests)
+  std::int64_t NewestJobId() const;                              // 0 when there is no job
+  // Jobs and dispatches held in memory (tests and the memory benchmark: bounded with a database).
+  std::size_t HeldJobs() const;
+  std::size_t HeldDispatches() const;
   // The jobs of q without their decisions, one at a time, until visit returns false (a page is full): a
   // listing of any size costs only the page it shows.
   void ForJobs(const JobQuery& q, const std::function<bool(const JobView&)>& visit) const;
