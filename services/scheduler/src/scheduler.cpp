@@ -557,9 +557,9 @@ void Scheduler::Impl::Flush() {
   Trim();
 }
 
-// Once `kept_ended_jobs` more jobs are held, the ended jobs past the newest `kept_ended_jobs` go, with their
-// ended dispatches and the oldest idempotency keys: all of it is in the database, which the views read back
-// (a sweep per kept_ended_jobs new jobs, so its cost is spread over them).
+// Once half `kept_ended_jobs` more jobs are held, the ended jobs past the newest `kept_ended_jobs` go, with
+// their ended dispatches and the oldest idempotency keys: all of it is in the database, which the views read
+// back (a sweep per kept_ended_jobs / 2 new jobs, so its cost is spread over them).
 void Scheduler::Impl::Trim() {
   if (jobs.size() < trim_at) return;
   std::vector<std::int64_t> gone;
@@ -577,7 +577,7 @@ void Scheduler::Impl::Trim() {
     idem.erase(idem_order.front());
     idem_order.pop_front();
   }
-  trim_at = jobs.size() + opt.kept_ended_jobs;
+  trim_at = jobs.size() + std::max<std::size_t>(opt.kept_ended_jobs / 2, 1);
 }
 
 // ---------------------------------------------------------------------------------------------------------
