@@ -173,20 +173,29 @@ void OkRun::ConvertXY(BlockWords& w, int motion, int col) {
 
 // G101 X Z C F, G102/G103 X C L F (ln 6446-6460): the end point of a line (Z too) or an arc of radius L on
 // the face; F mm/min along the path.
-void OkRun::ContourMove(const BlockWords& w, int g, int col) {
-  const bool arc = g != 101;
+// What every contour generation block needs (ln 6438-6460, 6700-6707, 6745-6756).
+void OkRun::ContourChecks(const BlockWords& w, int col) {
   if (modal_.comp != 40) {
-    Fail(col,
-         "G101-G103 under G41/G42: the cutter radius compensation plane G17 is not supported; program the "
-         "cutter centre path (ln 6706)");
+    Fail(
+        col,
+        "contour generation under G41/G42: the cutter radius compensation planes G17/G119 are not supported; "
+        "program the cutter centre path (ln 6706)");
   }
-  if (lap_.active || lap_.finish) Fail(col, "contour generation G101-G103 is not allowed in a LAP contour");
-  if (modal_.turret_b) Fail(col, "contour generation G101-G103 on turret B (G14) is not supported");
+  if (lap_.active || lap_.finish) Fail(col, "contour generation is not allowed in a LAP contour");
+  if (modal_.turret_b) Fail(col, "contour generation on turret B (G14) is not supported");
   if (!modal_.c_joined) Fail(col, "contour generation needs the C axis joined (M110) (ln 6701)");
   if (modal_.c_clamped) Fail(col, "contour generation while the C axis is clamped (M147) (ln 6701)");
-  if (modal_.per_rev) Fail(col, "contour generation feeds in mm/min: designate G94 (ln 6446-6460)");
+  if (modal_.per_rev)
+    Fail(col, "contour generation feeds in mm/min: designate G94 (ln 6446-6460, 6745-6752)");
   if (f_ <= 0) Fail(col, "no feedrate: F is 0 (F is cleared at reset)");
   if (w.HasExt(2)) Fail(w.ext_col[2], "QA= is not used in contour generation (the control chooses C's way)");
+}
+
+// G101 X Z C F, G102/G103 X C L F (ln 6446-6460): the end point of a line (Z too) or an arc of radius L on
+// the face; F mm/min along the path.
+void OkRun::ContourMove(const BlockWords& w, int g, int col) {
+  const bool arc = g != 101;
+  ContourChecks(w, col);
   if (arc && w.Has('Z')) Fail(w.Col('Z'), "no Z-axis command in G102/G103 (ln 6704-6705)");
   const bool inc = modal_.incremental && !w.absolute;
   const double x0 = ToProgram(kX, pos_[kX]), z0 = ToProgram(kZ, pos_[kZ]), c0 = ToProgram(kC, pos_[kC]);
@@ -234,6 +243,76 @@ void OkRun::ContourMove(const BlockWords& w, int g, int col) {
   }
   ContourChords(p, c1, z0, z0, col);
   contour_mode_ = true;
+}
+
+// The C turn of a side arc given by its absolute end (ln 6764-6775): of the end C and the same C a turn
+// away, the ends within 2L of the start; when both are, M15 takes the one C reaches turning forward (arc a),
+// M16 the one turning backward (arc b) (judgement 60). d is the end's C less the start's, in [0, 360).
+static double SideTravel(double dz, double d, double r, double l, bool m16, bool* none) {
+  auto fits = [&](double deg) { return std::hypot(dz, r * deg * kDeg) <= 2 * l; };
+  if (d < 1e-9 || d > 360 - 1e-9) d = 0;
+  if (d == 0 && fits(0)) return 0;
+  const double fwd = d == 0 ? 360.0 : d, back = fwd - 360.0 == 0 ? -360.0 : fwd - 360.0;
+  const bool f = fits(fwd), b = fits(back);
+  *none = !f && !b;
+  if (f && b) return m16 ? back : fwd;
+  return f ? fwd : back;
+}
+
+// G132/G133 Z C L F (ln 6709-6775): an arc of radius L on the plane developed from the cylinder at the
+// current X, Z along it and the arc length X/2 x C (radians) across it; F mm/min along the arc. The pieces
+// are straight in Z and C, so chords of the arc in that plane: n is the fewest whose sagitta L(1 - cos(a/2))
+// stays within CONTOUR_TOLERANCE.
+void OkRun::SideContour(const BlockWords& w, int g, int col) {
+  ContourChecks(w, col);
+  const bool inc = modal_.incremental && !w.absolute;
+  const double x0 = ToProgram(kX, pos_[kX]), z0 = ToProgram(kZ, pos_[kZ]), c0 = ToProgram(kC, pos_[kC]);
+  if (w.Has('X') && std::fabs((inc ? x0 + w.Get('X') : w.Get('X')) - x0) > 1e-6) {
+    Fail(w.Col('X'), "the X of the start and end points of G132/G133 differ (ln 6756)");
+  }
+  const double r = x0 / 2;
+  if (r <= 1e-6) Fail(col, "side contour generation needs X greater than 0 (the cylinder's diameter)");
+  if (!w.Has('L')) Fail(col, "G132/G133 need the arc radius L (ln 6745-6752)");
+  const double l = w.Get('L');
+  if (l <= 0) Fail(w.Col('L'), "the arc radius L must be positive (ln 6745-6752)");
+  const double z1 = w.Has('Z') ? (inc ? z0 + w.Get('Z') : w.Get('Z')) : z0;
+  double d = inc && w.Has('C') ? w.Get('C') : 0;
+  if (!inc && w.Has('C')) {
+    if (!w.absolute && std::fabs(w.Get('C')) > 359.999 + 1e-9)
+      Fail(w.Col('C'), "C is 0 to +-359.999 degrees");
+    bool none = false;
+    d = SideTravel(z1 - z0, Norm360(w.Get('C') - c0), r, l, modal_.c_negative, &none);
+    if (none) Fail(w.Col('L'), "L is too small to define the arc (ln 6745-6752)");
+  }
+  // The outer plane is seen from outside the work, Z to the right and the arc length of +C upward; the
+  // inner plane from inside, which turns each arc the other way (judgement 60).
+  const bool cw = (g == 132) != side_inner_;
+  const geom::Vec2 s{z0, 0}, e{z1, r * d * kDeg};
+  const geom::ArcSolution sol = geom::ArcFromRadius(s, e, l, cw, false, 0.001);
+  if (sol.error == geom::ArcError::kFullCircleWithRadius) {
+    Fail(col, "the end point is the start point: an arc given by its radius L cannot be a full circle");
+  }
+  if (sol.error != geom::ArcError::kNone) Fail(w.Col('L'), "L is too small to define the arc (ln 6745-6752)");
+  if (std::fabs(c_net_ + d) > 5965.0 * 360.0) {
+    Fail(col, "Alarm B Profile generation calculation: more than 5965 C-axis turns one way (ln 6779-6781)",
+         "2480");
+  }
+  const double sweep = sol.sweep * kDeg, step = 2 * std::acos(1 - std::min(1.0, contour_tol_ / l));
+  const double pieces = std::max(1.0, std::ceil(sweep / step - 1e-9));
+  if (pieces > kMaxPieces) {
+    Fail(col, fmt::format("the contour needs more than {} pieces within CONTOUR_TOLERANCE {:.4f} mm",
+                          kMaxPieces, contour_tol_));
+  }
+  const int n = static_cast<int>(pieces);
+  const double feed = f_ * n / (l * sweep), a0 = std::atan2(s.y - sol.center.y, s.x - sol.center.x);
+  double c = c0;
+  for (int k = 1; k <= n; ++k) {
+    const double a = a0 + (cw ? -sweep : sweep) * k / n;
+    const double z = k == n ? z1 : sol.center.x + l * std::cos(a);
+    const double ck = k == n ? c0 + d : c0 + (sol.center.y + l * std::sin(a)) / r / kDeg;
+    ContourPiece(x0, z, ck, ck - c, feed, FeedMode::kInverseTime, col);
+    c = ck;
+  }
 }
 
 // A G101 line: the special operations through the centre (ln 6653-6686), else equal pieces.

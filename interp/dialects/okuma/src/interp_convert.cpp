@@ -46,12 +46,6 @@ const char* UnsupportedG(int g) {
       return "mirror image designation";
     case 100:
       return "turret priority designation";
-    case 132:
-    case 133:
-    case 312:
-    case 313:
-      return "side contour generation on the developed cylinder: not run yet (issue 36), the outer/inner "
-             "plane and the M15/M16 choice of arc are in figures lost from the manual";
     case 107:
     case 108:
       return "spindle-synchronized tapping";
@@ -83,15 +77,17 @@ const char* UnsupportedG(int g) {
 }
 
 bool KnownG(int g) {
-  static constexpr int kKnown[] = {
-      0,  1,  2,   3,   4,   13,  14,  18,  28,  29,  31,  32,  33,  34,  35,  40,  41,  42,  50,  64, 65,
-      71, 72, 73,  74,  75,  76,  77,  78,  80,  81,  82,  83,  84,  85,  86,  87,  88,  90,  91,  94, 95,
-      96, 97, 101, 102, 103, 110, 111, 136, 137, 180, 181, 182, 183, 184, 185, 186, 187, 188, 189, 190};
+  static constexpr int kKnown[] = {0,   1,   2,   3,   4,   13,  14,  18,  28,  29,  31,  32,  33,
+                                   34,  35,  40,  41,  42,  50,  64,  65,  71,  72,  73,  74,  75,
+                                   76,  77,  78,  80,  81,  82,  83,  84,  85,  86,  87,  88,  90,
+                                   91,  94,  95,  96,  97,  101, 102, 103, 110, 111, 132, 133, 136,
+                                   137, 180, 181, 182, 183, 184, 185, 186, 187, 188, 189, 190};
   return std::find(std::begin(kKnown), std::end(kKnown), g) != std::end(kKnown);
 }
 
 bool IsMotionG(int g) {
-  return g == 0 || g == 1 || g == 2 || g == 3 || (g >= 31 && g <= 35) || (g >= 101 && g <= 103);
+  return g == 0 || g == 1 || g == 2 || g == 3 || (g >= 31 && g <= 35) || (g >= 101 && g <= 103) || g == 132 ||
+         g == 133;
 }
 
 }  // namespace
@@ -201,6 +197,15 @@ void OkRun::CollectWords(const Block& b, BlockWords& w) {
 // The block's G codes: modal groups, one-shots, and the codes the cell does not run.
 void OkRun::ReadNcGCodes(const BlockWords& w, NcGCodes& k) {
   for (const auto& g : w.g) {
+    if (g.code == 312 || g.code == 313) {
+      // The side contour generation programming mode (parameter No. 56 bit 4 with G119, ln 6785-6801) is not
+      // the cell's: G312/G313 outside it are the manual's alarm.
+      Fail(g.col,
+           fmt::format("Alarm B UNUSABLE contour generation command: G{} outside the side contour generation "
+                       "programming mode (ln 6799-6801)",
+                       g.code),
+           "2224");
+    }
     if (!KnownG(g.code)) {
       if (const char* what = UnsupportedG(g.code)) {
         Fail(g.col, fmt::format("G{} ({}) is not supported by the cell's OSP-E100L dialect", g.code, what));
@@ -550,6 +555,8 @@ uint32_t OkRun::UsedAddresses(const NcGCodes& k, std::string* what) const {
       break;
     case 102:
     case 103:
+    case 132:
+    case 133:
       used |= bits("CL");
       break;
     case -1:
@@ -913,6 +920,7 @@ void OkRun::CAxisJoint(const BlockWords& w, const BlockWords::Code& m) {
     Fail(m.col, "M110 must be alone in its block");
   }
   modal_.c_joined = m.code == 110;
+  if (modal_.c_joined) c_net_ = 0;
   modal_.spindle = m.code == 110 ? SpindleDir::kAxis : SpindleDir::kStop;
   SpindleOp& sp = Out<SpindleOp>();
   sp.dir = modal_.spindle;

@@ -14,7 +14,7 @@
 //   interp_cycles.cpp    grooving G73/G74, tapping G77/G78
 //   interp_mtool.cpp     the M-tool compound fixed cycles G181-G190 (drilling, boring, tapping, threads, key
 //                        ways)
-//   interp_ccontour.cpp  face contour generation G101-G103 (X-C lines and arcs as chords), coordinate
+//   interp_ccontour.cpp  contour generation G101-G103 (face), G132/G133 (side) as pieces, coordinate
 //                        conversion G137/G136
 //   lap.cpp              LAP tool paths (AP modes I-V) from a captured contour
 //   interp_lap.cpp       the executor's side of LAP: contour capture, G84-G88 calls, modal restore
@@ -306,10 +306,12 @@ class OkRun final : public RunBase, public VarReader {
   void MToolStart();
   double CTravelTo(double t) const;
 
-  // Face contour generation and coordinate conversion (interp_ccontour.cpp)
+  // Contour generation and coordinate conversion (interp_ccontour.cpp)
   bool CoordConversion(BlockWords& w, const NcGCodes& k);
   void ConvertXY(BlockWords& w, int motion, int col);
   void ContourMove(const BlockWords& w, int g, int col);
+  void SideContour(const BlockWords& w, int g, int col);
+  void ContourChecks(const BlockWords& w, int col);
   void ContourLine(double r0, double c0, double r1, double c1, double z0, double z1, int col);
   void ContourCentre(double r0, double c0, double r1, double c1, double z0, double z1, int col);
   void ContourChords(const FacePath& path, double c1, double z0, double z1, int col);
@@ -391,6 +393,8 @@ class OkRun final : public RunBase, public VarReader {
   } conv_;
   bool contour_mode_ = false;   // the last motion block was G101-G103 (X > 0 is checked when the mode begins)
   double contour_tol_ = 0.001;  // CONTOUR_TOLERANCE: chord error of a contour generation path, mm
+  bool side_inner_ = false;     // SIDE_CONTOUR_PLANE=INNER: G132/G133 on the inner development plane
+  double c_net_ = 0;            // C degrees turned since M110 (the 5965-turn bound of G132/G133)
   std::array<double, kAxisCount> pos_limit_{}, neg_limit_{};  // VPVL*, VNVL* (machine); set flags below
   uint32_t pos_limit_set_ = 0, neg_limit_set_ = 0;
 

@@ -76,6 +76,10 @@ void OkRun::Motion(const BlockWords& w, const Block& b, int motion_col) {
     case 103:
       if (w.Has('X') || w.Has('Z') || w.Has('C')) ContourMove(w, mode, motion_col);
       return;
+    case 132:
+    case 133:
+      if (w.Has('X') || w.Has('Z') || w.Has('C')) SideContour(w, mode, motion_col);
+      return;
     case -1:  // after G137 (ln 6830-6831)
       if (axes)
         Fail(motion_col, "G137 cancelled the motion mode: designate G00, G01 or a cycle in this block");
@@ -273,6 +277,7 @@ void OkRun::EmitMove(const AxisArray& target, uint32_t moved, bool rapid, double
   for (int a = 0; a < kAxisCount; ++a) {
     if (moved & (1u << a)) pos_[static_cast<size_t>(a)] = target[static_cast<size_t>(a)];
   }
+  if (travel_mask & kCBit) c_net_ += travel[kC];
   if (spec) force_stage_ = true;
   Target* to;
   if (rapid) {
