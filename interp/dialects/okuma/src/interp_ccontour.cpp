@@ -1,9 +1,11 @@
-// Okuma face contour generation G101-G103 (manual SECTION 9, seed ln 6438-6707) and coordinate system
-// conversion G137/G136 (SECTION 10, ln 6803-6918). The programmed contour is a line or an arc in the face's
-// Cartesian plane (program coordinates, radius values: +x along C0, +y along C90, so that C = atan(Y/X) +
-// theta as ln 6836-6842 convert); the control turns it into X and C (and Z) motion. The canon has no polar
-// move: the path goes out as equal pieces whose ends lie on it, each a `linear` with X, C (and Z) in inverse
-// time, as many as keep the X-C straight piece within CONTOUR_TOLERANCE of the path (judgement 56).
+// Okuma contour generation (manual SECTION 9, seed ln 6438-6801): G101-G103 on the face, G132/G133 on the
+// developed side, and coordinate system conversion G137/G136 (SECTION 10, ln 6803-6918). A face contour is a
+// line or an arc in the face's Cartesian plane (program coordinates, radius values: +x along C0, +y along
+// C90, so that C = atan(Y/X) + theta as ln 6836-6842 convert); the control turns it into X and C (and Z)
+// motion. The canon has no polar move: the path goes out as equal pieces whose ends lie on it, each a
+// `linear` with X, C (and Z) in inverse time, as many as keep the X-C straight piece within CONTOUR_TOLERANCE
+// of the path (judgement 56). A side arc is a circle in Z and the arc length of C: its pieces are chords
+// (judgement 60).
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -111,7 +113,7 @@ bool OkRun::CoordConversion(BlockWords& w, const NcGCodes& k) {
     if (mc_.g != 0) Fail(col, "cancel the M-tool compound fixed cycle with G180 before G137");
     if (modal_.comp != 40) Fail(col, "G137 is not allowed in nose radius compensation mode");
     if (lap_.active || lap_.finish) Fail(col, "G137 is not allowed in a LAP contour");
-    conv_ = CoordConv{true, true, col, w.Get('C'), 0, 0};
+    conv_ = CoordConv{true, true, w.Get('C'), 0, 0};
     modal_.motion = -1;  // G137 cancels G00, G01 and the cycles: the next block designates one (ln 6830-6831)
     contour_mode_ = false;
     return true;
@@ -171,8 +173,6 @@ void OkRun::ConvertXY(BlockWords& w, int motion, int col) {
   w.absolute = true;
 }
 
-// G101 X Z C F, G102/G103 X C L F (ln 6446-6460): the end point of a line (Z too) or an arc of radius L on
-// the face; F mm/min along the path.
 // What every contour generation block needs (ln 6438-6460, 6700-6707, 6745-6756).
 void OkRun::ContourChecks(const BlockWords& w, int col) {
   if (modal_.comp != 40) {

@@ -388,7 +388,6 @@ class OkRun final : public RunBase, public VarReader {
   struct CoordConv {
     bool on = false;
     bool need_xy = false;  // the first block after G137 gives both X and Y, absolute (ln 6884-6918)
-    int c_col = 1;
     double theta = 0, x = 0, y = 0;
   } conv_;
   bool contour_mode_ = false;   // the last motion block was G101-G103 (X > 0 is checked when the mode begins)
