@@ -335,14 +335,14 @@ void OkRun::ContourLine(double r0, double c0, double r1, double c1, double z0, d
 }
 
 // Lines along a radius (ln 6653-6686): X alone (with Z) at F mm/min; C alone at the C-axis feed of F (360
-// deg = 500 mm, ln 745-939; the centre override parameter at its 100 %), the shorter way, 180 degrees
-// positive (judgement 57).
+// deg = 500 mm, ln 745-939) times the C-axis center override (C_CENTER_OVERRIDE, ln 6680-6686), the shorter
+// way, 180 degrees positive (judgement 57).
 void OkRun::ContourCentre(double r0, double c0, double r1, double c1, double z0, double z1, int col) {
   const double dc = Wrap180(c1 - c0);
   auto radial = [&](double r, double z) { ContourPiece(2 * r, z, c0, 0, f_, FeedMode::kPerMinute, col); };
   auto turn = [&] {  // where X and Z stand
-    ContourPiece(ToProgram(kX, pos_[kX]), ToProgram(kZ, pos_[kZ]), c1, dc, f_ * 360.0 / 500.0,
-                 FeedMode::kDegPerMinute, col);
+    ContourPiece(ToProgram(kX, pos_[kX]), ToProgram(kZ, pos_[kZ]), c1, dc,
+                 f_ * 360.0 / 500.0 * centre_override_, FeedMode::kDegPerMinute, col);
     c0 = c1;
   };
   if (std::fabs(dc) < 1e-9) {

@@ -99,6 +99,9 @@ OkRun::OkRun(const RunOptions& o) : RunBase(o) {
       // the pieces, more than 1 mm is no contour).
       const double t = ParamNumber(val, 0.001);
       contour_tol_ = std::isfinite(t) ? std::clamp(t, 0.0001, 1.0) : 0.001;
+    } else if (key == "C_CENTER_OVERRIDE") {
+      const double pct = ParamNumber(val, 100);
+      centre_override_ = std::isfinite(pct) ? std::clamp(pct, 1.0, 1000.0) / 100 : 1;  // 1-1000 % (ln 6684)
     } else if (key == "SIDE_CONTOUR_PLANE") {
       side_inner_ = scan::Upper(scan::Trim(val)) == "INNER";  // MULTIPLE MACHINING Z-CE coordinate (ln 6719)
     } else if (key == "PECK_RETRACT") {

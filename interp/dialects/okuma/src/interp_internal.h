@@ -392,6 +392,7 @@ class OkRun final : public RunBase, public VarReader {
   } conv_;
   bool contour_mode_ = false;   // the last motion block was G101-G103 (X > 0 is checked when the mode begins)
   double contour_tol_ = 0.001;  // CONTOUR_TOLERANCE: chord error of a contour generation path, mm
+  double centre_override_ = 1;  // MULTIPLE MACHINING C-axis center override (1-1000 %, ln 6680-6686)
   bool side_inner_ = false;     // SIDE_CONTOUR_PLANE=INNER: G132/G133 on the inner development plane
   double c_net_ = 0;            // C degrees turned since M110 (the 5965-turn bound of G132/G133)
   std::array<double, kAxisCount> pos_limit_{}, neg_limit_{};  // VPVL*, VNVL* (machine); set flags below
