@@ -46,26 +46,17 @@ const char* UnsupportedG(int g) {
       return "mirror image designation";
     case 100:
       return "turret priority designation";
-    case 101:
-    case 102:
-    case 103:
-    case 132:
-    case 133:
-    case 312:
-    case 313:
-      return "contour generation (C-axis milling)";
     case 107:
     case 108:
       return "spindle-synchronized tapping";
     case 112:
     case 113:
-      return "circular thread cutting";
+      return "circular thread cutting, an option whose format the manual does not give: ln 5603, 9374-9375";
     case 122:
     case 123:
       return "W-axis command for the sub spindle";
-    case 137:
     case 138:
-      return "coordinate system conversion / Y-axis mode";
+      return "Y-axis mode: the appendix names it at ln 9400 without a format, and OK01 has no Y axis";
     case 140:
     case 141:
     case 142:
@@ -86,15 +77,17 @@ const char* UnsupportedG(int g) {
 }
 
 bool KnownG(int g) {
-  static constexpr int kKnown[] = {0,   1,   2,   3,   4,   13,  14,  18,  28,  29,  31,  32,  33, 34, 35,
-                                   40,  41,  42,  50,  64,  65,  71,  72,  73,  74,  75,  76,  77, 78, 80,
-                                   81,  82,  83,  84,  85,  86,  87,  88,  90,  91,  94,  95,  96, 97, 110,
-                                   111, 136, 180, 181, 182, 183, 184, 185, 186, 187, 188, 189, 190};
+  static constexpr int kKnown[] = {0,   1,   2,   3,   4,   13,  14,  18,  28,  29,  31,  32,  33,
+                                   34,  35,  40,  41,  42,  50,  64,  65,  71,  72,  73,  74,  75,
+                                   76,  77,  78,  80,  81,  82,  83,  84,  85,  86,  87,  88,  90,
+                                   91,  94,  95,  96,  97,  101, 102, 103, 110, 111, 132, 133, 136,
+                                   137, 180, 181, 182, 183, 184, 185, 186, 187, 188, 189, 190};
   return std::find(std::begin(kKnown), std::end(kKnown), g) != std::end(kKnown);
 }
 
 bool IsMotionG(int g) {
-  return g == 0 || g == 1 || g == 2 || g == 3 || (g >= 31 && g <= 35);
+  return g == 0 || g == 1 || g == 2 || g == 3 || (g >= 31 && g <= 35) || (g >= 101 && g <= 103) || g == 132 ||
+         g == 133;
 }
 
 }  // namespace
@@ -204,6 +197,15 @@ void OkRun::CollectWords(const Block& b, BlockWords& w) {
 // The block's G codes: modal groups, one-shots, and the codes the cell does not run.
 void OkRun::ReadNcGCodes(const BlockWords& w, NcGCodes& k) {
   for (const auto& g : w.g) {
+    if (g.code == 312 || g.code == 313) {
+      // The side contour generation programming mode (parameter No. 56 bit 4 with G119, ln 6785-6801) is not
+      // the cell's: G312/G313 outside it are the manual's alarm.
+      Fail(g.col,
+           fmt::format("Alarm B UNUSABLE contour generation command: G{} outside the side contour generation "
+                       "programming mode (ln 6799-6801)",
+                       g.code),
+           "2224");
+    }
     if (!KnownG(g.code)) {
       if (const char* what = UnsupportedG(g.code)) {
         Fail(g.col, fmt::format("G{} ({}) is not supported by the cell's OSP-E100L dialect", g.code, what));
@@ -228,8 +230,13 @@ void OkRun::ReadNcGCodes(const BlockWords& w, NcGCodes& k) {
         break;
       case 18:
       case 28:
+        break;  // the turning plane; torque limit cancel: the cell's only states (G17/G19/G119, G29 refused)
       case 136:
-        break;  // the turning plane; torque limit cancel and G136: the cell's only states (G29, G137 refused)
+        k.g136 = true;
+        break;
+      case 137:
+        k.g137 = true;
+        break;
       case 40:
       case 41:
       case 42:
@@ -323,6 +330,7 @@ void OkRun::MotionGCode(int motion_g, int motion_col) {
   }
   modal_.motion = motion_g;
   if (!(motion_g >= 31 && motion_g <= 35)) chain_.active = false;
+  if (motion_g < 101 || motion_g > 103) contour_mode_ = false;
 }
 
 // What the block does after its codes: a dwell, a zero shift, a cycle, or its move.
@@ -377,6 +385,10 @@ void OkRun::ExecNc(const Block& b) {
   if (k.g90 && k.g91) Fail(w.FindG(91)->col, "G90 and G91 in one block");
   if (k.g90) modal_.incremental = false;
   if (k.g91) modal_.incremental = true;
+  if (CoordConversion(w, k)) {
+    EndBlockStages(false);
+    return;
+  }
   if (MToolMode(w, k)) {
     EndBlockStages(false);
     return;
@@ -522,7 +534,8 @@ uint32_t OkRun::UsedAddresses(const NcGCodes& k, std::string* what) const {
   }
   const int motion = k.motion_g >= 0 ? k.motion_g : modal_.motion;
   uint32_t used = named(motion, "XZY");  // Y: Motion names the missing axis itself
-  if (k.comp_g) used |= bits("IK");      // the entry or exit vector of G40/G41/G42
+  if (motion < 0) *what = "a block after G137";
+  if (k.comp_g) used |= bits("IK");  // the entry or exit vector of G40/G41/G42
   switch (motion) {
     case 0:
     case 1:
@@ -536,6 +549,17 @@ uint32_t OkRun::UsedAddresses(const NcGCodes& k, std::string* what) const {
     case 32:
     case 33:
       used |= bits("CIKAELJ");
+      break;
+    case 101:
+      used |= bits("C");
+      break;
+    case 102:
+    case 103:
+    case 132:
+    case 133:
+      used |= bits("CL");
+      break;
+    case -1:
       break;
     default:  // G34/G35
       used |= bits("CAEJ");
@@ -896,6 +920,7 @@ void OkRun::CAxisJoint(const BlockWords& w, const BlockWords::Code& m) {
     Fail(m.col, "M110 must be alone in its block");
   }
   modal_.c_joined = m.code == 110;
+  if (modal_.c_joined) c_net_ = 0;
   modal_.spindle = m.code == 110 ? SpindleDir::kAxis : SpindleDir::kStop;
   SpindleOp& sp = Out<SpindleOp>();
   sp.dir = modal_.spindle;

@@ -94,6 +94,16 @@ OkRun::OkRun(const RunOptions& o) : RunBase(o) {
       zero_offset_[kC] = ParamNumber(val, 0);
     } else if (key == "ARC_TOLERANCE") {
       arc_tolerance_ = std::max(0.0, ParamNumber(val, 0.01));
+    } else if (key == "CONTOUR_TOLERANCE") {
+      // The chord error of G101-G103 paths; kept within 0.1 um - 1 mm (fewer than 0.1 um would only multiply
+      // the pieces, more than 1 mm is no contour).
+      const double t = ParamNumber(val, 0.001);
+      contour_tol_ = std::isfinite(t) ? std::clamp(t, 0.0001, 1.0) : 0.001;
+    } else if (key == "C_CENTER_OVERRIDE") {
+      const double pct = ParamNumber(val, 100);
+      centre_override_ = std::isfinite(pct) ? std::clamp(pct, 1.0, 1000.0) / 100 : 1;  // 1-1000 % (ln 6684)
+    } else if (key == "SIDE_CONTOUR_PLANE") {
+      side_inner_ = scan::Upper(scan::Trim(val)) == "INNER";  // MULTIPLE MACHINING Z-CE coordinate (ln 6719)
     } else if (key == "PECK_RETRACT") {
       peck_retract_ = std::max(0.0, ParamNumber(val, 0.5));
     } else if (key == "MULTI_PECK_RETRACT") {
@@ -640,6 +650,8 @@ void OkRun::ResetProgramState() {
   modal_.chuck_barrier = modal_.tail_barrier = false;  // barrier off at reset (ln 9108)
   modal_.mtool_release = false;                        // M152 at reset (ln 4741)
   mc_ = MToolCycle();
+  conv_ = CoordConv();  // G136 at reset (ln 6815, 9398)
+  contour_mode_ = false;
   f_ = 0;
 }
 

@@ -13,9 +13,12 @@
 //   interp_thread.cpp    thread cutting G31-G35 and the compound thread cycles G71/G72
 //   interp_cycles.cpp    grooving G73/G74, tapping G77/G78
 //   interp_mtool.cpp     the M-tool compound fixed cycles G181-G190 (drilling, boring, tapping, threads, key
-//   ways) lap.cpp              LAP tool paths (AP modes I-V) from a captured contour interp_lap.cpp       the
-//   executor's side of LAP: contour capture, G84-G88 calls, modal restore tool_data.cpp        Okuma tool
-//   data (tool offsets, nose radius) in the manual's variables
+//                        ways)
+//   interp_ccontour.cpp  contour generation G101-G103 (face), G132/G133 (side) as pieces, coordinate
+//                        conversion G137/G136
+//   lap.cpp              LAP tool paths (AP modes I-V) from a captured contour
+//   interp_lap.cpp       the executor's side of LAP: contour capture, G84-G88 calls, modal restore
+//   tool_data.cpp        Okuma tool data (tool offsets, nose radius) in the manual's variables
 #pragma once
 
 #include <array>
@@ -90,7 +93,8 @@ struct BlockWords {
     int col = 1;
   };
   std::vector<Code> g, m;
-  int t_digits = 0;  // digits written in the T word (4 or 6)
+  int t_digits = 0;       // digits written in the T word (4 or 6)
+  bool absolute = false;  // X, Z, C are absolute whatever G90/G91 (G137 converted them)
 
   bool Has(char a) const { return (has >> (a - 'A')) & 1u; }
   double Get(char a) const { return v[static_cast<size_t>(a - 'A')]; }
@@ -105,21 +109,22 @@ struct BlockWords {
     g.clear();
     m.clear();
     t_digits = 0;
+    absolute = false;
   }
 };
 int ExtIndex(Addr a);  // index into BlockWords::ext, -1 if not an extended address
 
 // Modal state by meaning (the codes that set it in the comments).
 struct Modal {
-  int motion = 0;                          // G00 G01 G02 G03 G31 G32 G33 G34 G35 (their numbers)
-  bool incremental = false;                // G91 (G90 at reset)
-  bool per_rev = true;                     // G95 (power-on and reset) / G94
-  bool css = false;                        // G96 / G97
-  bool turret_b = false;                   // G14 / G13 (reset)
-  bool droop = false;                      // G65 / G64
-  bool chuck_barrier = false;              // M25 / M24 (off at power-on and reset, ln 9108)
-  bool tail_barrier = false;               // M21 / M20
-  int comp = 40;                           // G40 / G41 / G42 as programmed
+  int motion = 0;              // G00 G01 G02 G03 G31-G35 G101-G103 (their numbers); -1 none (G137)
+  bool incremental = false;    // G91 (G90 at reset)
+  bool per_rev = true;         // G95 (power-on and reset) / G94
+  bool css = false;            // G96 / G97
+  bool turret_b = false;       // G14 / G13 (reset)
+  bool droop = false;          // G65 / G64
+  bool chuck_barrier = false;  // M25 / M24 (off at power-on and reset, ln 9108)
+  bool tail_barrier = false;   // M21 / M20
+  int comp = 40;               // G40 / G41 / G42 as programmed
   SpindleDir spindle = SpindleDir::kStop;  // M03 M04 M05 M19 (as the spindle turns, after G14's mirror)
   bool coolant = false;                    // M08 / M09
   bool c_joined = false;                   // M110 / M109
@@ -156,6 +161,8 @@ struct MToolCycle {
   long budget = 0;            // moves one block may still make (a guard, judgement 38)
   int col = 1;                // the block's cycle column (for the guard's alarm)
 };
+
+struct FacePath;  // a face contour in Cartesian program coordinates (interp_ccontour.cpp)
 
 class OkRun final : public RunBase, public VarReader {
  public:
@@ -227,6 +234,7 @@ class OkRun final : public RunBase, public VarReader {
     int motion_g = -1, motion_col = 1, comp_g = 0;
     bool dwell = false, g50 = false, g90 = false, g91 = false, g13 = false, g14 = false, g80 = false;
     bool g180 = false, mtool_fresh = false;  // G180; a G181-G190 code in this block
+    bool g136 = false, g137 = false;         // coordinate conversion off / on
     int chamfer = 0, cycle = 0, lap = 0, cycle_col = 1;
   };
   void ReadNcGCodes(const BlockWords& w, NcGCodes& k);
@@ -298,6 +306,18 @@ class OkRun final : public RunBase, public VarReader {
   void MToolStart();
   double CTravelTo(double t) const;
 
+  // Contour generation and coordinate conversion (interp_ccontour.cpp)
+  bool CoordConversion(BlockWords& w, const NcGCodes& k);
+  void ConvertXY(BlockWords& w, int motion, int col);
+  void ContourMove(const BlockWords& w, int g, int col);
+  void SideContour(const BlockWords& w, int g, int col);
+  void ContourChecks(const BlockWords& w, int col);
+  void ContourLine(double r0, double c0, double r1, double c1, double z0, double z1, int col);
+  void ContourCentre(double r0, double c0, double r1, double c1, double z0, double z1, int col);
+  void ContourChords(const FacePath& path, double c1, double z0, double z1, int col);
+  void ContourPiece(double x_prog, double z_prog, double c_prog, double c_travel, double feed, FeedMode fm,
+                    int col);
+
   // LAP (interp_lap.cpp)
   void LapCall(const BlockWords& w, const Block& b, int g, int col);
   void LapBlock(const Block& b, const BlockWords& w);
@@ -363,6 +383,18 @@ class OkRun final : public RunBase, public VarReader {
   double max_rpm_ = 0;  // G50 S
   ThreadChain chain_;
   MToolCycle mc_;
+  // G137 coordinate conversion (ln 6803-6918): the Cartesian face system at angle theta (program C) and the
+  // last X, Y commanded in it (radius values).
+  struct CoordConv {
+    bool on = false;
+    bool need_xy = false;  // the first block after G137 gives both X and Y, absolute (ln 6884-6918)
+    double theta = 0, x = 0, y = 0;
+  } conv_;
+  bool contour_mode_ = false;   // the last motion block was G101-G103 (X > 0 is checked when the mode begins)
+  double contour_tol_ = 0.001;  // CONTOUR_TOLERANCE: chord error of a contour generation path, mm
+  double centre_override_ = 1;  // MULTIPLE MACHINING C-axis center override (1-1000 %, ln 6680-6686)
+  bool side_inner_ = false;     // SIDE_CONTOUR_PLANE=INNER: G132/G133 on the inner development plane
+  double c_net_ = 0;            // C degrees turned since M110 (the 5965-turn bound of G132/G133)
   std::array<double, kAxisCount> pos_limit_{}, neg_limit_{};  // VPVL*, VNVL* (machine); set flags below
   uint32_t pos_limit_set_ = 0, neg_limit_set_ = 0;
 

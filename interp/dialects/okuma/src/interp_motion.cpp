@@ -36,10 +36,10 @@ double OkRun::ToProgram(int axis, double machine) const {
 }
 
 void OkRun::Motion(const BlockWords& w, const Block& b, int motion_col) {
-  if (w.Has('Y')) Fail(w.Col('Y'), "this lathe has no Y axis");
+  if (w.Has('Y')) Fail(w.Col('Y'), "Y is a word of the coordinate conversion mode G137 (ln 6824, 6850)");
   const int mode = modal_.motion;
   const bool axes = w.Has('X') || w.Has('Z') || w.Has('C') || w.Has('A');
-  if (open_line_ && axes && mode != 0 && mode != 1 && mode != 34 && mode != 35) {
+  if (open_line_ && axes && mode != 0 && mode != 1 && mode != 34 && mode != 35 && mode >= 0) {
     Fail(motion_col, "after a line given by an angle only, the next block must be a line with X, Z and A");
   }
   switch (mode) {
@@ -71,6 +71,19 @@ void OkRun::Motion(const BlockWords& w, const Block& b, int motion_col) {
     case 35:
       if (axes) ThreadBlock(w, mode, motion_col);
       return;
+    case 101:
+    case 102:
+    case 103:
+      if (w.Has('X') || w.Has('Z') || w.Has('C')) ContourMove(w, mode, motion_col);
+      return;
+    case 132:
+    case 133:
+      if (w.Has('X') || w.Has('Z') || w.Has('C')) SideContour(w, mode, motion_col);
+      return;
+    case -1:  // after G137 (ln 6830-6831)
+      if (axes)
+        Fail(motion_col, "G137 cancelled the motion mode: designate G00, G01 or a cycle in this block");
+      return;
     default:
       return;
   }
@@ -89,7 +102,7 @@ bool OkRun::TargetOf(const BlockWords& w, AxisArray& target, uint32_t* moved, in
   const bool has_x = w.Has('X'), has_z = w.Has('Z'), has_a = w.Has('A');
   auto prog_target = [&](int axis, char a) {
     const double cur = ToProgram(axis, pos_[static_cast<size_t>(axis)]);
-    return ToMachine(axis, modal_.incremental ? cur + w.Get(a) : w.Get(a));
+    return ToMachine(axis, modal_.incremental && !w.absolute ? cur + w.Get(a) : w.Get(a));
   };
   const geom::Vec2 start = PlaneOf(pos_);
   if (open_line_) {
@@ -141,11 +154,11 @@ void OkRun::CTarget(const BlockWords& w, AxisArray& target, AxisArray& travel, u
   const double c = w.Get('C');
   const double cur = pos_[kC];
   double t, tr;
-  if (modal_.incremental) {
+  if (modal_.incremental && !w.absolute) {
     tr = c;
     t = std::fmod(cur + tr, 360.0);
   } else {
-    if (std::fabs(c) > 359.999 + 1e-9) Fail(col, "C is 0 to +-359.999 degrees");
+    if (!w.absolute && std::fabs(c) > 359.999 + 1e-9) Fail(col, "C is 0 to +-359.999 degrees");
     t = std::fmod(c + Offset(kC), 360.0);
     if (t < 0) t += 360.0;
     tr = CTravelTo(t);
@@ -264,6 +277,7 @@ void OkRun::EmitMove(const AxisArray& target, uint32_t moved, bool rapid, double
   for (int a = 0; a < kAxisCount; ++a) {
     if (moved & (1u << a)) pos_[static_cast<size_t>(a)] = target[static_cast<size_t>(a)];
   }
+  if (travel_mask & kCBit) c_net_ += travel[kC];
   if (spec) force_stage_ = true;
   Target* to;
   if (rapid) {

@@ -486,6 +486,14 @@ class Lexer {
       neg = s_[i_] == '-';
       ++i_;
     }
+    if (i_ < s_.size() && s_[i_] == '[' && i_ > start) {  // a sign and a bracket: E-67's X-[200-V1]*SIN[35]
+      ExprParser p(s_, start, b_.pool);
+      w.expr = true;
+      w.node = p.Parse();
+      i_ = p.pos();
+      Push(w);
+      return;
+    }
     double v = 0, scale = 0.1;
     int digits = 0, written = 0;
     while (i_ < s_.size() && (IsDigit(s_[i_]) || s_[i_] == '.')) {

@@ -49,6 +49,16 @@ TEST(OkumaRun, UnitsFirstDiameterModeAndAMove) {
   EXPECT_EQ(r.ops[3], R"({"op":"end","line":4,"m":2,"shuttle":false})");
 }
 
+// ln 6779-6781: G132/G133 turn C at most 5965 turns one way since M110; 720 degrees a block reach the bound
+// in the 2983rd (2982 x 720 = 2,147,040 <= 5965 x 360 = 2,147,400 < 2983 x 720). Too long for the corpus.
+TEST(OkumaRun, SideContourStopsPast5965Turns) {
+  auto r = RunText(
+      "N1 M110\nN2 M146 M15\nN3 G00 X20 Z100 C0\nN4 G94 F3000\nN5 G91\nNLP G132 C720 L10000\nV1=V1+1\n"
+      "IF [V1 LT 3000] GOTO NLP\nM02\n");
+  EXPECT_EQ(r.run->Variables().at("V1"), 2982);
+  EXPECT_NE(r.diag.find("[2480] Alarm B Profile generation calculation"), std::string::npos) << r.diag;
+}
+
 TEST(OkumaRun, CommonVariablesComeInAndGoOut) {
   auto r = RunText("N1 V1=V1+1 V5=10\nM02\n", {{"V1", 19}, {"V7", 3}, {"L1500", 1}});
   EXPECT_EQ(r.run->Variables(), (std::map<std::string, double>{{"V1", 20}, {"V5", 10}, {"V7", 3}}));
