@@ -41,11 +41,12 @@ std::vector<std::string> AllIdentityNames() {
 TEST(Table, CoversExactlyTheBusTopics) {
   const std::string st = "<ID>";
   std::set<std::string> bus_topics{
-      topics::kHealth,         topics::kStationStatus, topics::kToolTable,        topics::kVariables,
-      topics::kStationIo,      topics::kProgress,      topics::kStationEvent,     topics::kServoControl,
-      topics::kSchedulerState, topics::kJobState,      topics::kRunStatus,        topics::kJobStatus,
-      topics::kProgramChange,  topics::kAlarm,         topics::kInspectionStored, topics::kAxisState,
-      topics::kProgramList,    topics::Segments(st),   topics::Probe(st),         topics::Part(st)};
+      topics::kHealth,           topics::kStationStatus, topics::kToolTable,      topics::kVariables,
+      topics::kStationIo,        topics::kStationEvent,  topics::kSchedulerState, topics::kJobState,
+      topics::kRunStatus,        topics::kJobStatus,     topics::kProgramChange,  topics::kAlarm,
+      topics::kInspectionStored, topics::kAxisState,     topics::kProgramList,    topics::Segments(st),
+      topics::Probe(st),         topics::Part(st),       topics::Progress(st),    topics::ServoControl(st),
+      topics::ServoTools(st)};
   for (const std::string& svc :
        {std::string(topics::kProgramStore), std::string(topics::kScheduler), std::string(topics::kInspection),
         topics::StationRun(st), topics::StationCommand(st)}) {
@@ -136,7 +137,7 @@ TEST(Grants, TheViewerReadsStateAndEventsAndWritesNothing) {
   // No service's answers, and not the machines' internal streams.
   for (const std::string t :
        {"cell/scheduler/reply", "cell/program_store/reply", "cell/station/KT01/segments",
-        "cell/motion/progress", "cell/station/KT01/command/reply"})
+        "cell/station/KT01/progress", "cell/station/KT01/command/reply"})
     EXPECT_FALSE(MaySubscribe("viewer", t)) << t;
 }
 

@@ -97,19 +97,21 @@ class Interpreter {
       : p_("servo-dds-test/interpreter"),
         seg_kt01_(p_, topics::Segments("KT01"), QosKind::kStream),
         seg_kt02_(p_, topics::Segments("KT02"), QosKind::kStream),
-        progress_(p_, topics::kProgress, QosKind::kState),
+        progress_kt01_(p_, topics::Progress("KT01"), QosKind::kState),
+        progress_kt02_(p_, topics::Progress("KT02"), QosKind::kState),
         axes_(p_, topics::kAxisState, QosKind::kTelemetry),
         probe_(p_, topics::Probe("KT01"), QosKind::kCommand),
-        tools_(p_, topics::kToolTable, QosKind::kState),
-        control_(p_, topics::kServoControl, QosKind::kState) {}
+        tools_(p_, topics::ServoTools("KT01"), QosKind::kState),
+        control_(p_, topics::ServoControl("KT01"), QosKind::kState) {}
 
   bool WaitForServos() {
     return seg_kt01_.WaitForMatched(1, kMatch) && seg_kt02_.WaitForMatched(1, kMatch) &&
-           progress_.WaitForMatched(2, kMatch) && axes_.WaitForMatched(2, kMatch) &&
-           probe_.WaitForMatched(1, kMatch) && tools_.WaitForMatched(2, kMatch) &&
-           control_.WaitForMatched(2, kMatch);
+           progress_kt01_.WaitForMatched(1, kMatch) && progress_kt02_.WaitForMatched(1, kMatch) &&
+           axes_.WaitForMatched(2, kMatch) && probe_.WaitForMatched(1, kMatch) &&
+           tools_.WaitForMatched(1, kMatch) && control_.WaitForMatched(1, kMatch);
   }
 
+  // KT01's servo's tool table and panel (per-station topics, topics::ServoTools and ServoControl).
   cell::bus::Writer<cell::ToolTable>& tools() { return tools_; }
   cell::bus::Writer<cell::ServoControl>& control() { return control_; }
 
@@ -124,7 +126,7 @@ class Interpreter {
   std::optional<cell::SegmentProgress> WaitProgress(
       const std::string& station, const std::function<bool(const cell::SegmentProgress&)>& pred,
       std::chrono::milliseconds timeout = kRunTimeout) {
-    return progress_.WaitFor(
+    return ProgressOf(station).WaitFor(
         [&](const cell::SegmentProgress& p) { return p.station().to_string() == station && pred(p); },
         timeout);
   }
@@ -209,7 +211,7 @@ class Interpreter {
           r.timed_out = true;
           return r;
         }
-        auto p = progress_.WaitFor(
+        auto p = ProgressOf(station).WaitFor(
             [&](const cell::SegmentProgress& x) {
               return x.station().to_string() == station && x.run_id() == run_id &&
                      (x.completed_seq() >= r.held_credit || x.alarm());
@@ -224,7 +226,7 @@ class Interpreter {
         continue;
       }
       auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now());
-      auto p = left.count() > 0 ? progress_.Take(left) : std::nullopt;
+      auto p = left.count() > 0 ? ProgressOf(station).Take(left) : std::nullopt;
       if (!p) {
         r.timed_out = true;
         return r;
@@ -238,7 +240,10 @@ class Interpreter {
   cell::bus::Participant p_;
   cell::bus::Writer<cell::MotionSegment> seg_kt01_;
   cell::bus::Writer<cell::MotionSegment> seg_kt02_;
-  cell::bus::Reader<cell::SegmentProgress> progress_;
+  cell::bus::Reader<cell::SegmentProgress>& ProgressOf(const std::string& station) {
+    return station == "KT01" ? progress_kt01_ : progress_kt02_;
+  }
+  cell::bus::Reader<cell::SegmentProgress> progress_kt01_, progress_kt02_;
   cell::bus::Reader<cell::AxisState> axes_;
   cell::bus::Reader<cell::ProbeResult> probe_;
   cell::bus::Writer<cell::ToolTable> tools_;

@@ -10,15 +10,15 @@ namespace cell::servo {
 using machine::MachineConfig;
 
 Service::Service(bus::Participant& p, MachineConfig cfg, ClockKind clock)
-    : progress_(p, bus::topics::kProgress, bus::QosKind::kState),
+    : progress_(p, bus::topics::Progress(cfg.station_id), bus::QosKind::kState),
       axes_(p, bus::topics::kAxisState, bus::QosKind::kTelemetry),
       probe_w_(p, bus::topics::Probe(cfg.station_id), bus::QosKind::kCommand),
       rx_(cfg, clock, static_cast<uint64_t>(health::WallNs()), *this),
       segments_(p, bus::topics::Segments(cfg.station_id), bus::QosKind::kStream,
                 [this](const cell::MotionSegment& m, const bus::SampleInfo&) { rx_.OnSegment(m); }),
-      tools_r_(p, bus::topics::kToolTable, bus::QosKind::kState,
+      tools_r_(p, bus::topics::ServoTools(cfg.station_id), bus::QosKind::kState,
                [this](const cell::ToolTable& t, const bus::SampleInfo&) { rx_.OnTools(t); }),
-      control_r_(p, bus::topics::kServoControl, bus::QosKind::kState,
+      control_r_(p, bus::topics::ServoControl(cfg.station_id), bus::QosKind::kState,
                  [this](const cell::ServoControl& c, const bus::SampleInfo&) { rx_.OnControl(c); }),
       part_r_(p, bus::topics::Part(cfg.station_id), bus::QosKind::kState,
               [this](const cell::PartModel& m, const bus::SampleInfo&) { rx_.OnPartModel(m); }) {}

@@ -15,8 +15,6 @@ inline constexpr const char* kToolTable = "cell/station/tools";         // ToolT
 inline constexpr const char* kVariables = "cell/station/variables";     // StationVariables
 inline constexpr const char* kStationIo = "cell/station/io";            // StationIoState
 inline constexpr const char* kStationEvent = "cell/station/event";      // StationEvent (KT-APL EVT)
-inline constexpr const char* kProgress = "cell/motion/progress";        // SegmentProgress (credits)
-inline constexpr const char* kServoControl = "cell/motion/control";     // ServoControl (hold, overrides)
 inline constexpr const char* kSchedulerState = "cell/scheduler/state";  // SchedulerState (backlog)
 inline constexpr const char* kJobState = "cell/job/state";              // JobInfo, key job_id % kJobSlots
 inline constexpr const char* kProgramList = "cell/program/list";        // ProgramEntry, key node and name
@@ -39,6 +37,19 @@ inline std::string Probe(const std::string& station) {
 // State (kState), per station: the run's part model from the program store (PartModel).
 inline std::string Part(const std::string& station) {
   return "cell/station/" + station + "/part";
+}
+// State (kState), per station, between a station's interpreter and its axis servo only: segment credits
+// (SegmentProgress), feed hold and overrides (ServoControl), and the tool table the servo's tool changer
+// reads (ToolTable, also on kToolTable for the cell). Shared keyed topics made every interpreter match every
+// servo: 3 x 32 x 32 reliable matches at 32 stations, for data each reader dropped but its own station's.
+inline std::string Progress(const std::string& station) {
+  return "cell/station/" + station + "/progress";
+}
+inline std::string ServoControl(const std::string& station) {
+  return "cell/station/" + station + "/control";
+}
+inline std::string ServoTools(const std::string& station) {
+  return "cell/station/" + station + "/servo_tools";
 }
 // Request/reply services (two kCommand topics each: <name>/request, <name>/reply).
 inline constexpr const char* kProgramStore = "cell/program_store";  // ProgramRequest / ProgramReply

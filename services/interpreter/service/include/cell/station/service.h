@@ -30,7 +30,10 @@ class Service final : public StationIo, public ServoLink {
 
   // StationIo
   void PublishStatus(const cell::StationStatus& s) override { status_w_.Write(s); }
-  void PublishTools(const cell::ToolTable& t) override { tools_w_.Write(t); }
+  void PublishTools(const cell::ToolTable& t) override {
+    tools_w_.Write(t);        // the cell's view: scheduler, cellctl, dashboard
+    servo_tools_w_.Write(t);  // this station's axis servo only (topics::ServoTools)
+  }
   void PublishVariables(const cell::StationVariables& v) override { vars_w_.Write(v); }
   void PublishIo(const cell::StationIoState& s) override { io_w_.Write(s); }
   void PublishEvent(const cell::StationEvent& e) override { event_w_.Write(e); }
@@ -74,6 +77,7 @@ class Service final : public StationIo, public ServoLink {
   bus::Writer<cell::RunStatus> run_w_;
   bus::Writer<cell::MotionSegment> seg_w_;
   bus::Writer<cell::ServoControl> control_w_;
+  bus::Writer<cell::ToolTable> servo_tools_w_;
   bus::Writer<cell::PartModel> part_w_;
   program_store::Client programs_;
   bus::Client<cell::InspectionRequest, cell::InspectionReply> inspection_;
