@@ -58,23 +58,26 @@ std::optional<Contour> RunProgram(const PartOptions& o, const fs::path& dir, con
   return c;
 }
 
+std::string Element(const Contour& c, std::size_t i) {
+  if (i >= c.elements.size()) return "(none)";
+  const Vec3& s = c.starts[i];
+  char from[96];
+  std::snprintf(from, sizeof from, "from (%.4f, %.4f, %.4f) ", s[0], s[1], s[2]);
+  return "line " + std::to_string(c.elements[i].line) + ": " + from + Describe(c.elements[i]);
+}
+
 void Show(const std::string& name, const Contour& c) {
-  std::printf("  %s: start (%.4f, %.4f, %.4f)\n", name.c_str(), c.start[0], c.start[1], c.start[2]);
+  std::cout << "  " << name << ":\n";
   for (std::size_t i = 0; i < c.elements.size(); ++i)
-    std::printf("    %zu line %d: %s\n", i + 1, c.elements[i].line, Describe(c.elements[i]).c_str());
+    std::cout << "    " << i + 1 << " " << Element(c, i) << "\n";
 }
 
 void Report(const Part& part, const PartProgram& a, const PartProgram& b, const Contour& ca,
             const Contour& cb, const Disagreement& d) {
   std::cout << part.name << ": " << b.file << " differs from " << a.file << " at element " << d.index << ": "
             << d.field << (d.detail.empty() ? "" : " (" + d.detail + ")") << "\n";
-  auto at = [&](const Contour& c) {
-    if (d.index == 0) return "start " + Describe(Move{MoveKind::kLine, c.start});
-    if (d.index > c.elements.size()) return std::string("(none)");
-    const Move& m = c.elements[d.index - 1];
-    return "line " + std::to_string(m.line) + ": " + Describe(m);
-  };
-  std::cout << "  " << a.dialect << ": " << at(ca) << "\n  " << b.dialect << ": " << at(cb) << "\n";
+  std::cout << "  " << a.dialect << ": " << Element(ca, d.index - 1) << "\n  " << b.dialect << ": "
+            << Element(cb, d.index - 1) << "\n";
 }
 
 // Every program of one part against its first; false on a refusal or a difference.

@@ -101,18 +101,19 @@ bool SameArc(const Move& a, const Move& b, double tol) {
          Dist(a.center, b.center) < tol;
 }
 
-// Adds an element at `from`, joining it to the last one where they are one line or one arc.
+// Adds an element at `from`, joining it to the last one where they are one line or one arc cut on.
 void Append(Contour& c, const Vec3& from, Move m, double tol) {
   if (m.kind == MoveKind::kLine && Dist(from, m.end) < tol) return;  // goes nowhere
-  if (!c.elements.empty()) {
+  if (!c.elements.empty() && Dist(c.elements.back().end, from) < tol) {
     Move& last = c.elements.back();
-    Vec3 before = c.elements.size() > 1 ? c.elements[c.elements.size() - 2].end : c.start;
-    if ((last.kind == MoveKind::kLine && m.kind == MoveKind::kLine && Collinear(before, from, m.end, tol)) ||
+    if ((last.kind == MoveKind::kLine && m.kind == MoveKind::kLine &&
+         Collinear(c.starts.back(), from, m.end, tol)) ||
         SameArc(last, m, tol)) {
       last.end = m.end;
       return;
     }
   }
+  c.starts.push_back(from);
   c.elements.push_back(m);
 }
 
@@ -154,8 +155,7 @@ bool ReadPart(const std::string& dir, Part* part, std::string* error) {
 
 Contour FinishedContour(const std::vector<Move>& moves, const PartProgram& p, double tol) {
   Contour c;
-  Vec3 pos{};
-  bool started = false;
+  Vec3 pos{}, thread_from{};
   const Move* thread = nullptr;
   auto local = [&](Vec3 v) {
     for (int i = 0; i < 3; ++i) v[i] -= p.origin[i];
@@ -165,27 +165,28 @@ Contour FinishedContour(const std::vector<Move>& moves, const PartProgram& p, do
     Move e = m;
     e.end = local(m.end);
     e.center = local(m.center);
-    bool cuts = (m.kind == MoveKind::kLine || m.kind == MoveKind::kArc) && InRanges(m.line, p.finish);
-    if (cuts && !started) c.start = pos, started = true;
-    if (cuts) Append(c, pos, e, tol);
-    if (m.kind == MoveKind::kThread && InRanges(m.line, p.thread)) thread = &m;
+    if ((m.kind == MoveKind::kLine || m.kind == MoveKind::kArc) && InRanges(m.line, p.finish))
+      Append(c, pos, e, tol);
+    if (m.kind == MoveKind::kThread && InRanges(m.line, p.thread)) thread = &m, thread_from = pos;
     pos = e.end;
   }
-  if (thread) {  // the last pass is the finished thread; where it starts is the cycle's own
+  if (thread) {  // the last pass is the finished thread
     Move t = *thread;
     t.end = local(t.end);
+    c.starts.push_back(thread_from);
     c.elements.push_back(t);
   }
   return c;
 }
 
 std::optional<Disagreement> CompareContours(const Contour& a, const Contour& b, double tol) {
-  for (int i = 0; i < 3; ++i)
-    if (std::fabs(a.start[i] - b.start[i]) > tol)
-      return Disagreement{0, std::string("start ") + "xyz"[i], ""};
   std::size_t n = std::min(a.elements.size(), b.elements.size());
-  for (std::size_t i = 0; i < n; ++i)
+  for (std::size_t i = 0; i < n; ++i) {
+    for (int k = 0; k < 3; ++k)
+      if (std::fabs(a.starts[i][k] - b.starts[i][k]) > tol)
+        return Disagreement{i + 1, std::string("start ") + "xyz"[k], ""};
     if (auto f = ElementField(a.elements[i], b.elements[i], tol)) return Disagreement{i + 1, *f, ""};
+  }
   if (a.elements.size() != b.elements.size())
     return Disagreement{n + 1, "element count",
                         std::to_string(a.elements.size()) + " against " + std::to_string(b.elements.size())};

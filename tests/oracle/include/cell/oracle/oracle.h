@@ -230,12 +230,12 @@ bool ReadPart(const std::string& dir, Part* part, std::string* error);
 // in the part's frame; collinear lines are joined and lines that go nowhere dropped, so two programs that
 // cut one contour in different blocks still agree.
 struct Contour {
-  Vec3 start{};
+  std::vector<Vec3> starts;  // where each element starts (drilled holes: a gap of rapids before each)
   std::vector<Move> elements;
 };
 Contour FinishedContour(const std::vector<Move>& moves, const PartProgram& p, double tol);
-// The first element where two contours differ (end point, arc centre in its plane, plane, sense, thread
-// lead), or none; index 0 is the start point, element i is index i + 1.
+// The first element where two contours differ (start and end point, arc centre in its plane, plane, sense,
+// thread lead), or none; element i is index i + 1.
 std::optional<Disagreement> CompareContours(const Contour& a, const Contour& b, double tol);
 
 }  // namespace cell::oracle
