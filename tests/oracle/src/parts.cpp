@@ -3,6 +3,7 @@
 // differential's parser of cell-interp's output: mm, machine frame, x a radius).
 #include <cctype>
 #include <cmath>
+#include <cstddef>
 #include <cstdio>
 #include <fstream>
 #include <sstream>
@@ -63,6 +64,8 @@ bool ReadProgram(std::stringstream& words, const std::string& dir, PartProgram* 
       ok = Ranges(value, lines, &p->finish);
     else if (key == "thread")
       ok = Ranges(value, lines, &p->thread);
+    else if (key == "corner-arcs")
+      ok = (p->corner_arcs = std::atof(value.c_str())) > 0;
     else if (key == "origin")
       ok = std::sscanf(value.c_str(), "%lf,%lf,%lf", &p->origin[0], &p->origin[1], &p->origin[2]) == 3;
     else
@@ -132,6 +135,37 @@ std::optional<std::string> ElementField(const Move& a, const Move& b, double tol
   return std::nullopt;
 }
 
+// Where lines a0-a1 and b0-b1 meet, in the plane of axes (i, j); false when parallel.
+bool Meet(const Vec3& a0, const Vec3& a1, const Vec3& b0, const Vec3& b1, int i, int j, Vec3* at) {
+  double dx = a1[i] - a0[i], dy = a1[j] - a0[j], ex = b1[i] - b0[i], ey = b1[j] - b0[j];
+  double den = dx * ey - dy * ex;
+  if (std::fabs(den) < 1e-12) return false;
+  double t = ((b0[i] - a0[i]) * ey - (b0[j] - a0[j]) * ex) / den;
+  *at = a0;
+  (*at)[i] += dx * t, (*at)[j] += dy * t;
+  return true;
+}
+
+// An outside-corner arc of radius r between two lines becomes the corner where the lines meet.
+void CornerArcsToPoints(Contour& c, double r, double tol) {
+  static const std::array<std::array<int, 2>, 3> in_plane{{{0, 1}, {2, 0}, {1, 2}}};
+  for (std::size_t k = 1; k + 1 < c.elements.size(); ++k) {
+    const Move& arc = c.elements[k];
+    if (arc.kind != MoveKind::kArc || std::fabs(Dist(arc.end, arc.center) - r) > tol) continue;
+    Move& before = c.elements[k - 1];
+    const Move& after = c.elements[k + 1];
+    if (before.kind != MoveKind::kLine || after.kind != MoveKind::kLine) continue;
+    if (Dist(before.end, c.starts[k]) > tol || Dist(arc.end, c.starts[k + 1]) > tol) continue;
+    auto [i, j] = in_plane[static_cast<std::size_t>(arc.plane - 17)];
+    Vec3 at{};
+    if (!Meet(c.starts[k - 1], before.end, c.starts[k + 1], after.end, i, j, &at)) continue;
+    before.end = at;
+    c.starts[k + 1] = at;
+    c.elements.erase(c.elements.begin() + static_cast<std::ptrdiff_t>(k));
+    c.starts.erase(c.starts.begin() + static_cast<std::ptrdiff_t>(k));
+  }
+}
+
 }  // namespace
 
 bool ReadPart(const std::string& dir, Part* part, std::string* error) {
@@ -170,6 +204,7 @@ Contour FinishedContour(const std::vector<Move>& moves, const PartProgram& p, do
     if (m.kind == MoveKind::kThread && InRanges(m.line, p.thread)) thread = &m, thread_from = pos;
     pos = e.end;
   }
+  if (p.corner_arcs > 0) CornerArcsToPoints(c, p.corner_arcs, tol);
   if (thread) {  // the last pass is the finished thread
     Move t = *thread;
     t.end = local(t.end);

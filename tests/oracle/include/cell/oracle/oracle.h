@@ -217,6 +217,9 @@ struct PartProgram {
   std::vector<LineRange> finish;             // lines whose feed moves cut the finished contour
   std::vector<LineRange> thread;             // lines whose last thread pass is the finished thread
   Vec3 origin{};                             // the part zero in the machine frame, mm (x a radius)
+  // Compensation that goes round an outside corner on an arc of this radius about it (EMCO, ln 2753) is
+  // compared as the intersection of the two offset elements (Okuma, ln 2298-2324): the same corner is cut.
+  double corner_arcs = 0;
 };
 struct Part {
   std::string name;
