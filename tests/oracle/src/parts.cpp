@@ -64,6 +64,8 @@ bool ReadProgram(std::stringstream& words, const std::string& dir, PartProgram* 
       ok = Ranges(value, lines, &p->finish);
     else if (key == "thread")
       ok = Ranges(value, lines, &p->thread);
+    else if (key == "pass")
+      ok = (p->last_pass = value == "last");
     else if (key == "corner-arcs")
       ok = (p->corner_arcs = std::atof(value.c_str())) > 0;
     else if (key == "origin")
@@ -195,15 +197,19 @@ Contour FinishedContour(const std::vector<Move>& moves, const PartProgram& p, do
     for (int i = 0; i < 3; ++i) v[i] -= p.origin[i];
     return v;
   };
+  std::vector<std::pair<Vec3, Move>> cut;  // where each finish move starts, and the move
   for (const Move& m : moves) {
     Move e = m;
     e.end = local(m.end);
     e.center = local(m.center);
-    if ((m.kind == MoveKind::kLine || m.kind == MoveKind::kArc) && InRanges(m.line, p.finish))
-      Append(c, pos, e, tol);
+    if ((m.kind == MoveKind::kLine || m.kind == MoveKind::kArc) && InRanges(m.line, p.finish)) {
+      if (p.last_pass && !cut.empty() && m.line < cut.back().second.line) cut.clear();  // a pass again
+      cut.emplace_back(pos, e);
+    }
     if (m.kind == MoveKind::kThread && InRanges(m.line, p.thread)) thread = &m, thread_from = pos;
     pos = e.end;
   }
+  for (const auto& [from, e] : cut) Append(c, from, e, tol);
   if (p.corner_arcs > 0) CornerArcsToPoints(c, p.corner_arcs, tol);
   if (thread) {  // the last pass is the finished thread
     Move t = *thread;

@@ -220,6 +220,9 @@ struct PartProgram {
   // Compensation that goes round an outside corner on an arc of this radius about it (EMCO, ln 2753) is
   // compared as the intersection of the two offset elements (Okuma, ln 2298-2324): the same corner is cut.
   double corner_arcs = 0;
+  // The finish lines run more than once (a loop, a subprogram called twice, Balt-System's RPT with a stock
+  // allowance): only the last pass counts, the moves since the program last went back to an earlier line.
+  bool last_pass = false;
 };
 struct Part {
   std::string name;
