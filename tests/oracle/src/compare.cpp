@@ -239,6 +239,7 @@ std::string Describe(const Move& m) {
   const char* kind = m.kind == MoveKind::kRapid    ? "rapid"
                      : m.kind == MoveKind::kArc    ? "arc"
                      : m.kind == MoveKind::kThread ? "thread"
+                     : m.kind == MoveKind::kSet    ? "point"
                                                    : "linear";
   std::snprintf(buf, sizeof buf, "%s to (%.4f, %.4f, %.4f) abc (%.4f, %.4f, %.4f)", kind, m.end[0], m.end[1],
                 m.end[2], m.rot[0], m.rot[1], m.rot[2]);

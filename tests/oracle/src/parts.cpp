@@ -1,6 +1,7 @@
 // One part in every dialect of its kind (issue 33 item 3, docs/testing.md "Parts"): the finished contour of
 // each program, in the part's frame, and where two of them first differ. The moves are compare.cpp's (the
 // differential's parser of cell-interp's output: mm, machine frame, x a radius).
+#include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <cstddef>
@@ -64,6 +65,8 @@ bool ReadProgram(std::stringstream& words, const std::string& dir, PartProgram* 
       ok = Ranges(value, lines, &p->finish);
     else if (key == "thread")
       ok = Ranges(value, lines, &p->thread);
+    else if (key == "bottoms")
+      ok = Ranges(value, lines, &p->bottoms);
     else if (key == "pass")
       ok = (p->last_pass = value == "last");
     else if (key == "corner-arcs")
@@ -168,6 +171,23 @@ void CornerArcsToPoints(Contour& c, double r, double tol) {
   }
 }
 
+// The plunges on `ranges` that end at the least x, as points (kSet, starting where they end).
+void AppendBottoms(Contour& c, const std::vector<Move>& moves, const std::vector<LineRange>& ranges,
+                   const Vec3& origin, double tol) {
+  std::vector<Move> feeds;
+  double least = 1e300;
+  for (const Move& m : moves)
+    if (m.kind == MoveKind::kLine && InRanges(m.line, ranges))
+      feeds.push_back(m), least = std::min(least, m.end[0]);
+  for (Move m : feeds) {
+    if (m.end[0] > least + tol) continue;
+    for (int i = 0; i < 3; ++i) m.end[i] -= origin[i];
+    m.kind = MoveKind::kSet;
+    c.starts.push_back(m.end);
+    c.elements.push_back(m);
+  }
+}
+
 }  // namespace
 
 bool ReadPart(const std::string& dir, Part* part, std::string* error) {
@@ -211,6 +231,7 @@ Contour FinishedContour(const std::vector<Move>& moves, const PartProgram& p, do
   }
   for (const auto& [from, e] : cut) Append(c, from, e, tol);
   if (p.corner_arcs > 0) CornerArcsToPoints(c, p.corner_arcs, tol);
+  if (!p.bottoms.empty()) AppendBottoms(c, moves, p.bottoms, p.origin, tol);
   if (thread) {  // the last pass is the finished thread
     Move t = *thread;
     t.end = local(t.end);

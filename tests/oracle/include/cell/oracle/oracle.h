@@ -216,7 +216,10 @@ struct PartProgram {
   std::string file, dialect, params, tools;  // file names in the part's folder ("" none)
   std::vector<LineRange> finish;             // lines whose feed moves cut the finished contour
   std::vector<LineRange> thread;             // lines whose last thread pass is the finished thread
-  Vec3 origin{};                             // the part zero in the machine frame, mm (x a radius)
+  // Lines of a plunge cycle (a groove): the feed moves that end deepest (the least x) are the groove's floor,
+  // compared as points; the pecks on the way down are each manual's own.
+  std::vector<LineRange> bottoms;
+  Vec3 origin{};  // the part zero in the machine frame, mm (x a radius)
   // Compensation that goes round an outside corner on an arc of this radius about it (EMCO, ln 2753) is
   // compared as the intersection of the two offset elements (Okuma, ln 2298-2324): the same corner is cut.
   double corner_arcs = 0;
