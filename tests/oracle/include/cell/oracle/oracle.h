@@ -222,6 +222,8 @@ struct PartProgram {
   Vec3 origin{};  // the part zero in the machine frame, mm (x a radius)
   // Compensation that goes round an outside corner on an arc of this radius about it (EMCO, ln 2753) is
   // compared as the intersection of the two offset elements (Okuma, ln 2298-2324): the same corner is cut.
+  // Every arc of that radius between two lines is taken for such a corner (a concave fillet of twice the
+  // radius makes one too): a part that programs one must not use this.
   double corner_arcs = 0;
   // The finish lines run more than once (a loop, a subprogram called twice, Balt-System's RPT with a stock
   // allowance): only the last pass counts, the moves since the program last went back to an earlier line.
