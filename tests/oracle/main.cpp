@@ -211,6 +211,7 @@ int Check(const Options& o) {
 
 int main(int argc, char** argv) {
   if (argc > 1 && std::string(argv[1]) == "prop") return Properties(argc, argv);
+  if (argc > 1 && std::string(argv[1]) == "parts") return Parts(argc, argv);
   Options o;
   if (!ParseArgs(argc, argv, o)) {
     std::cerr
@@ -221,7 +222,8 @@ int main(int argc, char** argv) {
            "D|all "
            "--seed S "
            "--blocks N\n"
-           "                       [--chunk M] [--interp PATH] [--keep DIR]\n";
+           "                       [--chunk M] [--interp PATH] [--keep DIR]\n"
+           "       cell-oracle-gen parts [--dir DIR] [--part NAME] [--interp PATH] [--verbose] [--plant]\n";
     return 2;
   }
   if (o.command == "gen") {

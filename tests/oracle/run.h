@@ -48,5 +48,7 @@ inline std::uint64_t ProgramSeed(std::uint64_t seed, const std::string& dialect,
 
 // `cell-oracle-gen prop`: the properties every program keeps (props.cpp).
 int Properties(int argc, char** argv);
+// `cell-oracle-gen parts`: one part in every dialect of its kind (parts_cli.cpp).
+int Parts(int argc, char** argv);
 
 }  // namespace cell::oracle

@@ -106,7 +106,8 @@ Move NgcArc(const std::vector<double>& a, const NgcState& st) {
 
 }  // namespace
 
-std::vector<Move> ParseCellInterp(const std::string& json_lines, bool lathe, std::string* error) {
+std::vector<Move> ParseCellInterp(const std::string& json_lines, bool lathe, std::string* error,
+                                  bool threads) {
   std::vector<Move> out;
   std::stringstream ss(json_lines);
   std::string line;
@@ -122,6 +123,13 @@ std::vector<Move> ParseCellInterp(const std::string& json_lines, bool lathe, std
     if (op == "rapid" || op == "linear" || op == "arc") {
       Move m = CellMove(j, lathe, pos, rot);
       for (int i = 0; i < 3; ++i) m.end[i] += regrid[i], m.center[i] += regrid[i];
+      out.push_back(m);
+    }
+    if (op == "thread" && threads) {
+      Move m = CellMove(j, lathe, pos, rot);
+      m.kind = MoveKind::kThread;
+      m.feed = j.value("lead", 0.0);
+      for (int i = 0; i < 3; ++i) m.end[i] += regrid[i];
       out.push_back(m);
     }
     if (op == "regrid") {  // KT-APL G92: the present position is renamed; positions after it are in that grid
@@ -228,7 +236,11 @@ void InverseToPerMinute(std::vector<Move>& moves) {
 
 std::string Describe(const Move& m) {
   char buf[256];
-  const char* kind = m.kind == MoveKind::kRapid ? "rapid" : m.kind == MoveKind::kArc ? "arc" : "linear";
+  const char* kind = m.kind == MoveKind::kRapid    ? "rapid"
+                     : m.kind == MoveKind::kArc    ? "arc"
+                     : m.kind == MoveKind::kThread ? "thread"
+                     : m.kind == MoveKind::kSet    ? "point"
+                                                   : "linear";
   std::snprintf(buf, sizeof buf, "%s to (%.4f, %.4f, %.4f) abc (%.4f, %.4f, %.4f)", kind, m.end[0], m.end[1],
                 m.end[2], m.rot[0], m.rot[1], m.rot[2]);
   std::string s = buf;
@@ -238,7 +250,10 @@ std::string Describe(const Move& m) {
     s += buf;
   }
   if (m.kind != MoveKind::kRapid) {
-    std::snprintf(buf, sizeof buf, " F%.4f %s", m.feed, m.per_rev ? "mm/rev" : "mm/min");
+    if (m.kind == MoveKind::kThread)
+      std::snprintf(buf, sizeof buf, " lead %.4f mm", m.feed);
+    else
+      std::snprintf(buf, sizeof buf, " F%.4f %s", m.feed, m.per_rev ? "mm/rev" : "mm/min");
     s += buf;
   }
   return s;

@@ -24,7 +24,8 @@ struct Modes {
   int offset = 0;            // work offset 0 (none) .. kOffsets-1
 };
 
-enum class MoveKind { kRapid, kLine, kArc, kCycle, kSet };  // kSet: the position is `end` (G92), no motion
+// kSet: the position is `end` (G92), no motion; kThread: a lathe thread pass (parts only, `feed` its lead)
+enum class MoveKind { kRapid, kLine, kArc, kCycle, kSet, kThread };
 
 // One generated motion block. Positions are program coordinates in the program unit, x as a radius (a lathe
 // module writes diameters); every coordinate lies on the unit's grid, so both programs state it exactly.
@@ -192,7 +193,9 @@ void MirrorMoves(std::vector<Move>& moves, unsigned axes);
 void RotateMoves(std::vector<Move>& moves, double degrees);
 void ScaleMoves(std::vector<Move>& moves, double factor);
 
-std::vector<Move> ParseCellInterp(const std::string& json_lines, bool lathe, std::string* error);
+// `threads`: thread ops become kThread moves (the parts' comparer); without, they are skipped.
+std::vector<Move> ParseCellInterp(const std::string& json_lines, bool lathe, std::string* error,
+                                  bool threads = false);
 std::vector<Move> ParseRs274(const std::string& canon, bool lathe, std::string* error);
 
 // Compare the two lists; empty when they agree, else the first disagreement in words.
@@ -203,5 +206,47 @@ struct Disagreement {
 };
 std::optional<Disagreement> Compare(const std::vector<Move>& cell, const std::vector<Move>& ngc, double tol);
 std::string Describe(const Move& m);
+
+// One part in every dialect of its kind (issue 33 item 3, docs/testing.md "Parts"): a part's programs and
+// which of their lines cut the finished contour, read from tests/oracle/parts/<part>/part.txt.
+struct LineRange {
+  int first = 0, last = 0;  // 1-based program lines, inclusive
+};
+struct PartProgram {
+  std::string file, dialect, params, tools;  // file names in the part's folder ("" none)
+  std::vector<LineRange> finish;             // lines whose feed moves cut the finished contour
+  std::vector<LineRange> thread;             // lines whose last thread pass is the finished thread
+  // Lines of a plunge cycle (a groove): the feed moves that end deepest (the least x) are the groove's floor,
+  // compared as points; the pecks on the way down are each manual's own.
+  std::vector<LineRange> bottoms;
+  Vec3 origin{};  // the part zero in the machine frame, mm (x a radius)
+  // Compensation that goes round an outside corner on an arc of this radius about it (EMCO, ln 2753) is
+  // compared as the intersection of the two offset elements (Okuma, ln 2298-2324): the same corner is cut.
+  // Every arc of that radius between two lines is taken for such a corner (a concave fillet of twice the
+  // radius makes one too): a part that programs one must not use this.
+  double corner_arcs = 0;
+  // The finish lines run more than once (a loop, a subprogram called twice, Balt-System's RPT with a stock
+  // allowance): only the last pass counts, the moves since the program last went back to an earlier line.
+  bool last_pass = false;
+};
+struct Part {
+  std::string name;
+  std::vector<PartProgram> programs;
+};
+// Reads part.txt (its syntax: docs/testing.md); a line range may name N-words ("N101-N120": the program
+// lines that begin with them).
+bool ReadPart(const std::string& dir, Part* part, std::string* error);
+
+// The finished contour of a run's moves: where it starts and its elements (lines, arcs, the finished thread)
+// in the part's frame; collinear lines are joined and lines that go nowhere dropped, so two programs that
+// cut one contour in different blocks still agree.
+struct Contour {
+  std::vector<Vec3> starts;  // where each element starts (drilled holes: a gap of rapids before each)
+  std::vector<Move> elements;
+};
+Contour FinishedContour(const std::vector<Move>& moves, const PartProgram& p, double tol);
+// The first element where two contours differ (start and end point, arc centre in its plane, plane, sense,
+// thread lead), or none; element i is index i + 1.
+std::optional<Disagreement> CompareContours(const Contour& a, const Contour& b, double tol);
 
 }  // namespace cell::oracle
