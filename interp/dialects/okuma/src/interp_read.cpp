@@ -472,28 +472,22 @@ class Lexer {
       Blanks();
       if (i_ < s_.size() && s_[i_] == '[') expr = true;
     }
-    if (expr) {
-      ExprParser p(s_, i_, b_.pool);
+    auto expression_from = [&](size_t from) {
+      ExprParser p(s_, from, b_.pool);
       w.expr = true;
       w.node = p.Parse();
       i_ = p.pos();
       Push(w);
-      return;
-    }
+    };
+    if (expr) return expression_from(i_);
     size_t start = i_;
     bool neg = false;
     if (i_ < s_.size() && (s_[i_] == '+' || s_[i_] == '-')) {
       neg = s_[i_] == '-';
       ++i_;
     }
-    if (i_ < s_.size() && s_[i_] == '[' && i_ > start) {  // a sign and a bracket: E-67's X-[200-V1]*SIN[35]
-      ExprParser p(s_, start, b_.pool);
-      w.expr = true;
-      w.node = p.Parse();
-      i_ = p.pos();
-      Push(w);
-      return;
-    }
+    // A sign and a bracket: E-67's X-[200-V1]*SIN[35].
+    if (i_ < s_.size() && s_[i_] == '[' && i_ > start) return expression_from(start);
     double v = 0, scale = 0.1;
     int digits = 0, written = 0;
     while (i_ < s_.size() && (IsDigit(s_[i_]) || s_[i_] == '.')) {
