@@ -482,15 +482,15 @@ bool OkRun::MToolMode(const BlockWords& w, NcGCodes& k) {
 // The single-letter addresses the block's function reads (each function's programming format: ln 1147-1300,
 // 1642-1707, 3239-3414, 3640-4071, 5124-5252, 2235-2447 for I/K with G40-G42); F, S and T belong to any
 // block. `what` names the function for the alarm.
-uint32_t OkRun::UsedAddresses(const NcGCodes& k, std::string* what) const {
+uint32_t OkRun::UsedAddresses(const NcGCodes& k, int* g) const {
   auto bits = [](std::string_view s) {
     uint32_t m = 0;
     for (char c : s) m |= 1u << (c - 'A');
     return m;
   };
   const uint32_t any = bits("FST") | ((lap_.active || lap_.finish) ? bits("E") : 0);  // E: a contour's feed
-  auto named = [&](int g, std::string_view letters) {
-    *what = fmt::format("a G{:02} block", g);
+  auto named = [&](int code, std::string_view letters) {
+    *g = code;  // the text is made only for a refusal: this runs for every block
     return any | bits(letters);
   };
   if (k.dwell) return named(4, "");
@@ -547,8 +547,9 @@ uint32_t OkRun::UsedAddresses(const NcGCodes& k, std::string* what) const {
 // A word the block's function does not read (a stray Q5 on a G01 block, K on a G00) is refused, not ignored
 // (judgement 51); the manual prints no alarm number for it.
 void OkRun::RefuseUnusedAddresses(const BlockWords& w, const NcGCodes& k) const {
-  std::string what;
-  const uint32_t unused = w.has & ~UsedAddresses(k, &what);
+  int g = 0;
+  const uint32_t unused = w.has & ~UsedAddresses(k, &g);
+  std::string what = unused == 0 ? std::string() : fmt::format("a G{:02} block", g);
   // Extended addresses: QA= with a C word (ln 2075), DA= in G73/G74 (ln 3933), the G84 change points of a
   // G85/G86 call (ln 5145-5173), SA= in G185-G188, SB= anywhere; PZ=, PW= are refused before.
   uint32_t ext_used = 0;
@@ -561,7 +562,7 @@ void OkRun::RefuseUnusedAddresses(const BlockWords& w, const NcGCodes& k) const 
     if (!w.HasExt(i) || ((ext_used >> i) & 1u)) continue;
     const int col = w.ext_col[static_cast<size_t>(i)];
     if (i == 2) Fail(col, "QA= (C-axis revolutions, ln 2075) needs a C word in its block");
-    Fail(col, fmt::format("address {}= is not used by {}", AddrName(kExt[i]), what));
+    Fail(col, fmt::format("address {}= is not used by a G{:02} block", AddrName(kExt[i]), g));
   }
   if (unused == 0) return;
   char a = 'A';
