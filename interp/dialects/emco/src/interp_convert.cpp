@@ -160,6 +160,20 @@ bool BlockWords::any_d() const {
   return false;
 }
 
+void BlockWords::Clear() {
+  for (Val* v : {&x, &z, &i, &k, &f, &s, &t, &l}) {
+    if (v->set) *v = Val{};
+  }
+  for (auto* arr : {&p, &d}) {
+    for (Val& v : *arr) {
+      if (v.set) v = Val{};
+    }
+  }
+  x_inc = z_inc = false;
+  ng = nm = 0;
+  first_col = 1;
+}
+
 void EmRun::Collect(const Block& b, BlockWords& bw) const {
   bw.first_col = b.count > 0 ? b.w[0].col : 1;
   for (int i = 0; i < b.count; ++i) {
@@ -311,7 +325,8 @@ void EmRun::CheckWords(const BlockWords& bw, Motion motion, bool g04, bool g92, 
 }
 
 void EmRun::Execute(const Block& b) {
-  BlockWords bw;
+  BlockWords& bw = words_;
+  bw.Clear();
   Collect(b, bw);
 
   // G codes: the last of a group wins (ln 878-883).

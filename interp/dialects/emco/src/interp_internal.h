@@ -110,6 +110,9 @@ struct BlockWords {
   int pos_col() const { return x.set && (!z.set || x.col < z.col) ? x.col : (z.set ? z.col : first_col); }
   bool any_p() const;
   bool any_d() const;
+  // Back to an empty block: only the values set are cleared (the executor reuses one BlockWords, and zeroing
+  // all of it for every block cost more than reading the block).
+  void Clear();
 };
 
 // ---------------------------------------------------------------------------------------------------------
@@ -276,7 +279,7 @@ class EmRun final : public RunBase {
     TextSpan span;
     bool own = false;  // in the program's own file: it reports its own lines
   };
-  std::optional<Subroutine> FindSubroutine(int number);
+  const Subroutine* FindSubroutine(int number);
   void CallSubroutine(const BlockWords& bw, int col);
   void ReturnFromSubroutine(int col);
   void EndOfSubroutine();
@@ -335,6 +338,7 @@ class EmRun final : public RunBase {
   std::map<int, Subroutine> subs_;  // subroutines found so far, by number
   bool own_indexed_ = false;
   Block scratch_;
+  BlockWords words_;  // the block being executed (Execute)
   int cur_line_ = 1;
   bool cur_own_ = true;
   bool first_block_ = true;  // group 7 may change only here (ALARM 390)
