@@ -140,6 +140,12 @@ struct NumCacheEntry {
 };
 thread_local NumCacheEntry num_cache[64];
 
+// "00" .. "99": numbers are written two digits at a time.
+constexpr char kPairs[] =
+    "00010203040506070809101112131415161718192021222324252627282930313233343536373839"
+    "40414243444546474849505152535455565758596061626364656667686970717273747576777879"
+    "8081828384858687888990919293949596979899";
+
 void Num(Buf& out, double v) {
   if (!std::isfinite(v)) {
     out += '0';
@@ -165,10 +171,6 @@ void Num(Buf& out, double v) {
       char* p = e;
       auto ip = static_cast<uint32_t>(r / 1000000);  // < 10^6: 32-bit division is cheaper
       auto fp = static_cast<uint32_t>(r % 1000000);
-      static constexpr char kPairs[] =
-          "00010203040506070809101112131415161718192021222324252627282930313233343536373839"
-          "40414243444546474849505152535455565758596061626364656667686970717273747576777879"
-          "8081828384858687888990919293949596979899";
       for (int k = 0; k < 3; ++k) {  // six fraction digits, two at a time
         uint32_t d = fp % 100;
         fp /= 100;
@@ -206,10 +208,18 @@ void Int(Buf& out, long v) {
   char* e = buf + 24;
   char* p = e;
   unsigned long u = v < 0 ? 0ul - static_cast<unsigned long>(v) : static_cast<unsigned long>(v);
-  do {
-    *--p = static_cast<char>('0' + u % 10);
-    u /= 10;
-  } while (u);
+  while (u >= 100) {  // every line's number: two digits per division
+    const unsigned long d = u % 100;
+    u /= 100;
+    p -= 2;
+    std::memcpy(p, kPairs + 2 * d, 2);
+  }
+  if (u >= 10) {
+    p -= 2;
+    std::memcpy(p, kPairs + 2 * u, 2);
+  } else {
+    *--p = static_cast<char>('0' + u);
+  }
   if (v < 0) *--p = '-';
   std::memcpy(out.Room(24), p, 24);
   out.Advance(static_cast<size_t>(e - p));
