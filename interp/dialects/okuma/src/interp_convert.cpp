@@ -446,21 +446,26 @@ bool OkRun::MToolMode(const BlockWords& w, NcGCodes& k) {
     MToolCancel(col);
     return true;
   }
-  int col = !w.g.empty() ? w.g.front().col : (!w.m.empty() ? w.m.front().col : 0);
-  for (int i = 0; i < 26 && col == 0; ++i) {  // no G or M: the block's first word
-    if ((w.has >> i) & 1u) col = w.col[static_cast<size_t>(i)];
-  }
-  for (int i = 0; i < 26 && w.g.empty() && w.m.empty(); ++i) {
-    if ((w.has >> i) & 1u) col = std::min(col, w.col[static_cast<size_t>(i)]);
-  }
-  if (col == 0) col = 1;
+  // The column refusals point at; found only when needed (two scans of the 26 letters, for every block).
+  auto block_col = [&w] {
+    int col = !w.g.empty() ? w.g.front().col : (!w.m.empty() ? w.m.front().col : 0);
+    for (int i = 0; i < 26 && col == 0; ++i) {  // no G or M: the block's first word
+      if ((w.has >> i) & 1u) col = w.col[static_cast<size_t>(i)];
+    }
+    for (int i = 0; i < 26 && w.g.empty() && w.m.empty(); ++i) {
+      if ((w.has >> i) & 1u) col = std::min(col, w.col[static_cast<size_t>(i)]);
+    }
+    return col == 0 ? 1 : col;
+  };
   if (mc_.after_cancel) {
+    const int col = block_col();
     if (!w.Has('X') || !w.Has('Z')) {
       Fail(col, "the block after G180 must contain both X and Z");
     }
     mc_.after_cancel = false;
   }
   if (k.cycle == 0 && mc_.g != 0) {
+    const int col = block_col();
     if (k.motion_g >= 0 || k.lap || k.dwell || k.g50) {
       Fail(col, "cancel the M-tool compound fixed cycle with G180 first");
     }
@@ -589,6 +594,7 @@ void OkRun::RefuseTorqueAndTurretB(const BlockWords& w) {
          "saddle");
   }
   for (const char* name : {"PZ", "PW"}) {
+    if (w.ext_has == 0) break;  // no extended address in the block (nearly every block)
     const int i = ExtIndex(MakeAddr(name[0], name[1]));
     if (w.HasExt(i)) {
       Fail(w.ext_col[static_cast<size_t>(i)],
