@@ -110,6 +110,9 @@ struct BlockWords {
   int pos_col() const { return x.set && (!z.set || x.col < z.col) ? x.col : (z.set ? z.col : first_col); }
   bool any_p() const;
   bool any_d() const;
+  // Value n: 0-7 x z i k f s t l, 8-15 P0-P7, 16-23 D0-D7.
+  Val& Slot(int n);
+  uint32_t set_mask = 0;  // the values set (bit n: Slot(n))
   // Back to an empty block: only the values set are cleared (the executor reuses one BlockWords, and zeroing
   // all of it for every block cost more than reading the block).
   void Clear();
