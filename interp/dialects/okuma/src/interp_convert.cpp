@@ -484,66 +484,74 @@ bool OkRun::MToolMode(const BlockWords& w, NcGCodes& k) {
   return false;
 }
 
+namespace {
+
+// The mask of single-letter addresses (bit 0: A) of `letters`, made at compile time: the address check runs
+// for every block.
+consteval uint32_t LetterBits(std::string_view letters) {
+  uint32_t m = 0;
+  for (char c : letters) m |= 1u << (c - 'A');
+  return m;
+}
+
+}  // namespace
+
 // The single-letter addresses the block's function reads (each function's programming format: ln 1147-1300,
 // 1642-1707, 3239-3414, 3640-4071, 5124-5252, 2235-2447 for I/K with G40-G42); F, S and T belong to any
 // block. `what` names the function for the alarm.
 uint32_t OkRun::UsedAddresses(const NcGCodes& k, int* g) const {
-  auto bits = [](std::string_view s) {
-    uint32_t m = 0;
-    for (char c : s) m |= 1u << (c - 'A');
-    return m;
-  };
-  const uint32_t any = bits("FST") | ((lap_.active || lap_.finish) ? bits("E") : 0);  // E: a contour's feed
-  auto named = [&](int code, std::string_view letters) {
+  const uint32_t any =
+      LetterBits("FST") | ((lap_.active || lap_.finish) ? LetterBits("E") : 0);  // E: a contour's feed
+  auto named = [&](int code, uint32_t letters) {
     *g = code;  // the text is made only for a refusal: this runs for every block
-    return any | bits(letters);
+    return any | letters;
   };
-  if (k.dwell) return named(4, "");
-  if (k.g50) return named(50, "XZC");
-  if (k.lap) return named(k.lap, k.lap == 88 ? "DUWEHB" : "DUWE");
+  if (k.dwell) return named(4, LetterBits(""));
+  if (k.g50) return named(50, LetterBits("XZC"));
+  if (k.lap) return named(k.lap, k.lap == 88 ? LetterBits("DUWEHB") : LetterBits("DUWE"));
   switch (k.cycle) {
     case 71:
-      return named(71, "XZAIBDUHLEJQ");
+      return named(71, LetterBits("XZAIBDUHLEJQ"));
     case 72:
-      return named(72, "XZAKBDWHLEJQ");
+      return named(72, LetterBits("XZAKBDWHLEJQ"));
     case 73:
     case 74:
-      return named(k.cycle, "XZIKDLE");
+      return named(k.cycle, LetterBits("XZIKDLE"));
     case 77:
     case 78:
-      return named(k.cycle, "XZK");
+      return named(k.cycle, LetterBits("XZK"));
     case 183:
-      return named(183, "XZCRIKQDEL");
+      return named(183, LetterBits("XZCRIKQDEL"));
     case 185:
     case 186:
     case 187:
     case 188:
-      return named(k.cycle, "XZCIK");
+      return named(k.cycle, LetterBits("XZCIK"));
     case 190:
-      return named(190, "XZCIKQDUWE");
+      return named(190, LetterBits("XZCIKQDUWE"));
     default:
-      if (k.cycle >= 181 && k.cycle <= 189) return named(k.cycle, "XZCRIKQE");
+      if (k.cycle >= 181 && k.cycle <= 189) return named(k.cycle, LetterBits("XZCRIKQE"));
       break;
   }
   const int motion = k.motion_g >= 0 ? k.motion_g : modal_.motion;
-  uint32_t used = named(motion, "XZY");  // Y: Motion names the missing axis itself
-  if (k.comp_g) used |= bits("IK");      // the entry or exit vector of G40/G41/G42
+  uint32_t used = named(motion, LetterBits("XZY"));  // Y: Motion names the missing axis itself
+  if (k.comp_g) used |= LetterBits("IK");            // the entry or exit vector of G40/G41/G42
   switch (motion) {
     case 0:
     case 1:
-      used |= bits("CA") | (k.chamfer ? bits("L") : 0);
+      used |= LetterBits("CA") | (k.chamfer ? LetterBits("L") : 0);
       break;
     case 2:
     case 3:
-      used |= bits("IKL");
+      used |= LetterBits("IKL");
       break;
     case 31:
     case 32:
     case 33:
-      used |= bits("CIKAELJ");
+      used |= LetterBits("CIKAELJ");
       break;
     default:  // G34/G35
-      used |= bits("CAEJ");
+      used |= LetterBits("CAEJ");
       break;
   }
   return used;
