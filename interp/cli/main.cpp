@@ -193,11 +193,10 @@ int main(int argc, char** argv) {
   };
   cell::interp::Step s;
   for (;;) {
-    run->NextInto(s);
-    if (s.kind == cell::interp::Step::kCanon) {
-      cell::interp::AppendJsonLine(out, s.canon);
+    if (const cell::interp::Canon* c = run->NextInPlace(s)) {  // written where the run keeps it: no copy
+      cell::interp::AppendJsonLine(out, *c);
       out += '\n';
-      if (plot) plot->Add(s.canon);
+      if (plot) plot->Add(*c);
       if (out.size() > (1 << 16)) flush();
     } else if (s.kind == cell::interp::Step::kEnd) {
       return finish(0);

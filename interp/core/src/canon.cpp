@@ -2,8 +2,11 @@
 
 #include <fmt/format.h>
 
+#include <array>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
+#include <string>
 #include <string_view>
 
 namespace cell::interp {
@@ -70,7 +73,9 @@ namespace {
 
 // The writer's staging buffer: pieces are copied into a fixed local array and appended to the caller's
 // string in one go (per-piece std::string appends dominated the cost of a line). Anything larger than the
-// array goes straight through.
+// array goes straight through. Literals are copied with their length known at compile time, and short
+// pieces of a bounded length (Room) as a fixed-size block the cursor then moves only part of the way
+// over: both copies are inlined moves, not calls of memcpy.
 class Buf {
  public:
   explicit Buf(std::string& out) : out_(out) {}
@@ -80,6 +85,14 @@ class Buf {
   Buf& operator+=(char c) {
     if (p_ == end_) Flush();
     *p_++ = c;
+    return *this;
+  }
+  template <size_t N>
+  Buf& operator+=(const char (&s)[N]) {
+    static_assert(N - 1 <= kCap);
+    if (N - 1 > static_cast<size_t>(end_ - p_)) Flush();
+    std::memcpy(p_, s, N - 1);
+    p_ += N - 1;
     return *this;
   }
   Buf& operator+=(std::string_view s) {
@@ -95,6 +108,12 @@ class Buf {
     return *this;
   }
   void append(const char* p, size_t n) { *this += std::string_view(p, n); }
+  // At least n bytes free at the cursor (n <= kCap).
+  char* Room(size_t n) {
+    if (n > static_cast<size_t>(end_ - p_)) Flush();
+    return p_;
+  }
+  void Advance(size_t n) { p_ += n; }
   void Flush() {
     out_.append(buf_, static_cast<size_t>(p_ - buf_));
     p_ = buf_;
@@ -121,6 +140,12 @@ struct NumCacheEntry {
 };
 thread_local NumCacheEntry num_cache[64];
 
+// "00" .. "99": numbers are written two digits at a time.
+constexpr char kPairs[] =
+    "00010203040506070809101112131415161718192021222324252627282930313233343536373839"
+    "40414243444546474849505152535455565758596061626364656667686970717273747576777879"
+    "8081828384858687888990919293949596979899";
+
 void Num(Buf& out, double v) {
   if (!std::isfinite(v)) {
     out += '0';
@@ -130,7 +155,8 @@ void Num(Buf& out, double v) {
   std::memcpy(&bits, &v, sizeof bits);
   NumCacheEntry& hit = num_cache[(bits * 0x9E3779B97F4A7C15ull) >> 58];
   if (hit.len != 0 && hit.bits == bits) {
-    out += std::string_view(hit.text, hit.len);
+    std::memcpy(out.Room(sizeof hit.text), hit.text, sizeof hit.text);  // all of it: a fixed-size move
+    out.Advance(hit.len);
     return;
   }
   if (std::fabs(v) < 5e-7) v = 0;  // no "-0.000000"
@@ -140,15 +166,11 @@ void Num(Buf& out, double v) {
     double frac = a - static_cast<double>(whole);
     if (std::fabs(frac - 0.5) > 1e-3) {
       uint64_t r = whole + (frac > 0.5 ? 1 : 0);
-      char buf[32];
-      char* e = buf + sizeof buf;
+      char buf[48];  // the digits end at e; at most 14 characters, copied as a fixed 16 (room behind e)
+      char* e = buf + 32;
       char* p = e;
       auto ip = static_cast<uint32_t>(r / 1000000);  // < 10^6: 32-bit division is cheaper
       auto fp = static_cast<uint32_t>(r % 1000000);
-      static constexpr char kPairs[] =
-          "00010203040506070809101112131415161718192021222324252627282930313233343536373839"
-          "40414243444546474849505152535455565758596061626364656667686970717273747576777879"
-          "8081828384858687888990919293949596979899";
       for (int k = 0; k < 3; ++k) {  // six fraction digits, two at a time
         uint32_t d = fp % 100;
         fp /= 100;
@@ -166,12 +188,12 @@ void Num(Buf& out, double v) {
       } while (ip);
       if (v < 0) *--p = '-';
       auto n = static_cast<size_t>(end - p);
-      if (n <= sizeof hit.text) {
-        hit.bits = bits;
-        hit.len = static_cast<uint8_t>(n);
-        std::memcpy(hit.text, p, n);
-      }
-      out.append(p, n);
+      static_assert(sizeof hit.text >= 16);
+      hit.bits = bits;
+      hit.len = static_cast<uint8_t>(n);
+      std::memcpy(hit.text, p, 16);
+      std::memcpy(out.Room(16), p, 16);
+      out.Advance(n);
       return;
     }
   }
@@ -182,16 +204,25 @@ void Num(Buf& out, double v) {
 }
 
 void Int(Buf& out, long v) {
-  char buf[24];
-  char* e = buf + sizeof buf;
+  char buf[48];  // at most 20 digits and a sign, ending at e; copied as a fixed 24 (room behind e)
+  char* e = buf + 24;
   char* p = e;
   unsigned long u = v < 0 ? 0ul - static_cast<unsigned long>(v) : static_cast<unsigned long>(v);
-  do {
-    *--p = static_cast<char>('0' + u % 10);
-    u /= 10;
-  } while (u);
+  while (u >= 100) {  // every line's number: two digits per division
+    const unsigned long d = u % 100;
+    u /= 100;
+    p -= 2;
+    std::memcpy(p, kPairs + 2 * d, 2);
+  }
+  if (u >= 10) {
+    p -= 2;
+    std::memcpy(p, kPairs + 2 * u, 2);
+  } else {
+    *--p = static_cast<char>('0' + u);
+  }
   if (v < 0) *--p = '-';
-  out.append(p, static_cast<size_t>(e - p));
+  std::memcpy(out.Room(24), p, 24);
+  out.Advance(static_cast<size_t>(e - p));
 }
 
 void Str(Buf& out, std::string_view s) {
@@ -224,7 +255,8 @@ void Str(Buf& out, std::string_view s) {
   out += '"';
 }
 
-void Key(Buf& out, const char* k) {
+template <size_t N>
+void Key(Buf& out, const char (&k)[N]) {
   out += ",\"";
   out += k;
   out += "\":";
@@ -268,7 +300,8 @@ void FeedOf(Buf& out, const Feed& f, bool with_exact_stop) {
   if (with_exact_stop && f.exact_stop) out += ",\"exact_stop\":true";
 }
 
-void Bool(Buf& out, const char* key, bool v) {
+template <size_t N>
+void Bool(Buf& out, const char (&key)[N], bool v) {
   Key(out, key);
   out += v ? std::string_view("true") : std::string_view("false");
 }
@@ -563,11 +596,34 @@ std::string ToJsonLine(const Canon& c) {
   return out;
 }
 
+namespace {
+
+// Every op's `{"op":"<name>","line":`, padded to a fixed size: copied whole, as a cached number.
+struct OpPrefix {
+  char text[32];
+  uint8_t len;
+};
+
+const std::array<OpPrefix, kOpCount>& OpPrefixes() {
+  static const std::array<OpPrefix, kOpCount> table = [] {
+    std::array<OpPrefix, kOpCount> t{};
+    for (int i = 0; i < kOpCount; ++i) {
+      std::string s = std::string("{\"op\":\"") + OpName(static_cast<Op>(i)) + "\",\"line\":";
+      std::memcpy(t[i].text, s.data(), s.size());  // at most 27 characters (tool_select)
+      t[i].len = static_cast<uint8_t>(s.size());
+    }
+    return t;
+  }();
+  return table;
+}
+
+}  // namespace
+
 void AppendJsonLine(std::string& str, const Canon& c) {
   Buf out(str);
-  out += std::string_view("{\"op\":\"");
-  out += OpName(c.op());
-  out += std::string_view("\",\"line\":");
+  const OpPrefix& prefix = OpPrefixes()[static_cast<size_t>(c.op())];
+  std::memcpy(out.Room(sizeof prefix.text), prefix.text, sizeof prefix.text);
+  out.Advance(prefix.len);
   Int(out, c.line);
   std::visit(Writer{out}, c.p);
   out += '}';

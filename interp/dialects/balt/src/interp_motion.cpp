@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <optional>
 
 #include "interp_internal.h"
 
@@ -349,27 +350,28 @@ void BaltRun::EmitMotion(Op op, const AxisArray& mach_in, std::uint32_t moved, c
     }
   }
   Target* to = nullptr;
-  Canon routed;
+  std::optional<Canon> routed;  // made only when routed (a Canon is zeroed when made: every move)
   const bool in_plane = op == Op::kArc || geom::Norm(path.end - path.start) >= geom::kTiny;
   // A corner word in the next block keeps this move open (ln 3160-3200).
   if (in_plane && !gtl_profile_ && !contour_.on() && op != Op::kRapid) hold_next_ = NextIsCornerWord();
   const bool route = Routed();
   if (route) {
     CommitStage();
-    routed.line = cur_line_;
+    routed.emplace();
+    routed->line = cur_line_;
   }
   switch (op) {
     case Op::kRapid:
-      to = route ? &routed.Set<RapidOp>().to : &out_.Emplace<RapidOp>(cur_line_).to;
+      to = route ? &routed->Set<RapidOp>().to : &out_.Emplace<RapidOp>(cur_line_).to;
       break;
     case Op::kLinear: {
-      LinearOp& l = route ? routed.Set<LinearOp>() : out_.Emplace<LinearOp>(cur_line_);
+      LinearOp& l = route ? routed->Set<LinearOp>() : out_.Emplace<LinearOp>(cur_line_);
       l.feed = feed;
       to = &l.to;
       break;
     }
     default: {
-      ArcOp& a = route ? routed.Set<ArcOp>() : out_.Emplace<ArcOp>(cur_line_);
+      ArcOp& a = route ? routed->Set<ArcOp>() : out_.Emplace<ArcOp>(cur_line_);
       a.feed = feed;
       a.cw = path.cw;
       a.angle = path.sweep + 360.0 * helix_turns;
@@ -390,11 +392,11 @@ void BaltRun::EmitMotion(Op op, const AxisArray& mach_in, std::uint32_t moved, c
   to->travel = travel;
   to->travel_mask = travel_mask;
   if (route && GtlDefers()) {
-    profile_.deferred.push_back(std::move(routed));  // at the end of the element being traversed
+    profile_.deferred.push_back(std::move(*routed));  // at the end of the element being traversed
   } else if (route) {
     if (!contour_.engaged()) contour_.Sync(pos_);
     try {
-      contour_.Take(std::move(routed), in_plane ? &path : nullptr, gtl_profile_ || hold_next_);
+      contour_.Take(std::move(*routed), in_plane ? &path : nullptr, gtl_profile_ || hold_next_);
     } catch (const ContourError& e) {
       ContourFail(e);
     }

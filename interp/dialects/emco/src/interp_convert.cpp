@@ -4,6 +4,7 @@
 // compensation G40/G41/G42.
 #include <fmt/format.h>
 
+#include <bit>
 #include <cmath>
 
 #include "cell/interp/geometry/tool_nose.h"
@@ -134,7 +135,10 @@ bool Threading(Motion m) {
   return m == Motion::kThread || m == Motion::kG85;
 }
 
-void Set(Val& v, const Word& w, int order) {
+// Value `slot` of the block (BlockWords::Slot) as word `w`, the order-th of its block.
+void Set(BlockWords& bw, int slot, const Word& w, int order) {
+  bw.set_mask |= 1u << slot;
+  Val& v = bw.Slot(slot);
   v.set = true;
   v.point = w.point;
   v.sign = w.sign;
@@ -160,6 +164,37 @@ bool BlockWords::any_d() const {
   return false;
 }
 
+Val& BlockWords::Slot(int n) {
+  switch (n) {
+    case 0:
+      return x;
+    case 1:
+      return z;
+    case 2:
+      return i;
+    case 3:
+      return k;
+    case 4:
+      return f;
+    case 5:
+      return s;
+    case 6:
+      return t;
+    case 7:
+      return l;
+    default:
+      return n < 16 ? p[static_cast<size_t>(n - 8)] : d[static_cast<size_t>(n - 16)];
+  }
+}
+
+void BlockWords::Clear() {
+  for (uint32_t m = set_mask; m != 0; m &= m - 1) Slot(std::countr_zero(m)) = Val{};
+  set_mask = 0;
+  x_inc = z_inc = false;
+  ng = nm = 0;
+  first_col = 1;
+}
+
 void EmRun::Collect(const Block& b, BlockWords& bw) const {
   bw.first_col = b.count > 0 ? b.w[0].col : 1;
   for (int i = 0; i < b.count; ++i) {
@@ -167,37 +202,37 @@ void EmRun::Collect(const Block& b, BlockWords& bw) const {
     switch (w.letter) {
       case 'X':
       case 'U':
-        Set(bw.x, w, i);
+        Set(bw, 0, w, i);
         bw.x_inc = w.letter == 'U';
         break;
       case 'Z':
       case 'W':
-        Set(bw.z, w, i);
+        Set(bw, 1, w, i);
         bw.z_inc = w.letter == 'W';
         break;
       case 'I':
-        Set(bw.i, w, i);
+        Set(bw, 2, w, i);
         break;
       case 'K':
-        Set(bw.k, w, i);
+        Set(bw, 3, w, i);
         break;
       case 'F':
-        Set(bw.f, w, i);
+        Set(bw, 4, w, i);
         break;
       case 'S':
-        Set(bw.s, w, i);
+        Set(bw, 5, w, i);
         break;
       case 'T':
-        Set(bw.t, w, i);
+        Set(bw, 6, w, i);
         break;
       case 'L':
-        Set(bw.l, w, i);
+        Set(bw, 7, w, i);
         break;
       case 'P':
-        Set(bw.p[w.index], w, i);
+        Set(bw, 8 + w.index, w, i);
         break;
       case 'D':
-        Set(bw.d[w.index], w, i);
+        Set(bw, 16 + w.index, w, i);
         break;
       case 'G':
       case 'M': {
@@ -311,7 +346,8 @@ void EmRun::CheckWords(const BlockWords& bw, Motion motion, bool g04, bool g92, 
 }
 
 void EmRun::Execute(const Block& b) {
-  BlockWords bw;
+  BlockWords& bw = words_;
+  bw.Clear();
   Collect(b, bw);
 
   // G codes: the last of a group wins (ln 878-883).

@@ -358,14 +358,14 @@ std::map<int, TextSpan> IndexPrograms(const std::shared_ptr<const ProgramText>& 
 
 // A subroutine's text: the program's own file first (several programs may follow each other, ln 5635), then
 // the library (--lib, the station's store). Found programs are kept: a loop calls them again.
-std::optional<EmRun::Subroutine> EmRun::FindSubroutine(int number) {
+const EmRun::Subroutine* EmRun::FindSubroutine(int number) {
   if (!own_indexed_) {
     own_indexed_ = true;
     const auto& text = (*frames_)[0].span.text;
     for (auto& [n, span] : IndexPrograms(text, nullptr)) subs_[n] = {span, true};
   }
-  if (auto it = subs_.find(number); it != subs_.end()) return it->second;
-  if (!opt_.library) return std::nullopt;
+  if (auto it = subs_.find(number); it != subs_.end()) return &it->second;
+  if (!opt_.library) return nullptr;
   for (const std::string& n :
        {fmt::format("O{:04d}", number), fmt::format("O{}", number), std::to_string(number)}) {
     if (std::optional<std::string> body = opt_.library(n)) {
@@ -373,10 +373,10 @@ std::optional<EmRun::Subroutine> EmRun::FindSubroutine(int number) {
       std::map<int, TextSpan> in = IndexPrograms(ProgramText::FromString(std::move(*body)), &whole);
       std::optional<TextSpan> span = in.count(number) ? std::optional<TextSpan>(in.at(number)) : whole;
       if (!span) continue;
-      return subs_[number] = {*span, false};
+      return &(subs_[number] = {*span, false});
     }
   }
-  return std::nullopt;
+  return nullptr;
 }
 
 // G25 L<number><runs> (ln 2179-2273): the subroutine O<number> runs <runs> times (1-99), then the program
@@ -394,8 +394,10 @@ void EmRun::CallSubroutine(const BlockWords& bw, int col) {
   }
   if (static_cast<int>(fr.depth()) - 1 >= kMaxNesting) Alarm(300, col);
   if (LastBlock()) Alarm(340, col);
-  std::string name = fmt::format("O{:04d}", number);
-  std::optional<Subroutine> sub = FindSubroutine(number);
+  std::string name = "O0000";  // O{:04d}, by hand: this runs for every call (number <= 255, L <= 25599)
+  for (int i = 4, n = number; i >= 1 && n > 0; --i, n /= 10)
+    name[static_cast<size_t>(i)] = static_cast<char>('0' + n % 10);
+  const Subroutine* sub = FindSubroutine(number);
   if (!sub) Alarm(310, bw.l.col, name);
   const TextSpan* span = &sub->span;
   bool own = sub->own;

@@ -110,6 +110,12 @@ struct BlockWords {
   int pos_col() const { return x.set && (!z.set || x.col < z.col) ? x.col : (z.set ? z.col : first_col); }
   bool any_p() const;
   bool any_d() const;
+  // Value n: 0-7 x z i k f s t l, 8-15 P0-P7, 16-23 D0-D7.
+  Val& Slot(int n);
+  uint32_t set_mask = 0;  // the values set (bit n: Slot(n))
+  // Back to an empty block: only the values set are cleared (the executor reuses one BlockWords, and zeroing
+  // all of it for every block cost more than reading the block).
+  void Clear();
 };
 
 // ---------------------------------------------------------------------------------------------------------
@@ -276,7 +282,7 @@ class EmRun final : public RunBase {
     TextSpan span;
     bool own = false;  // in the program's own file: it reports its own lines
   };
-  std::optional<Subroutine> FindSubroutine(int number);
+  const Subroutine* FindSubroutine(int number);
   void CallSubroutine(const BlockWords& bw, int col);
   void ReturnFromSubroutine(int col);
   void EndOfSubroutine();
@@ -335,6 +341,7 @@ class EmRun final : public RunBase {
   std::map<int, Subroutine> subs_;  // subroutines found so far, by number
   bool own_indexed_ = false;
   Block scratch_;
+  BlockWords words_;  // the block being executed (Execute)
   int cur_line_ = 1;
   bool cur_own_ = true;
   bool first_block_ = true;  // group 7 may change only here (ALARM 390)

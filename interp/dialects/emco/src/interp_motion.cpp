@@ -209,12 +209,12 @@ void EmRun::Thread33(const BlockWords& bw, Vec2 to) {
 // skipped while it holds nothing (the common case costs one test).
 
 void EmRun::EmitMove(Move&& m) {
-  Item it;
-  it.m = std::move(m);
   if (!corner_.engaged() && !comp_.engaged()) {
-    WriteMove(it.m);
+    WriteMove(m);  // no Item: building one zeroes its Canon too, for every move
     return;
   }
+  Item it;
+  it.m = std::move(m);
   Route(std::move(it), 0);
 }
 

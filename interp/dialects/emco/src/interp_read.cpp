@@ -91,7 +91,8 @@ bool ReadNumber(Cursor& c, double& value, bool& point, bool& sign, int& int_digi
   }
   if (count == 0) return false;
   static constexpr double kPow10[] = {1, 10, 100, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12};
-  value = frac < 13 ? digits / kPow10[frac] : digits / std::pow(10.0, frac);
+  // No division without fraction digits (most words): x / 1 is x.
+  value = frac == 0 ? digits : frac < 13 ? digits / kPow10[frac] : digits / std::pow(10.0, frac);
   if (neg) value = -value;
   return true;
 }

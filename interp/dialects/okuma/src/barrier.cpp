@@ -77,6 +77,16 @@ void OkRun::BarrierOffAfterBlock() {
 // Checks the commands waiting to go out, in order. At the first move that would enter an active barrier the
 // queue is cut before it and the run ends with the alarm at that move's line. Returns false then.
 bool OkRun::CheckBarriers() {
+  if (!modal_.chuck_barrier && !modal_.tail_barrier) {
+    // No barrier on (the common case, every block): only where the next check starts from.
+    for (size_t i = out_.size(); i-- > 0;) {
+      if (const Target* to = out_.at(i).target()) {
+        barrier_from_ = to->pos;
+        break;
+      }
+    }
+    return true;
+  }
   std::array<Box, 4> boxes{};
   size_t n = 0;
   if (modal_.chuck_barrier) {

@@ -458,21 +458,26 @@ bool OkRun::MToolMode(const BlockWords& w, NcGCodes& k) {
     MToolCancel(col);
     return true;
   }
-  int col = !w.g.empty() ? w.g.front().col : (!w.m.empty() ? w.m.front().col : 0);
-  for (int i = 0; i < 26 && col == 0; ++i) {  // no G or M: the block's first word
-    if ((w.has >> i) & 1u) col = w.col[static_cast<size_t>(i)];
-  }
-  for (int i = 0; i < 26 && w.g.empty() && w.m.empty(); ++i) {
-    if ((w.has >> i) & 1u) col = std::min(col, w.col[static_cast<size_t>(i)]);
-  }
-  if (col == 0) col = 1;
+  // The column refusals point at; found only when needed (two scans of the 26 letters, for every block).
+  auto block_col = [&w] {
+    int col = !w.g.empty() ? w.g.front().col : (!w.m.empty() ? w.m.front().col : 0);
+    for (int i = 0; i < 26 && col == 0; ++i) {  // no G or M: the block's first word
+      if ((w.has >> i) & 1u) col = w.col[static_cast<size_t>(i)];
+    }
+    for (int i = 0; i < 26 && w.g.empty() && w.m.empty(); ++i) {
+      if ((w.has >> i) & 1u) col = std::min(col, w.col[static_cast<size_t>(i)]);
+    }
+    return col == 0 ? 1 : col;
+  };
   if (mc_.after_cancel) {
+    const int col = block_col();
     if (!w.Has('X') || !w.Has('Z')) {
       Fail(col, "the block after G180 must contain both X and Z");
     }
     mc_.after_cancel = false;
   }
   if (k.cycle == 0 && mc_.g != 0) {
+    const int col = block_col();
     if (k.motion_g >= 0 || k.lap || k.dwell || k.g50) {
       Fail(col, "cancel the M-tool compound fixed cycle with G180 first");
     }
@@ -491,78 +496,85 @@ bool OkRun::MToolMode(const BlockWords& w, NcGCodes& k) {
   return false;
 }
 
+namespace {
+
+// The mask of single-letter addresses (bit 0: A) of `letters`, made at compile time: the address check runs
+// for every block.
+consteval uint32_t LetterBits(std::string_view letters) {
+  uint32_t m = 0;
+  for (char c : letters) m |= 1u << (c - 'A');
+  return m;
+}
+
+}  // namespace
+
 // The single-letter addresses the block's function reads (each function's programming format: ln 1147-1300,
 // 1642-1707, 3239-3414, 3640-4071, 5124-5252, 2235-2447 for I/K with G40-G42); F, S and T belong to any
 // block. `what` names the function for the alarm.
-uint32_t OkRun::UsedAddresses(const NcGCodes& k, std::string* what) const {
-  auto bits = [](std::string_view s) {
-    uint32_t m = 0;
-    for (char c : s) m |= 1u << (c - 'A');
-    return m;
+uint32_t OkRun::UsedAddresses(const NcGCodes& k, int* g) const {
+  const uint32_t any =
+      LetterBits("FST") | ((lap_.active || lap_.finish) ? LetterBits("E") : 0);  // E: a contour's feed
+  auto named = [&](int code, uint32_t letters) {
+    *g = code;  // the text is made only for a refusal: this runs for every block
+    return any | letters;
   };
-  const uint32_t any = bits("FST") | ((lap_.active || lap_.finish) ? bits("E") : 0);  // E: a contour's feed
-  auto named = [&](int g, std::string_view letters) {
-    *what = fmt::format("a G{:02} block", g);
-    return any | bits(letters);
-  };
-  if (k.dwell) return named(4, "");
-  if (k.g50) return named(50, "XZC");
-  if (k.lap) return named(k.lap, k.lap == 88 ? "DUWEHB" : "DUWE");
+  if (k.dwell) return named(4, LetterBits(""));
+  if (k.g50) return named(50, LetterBits("XZC"));
+  if (k.lap) return named(k.lap, k.lap == 88 ? LetterBits("DUWEHB") : LetterBits("DUWE"));
   switch (k.cycle) {
     case 71:
-      return named(71, "XZAIBDUHLEJQ");
+      return named(71, LetterBits("XZAIBDUHLEJQ"));
     case 72:
-      return named(72, "XZAKBDWHLEJQ");
+      return named(72, LetterBits("XZAKBDWHLEJQ"));
     case 73:
     case 74:
-      return named(k.cycle, "XZIKDLE");
+      return named(k.cycle, LetterBits("XZIKDLE"));
     case 77:
     case 78:
-      return named(k.cycle, "XZK");
+      return named(k.cycle, LetterBits("XZK"));
     case 183:
-      return named(183, "XZCRIKQDEL");
+      return named(183, LetterBits("XZCRIKQDEL"));
     case 185:
     case 186:
     case 187:
     case 188:
-      return named(k.cycle, "XZCIK");
+      return named(k.cycle, LetterBits("XZCIK"));
     case 190:
-      return named(190, "XZCIKQDUWE");
+      return named(190, LetterBits("XZCIKQDUWE"));
     default:
-      if (k.cycle >= 181 && k.cycle <= 189) return named(k.cycle, "XZCRIKQE");
+      if (k.cycle >= 181 && k.cycle <= 189) return named(k.cycle, LetterBits("XZCRIKQE"));
       break;
   }
   const int motion = k.motion_g >= 0 ? k.motion_g : modal_.motion;
-  uint32_t used = named(motion, "XZY");  // Y: Motion names the missing axis itself
-  if (motion < 0) *what = "a block after G137";
-  if (k.comp_g) used |= bits("IK");  // the entry or exit vector of G40/G41/G42
+  uint32_t used = named(motion, LetterBits("XZY"));  // Y: Motion names the missing axis itself
+  if (k.comp_g) used |= LetterBits("IK");            // the entry or exit vector of G40/G41/G42
   switch (motion) {
     case 0:
     case 1:
-      used |= bits("CA") | (k.chamfer ? bits("L") : 0);
+      used |= LetterBits("CA") | (k.chamfer ? LetterBits("L") : 0);
       break;
     case 2:
     case 3:
-      used |= bits("IKL");
+      used |= LetterBits("IKL");
       break;
     case 31:
     case 32:
     case 33:
-      used |= bits("CIKAELJ");
+      used |= LetterBits("CIKAELJ");
       break;
     case 101:
-      used |= bits("C");
+      used |= LetterBits("C");
       break;
     case 102:
     case 103:
     case 132:
     case 133:
-      used |= bits("CL");
+      used |= LetterBits("CL");
       break;
     case -1:
       break;
     default:  // G34/G35
-      used |= bits("CAEJ");
+      used |= LetterBits("CAEJ");
       break;
   }
   return used;
@@ -571,8 +583,12 @@ uint32_t OkRun::UsedAddresses(const NcGCodes& k, std::string* what) const {
 // A word the block's function does not read (a stray Q5 on a G01 block, K on a G00) is refused, not ignored
 // (judgement 51); the manual prints no alarm number for it.
 void OkRun::RefuseUnusedAddresses(const BlockWords& w, const NcGCodes& k) const {
-  std::string what;
-  const uint32_t unused = w.has & ~UsedAddresses(k, &what);
+  int g = 0;
+  const uint32_t unused = w.has & ~UsedAddresses(k, &g);
+  // No motion code in force: only after G137 (coordinate conversion cancels the mode, judgement 58).
+  std::string what = unused == 0 ? std::string()
+                     : g < 0     ? std::string("a block after G137")
+                                 : fmt::format("a G{:02} block", g);
   // Extended addresses: QA= with a C word (ln 2075), DA= in G73/G74 (ln 3933), the G84 change points of a
   // G85/G86 call (ln 5145-5173), SA= in G185-G188, SB= anywhere; PZ=, PW= are refused before.
   uint32_t ext_used = 0;
@@ -585,7 +601,7 @@ void OkRun::RefuseUnusedAddresses(const BlockWords& w, const NcGCodes& k) const 
     if (!w.HasExt(i) || ((ext_used >> i) & 1u)) continue;
     const int col = w.ext_col[static_cast<size_t>(i)];
     if (i == 2) Fail(col, "QA= (C-axis revolutions, ln 2075) needs a C word in its block");
-    Fail(col, fmt::format("address {}= is not used by {}", AddrName(kExt[i]), what));
+    Fail(col, fmt::format("address {}= is not used by a G{:02} block", AddrName(kExt[i]), g));
   }
   if (unused == 0) return;
   char a = 'A';
@@ -612,6 +628,7 @@ void OkRun::RefuseTorqueAndTurretB(const BlockWords& w) {
          "saddle");
   }
   for (const char* name : {"PZ", "PW"}) {
+    if (w.ext_has == 0) break;  // no extended address in the block (nearly every block)
     const int i = ExtIndex(MakeAddr(name[0], name[1]));
     if (w.HasExt(i)) {
       Fail(w.ext_col[static_cast<size_t>(i)],

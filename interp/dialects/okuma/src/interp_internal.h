@@ -238,7 +238,8 @@ class OkRun final : public RunBase, public VarReader {
     int chamfer = 0, cycle = 0, lap = 0, cycle_col = 1;
   };
   void ReadNcGCodes(const BlockWords& w, NcGCodes& k);
-  uint32_t UsedAddresses(const NcGCodes& k, std::string* what) const;
+  // The addresses the block's function reads, and the G code that function is named by in a refusal.
+  uint32_t UsedAddresses(const NcGCodes& k, int* g) const;
   void RefuseUnusedAddresses(const BlockWords& w, const NcGCodes& k) const;
   void MotionGCode(int motion_g, int motion_col);
   void NcAction(const BlockWords& w, const Block& b, const NcGCodes& k, bool xz);

@@ -140,6 +140,13 @@ class Run {
   }
   // The same, into a Step the caller keeps between calls (long runs: no per-command construction).
   virtual void NextInto(Step& s) = 0;
+  // The same without copying the command: the next command where the run keeps it (valid until the next
+  // call), or nullptr at the end or the error, which are then in `s`. For callers that only read each
+  // command once (the offline CLI's output).
+  virtual const Canon* NextInPlace(Step& s) {
+    NextInto(s);
+    return s.kind == Step::kCanon ? &s.canon : nullptr;
+  }
   // Persistent variables as they stand, keyed by the dialect's own names (KT-APL L1000-L2999 as "L1000",
   // Okuma common variables "V1"); the station stores them between runs and gives them to the next.
   virtual std::map<std::string, double> Variables() const = 0;

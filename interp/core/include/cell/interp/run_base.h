@@ -22,6 +22,17 @@ class RunBase : public Run {
     }
     s = final_;
   }
+  const Canon* NextInPlace(Step& s) final {
+    while (out_.empty() && !finished_) StepOnce();
+    if (!out_.empty()) {
+      // Popped, but its slot is written again only when a later call runs the next block.
+      const Canon* c = &out_.front();
+      out_.pop_front();
+      return c;
+    }
+    s = final_;
+    return nullptr;
+  }
 
  protected:
   RunBase() = default;
