@@ -33,6 +33,7 @@ records::Job ToRecord(const JobView& j, bool with_decisions) {
   r.started_ns = j.started_ms * 1000000;
   r.finished_ns = j.finished_ms * 1000000;
   r.cycle_s = j.cycle_s;
+  r.predicted_s = j.predicted_s;
   r.op_index = j.op_index + 1;
   r.op_count = j.op_count;
   r.decision_count = static_cast<std::uint32_t>(j.decision_count);
