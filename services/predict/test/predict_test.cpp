@@ -13,6 +13,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <fstream>
+#include <sstream>
 #include <string>
 
 #include "cell/config/config.h"
@@ -89,6 +91,29 @@ TEST(Predict, ToolChangesAndSpindleRamp) {
   EXPECT_NEAR(spin - one, 1.0, 0.005);
   const double spin_change = Seconds("KT01", Kt("N3 T1001 M06\nN4 S2000 M03\nN5 T1002 M06\n"));
   EXPECT_NEAR(spin_change - spin, 6.12 + 1.0, 0.005);
+}
+
+// EM01 (EMCO lathe): emco_station_test works this thread cycle (G85, manual ln 4176-4188) by hand from EM01's
+// machine data: 20.12 .. 21.16 s, + 0.2 s for the servo's own settling.
+TEST(Predict, EmcoThreadAsWorkedByHand) {
+  const double t = Seconds("EM01",
+                           "%\nN0010 T0202 G00 X50. Z10.\nN0020 G97 S600 M04\nN0030 G00 X31. Z2.\n"
+                           "N0040 G85 X27.546 Z-42. D3=600 D6=1227 F2000\nN0050 G00 X50. Z10.\nN0060 M30\n");
+  EXPECT_GT(t, 20.12);
+  EXPECT_LT(t, 21.16 + 0.2);
+}
+
+// The KT-APL programs station_corpus_test runs on KT01 all have a number.
+TEST(Predict, CorpusProgramsOnKt01) {
+  for (const char* c : {"p2_5_25_arc_cw_absolute", "p2_5_27_full_circle", "p2_5_32_helix", "p2_5_33_r_arc",
+                        "p2_5_34_r_sign", "p1_e23_cls_run_count", "p1_e10_g82"}) {
+    std::ifstream f(kSource + "/tests/conformance/ktapl/" + c + ".ktapl");
+    std::stringstream text;
+    text << f.rdbuf();
+    Prediction p = PredictOn("KT01", text.str(), "ktapl");
+    EXPECT_TRUE(p.seconds) << c << ": " << p.why;
+    EXPECT_GT(p.seconds.value_or(0), 0.0) << c;
+  }
 }
 
 TEST(Predict, ADifferentDialectCannotRun) {

@@ -146,5 +146,50 @@ TEST(Estimates, NoPredictorNoEstimate) {
   EXPECT_EQ(c.sched->Estimates("TURN").stations[0].why, "no predictor");
 }
 
+// The plan runs the allocation rule forward on the estimates: three pallets through a two-operation route
+// (op 1 on EM01 or EM02, op 2 on EM01 only), every visit 100 s.
+TEST(Plan, TheRuleRunForwardOnTheEstimates) {
+  FakeCell c;
+  FakePredictor p;
+  p.seconds[{"TURN", "EM01"}] = 100.0;
+  p.seconds[{"TURN", "EM02"}] = 100.0;
+  c.sched->SetPredictor(&p);
+  c.programs.Put("TURN", kEmco, "emco");
+  Emco(c, "EM01");
+  Emco(c, "EM02");
+  c.Route("R", {"EM01,EM02:TURN", "EM01:TURN"});
+  c.Route("W", {"EM03:TURN"});
+  const std::int64_t j1 = c.Operate("R", 1), j2 = c.Operate("R", 2), j3 = c.Operate("R", 3);
+  const std::int64_t w = c.Operate("W", 4);
+  const std::vector<PlanRow> plan = c.sched->Plan();
+  const std::int64_t t0 = c.now_ms;
+  struct Want {
+    std::int64_t job;
+    int op;
+    std::string station;
+    std::int64_t start_s, end_s;
+  };
+  // EM01 holds pallet 1 and then 3 (ties at 0 s and 100 s go to EM01, listed first), EM02 pallet 2; the
+  // second operations queue on EM01 as their pallets become ready: 1 at 100 s, 2 at 100 s, 3 at 200 s.
+  const std::vector<Want> want = {{j1, 0, "EM01", 0, 100},   {j1, 1, "EM01", 200, 300},
+                                  {j2, 0, "EM02", 0, 100},   {j2, 1, "EM01", 300, 400},
+                                  {j3, 0, "EM01", 100, 200}, {j3, 1, "EM01", 400, 500}};
+  ASSERT_EQ(plan.size(), want.size() + 1);
+  for (std::size_t i = 0; i < want.size(); ++i) {
+    EXPECT_EQ(plan[i].job, want[i].job) << i;
+    EXPECT_EQ(plan[i].op, want[i].op) << i;
+    EXPECT_EQ(plan[i].station, want[i].station) << i;
+    EXPECT_EQ(plan[i].start_ms, t0 + want[i].start_s * 1000) << i;
+    EXPECT_EQ(plan[i].end_ms, t0 + want[i].end_s * 1000) << i;
+  }
+  EXPECT_EQ(plan.back().job, w);
+  EXPECT_FALSE(plan.back().start_ms);
+  EXPECT_NE(plan.back().waiting_for.find("EM03"), std::string::npos) << plan.back().waiting_for;
+  const nlohmann::json j = ToJson(plan);
+  EXPECT_EQ(j[0]["op"], 1);
+  EXPECT_TRUE(j[0]["waiting_for"].is_null());
+  EXPECT_TRUE(j.back()["start"].is_null());
+}
+
 }  // namespace
 }  // namespace cell::scheduler

@@ -181,6 +181,17 @@ struct JobResult {
   Effects effects;
 };
 
+// One visit of the plan (docs/scheduler.md §15): a pallet's operation on a station, projected.
+struct PlanRow {
+  std::int64_t job = 0;
+  int pallet = 0;
+  std::string route;                             // "" for a pallet run or a schedule
+  int op = 0;                                    // 0-based
+  std::string station;                           // "" while the pallet waits
+  std::optional<std::int64_t> start_ms, end_ms;  // wall clock, ms since the epoch; none while waiting
+  std::string waiting_for;                       // why it waits
+};
+
 class Scheduler {
  public:
   // Opens (or creates) the database and loads its state. `programs` must outlive the Scheduler.
@@ -243,6 +254,9 @@ class Scheduler {
   // A program's prediction and estimate on every known station, predicted now where missing (and kept).
   // Throws cell::Error(kNotFound) for a program the source does not have.
   ProgramEstimates Estimates(std::string_view program);
+  // The projected schedule: every live job's visits from the stations' state now and the allocation rule
+  // run forward on the backlog seconds (UCY or estimates); waiting jobs without times.
+  std::vector<PlanRow> Plan();
 
   // ---- queries ----
   std::optional<JobView> Job(std::int64_t id, bool with_decisions = true) const;
