@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <chrono>
 #include <cstdlib>
 #include <memory>
 
@@ -28,7 +29,11 @@ struct NoNumber {
 class Sim {
  public:
   Sim(machine::MachineConfig cfg, const Input& in)
-      : m_(std::move(cfg), servo::ClockKind::kVirtual), max_s_(in.max_machine_s) {}
+      : m_(std::move(cfg), servo::ClockKind::kVirtual),
+        max_s_(in.max_machine_s),
+        deadline_(std::chrono::steady_clock::now() +
+                  std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                      std::chrono::duration<double>(in.max_wall_s))) {}
 
   servo::Machine& machine() { return m_; }
 
@@ -73,6 +78,11 @@ class Sim {
     if (m_.HasEvents()) Take();
     if (m_.machine_time() > max_s_)
       throw NoNumber{fmt::format("did not end within {:.0f} machine seconds", max_s_)};
+    if ((m_.ticks() & 0x3ff) == 0 && std::chrono::steady_clock::now() > deadline_)
+      throw NoNumber{
+          fmt::format("not predicted: still running at {:.0f} machine seconds after the prediction's "
+                      "wall-clock bound",
+                      m_.machine_time())};
     return true;
   }
   void Take() {
@@ -90,6 +100,7 @@ class Sim {
 
   servo::Machine m_;
   double max_s_;
+  std::chrono::steady_clock::time_point deadline_;
   std::uint64_t next_id_ = 0, want_probe_ = 0;
   servo::ProbeResult probe_;
   std::optional<double> first_;

@@ -141,6 +141,22 @@ TEST(Predict, AProbeWithoutAPartModelNeedsARun) {
   EXPECT_NE(p.why.find("part model"), std::string::npos) << p.why;
 }
 
+TEST(Predict, AnEndlessProgramIsBounded) {
+  Input in;
+  in.program = "T";
+  in.text = Kt("N3 (LBL,3)\nN4 G01 X300. F3000.\nN5 G01 X100.\nN6 (GTO,3)\n");
+  in.station = Station("KT01");
+  in.max_machine_s = 60;
+  Prediction p = Predict(in);
+  EXPECT_FALSE(p.seconds);
+  EXPECT_NE(p.why.find("did not end within 60 machine seconds"), std::string::npos) << p.why;
+  in.max_machine_s = 1e9;
+  in.max_wall_s = 0.2;
+  p = Predict(in);
+  EXPECT_FALSE(p.seconds);
+  EXPECT_NE(p.why.find("wall-clock bound"), std::string::npos) << p.why;
+}
+
 TEST(Predict, ASoftLimitIsTheServosAlarm) {
   Prediction p = PredictOn("KT01", Kt("N3 G01 X5000. F3000.\n"));
   EXPECT_FALSE(p.seconds);

@@ -40,6 +40,7 @@ struct Input {
   // Bounds on a program that never ends offline (a loop on a variable only a run changes).
   double max_machine_s = 24 * 3600.0;
   long max_ops = 20'000'000;
+  double max_wall_s = 10.0;  // a caller that must answer (the scheduler) is not held longer
 };
 
 struct Prediction {
