@@ -33,8 +33,8 @@ std::string StationPredictor::Basis(std::string_view station) {
   std::string b;
   try {
     b = FileFingerprint(interp::LoadStation(station).file.string());
-  } catch (const std::exception& e) {
-    b = "none";
+  } catch (const std::exception&) {
+    b = "none";  // no file: Predict says why
   }
   return basis_.emplace(std::string(station), b).first->second;
 }
