@@ -167,8 +167,8 @@ std::optional<std::string> LocalServiceOn(int domain) {
       // cannot be read even by its owner (issue 44's flake: a test's service on its way out made `route
       // show` wait out discovery). A process on its way out is no service.
       if (Exiting(entry.path())) continue;
-      if (block) return what + ", whose environment is empty";
-      return what + ", whose environment cannot be read";
+      // A live process with an empty environment runs on the default domain (DomainIn below).
+      if (!block) return what + ", whose environment cannot be read";
     }
     const std::optional<int> d = DomainIn(*block);
     if (!d || *d == domain) return what;
