@@ -777,19 +777,18 @@ Effects Scheduler::Cancel(std::string_view key, std::int64_t job_id, std::string
   const std::string command = json{{"verb", "job-cancel"}, {"job", job_id}}.dump();
   m.Call([&] {
     if (m.Seen(key, command)) return;
+    auto already = [&](JobState s) {
+      return Error(Errc::kFailedPrecondition, fmt::format("job {} is already {}", job_id, JobStateName(s)));
+    };
     auto it = m.jobs.find(job_id);
     if (it == m.jobs.end()) {
       // Only ended jobs leave memory: one the database still has is already over.
       const auto stored = m.store ? m.store->Job(job_id, false) : std::nullopt;
       if (!stored) throw Error(Errc::kNotFound, fmt::format("no job {}", job_id));
-      throw Error(Errc::kFailedPrecondition,
-                  fmt::format("job {} is already {}", job_id, JobStateName(stored->state)));
+      throw already(stored->state);
     }
     JobRec& j = it->second;
-    if (IsTerminal(j.state)) {
-      throw Error(Errc::kFailedPrecondition,
-                  fmt::format("job {} is already {}", job_id, JobStateName(j.state)));
-    }
+    if (IsTerminal(j.state)) throw already(j.state);
     int freed = -1;
     if (j.dispatch != 0) {
       DispatchRec& d = m.dispatches.at(j.dispatch);

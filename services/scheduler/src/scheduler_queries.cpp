@@ -123,9 +123,9 @@ void Scheduler::ForJobs(const JobQuery& q, const std::function<bool(const JobVie
   if (impl_->store) {
     // The database holds every job, and what memory holds is flushed: the stored rows in order, each seen
     // as memory has it where memory still has it.
-    impl_->store->ForJobs(q, [&](std::int64_t id, JobView&& stored) {
+    impl_->store->ForJobs(q, [&](std::int64_t id, const std::function<JobView()>& stored) {
       auto it = impl_->jobs.find(id);
-      return visit(it == impl_->jobs.end() ? stored : impl_->View(it->second, false));
+      return visit(it == impl_->jobs.end() ? stored() : impl_->View(it->second, false));
     });
     return;
   }

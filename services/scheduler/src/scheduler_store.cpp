@@ -523,17 +523,17 @@ std::optional<JobView> Store::Job(std::int64_t id, bool with_decisions) {
   return v;
 }
 
-void Store::ForJobs(const JobQuery& q, const std::function<bool(std::int64_t, JobView&&)>& visit) {
+void Store::ForJobs(const JobQuery& q,
+                    const std::function<bool(std::int64_t, const std::function<JobView()>&)>& visit) {
   auto s = db_.Prepare(std::string("SELECT ") + kJobViewColumns +
                        " FROM jobs WHERE id > ?1 AND (?2 = '' OR state = ?2) AND (?3 = '' OR station = ?3) "
                        "ORDER BY id");
   s.BindInt64(1, q.after)
       .BindText(2, q.state ? std::string(JobStateName(*q.state)) : std::string())
       .BindText(3, q.station);
-  while (s.Step()) {
-    JobView v = StoredJob(s);
-    if (!visit(v.id, std::move(v))) return;
-  }
+  const std::function<JobView()> stored = [&s] { return StoredJob(s); };
+  while (s.Step())
+    if (!visit(s.ColumnInt64(0), stored)) return;
 }
 
 std::optional<Keyed> Store::Idempotency(const std::string& key) {

@@ -30,8 +30,10 @@ class Store {
 
   // ---- what memory let go of, read back (everything in memory is flushed, so these agree with it) ----
   std::optional<JobView> Job(std::int64_t id, bool with_decisions);
-  // `job ls` over every job: each row's id with its stored view (no decisions), in id order, until false.
-  void ForJobs(const JobQuery& q, const std::function<bool(std::int64_t, JobView&&)>& visit);
+  // `job ls` over every job: each row's id, and how to read its stored view (no decisions) when the caller
+  // has none of its own, in id order, until false.
+  void ForJobs(const JobQuery& q,
+               const std::function<bool(std::int64_t, const std::function<JobView()>&)>& visit);
   std::optional<Keyed> Idempotency(const std::string& key);
 
  private:
