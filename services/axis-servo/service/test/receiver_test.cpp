@@ -229,10 +229,19 @@ TEST_F(ReceiverTest, TheMagazineIsTheStationsPublishedToolTable) {
   EXPECT_FALSE(Last().alarm());
 }
 
+// Axis state at a rate in wall time: 50 Hz while the machine moves, 4 Hz at rest with the first sample at
+// rest at once (Receiver::kRestAxisPeriod; issue 43: 32 resting servos at 50 Hz were a third of an idle
+// 32-station cell's CPU).
 TEST_F(ReceiverTest, AxisStateIsPublishedOnTheWallClock) {
-  Turn([] { return false; }, 200);  // 200 ms of wall time
+  Turn([] { return false; }, 1000);  // 1 s of wall time at rest: at once, then at 250, 500, 750, 1000 ms
+  EXPECT_GE(sink_.axes.size(), 4u);
+  EXPECT_LE(sink_.axes.size(), 6u);
+  sink_.axes.clear();
+  Send(Seg(1, 1, cell::SEGMENT_LINEAR, 500, 0, 100, 500));  // a minute of motion
+  Turn([] { return false; }, 200);                          // 200 ms of it: every 20 ms
   EXPECT_GE(sink_.axes.size(), 9u);
   EXPECT_LE(sink_.axes.size(), 11u);
+  for (const auto& a : sink_.axes) EXPECT_NE(a.velocity()[0], 0.0);  // all of them while it moves
 }
 
 }  // namespace
