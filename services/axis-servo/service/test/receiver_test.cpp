@@ -241,7 +241,9 @@ TEST_F(ReceiverTest, AxisStateIsPublishedOnTheWallClock) {
   Turn([] { return false; }, 200);                          // 200 ms of it: every 20 ms
   EXPECT_GE(sink_.axes.size(), 9u);
   EXPECT_LE(sink_.axes.size(), 11u);
-  for (const auto& a : sink_.axes) EXPECT_NE(a.velocity()[0], 0.0);  // all of them while it moves
+  // The first goes out at the turn the segment arrives (the last sample at rest was 250 ms before); every one
+  // after it is taken while the machine moves.
+  for (std::size_t i = 1; i < sink_.axes.size(); ++i) EXPECT_NE(sink_.axes[i].velocity()[0], 0.0) << i;
 }
 
 }  // namespace
