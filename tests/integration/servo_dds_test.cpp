@@ -490,11 +490,13 @@ TEST_F(ServoDds, RealAndVirtualClocksAgreeAndFollowingErrorShows) {
   EXPECT_NEAR(tr, tv, 0.01 * tv) << "real " << tr << " s, virtual " << tv << " s";
   EXPECT_GT(wall, 0.9 * tr) << "the real clock ran faster than the wall clock";
 
-  // Samples of KT02 received during the real-clock run (queued since the drain above).
+  // Samples of KT02 received during the real-clock run (queued since the drain above): 50 Hz of wall time
+  // while it moves (a loaded host may lose some of the best-effort samples).
   double max_fe = 0;
-  int moving = 0;
+  int moving = 0, samples = 0;
   while (auto a = bus_->TakeAxes(0ms)) {
     if (a->station().to_string() != "KT02") continue;
+    ++samples;
     double v2 = 0;
     for (int i = 0; i < 3; ++i) {
       max_fe = std::max(max_fe, std::abs(a->following_error()[static_cast<size_t>(i)]));
@@ -503,15 +505,21 @@ TEST_F(ServoDds, RealAndVirtualClocksAgreeAndFollowingErrorShows) {
     if (v2 > 0) ++moving;
   }
   EXPECT_GE(moving, 10);
+  EXPECT_GE(samples, static_cast<int>(0.6 * 50 * wall)) << "over " << wall << " s of wall time";
+  EXPECT_LE(samples, static_cast<int>(1.3 * 50 * wall) + 2) << "over " << wall << " s of wall time";
   EXPECT_GT(max_fe, 1e-6) << "no following error seen while moving";
   EXPECT_LT(max_fe, 0.5);
 }
 
-// (d) Axis state arrives at about 50 Hz of wall time, whatever the clock.
-TEST_F(ServoDds, AxisStateAtFiftyHertzWall) {
+// (d) Axis state at a rate in wall time, whatever the clock: 50 Hz while the machine moves (checked in
+// RealAndVirtualClocksAgreeAndFollowingErrorShows) and 4 Hz at rest (Receiver::kRestAxisPeriod), on the
+// virtual clock (KT01) and the real one (KT02) alike: 32 resting servos at 50 Hz were a third of an idle
+// 32-station cell's CPU (issue 43).
+TEST_F(ServoDds, AxisStateAtFourHertzAtRest) {
+  ASSERT_TRUE(bus_->WaitIdle("KT01"));
   bus_->DrainAxes();
   int kt01 = 0, kt02 = 0;
-  auto end = Clock::now() + 1s;
+  auto end = Clock::now() + 2s;
   while (Clock::now() < end) {
     auto left = std::chrono::duration_cast<std::chrono::milliseconds>(end - Clock::now());
     auto a = bus_->TakeAxes(std::max(left, 1ms));
@@ -519,10 +527,10 @@ TEST_F(ServoDds, AxisStateAtFiftyHertzWall) {
     if (a->station().to_string() == "KT01") ++kt01;
     if (a->station().to_string() == "KT02") ++kt02;
   }
-  EXPECT_GE(kt01, 35);
-  EXPECT_LE(kt01, 65);
-  EXPECT_GE(kt02, 35);
-  EXPECT_LE(kt02, 65);
+  EXPECT_GE(kt01, 5);  // 8 expected in 2 s
+  EXPECT_LE(kt01, 12);
+  EXPECT_GE(kt02, 5);
+  EXPECT_LE(kt02, 12);
 }
 
 // (c) A segment beyond travel: alarm 500 over DDS, and the machine does not move.

@@ -172,8 +172,11 @@ Receiver::Turn Receiver::Tick(TimePoint now) {
     HandleEvents();
   }
   if (dirty_) PublishProgress();
-  // 50 Hz of wall time at rest too (DESIGN §3, servo_dds_test): a resting turn waits kRestWait at most.
-  if (now - last_axes_ >= kAxisPeriod) PublishAxes(now);
+  // Axis state at a rate in wall time (DESIGN §3): 50 Hz while anything moves, 4 Hz at rest, and the first
+  // sample at rest at once (the position the machine stopped at).
+  const bool quiet = turn.resting || (!turn.stepped && !turn.waiting);
+  if ((quiet && !quiet_) || now - last_axes_ >= (quiet ? kRestAxisPeriod : kAxisPeriod)) PublishAxes(now);
+  quiet_ = quiet;
   resting_ = turn.resting;
   return turn;
 }

@@ -47,10 +47,11 @@ void Service::Loop(std::stop_token st) {
       rx_.WaitForSegment(std::chrono::milliseconds(1));
     } else if (turn.resting || !turn.stepped) {
       // Nothing moves (idle on the virtual clock, resting on the real one): sleep until something arrives
-      // or the next axis sample is due, instead of turning 1000 times a second.
+      // (a segment, tools, a part model or a panel command wakes it) or the next axis sample is due,
+      // instead of turning 1000 times a second.
       const auto now = std::chrono::steady_clock::now();
       rx_.WaitForSegment(std::clamp<std::chrono::steady_clock::duration>(
-          rx_.AxesDue() - now, std::chrono::milliseconds(1), Receiver::kRestWait));
+          rx_.AxesDue() - now, std::chrono::milliseconds(1), Receiver::kRestAxisPeriod));
     }
   }
   alive_ = false;

@@ -229,10 +229,21 @@ TEST_F(ReceiverTest, TheMagazineIsTheStationsPublishedToolTable) {
   EXPECT_FALSE(Last().alarm());
 }
 
+// Axis state at a rate in wall time: 50 Hz while the machine moves, 4 Hz at rest with the first sample at
+// rest at once (Receiver::kRestAxisPeriod; issue 43: 32 resting servos at 50 Hz were a third of an idle
+// 32-station cell's CPU).
 TEST_F(ReceiverTest, AxisStateIsPublishedOnTheWallClock) {
-  Turn([] { return false; }, 200);  // 200 ms of wall time
+  Turn([] { return false; }, 1000);  // 1 s of wall time at rest: at once, then at 250, 500, 750, 1000 ms
+  EXPECT_GE(sink_.axes.size(), 4u);
+  EXPECT_LE(sink_.axes.size(), 6u);
+  sink_.axes.clear();
+  Send(Seg(1, 1, cell::SEGMENT_LINEAR, 500, 0, 100, 500));  // a minute of motion
+  Turn([] { return false; }, 200);                          // 200 ms of it: every 20 ms
   EXPECT_GE(sink_.axes.size(), 9u);
   EXPECT_LE(sink_.axes.size(), 11u);
+  // The first goes out at the turn the segment arrives (the last sample at rest was 250 ms before); every one
+  // after it is taken while the machine moves.
+  for (std::size_t i = 1; i < sink_.axes.size(); ++i) EXPECT_NE(sink_.axes[i].velocity()[0], 0.0) << i;
 }
 
 }  // namespace

@@ -42,8 +42,11 @@ class Receiver {
  public:
   using TimePoint = std::chrono::steady_clock::time_point;
   static constexpr auto kAxisPeriod =
-      std::chrono::milliseconds(20);                                // 50 Hz in wall time, whatever the clock
-  static constexpr auto kRestWait = std::chrono::milliseconds(20);  // a resting turn's sleep
+      std::chrono::milliseconds(20);  // 50 Hz in wall time, whatever the clock, while anything moves
+  // A machine at rest (nothing moves, the spindle stopped) repeats its unchanged axis state at 4 Hz: 32
+  // resting servos at 50 Hz were a third of an idle 32-station cell's CPU (issue 43). The first sample at
+  // rest goes out at once, so the position it stopped at is never late.
+  static constexpr auto kRestAxisPeriod = std::chrono::milliseconds(250);
   // Virtual clock: how long (wall) the machine waits for the producer to refill a look-ahead queue that is
   // less than half full before it runs on with what it has (see LookAheadStarved()).
   static constexpr auto kLookAheadWait = std::chrono::milliseconds(5);
@@ -70,8 +73,8 @@ class Receiver {
   Turn Tick(TimePoint now);
   // Waits up to `d` for a segment, tools, a part model or a panel command to arrive.
   void WaitForSegment(std::chrono::steady_clock::duration d);
-  // When the next axis sample is due (a resting loop wakes for it).
-  TimePoint AxesDue() const { return last_axes_ + kAxisPeriod; }
+  // When the next axis sample is due (a resting loop sleeps until then unless something arrives).
+  TimePoint AxesDue() const { return last_axes_ + (quiet_ ? kRestAxisPeriod : kAxisPeriod); }
   // Reports progress now (at start-up: run 0).
   void PublishProgress();
 
@@ -124,6 +127,7 @@ class Receiver {
   bool dirty_ = true;
   TimePoint last_axes_{};
   bool resting_ = false;          // the last turn found the machine resting
+  bool quiet_ = false;            // the last turn moved nothing (resting, or idle on the virtual clock)
   bool feed_hold_ = false;        // the operator's hold, re-applied after every reset
   std::int32_t aborted_run_ = 0;  // cancelled by the operator: its later segments are dropped
 };
