@@ -46,7 +46,7 @@ TEST(Table, CoversExactlyTheBusTopics) {
       topics::kRunStatus,        topics::kJobStatus,     topics::kProgramChange,  topics::kAlarm,
       topics::kInspectionStored, topics::kAxisState,     topics::kProgramList,    topics::Segments(st),
       topics::Probe(st),         topics::Part(st),       topics::Progress(st),    topics::ServoControl(st),
-      topics::ServoTools(st)};
+      topics::ServoTools(st),    topics::kStationProgram};
   for (const std::string& svc :
        {std::string(topics::kProgramStore), std::string(topics::kScheduler), std::string(topics::kInspection),
         topics::StationRun(st), topics::StationCommand(st)}) {

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include <gtest/gtest.h>
+#include <httplib.h>
 #include <nlohmann/json.hpp>
 
 #include "cell/testing/local_cell.h"
@@ -64,6 +65,32 @@ TEST_F(SecureCell, PalletsRunEndToEndThroughTheSecuredBus) {
   auto wait = cell_.Ctl({"job", "wait", job, "--timeout", "90"});
   EXPECT_EQ(wait.code, 0) << wait.out << wait.err;
   EXPECT_EQ(wait.out, "COMPLETED\n");
+
+  // The dashboard, the viewer, draws the program KT01 ran from the text the station published as the run
+  // started (cell/station/program): it may not ask the store (docs/dashboard.md, "Toolpath"). Three motion
+  // ops, N20-N40, as SECURE1 has.
+  std::string url = ReadFile(cell_.data_dir() + "/dashboard.url");
+  url = url.substr(0, url.find('\n'));
+  ASSERT_NE(url.find("http://127.0.0.1:"), std::string::npos) << url;
+  httplib::Client web("127.0.0.1", std::stoi(url.substr(url.rfind(':') + 1)));
+  json path;
+  for (auto until = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+       std::chrono::steady_clock::now() < until;
+       std::this_thread::sleep_for(std::chrono::milliseconds(200))) {
+    auto r = web.Get("/api/station/KT01/path");
+    if (r && r->status == 200) {
+      path = json::parse(r->body, nullptr, false);
+      break;
+    }
+  }
+  ASSERT_TRUE(path.is_object()) << "no toolpath for KT01 from the secured dashboard";
+  EXPECT_EQ(path["program"], "SECURE1") << path.dump();
+  EXPECT_EQ(path["motion_ops"], 3) << path.dump();
+  EXPECT_EQ(path["source"].get<std::string>().rfind("run ", 0), 0u) << path.dump();
+  // Control: a program the station did not run would come from the store, which the viewer may not ask.
+  auto other = web.Get("/api/station/KT01/path?program=BYNOBODY");
+  ASSERT_TRUE(other);
+  EXPECT_NE(other->status, 200) << other->body;
 }
 
 TEST_F(SecureCell, TheViewerReadsButCannotWrite) {

@@ -1,5 +1,6 @@
 #include "cell/dashboard/path.h"
 
+#include <functional>
 #include <vector>
 
 #include "cell/bus/topics.h"
@@ -71,7 +72,12 @@ Paths::Paths(bus::Participant& p)
                    [this](const cell::StationVariables& v, const bus::SampleInfo&) {
                      std::lock_guard lk(data_mu_);
                      vars_[v.station().to_string()] = v;
-                   }) {}
+                   }),
+      programs_reader_(p, bus::topics::kStationProgram, bus::QosKind::kState,
+                       [this](const cell::StationProgram& r, const bus::SampleInfo&) {
+                         std::lock_guard lk(data_mu_);
+                         programs_[r.station().to_string()] = r;
+                       }) {}
 
 Paths::~Paths() = default;
 
@@ -98,22 +104,55 @@ PathAnswer Paths::Path(const std::string& station, const std::string& program) {
   }
 }
 
+// What the station published as its run started (topics::kStationProgram): the text it runs, readable by
+// a viewer under DDS Security; nullopt when the station runs another program or published it without its
+// text (too long), with the reason in `why`.
+std::optional<Paths::Source> Paths::FromStation(const std::string& station, const std::string& program,
+                                                std::string& why) {
+  std::lock_guard lk(data_mu_);
+  auto it = programs_.find(station);
+  if (it == programs_.end() || it->second.program().to_string() != program) return std::nullopt;
+  const cell::StationProgram& p = it->second;
+  if (p.size() > p.text().size()) {
+    why = program + " is " + std::to_string(p.size()) + " characters, more than the " +
+          std::to_string(p.text().max_size) + " a station publishes";
+    return std::nullopt;
+  }
+  Source s;
+  s.text = p.text().to_string();
+  s.node = p.node().to_string();
+  s.label = "run " + std::to_string(p.dispatch_id());
+  s.key = s.label + "\n" + std::to_string(std::hash<std::string>{}(s.text));
+  return s;
+}
+
+// From the program store, as the station looks a program up (docs/station.md): its namespace, then HOST.
+Paths::Source Paths::FromStore(const std::string& station, const std::string& program,
+                               const std::string& prefix) {
+  std::string why;
+  program_store::Client* store = Store(why);
+  if (!store) throw Error(Errc::kUnavailable, prefix + why);
+  for (const std::string& ns : {station, std::string("HOST")})
+    if (auto file = store->Fetch(ns, program)) {
+      const uint32_t revision = file->info.value("revision", 0u);
+      Source s;
+      s.text = std::move(file->content);
+      s.node = ns;
+      s.revision = revision;
+      s.label = ns + " revision " + std::to_string(revision);
+      s.key = s.label;
+      return s;
+    }
+  throw Error(Errc::kNotFound, prefix + "no program '" + program + "' in " + station + " or HOST");
+}
+
 PathAnswer Paths::Build(const std::string& station, const std::string& program) {
   if (program.empty()) return {404, {{"error", station + " has run no program yet"}}};
   const config::StationConfig st = interp::LoadStation(station);
   std::string why;
-  program_store::Client* store = Store(why);
-  if (!store) return {503, {{"error", why}}};
-  // As the station looks a program up (docs/station.md): its namespace, then HOST.
-  const std::vector<std::string> namespaces = {st.id, "HOST"};
-  std::optional<program_store::Client::File> file;
-  std::string node;
-  for (const auto& ns : namespaces)
-    if ((file = store->Fetch(ns, program))) {
-      node = ns;
-      break;
-    }
-  if (!file) return {404, {{"error", "no program '" + program + "' in " + st.id + " or HOST"}}};
+  // The text the station runs, as it published it; another program (?program=) from the store.
+  std::optional<Source> from = FromStation(st.id, program, why);
+  if (!from) from = FromStore(st.id, program, why.empty() ? why : why + "; ");
   interp::RunOptions opt;
   opt.tools = tooltable::ToolTable(st.tools);
   uint32_t tools_rev = 0;
@@ -124,22 +163,25 @@ PathAnswer Paths::Build(const std::string& station, const std::string& program) 
     if (auto v = vars_.find(st.id); v != vars_.end())
       for (const auto& x : v->second.variables()) opt.variables[x.name().to_string()] = x.value();
   }
-  const uint32_t revision = file->info.value("revision", 0u);
-  const std::string key = st.id + "\n" + node + "\n" + program + "\n" + std::to_string(revision) + "\n" +
-                          std::to_string(tools_rev);
+  const std::string key = st.id + "\n" + program + "\n" + from->key + "\n" + std::to_string(tools_rev);
   if (auto c = cache_.find(key); c != cache_.end()) return {200, c->second};
   const interp::Dialect& d = interp::DialectOrThrow(st.dialect);
   opt.dialect = std::string(d.name());
   opt.program_name = program;
-  opt.program_text = std::move(file->content);
+  opt.program_text = std::move(from->text);
   opt.params = st.params;
-  opt.library = [store, namespaces](const std::string& lib) -> std::optional<std::string> {
-    for (const auto& ns : namespaces)
+  // A library the program calls comes from the store (a viewer under DDS Security may not ask it: the path
+  // then stops at the call, and the note says why).
+  opt.library = [this, node = from->node, id = st.id](const std::string& lib) -> std::optional<std::string> {
+    std::string why;
+    program_store::Client* store = Store(why);
+    if (!store) return std::nullopt;
+    for (const std::string& ns : {node, id, std::string("HOST")})
       if (auto text = store->Get(ns, lib)) return text;
     return std::nullopt;
   };
   const interp::MachineKind machine = StationMachine(st, d);
-  Plot plot({machine, program + " (" + opt.dialect + ", " + node + ", station " + st.id + ")"});
+  Plot plot({machine, program + " (" + opt.dialect + ", " + from->label + ", station " + st.id + ")"});
   auto run = interp::StartRun(opt);
   interp::Step s;
   for (run->NextInto(s); s.kind == interp::Step::kCanon && plot.moves().size() < kMaxMoves; run->NextInto(s))
@@ -150,8 +192,9 @@ PathAnswer Paths::Build(const std::string& station, const std::string& program) 
   nlohmann::json j = PathJson(plot);
   j.update({{"station", st.id},
             {"program", program},
-            {"node", node},
-            {"revision", revision},
+            {"node", from->node},
+            {"revision", from->revision ? nlohmann::json(*from->revision) : nlohmann::json()},
+            {"source", from->label},
             {"dialect", opt.dialect},
             {"machine", machine == interp::MachineKind::kLathe ? "lathe" : "machining centre"},
             {"note", note}});

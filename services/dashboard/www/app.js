@@ -291,8 +291,7 @@
       for (const p of svg.querySelectorAll('path[data-seq]')) want.paths[Number(p.dataset.seq)].push(p);
       want.views = [...svg.querySelectorAll('g.view')].map(viewOf);
       want.tol = tolerance(j);
-      box.querySelector('.pathinfo').textContent = j.dialect + ' · ' + j.machine + ' · from ' + j.node +
-        ' revision ' + j.revision + ' · ' + j.motion_ops + ' motion ops' + (j.note ? ' · ' + j.note : '');
+      box.querySelector('.pathinfo').textContent = j.dialect + ' · ' + j.machine + ' · from ' + j.source + ' · ' + j.motion_ops + ' motion ops' + (j.note ? ' · ' + j.note : '');
       box.dataset.moves = j.moves.length;
       box.dataset.state = 'drawn';
       setDone(0);

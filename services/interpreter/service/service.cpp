@@ -14,6 +14,7 @@ Service::Service(bus::Participant& p, config::StationConfig cfg, const std::file
       vars_w_(p, bus::topics::kVariables, bus::QosKind::kState),
       io_w_(p, bus::topics::kStationIo, bus::QosKind::kState),
       event_w_(p, bus::topics::kStationEvent, bus::QosKind::kEvent),
+      program_w_(p, bus::topics::kStationProgram, bus::QosKind::kState),
       run_w_(p, bus::topics::kRunStatus, bus::QosKind::kEvent),
       seg_w_(p, bus::topics::Segments(cfg.id), bus::QosKind::kStream),
       control_w_(p, bus::topics::ServoControl(cfg.id), bus::QosKind::kState),

@@ -184,6 +184,19 @@ std::optional<std::string> Station::ReadProgram(const std::string& node, const s
   return text;
 }
 
+// The text the run is about to run, for the cell's toolpath view (topics::kStationProgram): a viewer under
+// DDS Security may not fetch it from the store. A program past the sample's bound goes without its text.
+void Station::PublishProgram(const Dispatch& d, const std::string& name, const std::string& text) {
+  cell::StationProgram p;
+  p.station(cfg_.id);
+  p.dispatch_id(d.dispatch_id);
+  p.program(name.substr(0, 128));
+  p.node(d.node.substr(0, 16));
+  p.size(static_cast<uint32_t>(text.size()));
+  if (text.size() <= p.text().max_size) p.text(text);
+  io_.PublishProgram(p);
+}
+
 // One program of the dispatch. It starts from the CNC's memory as it stands; what it changed there (machine
 // parameters, TLD, ZTB) is committed after its end (with the servo drained) and at its failure, in one
 // transaction with the run's progress, so the next program starts from it and a kill -9 loses nothing that
@@ -194,6 +207,7 @@ void Station::RunProgram(ActiveRun& run, const std::string& entry) {
   const std::size_t comma = entry.find(',');
   const std::string name = entry.substr(0, comma);
   auto text = ReadProgram(run.d.node, name);
+  PublishProgram(run.d, name, *text);
   const MemorySnapshot start = memory_.Get();
   interp::RunOptions opt;
   opt.dialect = cfg_.dialect;

@@ -207,6 +207,7 @@ class FakeIo final : public StationIo {
   void PublishVariables(const cell::StationVariables& v) override { variables.push_back(v); }
   void PublishIo(const cell::StationIoState& s) override { io.push_back(s); }
   void PublishEvent(const cell::StationEvent& e) override { events.push_back(e); }
+  void PublishProgram(const cell::StationProgram& p) override { programs_run.push_back(p); }
   void PublishRun(const cell::RunStatus& r) override { runs.push_back(r); }
   void PublishControl(const cell::ServoControl& c) override { control.push_back(c); }
   std::optional<std::string> Program(const std::string& node, const std::string& name) override {
@@ -279,6 +280,7 @@ class FakeIo final : public StationIo {
   std::vector<cell::StationVariables> variables;
   std::vector<cell::StationIoState> io;
   std::vector<cell::StationEvent> events;
+  std::vector<cell::StationProgram> programs_run;
   std::vector<cell::RunStatus> runs;
   std::vector<cell::ServoControl> control;
   std::vector<cell::InspectionRequest> records;

@@ -70,6 +70,29 @@ TEST_F(StationCore, RunsEveryProgramOfTheMapRepeatAndReportsProgress) {
   EXPECT_EQ(io_.records[0].run().dispatch_id(), 5);
 }
 
+// The text of each program a run starts goes out for the toolpath view (topics::kStationProgram), whole up to
+// the sample's 65,536 characters; a longer one goes with its size and no text, so that no page draws a cut
+// program as if it were whole.
+TEST_F(StationCore, EachProgramARunStartsIsPublishedWithItsText) {
+  Put("A", Moves(1));
+  std::string big = Moves(1);
+  big.insert(big.find('\n') + 1, std::string(70000, '\n'));  // empty blocks
+  Put("BIG", big);
+  ASSERT_EQ(station_->OnRun(Request(6, {"A", "BIG"})).state(), cell::RUN_QUEUED);
+  EXPECT_EQ(RunOne(6).state(), cell::RUN_COMPLETED);
+  ASSERT_EQ(io_.programs_run.size(), 2u);
+  const cell::StationProgram& a = io_.programs_run[0];
+  EXPECT_EQ(a.station().to_string(), "KT01");
+  EXPECT_EQ(a.dispatch_id(), 6);
+  EXPECT_EQ(a.program().to_string(), "A");
+  EXPECT_EQ(a.text().to_string(), Moves(1));
+  EXPECT_EQ(a.size(), Moves(1).size());
+  const cell::StationProgram& b = io_.programs_run[1];
+  EXPECT_EQ(b.program().to_string(), "BIG");
+  EXPECT_EQ(b.size(), big.size());
+  EXPECT_TRUE(b.text().to_string().empty());
+}
+
 TEST_F(StationCore, MissingProgramAndProgramErrorFailTheRun) {
   ASSERT_EQ(Dispatch(1, {"NOPE"}).state(), cell::RUN_QUEUED);
   auto miss = RunOne(1);

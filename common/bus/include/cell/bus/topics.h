@@ -15,6 +15,7 @@ inline constexpr const char* kToolTable = "cell/station/tools";         // ToolT
 inline constexpr const char* kVariables = "cell/station/variables";     // StationVariables
 inline constexpr const char* kStationIo = "cell/station/io";            // StationIoState
 inline constexpr const char* kStationEvent = "cell/station/event";      // StationEvent (KT-APL EVT)
+inline constexpr const char* kStationProgram = "cell/station/program";  // StationProgram, as runs start
 inline constexpr const char* kSchedulerState = "cell/scheduler/state";  // SchedulerState (backlog)
 inline constexpr const char* kJobState = "cell/job/state";              // JobInfo, key job_id % kJobSlots
 inline constexpr const char* kProgramList = "cell/program/list";        // ProgramEntry, key node and name

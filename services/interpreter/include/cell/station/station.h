@@ -38,7 +38,8 @@ class StationIo {
   virtual void PublishTools(const cell::ToolTable& t) = 0;
   virtual void PublishVariables(const cell::StationVariables& v) = 0;
   virtual void PublishIo(const cell::StationIoState& s) = 0;
-  virtual void PublishEvent(const cell::StationEvent& e) = 0;  // what a program records (KT-APL EVT)
+  virtual void PublishEvent(const cell::StationEvent& e) = 0;      // what a program records (KT-APL EVT)
+  virtual void PublishProgram(const cell::StationProgram& p) = 0;  // the text a run's program starts with
   virtual void PublishRun(const cell::RunStatus& r) = 0;
   virtual void PublishControl(const cell::ServoControl& c) = 0;
   // A program's text from the program store: namespace `node`, then HOST; nullopt when in neither.
@@ -122,6 +123,7 @@ class Station {
   void RunProgram(ActiveRun& run, const std::string& entry);
   bool StartSelected();
   std::optional<std::string> ReadProgram(const std::string& node, const std::string& entry);
+  void PublishProgram(const Dispatch& d, const std::string& name, const std::string& text);
   std::vector<bool> SendPartModel(const Dispatch& d);
   void ProgramStop(const std::string& program, int line, const interp::StopOp& stop);
   // KT-APL WAI (interp::Environment::WaitInputs): after the motion before it, until the inputs match.

@@ -37,6 +37,7 @@ class Service final : public StationIo, public ServoLink {
   void PublishVariables(const cell::StationVariables& v) override { vars_w_.Write(v); }
   void PublishIo(const cell::StationIoState& s) override { io_w_.Write(s); }
   void PublishEvent(const cell::StationEvent& e) override { event_w_.Write(e); }
+  void PublishProgram(const cell::StationProgram& p) override { program_w_.Write(p); }
   void PublishRun(const cell::RunStatus& r) override { run_w_.Write(r); }
   void PublishControl(const cell::ServoControl& c) override { control_w_.Write(c); }
   std::optional<std::string> Program(const std::string& node, const std::string& name) override {
@@ -74,6 +75,7 @@ class Service final : public StationIo, public ServoLink {
   bus::Writer<cell::StationVariables> vars_w_;
   bus::Writer<cell::StationIoState> io_w_;
   bus::Writer<cell::StationEvent> event_w_;
+  bus::Writer<cell::StationProgram> program_w_;
   bus::Writer<cell::RunStatus> run_w_;
   bus::Writer<cell::MotionSegment> seg_w_;
   bus::Writer<cell::ServoControl> control_w_;
