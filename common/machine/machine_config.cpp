@@ -241,6 +241,11 @@ MachineConfig ParseMachineConfig(std::string_view text, const std::string& sourc
   m.spindle_max_rpm = sp.Number("max_rpm", 0, 100000, std::nullopt, "rpm", true);
   m.spindle_accel_rpm_s = sp.Number("acceleration", 0, 1e6, std::nullopt, "rpm/s", true);
   m.spindle_orient_time = sp.Number("orient_time", 0, 60, 1.5, "s");
+  m.live_tool_max_rpm = sp.Number("live_tool_max_rpm", 0, 100000, 0.0, "rpm");
+  m.live_tool_accel_rpm_s = sp.Number("live_tool_acceleration", 0, 1e6, 0.0, "rpm/s");
+  if ((m.live_tool_max_rpm > 0) != (m.live_tool_accel_rpm_s > 0))
+    sp.Fail("live_tool_acceleration",
+            "a live-tool spindle needs live_tool_max_rpm and live_tool_acceleration");
   sp.Done();
 
   TableReader mag(source, "magazine.", root["magazine"].as_table());
@@ -358,6 +363,8 @@ drive = { motor_inertia = 0.0015, load_inertia = 0.0008, viscous_friction = 0.00
 [spindle]
 max_rpm = 3500
 acceleration = 1500
+live_tool_max_rpm = 4000
+live_tool_acceleration = 2000
 [magazine]
 sockets = 12
 index_time = 0.3

@@ -3,9 +3,12 @@
 // the scheduler.
 #include <signal.h>
 
+#include <array>
 #include <chrono>
+#include <cmath>
 #include <fstream>
 #include <map>
+#include <mutex>
 #include <string>
 #include <thread>
 #include <vector>
@@ -13,6 +16,9 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "cell/bus/bus.h"
+#include "cell/bus/topics.h"
+#include "cell/idl/motion.h"
 #include "cell/testing/cell_fixture.h"
 
 using namespace cell::testing;
@@ -186,6 +192,71 @@ TEST_F(OkumaCell, ThreadCycleTimeFollowsLeadAndSpindleSpeed) {
   // Plus two turret changes (to tool 3 and back to 1: 2 x (1.2 s + 2 stations x 0.3 s), OK01.toml [times] and
   // [magazine]), the sync wait, the spindle start and stop and about 200 mm of rapids.
   EXPECT_LT(lead1, 60.0 + 3.6 + 0.6 + 3.0);
+}
+
+// Issue 36 item 4: the manual's cross-drilling example E-52 (G181 with the live tool on the joined C axis, ln
+// 4754-4805; tests/conformance/okuma/p7_e052_mtool_drilling_g181 has every position worked out) on OK01
+// through cellctl and the real servo. N099 and N108 retract to X400 Z200, not X1000 Z1000: OK01's X travels
+// 600 mm on the diameter. Four holes, each drilled from the R point Z102 to Z75 at F40 mm/min (G94): hole A
+// at X60 C0, B at X120 C90, C at X120 C180, D at X60 C270: the four feed segments the station sends its servo
+// (read from cell/station/OK01/segments, X as a diameter, C in degrees). The servo ends at X400 Z200 C270.
+// Machine time: the four feeds are 4 x 27 mm / 40 mm/min = 4 x 40.5 s = 162 s; the rest (the live tool's
+// ramps, 400 / 2000 rpm/s = 0.2 s each way, OK01.toml [spindle]; one turret index, 1.2 + 0.3 s; four C
+// indexes of 90 degrees at 7200 deg/min, 0.75 s plus 0.17 s of acceleration each; about 1,000 mm of rapids
+// at 200-250 mm/s) is under 15 s. Before the servo had a live tool, the station refused M13 and the job
+// failed.
+TEST_F(OkumaCell, CrossDrillingE52RunsWithTheLiveToolAtTheManualsCPositions) {
+  cell::bus::Participant observer("okuma-test/observer");
+  std::mutex mu;
+  std::vector<std::array<double, 3>> feeds;  // X (diameter), Z, C of each feed segment
+  cell::bus::Reader<cell::MotionSegment> segments(
+      observer, cell::bus::topics::Segments("OK01"), cell::bus::QosKind::kStream,
+      [&](const cell::MotionSegment& m, const cell::bus::SampleInfo&) {
+        if (m.kind() != cell::SEGMENT_LINEAR) return;
+        std::lock_guard lk(mu);
+        feeds.push_back({m.target()[0], m.target()[2], m.target()[5]});
+      });
+  std::array<double, 3> at_rest{-1, -1, -1};
+  cell::bus::Reader<cell::AxisState> axes(observer, cell::bus::topics::kAxisState,
+                                          cell::bus::QosKind::kTelemetry,
+                                          [&](const cell::AxisState& a, const cell::bus::SampleInfo&) {
+                                            if (a.station().to_string() != "OK01") return;
+                                            std::lock_guard lk(mu);
+                                            at_rest = {a.actual()[0], a.actual()[2], a.actual()[5]};
+                                          });
+  ASSERT_TRUE(cell::bus::WaitUntil([&] { return segments.Matched() > 0; }, std::chrono::seconds(10)));
+  Put("E52.MIN",
+      "%\nO52\nN099 G00 X400 Z200 M05\nN100 M110\nN101 M15\nN102 G094 X200 Z150 T0101 SB=400\n"
+      "N103 G181 X60 Z75 C0 K48 F40\nN104 X120 C90\nN105 C180\nN106 X60 C270\nN107 G180\n"
+      "N108 G00 X400 Z200 M146 M12\nN109 G95 M109\nN110 M02\n%\n",
+      "HOST");
+  EXPECT_EQ(Ctl({"pallet", "set", "52", "E52.MIN"}).code, 0);
+  auto run = Ctl({"pallet", "run", "52", "--station", "OK01"});
+  ASSERT_EQ(run.code, 0) << run.err;
+  const std::string job = FirstLine(run.out);
+  auto w = Ctl({"job", "wait", job, "--timeout", "120"});
+  ASSERT_EQ(w.out, "COMPLETED\n") << w.err << CtlJson({"job", "show", job, "--json"}).dump();
+  const double cycle = CtlJson({"job", "show", job, "--json"})["cycle_s"].get<double>();
+  EXPECT_GE(cycle, 162.0);
+  EXPECT_LT(cycle, 162.0 + 15.0);
+  {
+    std::lock_guard lk(mu);
+    const std::vector<std::array<double, 3>> holes = {
+        {60, 75, 0}, {120, 75, 90}, {120, 75, 180}, {60, 75, 270}};
+    ASSERT_EQ(feeds.size(), holes.size());
+    for (size_t i = 0; i < holes.size(); ++i)
+      for (size_t a = 0; a < 3; ++a)
+        EXPECT_NEAR(feeds[i][a], holes[i][a], 1e-6) << "hole " << i << " axis " << a;
+  }
+  // At rest the servo publishes its position at 4 Hz: where N108 left it, C at 270 (never turned back).
+  EXPECT_TRUE(cell::bus::WaitUntil(
+      [&] {
+        std::lock_guard lk(mu);
+        return std::abs(at_rest[0] - 400) < 0.01 && std::abs(at_rest[1] - 200) < 0.01 &&
+               std::abs(at_rest[2] - 270) < 0.01;
+      },
+      std::chrono::seconds(10)))
+      << at_rest[0] << " " << at_rest[1] << " " << at_rest[2];
 }
 
 }  // namespace

@@ -82,6 +82,7 @@ Segment FromWire(const cell::MotionSegment& m, uint64_t id) {
   s.pallet = m.pallet();
   s.css_surface_speed = m.css_surface_speed();
   s.spindle_max_rpm = m.spindle_max_rpm();
+  s.live_tool = m.live_tool();
   s.thread_lead = m.thread_lead();
   s.thread_lead_change = m.thread_lead_change();
   s.thread_start_angle = m.thread_start_angle();

@@ -121,6 +121,7 @@ Machine::Machine(MachineConfig config, ClockKind clock)
   planner_.Flush(home);
   filter_.Reset(home);
   spindle_.Configure(cfg_.spindle_max_rpm, cfg_.spindle_accel_rpm_s);
+  live_tool_.Configure(cfg_.live_tool_max_rpm, cfg_.live_tool_accel_rpm_s);
   prev_cmd_ = home;
   SetToolTable(cfg_.tools);
   for (const auto& ref : cfg_.part_models) parts_[ref.pallet] = partmodel::LoadPartModel(ref.file);
@@ -442,6 +443,12 @@ bool Machine::StartBarrier(Entry& e) {
       timer(s.dwell_s);
       break;
     case SegmentKind::kSpindle: {
+      if (s.live_tool) {
+        if (!StartLiveTool(s)) return false;
+        // Complete when the live tool is at speed, as the work spindle's command.
+        timer(std::abs(live_tool_.TargetAt(0) - live_tool_.rpm()) / cfg_.live_tool_accel_rpm_s);
+        break;
+      }
       if (!StartSpindle(s)) return false;
       // Complete when the spindle is at speed (the ramp runs in Step()).
       double t = std::abs(spindle_.TargetAt(XDiameter()) - spindle_.rpm()) / cfg_.spindle_accel_rpm_s;
@@ -579,6 +586,10 @@ void Machine::StepOp() {
       if (now < op_.until) return;
       switch (s.kind) {
         case SegmentKind::kSpindle:
+          if (s.live_tool) {
+            live_tool_.Snap(0);
+            break;
+          }
           spindle_.Snap(XDiameter());
           spindle_oriented_ = s.spindle_dir == SpindleDirection::kOrient;
           break;
@@ -760,7 +771,7 @@ bool Machine::Idle() const {
 }
 
 bool Machine::Resting() const {
-  return clock_kind_ == ClockKind::kReal && !spindle_.Active() && Idle();
+  return clock_kind_ == ClockKind::kReal && !spindle_.Active() && !live_tool_.Active() && Idle();
 }
 
 std::uint64_t Machine::CatchUp() {
@@ -830,10 +841,14 @@ bool Machine::StepNow() {
       if (at >= 0) planner_.IndexPulse(at);
     }
   }
+  if (live_tool_.Active()) [[unlikely]]
+    live_tool_.Step(cfg_.servo_period_s, 0, false);
   const bool op_motion =
       op_.phase == OpPhase::kMotion || op_.phase == OpPhase::kIndexMove || op_.phase == OpPhase::kIndexRest;
-  // Cutting time: a feed move of the program (not a probe or index move) with the spindle turning.
-  if (spindle_.rpm() != 0 && !op_motion && planner_.OnFeedMove() && !spindle_tool_.empty()) [[unlikely]]
+  // Cutting time: a feed move of the program (not a probe or index move) with the spindle turning (the work
+  // spindle, or a lathe's live tool).
+  if ((spindle_.rpm() != 0 || live_tool_.rpm() != 0) && !op_motion && planner_.OnFeedMove() &&
+      !spindle_tool_.empty()) [[unlikely]]
     ChargeCutting(cfg_.servo_period_s);
   const AxisVector& pre = planner_.Tick();
   for (const auto& m : planner_.Marks()) {

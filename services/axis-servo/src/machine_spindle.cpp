@@ -39,6 +39,30 @@ bool Machine::StartSpindle(const Segment& s) {
   return true;
 }
 
+// A lathe's live-tool (M-tool) spindle: a constant speed, stop, cw or ccw (Okuma M13/M14/M12 at SB=).
+bool Machine::StartLiveTool(const Segment& s) {
+  if (cfg_.live_tool_max_rpm <= 0) {
+    RaiseAlarm(
+        AlarmCode::kInvalidSegment,
+        fmt::format("segment {}: this machine has no live-tool spindle (spindle.live_tool_max_rpm)", s.id),
+        s.id);
+    return false;
+  }
+  const int dir = s.spindle_dir == SpindleDirection::kCW    ? 1
+                  : s.spindle_dir == SpindleDirection::kCCW ? -1
+                                                            : 0;
+  const double rpm = std::abs(s.spindle_rpm);
+  if (dir != 0 && rpm > cfg_.live_tool_max_rpm) {
+    RaiseAlarm(AlarmCode::kInvalidSegment,
+               fmt::format("segment {}: live tool {:.0f} rpm above live_tool_max_rpm {:.0f}", s.id, rpm,
+                           cfg_.live_tool_max_rpm),
+               s.id);
+    return false;
+  }
+  live_tool_.SetRpm(dir * rpm);
+  return true;
+}
+
 bool Machine::PlanThread(const Segment& s, const AxisVector& start, const AxisVector& end, std::string& why) {
   const AxisVector d = end - start;
   if (present_[kB] && cfg_.axes[kB].type == AxisType::kIndex && std::abs(d[kB]) > 1e-9) {

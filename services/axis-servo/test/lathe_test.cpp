@@ -172,6 +172,52 @@ TEST(Lathe, TurretIndexesWithTheSpindleTurning) {
   EXPECT_NEAR(t_change, m.config().tool_change_time + m.config().magazine_index_time, 2 * m.period());
 }
 
+// The live-tool (M-tool) spindle (Okuma M13/M14 SB=, M12; manual ln 1868-1871): its own speed, reached at
+// its own acceleration, the work spindle untouched. The built-in lathe's live tool: 4000 rpm, 2000 rpm/s.
+// M13 SB=400 from rest: 400 / 2000 = 0.2 s; M14 SB=1000 from +400: 1400 / 2000 = 0.7 s; M12: 0.5 s.
+TEST(Lathe, TheLiveToolTurnsAtItsOwnSpeedAfterItsOwnRamp) {
+  Machine m = Lathe();
+  m.Push(Spindle(1, 1200));  // the work spindle, 1200 / 1500 = 0.8 s
+  Segment live = Spindle(2, 400);
+  live.live_tool = true;
+  m.Push(live);
+  live.id = 3;
+  live.spindle_rpm = 1000;
+  live.spindle_dir = SpindleDirection::kCCW;
+  m.Push(live);
+  live.id = 4;
+  live.spindle_dir = SpindleDirection::kStop;
+  m.Push(live);
+  std::vector<Event> ev;
+  RunSampled(m, ev);
+  ASSERT_EQ(m.alarm().code, AlarmCode::kNone) << m.alarm().text;
+  auto took = [&](std::uint64_t id) {
+    return Find(ev, EventKind::kCompleted, id)->machine_time -
+           Find(ev, EventKind::kStarted, id)->machine_time;
+  };
+  EXPECT_NEAR(took(1), 0.8, 2 * m.period());
+  EXPECT_NEAR(took(2), 0.2, 2 * m.period());
+  EXPECT_NEAR(took(3), 0.7, 2 * m.period());
+  EXPECT_NEAR(took(4), 0.5, 2 * m.period());
+  EXPECT_EQ(m.State().spindle_rpm, 1200);  // the work spindle kept its speed throughout
+}
+
+TEST(Lathe, ALiveToolOnAMachineWithoutOneOrAboveItsLimitIsAnAlarm) {
+  Segment live = Spindle(1, 400);
+  live.live_tool = true;
+  Machine hmc(DefaultMachineConfig("hmc"), ClockKind::kVirtual);
+  hmc.Push(live);
+  hmc.RunUntilIdle();
+  EXPECT_EQ(hmc.alarm().code, AlarmCode::kInvalidSegment);
+  EXPECT_NE(hmc.alarm().text.find("no live-tool spindle"), std::string::npos) << hmc.alarm().text;
+  Machine m = Lathe();
+  live.spindle_rpm = 4500;  // above the built-in lathe's 4000
+  m.Push(live);
+  m.RunUntilIdle();
+  EXPECT_EQ(m.alarm().code, AlarmCode::kInvalidSegment);
+  EXPECT_NE(m.alarm().text.find("above live_tool_max_rpm 4000"), std::string::npos) << m.alarm().text;
+}
+
 // ---- Constant surface speed: rpm = min(limit, max_rpm, 1000 v / (pi D)).
 
 double CssRpm(double v, double d) {

@@ -277,7 +277,10 @@ void Station::RunProgram(ActiveRun& run, const std::string& entry) {
       const interp::Canon& c = s.canon;
       const auto* change = c.If<interp::ToolChangeOp>();
       board_.Position(name, c.line, change ? &change->tool : nullptr);
-      if (auto seg = ToSegment(c)) stream_.Send(*seg);
+      if (auto seg = ToSegment(c)) {
+        unwrap_.Apply(c, *seg);
+        stream_.Send(*seg);
+      }
       ExecuteIo(name, c, aux);
       if (const auto* ev = c.If<interp::EventOp>()) {
         // KT-APL EVT: recorded for the supervisor (the manual's central computer): an event on the bus.
@@ -388,15 +391,8 @@ void Station::ExecuteIo(const std::string& program, const interp::Canon& c, AuxI
     }
   };
   if (const auto* sp = c.If<interp::SpindleOp>()) {
-    if (sp->spindle == interp::SpindleId::kMain) {
-      aux.Spindle(*sp);
-    } else if (sp->dir == interp::SpindleDir::kCw || sp->dir == interp::SpindleDir::kCcw) {
-      // The axis servo has no live-tool spindle yet (issue 36): refused rather than cut with a still tool.
-      checked([] {
-        throw Error(Errc::kFailedPrecondition,
-                    "the live-tool (M-tool) spindle cannot start: the axis servo has no live-tool spindle");
-      });
-    }
+    // The work spindle's interlocks; a live tool is the servo's alone (a machine without one alarms there).
+    if (sp->spindle == interp::SpindleId::kMain) aux.Spindle(*sp);
   } else if (const auto* o = c.If<interp::OutputOp>()) {
     const auto spec = checked([&] { return ParseOutputSpec(o->spec); });
     if (!spec) {

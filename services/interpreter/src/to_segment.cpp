@@ -70,9 +70,9 @@ std::optional<cell::MotionSegment> ToSegment(const interp::Canon& c) {
       return s;
     case interp::Op::kSpindle: {
       const auto& sp = c.As<interp::SpindleOp>();
-      // The segment's spindle is the work spindle; a live tool's op is the station's (Station::ExecuteIo).
-      if (sp.spindle != interp::SpindleId::kMain) return std::nullopt;
       s.kind(cell::SEGMENT_SPINDLE);
+      // A lathe's live-tool (M-tool) spindle: its own speed and direction (Okuma M13/M14/M12, SB=).
+      s.live_tool(sp.spindle == interp::SpindleId::kLiveTool);
       s.spindle_rpm(sp.rpm);
       s.spindle_mode(sp.dir == interp::SpindleDir::kCw       ? 1
                      : sp.dir == interp::SpindleDir::kCcw    ? 2
@@ -102,6 +102,27 @@ std::optional<cell::MotionSegment> ToSegment(const interp::Canon& c) {
       return s;
     default:
       return std::nullopt;
+  }
+}
+
+void RotaryUnwrap::Apply(const interp::Canon& c, cell::MotionSegment& s) {
+  const interp::Target* t = c.If<interp::RapidOp>()    ? &c.As<interp::RapidOp>().to
+                            : c.If<interp::LinearOp>() ? &c.As<interp::LinearOp>().to
+                            : c.If<interp::ArcOp>()    ? &c.As<interp::ArcOp>().to
+                            : c.If<interp::ThreadOp>() ? &c.As<interp::ThreadOp>().to
+                                                       : nullptr;
+  if (!t) return;
+  const int axes[2] = {interp::kA, interp::kC};
+  for (int i = 0; i < 2; ++i) {
+    const auto a = static_cast<size_t>(axes[i]);
+    if (!(t->used & (1u << a))) continue;
+    double sent = t->pos[a] + offset_[i];
+    if (t->travel_mask & (1u << a)) {
+      sent = last_[i] + t->travel[a];
+      offset_[i] = sent - t->pos[a];
+    }
+    s.target()[a] = sent;
+    last_[i] = sent;
   }
 }
 

@@ -1,6 +1,8 @@
 // Canonical commands to the servo's segments (ToSegment): the lathe ops reach the servo's lathe kind.
 #include <gtest/gtest.h>
 
+#include <optional>
+
 #include "cell/station/to_segment.h"
 
 namespace cell::station {
@@ -33,17 +35,23 @@ TEST(ToSegment, ThreadCarriesLeadLeadChangeAndStartAngle) {
   EXPECT_TRUE(ToSegment(c)->exact_stop());
 }
 
-// A live tool's op never drives the work spindle: the station handles it (Station::ExecuteIo).
-TEST(ToSegment, LiveToolSpindleIsNoSegment) {
+// A live tool's op is a spindle segment of the live tool, never of the work spindle (Okuma M13 SB=400,
+// manual ln 1868-1871); the work spindle joined as C no longer turns as a spindle.
+TEST(ToSegment, LiveToolSpindleIsTheLiveToolsSegment) {
   Canon c;
   interp::SpindleOp& sp = c.Set<interp::SpindleOp>();
   sp.spindle = interp::SpindleId::kLiveTool;
   sp.dir = interp::SpindleDir::kCw;
   sp.rpm = 400;
-  EXPECT_FALSE(ToSegment(c));
+  ASSERT_TRUE(ToSegment(c));
+  EXPECT_EQ(ToSegment(c)->kind(), cell::SEGMENT_SPINDLE);
+  EXPECT_TRUE(ToSegment(c)->live_tool());
+  EXPECT_EQ(ToSegment(c)->spindle_mode(), 1);
+  EXPECT_DOUBLE_EQ(ToSegment(c)->spindle_rpm(), 400);
   sp.spindle = interp::SpindleId::kMain;
   sp.dir = interp::SpindleDir::kAxis;  // joined as C: the spindle no longer turns as a spindle
   ASSERT_TRUE(ToSegment(c));
+  EXPECT_FALSE(ToSegment(c)->live_tool());
   EXPECT_EQ(ToSegment(c)->spindle_mode(), 0);
 }
 
@@ -95,6 +103,42 @@ TEST(ToSegment, PerRevolutionFeedAndArcPlanes) {
   Canon m;
   m.Set<interp::MessageOp>().text = "x";
   EXPECT_FALSE(ToSegment(m));
+}
+
+// Okuma's C after M110 (docs/canonical-commands.md: `c` normalised with `c_travel`): M15 C270 then M15 C0
+// turns +90 (E-52, manual ln 4786-4799), so the servo, whose C does not wrap, is sent 360, not 0; a later
+// move that gives no turn stays where the last one ended; a -10 turn from there is 350.
+TEST(RotaryUnwrap, CFollowsTheTurnsNotTheNormalisedPosition) {
+  RotaryUnwrap unwrap;
+  auto move = [&](double c, std::optional<double> travel, double x = 60) {
+    Canon op;
+    interp::RapidOp& r = op.Set<interp::RapidOp>();
+    r.to.pos[interp::kX] = x;
+    r.to.pos[interp::kC] = c;
+    r.to.used = (1u << interp::kX) | (1u << interp::kC);
+    if (travel) {
+      r.to.travel[interp::kC] = *travel;
+      r.to.travel_mask = 1u << interp::kC;
+    }
+    auto seg = ToSegment(op);
+    unwrap.Apply(op, *seg);
+    return seg->target()[interp::kC];
+  };
+  EXPECT_DOUBLE_EQ(move(0, std::nullopt), 0);
+  EXPECT_DOUBLE_EQ(move(270, 270.0), 270);
+  EXPECT_DOUBLE_EQ(move(0, 90.0), 360);
+  EXPECT_DOUBLE_EQ(move(0, std::nullopt, 120), 360);  // X alone: C stays
+  EXPECT_DOUBLE_EQ(move(350, -10.0), 350);
+  EXPECT_DOUBLE_EQ(move(10, 20.0), 370);
+  // A dialect that gives no turn is sent as it is.
+  RotaryUnwrap plain;
+  Canon op;
+  interp::LinearOp& l = op.Set<interp::LinearOp>();
+  l.to.pos[interp::kC] = 400;
+  l.to.used = 1u << interp::kC;
+  auto seg = ToSegment(op);
+  plain.Apply(op, *seg);
+  EXPECT_DOUBLE_EQ(seg->target()[interp::kC], 400);
 }
 
 }  // namespace

@@ -72,6 +72,9 @@ struct MachineConfig {
   double spindle_max_rpm = 4000.0;
   double spindle_accel_rpm_s = 2000.0;
   double spindle_orient_time = 1.5;
+  // A lathe's live-tool (M-tool) spindle, for rotating tools on the turret; 0: the machine has none.
+  double live_tool_max_rpm = 0.0;
+  double live_tool_accel_rpm_s = 0.0;
   // Devices
   int magazine_sockets = 60;
   double magazine_index_time = 0.1;  // s per socket step

@@ -166,6 +166,7 @@ class Machine {
   double FeedNow(const Segment& s, double length) const;  // units/s at today's spindle speed
   bool PlanThread(const Segment& s, const AxisVector& start, const AxisVector& end, std::string& why);
   bool StartSpindle(const Segment& s);
+  bool StartLiveTool(const Segment& s);
   double XDiameter() const { return 2.0 * std::abs(filter_.Output()[kX]); }  // constant surface speed
   void Emit(EventKind kind, std::uint64_t seg, const Alarm* alarm = nullptr,
             const ProbeResult* probe = nullptr);
@@ -205,6 +206,7 @@ class Machine {
 
   // Devices
   Spindle spindle_;
+  Spindle live_tool_;  // a lathe's live-tool (M-tool) spindle, when the machine has one
   bool spindle_oriented_ = false;
   CoolantMode coolant_ = CoolantMode::kOff;
   std::map<int, std::string> magazine_;  // socket -> tool

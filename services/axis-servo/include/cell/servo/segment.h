@@ -72,6 +72,7 @@ struct Segment {
   // kSpindle. Every spindle segment states the whole spindle command; nothing carries over from the last.
   double spindle_rpm = 0.0;  // rpm when css_surface_speed is 0
   SpindleDirection spindle_dir = SpindleDirection::kStop;
+  bool live_tool = false;  // kSpindle: a lathe's live-tool (M-tool) spindle (stop, cw, ccw at spindle_rpm)
   // Constant surface speed in m/min (0: off): rpm = min(limit, max_rpm, 1000 v / (pi D)), D = X diameter.
   double css_surface_speed = 0.0;
   // The programmed spindle limit in rpm (Okuma G50 S, EMCO G92 S); 0: the machine's max_rpm.

@@ -27,6 +27,7 @@
 #include "cell/station/panel.h"
 #include "cell/station/segment_stream.h"
 #include "cell/station/station_db.h"
+#include "cell/station/to_segment.h"
 
 namespace cell::station {
 
@@ -144,6 +145,7 @@ class Station {
   Memory memory_;
   DiscreteIo dio_;
   SegmentStream stream_;
+  RotaryUnwrap unwrap_;  // A and C as the servo runs them, across runs (the servo keeps its position)
   std::atomic<std::int32_t> cancel_id_{0};
   std::atomic<bool> stop_{false};
   std::mutex work_mu_;  // for work_cv_ and work_pending_ only: the queue itself is in db_
