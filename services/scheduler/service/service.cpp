@@ -71,6 +71,7 @@ Service::Service(bus::Participant& p, const std::filesystem::path& data_dir)
         return StoredProgram{std::move(f->content), f->dialect(), std::move(type)};
       }),
       sched_(Options{(data_dir / "scheduler.db").string(), false, {}}, source_),
+      predictor_(programs_),
       live_(p),
       jobs_w_(p, bus::topics::kJobStatus, bus::QosKind::kEvent),
       state_w_(p, bus::topics::kSchedulerState, bus::QosKind::kState),
@@ -84,6 +85,7 @@ Service::~Service() {
 void Service::Start() {
   {
     std::lock_guard lk(mu_);
+    sched_.SetPredictor(&predictor_);
     for (auto& id : config::ListStations()) {
       auto cfg = interp::LoadStation(id);
       dialect_[id] = cfg.dialect;
@@ -324,6 +326,12 @@ cell::SchedulerReply Service::Handle(const cell::SchedulerRequest& r) {
       if (!sched_.Job(r.job_id(), false))
         throw Error(Errc::kNotFound, "unknown job " + std::to_string(r.job_id()));
       Apply(sched_.Cancel(key, r.job_id()));
+      break;
+    case cell::SCHED_PROGRAM_SHOW:
+      info(ToJson(sched_.Estimates(name)));
+      break;
+    case cell::SCHED_PLAN:
+      info(ToJson(sched_.Plan()));
       break;
   }
   return rep;

@@ -13,6 +13,7 @@
 #include <utility>
 #include <vector>
 
+#include "cell/scheduler/estimates.h"
 #include "cell/scheduler/program_source.h"
 #include "cell/scheduler/route.h"
 #include "cell/scheduler/scheduler.h"
@@ -24,8 +25,9 @@ namespace cell::scheduler {
 struct Scheduler::Impl : State {
   Options opt;
   ProgramSource& programs;
-  std::optional<Store> store;  // none: in memory only
-  Effects fx;                  // what the call in progress produced
+  std::optional<Store> store;      // none: in memory only
+  Effects fx;                      // what the call in progress produced
+  Predictor* predictor = nullptr;  // none: no predictions, UCY alone
 
   Impl(Options o, ProgramSource& p);
 
@@ -47,6 +49,15 @@ struct Scheduler::Impl : State {
   bool ProgramExists(const std::string& entry);
   Ops BuildRouteOps(const RouteSpec& spec, bool strict);
 
+  // ---- estimates (docs/scheduler.md "Estimates") ----
+  // The program's record on the station for this revision: kept, or predicted now (and marked changed);
+  // nullptr without a predictor or a revision.
+  const EstimateRec* EstimateFor(const std::string& program, const std::string& revision, int station);
+  // Seconds of backlog per program of `op` on `station` (stated UCY, else the estimate, else 0), and the
+  // prediction behind the visit when every program that runs has one.
+  std::vector<std::int64_t> BacklogFor(const Op& op, int station, std::optional<double>& predicted);
+  // A visit's machine seconds correct its programs' estimates on its station (LearnEstimate).
+  void Learn(const DispatchRec& d, double actual);
   // ---- decisions ----
   void JobChanged(JobRec& j);
   DecisionRec& AddDecision(JobRec& j, std::string trigger);

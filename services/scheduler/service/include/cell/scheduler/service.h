@@ -21,6 +21,7 @@
 #include "cell/idl/station.h"
 #include "cell/program_store/client.h"
 #include "cell/scheduler/scheduler.h"
+#include "cell/scheduler/station_predictor.h"
 
 namespace cell::scheduler {
 
@@ -53,6 +54,7 @@ class Service {
   TextProgramSource source_;
   std::mutex mu_;  // guards sched_ and the bookkeeping below
   Scheduler sched_;
+  StationPredictor predictor_;                  // predicted cycle times (docs/scheduler.md "Estimates")
   std::map<std::string, std::string> dialect_;  // configured stations
   std::map<std::string, bool> online_;
   struct Condition {
