@@ -164,7 +164,8 @@ void AddProgramGet(CLI::App& prog, Context& ctx, const OptsPtr& o) {
 }
 
 // DESIGN §6b: the scheduler's predictions and estimates of the program on each station (docs/scheduler.md
-// "Estimates"); without a scheduler on the bus, none, and predicted_why says so.
+// "Estimates"); without a scheduler on the bus, none, and predicted_why says so. The scheduler answers at
+// once with what it has: a prediction not made yet is asked for then ("not predicted yet: asked for").
 void AddEstimates(Context& ctx, const Opts& o, nlohmann::json& j) {
   const std::string ref = o.node == "HOST" ? o.name : o.node + ":" + o.name;
   if (!j.value("dialect", std::string()).size() || j.value("type", std::string()) == "part_model") return;
@@ -176,7 +177,7 @@ void AddEstimates(Context& ctx, const Opts& o, nlohmann::json& j) {
   cell::SchedulerRequest r;
   r.op(cell::SCHED_PROGRAM_SHOW);
   cell::names::Assign(r.name(), ref, "program");
-  const nlohmann::json e = nlohmann::json::parse(ctx.Scheduler(r, bus::Millis(120000)).info().to_string());
+  const nlohmann::json e = nlohmann::json::parse(ctx.Scheduler(r).info().to_string());
   for (const char* k : {"predicted_s", "predicted_why", "estimate_s", "estimate_runs"}) j[k] = e.at(k);
 }
 

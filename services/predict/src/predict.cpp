@@ -21,6 +21,7 @@ namespace {
 // Ends a prediction with a reason instead of a number (thrown from inside the run's Environment too).
 struct NoNumber {
   std::string why;
+  bool transient = false;  // Prediction::transient
 };
 
 // The station's servo model on the virtual clock, fed as the axis servo's receiver feeds it: on credit, with
@@ -33,7 +34,8 @@ class Sim {
         max_s_(in.max_machine_s),
         deadline_(std::chrono::steady_clock::now() +
                   std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-                      std::chrono::duration<double>(in.max_wall_s))) {}
+                      std::chrono::duration<double>(in.max_wall_s))),
+        stop_(in.stop) {}
 
   servo::Machine& machine() { return m_; }
 
@@ -72,17 +74,23 @@ class Sim {
   }
   long segments() const { return segments_; }
 
+  // The wall-clock bound and the caller's stop (checked every 1024 ticks: a clock read per tick costs).
+  void CheckWall() const {
+    if (std::chrono::steady_clock::now() > deadline_ || stop_.stop_requested())
+      throw NoNumber{
+          fmt::format("not predicted: still running at {:.0f} machine seconds {}", m_.machine_time(),
+                      stop_.stop_requested() ? "when the prediction was stopped"
+                                             : "after the prediction's wall-clock bound"),
+          true};
+  }
+
  private:
   bool Step() {
     if (!m_.Step()) return false;
     if (m_.HasEvents()) Take();
     if (m_.machine_time() > max_s_)
       throw NoNumber{fmt::format("did not end within {:.0f} machine seconds", max_s_)};
-    if ((m_.ticks() & 0x3ff) == 0 && std::chrono::steady_clock::now() > deadline_)
-      throw NoNumber{
-          fmt::format("not predicted: still running at {:.0f} machine seconds after the prediction's "
-                      "wall-clock bound",
-                      m_.machine_time())};
+    if ((m_.ticks() & 0x3ff) == 0) CheckWall();
     return true;
   }
   void Take() {
@@ -101,6 +109,7 @@ class Sim {
   servo::Machine m_;
   double max_s_;
   std::chrono::steady_clock::time_point deadline_;
+  std::stop_token stop_;
   std::uint64_t next_id_ = 0, want_probe_ = 0;
   servo::ProbeResult probe_;
   std::optional<double> first_;
@@ -259,6 +268,7 @@ Prediction Predict(const Input& in) {
     out.seconds = sim.Cycle().value_or(0.0);
   } catch (const NoNumber& n) {
     out.why = n.why;
+    out.transient = n.transient;
   } catch (const std::exception& e) {
     out.why = e.what();
   }

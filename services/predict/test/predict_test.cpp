@@ -12,9 +12,11 @@
 
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cmath>
 #include <fstream>
 #include <sstream>
+#include <stop_token>
 #include <string>
 
 #include "cell/config/config.h"
@@ -155,6 +157,24 @@ TEST(Predict, AnEndlessProgramIsBounded) {
   p = Predict(in);
   EXPECT_FALSE(p.seconds);
   EXPECT_NE(p.why.find("wall-clock bound"), std::string::npos) << p.why;
+  EXPECT_TRUE(
+      p.transient);  // the wall-clock bound: another try may finish; the machine-time bound is definite
+  in.max_wall_s = 10;
+  std::stop_source stop;
+  stop.request_stop();
+  in.stop = stop.get_token();
+  p = Predict(in);
+  EXPECT_TRUE(p.transient);
+  EXPECT_NE(p.why.find("when the prediction was stopped"), std::string::npos) << p.why;
+}
+
+// A loop that never moves steps no servo: the interpreter's own bound on blocks without motion ends it, a
+// definite answer (the station refuses it the same way).
+TEST(Predict, AnEndlessLoopWithoutMotionIsTheInterpretersAlarm) {
+  Prediction p = PredictOn("KT01", Kt("N3 (LBL,3)\nN4 G90\nN6 (GTO,3)\n"));
+  EXPECT_FALSE(p.seconds);
+  EXPECT_FALSE(p.transient);
+  EXPECT_NE(p.why.find("WITHOUT MOTION OR OUTPUT"), std::string::npos) << p.why;
 }
 
 TEST(Predict, ASoftLimitIsTheServosAlarm) {

@@ -40,8 +40,10 @@ std::string StationPredictor::Basis(std::string_view station) {
 }
 
 // As the station reads its map entry (docs/station.md): "NODE:NAME" from NODE, a plain NAME from the
-// station's namespace, then HOST; subprograms likewise.
-Predicted StationPredictor::Predict(std::string_view program, std::string_view station) {
+// station's namespace, then HOST; subprograms likewise. A store that does not answer (here or for a
+// subprogram during the run) makes the answer transient: not kept, asked again after the queue's back-off.
+Predicted StationPredictor::Predict(std::string_view program, std::string_view station,
+                                    std::chrono::milliseconds limit, std::stop_token stop) {
   Predicted out;
   predict::Input in;
   in.station = interp::LoadStation(station);
@@ -49,8 +51,12 @@ Predicted StationPredictor::Predict(std::string_view program, std::string_view s
   const std::vector<std::string> namespaces =
       ref.node.empty() ? std::vector<std::string>{in.station.id, "HOST"} : std::vector<std::string>{ref.node};
   std::optional<program_store::Client::File> file;
-  for (const auto& ns : namespaces)
-    if ((file = store_.Fetch(ns, ref.name))) break;
+  try {
+    for (const auto& ns : namespaces)
+      if ((file = store_.Fetch(ns, ref.name))) break;
+  } catch (const std::exception& e) {
+    return Predicted{std::nullopt, fmt::format("the program store did not answer: {}", e.what()), true};
+  }
   if (!file) {
     out.why = fmt::format("no program '{}' where {} reads it", program, station);
     return out;
@@ -58,11 +64,19 @@ Predicted StationPredictor::Predict(std::string_view program, std::string_view s
   in.program = ref.name;
   in.program_dialect = file->dialect();
   in.text = std::move(file->content);
-  in.library = [this, namespaces](const std::string& lib) -> std::optional<std::string> {
-    for (const auto& ns : namespaces)
-      if (auto text = store_.Get(ns, lib)) return text;
+  bool store_failed = false;
+  in.library = [this, namespaces, &store_failed](const std::string& lib) -> std::optional<std::string> {
+    try {
+      for (const auto& ns : namespaces)
+        if (auto text = store_.Get(ns, lib)) return text;
+    } catch (...) {
+      store_failed = true;
+      throw;
+    }
     return std::nullopt;
   };
+  in.max_wall_s = std::chrono::duration<double>(limit).count();
+  in.stop = std::move(stop);
   const auto t0 = std::chrono::steady_clock::now();
   const predict::Prediction p = predict::Predict(in);
   spdlog::info("predicted {} on {}: {} ({:.3f} s to predict)", program, station,
@@ -70,6 +84,7 @@ Predicted StationPredictor::Predict(std::string_view program, std::string_view s
                std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
   out.seconds = p.seconds;
   out.why = p.why;
+  out.transient = p.transient || store_failed;
   return out;
 }
 

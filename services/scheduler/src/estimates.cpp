@@ -4,6 +4,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
+
+#include <fmt/format.h>
 
 #include "cell/error/error.h"
 #include "cell/scheduler/scheduler.h"
@@ -21,19 +24,20 @@ const EstimateRec* Scheduler::Impl::EstimateFor(const std::string& program, cons
                                                 int station) {
   if (!predictor || revision.empty()) return nullptr;
   const std::string& id = stations[static_cast<std::size_t>(station)].id;
-  const std::string key = revision + "/" + predictor->Basis(id);
-  EstimateRec& r = estimates[{program, id}];
-  if (r.revision == key) return &r;
-  Predicted p;
-  try {
-    p = predictor->Predict(program, id);
-  } catch (const std::exception& e) {
-    p.why = e.what();
+  std::string key = revision + "/" + predictor->Basis(id);
+  if (auto it = estimates.find({program, id}); it != estimates.end() && it->second.revision == key)
+    return &it->second;
+  // Asked, never made here: a prediction fetches the program and runs it, seconds under the caller's lock
+  // would stall every allocation and report (the chaos test's stalled scheduler, issue 40).
+  if (ask) ask(PredictionRequest{program, id, std::move(key)});
+  return nullptr;
+}
+
+void Scheduler::Impl::AskEstimates(const Op& op) {
+  for (std::size_t i = 0; i < op.programs.size(); ++i) {
+    if (op.Revision(i).empty()) continue;
+    for (int s : op.stations) EstimateFor(op.programs[i], op.Revision(i), s);
   }
-  // A new revision (of the program or the station's model) starts over: what was learned was another program.
-  r = EstimateRec{key, p.seconds, p.seconds ? std::string() : p.why, p.seconds, 0};
-  dirty_estimates.insert({program, id});
-  return &r;
 }
 
 std::vector<std::int64_t> Scheduler::Impl::BacklogFor(const Op& op, int station,
@@ -86,8 +90,29 @@ void Scheduler::Impl::Learn(const DispatchRec& d, double actual) {
   }
 }
 
-void Scheduler::SetPredictor(Predictor* predictor) {
+void Scheduler::SetPredictor(Predictor* predictor, std::function<void(const PredictionRequest&)> ask) {
   impl_->predictor = predictor;
+  impl_->ask = std::move(ask);
+}
+
+Effects Scheduler::PredictionAnswered(const PredictionRequest& request, const Predicted& answer) {
+  Impl& m = *impl_;
+  m.Call([&] {
+    if (answer.transient) {
+      m.fx.notes.push_back(fmt::format("prediction of {} on {} not made ({}): asked again at its next need",
+                                       request.program, request.station, answer.why));
+      return;
+    }
+    if (m.FindStation(request.station) < 0) return;
+    EstimateRec& r = m.estimates[{request.program, request.station}];
+    if (r.revision == request.revision) return;  // answered before (a request asked twice)
+    // A new revision (of the program or the station's model) starts over: what was learned was another
+    // program.
+    r = EstimateRec{request.revision, answer.seconds, answer.seconds ? std::string() : answer.why,
+                    answer.seconds, 0};
+    m.dirty_estimates.insert({request.program, request.station});
+  });
+  return m.TakeEffects();
 }
 
 ProgramEstimates Scheduler::Estimates(std::string_view program) {
@@ -109,7 +134,7 @@ ProgramEstimates Scheduler::Estimates(std::string_view program) {
         v.estimate_s = e->estimate;
         v.runs = e->runs;
       } else {
-        v.why = "no predictor";
+        v.why = m.predictor ? "not predicted yet: asked for" : "no predictor";
       }
       out.stations.push_back(std::move(v));
     }

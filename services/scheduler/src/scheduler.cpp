@@ -301,6 +301,7 @@ Op Scheduler::Impl::BuildOp(const OpSpec& spec, bool require_ucy, bool strict, s
   }
   for (const auto& s : spec.stations) op.stations.push_back(StationIndex(s, true));
   for (const auto& t : op.tools) op.tool_ids.push_back(tool_index.Intern(t));
+  AskEstimates(op);  // predicted while the route waits for pallets, not at the first allocation
   return op;
 }
 
@@ -619,6 +620,9 @@ Effects Scheduler::Recover() {
       }
     }
     for (std::size_t s = 0; s < m.stations.size(); ++s) m.TrySend(static_cast<int>(s));
+    // What the routes' programs lack (a new station model, a prediction the last process did not finish).
+    for (const auto& [name, r] : m.routes)
+      for (const Op& op : *r.ops) m.AskEstimates(op);
   });
   return m.TakeEffects();
 }

@@ -16,6 +16,7 @@
 #include <functional>
 #include <map>
 #include <optional>
+#include <stop_token>
 #include <string>
 
 #include "cell/config/config.h"
@@ -40,13 +41,16 @@ struct Input {
   // Bounds on a program that never ends offline (a loop on a variable only a run changes).
   double max_machine_s = 24 * 3600.0;
   long max_ops = 20'000'000;
-  double max_wall_s = 10.0;  // a caller that must answer (the scheduler) is not held longer
+  double max_wall_s = 10.0;  // a prediction is not worth more of the machine than this
+  std::stop_token stop;      // a caller that stops (the scheduler's PredictionQueue) ends the run early
 };
 
 struct Prediction {
   std::optional<double> seconds;  // machine seconds, first segment to end; nullopt: see why
   std::string why;                // why there is no number ("" when there is one)
-  long segments = 0;              // motion and device segments the servo ran
+  // No number this time only: the wall-clock bound passed or the caller stopped (another try may finish).
+  bool transient = false;
+  long segments = 0;  // motion and device segments the servo ran
 };
 
 Prediction Predict(const Input& in);

@@ -253,10 +253,15 @@ class Scheduler {
   Effects ProgramChanged(std::string_view name);
 
   // ---- estimates (estimates.h; docs/scheduler.md "Estimates") ----
-  // The predictor the scheduler asks (not owned; nullptr: none, and the backlog counts UCY alone).
-  void SetPredictor(Predictor* predictor);
-  // A program's prediction and estimate on every known station, predicted now where missing (and kept).
-  // Throws cell::Error(kNotFound) for a program the source does not have.
+  // Predictions: `predictor` (not owned; nullptr: none, and the backlog counts UCY alone) gives each
+  // station's Basis; `ask` queues a prediction the scheduler has no record for and must return at once
+  // (PredictionQueue::Ask): it is called with the caller's lock held. Until the answer comes back through
+  // PredictionAnswered(), the backlog counts UCY, or nothing, as without a predictor.
+  void SetPredictor(Predictor* predictor, std::function<void(const PredictionRequest&)> ask);
+  // An answer to a request `ask` was given: kept with the request's revision unless it is transient.
+  Effects PredictionAnswered(const PredictionRequest& request, const Predicted& answer);
+  // A program's prediction and estimate on every known station; where one is missing it is asked for and
+  // shown as not predicted yet. Throws cell::Error(kNotFound) for a program the source does not have.
   ProgramEstimates Estimates(std::string_view program);
   // The projected schedule: every live job's visits from the stations' state now and the allocation rule
   // run forward on the backlog seconds (UCY or estimates); waiting jobs without times.
