@@ -1,8 +1,9 @@
 // predict_bench: every positive conformance program of each dialect (tests/conformance/<dialect>/NAME.<ext>
 // with NAME.expected and no NAME.diag) predicted on the repository's station of that dialect (KT01, OK01,
 // EM01, BS01): how many get a number, the reasons of those that do not, and the cost: machine seconds
-// predicted per wall second. Predicted against actual through the real processes: predict_cell_test prints
-// those figures. Usage: predict_bench [SOURCE_DIR] (default: the source tree it was built from).
+// predicted per wall second, the mean wall time of one prediction and the slowest. Predicted against actual
+// through the real processes: predict_cell_test prints those figures. Usage: predict_bench [SOURCE_DIR]
+// (default: the source tree it was built from).
 #include <fmt/format.h>
 
 #include <chrono>
@@ -46,6 +47,8 @@ void Dialect(const fs::path& root, const std::string& dialect, const std::string
   int total = 0, numbers = 0;
   double machine = 0;
   std::map<std::string, int> why;
+  double slowest = 0;  // the longest one prediction took (the scheduler's worker runs one at a time)
+  std::string slowest_name;
   const auto t0 = std::chrono::steady_clock::now();
   for (const auto& e : fs::directory_iterator(root / "tests" / "conformance" / dialect)) {
     const fs::path p = e.path();
@@ -59,7 +62,13 @@ void Dialect(const fs::path& root, const std::string& dialect, const std::string
     in.program_dialect = dialect;
     in.station = st;
     in.max_machine_s = 3600;
+    const auto p0 = std::chrono::steady_clock::now();
     const cell::predict::Prediction r = cell::predict::Predict(in);
+    const double took = std::chrono::duration<double>(std::chrono::steady_clock::now() - p0).count();
+    if (took > slowest) {
+      slowest = took;
+      slowest_name = in.program;
+    }
     ++total;
     if (r.seconds) {
       ++numbers;
@@ -69,8 +78,12 @@ void Dialect(const fs::path& root, const std::string& dialect, const std::string
     }
   }
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  fmt::print("{:6} on {}: {}/{} programs predicted, {:.1f} machine s in {:.2f} wall s ({:.0f}x real time)\n",
-             dialect, station, numbers, total, machine, wall, wall > 0 ? machine / wall : 0.0);
+  fmt::print(
+      "{:6} on {}: {}/{} programs predicted, {:.1f} machine s in {:.2f} wall s ({:.0f}x real time); {:.1f} "
+      "ms "
+      "a program, the slowest {} {:.1f} ms\n",
+      dialect, station, numbers, total, machine, wall, wall > 0 ? machine / wall : 0.0,
+      total ? 1000 * wall / total : 0.0, slowest_name, 1000 * slowest);
   for (const auto& [k, n] : why) fmt::print("    {:3} x {}\n", n, k);
 }
 
