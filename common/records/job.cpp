@@ -77,6 +77,8 @@ json JobJson(const Job& j, bool with_decisions) {
               {"op_count", j.op_count},
               {"decision_count", j.decision_count}};
   if (with_decisions) {
+    // `job show` (DESIGN §6b): the prediction its allocations used, beside cycle_s; null when none had one.
+    out["predicted_s"] = j.predicted_s ? json(*j.predicted_s) : json(nullptr);
     json d = json::array();
     for (const auto& x : j.decisions) d.push_back(DecisionJson(x));
     out["decisions"] = d;

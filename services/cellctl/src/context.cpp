@@ -61,6 +61,13 @@ cell::SchedulerReply Context::Scheduler(cell::SchedulerRequest req, bus::Millis 
   return rep;
 }
 
+bool Context::SchedulerUp(bus::Millis timeout) {
+  if (!scheduler_)
+    scheduler_ = std::make_unique<bus::Client<cell::SchedulerRequest, cell::SchedulerReply>>(
+        Bus(), bus::topics::kScheduler);
+  return scheduler_->WaitForServer(timeout);
+}
+
 cell::InspectionReply Context::Inspection(cell::InspectionRequest req, bus::Millis timeout) {
   if (!inspection_)
     inspection_ = std::make_unique<bus::Client<cell::InspectionRequest, cell::InspectionReply>>(

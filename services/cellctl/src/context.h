@@ -37,6 +37,8 @@ class Context {
   // One client per service for the whole command: the service replays a reply to the same client and
   // request id, and a second client on the same participant would count its requests from 1 again.
   cell::SchedulerReply Scheduler(cell::SchedulerRequest req, bus::Millis timeout = bus::Millis(30000));
+  // True when the scheduler answers requests within `timeout` (a verb that only adds its data asks first).
+  bool SchedulerUp(bus::Millis timeout);
   cell::InspectionReply Inspection(cell::InspectionRequest req, bus::Millis timeout = bus::Millis(10000));
   std::optional<cell::ToolTable> Tools(const std::string& station, bus::Millis timeout);
   std::optional<cell::StationVariables> Variables(const std::string& station, bus::Millis timeout);

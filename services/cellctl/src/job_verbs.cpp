@@ -121,6 +121,16 @@ void AddJobVerbs(CLI::App& app, Context& ctx) {
       j = JobInfo(ctx, o->id);
     }
   });
+
+  // DESIGN §6b: the projected schedule (docs/scheduler.md §15).
+  auto* plan = app.add_subcommand("plan", "when each pallet is projected to start and end, on which station");
+  plan->add_flag("--json", ctx.json);
+  plan->callback([&ctx] {
+    cell::SchedulerRequest r;
+    r.op(cell::SCHED_PLAN);
+    const auto rows = nlohmann::json::parse(ctx.Scheduler(r).info().to_string());
+    Print(ctx, rows, {"job", "pallet", "route", "op", "station", "start", "end", "waiting_for"});
+  });
 }
 
 void AddInspectVerbs(CLI::App& app, Context& ctx) {

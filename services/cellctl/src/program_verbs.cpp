@@ -163,6 +163,24 @@ void AddProgramGet(CLI::App& prog, Context& ctx, const OptsPtr& o) {
   });
 }
 
+// DESIGN §6b: the scheduler's predictions and estimates of the program on each station (docs/scheduler.md
+// "Estimates"); without a scheduler on the bus, none, and predicted_why says so. The scheduler answers at
+// once with what it has: a prediction not made yet is asked for then ("not predicted yet: asked for").
+void AddEstimates(Context& ctx, const Opts& o, nlohmann::json& j) {
+  const std::string ref = o.node == "HOST" ? o.name : o.node + ":" + o.name;
+  if (!j.value("dialect", std::string()).size() || j.value("type", std::string()) == "part_model") return;
+  if (!ctx.SchedulerUp(bus::Millis(2000))) {
+    j["predicted_s"] = nullptr;
+    j["predicted_why"] = "no scheduler on the bus: predictions are the scheduler's";
+    return;
+  }
+  cell::SchedulerRequest r;
+  r.op(cell::SCHED_PROGRAM_SHOW);
+  cell::names::Assign(r.name(), ref, "program");
+  const nlohmann::json e = nlohmann::json::parse(ctx.Scheduler(r).info().to_string());
+  for (const char* k : {"predicted_s", "predicted_why", "estimate_s", "estimate_runs"}) j[k] = e.at(k);
+}
+
 void AddProgramShow(CLI::App& prog, Context& ctx, const OptsPtr& o) {
   auto* show = prog.add_subcommand("show", "metadata: type, dialect, NAM, UTL, UCY, revisions");
   show->add_option("NAME", o->name)->required();
@@ -171,6 +189,7 @@ void AddProgramShow(CLI::App& prog, Context& ctx, const OptsPtr& o) {
   show->callback([o, &ctx] {
     CheckAddress(o->node, o->name);
     auto j = ctx.Programs().Show(o->node, o->name);
+    AddEstimates(ctx, *o, j);
     if (ctx.json) return Print(ctx, j, {});
     nlohmann::json flat = j;
     flat.erase("revisions");

@@ -71,6 +71,7 @@ Service::Service(bus::Participant& p, const std::filesystem::path& data_dir)
         return StoredProgram{std::move(f->content), f->dialect(), std::move(type)};
       }),
       sched_(Options{(data_dir / "scheduler.db").string(), false, {}}, source_),
+      predictor_(p),
       live_(p),
       jobs_w_(p, bus::topics::kJobStatus, bus::QosKind::kEvent),
       state_w_(p, bus::topics::kSchedulerState, bus::QosKind::kState),
@@ -82,13 +83,25 @@ Service::~Service() {
 }
 
 void Service::Start() {
+  // Answers come back on the queue's worker: mu_ is taken only to keep one (never while predicting).
+  predictions_.emplace(predictor_, [this](const PredictionRequest& r, const Predicted& p) {
+    std::lock_guard lk(mu_);
+    try {
+      Apply(sched_.PredictionAnswered(r, p));
+    } catch (const std::exception& e) {
+      spdlog::warn("prediction of {} on {} not kept: {}", r.program, r.station, e.what());
+      throw;  // the queue backs off and it is asked again
+    }
+  });
   {
     std::lock_guard lk(mu_);
+    sched_.SetPredictor(&predictor_, [this](const PredictionRequest& r) { predictions_->Ask(r); });
     for (auto& id : config::ListStations()) {
       auto cfg = interp::LoadStation(id);
       dialect_[id] = cfg.dialect;
       online_[id] = false;
       sched_.ConfigureStation(id, cfg.dialect);
+      predictor_.Basis(id);  // the station file's fingerprint read now, not at the first allocation
     }
     Effects e = sched_.Recover();
     if (!e.dispatches.empty())
@@ -142,6 +155,7 @@ void Service::Start() {
 
 void Service::Stop() {
   server_.reset();
+  if (predictions_) predictions_->Stop();  // before anything its worker's answers use goes away
   if (sender_.joinable()) {
     sender_.request_stop();
     out_cv_.notify_all();
@@ -324,6 +338,12 @@ cell::SchedulerReply Service::Handle(const cell::SchedulerRequest& r) {
       if (!sched_.Job(r.job_id(), false))
         throw Error(Errc::kNotFound, "unknown job " + std::to_string(r.job_id()));
       Apply(sched_.Cancel(key, r.job_id()));
+      break;
+    case cell::SCHED_PROGRAM_SHOW:
+      info(ToJson(sched_.Estimates(name)));
+      break;
+    case cell::SCHED_PLAN:
+      info(ToJson(sched_.Plan()));
       break;
   }
   return rep;

@@ -1,5 +1,6 @@
 #include "cell/scheduler/json.h"
 
+#include "cell/records/time.h"
 #include "cell/records/values.h"
 
 namespace cell::scheduler {
@@ -33,6 +34,7 @@ records::Job ToRecord(const JobView& j, bool with_decisions) {
   r.started_ns = j.started_ms * 1000000;
   r.finished_ns = j.finished_ms * 1000000;
   r.cycle_s = j.cycle_s;
+  r.predicted_s = j.predicted_s;
   r.op_index = j.op_index + 1;
   r.op_count = j.op_count;
   r.decision_count = static_cast<std::uint32_t>(j.decision_count);
@@ -89,6 +91,34 @@ json ToJson(const RouteView& r) {
           {"valid", r.valid},
           {"invalid_reason", records::TextOrNull(r.invalid_reason)},
           {"ops", ops}};
+}
+
+json ToJson(const ProgramEstimates& e) {
+  json predicted = json::object(), why = json::object(), estimate = json::object(), runs = json::object();
+  for (const auto& s : e.stations) {
+    predicted[s.station] = s.predicted_s ? json(*s.predicted_s) : json(nullptr);
+    why[s.station] = s.predicted_s ? json(nullptr) : json(s.why);
+    estimate[s.station] = s.estimate_s ? json(*s.estimate_s) : json(nullptr);
+    runs[s.station] = s.runs;
+  }
+  return {{"program", e.meta.name},   {"ucy_s", e.meta.ucy_s ? json(*e.meta.ucy_s) : json(nullptr)},
+          {"predicted_s", predicted}, {"predicted_why", why},
+          {"estimate_s", estimate},   {"estimate_runs", runs}};
+}
+
+json ToJson(const std::vector<PlanRow>& plan) {
+  json out = json::array();
+  for (const auto& r : plan) {
+    out.push_back({{"job", r.job},
+                   {"pallet", r.pallet},
+                   {"route", records::TextOrNull(r.route)},
+                   {"op", r.op + 1},
+                   {"station", records::TextOrNull(r.station)},
+                   {"start", r.start_ms ? records::TimeOrNull(*r.start_ms * 1000000) : json(nullptr)},
+                   {"end", r.end_ms ? records::TimeOrNull(*r.end_ms * 1000000) : json(nullptr)},
+                   {"waiting_for", records::TextOrNull(r.waiting_for)}});
+  }
+  return out;
 }
 
 json ToolsJson(const tooltable::ToolTable& t) {

@@ -40,6 +40,18 @@ ProgramMeta ReadProgramMeta(std::string_view text, std::string_view dialect, std
 
 namespace {
 
+// FNV-1a, 64 bits: stable across processes and builds (a stored key), and enough to tell revisions apart.
+std::string Fingerprint(const StoredProgram& p) {
+  std::uint64_t h = 14695981039346656037ull;
+  auto add = [&h](std::string_view s) {
+    for (unsigned char c : s) h = (h ^ c) * 1099511628211ull;
+  };
+  add(p.dialect);
+  add("\n");
+  add(p.text);
+  return fmt::format("{:016x}", h);
+}
+
 ProgramMeta MetaOf(const StoredProgram& p, std::string_view name) {
   if (p.type == "part_model") {
     ProgramMeta meta;
@@ -47,7 +59,9 @@ ProgramMeta MetaOf(const StoredProgram& p, std::string_view name) {
     meta.part_model = true;
     return meta;
   }
-  return ReadProgramMeta(p.text, p.dialect, name);
+  ProgramMeta meta = ReadProgramMeta(p.text, p.dialect, name);
+  meta.revision = Fingerprint(p);
+  return meta;
 }
 
 }  // namespace

@@ -137,7 +137,8 @@ std::string State::Describe(const AllocationRec& a) const {
 
 bool State::Dirty() const {
   return !dirty_jobs.empty() || !dirty_dispatches.empty() || !dirty_stations.empty() ||
-         !dirty_pallets.empty() || !dirty_routes.empty() || !new_decisions.empty() || !new_idem.empty();
+         !dirty_pallets.empty() || !dirty_routes.empty() || !dirty_estimates.empty() ||
+         !new_decisions.empty() || !new_idem.empty();
 }
 void State::ClearDirty() {
   dirty_jobs.clear();
@@ -145,6 +146,7 @@ void State::ClearDirty() {
   dirty_stations.clear();
   dirty_pallets.clear();
   dirty_routes.clear();
+  dirty_estimates.clear();
   new_decisions.clear();
   new_idem.clear();
 }
@@ -244,6 +246,8 @@ Op Scheduler::Impl::BuildOp(const OpSpec& spec, bool require_ucy, bool strict, s
       } else if (meta && meta->part_model) {
         models.push_back(name);
         op.ucy.push_back(0);
+        op.revisions.emplace_back();
+        op.stated.push_back(1);
         continue;
       } else if (!meta) {
         problem = fmt::format("program '{}' not found", name);
@@ -268,10 +272,14 @@ Op Scheduler::Impl::BuildOp(const OpSpec& spec, bool require_ucy, bool strict, s
     if (!problem.empty()) {
       if (op.blocked.empty()) op.blocked = fmt::format("{}: {}", where, problem);
       op.ucy.push_back(0);
+      op.revisions.emplace_back();
+      op.stated.push_back(1);
       continue;
     }
     const std::int64_t u = meta->ucy_s.value_or(0);
     op.ucy.push_back(u);
+    op.revisions.push_back(meta->revision);
+    op.stated.push_back(meta->ucy_s ? 1 : 0);
     op.ucy_sum += u;
     for (const auto& t : meta->tools) {
       if (std::find(op.tools.begin(), op.tools.end(), t) == op.tools.end()) op.tools.push_back(t);
@@ -293,6 +301,7 @@ Op Scheduler::Impl::BuildOp(const OpSpec& spec, bool require_ucy, bool strict, s
   }
   for (const auto& s : spec.stations) op.stations.push_back(StationIndex(s, true));
   for (const auto& t : op.tools) op.tool_ids.push_back(tool_index.Intern(t));
+  AskEstimates(op);  // predicted while the route waits for pallets, not at the first allocation
   return op;
 }
 
@@ -358,8 +367,17 @@ void Scheduler::Impl::Evaluate(JobRec& j, std::string_view trigger) {
   } else {
     d.why = fmt::format("shortest backlog among eligible stations: {} s", backlog);
   }
-  d.added = op.ucy_sum;
+  std::optional<double> predicted;
+  std::vector<std::int64_t> secs = BacklogFor(op, w, predicted);
+  std::int64_t added = 0;
+  for (auto u : secs) added += u;
+  d.added = added;
   d.alloc = std::move(alloc);
+  if (predicted) {
+    j.predicted[j.op] = *predicted;
+  } else {
+    j.predicted.erase(j.op);
+  }
 
   DispatchRec disp;
   disp.id = next_dispatch++;
@@ -368,9 +386,9 @@ void Scheduler::Impl::Evaluate(JobRec& j, std::string_view trigger) {
   disp.pallet = j.pallet;
   disp.op = j.op;
   disp.programs = op.programs;
-  disp.ucy = op.ucy;
+  disp.ucy = std::move(secs);
   dirty_dispatches.insert(disp.id);
-  states[static_cast<std::size_t>(w)].backlog_s += op.ucy_sum;
+  states[static_cast<std::size_t>(w)].backlog_s += added;
   stations[static_cast<std::size_t>(w)].queue.push_back(disp.id);
   dirty_stations.insert(w);
   dispatches.emplace(disp.id, std::move(disp));
@@ -602,6 +620,9 @@ Effects Scheduler::Recover() {
       }
     }
     for (std::size_t s = 0; s < m.stations.size(); ++s) m.TrySend(static_cast<int>(s));
+    // What the routes' programs lack (a new station model, a prediction the last process did not finish).
+    for (const auto& [name, r] : m.routes)
+      for (const Op& op : *r.ops) m.AskEstimates(op);
   });
   return m.TakeEffects();
 }

@@ -6,6 +6,7 @@
 
 #include <chrono>
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -13,6 +14,7 @@
 #include <utility>
 #include <vector>
 
+#include "cell/scheduler/estimates.h"
 #include "cell/scheduler/program_source.h"
 #include "cell/scheduler/route.h"
 #include "cell/scheduler/scheduler.h"
@@ -24,8 +26,10 @@ namespace cell::scheduler {
 struct Scheduler::Impl : State {
   Options opt;
   ProgramSource& programs;
-  std::optional<Store> store;  // none: in memory only
-  Effects fx;                  // what the call in progress produced
+  std::optional<Store> store;                         // none: in memory only
+  Effects fx;                                         // what the call in progress produced
+  Predictor* predictor = nullptr;                     // none: no predictions, UCY alone
+  std::function<void(const PredictionRequest&)> ask;  // queues a prediction (SetPredictor)
 
   Impl(Options o, ProgramSource& p);
 
@@ -47,6 +51,17 @@ struct Scheduler::Impl : State {
   bool ProgramExists(const std::string& entry);
   Ops BuildRouteOps(const RouteSpec& spec, bool strict);
 
+  // ---- estimates (docs/scheduler.md "Estimates") ----
+  // The program's record on the station for this revision; nullptr without a predictor or a revision, or
+  // while the prediction is asked for (never made here: predicting would hold the caller's lock).
+  const EstimateRec* EstimateFor(const std::string& program, const std::string& revision, int station);
+  // Asks for what an operation's programs lack on its stations, ahead of their allocation.
+  void AskEstimates(const Op& op);
+  // Seconds of backlog per program of `op` on `station` (stated UCY, else the estimate, else 0), and the
+  // prediction behind the visit when every program that runs has one.
+  std::vector<std::int64_t> BacklogFor(const Op& op, int station, std::optional<double>& predicted);
+  // A visit's machine seconds correct its programs' estimates on its station (LearnEstimate).
+  void Learn(const DispatchRec& d, double actual);
   // ---- decisions ----
   void JobChanged(JobRec& j);
   DecisionRec& AddDecision(JobRec& j, std::string trigger);

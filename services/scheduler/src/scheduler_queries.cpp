@@ -19,6 +19,11 @@ JobView Scheduler::Impl::View(const JobRec& j, bool with_decisions) const {
   v.started_ms = j.started;
   v.finished_ms = j.finished;
   v.cycle_s = j.cycle;
+  if (!j.predicted.empty()) {
+    double sum = 0;
+    for (const auto& [op, seconds] : j.predicted) sum += seconds;
+    v.predicted_s = sum;
+  }
   v.op_index = j.op;
   v.op_count = static_cast<int>(j.ops->size());
   v.decision_count = static_cast<int>(j.decisions.size());

@@ -205,6 +205,7 @@ Effects Scheduler::RunFinished(std::int64_t dispatch_id, std::optional<double> c
     const int s = d->station;
     m.stations[static_cast<std::size_t>(s)].pending_vars.clear();  // the station had them before this run
     m.Detach(*d, DState::kDone);
+    if (cycle_s) m.Learn(*d, *cycle_s);
     auto& j = m.jobs.at(d->job);
     if (cycle_s) j.cycle = j.cycle.value_or(0) + *cycle_s;
     j.dispatch = 0;

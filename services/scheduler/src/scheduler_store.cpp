@@ -49,6 +49,12 @@ ALTER TABLE idempotency ADD COLUMN command TEXT NOT NULL DEFAULT '';
       store::Migration::Sql(4, "scheduler: VSET writes a station has not shown back yet", R"sql(
 ALTER TABLE stations ADD COLUMN pending_vars TEXT NOT NULL DEFAULT '{}';
 )sql"),
+      store::Migration::Sql(5, "scheduler: predicted and learned cycle times, a job's predictions", R"sql(
+CREATE TABLE estimates (program TEXT NOT NULL, station TEXT NOT NULL, revision TEXT NOT NULL,
+                        predicted_s REAL, why TEXT NOT NULL, estimate_s REAL, runs INTEGER NOT NULL,
+                        PRIMARY KEY (program, station));
+ALTER TABLE jobs ADD COLUMN predicted TEXT NOT NULL DEFAULT '{}';
+)sql"),
   };
   return m;
 }
@@ -91,7 +97,9 @@ json OpsToJson(const std::vector<Op>& ops, const std::vector<StationRec>& st) {
                    {"programs", op.programs},
                    {"ucy", op.ucy},
                    {"tools", op.tools},
-                   {"blocked", op.blocked}});
+                   {"blocked", op.blocked},
+                   {"revisions", op.revisions},
+                   {"stated", op.stated}});
   }
   return out;
 }
@@ -106,6 +114,9 @@ Ops OpsFromJson(State& state, const json& j) {
     op.ucy = o.at("ucy").get<std::vector<std::int64_t>>();
     op.tools = o.at("tools").get<std::vector<std::string>>();
     op.blocked = o.at("blocked");
+    // Operations stored before estimates have neither: UCY alone, as then.
+    if (o.contains("revisions")) op.revisions = o.at("revisions").get<std::vector<std::string>>();
+    if (o.contains("stated")) op.stated = o.at("stated").get<std::vector<char>>();
     for (auto u : op.ucy) op.ucy_sum += u;
     for (const auto& t : op.tools) op.tool_ids.push_back(state.tool_index.Intern(t));
     ops->push_back(std::move(op));
@@ -175,7 +186,7 @@ constexpr const char* kEndedStates = "('COMPLETED', 'FAILED', 'CANCELLED')";
 void LoadJobs(store::Database& db, State& state, std::size_t kept_ended) {
   auto q = db.Prepare(
       std::string("SELECT id, state, kind, route, pallet, op, station, reason, started_ms, finished_ms, "
-                  "cycle_s, dispatch, ops, schedule FROM jobs WHERE state NOT IN ") +
+                  "cycle_s, dispatch, ops, schedule, predicted FROM jobs WHERE state NOT IN ") +
       kEndedStates + " OR id IN (SELECT id FROM jobs WHERE state IN " + kEndedStates +
       " ORDER BY id DESC LIMIT ?1)");
   q.BindInt64(1, static_cast<std::int64_t>(kept_ended));
@@ -215,6 +226,8 @@ void LoadJobs(store::Database& db, State& state, std::size_t kept_ended) {
                                     r.at("index"),     r.at("count"),   r.at("line")};
       }
     }
+    const json predicted = json::parse(q.ColumnText(14));
+    for (const auto& [op, v] : predicted.items()) j.predicted[std::stoi(op)] = v.get<double>();
     if (j.state == JobState::kWaiting) state.waiting.insert(j.id);
     if (!IsTerminal(j.state) && j.pallet != 0) state.busy_pallets[j.pallet] = j.id;
     state.jobs.emplace(j.id, std::move(j));
@@ -287,7 +300,7 @@ void LoadDecisions(store::Database& db, State& state) {
 // The columns StoredJob reads, in its order.
 constexpr const char* kJobViewColumns =
     "id, state, kind, route, pallet, op, station, reason, started_ms, finished_ms, cycle_s, ops, schedule, "
-    "(SELECT COUNT(*) FROM decisions WHERE decisions.job = jobs.id)";
+    "(SELECT COUNT(*) FROM decisions WHERE decisions.job = jobs.id), predicted";
 
 JobView StoredJob(store::Statement& q) {
   JobView v;
@@ -305,6 +318,12 @@ JobView StoredJob(store::Statement& q) {
   v.op_count = static_cast<int>(json::parse(q.ColumnText(11)).size());
   if (const std::string sched = q.ColumnText(12); !sched.empty()) v.schedule = json::parse(sched).at("name");
   v.decision_count = static_cast<int>(q.ColumnInt64(13));
+  // As Scheduler::Impl::View: the sum of the predictions each operation's allocation used.
+  if (const json predicted = json::parse(q.ColumnText(14)); !predicted.empty()) {
+    double sum = 0;
+    for (const auto& [op, seconds] : predicted.items()) sum += seconds.get<double>();
+    v.predicted_s = sum;
+  }
   return v;
 }
 
@@ -411,11 +430,13 @@ void FlushJobs(store::Database& db, const State& state) {
   auto q = db.Prepare(
       "INSERT INTO jobs(id, state, kind, route, pallet, op, station, reason, started_ms, finished_ms, "
       "cycle_s, "
-      "dispatch, ops, schedule) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14) "
+      "dispatch, ops, schedule, predicted) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, "
+      "?14, "
+      "?15) "
       "ON CONFLICT(id) DO UPDATE SET state = excluded.state, op = excluded.op, station = excluded.station, "
       "reason = excluded.reason, started_ms = excluded.started_ms, finished_ms = excluded.finished_ms, "
       "cycle_s = excluded.cycle_s, dispatch = excluded.dispatch, ops = excluded.ops, "
-      "schedule = excluded.schedule");
+      "schedule = excluded.schedule, predicted = excluded.predicted");
   for (std::int64_t id : state.dirty_jobs) {
     const JobRec& j = state.jobs.at(id);
     q.BindInt64(1, j.id).BindText(2, JobStateName(j.state)).BindText(3, j.kind).BindText(4, j.route);
@@ -443,6 +464,9 @@ void FlushJobs(store::Database& db, const State& state) {
       sched = js.dump();
     }
     q.BindText(14, sched);
+    json predicted = json::object();
+    for (const auto& [op, v] : j.predicted) predicted[std::to_string(op)] = v;
+    q.BindText(15, predicted.dump());
     q.BindInt64(12, j.dispatch).BindText(13, OpsToJson(*j.ops, state.stations).dump()).Run();
     q.Reset();
   }
@@ -499,6 +523,39 @@ Store::Store(const std::string& path) : db_(store::Database::Open(path)) {
   store::Migrate(db_, Migrations());
 }
 
+void LoadEstimates(store::Database& db, State& state) {
+  auto q = db.Prepare("SELECT program, station, revision, predicted_s, why, estimate_s, runs FROM estimates");
+  while (q.Step()) {
+    EstimateRec& r = state.estimates[{q.ColumnText(0), q.ColumnText(1)}];
+    r.revision = q.ColumnText(2);
+    if (!q.IsNull(3)) r.predicted = q.ColumnDouble(3);
+    r.why = q.ColumnText(4);
+    if (!q.IsNull(5)) r.estimate = q.ColumnDouble(5);
+    r.runs = static_cast<int>(q.ColumnInt64(6));
+  }
+}
+
+void FlushEstimates(store::Database& db, const State& state) {
+  if (state.dirty_estimates.empty()) return;
+  auto q = db.Prepare(
+      "INSERT OR REPLACE INTO estimates(program, station, revision, predicted_s, why, estimate_s, runs) "
+      "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7)");
+  for (const EstimateKey& k : state.dirty_estimates) {
+    const EstimateRec& r = state.estimates.at(k);
+    q.BindText(1, k.first).BindText(2, k.second).BindText(3, r.revision).BindText(5, r.why);
+    if (r.predicted)
+      q.BindDouble(4, *r.predicted);
+    else
+      q.BindNull(4);
+    if (r.estimate)
+      q.BindDouble(6, *r.estimate);
+    else
+      q.BindNull(6);
+    q.BindInt64(7, r.runs).Run();
+    q.Reset();
+  }
+}
+
 void Store::Load(State& state, std::size_t kept_ended) {
   LoadCounters(db_, state);
   LoadStations(db_, state);
@@ -507,6 +564,7 @@ void Store::Load(State& state, std::size_t kept_ended) {
   LoadJobs(db_, state, kept_ended);
   LoadDispatches(db_, state);
   LoadDecisions(db_, state);
+  LoadEstimates(db_, state);
   state.ClearDirty();
 }
 
@@ -553,6 +611,7 @@ void Store::Flush(const State& state) {
   FlushJobs(db_, state);
   FlushDispatches(db_, state);
   FlushDecisions(db_, state);
+  FlushEstimates(db_, state);
   tx.Commit();
 }
 

@@ -38,6 +38,16 @@ struct Op {
   std::vector<int> tool_ids;
   std::int64_t ucy_sum = 0;
   std::string blocked;  // non-empty: a program no longer qualifies; the pallet waits
+  // Per program: its revision (ProgramMeta::revision; "" for a part model or a program that does not
+  // qualify: no estimate) and whether its UCY is stated (stated UCY wins over the estimate, scheduler.md).
+  // Empty (an operation stored before estimates): UCY alone, as before.
+  std::vector<std::string> revisions;
+  std::vector<char> stated;
+  bool Stated(std::size_t i) const { return i >= stated.size() || stated[i]; }
+  const std::string& Revision(std::size_t i) const {
+    static const std::string none;
+    return i < revisions.size() ? revisions[i] : none;
+  }
 };
 using Ops = std::shared_ptr<const std::vector<Op>>;
 
@@ -70,7 +80,8 @@ struct JobRec {
   std::string reason;
   std::int64_t started = 0, finished = 0;
   std::optional<double> cycle;
-  std::int64_t dispatch = 0;  // live dispatch id, 0 = none
+  std::map<int, double> predicted;  // per operation: the predicted seconds its last allocation used
+  std::int64_t dispatch = 0;        // live dispatch id, 0 = none
   std::vector<DecisionRec> decisions;
   // Schedule jobs: the program, where its runner stands, and the run in progress.
   std::string sched_name, sched_text;
@@ -78,6 +89,17 @@ struct JobRec {
   schedule::RunnerPosition sched_pos;
   std::optional<schedule::Run> sched_run;
 };
+
+// A program's prediction and learned estimate on one station, for one revision of the program and of what
+// the prediction rests on (Predictor::Basis).
+struct EstimateRec {
+  std::string revision;  // ProgramMeta::revision + "/" + basis
+  std::optional<double> predicted;
+  std::string why;
+  std::optional<double> estimate;
+  int runs = 0;
+};
+using EstimateKey = std::pair<std::string, std::string>;  // program (map entry), station id
 
 struct DispatchRec {
   std::int64_t id = 0, job = 0;
@@ -131,6 +153,7 @@ struct State {
   // With a database, a cache of the keys (the newest, in idem_order); the database holds them all.
   std::unordered_map<std::string, Keyed> idem;
   std::deque<std::string> idem_order;
+  std::map<EstimateKey, EstimateRec> estimates;
   std::int64_t next_job = 1, next_dispatch = 1, next_seq = 1;
   std::size_t trim_at = 0;  // jobs.size() at which ended jobs are next let go (Scheduler::Impl::Trim)
 
@@ -138,6 +161,7 @@ struct State {
   std::set<std::int64_t> dirty_jobs, dirty_dispatches;
   std::set<int> dirty_stations, dirty_pallets;
   std::set<std::string> dirty_routes;
+  std::set<EstimateKey> dirty_estimates;
   std::vector<std::pair<std::int64_t, std::size_t>> new_decisions;  // job, index
   std::vector<std::pair<std::string, Keyed>> new_idem;
 

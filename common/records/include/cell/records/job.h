@@ -38,13 +38,15 @@ struct Job {
   int pallet = 0;
   std::int64_t started_ns = 0, finished_ns = 0;  // 0 = not yet
   std::optional<double> cycle_s;                 // machine seconds, once known
+  std::optional<double> predicted_s;             // job show: what its allocations predicted (not on the wire)
   int op_index = 1, op_count = 1;                // 1-based
   std::uint32_t decision_count = 0;              // all decisions, even when `decisions` holds the latest only
   std::vector<Decision> decisions;
 };
 
 // {id, state, route, pallet, station, reason, started, finished, cycle_s, kind, schedule, op_index, op_count,
-// decision_count}, plus `decisions` when with_decisions. Empty strings and unset times are null.
+// decision_count}, plus `decisions` and `predicted_s` when with_decisions. Empty strings and unset times are
+// null.
 nlohmann::json JobJson(const Job& job, bool with_decisions);
 nlohmann::json DecisionJson(const Decision& d);
 

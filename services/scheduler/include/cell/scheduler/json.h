@@ -5,6 +5,7 @@
 #include <nlohmann/json.hpp>
 
 #include "cell/records/job.h"
+#include "cell/scheduler/estimates.h"
 #include "cell/scheduler/scheduler.h"
 #include "cell/tooltable/tooltable.h"
 
@@ -24,6 +25,13 @@ nlohmann::json ToJson(const Decision& d);
 // as is, for the caller's bound to refuse.
 nlohmann::json FitJobShow(nlohmann::json job, std::size_t bound);
 nlohmann::json ToJson(const RouteView& r);
+// What `program show` adds (DESIGN §6b): {program, ucy_s, predicted_s, predicted_why, estimate_s,
+// estimate_runs}, each of the last four an object keyed by station id (predicted_s null and predicted_why the
+// reason where the station gives no number; predicted_why null where it does).
+nlohmann::json ToJson(const ProgramEstimates& e);
+// `plan` (DESIGN §6b): [{job, pallet, route, op (1-based), station, start, end, waiting_for}], ISO-8601 UTC;
+// a waiting pallet has station, start and end null and waiting_for the reason (null otherwise).
+nlohmann::json ToJson(const std::vector<PlanRow>& plan);
 // `station tools ID`: an array of {tool, socket, length, diameter, life_left_min, worn, broken}.
 nlohmann::json ToolsJson(const tooltable::ToolTable& t);
 

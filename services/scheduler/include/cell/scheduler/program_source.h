@@ -21,6 +21,8 @@ struct ProgramMeta {
   // Not a program: the pallet's part model (the store's type part_model), which the station hands to its
   // axis servo for probing; no tools, no cycle time (docs/scheduler.md, "Part models").
   bool part_model = false;
+  // A fingerprint of the program's text and dialect: predictions are kept with it (estimates.h).
+  std::string revision;
 };
 
 // The scheduler's view of a program's heading, read by its dialect (Dialect::ReadHeading; for KT-APL DESIGN

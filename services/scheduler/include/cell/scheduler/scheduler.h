@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "cell/idl/scheduler.h"
+#include "cell/scheduler/estimates.h"
 #include "cell/scheduler/program_source.h"
 #include "cell/scheduler/route.h"
 #include "cell/scheduler/schedule_program.h"
@@ -110,6 +111,9 @@ struct JobView {
   std::int64_t started_ms = 0;    // first run start reported by a station; 0 = not yet
   std::int64_t finished_ms = 0;   // terminal time; 0 = not yet
   std::optional<double> cycle_s;  // sum of the stations' reported machine seconds
+  // Sum of the predictions its allocations used (one per operation allocated; estimates.h), when every one
+  // had one.
+  std::optional<double> predicted_s;
   int op_index = 0;
   int op_count = 0;
   int decision_count = 0;           // all of the job's decisions, listed in `decisions` or not
@@ -181,6 +185,17 @@ struct JobResult {
   Effects effects;
 };
 
+// One visit of the plan (docs/scheduler.md §15): a pallet's operation on a station, projected.
+struct PlanRow {
+  std::int64_t job = 0;
+  int pallet = 0;
+  std::string route;                             // "" for a pallet run or a schedule
+  int op = 0;                                    // 0-based
+  std::string station;                           // "" while the pallet waits
+  std::optional<std::int64_t> start_ms, end_ms;  // wall clock, ms since the epoch; none while waiting
+  std::string waiting_for;                       // why it waits
+};
+
 class Scheduler {
  public:
   // Opens (or creates) the database and loads its state. `programs` must outlive the Scheduler.
@@ -236,6 +251,21 @@ class Scheduler {
   Effects ReportRun(const RunReport& report);
   // A program changed (or vanished) in the store: routes using it are re-validated.
   Effects ProgramChanged(std::string_view name);
+
+  // ---- estimates (estimates.h; docs/scheduler.md "Estimates") ----
+  // Predictions: `predictor` (not owned; nullptr: none, and the backlog counts UCY alone) gives each
+  // station's Basis; `ask` queues a prediction the scheduler has no record for and must return at once
+  // (PredictionQueue::Ask): it is called with the caller's lock held. Until the answer comes back through
+  // PredictionAnswered(), the backlog counts UCY, or nothing, as without a predictor.
+  void SetPredictor(Predictor* predictor, std::function<void(const PredictionRequest&)> ask);
+  // An answer to a request `ask` was given: kept with the request's revision unless it is transient.
+  Effects PredictionAnswered(const PredictionRequest& request, const Predicted& answer);
+  // A program's prediction and estimate on every known station; where one is missing it is asked for and
+  // shown as not predicted yet. Throws cell::Error(kNotFound) for a program the source does not have.
+  ProgramEstimates Estimates(std::string_view program);
+  // The projected schedule: every live job's visits from the stations' state now and the allocation rule
+  // run forward on the backlog seconds (UCY or estimates); waiting jobs without times.
+  std::vector<PlanRow> Plan();
 
   // ---- queries ----
   std::optional<JobView> Job(std::int64_t id, bool with_decisions = true) const;

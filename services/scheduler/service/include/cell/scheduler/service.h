@@ -20,7 +20,9 @@
 #include "cell/idl/scheduler.h"
 #include "cell/idl/station.h"
 #include "cell/program_store/client.h"
+#include "cell/scheduler/prediction_queue.h"
 #include "cell/scheduler/scheduler.h"
+#include "cell/scheduler/station_predictor.h"
 
 namespace cell::scheduler {
 
@@ -53,6 +55,9 @@ class Service {
   TextProgramSource source_;
   std::mutex mu_;  // guards sched_ and the bookkeeping below
   Scheduler sched_;
+  StationPredictor predictor_;  // predicted cycle times (docs/scheduler.md "Estimates")
+  // Its worker predicts off mu_ and takes mu_ only to hand an answer to sched_ (created by Start()).
+  std::optional<PredictionQueue> predictions_;
   std::map<std::string, std::string> dialect_;  // configured stations
   std::map<std::string, bool> online_;
   struct Condition {

@@ -1,0 +1,157 @@
+// Predicted cycle times through the real processes (issue 40): a mixed cell (KT01, KT-APL; EM01, EMCO) with
+// the program store, the scheduler and each station's interpreter and axis servo on the virtual clock.
+// `program show --json` gives the scheduler's prediction per station (a number on the station of the
+// program's dialect, null and the reason on the other), `job show` the prediction its allocation used beside
+// the cycle_s the station measured, and after the run the estimate has learned from it.
+#include <chrono>
+#include <cmath>
+#include <fstream>
+#include <iostream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "cell/testing/cell_fixture.h"
+
+using namespace cell::testing;
+using nlohmann::json;
+
+namespace {
+
+// The thread of emco_station_test (E59, manual ln 4176-4188), whose cycle is worked there by hand:
+// 20.12 .. 21.36 s.
+const char* kThread =
+    "%\n"
+    "N0010 T0202 G00 X50. Z10.\n"
+    "N0020 G97 S600 M04\n"
+    "N0030 G00 X31. Z2.\n"
+    "N0040 G85 X27.546 Z-42. D3=600 D6=1227 F2000\n"
+    "N0050 G00 X50. Z10.\n"
+    "N0060 M30\n";
+
+class PredictCell : public CellFixture {
+ protected:
+  PredictCell() : CellFixture("cell-predict-") {}
+  void SetUp() override { Up("KT01,EM01"); }
+
+  // `program show --json` until the scheduler's answer for `station` has come (a number, or the reason there
+  // is none): it predicts on a worker of its own, after the first show asked (docs/scheduler.md §14). The
+  // last shown at the deadline otherwise. Also prints how long the prediction took to appear.
+  json WaitPredicted(const std::string& name, const std::string& station) {
+    const auto t0 = std::chrono::steady_clock::now();
+    json shown;
+    for (;;) {
+      shown = CtlJson({"program", "show", name, "--json"});
+      const json& why = shown["predicted_why"][station];
+      if (shown["predicted_s"][station].is_number() ||
+          (why.is_string() && why.get<std::string>().rfind("not predicted yet", 0) != 0))
+        break;
+      if (std::chrono::steady_clock::now() - t0 > std::chrono::seconds(60)) return shown;
+      std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    }
+    std::cout << name << " on " << station << ": the prediction appeared after "
+              << std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() << " s\n";
+    return shown;
+  }
+};
+
+TEST_F(PredictCell, ProgramShowPredictsJobShowComparesAndTheEstimateLearns) {
+  const std::string path = cell_.data_dir() + "/THREAD.emco";
+  std::ofstream(path) << kThread;
+  auto put = Ctl({"program", "put", path, "--name", "THREAD", "--dialect", "emco"});
+  ASSERT_EQ(put.code, 0) << put.out << put.err;
+
+  json shown = WaitPredicted("THREAD", "EM01");
+  ASSERT_TRUE(shown["predicted_s"].is_object()) << shown.dump();
+  ASSERT_TRUE(shown["predicted_s"]["EM01"].is_number()) << shown.dump();
+  const double predicted = shown["predicted_s"]["EM01"].get<double>();
+  EXPECT_GT(predicted, 20.12) << shown.dump();
+  EXPECT_LT(predicted, 21.36) << shown.dump();
+  EXPECT_TRUE(shown["predicted_why"]["EM01"].is_null()) << shown.dump();
+  shown = WaitPredicted("THREAD", "KT01");  // asked with EM01's, answered after it
+  EXPECT_TRUE(shown["predicted_s"]["KT01"].is_null()) << shown.dump();
+  EXPECT_NE(shown["predicted_why"]["KT01"].get<std::string>().find("KT01 runs ktapl"), std::string::npos)
+      << shown.dump();
+  EXPECT_EQ(shown["estimate_s"]["EM01"], predicted) << shown.dump();
+  EXPECT_EQ(shown["estimate_runs"]["EM01"], 0) << shown.dump();
+
+  ASSERT_EQ(Ctl({"route", "define", "EMR", "--op", "EM01:THREAD"}).code, 0);
+  auto op = Ctl({"route", "operate", "EMR", "--pallet", "7"});
+  ASSERT_EQ(op.code, 0) << op.err;
+  const std::string job = op.out.substr(0, op.out.find('\n'));
+  // The allocation added the estimate to EM01's backlog (an EMCO program has no UCY).
+  auto wait = Ctl({"job", "wait", job, "--timeout", "60"});
+  ASSERT_EQ(wait.code, 0) << wait.out << wait.err;
+  json j = CtlJson({"job", "show", job, "--json"});
+  ASSERT_TRUE(j["cycle_s"].is_number()) << j.dump();
+  ASSERT_TRUE(j["predicted_s"].is_number()) << j.dump();
+  EXPECT_DOUBLE_EQ(j["predicted_s"].get<double>(), predicted);
+  const double actual = j["cycle_s"].get<double>();
+  // The same servo model on the same virtual clock: within 1 % (issue 40's target).
+  EXPECT_NEAR(predicted, actual, 0.01 * actual) << j.dump();
+  std::cout << "THREAD on EM01: predicted " << predicted << " s, actual " << actual << " s\n";
+
+  json after = CtlJson({"program", "show", "THREAD", "--json"});
+  EXPECT_EQ(after["estimate_runs"]["EM01"], 1) << after.dump();
+  EXPECT_NEAR(after["estimate_s"]["EM01"].get<double>(), actual, 1e-6) << after.dump();  // the first run
+  EXPECT_EQ(after["predicted_s"]["EM01"], predicted) << after.dump();
+}
+
+// KT-APL corpus programs (those station_corpus_test runs on KT01), each as a pallet run one after another:
+// the prediction its allocation used against the machine seconds KT01 measured (the figures are printed).
+// A prediction starts from the machine at rest at its zero with an empty spindle (docs/predict.md,
+// judgement call 4); on the station each run starts where the last one left the axes, the spindle and the
+// magazine, so only the first run starts as predicted: it agrees within 1 %, the others within 6 % (measured:
+// 0.95-1.04, the first approach move and tool change from elsewhere).
+TEST_F(PredictCell, CorpusProgramsOnKt01) {
+  const std::vector<std::string> cases = {
+      "p2_5_25_arc_cw_absolute", "p2_5_27_full_circle",  "p2_5_32_helix", "p2_5_33_r_arc",
+      "p2_5_34_r_sign",          "p1_e23_cls_run_count", "p1_e10_g82"};
+  int pallet = 10;
+  for (const auto& c : cases) {
+    const std::string name = "C" + std::to_string(pallet);
+    auto put = Ctl({"program", "put", SourceDir() + "/tests/conformance/ktapl/" + c + ".ktapl", "--name",
+                    name, "--dialect", "ktapl"});
+    ASSERT_EQ(put.code, 0) << c << ": " << put.out << put.err;
+    // The allocation uses a prediction only once it is there: wait for it, as an operator would look.
+    const json shown = WaitPredicted(name, "KT01");
+    ASSERT_TRUE(shown["predicted_s"]["KT01"].is_number()) << c << ": " << shown.dump();
+    ASSERT_EQ(Ctl({"pallet", "set", std::to_string(pallet), name}).code, 0);
+    auto run = Ctl({"pallet", "run", std::to_string(pallet), "--station", "KT01"});
+    ASSERT_EQ(run.code, 0) << run.err;
+    const std::string job = run.out.substr(0, run.out.find('\n'));
+    auto wait = Ctl({"job", "wait", job, "--timeout", "60"});
+    ASSERT_EQ(wait.code, 0) << c << ": " << wait.out << wait.err;
+    json j = CtlJson({"job", "show", job, "--json"});
+    ASSERT_TRUE(j["predicted_s"].is_number()) << c << ": " << j.dump();
+    const double predicted = j["predicted_s"].get<double>(), actual = j["cycle_s"].get<double>();
+    std::cout << c << " on KT01: predicted " << predicted << " s, actual " << actual << " s, ratio "
+              << predicted / actual << "\n";
+    EXPECT_NEAR(predicted, actual, (pallet == 10 ? 0.01 : 0.06) * actual) << c;
+    ++pallet;
+  }
+}
+
+// `cellctl plan`: a pallet whose only station is down waits, with the reason, and no times.
+TEST_F(PredictCell, PlanShowsAWaitingPallet) {
+  const std::string path = cell_.data_dir() + "/P1.ktapl";
+  std::ofstream(path) << "%\n(NAM,P1)\n(UCY,120)\nG71 G90\nG0 X100. Y100. Z100. F0\nM30\n";
+  ASSERT_EQ(Ctl({"program", "put", path, "--name", "P1", "--dialect", "ktapl"}).code, 0);
+  ASSERT_EQ(Ctl({"route", "define", "W", "--op", "KT02:P1"}).code, 0);
+  auto op = Ctl({"route", "operate", "W", "--pallet", "3"});
+  ASSERT_EQ(op.code, 0) << op.err;
+  json plan = CtlJson({"plan", "--json"});
+  ASSERT_TRUE(plan.is_array()) << plan.dump();
+  ASSERT_EQ(plan.size(), 1u) << plan.dump();
+  EXPECT_EQ(plan[0]["pallet"], 3);
+  EXPECT_EQ(plan[0]["route"], "W");
+  EXPECT_EQ(plan[0]["op"], 1);
+  EXPECT_TRUE(plan[0]["start"].is_null()) << plan.dump();
+  EXPECT_TRUE(plan[0]["end"].is_null()) << plan.dump();
+  EXPECT_NE(plan[0]["waiting_for"].get<std::string>().find("KT02"), std::string::npos) << plan.dump();
+}
+
+}  // namespace
