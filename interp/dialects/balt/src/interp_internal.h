@@ -394,6 +394,7 @@ class BaltRun final : public RunBase {
   void LoadRandomTools();
   int RandomPocket(int tool, int col);
   void SaveToolLife();
+  void SaveFile(const std::string& lib, const std::string& text);  // opt_.save; a store refusal stops the run
   const tooltable::ToolEntry* FindOffset(int n) const;
 
   // Compensation and the output route (interp_comp.cpp)
