@@ -297,7 +297,9 @@ void Station::RunProgram(ActiveRun& run, const std::string& entry) {
     }
     board_.Publish();
     stream_.WaitDrained();
+    panel_.FixOverrides(false);  // the program's end resets its modes, M49 with them
   } catch (...) {
+    panel_.FixOverrides(false);
     try {
       commit();  // what the program changed before it failed stays, as on the control
     } catch (const std::exception& e) {
@@ -395,6 +397,10 @@ void Station::ExecuteIo(const std::string& program, const interp::Canon& c, AuxI
     } else {
       checked([&] { dio_.SetOutputs(spec->bits); });
     }
+  } else if (const auto* ovr = c.If<interp::OverridesOp>()) {
+    // KT-APL M49/M48 (ln 2896-2937): from this block on; the motion before it runs at the operator's setting.
+    stream_.WaitDrained();
+    panel_.FixOverrides(ovr->fixed);
   } else if (const auto* a = c.If<interp::AuxOp>()) {
     const auto bit = checked([&] { return aux.Aux(a->m); });
     if (!bit) return;

@@ -499,6 +499,46 @@ TEST_F(StationCore, M00StopsTheRunUntilCycleStart) {
   EXPECT_DOUBLE_EQ(last_x, 20.0);  // the run went on after the stop
 }
 
+// KT-APL M49 (ln 2896-2937, example 5-18 at ln 5095-5133): feed and spindle speed at 100 % whatever the
+// selector says, from the M49 block on (the motion before it ran at the operator's 50 %: the station drains
+// first); M48 gives the 50 % back after the tapping moves; the operator's setting is kept throughout, and a
+// change of it while fixed is recorded and applies after M48. The program's end releases a forgotten M49.
+TEST_F(StationCore, M49FixesTheFeedOverrideAt100PercentUntilM48) {
+  cell::StationRequest o;
+  o.op(cell::STATION_OVERRIDE);
+  o.feed_override(0.5);
+  o.rapid_override(-1);
+  station_->OnCommand(o);
+  Put("P", "G71 G90\nG01 X0 Y0 Z206. F500.\nX154. Y305.\nZ184. M49\nZ206.\nX381. Y229. M48\nX0 M49\nM30\n");
+  Dispatch(1, {"P"});
+  std::vector<std::pair<double, std::size_t>> sent;  // feed override sent, segments the servo had run then
+  io_.on_control = [&](const cell::ServoControl& c) {
+    sent.emplace_back(c.feed_override(), servo_.ran.size());
+  };
+  bool pressed = false;
+  script_ = [&] {
+    if (!pressed && station_->Control().feed_override() == 1.0) {
+      pressed = true;
+      o.feed_override(0.8);  // the selector turned while fixed: not sent, kept
+      station_->OnCommand(o);
+      EXPECT_DOUBLE_EQ(station_->Control().feed_override(), 1.0);
+    }
+  };
+  EXPECT_EQ(RunOne(1).state(), cell::RUN_COMPLETED);
+  io_.on_control = nullptr;
+  // Fixed once the 2 moves before M49 (Z206, then X154 Y305) had run; the 0.8 press
+  // is sent as 100 %; M48 sends 0.8 after the two tapping moves; the last M49 is released at the end.
+  ASSERT_EQ(sent.size(), 5u);
+  EXPECT_DOUBLE_EQ(sent[0].first, 1.0);
+  EXPECT_EQ(sent[0].second, 2u);
+  EXPECT_DOUBLE_EQ(sent[1].first, 1.0);
+  EXPECT_DOUBLE_EQ(sent[2].first, 0.8);
+  EXPECT_EQ(sent[2].second, 4u);
+  EXPECT_DOUBLE_EQ(sent[3].first, 1.0);
+  EXPECT_DOUBLE_EQ(sent[4].first, 0.8);
+  EXPECT_DOUBLE_EQ(station_->Control().feed_override(), 0.8);
+}
+
 // Balt-System (issue 35 item 4): START on an idle station runs the program SPG selected (ln 8873-8888) as a
 // run of the station's own (dispatch id below 1); nothing selected is FILMS4 54 (ln 10079-10080). A map's
 // "BS01/MP2:P9" is read from that memory alone, and never from another station's. A KT-APL station's START
