@@ -388,8 +388,14 @@ void Station::ExecuteIo(const std::string& program, const interp::Canon& c, AuxI
   } else if (const auto* o = c.If<interp::OutputOp>()) {
     const auto spec = checked([&] { return ParseOutputSpec(o->spec); });
     if (!spec) {
-      spdlog::debug("output '{}' is not a discrete output the station models", o->spec);
-      return;
+      // A signal the station does not model (Balt-System SA/SK buffers, H functions on a machine that has
+      // no output for them) would be a program's effect dropped: the run stops at the block instead.
+      checked([&]() -> void {
+        throw Error(
+            Errc::kFailedPrecondition,
+            fmt::format("output '{}' is not a signal of station {} (its station file has no such output)",
+                        o->spec, cfg_.id));
+      });
     }
     stream_.WaitDrained();
     if (spec->save) {

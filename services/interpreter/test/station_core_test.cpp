@@ -539,6 +539,32 @@ TEST_F(StationCore, M49FixesTheFeedOverrideAt100PercentUntilM48) {
   EXPECT_DOUBLE_EQ(station_->Control().feed_override(), 0.8);
 }
 
+// Balt-System SA/SK (ln 4108-4138, judgement call 52): a station whose file names no such signal never takes
+// the write and drops it; with INTERFACE_LOGIC=0 (BS01) the dialect refuses it (FILMS4 103), and a station
+// that left the setting on still stops the run at the block rather than log the signal away.
+TEST_F(StationCore, ABaltBufferWriteTheStationDoesNotModelStopsTheRun) {
+  cfg_.id = "BS01";
+  cfg_.dialect = "balt";
+  cfg_.tools = {};
+  servo_.station_id = "BS01";
+  Make();
+  Put("SIG", "G0 X10 Y20 Z30\nSA128=1\nG0 X0\nM30\n", "BS01");
+  ASSERT_EQ(Dispatch(1, {"SIG"}).state(), cell::RUN_QUEUED);
+  auto run = RunOne(1);
+  EXPECT_EQ(run.state(), cell::RUN_FAILED);
+  EXPECT_EQ(
+      run.reason(),
+      "SIG:2: error: output 'SA128=1' is not a signal of station BS01 (its station file has no such output)");
+  cfg_.params["INTERFACE_LOGIC"] = "0";
+  Make();
+  ASSERT_EQ(Dispatch(2, {"SIG"}).state(), cell::RUN_QUEUED);
+  auto refused = RunOne(2);
+  EXPECT_EQ(refused.state(), cell::RUN_FAILED);
+  EXPECT_NE(refused.reason().to_string().find("SIG:2:1: error: [FILMS4 103] FUNCTION NOT CONFIGURED: SA:"),
+            std::string::npos)
+      << refused.reason();
+}
+
 // Balt-System (issue 35 item 4): START on an idle station runs the program SPG selected (ln 8873-8888) as a
 // run of the station's own (dispatch id below 1); nothing selected is FILMS4 54 (ln 10079-10080). A map's
 // "BS01/MP2:P9" is read from that memory alone, and never from another station's. A KT-APL station's START
