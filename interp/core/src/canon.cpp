@@ -65,6 +65,8 @@ const char* OpName(Op op) {
       return "event";
     case Op::kToolData:
       return "tool_data";
+    case Op::kOverrides:
+      return "overrides";
   }
   return "unknown";
 }
@@ -471,6 +473,7 @@ struct Writer {
     Key(out, "text");
     Str(out, e.text);
   }
+  void operator()(const OverridesOp& o) const { Bool(out, "fixed", o.fixed); }
   void operator()(const ToolDataOp& t) const {
     Key(out, "tool");
     Str(out, t.cleared ? std::string_view("*") : std::string_view(t.entry.tool));

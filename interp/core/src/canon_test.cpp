@@ -161,6 +161,15 @@ TEST(CanonJson, LatheOps) {
   EXPECT_EQ(ToJsonLine(c), R"({"op":"tool_change","line":1,"tool":"1001"})");
 }
 
+TEST(CanonJson, OverridesSaysWhetherTheyAreFixed) {
+  Canon c;
+  c.line = 8;
+  c.Set<OverridesOp>().fixed = true;
+  EXPECT_EQ(ToJsonLine(c), R"({"op":"overrides","line":8,"fixed":true})");
+  c.Set<OverridesOp>();
+  EXPECT_EQ(ToJsonLine(c), R"({"op":"overrides","line":8,"fixed":false})");
+}
+
 TEST(CanonJson, ToolDataKeepsKtaplKeysAndAddsLatheKeysOnlyWhereSet) {
   Canon c;
   c.line = 2;

@@ -314,7 +314,9 @@ void Station::RunProgram(ActiveRun& run, const std::string& entry) {
     }
     board_.Publish();
     stream_.WaitDrained();
+    panel_.FixOverrides(false);  // the program's end resets its modes, M49 with them
   } catch (...) {
+    panel_.FixOverrides(false);
     try {
       commit();  // what the program changed before it failed stays, as on the control
     } catch (const std::exception& e) {
@@ -396,8 +398,14 @@ void Station::ExecuteIo(const std::string& program, const interp::Canon& c, AuxI
   } else if (const auto* o = c.If<interp::OutputOp>()) {
     const auto spec = checked([&] { return ParseOutputSpec(o->spec); });
     if (!spec) {
-      spdlog::debug("output '{}' is not a discrete output the station models", o->spec);
-      return;
+      // A signal the station does not model (Balt-System SA/SK buffers, H functions on a machine that has
+      // no output for them) would be a program's effect dropped: the run stops at the block instead.
+      checked([&]() -> void {
+        throw Error(
+            Errc::kFailedPrecondition,
+            fmt::format("output '{}' is not a signal of station {} (its station file has no such output)",
+                        o->spec, cfg_.id));
+      });
     }
     stream_.WaitDrained();
     if (spec->save) {
@@ -405,6 +413,10 @@ void Station::ExecuteIo(const std::string& program, const interp::Canon& c, AuxI
     } else {
       checked([&] { dio_.SetOutputs(spec->bits); });
     }
+  } else if (const auto* ovr = c.If<interp::OverridesOp>()) {
+    // KT-APL M49/M48 (ln 2896-2937): from this block on; the motion before it runs at the operator's setting.
+    stream_.WaitDrained();
+    panel_.FixOverrides(ovr->fixed);
   } else if (const auto* a = c.If<interp::AuxOp>()) {
     const auto bit = checked([&] { return aux.Aux(a->m); });
     if (!bit) return;

@@ -158,9 +158,10 @@ std::uint32_t Panel::Press(const cell::StationRequest& r) {
   saved.optional_stop = optional_stop_;
   db_.SavePanel(saved);
   control_ = c;
-  publish_(control_);
-  spdlog::info("panel: feed hold {}, feed override {:.0f} %, rapid override {:.0f} %",
-               c.feed_hold() ? "on" : "off", c.feed_override() * 100, c.rapid_override() * 100);
+  publish_(Sent());
+  spdlog::info("panel: feed hold {}, feed override {:.0f} %{}, rapid override {:.0f} %",
+               c.feed_hold() ? "on" : "off", c.feed_override() * 100,
+               overrides_fixed_ ? " (fixed at 100 % by the program)" : "", c.rapid_override() * 100);
   return c.revision();
 }
 
@@ -178,17 +179,33 @@ void Panel::AbortRun(std::int32_t run_id) {
   std::lock_guard lk(mu_);
   control_.abort_run(run_id);
   control_.revision(control_.revision() + 1);
-  publish_(control_);
+  publish_(Sent());
+}
+
+void Panel::FixOverrides(bool fixed) {
+  std::lock_guard lk(mu_);
+  if (fixed == overrides_fixed_) return;
+  overrides_fixed_ = fixed;
+  control_.revision(control_.revision() + 1);
+  publish_(Sent());
+  spdlog::info("panel: feed and spindle speed {}",
+               fixed ? "fixed at 100 % by the program (M49)" : "overrides enabled again");
+}
+
+cell::ServoControl Panel::Sent() const {
+  cell::ServoControl c = control_;
+  if (overrides_fixed_ && c.feed_override() > 0) c.feed_override(1.0);
+  return c;
 }
 
 void Panel::Publish() {
   std::lock_guard lk(mu_);
-  publish_(control_);
+  publish_(Sent());
 }
 
 cell::ServoControl Panel::Get() const {
   std::lock_guard lk(mu_);
-  return control_;
+  return Sent();
 }
 
 }  // namespace cell::station

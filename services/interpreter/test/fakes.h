@@ -209,7 +209,10 @@ class FakeIo final : public StationIo {
   void PublishEvent(const cell::StationEvent& e) override { events.push_back(e); }
   void PublishProgram(const cell::StationProgram& p) override { programs_run.push_back(p); }
   void PublishRun(const cell::RunStatus& r) override { runs.push_back(r); }
-  void PublishControl(const cell::ServoControl& c) override { control.push_back(c); }
+  void PublishControl(const cell::ServoControl& c) override {
+    control.push_back(c);
+    if (on_control) on_control(c);
+  }
   std::optional<std::string> Program(const std::string& node, const std::string& name) override {
     fetched.push_back(name);
     if (on_fetch) on_fetch(name);
@@ -283,6 +286,7 @@ class FakeIo final : public StationIo {
   std::vector<cell::StationProgram> programs_run;
   std::vector<cell::RunStatus> runs;
   std::vector<cell::ServoControl> control;
+  std::function<void(const cell::ServoControl&)> on_control;  // at each publication
   std::vector<cell::InspectionRequest> records;
   std::vector<std::string> fetched;
 };

@@ -522,6 +522,72 @@ TEST_F(StationCore, M00StopsTheRunUntilCycleStart) {
   EXPECT_DOUBLE_EQ(last_x, 20.0);  // the run went on after the stop
 }
 
+// KT-APL M49 (ln 2896-2937, example 5-18 at ln 5095-5133): feed and spindle speed at 100 % whatever the
+// selector says, from the M49 block on (the motion before it ran at the operator's 50 %: the station drains
+// first); M48 gives the 50 % back after the tapping moves; the operator's setting is kept throughout, and a
+// change of it while fixed is recorded and applies after M48. The program's end releases a forgotten M49.
+TEST_F(StationCore, M49FixesTheFeedOverrideAt100PercentUntilM48) {
+  cell::StationRequest o;
+  o.op(cell::STATION_OVERRIDE);
+  o.feed_override(0.5);
+  o.rapid_override(-1);
+  station_->OnCommand(o);
+  Put("P", "G71 G90\nG01 X0 Y0 Z206. F500.\nX154. Y305.\nZ184. M49\nZ206.\nX381. Y229. M48\nX0 M49\nM30\n");
+  Dispatch(1, {"P"});
+  std::vector<std::pair<double, std::size_t>> sent;  // feed override sent, segments the servo had run then
+  io_.on_control = [&](const cell::ServoControl& c) {
+    sent.emplace_back(c.feed_override(), servo_.ran.size());
+  };
+  bool pressed = false;
+  script_ = [&] {
+    if (!pressed && station_->Control().feed_override() == 1.0) {
+      pressed = true;
+      o.feed_override(0.8);  // the selector turned while fixed: not sent, kept
+      station_->OnCommand(o);
+      EXPECT_DOUBLE_EQ(station_->Control().feed_override(), 1.0);
+    }
+  };
+  EXPECT_EQ(RunOne(1).state(), cell::RUN_COMPLETED);
+  io_.on_control = nullptr;
+  // Fixed once the 2 moves before M49 (Z206, then X154 Y305) had run; the 0.8 press
+  // is sent as 100 %; M48 sends 0.8 after the two tapping moves; the last M49 is released at the end.
+  ASSERT_EQ(sent.size(), 5u);
+  EXPECT_DOUBLE_EQ(sent[0].first, 1.0);
+  EXPECT_EQ(sent[0].second, 2u);
+  EXPECT_DOUBLE_EQ(sent[1].first, 1.0);
+  EXPECT_DOUBLE_EQ(sent[2].first, 0.8);
+  EXPECT_EQ(sent[2].second, 4u);
+  EXPECT_DOUBLE_EQ(sent[3].first, 1.0);
+  EXPECT_DOUBLE_EQ(sent[4].first, 0.8);
+  EXPECT_DOUBLE_EQ(station_->Control().feed_override(), 0.8);
+}
+
+// Balt-System SA/SK (ln 4108-4138, judgement call 52): a station whose file names no such signal never takes
+// the write and drops it; with INTERFACE_LOGIC=0 (BS01) the dialect refuses it (FILMS4 103), and a station
+// that left the setting on still stops the run at the block rather than log the signal away.
+TEST_F(StationCore, ABaltBufferWriteTheStationDoesNotModelStopsTheRun) {
+  cfg_.id = "BS01";
+  cfg_.dialect = "balt";
+  cfg_.tools = {};
+  servo_.station_id = "BS01";
+  Make();
+  Put("SIG", "G0 X10 Y20 Z30\nSA128=1\nG0 X0\nM30\n", "BS01");
+  ASSERT_EQ(Dispatch(1, {"SIG"}).state(), cell::RUN_QUEUED);
+  auto run = RunOne(1);
+  EXPECT_EQ(run.state(), cell::RUN_FAILED);
+  EXPECT_EQ(
+      run.reason(),
+      "SIG:2: error: output 'SA128=1' is not a signal of station BS01 (its station file has no such output)");
+  cfg_.params["INTERFACE_LOGIC"] = "0";
+  Make();
+  ASSERT_EQ(Dispatch(2, {"SIG"}).state(), cell::RUN_QUEUED);
+  auto refused = RunOne(2);
+  EXPECT_EQ(refused.state(), cell::RUN_FAILED);
+  EXPECT_NE(refused.reason().to_string().find("SIG:2:1: error: [FILMS4 103] FUNCTION NOT CONFIGURED: SA:"),
+            std::string::npos)
+      << refused.reason();
+}
+
 // Balt-System (issue 35 item 4): START on an idle station runs the program SPG selected (ln 8873-8888) as a
 // run of the station's own (dispatch id below 1); nothing selected is FILMS4 54 (ln 10079-10080). A map's
 // "BS01/MP2:P9" is read from that memory alone, and never from another station's. A KT-APL station's START

@@ -26,7 +26,6 @@ constexpr const char* kExecuted = "[FILMS2 03] COMMAND EXECUTED";
 constexpr const char* kExists = "[FILMS2 05] EXISTS DELETE??? (Y/N)";
 constexpr const char* kDisplayed = "[FILMS2 06] FILE DISPLAYED";
 constexpr const char* kContinue = "[FILMS2 09] DO YOU CONTINUE? (Y/N)";
-constexpr const char* kNoFreeSectors = "[FILMS3 15] NO FREE SECTORS";
 constexpr const char* kInvalidOperation = "[FILMS3 20] INVALID OPERATION";
 constexpr const char* kWriteProtected = "[FILMS3 26] WRITE PROTECTED FILE";
 

@@ -457,7 +457,30 @@ bool ProgramStore::HasNamespace(std::string_view node) const {
   return std::find(namespaces_.begin(), namespaces_.end(), node) != namespaces_.end();
 }
 
+bool ProgramStore::IsMemory(std::string_view node) const {
+  if (node.find('/') != std::string_view::npos) return true;  // "ID/MPn": only Balt-System stations have them
+  const Dialect d = NamespaceDialect(node);
+  return d && d->name() == "balt";
+}
+
 namespace {
+
+// A Balt-System memory holds kMemoryCapacity characters (ln 223): storing `size` characters as `name` in
+// `node` (replacing its head, if any) must leave it within that, else FILMS3 15 "the specified destination
+// device is full" (ln 9758-9759) and nothing is stored. HOST and other stations' namespaces are not bounded.
+void CheckMemoryRoom(const ProgramStore& store, Database& db, const std::string& node,
+                     const std::string& name, std::uint64_t size) {
+  if (!store.IsMemory(node)) return;
+  Statement st = db.Prepare(
+      "SELECT coalesce(sum(r.size), 0) FROM files f JOIN revisions r ON r.file_id = f.id AND r.rev = f.head "
+      "WHERE f.node = ? AND f.name <> ?");
+  st.BindText(1, node).BindText(2, name);
+  const std::uint64_t others = st.Step() ? static_cast<std::uint64_t>(st.ColumnInt64(0)) : 0;
+  if (others + size > kMemoryCapacity) {
+    Fail(Errc::kFailedPrecondition, fmt::format("{}: {} would hold {} characters, {} at most (ln 223)",
+                                                kNoFreeSectors, node, others + size, kMemoryCapacity));
+  }
+}
 
 void RequireNamespace(const ProgramStore& store, std::string_view node) {
   if (node.empty()) Fail(Errc::kInvalidArgument, "no namespace given");
@@ -526,6 +549,7 @@ struct ProgramStore::Impl {
                          Quote(req.node, req.name), existing->info.head_revision));
       }
     }
+    CheckMemoryRoom(self, db, req.node, req.name, content.size());
     Statement blob = db.Prepare("INSERT OR IGNORE INTO blobs(sha256, size, data) VALUES (?, ?, ?)");
     blob.BindText(1, sha).BindInt64(2, static_cast<std::int64_t>(content.size())).BindBlob(3, content).Run();
     std::uint32_t rev = InsertRevision(db, existing, req.node, req.name, sha, md);
@@ -672,6 +696,7 @@ PutResult ProgramStore::Copy(const CopyRequest& request) {
                          Quote(request.to_node, to_name), existing->info.head_revision));
       }
     }
+    CheckMemoryRoom(*this, db, request.to_node, to_name, source.info.metadata.size);
     std::uint32_t rev = InsertRevision(db, existing, request.to_node, to_name, source.info.sha256, md);
     result.created = !existing;
     result.file = MustFind(db, request.to_node, to_name, rev).info;
@@ -708,6 +733,7 @@ OpResult ProgramStore::Rename(const RenameRequest& request) {
       Fail(Errc::kAlreadyExists, fmt::format("{} already exists; remove it first (rename never overwrites)",
                                              Quote(to_node, to_name)));
     }
+    if (to_node != request.node) CheckMemoryRoom(*this, db, to_node, to_name, source.info.metadata.size);
     Statement up = db.Prepare("UPDATE files SET node = ?, name = ? WHERE id = ?");
     up.BindText(1, to_node).BindText(2, to_name).BindInt64(3, source.file_id).Run();
     std::uint32_t head = source.info.head_revision;

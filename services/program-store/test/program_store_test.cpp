@@ -25,6 +25,7 @@ namespace {
 const Dialect kNoDialect = nullptr;
 const Dialect kKtapl = interp::FindDialect("ktapl");
 const Dialect kOkuma = interp::FindDialect("okuma");
+const Dialect kBalt = interp::FindDialect("balt");
 
 namespace fs = std::filesystem;
 using ::testing::ElementsAre;
@@ -224,6 +225,64 @@ TEST(ProgramStore, StationNamespacesLendTheirDialect) {
   StoreOptions bad = Options(tmp.path());
   bad.namespace_dialects = {{"KT07", kKtapl}};
   ExpectError([&] { ProgramStore x(bad); }, Errc::kInvalidArgument, "not a configured station namespace");
+}
+
+// A Balt-System memory holds 64,000 characters (manual ln 223): a put, a copy or a move that would overfill
+// one is FILMS3 15 NO FREE SECTORS (ln 9758-9759) and stores nothing; MP1 is the station's own namespace.
+// Other stations' namespaces and HOST are not bounded. Sizes: 40,000 + 24,000 = 64,000 fits exactly; one
+// character more does not, nor does replacing the 24,000 file by 24,001.
+TEST(ProgramStore, BaltMemoriesHoldSixtyFourThousandCharacters) {
+  TempDir tmp;
+  StoreOptions opts = Options(tmp.path());
+  opts.namespaces = {"BS01", "BS01/MP2", "KT01"};
+  opts.namespace_dialects = {{"BS01", kBalt}, {"BS01/MP2", kBalt}, {"KT01", kKtapl}};
+  ProgramStore ps(opts);
+  EXPECT_TRUE(ps.IsMemory("BS01"));
+  EXPECT_TRUE(ps.IsMemory("BS01/MP2"));
+  EXPECT_FALSE(ps.IsMemory("KT01"));
+  EXPECT_FALSE(ps.IsMemory("HOST"));
+  // A Balt-System program of n characters: comment blocks after a G0 block.
+  auto text = [](std::size_t n) {
+    std::string t = "G0 X0\n";
+    while (t.size() < n) t += std::string(std::min<std::size_t>(79, n - t.size() - 1), ';') + "\n";
+    return t;
+  };
+  auto put = [&](const std::string& node, const std::string& name, std::size_t n, bool force = false) {
+    PutRequest r = Req(node, name, text(n), force);
+    r.dialect = kBalt;
+    return ps.Put(r);
+  };
+  put("BS01/MP2", "BIG", 40000);
+  put("BS01/MP2", "MID", 24000);
+  const std::string before = Snapshot(ps.database_path());
+  ExpectError([&] { put("BS01/MP2", "ONE", 6); }, Errc::kFailedPrecondition,
+              "[FILMS3 15] NO FREE SECTORS: BS01/MP2 would hold 64006 characters, 64000 at most");
+  ExpectError([&] { put("BS01/MP2", "MID", 24001, true); }, Errc::kFailedPrecondition,
+              "[FILMS3 15] NO FREE SECTORS");
+  EXPECT_EQ(Snapshot(ps.database_path()), before);
+  put("BS01/MP2", "MID", 23000, true);  // a smaller revision frees room
+  put("BS01", "P1", 64000);
+  ExpectError([&] { put("BS01", "P2", 10); }, Errc::kFailedPrecondition, "NO FREE SECTORS");
+  put("HOST", "P3", 2000);
+  ExpectError(
+      [&] {
+        ps.Copy({.from_node = "HOST",
+                 .from_name = "P3",
+                 .from_revision = 0,
+                 .to_node = "BS01/MP2",
+                 .to_name = "",
+                 .force = false,
+                 .idempotency_key = ""});
+      },
+      Errc::kFailedPrecondition, "NO FREE SECTORS");
+  ExpectError(
+      [&] {
+        ps.Rename({.node = "HOST", .name = "P3", .to_node = "BS01", .to_name = "", .idempotency_key = ""});
+      },
+      Errc::kFailedPrecondition, "NO FREE SECTORS");
+  std::string kt;
+  while (kt.size() < 70000) kt += "N10 G0 X1. F0\n";
+  ps.Put(Req("KT01", "LONG", kt));  // not a memory: only the store's file size bounds it
 }
 
 TEST(ProgramStore, BadInputGetsAClearErrorAndChangesNothing) {

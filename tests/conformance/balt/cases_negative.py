@@ -163,6 +163,18 @@ neg("neg_rap_auto_return", "; ln 2170\nRAP=1\n", 2, 5, 5,
     "return from", "L2170")
 neg("neg_uep_off", "; ln 2177\nUEP=0\n", 2, 5, 103,
     "FUNCTION NOT CONFIGURED: UEP=0: the servo always checks the following error", "L2177")
+# SA / SK (ln 4108-4138): the A and K buffers are the interface logic's (the machine builder's signals, "data
+# area 2 Siprom system", not in the manual). A machine without it (INTERFACE_LOGIC=0, BS01) refuses writes and
+# reads with FILMS4 103; ABTVU, K bit 340 (ln 8520), asks for a tool life count the cell cannot make
+# (judgement call 52).
+neg("neg_sa_no_interface_logic", "; ln 4132-4136 SA128=1 sets signal 128 of the A buffer\nSA128=1\n", 2, 1, 103,
+    "FUNCTION NOT CONFIGURED: SA: the machine has no interface logic for the A and K buffers (INTERFACE_LOGIC=0)",
+    "L4132", params="INTERFACE_LOGIC=0\n")
+neg("neg_sk_read_no_interface_logic", "; ln 5486 E2=SK396 reads byte 396 of the K buffer\nE2=SK396\n", 2, 4,
+    103, "FUNCTION NOT CONFIGURED: SK: the machine has no interface logic for the A and K buffers "
+    "(INTERFACE_LOGIC=0)", "L5486", params="INTERFACE_LOGIC=0\n")
+neg("neg_sk_abtvu", "; ln 8520 ABTVU: SK340.BL=1 counts tool life without cutting\nSK340.BL=1\n", 2, 1, 103,
+    "FUNCTION NOT CONFIGURED: SK340.BL=1 (ABTVU): the cell counts tool life only while the tool cuts", "L8520")
 neg("neg_erf_negative", "; ln 4317-4329 ERF is a form error in mm\nERF=-.1\n", 2, 5, 13,
     "FORMAT ERROR: ERF (a form error) is not negative", "L4319")
 neg("neg_mcd_range", "; ln 4333 MCD is 0 to 2\nMCD=2.5\n", 2, 5, 13, "FORMAT ERROR: MCD is 0-2", "L4333")

@@ -287,6 +287,7 @@ class BaltRun final : public RunBase {
   // Assignments and variables (interp_params.cpp)
   void Assign(const Assignment& a);
   void AssignGlobal(const Assignment& a);
+  void CheckAbtvu(std::string_view name, int col);
   std::vector<unsigned char>& Buffer(std::string_view name, int col);
   void WriteBuffer(std::string_view name, int index, std::string_view fmt, double v, int col);
   void WriteBufferString(std::string_view name, int index, std::string_view fmt, std::string_view s, int col);
@@ -394,6 +395,7 @@ class BaltRun final : public RunBase {
   void LoadRandomTools();
   int RandomPocket(int tool, int col);
   void SaveToolLife();
+  void SaveFile(const std::string& lib, const std::string& text);  // opt_.save; a store refusal stops the run
   const tooltable::ToolEntry* FindOffset(int n) const;
 
   // Compensation and the output route (interp_comp.cpp)
@@ -507,6 +509,9 @@ class BaltRun final : public RunBase {
   // Random tool management (§6.7): the file FI1RAN when MP0 holds it; RANDOM_TOOLS=1 asks for it (FILMS4 83
   // without it). The special tool on the spindle, 0 = none (FILMS4 90).
   std::optional<RandomToolFile> random_;
+  // The A and K buffers (SA, SK, ln 4108-4138) are the interface logic's, whose signals the machine builder
+  // assigns; INTERFACE_LOGIC=0: the machine has none (BS01), SA/SK are FILMS4 103 (judgement call 52).
+  bool interface_logic_ = true;
   bool random_required_ = false;
   int spindle_special_ = 0;
   int next_tool_ = -1;  // the T word's tool, -1 = none yet

@@ -358,6 +358,11 @@ double BaltRun::UnitFactorPublic() const {
 }
 
 std::vector<unsigned char>& BaltRun::Buffer(std::string_view name, int col) {
+  if ((name == "SA" || name == "SK") && !interface_logic_) {
+    Fail(col, 103,
+         fmt::format("{}: the machine has no interface logic for the A and K buffers (INTERFACE_LOGIC=0)",
+                     name));
+  }
   if (name == "SA") return sa_;
   if (name == "SK") return sk_;
   if (name == "SYVAR") return syvar_;
@@ -446,6 +451,7 @@ void BaltRun::WriteBuffer(std::string_view name, int index, std::string_view f, 
       std::memcpy(p, &v, 8);
       break;
   }
+  CheckAbtvu(name, col);
   if (name != "SYVAR") {
     // The A and K buffers are the machine logic's: the write goes out as an output.
     Out<OutputOp>().spec =
@@ -470,7 +476,18 @@ void BaltRun::WriteBufferString(std::string_view name, int index, std::string_vi
     Fail(col, 18, fmt::format("{}{} is outside the area", name, index));
   }
   for (std::size_t k = 0; k < n; ++k) buf[static_cast<std::size_t>(index) + k] = k < s.size() ? s[k] : ' ';
+  CheckAbtvu(name, col);
   if (name != "SYVAR") Out<OutputOp>().spec = fmt::format("{}{}=\"{}\"", name, index, s);
+}
+
+// K buffer bit 340, ABTVU (ln 8520): tool life counted while the spindle and the feed are not active. The
+// cell counts a tool's life from the servo's cutting time (feed moves with the spindle turning) only, so
+// ABTVU=1 has no effect it could give: FILMS4 103; 0 is the cell's state (judgement call 52).
+void BaltRun::CheckAbtvu(std::string_view name, int col) {
+  if (name == "SK" && sk_.size() > 340 / 8 && ((sk_[340 / 8] >> (340 % 8)) & 1) != 0) {
+    sk_[340 / 8] = static_cast<unsigned char>(sk_[340 / 8] & ~(1u << (340 % 8)));
+    Fail(col, 103, "SK340.BL=1 (ABTVU): the cell counts tool life only while the tool cuts");
+  }
 }
 
 std::string BaltRun::GlobalString(std::string_view name, int index, std::string_view f, int col) {

@@ -108,6 +108,8 @@ BaltRun::BaltRun(const RunOptions& o) : RunBase(o) {
       logic_m_ = Codes(key, val);
     } else if (key == "H_CODES") {
       logic_h_ = Codes(key, val);
+    } else if (key == "INTERFACE_LOGIC") {
+      interface_logic_ = Number(key, val) != 0;
     } else if (key == "RANDOM_TOOLS") {
       random_required_ = Number(key, val) != 0;
     } else if (key == "TRANSDUCER") {

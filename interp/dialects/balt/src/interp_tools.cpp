@@ -149,7 +149,19 @@ void BaltRun::LoadToolLife() {
 
 void BaltRun::SaveToolLife() {
   life_changed_ = false;
-  if (life_ && opt_.save) opt_.save("GE1TOL/MP3", life_->Format());
+  if (life_) SaveFile("GE1TOL/MP3", life_->Format());
+}
+
+// A file saved into a memory: the station's store refuses it when the memory would hold more than 64,000
+// characters (FILMS3 15 NO FREE SECTORS, ln 223, 9758-9759), and the run stops at the block that changed it
+// with that message instead of going on with a change the memory did not keep.
+void BaltRun::SaveFile(const std::string& lib, const std::string& text) {
+  if (!opt_.save) return;
+  try {
+    opt_.save(lib, text);
+  } catch (const cell::Error& e) {
+    Fail(1, 0, e.what());
+  }
 }
 
 // (RQU,tool,offset,Z..,K..) / (RQP,...) (ln 6820-6872, 7357-7412): increments added to the offset's length

@@ -115,7 +115,7 @@ void BaltRun::LoadOrigins() {
 
 void BaltRun::SaveOrigins() {
   origins_changed_ = false;
-  if (opt_.save) opt_.save("FILEOR/MP3", FormatOrigins(origins_));
+  SaveFile("FILEOR/MP3", FormatOrigins(origins_));
 }
 
 void BaltRun::SelectOrigin(int n, std::uint32_t axes, int col) {

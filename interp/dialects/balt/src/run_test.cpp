@@ -4,6 +4,7 @@
 
 #include <map>
 
+#include "cell/error/error.h"
 #include "cell/interp/balt.h"
 
 namespace cell::interp {
@@ -80,6 +81,26 @@ TEST(BaltRun, SavesTheFilesItChanges) {
   EXPECT_NE(saved["FILEOR/MP3"].find("3 X+10.250"), std::string::npos) << saved["FILEOR/MP3"];
   EXPECT_NE(saved["GE1TOL/MP3"].find("VTU,13,T14,[TOOL COMP]14,t60,t2,t60,A"), std::string::npos)
       << saved["GE1TOL/MP3"];
+}
+
+// A memory that cannot take the changed file (the store's FILMS3 15 NO FREE SECTORS, ln 223, 9758-9759)
+// stops the run at the block that changed it, with the store's message: the change is not kept silently.
+TEST(BaltRun, AFullMemoryStopsTheRunThatSavesIntoIt) {
+  std::map<std::string, std::string> lib = {{"FILEOR", "0 X0 Y0 Z0\n3 X10\n"}};
+  RunOptions opt;
+  opt.library = [&](const std::string& n) -> std::optional<std::string> {
+    auto it = lib.find(n);
+    return it == lib.end() ? std::nullopt : std::optional<std::string>(it->second);
+  };
+  opt.save = [](const std::string&, const std::string&) {
+    throw cell::Error(cell::Errc::kFailedPrecondition, "[FILMS3 15] NO FREE SECTORS: BS01/MP3 is full");
+  };
+  opt.program_text = "G0 X1\n(RQO,3,X0.25)\nG0 X2\n";
+  std::string err;
+  auto out = RunAll(opt, nullptr, &err);
+  EXPECT_NE(err.find(":2:1: error: [FILMS3 15] NO FREE SECTORS: BS01/MP3 is full"), std::string::npos) << err;
+  ASSERT_FALSE(out.empty());
+  EXPECT_EQ(out.back().line, 1);  // nothing after the refused block
 }
 
 // RQU changes the tool table the run hands back (Run::Tools) and says so in a tool_data op.

@@ -443,6 +443,9 @@ void KtRun::ImmediateMCodes(const Words& words, bool speed_changed, const Word* 
         if (code == 40) mode_.tapping_range = true;
         if (code == 48 || code == 49) mode_.overrides_locked = code == 49;
         Out<AuxOp>().m = code;
+        // M49 forces feed and spindle speed to 100 %, M48 gives the selectors back (ln 2896-2937): the
+        // control's own effect, after the machine-logic signal (call 83).
+        if (code == 48 || code == 49) Out<OverridesOp>().fixed = code == 49;
         break;
       case 99: {
         // With M00 in the block and an operator at the machine the program stops with the block's comment
@@ -692,6 +695,7 @@ void KtRun::AfterMCode(const BlockMCodes& mc) {
       ChangeTool(mc.after_col);
       if (mode_.spindle == SpindleDir::kCw || mode_.spindle == SpindleDir::kCcw)
         mode_.spindle = SpindleDir::kStop;
+      if (mode_.overrides_locked) Out<OverridesOp>().fixed = false;  // "M49 is canceled by M06" (ln 2937)
       mode_.overrides_locked = false;
       break;
     case 9: {

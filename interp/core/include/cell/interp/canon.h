@@ -62,8 +62,9 @@ enum class Op : std::uint8_t {
   kFileOp,      // copy, delete, print, remote copy, save/load of tables
   kEvent,       // an event record
   kToolData,    // the program changed the tool table
+  kOverrides,   // the operator's feed and spindle speed overrides are fixed at 100 % or enabled again
 };
-inline constexpr int kOpCount = static_cast<int>(Op::kToolData) + 1;
+inline constexpr int kOpCount = static_cast<int>(Op::kOverrides) + 1;
 
 // Stable JSON name of an op ("rapid", "tool_change", ...).
 const char* OpName(Op op);
@@ -257,11 +258,19 @@ struct ToolDataOp {
   tooltable::ToolEntry entry;
 };
 
+// KT-APL M49 / M48 (ln 2896-2937): while `fixed`, feed and spindle speed run at 100 % of their programmed
+// values whatever the operator's override selectors say (a feed override of 0 % still stops the axes); M48,
+// and M06, enable the selectors again. The station applies it to what it publishes to the servo.
+struct OverridesOp {
+  static constexpr Op kOp = Op::kOverrides;
+  bool fixed = false;
+};
+
 struct Canon {
   using Payload = std::variant<UnitsOp, RapidOp, LinearOp, ArcOp, ThreadOp, DwellOp, SpindleOp, CoolantOp,
                                ToolSelectOp, ToolChangeOp, StopOp, EndOp, PalletOp, MessageOp, AlarmOp, AuxOp,
                                RegridOp, ProbeOp, OutputOp, WaitInputOp, FileOpenOp, FileWriteOp, FileCloseOp,
-                               FileOpOp, EventOp, ToolDataOp>;
+                               FileOpOp, EventOp, ToolDataOp, OverridesOp>;
 
   int line = 0;  // 1-based line of the block in PROGRAM that caused it (calling block for library code)
   Payload p;

@@ -73,16 +73,25 @@ class Panel {
   std::uint64_t CycleStarts() const;
   // The scheduler cancelled the running dispatch: the servo stops it too.
   void AbortRun(std::int32_t run_id);
+  // The program fixes feed and spindle speed at 100 % (KT-APL M49, an `overrides` op) or gives the
+  // selectors back (M48, M06, the program's end). While fixed the servo gets a feed override of 100 % (0 %
+  // stays 0 %: "axis motion is inhibited", ln 2917); the operator's setting is kept, changes to it are
+  // recorded, and it is published again when the program releases the selectors. The servo's spindle has no
+  // override, so the spindle is always at 100 %. Not persisted: a restarted interpreter starts no program.
+  void FixOverrides(bool fixed);
   void Publish();
-  cell::ServoControl Get() const;
+  cell::ServoControl Get() const;  // what the servo is sent
 
  private:
+  cell::ServoControl Sent() const;  // control_ as the servo gets it (caller holds mu_)
+
   StationDb& db_;
   std::function<void(const cell::ServoControl&)> publish_;
   mutable std::mutex mu_;
   cell::ServoControl control_;
   std::uint64_t cycle_starts_ = 0;
   std::optional<bool> optional_stop_;
+  bool overrides_fixed_ = false;
 };
 
 }  // namespace cell::station

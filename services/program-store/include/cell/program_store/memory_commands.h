@@ -60,9 +60,6 @@ struct MemoryCommandResult {
   bool differ = false;             // DIF found a difference
 };
 
-// The characters one memory MP0-MP6 holds: the control's user memory (ln 223, "64,000 characters").
-inline constexpr std::uint64_t kMemoryCapacity = 64000;
-
 // The namespace of memory `memory` ("MP0".."MP6", "HOST", "HD", "HDO"; "" = MP1) of `station`. Other
 // devices (PR, CT, PP, LP, TY, FD, ...) are not on the cell: FILMS1 04 PERIPHERAL ERROR.
 std::string MemoryNamespace(std::string_view station, std::string_view memory);

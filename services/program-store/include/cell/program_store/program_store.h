@@ -26,6 +26,10 @@
 namespace cell::program_store {
 
 inline constexpr std::string_view kHostNamespace = "HOST";
+// The characters one Balt-System memory MP0-MP6 holds: the control's user memory (ln 223, "64,000
+// characters"). A put, copy or move that would overfill a memory is refused with the control's FILMS3 15.
+inline constexpr std::uint64_t kMemoryCapacity = 64000;
+inline constexpr const char* kNoFreeSectors = "[FILMS3 15] NO FREE SECTORS";
 
 struct StoreOptions {
   std::filesystem::path data_dir;  // the database is data_dir / database_file
@@ -191,6 +195,8 @@ class ProgramStore {
 
   bool HasNamespace(std::string_view node) const;
   Dialect NamespaceDialect(std::string_view node) const;  // nullptr for HOST or when not configured
+  // A Balt-System memory (held to kMemoryCapacity): "ID/MPn", or a station namespace of that dialect (MP1).
+  bool IsMemory(std::string_view node) const;
   const std::vector<std::string>& namespaces() const { return namespaces_; }
   const std::filesystem::path& database_path() const { return db_path_; }
 
