@@ -195,7 +195,7 @@ const std::vector<TopicRule>& Table() {
        {kOp},
        {kDnc},
        Scope::kOwnStation,
-       "`cellctl dnc send|receive|drip|status`: transfers on the station's serial line"},
+       "`cellctl dnc send`, `receive`, `drip`, `status`: transfers on the station's serial line"},
       {"cell/station/<ID>/dnc/reply",
        {kDnc},
        {kOp},

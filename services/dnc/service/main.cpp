@@ -58,7 +58,10 @@ int main(int argc, char** argv) {
                  serial.device, serial.baud, cell::dnc::CodeName(serial.format.code), serial.format.data_bits,
                  cell::dnc::ParityName(serial.format.parity).substr(0, 1), serial.stop_bits,
                  cell::dnc::FlowName(serial.flow), cell::dnc::EndName(serial.format.end));
-    daemon.RunUntilStop([] { return true; });
+    daemon.RunUntilStop([&service] {
+      service.Tick();
+      return true;
+    });
     daemon.NotifyStopping();
     return 0;
   } catch (const std::exception& e) {

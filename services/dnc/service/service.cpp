@@ -128,14 +128,14 @@ cell::DncReply Service::Receive(const cell::DncRequest& r) {
   const std::string name = r.name().to_string();
   const std::string node = r.node().size() == 0 ? station_ : r.node().to_string();
   const std::string where = fmt::format("{}:{}", node, name);
-  Begin(cell::DNC_RECEIVING, where);
   ReceiveOptions o;
   o.flow = serial_.flow;
   o.progress = [this](const Stats& st) { Progress(st); };
   o.cancel = &cancel_;
   Received got;
   try {
-    FlushInput(Line());
+    FlushInput(Line());  // before the line says it is receiving: what comes after that is the program
+    Begin(cell::DNC_RECEIVING, where);
     got = dnc::Receive(Line(), serial_.format, o);
     if (got.text.find_first_not_of("\n") == std::string::npos)
       throw Error(Errc::kInvalidArgument, fmt::format("device {}: byte {}: no program between the leader and "
@@ -192,7 +192,13 @@ void Service::Progress(const Stats& st, bool force) {
   status_.rate(st.Rate());
   status_.stalls(static_cast<uint32_t>(st.stalls));
   status_.stopped_s(st.stalled_s);
+  dirty_ = true;
   if (force || std::chrono::steady_clock::now() - published_ > std::chrono::milliseconds(500)) Publish();
+}
+
+void Service::Tick() {
+  std::lock_guard lk(mu_);
+  if (dirty_) Publish();
 }
 
 void Service::End(const Stats& st, const std::string& error) {
@@ -214,6 +220,7 @@ void Service::End(const Stats& st, const std::string& error) {
 }
 
 void Service::Publish() {
+  dirty_ = false;
   status_.updated_ns(health::WallNs());
   published_ = std::chrono::steady_clock::now();
   try {

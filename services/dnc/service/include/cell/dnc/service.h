@@ -32,6 +32,9 @@ class Service {
   Service(bus::Participant& p, std::string station, std::string dialect, Serial serial,
           std::unique_ptr<Port> line, Opener reopen);
   ~Service();  // a transfer under way is cancelled
+  // From the main loop: publishes figures that changed since the line state was last written (a transfer's
+  // progress is written at most every half second, and a line gone quiet calls no progress).
+  void Tick();
   Service(const Service&) = delete;
   Service& operator=(const Service&) = delete;
 
@@ -58,6 +61,7 @@ class Service {
   std::mutex mu_;
   cell::DncStatus status_;
   std::chrono::steady_clock::time_point published_;
+  bool dirty_ = false;  // status_ has figures not yet written
   bus::Writer<cell::DncStatus> status_w_;
   bus::Server<cell::DncRequest, cell::DncReply> server_;
 };
