@@ -293,6 +293,32 @@ TEST_F(DncTest, AKilledDncMidReceiveStoresNothingAndARestartedOneServesAgain) {
   EXPECT_EQ(wire, Encode(FormatOf(kKt), Program("%", 3)));
 }
 
+TEST_F(DncTest, DripKeepsASmallControlBufferFedWhileTheControlExecutes) {
+  // 250 blocks (about 8 KB), 32 times the control's 256-byte buffer, which it empties at half the line rate
+  // and with a 50 ms pause every 512 bytes (a long block): the cell must stop and go on with every XOFF/XON.
+  const std::string big = Program("%", 250);
+  Put("BIG", "HOST", big);
+  test::SimOptions so = Sim(kKt);
+  so.exec_bytes_per_s = so.line_bytes_per_s / 2;
+  so.pause_every = 512;
+  so.pause_s = 0.05;
+  test::SimControl sim(*ptys_["KT01"], so);
+  sim.StartReading();
+  ForgetStates();
+  auto drip = CtlInBackground({"dnc", "drip", "KT01", "BIG"}, "drip");
+  EXPECT_TRUE(WaitState("KT01", cell::DNC_DRIPPING, 1000));  // under way, as `dnc status` shows it
+  auto code = drip->Wait(std::chrono::seconds(60));
+  sim.Join();
+  ASSERT_EQ(code, std::optional<int>(0)) << cell::testing::ReadFile(dir_ + "/drip.err");
+  EXPECT_THAT(cell::testing::ReadFile(dir_ + "/drip.out"), HasSubstr("dripped HOST:BIG to KT01"));
+  EXPECT_EQ(sim.error(), "");
+  EXPECT_EQ(sim.lost(), 0u);
+  EXPECT_GT(sim.xoffs(), 10u);
+  EXPECT_LE(sim.max_fill(), 256u);
+  EXPECT_EQ(sim.text(), big);
+  EXPECT_EQ(sim.wire(), Encode(FormatOf(kKt), big));
+}
+
 TEST_F(DncTest, StatusListsEveryLineAndOneWithoutAProcessAsSuch) {
   Put("S1", "KT01", Program("%", 10));
   RunResult r;
@@ -319,6 +345,26 @@ TEST_F(DncTest, StatusListsEveryLineAndOneWithoutAProcessAsSuch) {
   r = Ctl({"dnc", "send", "KT02", "S1"});
   EXPECT_EQ(r.code, 1);
   EXPECT_THAT(r.err, HasSubstr("station KT02 has no [serial] table"));
+}
+
+// `cellctl up` checks every [serial] line as cell-dnc would before it starts anything: EM01 at 9600 baud
+// (the EMCOTRONIC accepts 150-4800, ln 5315, alarm 870 ln 7225) is refused in one line, nothing runs.
+TEST(DncUp, ABadSerialLineIsRefusedBeforeAnythingStarts) {
+  const std::string dir = cell::testing::MakeTempDir("cell-dnc-up-");
+  fs::copy(cell::testing::SourceDir() + "/deploy", dir + "/config", fs::copy_options::recursive);
+  std::ofstream(dir + "/config/stations/EM01.toml", std::ios::app)
+      << "\n[serial]\ndevice = \"/dev/ttyS0\"\nbaud = 9600\n";
+  const std::map<std::string, std::string> env{{"CELL_CONFIG_DIR", dir + "/config"},
+                                               {"CELL_DATA_DIR", dir + "/data"}};
+  const auto start = std::chrono::steady_clock::now();
+  RunResult r = cell::testing::RunCommand({cell::testing::BinDir() + "/cellctl", "up", "--stations", "EM01"},
+                                          env, std::chrono::seconds(60));
+  EXPECT_EQ(r.code, 1);
+  EXPECT_THAT(r.err, HasSubstr("EM01.toml: [serial] baud = 9600"));
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(10));
+  EXPECT_FALSE(fs::exists(dir + "/data/cell-up.json"));
+  fs::remove_all(dir);
 }
 
 }  // namespace
