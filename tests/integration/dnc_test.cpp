@@ -37,14 +37,16 @@ using ::testing::HasSubstr;
 
 namespace {
 
-// Each line's [serial] table beyond the device: KT01 at 38400 baud (3840 bytes/s, 7E1 in the eighth bit,
-// docs/dnc.md), EM01 at the EMCOTRONIC's highest, 4800 (480 bytes/s: alarm 870, ln 7225), XON/XOFF (a pty
-// carries no RTS/CTS).
+// Each line's [serial] table beyond the device: KT01 at its default 9600 baud (960 bytes/s, 7E1 in the eighth
+// bit, docs/dnc.md), EM01 at the EMCOTRONIC's highest, 4800 (480 bytes/s: alarm 870, ln 7225), XON/XOFF (a
+// pty carries no RTS/CTS). Real rates, not scaled: the simulated control's 192 bytes above its XOFF mark are
+// then 200 ms (KT01) and 400 ms (EM01) of the machine's scheduling delays, which a test on a loaded machine
+// needs.
 struct Line {
   std::string station, dialect;
   int baud;
 };
-const Line kKt{"KT01", "ktapl", 38400};
+const Line kKt{"KT01", "ktapl", 9600};
 const Line kEm{"EM01", "emco", 4800};
 
 // A program both controls' codes carry (upper case, no '=' or '!'): 20 blocks, several XOFFs' worth.
@@ -294,12 +296,13 @@ TEST_F(DncTest, AKilledDncMidReceiveStoresNothingAndARestartedOneServesAgain) {
 }
 
 TEST_F(DncTest, DripKeepsASmallControlBufferFedWhileTheControlExecutes) {
-  // 250 blocks (about 8 KB), 32 times the control's 256-byte buffer, which it empties at half the line rate
-  // and with a 50 ms pause every 512 bytes (a long block): the cell must stop and go on with every XOFF/XON.
-  const std::string big = Program("%", 250);
+  // 150 blocks (about 5 KB), 20 times the control's 256-byte buffer, which it empties at 3/4 of the line
+  // rate and with a 50 ms pause every 512 bytes (a long block): the cell must stop and go on with every
+  // XOFF/XON.
+  const std::string big = Program("%", 150);
   Put("BIG", "HOST", big);
   test::SimOptions so = Sim(kKt);
-  so.exec_bytes_per_s = so.line_bytes_per_s / 2;
+  so.exec_bytes_per_s = so.line_bytes_per_s * 0.75;
   so.pause_every = 512;
   so.pause_s = 0.05;
   test::SimControl sim(*ptys_["KT01"], so);
@@ -307,7 +310,7 @@ TEST_F(DncTest, DripKeepsASmallControlBufferFedWhileTheControlExecutes) {
   ForgetStates();
   auto drip = CtlInBackground({"dnc", "drip", "KT01", "BIG"}, "drip");
   EXPECT_TRUE(WaitState("KT01", cell::DNC_DRIPPING, 1000));  // under way, as `dnc status` shows it
-  auto code = drip->Wait(std::chrono::seconds(60));
+  auto code = drip->Wait(std::chrono::seconds(90));
   sim.Join();
   ASSERT_EQ(code, std::optional<int>(0)) << cell::testing::ReadFile(dir_ + "/drip.err");
   EXPECT_THAT(cell::testing::ReadFile(dir_ + "/drip.out"), HasSubstr("dripped HOST:BIG to KT01"));
