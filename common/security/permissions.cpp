@@ -16,6 +16,7 @@ constexpr Role kSch = Role::kScheduler;
 constexpr Role kIw = Role::kInspectionWriter;
 constexpr Role kInt = Role::kInterpreter;
 constexpr Role kSrv = Role::kAxisServo;
+constexpr Role kDnc = Role::kDnc;
 constexpr Role kOp = Role::kOperator;
 constexpr Role kView = Role::kViewer;
 
@@ -24,7 +25,7 @@ constexpr std::string_view kStationMark = "<ID>";
 }  // namespace
 
 const std::vector<Role>& Roles() {
-  static const std::vector<Role> roles{kPs, kSch, kIw, kInt, kSrv, kOp, kView};
+  static const std::vector<Role> roles{kPs, kSch, kIw, kInt, kSrv, kDnc, kOp, kView};
   return roles;
 }
 
@@ -40,6 +41,8 @@ std::string_view RoleName(Role r) {
       return "interpreter";
     case Role::kAxisServo:
       return "axis-servo";
+    case Role::kDnc:
+      return "dnc";
     case Role::kOperator:
       return "operator";
     case Role::kViewer:
@@ -49,7 +52,7 @@ std::string_view RoleName(Role r) {
 }
 
 bool IsStationRole(Role r) {
-  return r == Role::kInterpreter || r == Role::kAxisServo;
+  return r == Role::kInterpreter || r == Role::kAxisServo || r == Role::kDnc;
 }
 
 // Who writes and reads each topic today (the services' bus bindings), narrowed to that. The viewer and the
@@ -58,8 +61,8 @@ bool IsStationRole(Role r) {
 const std::vector<TopicRule>& Table() {
   static const std::vector<TopicRule> table{
       {"cell/health",
-       {kPs, kSch, kIw, kInt, kSrv},
-       {kPs, kSch, kIw, kInt, kSrv, kOp, kView},
+       {kPs, kSch, kIw, kInt, kSrv, kDnc},
+       {kPs, kSch, kIw, kInt, kSrv, kDnc, kOp, kView},
        Scope::kSharedKeyed,
        "every service's heartbeat; its identity claim, the scheduler's census, `cellctl up`, the dashboard"},
       {"cell/station/status",
@@ -132,6 +135,11 @@ const std::vector<TopicRule>& Table() {
        {kOp, kView},
        Scope::kCell,
        "program store writes the list of every namespace; `program ls` as viewer reads"},
+      {"cell/dnc/status",
+       {kDnc},
+       {kOp, kView},
+       Scope::kSharedKeyed,
+       "cell-dnc writes its serial line's state (transfer, bytes, rate, stalls, errors); `dnc status` reads"},
       {"cell/inspection/stored",
        {kIw},
        {kOp, kView},
@@ -188,14 +196,25 @@ const std::vector<TopicRule>& Table() {
        {kSch, kOp},
        Scope::kOwnStation,
        "the station answers commands"},
+      {"cell/station/<ID>/dnc/request",
+       {kOp},
+       {kDnc},
+       Scope::kOwnStation,
+       "`cellctl dnc send`, `receive`, `drip`, `status`: transfers on the station's serial line"},
+      {"cell/station/<ID>/dnc/reply",
+       {kDnc},
+       {kOp},
+       Scope::kOwnStation,
+       "the station's cell-dnc answers when the transfer has ended"},
       {"cell/program_store/request",
-       {kSch, kInt, kOp},
+       {kSch, kInt, kDnc, kOp},
        {kPs},
        Scope::kSharedService,
-       "`cellctl program ...`; scheduler and interpreters read programs, interpreters store files"},
+       "`cellctl program ...`; scheduler and interpreters read programs, interpreters store files, cell-dnc "
+       "reads what it sends and stores what a control punches (its own station's namespace)"},
       {"cell/program_store/reply",
        {kPs},
-       {kSch, kInt, kOp},
+       {kSch, kInt, kDnc, kOp},
        Scope::kSharedService,
        "the program store answers"},
       {"cell/scheduler/request",

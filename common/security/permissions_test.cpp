@@ -41,15 +41,15 @@ std::vector<std::string> AllIdentityNames() {
 TEST(Table, CoversExactlyTheBusTopics) {
   const std::string st = "<ID>";
   std::set<std::string> bus_topics{
-      topics::kHealth,           topics::kStationStatus, topics::kToolTable,      topics::kVariables,
-      topics::kStationIo,        topics::kStationEvent,  topics::kSchedulerState, topics::kJobState,
-      topics::kRunStatus,        topics::kJobStatus,     topics::kProgramChange,  topics::kAlarm,
-      topics::kInspectionStored, topics::kAxisState,     topics::kProgramList,    topics::Segments(st),
-      topics::Probe(st),         topics::Part(st),       topics::Progress(st),    topics::ServoControl(st),
-      topics::ServoTools(st),    topics::kStationProgram};
+      topics::kHealth,           topics::kStationStatus,  topics::kToolTable,      topics::kVariables,
+      topics::kStationIo,        topics::kStationEvent,   topics::kSchedulerState, topics::kJobState,
+      topics::kRunStatus,        topics::kJobStatus,      topics::kProgramChange,  topics::kAlarm,
+      topics::kInspectionStored, topics::kAxisState,      topics::kProgramList,    topics::Segments(st),
+      topics::Probe(st),         topics::Part(st),        topics::Progress(st),    topics::ServoControl(st),
+      topics::ServoTools(st),    topics::kStationProgram, topics::kDncStatus};
   for (const std::string& svc :
        {std::string(topics::kProgramStore), std::string(topics::kScheduler), std::string(topics::kInspection),
-        topics::StationRun(st), topics::StationCommand(st)}) {
+        topics::StationRun(st), topics::StationCommand(st), topics::StationDnc(st)}) {
     bus_topics.insert(bus::RequestTopic(svc));
     bus_topics.insert(bus::ReplyTopic(svc));
   }
@@ -99,6 +99,22 @@ TEST(Grants, AStationWritesOnlyItsOwnSegmentsAndProbeResults) {
     for (const auto* list : {&g.publish, &g.subscribe})
       for (const auto& t : *list) EXPECT_EQ(t.find('*'), std::string::npos) << n << ": " << t;
   }
+}
+
+TEST(Grants, OnlyAStationsOwnDncServesItsLineAndTheOperatorCommandsIt) {
+  EXPECT_TRUE(MaySubscribe("dnc-KT01", "cell/station/KT01/dnc/request"));
+  EXPECT_TRUE(MayPublish("dnc-KT01", "cell/station/KT01/dnc/reply"));
+  EXPECT_FALSE(MaySubscribe("dnc-KT01", "cell/station/KT02/dnc/request"));
+  EXPECT_FALSE(MayPublish("dnc-KT01", "cell/station/KT02/dnc/reply"));
+  EXPECT_TRUE(MayPublish("operator", "cell/station/KT02/dnc/request"));
+  EXPECT_FALSE(MayPublish("viewer", "cell/station/KT01/dnc/request"));
+  EXPECT_FALSE(MayPublish("interpreter-KT01", "cell/station/KT01/dnc/request"));
+  // It reads and stores programs through the store, writes its line's state, and nothing of the machine.
+  EXPECT_TRUE(MayPublish("dnc-KT01", "cell/program_store/request"));
+  EXPECT_TRUE(MayPublish("dnc-KT01", "cell/dnc/status"));
+  EXPECT_TRUE(MaySubscribe("viewer", "cell/dnc/status"));
+  EXPECT_FALSE(MayPublish("dnc-KT01", "cell/station/KT01/segments"));
+  EXPECT_FALSE(MayPublish("dnc-KT01", "cell/station/KT01/command/request"));
 }
 
 TEST(Grants, AStationAnswersOnlyItsOwnCommands) {
@@ -159,8 +175,8 @@ TEST(Identity, NamesRoundTrip) {
     ASSERT_TRUE(back) << id.Name();
     EXPECT_EQ(*back, id);
   }
-  EXPECT_EQ(CellIdentities({"KT01"}).size(), 7u);
-  EXPECT_EQ(CellIdentities({"KT01", "KT01"}).size(), 7u);
+  EXPECT_EQ(CellIdentities({"KT01"}).size(), 8u);
+  EXPECT_EQ(CellIdentities({"KT01", "KT01"}).size(), 8u);
   EXPECT_EQ(ParseIdentity("interpreter-KT01")->station, "KT01");
   for (const char* bad : {"interpreter", "interpreter-", "axis-servo-K/T", "root", "operator-KT01", "",
                           "interpreter-ABCDEFGHIJKLMNOPQ"})

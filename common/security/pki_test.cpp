@@ -69,7 +69,7 @@ TEST_F(Pki, MakesEveryFileOwnerOnlyWhereKeysAre) {
   const PkiReport r = InitPki(opts_);
   EXPECT_EQ(r.ca, Outcome::kCreated);
   EXPECT_EQ(r.governance, Outcome::kCreated);
-  ASSERT_EQ(r.identities.size(), 7u);
+  ASSERT_EQ(r.identities.size(), 8u);
   for (auto& [name, out] : r.identities) EXPECT_EQ(out, Outcome::kCreated) << name;
 
   const fs::path& d = opts_.dir;
@@ -80,7 +80,7 @@ TEST_F(Pki, MakesEveryFileOwnerOnlyWhereKeysAre) {
   EXPECT_EQ(Mode(d / "governance.xml"), 0644u);
   EXPECT_EQ(Mode(d / "governance.p7s"), 0644u);
   for (const char* name : {"program-store", "scheduler", "inspection-writer", "operator", "viewer",
-                           "interpreter-KT01", "axis-servo-KT01"}) {
+                           "interpreter-KT01", "axis-servo-KT01", "dnc-KT01"}) {
     EXPECT_EQ(Mode(Id(name)), 0700u) << name;
     EXPECT_EQ(Mode(Id(name) / "key.pem"), 0600u) << name;
     EXPECT_EQ(Mode(Id(name) / "cert.pem"), 0644u) << name;
@@ -91,7 +91,7 @@ TEST_F(Pki, MakesEveryFileOwnerOnlyWhereKeysAre) {
   // Nothing else: no staged files, no openssl configuration left behind.
   size_t files = 0;
   for (auto& e : fs::recursive_directory_iterator(d)) files += e.is_regular_file() ? 1 : 0;
-  EXPECT_EQ(files, 4u + 7u * 4u);
+  EXPECT_EQ(files, 4u + 8u * 4u);
 }
 
 TEST_F(Pki, CertificatesAndSignaturesVerifyAgainstTheCaAndNoOther) {

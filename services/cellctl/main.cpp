@@ -19,6 +19,7 @@ int Run(int argc, char** argv) {
   cellctl::AddInspectVerbs(app, ctx);
   cellctl::AddCellVerbs(app, ctx);
   cellctl::AddPkiVerbs(app, ctx);
+  cellctl::AddDncVerbs(app, ctx);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

@@ -21,6 +21,7 @@
 #include "cell/config/units.h"
 #include "cell/dashboard/feed.h"
 #include "cell/dashboard/text_view.h"
+#include "cell/dnc/settings.h"
 #include "cell/interp/station_rules.h"
 #include "cell/names/names.h"
 #include "cell/security/pki.h"
@@ -69,6 +70,18 @@ bool RunsScheduler(const std::vector<CellProcess>& procs) {
 // A station's table that a unit asks for (X-CellStationTable): [serial] makes cell-dnc@ID run.
 bool HasTable(const std::string& station, const std::string& table) {
   return table == "serial" && cell::interp::LoadStation(station).serial.has_value();
+}
+
+// The station's file, and its [serial] line checked as its cell-dnc will check it (cell::dnc::Resolve), so
+// that `up` refuses a bad line before it starts anything rather than waiting 30 s for a cell-dnc that exits.
+void CheckStation(const std::string& station) {
+  const auto cfg = cell::interp::LoadStation(station);
+  if (!cfg.serial) return;
+  try {
+    cell::dnc::Resolve(cell::dnc::ControlOf(cfg.dialect), *cfg.serial);
+  } catch (const cell::Error& e) {
+    throw Exit{1, cfg.file.string() + ": " + e.what()};
+  }
 }
 
 // The cell's processes as this invocation would start them.
@@ -237,7 +250,7 @@ void AddCellUp(CLI::App& app, Context& ctx, const OptsPtr& o) {
   up->callback([o, &ctx, stations_opt, clock_opt] {
     auto stations = o->stations == "all" ? cell::config::ListStations() : Split(o->stations);
     if (stations.empty()) throw Exit{2, "--stations names no station"};
-    for (auto& s : stations) cell::interp::LoadStation(s);  // unknown station: a clear error now
+    for (auto& s : stations) CheckStation(s);  // an unknown station or a bad [serial] line: said now
     umask(077);  // the data directory, the record and the logs are the owner's only
     if (o->secure) Secure(stations);
     std::vector<CellProcess> procs;

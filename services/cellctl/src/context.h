@@ -93,5 +93,6 @@ void AddJobVerbs(CLI::App& app, Context& ctx);
 void AddInspectVerbs(CLI::App& app, Context& ctx);
 void AddCellVerbs(CLI::App& app, Context& ctx);  // up, down, watch
 void AddPkiVerbs(CLI::App& app, Context& ctx);   // pki init
+void AddDncVerbs(CLI::App& app, Context& ctx);   // dnc send|receive|drip|status
 
 }  // namespace cellctl

@@ -1,6 +1,7 @@
 // cell-dnc --station ID: the DNC process of one station's serial line (docs/dnc.md). It resolves the
 // station file's [serial] table against the control's defaults, takes the line exclusively and holds it,
-// announced on the bus like every process; a station without [serial] has no cell-dnc.
+// and serves the station's DNC requests (cell::dnc::Service), announced on the bus like every process; a
+// station without [serial] has no cell-dnc.
 #include <spdlog/spdlog.h>
 #include <CLI/CLI.hpp>
 
@@ -9,6 +10,7 @@
 #include "cell/config/dds.h"
 #include "cell/daemon/daemon.h"
 #include "cell/dnc/line.h"
+#include "cell/dnc/service.h"
 #include "cell/dnc/settings.h"
 #include "cell/health/health.h"
 #include "cell/identity/identity.h"
@@ -42,19 +44,24 @@ int main(int argc, char** argv) {
     cell::daemon::Daemon daemon;
     auto cfg = cell::config::LoadStation(station);
     const cell::dnc::Serial serial = LineOf(cfg);
-    auto line = cell::dnc::TtyPort::Open(serial);  // exclusive: a second cell-dnc on the line is refused
+    auto open = [serial] { return std::unique_ptr<cell::dnc::Port>(cell::dnc::TtyPort::Open(serial)); };
+    auto line = open();  // exclusive: a second cell-dnc on the line is refused before it joins the bus
     const auto dds = cell::config::DdsVendor(cfg.dds);
     cell::bus::Participant bus(cell::bus::Named("cell-dnc/" + station, dds.vendor));
     cell::health::Announcer health(bus, "cell-dnc", station);
     cell::identity::Claim claim(bus, health);
     claim.Confirm();  // one process per serial line
+    cell::dnc::Service service(bus, station, cfg.dialect, serial, std::move(line), open);
     health.Set(cell::SERVICE_READY, cfg.dialect);
     daemon.NotifyReady("line " + serial.device + " ready");
     spdlog::info("ready on domain {} with {}: {} {} baud {} {}{}{} flow {} end {}", bus.domain(), dds.vendor,
                  serial.device, serial.baud, cell::dnc::CodeName(serial.format.code), serial.format.data_bits,
                  cell::dnc::ParityName(serial.format.parity).substr(0, 1), serial.stop_bits,
                  cell::dnc::FlowName(serial.flow), cell::dnc::EndName(serial.format.end));
-    daemon.RunUntilStop([] { return true; });
+    daemon.RunUntilStop([&service] {
+      service.Tick();
+      return true;
+    });
     daemon.NotifyStopping();
     return 0;
   } catch (const std::exception& e) {

@@ -440,8 +440,10 @@ class Client : public Rejoinable {
 
   // Sends req and waits for its reply. Throws cell::Error: kUnavailable when no server was
   // matched within the timeout, kTimeout when it never answered. A reply with an error code is
-  // returned as is (see ThrowIfError).
-  Rep Call(Req req, Millis timeout, Millis resend = Millis(250)) {
+  // returned as is (see ThrowIfError). `abandon`, asked at every re-send, ends a long wait for a server
+  // known to be gone (a request that runs for minutes, whose server was killed): kUnavailable with its text.
+  Rep Call(Req req, Millis timeout, Millis resend = Millis(250),
+           const std::function<std::string()>& abandon = nullptr) {
     auto deadline = std::chrono::steady_clock::now() + timeout;
     // Discovery takes milliseconds (1 s across vendors); a server missing after 5 s is down. When no other
     // participant at all has answered after kLoneWindow, nothing runs on the domain: say so at once.
@@ -482,6 +484,15 @@ class Client : public Rejoinable {
         state_->pending.erase(id);
         throw Error(Errc::kTimeout,
                     service_ + " did not answer within " + std::to_string(timeout.count()) + " ms");
+      }
+      if (abandon) {
+        lk.unlock();
+        std::string why = abandon();
+        lk.lock();
+        if (!why.empty() && !state_->pending[id]) {
+          state_->pending.erase(id);
+          throw Error(Errc::kUnavailable, why);
+        }
       }
     }
   }

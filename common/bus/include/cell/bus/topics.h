@@ -19,6 +19,7 @@ inline constexpr const char* kStationProgram = "cell/station/program";  // Stati
 inline constexpr const char* kSchedulerState = "cell/scheduler/state";  // SchedulerState (backlog)
 inline constexpr const char* kJobState = "cell/job/state";              // JobInfo, key job_id % kJobSlots
 inline constexpr const char* kProgramList = "cell/program/list";        // ProgramEntry, key node and name
+inline constexpr const char* kDncStatus = "cell/dnc/status";            // DncStatus, key station (cell-dnc)
 // Event topics (kEvent): recent history for late joiners.
 inline constexpr const char* kRunStatus = "cell/run/status";          // RunStatus
 inline constexpr const char* kJobStatus = "cell/job/status";          // JobStatus
@@ -61,6 +62,10 @@ inline std::string StationRun(const std::string& station) {
 }
 inline std::string StationCommand(const std::string& station) {
   return "cell/station/" + station + "/command";
+}
+// The station's serial line (DncRequest / DncReply), served by its cell-dnc.
+inline std::string StationDnc(const std::string& station) {
+  return "cell/station/" + station + "/dnc";
 }
 
 // JobInfo instances: the newest kJobSlots jobs (slot = job_id % kJobSlots), no instance disposed.

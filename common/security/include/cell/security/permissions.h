@@ -17,6 +17,7 @@ enum class Role {
   kInspectionWriter,  // cell-inspection-writer
   kInterpreter,       // cell-interpreter --station ID
   kAxisServo,         // cell-axis-servo --station ID
+  kDnc,               // cell-dnc --station ID (stations with a [serial] line)
   kOperator,          // cellctl
   kViewer,            // cell-dashboard, read-only cellctl (CELL_IDENTITY=viewer)
 };
@@ -24,7 +25,7 @@ enum class Role {
 // Every role, in the table's column order.
 const std::vector<Role>& Roles();
 std::string_view RoleName(Role r);  // "program-store", "interpreter", ...
-bool IsStationRole(Role r);         // interpreter, axis-servo
+bool IsStationRole(Role r);         // interpreter, axis-servo, dnc
 
 // How far a topic's grants can be narrowed to one station.
 enum class Scope {

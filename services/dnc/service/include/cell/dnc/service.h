@@ -1,0 +1,69 @@
+// cell-dnc's bus binding (docs/dnc.md "On the bus"): the station's DNC requests served on its serial line,
+// programs read from and stored into the program store, the line's state published on cell/dnc/status.
+#pragma once
+
+#include <atomic>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <string>
+
+#include "cell/bus/bus.h"
+#include "cell/dnc/line.h"
+#include "cell/dnc/settings.h"
+#include "cell/dnc/transfer.h"
+#include "cell/idl/dnc.h"
+#include "cell/program_store/client.h"
+
+namespace cell::dnc {
+
+// How long the control may hold XOFF (or CTS low) before a transfer is given up. A send fills the control's
+// memory, which reads as fast as the line; a drip feed waits while the control executes what its buffer
+// holds, a long block or a dwell (judgement call 14).
+inline constexpr std::chrono::seconds kSendStall{30};
+inline constexpr std::chrono::seconds kDripStall{600};
+
+class Service {
+ public:
+  // Opens the line again after a transfer failed (a hang-up leaves a tty that must be opened again). Throws
+  // what TtyPort::Open throws.
+  using Opener = std::function<std::unique_ptr<Port>()>;
+  // `line`: the station's line, opened (exclusively) before the process claimed its identity.
+  Service(bus::Participant& p, std::string station, std::string dialect, Serial serial,
+          std::unique_ptr<Port> line, Opener reopen);
+  ~Service();  // a transfer under way is cancelled
+  // From the main loop: publishes figures that changed since the line state was last written (a transfer's
+  // progress is written at most every half second, and a line gone quiet calls no progress).
+  void Tick();
+  Service(const Service&) = delete;
+  Service& operator=(const Service&) = delete;
+
+ private:
+  cell::DncReply Handle(const cell::DncRequest& r);
+  cell::DncReply Send(const cell::DncRequest& r, bool drip);
+  cell::DncReply Receive(const cell::DncRequest& r);
+  cell::DncReply Status();
+  // The line, opened if it is not; a failed transfer closes it.
+  Port& Line();
+  // The transfer's state: begun, under way (at most every half second on the bus), ended.
+  void Begin(cell::DncState state, const std::string& program);
+  void Progress(const Stats& st, bool force = false);
+  void End(const Stats& st, const std::string& error);
+  void Publish();  // under mu_
+
+  std::string station_;
+  std::string dialect_;
+  Serial serial_;
+  Opener open_;
+  std::unique_ptr<Port> port_;
+  std::atomic<bool> cancel_{false};
+  program_store::Client store_;
+  std::mutex mu_;
+  cell::DncStatus status_;
+  std::chrono::steady_clock::time_point published_;
+  bool dirty_ = false;  // status_ has figures not yet written
+  bus::Writer<cell::DncStatus> status_w_;
+  bus::Server<cell::DncRequest, cell::DncReply> server_;
+};
+
+}  // namespace cell::dnc

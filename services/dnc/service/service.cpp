@@ -1,0 +1,233 @@
+// cell-dnc's bus binding (docs/dnc.md "On the bus").
+#include "cell/dnc/service.h"
+
+#include <termios.h>
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include <nlohmann/json.hpp>
+
+#include "cell/bus/topics.h"
+#include "cell/dnc/client.h"
+#include "cell/health/health.h"
+
+namespace cell::dnc {
+namespace {
+
+nlohmann::json Figures(const Stats& st) {
+  return {{"bytes", st.bytes},
+          {"seconds", st.seconds},
+          {"rate", st.Rate()},
+          {"stalls", st.stalls},
+          {"stopped_s", st.stalled_s}};
+}
+
+cell::DncReply Reply(const std::string& station, const nlohmann::json& info, uint32_t revision = 0) {
+  cell::DncReply rep;
+  rep.station(station);
+  rep.revision(revision);
+  rep.info(info.dump());
+  return rep;
+}
+
+// A tty's input is emptied before a receive: a flow-control byte left from an earlier send is no program.
+void FlushInput(Port& port) {
+  if (auto* tty = dynamic_cast<TtyPort*>(&port)) tcflush(tty->fd(), TCIFLUSH);
+}
+
+}  // namespace
+
+Service::Service(bus::Participant& p, std::string station, std::string dialect, Serial serial,
+                 std::unique_ptr<Port> line, Opener reopen)
+    : station_(std::move(station)),
+      dialect_(std::move(dialect)),
+      serial_(std::move(serial)),
+      open_(std::move(reopen)),
+      port_(std::move(line)),
+      store_(p),
+      status_w_(p, bus::topics::kDncStatus, bus::QosKind::kState),
+      server_(
+          p, bus::topics::StationDnc(station_), [this](const cell::DncRequest& r) { return Handle(r); },
+          [](const cell::DncRequest& r) {
+            if (r.op() == cell::DNC_STATUS) return std::string();
+            return fmt::format("dnc {} {} {}:{}", OpName(r.op()), r.station().to_string(),
+                               r.node().to_string(), r.name().to_string());
+          }) {
+  status_.station(station_);
+  status_.device(serial_.device);
+  status_.state(cell::DNC_IDLE);
+  std::lock_guard lk(mu_);
+  Publish();
+}
+
+Service::~Service() {
+  cancel_ = true;  // the transfer under way (on the bus's thread) ends now, so the server can go
+}
+
+Port& Service::Line() {
+  if (!port_) port_ = open_();
+  return *port_;
+}
+
+cell::DncReply Service::Handle(const cell::DncRequest& r) {
+  if (r.station().to_string() != station_)
+    throw Error(Errc::kInvalidArgument,
+                fmt::format("this is the DNC line of station {}, not {}", station_, r.station().to_string()));
+  switch (r.op()) {
+    case cell::DNC_SEND:
+      return Send(r, false);
+    case cell::DNC_DRIP:
+      return Send(r, true);
+    case cell::DNC_RECEIVE:
+      return Receive(r);
+    case cell::DNC_STATUS:
+      return Status();
+  }
+  throw Error(Errc::kInvalidArgument, fmt::format("unknown DNC operation {}", static_cast<int>(r.op())));
+}
+
+cell::DncReply Service::Send(const cell::DncRequest& r, bool drip) {
+  const std::string name = r.name().to_string();
+  const std::string node = r.node().to_string();
+  auto file = node.empty() ? store_.FetchWithFallback(station_, name) : store_.Fetch(node, name);
+  if (!file) {
+    throw Error(Errc::kNotFound, node.empty() ? fmt::format("no program '{}' in {} or HOST", name, station_)
+                                              : fmt::format("no program '{}' in {}", name, node));
+  }
+  const std::string where = fmt::format("{}:{}", file->info.value("node", node), name);
+  std::vector<uint8_t> bytes;
+  try {
+    bytes = Encode(serial_.format, file->content);
+  } catch (const Error& e) {
+    throw Error(e.code(), fmt::format("{}: {}", where, e.what()));
+  }
+  Begin(drip ? cell::DNC_DRIPPING : cell::DNC_SENDING, where);
+  SendOptions o;
+  o.flow = serial_.flow;
+  o.bytes_per_s = LineRate(serial_);
+  o.stall_timeout = drip ? kDripStall : kSendStall;
+  o.progress = [this](const Stats& st) { Progress(st); };
+  o.cancel = &cancel_;
+  Stats st;
+  try {
+    st = dnc::Send(Line(), bytes, o);
+  } catch (const Error& e) {
+    End(st, e.what());
+    throw;
+  }
+  End(st, "");
+  spdlog::info("{} {}: {} bytes in {:.1f} s, {} stops", drip ? "dripped" : "sent", where, st.bytes,
+               st.seconds, st.stalls);
+  nlohmann::json info = Figures(st);
+  info["program"] = where;
+  return Reply(station_, info);
+}
+
+cell::DncReply Service::Receive(const cell::DncRequest& r) {
+  const std::string name = r.name().to_string();
+  const std::string node = r.node().size() == 0 ? station_ : r.node().to_string();
+  const std::string where = fmt::format("{}:{}", node, name);
+  ReceiveOptions o;
+  o.flow = serial_.flow;
+  o.progress = [this](const Stats& st) { Progress(st); };
+  o.cancel = &cancel_;
+  Received got;
+  try {
+    FlushInput(Line());  // before the line says it is receiving: what comes after that is the program
+    Begin(cell::DNC_RECEIVING, where);
+    got = dnc::Receive(Line(), serial_.format, o);
+    if (got.text.find_first_not_of("\n") == std::string::npos)
+      throw Error(Errc::kInvalidArgument, fmt::format("device {}: byte {}: no program between the leader and "
+                                                      "the end of data",
+                                                      serial_.device, got.stats.bytes));
+  } catch (const Error& e) {
+    End(got.stats, e.what());
+    throw Error(e.code(), fmt::format("{}; nothing stored", e.what()));
+  }
+  // Complete and checked: only now does it become a revision (a new one when the name exists).
+  program_store::Client::PutOptions put;
+  put.node = node;
+  put.force = true;
+  put.dialect = dialect_;
+  nlohmann::json stored;
+  try {
+    stored = store_.Put(name, got.text, put);
+  } catch (const Error& e) {
+    End(got.stats, e.what());
+    throw Error(e.code(), fmt::format("received {} bytes, not stored: {}", got.stats.bytes, e.what()));
+  }
+  End(got.stats, "");
+  const uint32_t revision = stored.value("revision", 0u);
+  spdlog::info("received {} revision {}: {} bytes in {:.1f} s", where, revision, got.stats.bytes,
+               got.stats.seconds);
+  nlohmann::json info = Figures(got.stats);
+  info["program"] = where;
+  info["revision"] = revision;
+  info["size"] = got.text.size();
+  return Reply(station_, info, revision);
+}
+
+cell::DncReply Service::Status() {
+  std::lock_guard lk(mu_);
+  return Reply(station_, StatusJson(status_));
+}
+
+void Service::Begin(cell::DncState state, const std::string& program) {
+  std::lock_guard lk(mu_);
+  status_.state(state);
+  status_.program(program.substr(0, 160));
+  status_.bytes(0);
+  status_.seconds(0);
+  status_.rate(0);
+  status_.stalls(0);
+  status_.stopped_s(0);
+  Publish();
+}
+
+void Service::Progress(const Stats& st, bool force) {
+  std::lock_guard lk(mu_);
+  status_.bytes(st.bytes);
+  status_.seconds(st.seconds);
+  status_.rate(st.Rate());
+  status_.stalls(static_cast<uint32_t>(st.stalls));
+  status_.stopped_s(st.stalled_s);
+  dirty_ = true;
+  if (force || std::chrono::steady_clock::now() - published_ > std::chrono::milliseconds(500)) Publish();
+}
+
+void Service::Tick() {
+  std::lock_guard lk(mu_);
+  if (dirty_) Publish();
+}
+
+void Service::End(const Stats& st, const std::string& error) {
+  if (error.empty()) Progress(st);  // a failed transfer keeps its last figures (Send's are lost in the throw)
+  std::lock_guard lk(mu_);
+  status_.state(cell::DNC_IDLE);
+  status_.transfers(status_.transfers() + 1);
+  if (!error.empty()) {
+    status_.errors(status_.errors() + 1);
+    status_.last_error(error.substr(0, 512));
+    port_.reset();  // opened again for the next transfer: a hung-up tty stays hung up
+    try {
+      port_ = open_();
+    } catch (const Error& e) {
+      spdlog::error("{}", e.what());  // the next transfer tries again, and says why it cannot
+    }
+  }
+  Publish();
+}
+
+void Service::Publish() {
+  dirty_ = false;
+  status_.updated_ns(health::WallNs());
+  published_ = std::chrono::steady_clock::now();
+  try {
+    status_w_.Write(status_);
+  } catch (const Error& e) {
+    spdlog::warn("cell/dnc/status: {}", e.what());
+  }
+}
+
+}  // namespace cell::dnc
