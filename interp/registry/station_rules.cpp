@@ -1,5 +1,7 @@
 #include "cell/interp/station_rules.h"
 
+#include <cstdlib>
+
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -77,6 +79,15 @@ tooltable::ToolTable ParseStationTools(const config::StationConfig& cfg, std::st
                     source, where.empty() ? "" : where.substr(0, where.size() - 1), p.pallet, max, cfg.id));
   }
   return table;
+}
+
+std::optional<double> ParamNumber(const config::StationConfig& cfg, const std::string& name) {
+  auto it = cfg.params.find(name);
+  if (it == cfg.params.end()) return std::nullopt;
+  char* end = nullptr;
+  const double v = std::strtod(it->second.c_str(), &end);
+  if (end == it->second.c_str()) return std::nullopt;
+  return v;
 }
 
 }  // namespace cell::interp

@@ -14,22 +14,12 @@
 #include <nlohmann/json.hpp>
 
 #include "cell/testing/cell_fixture.h"
+#include "emco_thread_program.h"
 
 using namespace cell::testing;
 using nlohmann::json;
 
 namespace {
-
-// E59 (manual ln 4176-4188, M30x2; D6 = 1227, the catalogue's correction of the misprinted 1277) on
-// turret position 2 at 600 rpm: the thread from Z2 to Z-42, minor diameter 27.546.
-const char* kThread =
-    "%\n"
-    "N0010 T0202 G00 X50. Z10.\n"
-    "N0020 G97 S600 M04\n"
-    "N0030 G00 X31. Z2.\n"
-    "N0040 G85 X27.546 Z-42. D3=600 D6=1227 F2000\n"
-    "N0050 G00 X50. Z10.\n"
-    "N0060 M30\n";
 
 // E69/E70 (manual ln 4497-4536: the groove Z-24..-32 to X26 with a 3 mm tool, 1.5 mm pecks) with a 1.0 s
 // dwell (D4=10) instead of E70's 5.0 s, on turret position 3 at 800 rpm and 60 um/rev (G95, ln 4850).
@@ -67,7 +57,7 @@ class EmcoStation : public CellFixture {
 
 // The thread as a route's operation and the groove as a pallet run: EM01 takes both like any station.
 TEST_F(EmcoStation, ThreadingRouteAndGroovingPalletWithTheirCycleTimes) {
-  Put(kThread, "THREAD");
+  Put(kEmcoThreadE59, "THREAD");
   Put(kGroove, "GROOVE");
   auto d = Ctl({"route", "define", "EMR", "--op", "EM01:THREAD"});
   ASSERT_EQ(d.code, 0) << d.out << d.err;

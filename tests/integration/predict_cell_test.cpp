@@ -15,22 +15,12 @@
 #include <nlohmann/json.hpp>
 
 #include "cell/testing/cell_fixture.h"
+#include "emco_thread_program.h"
 
 using namespace cell::testing;
 using nlohmann::json;
 
 namespace {
-
-// The thread of emco_station_test (E59, manual ln 4176-4188), whose cycle is worked there by hand:
-// 20.12 .. 21.36 s.
-const char* kThread =
-    "%\n"
-    "N0010 T0202 G00 X50. Z10.\n"
-    "N0020 G97 S600 M04\n"
-    "N0030 G00 X31. Z2.\n"
-    "N0040 G85 X27.546 Z-42. D3=600 D6=1227 F2000\n"
-    "N0050 G00 X50. Z10.\n"
-    "N0060 M30\n";
 
 class PredictCell : public CellFixture {
  protected:
@@ -60,7 +50,7 @@ class PredictCell : public CellFixture {
 
 TEST_F(PredictCell, ProgramShowPredictsJobShowComparesAndTheEstimateLearns) {
   const std::string path = cell_.data_dir() + "/THREAD.emco";
-  std::ofstream(path) << kThread;
+  std::ofstream(path) << kEmcoThreadE59;
   auto put = Ctl({"program", "put", path, "--name", "THREAD", "--dialect", "emco"});
   ASSERT_EQ(put.code, 0) << put.out << put.err;
 

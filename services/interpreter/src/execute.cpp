@@ -9,6 +9,7 @@
 
 #include "cell/error/error.h"
 #include "cell/interp/interp.h"
+#include "cell/interp/station_rules.h"
 #include "cell/names/names.h"
 #include "cell/names/program_ref.h"
 #include "cell/partmodel/part_model.h"
@@ -68,12 +69,7 @@ class Station::RunEnvironment : public interp::Environment {
   // KT-APL L3020, the pallet on the station, from the dispatch.
   std::optional<double> SystemVariable(const std::string& name) override {
     if (name == "L3020") return pallet_;
-    auto it = station_.cfg_.params.find(name);
-    if (it == station_.cfg_.params.end()) return std::nullopt;
-    char* end = nullptr;
-    const double v = std::strtod(it->second.c_str(), &end);
-    if (end == it->second.c_str()) return std::nullopt;
-    return v;
+    return interp::ParamNumber(station_.cfg_, name);
   }
   void SetPallet(int pallet) { pallet_ = pallet; }
 

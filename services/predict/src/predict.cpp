@@ -8,6 +8,7 @@
 
 #include "cell/error/error.h"
 #include "cell/interp/interp.h"
+#include "cell/interp/station_rules.h"
 #include "cell/servo/machine.h"
 #include "cell/servo/receiver.h"
 #include "cell/station/io.h"
@@ -161,12 +162,7 @@ class Env : public interp::Environment {
   void Synchronize() override { sim_.Drain(); }
   std::optional<double> SystemVariable(const std::string& name) override {
     if (name == "L3020" && in_.pallet) return in_.pallet;
-    auto it = in_.station.params.find(name);
-    if (it == in_.station.params.end()) return std::nullopt;
-    char* end = nullptr;
-    const double v = std::strtod(it->second.c_str(), &end);
-    if (end == it->second.c_str()) return std::nullopt;
-    return v;
+    return interp::ParamNumber(in_.station, name);
   }
   void SetLine(int line) { line_ = line; }
 
@@ -222,13 +218,17 @@ void RunProgram(const Input& in, Sim& sim, bool part) {
   station::AuxIo aux(in.station.aux);
   auto run = interp::StartRun(Options(in, env));
   interp::Step s;
+  station::RotaryUnwrap unwrap;  // A and C as the station sends them (to_segment.h)
   for (long ops = 0;; ++ops) {
     if (ops >= in.max_ops) throw NoNumber{fmt::format("did not end within {} operations", in.max_ops)};
     run->NextInto(s);
     if (s.kind == interp::Step::kEnd) break;
     if (s.kind == interp::Step::kError) throw NoNumber{s.diag.Format()};
     env.SetLine(s.canon.line);
-    if (auto seg = station::ToSegment(s.canon)) sim.Push(*seg);
+    if (auto seg = station::ToSegment(s.canon)) {
+      unwrap.Apply(s.canon, *seg);
+      sim.Push(*seg);
+    }
     Io(s.canon, aux, sim, in.program);
   }
   sim.Drain();

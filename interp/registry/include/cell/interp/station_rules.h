@@ -5,6 +5,8 @@
 //   auto cfg = cell::config::LoadStation(id, &cell::interp::StationRules());
 #pragma once
 
+#include <optional>
+#include <string>
 #include <string_view>
 
 #include "cell/config/config.h"
@@ -24,6 +26,11 @@ config::StationConfig LoadStation(std::string_view id);
 // 4081-4083), "SOURCE:LINE:COL: error: TLD W VALUE 200 OUTSIDE 1-127 ...". Throws cell::Error.
 tooltable::ToolTable ParseStationTools(const config::StationConfig& cfg, std::string_view text,
                                        std::string_view source, const tooltable::ToolTable& base);
+
+// A station file's [params] entry read as a number: what the machine reports by the dialect's own names
+// (KT-APL L3060, the control's serial number), for the station and the predictor alike; nullopt when the
+// file has no such entry or it is not a number.
+std::optional<double> ParamNumber(const config::StationConfig& cfg, const std::string& name);
 
 // The coded-pallet limit (1-127) or the table's (1-255).
 inline int MaxPallet(const config::StationConfig& cfg) {
