@@ -10,10 +10,17 @@ namespace cell::servo {
 
 using machine::AxisType;
 
+namespace {
+
+// +1 clockwise (M03, Okuma M13), -1 counter-clockwise, 0 stopped (or oriented).
+int Sign(SpindleDirection d) {
+  return d == SpindleDirection::kCW ? 1 : d == SpindleDirection::kCCW ? -1 : 0;
+}
+
+}  // namespace
+
 bool Machine::StartSpindle(const Segment& s) {
-  const int dir = s.spindle_dir == SpindleDirection::kCW    ? 1
-                  : s.spindle_dir == SpindleDirection::kCCW ? -1
-                                                            : 0;
+  const int dir = Sign(s.spindle_dir);
   if (dir != 0 && s.css_surface_speed > 0) {
     if (!cfg_.axes[kX].diameter) {
       RaiseAlarm(
@@ -48,9 +55,7 @@ bool Machine::StartLiveTool(const Segment& s) {
         s.id);
     return false;
   }
-  const int dir = s.spindle_dir == SpindleDirection::kCW    ? 1
-                  : s.spindle_dir == SpindleDirection::kCCW ? -1
-                                                            : 0;
+  const int dir = Sign(s.spindle_dir);
   const double rpm = std::abs(s.spindle_rpm);
   if (dir != 0 && rpm > cfg_.live_tool_max_rpm) {
     RaiseAlarm(AlarmCode::kInvalidSegment,

@@ -1,5 +1,6 @@
 #include "cell/dashboard/path.h"
 
+#include <algorithm>
 #include <functional>
 #include <vector>
 
@@ -170,13 +171,17 @@ PathAnswer Paths::Build(const std::string& station, const std::string& program) 
   opt.program_name = program;
   opt.program_text = std::move(from->text);
   opt.params = st.params;
-  // A library the program calls comes from the store (a viewer under DDS Security may not ask it: the path
-  // then stops at the call, and the note says why).
-  opt.library = [this, node = from->node, id = st.id](const std::string& lib) -> std::optional<std::string> {
+  // A library the program calls comes from the store: the program's namespace, the station's, then HOST,
+  // each asked once (a viewer under DDS Security may not ask: the path then stops at the call, the note says
+  // why).
+  std::vector<std::string> namespaces;
+  for (const std::string& ns : {from->node, st.id, std::string("HOST")})
+    if (std::find(namespaces.begin(), namespaces.end(), ns) == namespaces.end()) namespaces.push_back(ns);
+  opt.library = [this, namespaces](const std::string& lib) -> std::optional<std::string> {
     std::string why;
     program_store::Client* store = Store(why);
     if (!store) return std::nullopt;
-    for (const std::string& ns : {node, id, std::string("HOST")})
+    for (const std::string& ns : namespaces)
       if (auto text = store->Get(ns, lib)) return text;
     return std::nullopt;
   };
