@@ -100,7 +100,7 @@ void Service::Start() {
       auto cfg = interp::LoadStation(id);
       dialect_[id] = cfg.dialect;
       online_[id] = false;
-      sched_.ConfigureStation(id, cfg.dialect);
+      sched_.ConfigureStation(id, cfg.dialect, cfg.coded_pallets);
       predictor_.Basis(id);  // the station file's fingerprint read now, not at the first allocation
     }
     Effects e = sched_.Recover();

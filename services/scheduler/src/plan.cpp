@@ -63,6 +63,7 @@ std::vector<PlanRow> Scheduler::Plan() {
     // backlog, listed first) with each station's backlog the time it still has then.
     std::vector<StationState> states = m.states;
     AllocationRec alloc;
+    std::vector<int> scratch;
     while (!ready.empty()) {
       const Ready r = ready.top();
       ready.pop();
@@ -71,7 +72,8 @@ std::vector<PlanRow> Scheduler::Plan() {
       for (std::size_t s = 0; s < states.size(); ++s)
         states[s].backlog_s = std::max<std::int64_t>(0, (free[s] - r.at_ms + 999) / 1000);
       alloc = AllocationRec{};
-      if (op.blocked.empty()) Allocate(op.stations, op.tool_ids, states, alloc);
+      if (op.blocked.empty())
+        Allocate(m.ListedFor(op.stations, j.pallet, scratch), op.tool_ids, states, alloc);
       if (alloc.winner < 0) {
         rows.push_back({j.id, j.pallet, j.route, r.op, "", std::nullopt, std::nullopt,
                         op.blocked.empty() ? m.Describe(alloc) : op.blocked});

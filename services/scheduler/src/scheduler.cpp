@@ -169,6 +169,31 @@ void Scheduler::Impl::CheckPallet(int pallet) const {
   }
 }
 
+const std::vector<int>& Scheduler::Impl::ListedFor(const std::vector<int>& listed, int pallet,
+                                                   std::vector<int>& scratch) const {
+  constexpr int kCodedMax = 127;
+  if (pallet <= kCodedMax) return listed;
+  scratch.clear();
+  for (int s : listed)
+    if (!stations[static_cast<std::size_t>(s)].coded_pallets) scratch.push_back(s);
+  return scratch.size() == listed.size() ? listed : scratch;
+}
+
+void Scheduler::Impl::CheckPalletOnStations(int pallet, const Ops& ops, std::string_view route) const {
+  std::vector<int> scratch;
+  for (std::size_t i = 0; i < ops->size(); ++i) {
+    const std::vector<int>& listed = (*ops)[i].stations;
+    if (listed.empty() || !ListedFor(listed, pallet, scratch).empty()) continue;
+    std::string ids;
+    for (int s : listed) ids += (ids.empty() ? "" : ", ") + stations[static_cast<std::size_t>(s)].id;
+    throw Error(
+        Errc::kInvalidArgument,
+        fmt::format("pallet {} cannot go to {} (operation {} of {}): a coded-pallet module takes pallets "
+                    "1-127 only",
+                    pallet, ids, i + 1, route));
+  }
+}
+
 // ---- building operations from specs ----
 // A station runs programs of its own controller language only: the dialect the program store recorded
 // for the program against each listed station's (its station file's, or what it announced). A station
@@ -353,7 +378,8 @@ void Scheduler::Impl::Evaluate(JobRec& j, std::string_view trigger) {
   AllocationRec alloc;
   alloc.candidates.reserve(op.stations.size());
   alloc.missing.reserve(op.stations.size() * 2);
-  Allocate(op.stations, op.tool_ids, states, alloc);
+  std::vector<int> scratch;
+  Allocate(ListedFor(op.stations, j.pallet, scratch), op.tool_ids, states, alloc);
   if (alloc.winner < 0) {
     SetWaiting(j, Describe(alloc), trigger, &alloc);
     return;
@@ -627,10 +653,11 @@ Effects Scheduler::Recover() {
   return m.TakeEffects();
 }
 
-void Scheduler::ConfigureStation(std::string_view id, std::string_view dialect) {
+void Scheduler::ConfigureStation(std::string_view id, std::string_view dialect, bool coded_pallets) {
   Impl& m = *impl_;
   m.Call([&] {
     const int s = m.StationIndex(id, true);
+    m.stations[static_cast<std::size_t>(s)].coded_pallets = coded_pallets;
     if (!dialect.empty() && m.stations[static_cast<std::size_t>(s)].dialect != dialect) {
       m.stations[static_cast<std::size_t>(s)].dialect = std::string(dialect);
       m.dirty_stations.insert(s);
@@ -703,6 +730,7 @@ JobResult Scheduler::Operate(std::string_view key, std::string_view route, int p
       throw Error(Errc::kFailedPrecondition,
                   fmt::format("pallet {} is already in job {}", pallet, busy->second));
     }
+    m.CheckPalletOnStations(pallet, it->second.ops, fmt::format("route {}", names::Shown(route)));
     JobRec j;
     j.id = m.next_job++;
     j.kind = "route";
@@ -742,6 +770,7 @@ JobResult Scheduler::RunPallet(std::string_view key, int pallet, std::string_vie
     auto ops = std::make_shared<std::vector<Op>>();
     // A direct run is the operator's non-FMS use: UCY is optional (0 s of backlog when absent).
     ops->push_back(m.BuildOp(spec, false, true, fmt::format("pallet {}", pallet)));
+    m.CheckPalletOnStations(pallet, ops, "the pallet run");
     JobRec j;
     j.id = m.next_job++;
     j.kind = "pallet";

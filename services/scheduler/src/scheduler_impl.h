@@ -38,6 +38,12 @@ struct Scheduler::Impl : State {
   }
   int MaxPallet() const { return opt.coded_pallets ? 127 : 255; }
   void CheckPallet(int pallet) const;
+  // The operation's listed stations that can hold `pallet`: a coded-pallet module takes 1-127 only (KT-APL
+  // seed lines 4081-4083), so for pallets 128-255 it is left out (into `scratch`); otherwise op.stations.
+  const std::vector<int>& ListedFor(const std::vector<int>& listed, int pallet,
+                                    std::vector<int>& scratch) const;
+  // Throws kInvalidArgument when an operation lists only stations that cannot hold `pallet`.
+  void CheckPalletOnStations(int pallet, const Ops& ops, std::string_view route) const;
 
   // ---- building operations from specs ----
   std::string DialectClash(const ProgramMeta& meta, const std::vector<std::string>& station_ids) const;

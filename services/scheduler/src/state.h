@@ -119,6 +119,7 @@ struct DispatchRec {
 
 struct StationRec {
   std::string id, dialect;
+  bool coded_pallets = false;  // a coded-pallet FMS module: pallets 1-127 only (KT-APL seed lines 4081-4083)
   std::string alarm_code, alarm_text;
   tooltable::ToolTable tools;
   std::deque<std::int64_t> queue;  // allocated, not yet handed out

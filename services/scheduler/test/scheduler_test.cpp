@@ -417,6 +417,45 @@ TEST(Jobs, IdempotencyKeysAndPalletRules) {
   EXPECT_NO_THROW(coded.Operate("R", 127));
 }
 
+// A coded-pallet FMS module (station file `coded_pallets = true`, KT04) holds pallets 1-127 only: "Machines
+// which have coded pallets (FMS, ...) are limited to pallet numbers in a range from 1 to 127" (KT-APL seed
+// lines 4081-4083). Pallet 200 is never allocated to it; an operation that lists only such modules refuses
+// it.
+TEST(Jobs, ACodedPalletModuleNeverGetsPallets128To255) {
+  FakeCell c;
+  c.sched->ConfigureStation("KT04", "ktapl", true);
+  c.Program("A", {}, 100);
+  c.Online("KT01");
+  c.Online("KT04");
+  c.Route("ONLY4", {"KT04:A"});
+  c.Route("BOTH", {"KT04,KT01:A"});
+  // KT04 is listed first with the same backlog (0 s): without the rule it would win pallet 200.
+  const auto j = c.Operate("BOTH", 200);
+  EXPECT_EQ(c.StationOf(j), "KT01");
+  ASSERT_EQ(c.sched->Job(j)->decisions.back().considered.size(), 1u);
+  // The plan projects a later operation by the same rule: KT04 is free and listed first, but not for 203.
+  c.Route("TWO", {"KT01:A", "KT04,KT01:A"});
+  c.Operate("TWO", 203);
+  const auto plan = c.sched->Plan();
+  ASSERT_EQ(plan.size(), 3u);
+  EXPECT_EQ(plan[2].pallet, 203);
+  EXPECT_EQ(plan[2].op, 1);
+  EXPECT_EQ(plan[2].station, "KT01");
+  std::string why;
+  try {
+    c.Operate("ONLY4", 201);
+  } catch (const Error& e) {
+    why = e.what();
+  }
+  EXPECT_NE(why.find("pallet 201 cannot go to KT04 (operation 1 of route 'ONLY4')"), std::string::npos)
+      << why;
+  EXPECT_EQ(c.sched->Jobs().size(), 2u);  // nothing recorded
+  c.sched->SetPalletMap("m", 202, {"A"});
+  EXPECT_EQ(CodeOf([&] { c.sched->RunPallet("run202", 202, "KT04"); }), Errc::kInvalidArgument);
+  // Pallets 1-127 go to KT04 as to any station (listed first, 0 s each).
+  EXPECT_EQ(c.StationOf(c.Operate("BOTH", 127)), "KT04");
+}
+
 // Issue 13: a key binds the whole command. The same command under a used key is a replay (the first outcome,
 // nothing new); a different one is refused with kFailedPrecondition naming both, and never runs.
 TEST(Jobs, AnIdempotencyKeyBindsTheWholeCommand) {

@@ -210,7 +210,10 @@ class Scheduler {
 
   // ---- commands (each carries an idempotency key; a repeated key returns the first outcome) ----
   // Station registration from configuration (offline until announced).
-  void ConfigureStation(std::string_view id, std::string_view dialect);
+  // `coded_pallets`: a coded-pallet FMS module (station file `coded_pallets = true`) holds pallets 1-127 only
+  // (KT-APL seed lines 4081-4083): it is no candidate for pallets 128-255, and an operation listing only such
+  // modules refuses them at OPERATE / `pallet run`.
+  void ConfigureStation(std::string_view id, std::string_view dialect, bool coded_pallets = false);
   void SetPalletMap(std::string_view key, int pallet, const std::vector<std::string>& programs);
   // DEFINE ROUTE: opens each program, extracts UTL and UCY. Throws cell::Error: kNotFound for a missing
   // program, kFailedPrecondition for a program without UCY, kInvalidArgument for a malformed spec.
