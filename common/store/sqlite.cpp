@@ -219,6 +219,7 @@ Database Database::Open(const std::filesystem::path& file, const OpenOptions& op
     }
   }
   db.Exec("PRAGMA synchronous=FULL; PRAGMA foreign_keys=ON");
+  if (options.cache_kib > 0) db.Exec(fmt::format("PRAGMA cache_size=-{}", options.cache_kib));
   return db;
 }
 

@@ -617,7 +617,7 @@ void Scheduler::Impl::Trim() {
       it = keep ? std::next(it) : dispatches.erase(it);
     }
   }
-  while (idem_order.size() > 4 * opt.kept_ended_jobs) {
+  while (idem_order.size() > 2 * opt.kept_ended_jobs) {
     idem.erase(idem_order.front());
     idem_order.pop_front();
   }

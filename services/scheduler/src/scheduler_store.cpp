@@ -519,7 +519,9 @@ void FlushDecisions(store::Database& db, const State& state) {
 
 }  // namespace
 
-Store::Store(const std::string& path) : db_(store::Database::Open(path)) {
+// 512 KiB of page cache: the scheduler writes each decision once and reads back only what memory let go of
+// (Impl::Trim), so SQLite's default 2 MB cache only delayed the point where its memory stops growing.
+Store::Store(const std::string& path) : db_(store::Database::Open(path, {.cache_kib = 512})) {
   store::Migrate(db_, Migrations());
 }
 

@@ -36,6 +36,10 @@ class SqliteError : public cell::Error {
 struct OpenOptions {
   int busy_timeout_ms = 10000;  // how long a statement waits for another connection's lock
   bool read_only = false;       // open an existing file read-only (no parent dirs, no WAL switch)
+  // The connection's page cache in KiB (PRAGMA cache_size=-N); 0 keeps SQLite's default (2,000 KiB). A
+  // service that runs for months and seldom reads back what it wrote bounds it smaller, so that its memory is
+  // flat early (issue 39: the page cache was what grew between pallets 1,000 and 5,000).
+  int cache_kib = 0;
 };
 
 // SQLite's fundamental column types.

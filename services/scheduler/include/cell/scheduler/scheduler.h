@@ -174,7 +174,7 @@ struct Options {
   std::function<std::chrono::system_clock::time_point()> clock;  // default: system_clock::now
   // With a database, the ended jobs kept in memory beyond the live ones (the newest, by id); the others are
   // read back from the database when asked for, so memory stays flat over months of pallets (issue 39).
-  // Idempotency keys are kept four times as many. At least 1. Without a database everything stays.
+  // Idempotency keys are kept twice as many. At least 1. Without a database everything stays.
   std::size_t kept_ended_jobs = 512;
 };
 
