@@ -646,14 +646,8 @@ const char* OkRun::RefusedControlM(int m) {
   switch (m) {
     case 29:
       return "tool interference check ON, ln 9520";
-    case 49:
-      return "spindle speed override fixed at 100 %, ln 1964-1968";
     case 124:
       return "STM time-over check ON, ln 1985-1986, 2142-2175";
-    case 161:
-      return "feedrate override fixed at 100 %, ln 2002-2003";
-    case 163:
-      return "M-tool spindle override fixed at 100 %, ln 2004-2005";
     case 165:
       return "slide hold and single block ignored, ln 2006-2007";
     case 194:
@@ -874,6 +868,10 @@ void OkRun::SpindleAndM(const BlockWords& w, bool before_motion) {
       case 153:
         modal_.mtool_release = c == 153;
         break;
+      case 160:
+      case 161:
+        FixFeedOverride(c == 161, c);
+        break;
       case 193:
       case 195:
       case 196:
@@ -886,6 +884,15 @@ void OkRun::SpindleAndM(const BlockWords& w, bool before_motion) {
         break;
     }
   }
+}
+
+// M161 / M160 (ln 2002-2003): the feedrate override dial ignored (100 %) / valid again, as the `overrides`
+// op after the code's `aux` (judgement 62). M49/M48 and M163/M162 fix spindle overrides the cell's spindles
+// do not have: they go out as `aux` only.
+void OkRun::FixFeedOverride(bool fixed, int m) {
+  Out<AuxOp>().m = m;
+  modal_.feed_fixed = fixed;
+  Out<OverridesOp>().fixed = fixed;
 }
 
 // The M-tool (live tool) spindle (ln 1863-1871, 1945-1946, 2036-2060, 4732-4744): SB= its speed (kept through

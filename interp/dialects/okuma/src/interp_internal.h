@@ -135,6 +135,7 @@ struct Modal {
   int infeed = 73;                         // M73 M74 M75
   bool mtool_release = false;              // M153 / M152
   SpindleDir mtool = SpindleDir::kStop;    // M13 M14 / M12: the live (M-tool) spindle
+  bool feed_fixed = false;                 // M161 / M160: the feedrate override fixed at 100 %
 };
 
 // The thread chain in progress (repeated G31/G32/G33 blocks, G34/G35 chains).
@@ -250,6 +251,7 @@ class OkRun final : public RunBase, public VarReader {
   void SpindleAndM(const BlockWords& w, bool before_motion);
   void MToolSpindle(const BlockWords& w);
   void EmitMTool(SpindleDir d);
+  void FixFeedOverride(bool fixed, int m);
   void CAxisJoint(const BlockWords& w, const BlockWords::Code& m);
   void StopAndEnd(const BlockWords& w);
   double Scale(char addr, double v, bool feed_per_rev) const;
