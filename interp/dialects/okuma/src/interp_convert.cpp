@@ -897,6 +897,12 @@ void OkRun::FixFeedOverride(bool fixed, int m) {
   Out<OverridesOp>().fixed = fixed;
 }
 
+// A cycle that fixes the feed override for its own moves (G77/G78 ln 4069, G178/G179 ln 4615): the
+// `overrides` op at its start and its end, unless M161 fixed it already.
+void OkRun::CycleFeedFixed(bool fixed) {
+  if (!modal_.feed_fixed) Out<OverridesOp>().fixed = fixed;
+}
+
 // The M-tool (live tool) spindle (ln 1863-1871, 1945-1946, 2036-2060, 4732-4744): SB= its speed (kept through
 // reset), M13 CW, M14 CCW, M12 stop. Rotating it needs the C axis joined (M110) unless the interlock is
 // released (M153); the manual gives that alarm no number. A new SB= while it turns changes its speed.

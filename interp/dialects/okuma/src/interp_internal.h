@@ -256,6 +256,7 @@ class OkRun final : public RunBase, public VarReader {
   void MToolSpindle(const BlockWords& w);
   void EmitMTool(SpindleDir d);
   void FixFeedOverride(bool fixed, int m);
+  void CycleFeedFixed(bool fixed);
   void CAxisJoint(const BlockWords& w, const BlockWords::Code& m);
   void StopAndEnd(const BlockWords& w);
   double Scale(char addr, double v, bool feed_per_rev) const;

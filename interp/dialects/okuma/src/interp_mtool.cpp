@@ -265,7 +265,7 @@ void OkRun::MToolSyncTap(const BlockWords& m, int g, double c, int col) {
   if (modal_.mtool != SpindleDir::kStop) EmitMTool(SpindleDir::kStop);
   MToolMove(h.da, h.ds, true, 0);
   if (!words_.HasM(141)) MToolClamp(true);
-  if (!modal_.feed_fixed) Out<OverridesOp>().fixed = true;
+  CycleFeedFixed(true);
   EmitMTool(fwd);
   const bool droop = modal_.droop;
   modal_.droop = true;  // each synchronized move ends in position (ln 4610)
@@ -273,7 +273,7 @@ void OkRun::MToolSyncTap(const BlockWords& m, int g, double c, int col) {
   EmitMTool(rev);
   MToolMove(h.da, h.ds, false, feed);
   modal_.droop = droop;
-  if (!modal_.feed_fixed) Out<OverridesOp>().fixed = false;
+  CycleFeedFixed(false);
   MToolClamp(false);
   if (words_.HasM(136) || multi_return_start_) MToolMove(h.da, h.d0, true, 0);
   EmitMTool(SpindleDir::kStop);
