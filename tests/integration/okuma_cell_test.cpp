@@ -39,6 +39,41 @@ std::string Part(const std::string& o, int first, int last, double dia) {
          std::to_string(last) + " M02\n%\n";
 }
 
+// What OK01's servo is sent and where it stands (the turn-mill tests): X (a diameter), Z and C of each feed
+// segment on cell/station/OK01/segments, and the position the servo last published.
+struct ServoWatch {
+  cell::bus::Participant observer{"okuma-test/observer"};
+  std::mutex mu;
+  std::vector<std::array<double, 3>> feeds;  // X (diameter), Z, C of each feed segment
+  std::array<double, 3> at{-1, -1, -1};
+  cell::bus::Reader<cell::MotionSegment> segments{
+      observer, cell::bus::topics::Segments("OK01"), cell::bus::QosKind::kStream,
+      [this](const cell::MotionSegment& m, const cell::bus::SampleInfo&) {
+        if (m.kind() != cell::SEGMENT_LINEAR) return;
+        std::lock_guard lk(mu);
+        feeds.push_back({m.target()[0], m.target()[2], m.target()[5]});
+      }};
+  cell::bus::Reader<cell::AxisState> axes{observer, cell::bus::topics::kAxisState,
+                                          cell::bus::QosKind::kTelemetry,
+                                          [this](const cell::AxisState& a, const cell::bus::SampleInfo&) {
+                                            if (a.station().to_string() != "OK01") return;
+                                            std::lock_guard lk(mu);
+                                            at = {a.actual()[0], a.actual()[2], a.actual()[5]};
+                                          }};
+  bool Matched() {
+    return cell::bus::WaitUntil([&] { return segments.Matched() > 0; }, std::chrono::seconds(10));
+  }
+  // At rest the servo publishes its position at 4 Hz.
+  bool RestsAt(double x, double z, double c) {
+    return cell::bus::WaitUntil(
+        [&] {
+          std::lock_guard lk(mu);
+          return std::abs(at[0] - x) < 0.01 && std::abs(at[1] - z) < 0.01 && std::abs(at[2] - c) < 0.01;
+        },
+        std::chrono::seconds(10));
+  }
+};
+
 class OkumaCell : public CellFixture {
  protected:
   OkumaCell() : CellFixture("cell-okuma-") {}
@@ -78,6 +113,19 @@ class OkumaCell : public CellFixture {
     EXPECT_EQ(vars["V1"], 20) << vars;
     EXPECT_EQ(vars["V2"], 15) << vars;
     EXPECT_EQ(vars["V3"], 25) << vars;
+  }
+  // Runs NAME (stored in HOST) on OK01 as pallet `pallet` and returns the job's cycle time (-1 after a
+  // failure).
+  double RunPallet(const std::string& pallet, const std::string& name, int timeout_s) {
+    EXPECT_EQ(Ctl({"pallet", "set", pallet, name}).code, 0);
+    auto run = Ctl({"pallet", "run", pallet, "--station", "OK01"});
+    EXPECT_EQ(run.code, 0) << run.err;
+    if (run.code != 0) return -1;
+    const std::string job = FirstLine(run.out);
+    auto w = Ctl({"job", "wait", job, "--timeout", std::to_string(timeout_s)});
+    EXPECT_EQ(w.out, "COMPLETED\n") << w.err << CtlJson({"job", "show", job, "--json"}).dump();
+    auto shown = CtlJson({"job", "show", job, "--json"});
+    return w.out == "COMPLETED\n" && shown["cycle_s"].is_number() ? shown["cycle_s"].get<double>() : -1.0;
   }
 };
 
@@ -206,57 +254,74 @@ TEST_F(OkumaCell, ThreadCycleTimeFollowsLeadAndSpindleSpeed) {
 // at 200-250 mm/s) is under 15 s. Before the servo had a live tool, the station refused M13 and the job
 // failed.
 TEST_F(OkumaCell, CrossDrillingE52RunsWithTheLiveToolAtTheManualsCPositions) {
-  cell::bus::Participant observer("okuma-test/observer");
-  std::mutex mu;
-  std::vector<std::array<double, 3>> feeds;  // X (diameter), Z, C of each feed segment
-  cell::bus::Reader<cell::MotionSegment> segments(
-      observer, cell::bus::topics::Segments("OK01"), cell::bus::QosKind::kStream,
-      [&](const cell::MotionSegment& m, const cell::bus::SampleInfo&) {
-        if (m.kind() != cell::SEGMENT_LINEAR) return;
-        std::lock_guard lk(mu);
-        feeds.push_back({m.target()[0], m.target()[2], m.target()[5]});
-      });
-  std::array<double, 3> at_rest{-1, -1, -1};
-  cell::bus::Reader<cell::AxisState> axes(observer, cell::bus::topics::kAxisState,
-                                          cell::bus::QosKind::kTelemetry,
-                                          [&](const cell::AxisState& a, const cell::bus::SampleInfo&) {
-                                            if (a.station().to_string() != "OK01") return;
-                                            std::lock_guard lk(mu);
-                                            at_rest = {a.actual()[0], a.actual()[2], a.actual()[5]};
-                                          });
-  ASSERT_TRUE(cell::bus::WaitUntil([&] { return segments.Matched() > 0; }, std::chrono::seconds(10)));
+  ServoWatch servo;
+  ASSERT_TRUE(servo.Matched());
   Put("E52.MIN",
       "%\nO52\nN099 G00 X400 Z200 M05\nN100 M110\nN101 M15\nN102 G094 X200 Z150 T0101 SB=400\n"
       "N103 G181 X60 Z75 C0 K48 F40\nN104 X120 C90\nN105 C180\nN106 X60 C270\nN107 G180\n"
       "N108 G00 X400 Z200 M146 M12\nN109 G95 M109\nN110 M02\n%\n",
       "HOST");
-  EXPECT_EQ(Ctl({"pallet", "set", "52", "E52.MIN"}).code, 0);
-  auto run = Ctl({"pallet", "run", "52", "--station", "OK01"});
-  ASSERT_EQ(run.code, 0) << run.err;
-  const std::string job = FirstLine(run.out);
-  auto w = Ctl({"job", "wait", job, "--timeout", "120"});
-  ASSERT_EQ(w.out, "COMPLETED\n") << w.err << CtlJson({"job", "show", job, "--json"}).dump();
-  const double cycle = CtlJson({"job", "show", job, "--json"})["cycle_s"].get<double>();
+  const double cycle = RunPallet("52", "E52.MIN", 120);
   EXPECT_GE(cycle, 162.0);
   EXPECT_LT(cycle, 162.0 + 15.0);
   {
-    std::lock_guard lk(mu);
+    std::lock_guard lk(servo.mu);
     const std::vector<std::array<double, 3>> holes = {
         {60, 75, 0}, {120, 75, 90}, {120, 75, 180}, {60, 75, 270}};
-    ASSERT_EQ(feeds.size(), holes.size());
+    ASSERT_EQ(servo.feeds.size(), holes.size());
     for (size_t i = 0; i < holes.size(); ++i)
       for (size_t a = 0; a < 3; ++a)
-        EXPECT_NEAR(feeds[i][a], holes[i][a], 1e-6) << "hole " << i << " axis " << a;
+        EXPECT_NEAR(servo.feeds[i][a], holes[i][a], 1e-6) << "hole " << i << " axis " << a;
   }
-  // At rest the servo publishes its position at 4 Hz: where N108 left it, C at 270 (never turned back).
-  EXPECT_TRUE(cell::bus::WaitUntil(
-      [&] {
-        std::lock_guard lk(mu);
-        return std::abs(at_rest[0] - 400) < 0.01 && std::abs(at_rest[1] - 200) < 0.01 &&
-               std::abs(at_rest[2] - 270) < 0.01;
-      },
-      std::chrono::seconds(10)))
-      << at_rest[0] << " " << at_rest[1] << " " << at_rest[2];
+  // Where N108 left it, C at 270 (never turned back).
+  EXPECT_TRUE(servo.RestsAt(400, 200, 270)) << servo.at[0] << " " << servo.at[1] << " " << servo.at[2];
+}
+
+// Issue 36 item 4: the manual's milled flat, E-61 program 1 (ln 6466-6488: G101 straight line cutting on the
+// face with the live tool; tests/conformance/okuma/p9_e061_g101_line and p9_e061_g101_default_tolerance work
+// the pieces out). The end mill at Z120 cuts the chord from A = (r50, C300) to B = (r50, C60): in the face
+// plane (x along C0, y along C90, radii) the line x = 25 from y = -43.3013 to +43.3013, 86.6025 mm long, a
+// flat 25 mm from the axis. OK01 runs it as the program prints it (X100, Z120 fit its travel); the test adds
+// a start (N099 G00 X200 Z200) and an end (N106-N108: back to X200 Z200, the live tool stopped, C released)
+// so the positions and the time are known. At the default CONTOUR_TOLERANCE of 0.001 mm the line goes out as
+// 194 equal pieces (judgement 56): piece k ends at y = -43.3013 + 86.6025 k / 194, X = 2 sqrt(25^2 + y^2)
+// (a diameter), C = atan2(y, 25), which the station sends unwrapped from N103's C300 (RotaryUnwrap): 360 +
+// atan2(y, 25) in degrees, 300 at A, 360 (C0) at k = 97 where X is 50, 420 (C60) at B.
+// Machine time: the flat is 86.6025 mm at F30 mm/min = 2.88675 min = 173.205 s (the pieces in inverse time,
+// 194 x 0.89281 s; C turns at most 1.15 deg/s at the middle, 0.5 mm/s over 25 mm, far below OK01's C limit of
+// 120 deg/s, so nothing slows it). The rest is under 12 s: N099 from the servo's start (at most 200 mm
+// radially at 200 mm/s and Z 200 mm at 250 mm/s: 1.0 s plus ramps); T0101 (one index at most: 1.2 s + 6
+// stations x 0.3 s = 3.0 s, OK01.toml); N103's C300 at 7200 deg/min (2.5 s + 0.2 s of ramps) with X 50 mm
+// radially; N104 Z 80 mm (0.32 s) and the live tool to 250 rpm at 2000 rpm/s (0.125 s); N106 back (about
+// 0.5 s) and the live tool's stop (0.125 s): about 8 s with the ramps and the segments' round trips.
+TEST_F(OkumaCell, MilledFlatE61CutsTheChordAtTheManualsXAndCPositions) {
+  ServoWatch servo;
+  ASSERT_TRUE(servo.Matched());
+  Put("E61.MIN",
+      "%\nO61\nN099 G00 X200 Z200\nN101 M110\nN102 M146 M15\nN103 G00 X100 C300 T0101 SB=250\n"
+      "N104 G94 Z120 M13\nN105 G101 C60 F30\nN106 G00 X200 Z200 M12\nN107 G95 M109\nN108 M02\n%\n",
+      "HOST");
+  const double cycle = RunPallet("61", "E61.MIN", 120);
+  EXPECT_GE(cycle, 173.2);
+  EXPECT_LT(cycle, 173.205 + 12.0);
+  {
+    std::lock_guard lk(servo.mu);
+    const int n = 194;
+    ASSERT_EQ(servo.feeds.size(), static_cast<size_t>(n));
+    const double pi = std::acos(-1.0), half = 25.0 * std::sqrt(3.0);  // A and B at y = -+43.3013
+    for (int k = 1; k <= n; ++k) {
+      const double y = -half + 2 * half * k / n;
+      const auto& f = servo.feeds[static_cast<size_t>(k - 1)];
+      EXPECT_NEAR(f[0], 2 * std::sqrt(25.0 * 25.0 + y * y), 1e-4) << "piece " << k;
+      EXPECT_NEAR(f[1], 120.0, 1e-6) << "piece " << k;
+      EXPECT_NEAR(f[2], 360.0 + std::atan2(y, 25.0) * 180 / pi, 1e-4) << "piece " << k;
+    }
+    EXPECT_NEAR(servo.feeds[96][0], 50.0, 1e-6);  // the flat's middle, on C0
+    EXPECT_NEAR(servo.feeds[96][2], 360.0, 1e-6);
+    EXPECT_NEAR(servo.feeds[193][0], 100.0, 1e-6);  // B
+    EXPECT_NEAR(servo.feeds[193][2], 420.0, 1e-6);
+  }
+  EXPECT_TRUE(servo.RestsAt(200, 200, 420)) << servo.at[0] << " " << servo.at[1] << " " << servo.at[2];
 }
 
 }  // namespace

@@ -410,7 +410,8 @@ void Station::ExecuteIo(const std::string& program, const interp::Canon& c, AuxI
       checked([&] { dio_.SetOutputs(spec->bits); });
     }
   } else if (const auto* ovr = c.If<interp::OverridesOp>()) {
-    // KT-APL M49/M48 (ln 2896-2937): from this block on; the motion before it runs at the operator's setting.
+    // KT-APL M49/M48 (ln 2896-2937), Okuma M161/M160: from this block on; the motion before it runs at the
+    // operator's setting.
     stream_.WaitDrained();
     panel_.FixOverrides(ovr->fixed);
   } else if (const auto* a = c.If<interp::AuxOp>()) {

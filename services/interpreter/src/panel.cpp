@@ -189,7 +189,7 @@ void Panel::FixOverrides(bool fixed) {
   control_.revision(control_.revision() + 1);
   publish_(Sent());
   spdlog::info("panel: feed and spindle speed {}",
-               fixed ? "fixed at 100 % by the program (M49)" : "overrides enabled again");
+               fixed ? "fixed at 100 % by the program (KT-APL M49, Okuma M161)" : "overrides enabled again");
 }
 
 cell::ServoControl Panel::Sent() const {

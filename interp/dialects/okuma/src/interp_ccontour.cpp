@@ -146,7 +146,7 @@ void OkRun::ConvertXY(BlockWords& w, int motion, int col) {
     Fail(col, "the first block after G137 must give both X and Y (ln 6887)");
   }
   const bool cycle = mc_.g != 0 || std::any_of(w.g.begin(), w.g.end(), [](const BlockWords::Code& c) {
-                       return c.code >= 181 && c.code <= 190;
+                       return IsMToolCycle(c.code);
                      });
   if (!cycle && motion != 0 && (motion < 101 || motion > 103)) {
     Fail(col, motion < 0 ? "G137 cancelled the motion mode: designate G00, G101-G103 or a cycle with X and Y "

@@ -51,7 +51,8 @@ const char* UnsupportedG(int g) {
       return "spindle-synchronized tapping";
     case 112:
     case 113:
-      return "circular thread cutting, an option whose format the manual does not give: ln 5603, 9374-9375";
+      return "circular thread cutting: an option whose format the manual does not give (ln 5603, 9374-9375), "
+             "and the servo's thread is a straight move";
     case 122:
     case 123:
       return "W-axis command for the sub spindle";
@@ -67,21 +68,17 @@ const char* UnsupportedG(int g) {
     default:
       if (g >= 161 && g <= 171) return "G code macro";
       if (g >= 205 && g <= 214) return "G code macro";
-      if (g == 178 || g == 179) {
-        return "M-tool synchronized tapping: the canonical output has no move synchronised with the live "
-               "tool";
-      }
       if (g == 191) return "longitudinal key-way cutting cycle: listed in the appendix only, no format";
       return nullptr;
   }
 }
 
 bool KnownG(int g) {
-  static constexpr int kKnown[] = {0,   1,   2,   3,   4,   13,  14,  18,  28,  29,  31,  32,  33,
-                                   34,  35,  40,  41,  42,  50,  64,  65,  71,  72,  73,  74,  75,
-                                   76,  77,  78,  80,  81,  82,  83,  84,  85,  86,  87,  88,  90,
-                                   91,  94,  95,  96,  97,  101, 102, 103, 110, 111, 132, 133, 136,
-                                   137, 180, 181, 182, 183, 184, 185, 186, 187, 188, 189, 190};
+  static constexpr int kKnown[] = {0,   1,   2,   3,   4,   13,  14,  18,  28,  29,  31,  32,  33,  34,
+                                   35,  40,  41,  42,  50,  64,  65,  71,  72,  73,  74,  75,  76,  77,
+                                   78,  80,  81,  82,  83,  84,  85,  86,  87,  88,  90,  91,  94,  95,
+                                   96,  97,  101, 102, 103, 110, 111, 132, 133, 136, 137, 178, 179, 180,
+                                   181, 182, 183, 184, 185, 186, 187, 188, 189, 190};
   return std::find(std::begin(kKnown), std::end(kKnown), g) != std::end(kKnown);
 }
 
@@ -297,6 +294,8 @@ void OkRun::ReadNcGCodes(const BlockWords& w, NcGCodes& k) {
       case 180:
         k.g180 = true;
         break;
+      case 178:
+      case 179:
       case 181:
       case 182:
       case 183:
@@ -347,7 +346,7 @@ void OkRun::NcAction(const BlockWords& w, const Block& b, const NcGCodes& k, boo
     Grooving(w, k.cycle, k.cycle_col);
   } else if (k.cycle == 77 || k.cycle == 78) {
     Tapping(w, k.cycle, k.cycle_col);
-  } else if (k.cycle >= 181 && k.cycle <= 190) {
+  } else if (IsMToolCycle(k.cycle)) {
     MToolBlock(w, k.cycle, k.mtool_fresh, k.cycle_col);
   } else {
     if (k.chamfer && modal_.motion != 1) {
@@ -484,12 +483,12 @@ bool OkRun::MToolMode(const BlockWords& w, NcGCodes& k) {
     k.cycle = mc_.g;
     k.cycle_col = col;
   }
-  if (k.cycle >= 181 && k.cycle <= 190) MToolChecks(w, k.cycle, k.mtool_fresh, k.cycle_col);
+  if (IsMToolCycle(k.cycle)) MToolChecks(w, k.cycle, k.mtool_fresh, k.cycle_col);
   if (!k.mtool_fresh) {
     for (const auto& m : w.m) {
       if (m.code == 136 || m.code == 141 || (m.code >= 211 && m.code <= 214)) {
         Fail(m.col,
-             fmt::format("M{} acts only in the block of an M-tool compound fixed cycle (G181-G190)", m.code));
+             fmt::format("M{} acts only in the block of an M-tool compound fixed cycle (G178-G190)", m.code));
       }
     }
   }
@@ -532,6 +531,9 @@ uint32_t OkRun::UsedAddresses(const NcGCodes& k, int* g) const {
     case 77:
     case 78:
       return named(k.cycle, LetterBits("XZK"));
+    case 178:
+    case 179:
+      return named(k.cycle, LetterBits("XZCRIKQDJ"));
     case 183:
       return named(183, LetterBits("XZCRIKQDEL"));
     case 185:
@@ -646,14 +648,8 @@ const char* OkRun::RefusedControlM(int m) {
   switch (m) {
     case 29:
       return "tool interference check ON, ln 9520";
-    case 49:
-      return "spindle speed override fixed at 100 %, ln 1964-1968";
     case 124:
       return "STM time-over check ON, ln 1985-1986, 2142-2175";
-    case 161:
-      return "feedrate override fixed at 100 %, ln 2002-2003";
-    case 163:
-      return "M-tool spindle override fixed at 100 %, ln 2004-2005";
     case 165:
       return "slide hold and single block ignored, ln 2006-2007";
     case 194:
@@ -874,6 +870,10 @@ void OkRun::SpindleAndM(const BlockWords& w, bool before_motion) {
       case 153:
         modal_.mtool_release = c == 153;
         break;
+      case 160:
+      case 161:
+        FixFeedOverride(c == 161, c);
+        break;
       case 193:
       case 195:
       case 196:
@@ -886,6 +886,21 @@ void OkRun::SpindleAndM(const BlockWords& w, bool before_motion) {
         break;
     }
   }
+}
+
+// M161 / M160 (ln 2002-2003): the feedrate override dial ignored (100 %) / valid again, as the `overrides`
+// op after the code's `aux` (judgement 62). M49/M48 and M163/M162 fix spindle overrides the cell's spindles
+// do not have: they go out as `aux` only.
+void OkRun::FixFeedOverride(bool fixed, int m) {
+  Out<AuxOp>().m = m;
+  modal_.feed_fixed = fixed;
+  Out<OverridesOp>().fixed = fixed;
+}
+
+// A cycle that fixes the feed override for its own moves (G77/G78 ln 4069, G178/G179 ln 4615): the
+// `overrides` op at its start and its end, unless M161 fixed it already.
+void OkRun::CycleFeedFixed(bool fixed) {
+  if (!modal_.feed_fixed) Out<OverridesOp>().fixed = fixed;
 }
 
 // The M-tool (live tool) spindle (ln 1863-1871, 1945-1946, 2036-2060, 4732-4744): SB= its speed (kept through

@@ -111,7 +111,8 @@ void OkRun::Grooving(const BlockWords& w, int g, int col) {
 void OkRun::Tapping(const BlockWords& w, int g, int col) {
   // G77 / G78 X Z K F: Q1 X rapid, Q2 spindle forward (G77) / reverse (G78) at the speed in force, Q3 Z rapid
   // by K toward the hole, Q4 tap to Z at F, Q5 spindle stop and reverse, Q6 back to the Q3 point at F, Q7 Z
-  // rapid back to the start; the spindle stays stopped (ln 4006-4071). K is the rapid approach distance.
+  // rapid back to the start; the spindle stays stopped (ln 4006-4071). K is the rapid approach distance. The
+  // feed override is 100 % over the whole cycle (judgement 62).
   if (!w.Has('Z')) Fail(col, fmt::format("G{} needs Z (the tapping end point)", g));
   if (f_ <= 0) Fail(col, fmt::format("G{} needs a feedrate F (the pitch in G95)", g));
   if (modal_.css) Fail(col, "tapping needs a constant spindle speed (G97)");
@@ -134,6 +135,7 @@ void OkRun::Tapping(const BlockWords& w, int g, int col) {
     sp.rpm = s_;
     sp.max_rpm = max_rpm_;
   };
+  CycleFeedFixed(true);  // "the feedrate override is fixed at 100 %" while the cycle runs (ln 4069)
   if (w.Has('X')) move(kX, prog(kX, 'X'), true);
   bool forward = g == 77;
   if (modal_.turret_b) forward = !forward;  // ln 7362
@@ -148,6 +150,7 @@ void OkRun::Tapping(const BlockWords& w, int g, int col) {
   move(kZ, zc, false);
   move(kZ, s[kZ], true);
   spindle(SpindleDir::kStop);
+  CycleFeedFixed(false);
 }
 
 }  // namespace cell::interp::okuma

@@ -649,6 +649,7 @@ void OkRun::ResetProgramState() {
   modal_.comp = 40;
   modal_.chuck_barrier = modal_.tail_barrier = false;  // barrier off at reset (ln 9108)
   modal_.mtool_release = false;                        // M152 at reset (ln 4741)
+  modal_.feed_fixed = false;                           // M160 at reset (the station releases it at the end)
   mc_ = MToolCycle();
   conv_ = CoordConv();  // G136 at reset (ln 6815, 9398)
   contour_mode_ = false;

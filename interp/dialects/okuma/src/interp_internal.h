@@ -12,8 +12,8 @@
 //   nose_comp.cpp        tool-nose radius compensation G40/G41/G42 on the core's offset geometry
 //   interp_thread.cpp    thread cutting G31-G35 and the compound thread cycles G71/G72
 //   interp_cycles.cpp    grooving G73/G74, tapping G77/G78
-//   interp_mtool.cpp     the M-tool compound fixed cycles G181-G190 (drilling, boring, tapping, threads, key
-//                        ways)
+//   interp_mtool.cpp     the M-tool compound fixed cycles G178-G190 (drilling, boring, tapping, synchronized
+//                        tapping, threads, key ways)
 //   interp_ccontour.cpp  contour generation G101-G103 (face), G132/G133 (side) as pieces, coordinate
 //                        conversion G137/G136
 //   lap.cpp              LAP tool paths (AP modes I-V) from a captured contour
@@ -113,6 +113,10 @@ struct BlockWords {
   }
 };
 int ExtIndex(Addr a);  // index into BlockWords::ext, -1 if not an extended address
+// G178-G190 but G180: the M-tool compound fixed cycles (ln 4073-4098).
+inline bool IsMToolCycle(int g) {
+  return g == 178 || g == 179 || (g >= 181 && g <= 190);
+}
 
 // Modal state by meaning (the codes that set it in the comments).
 struct Modal {
@@ -135,6 +139,7 @@ struct Modal {
   int infeed = 73;                         // M73 M74 M75
   bool mtool_release = false;              // M153 / M152
   SpindleDir mtool = SpindleDir::kStop;    // M13 M14 / M12: the live (M-tool) spindle
+  bool feed_fixed = false;                 // M161 / M160: the feedrate override fixed at 100 %
 };
 
 // The thread chain in progress (repeated G31/G32/G33 blocks, G34/G35 chains).
@@ -150,7 +155,7 @@ struct ThreadChain {
 // The M-tool compound fixed cycle in force (G181-G190 until G180, ln 4073-4937): its words are modal within
 // the mode (a block gives only what changes, ln 4797-4799).
 struct MToolCycle {
-  int g = 0;                  // 181-190; 0 = none
+  int g = 0;                  // 178, 179, 181-190; 0 = none
   AxisArray start{};          // the cycle start point (X0, Z0: where the mode began), machine
   BlockWords words;           // the words in force
   bool need_g180 = false;     // a Q block ran: only G180 may follow (ln 4651-4657)
@@ -250,6 +255,8 @@ class OkRun final : public RunBase, public VarReader {
   void SpindleAndM(const BlockWords& w, bool before_motion);
   void MToolSpindle(const BlockWords& w);
   void EmitMTool(SpindleDir d);
+  void FixFeedOverride(bool fixed, int m);
+  void CycleFeedFixed(bool fixed);
   void CAxisJoint(const BlockWords& w, const BlockWords::Code& m);
   void StopAndEnd(const BlockWords& w);
   double Scale(char addr, double v, bool feed_per_rev) const;
@@ -296,7 +303,15 @@ class OkRun final : public RunBase, public VarReader {
   void MToolMerge(const BlockWords& w);
   void MToolChecks(const BlockWords& w, int g, bool fresh, int col);
   void MToolDrill(const BlockWords& w, int g, int col);
+  struct HolePath {
+    int da = 0, pa = 0;  // the depth axis and the position axis
+    double d0 = 0, ds = 0, bottom = 0,
+           dir = 0;  // cycle start, cutting start, bottom along da; the feed's sign
+  };
+  HolePath MToolHolePath(const BlockWords& m, int g, int col);
+  void MToolHoleIndex(const BlockWords& m, const HolePath& h, double c);
   void MToolHole(const BlockWords& w, int g, double c, int col);
+  void MToolSyncTap(const BlockWords& m, int g, double c, int col);
   void MToolPecks(int axis, double from, double bottom, double dir, int col);
   void MToolKeyway(const BlockWords& w, double c, int col);
   void MToolThread(const BlockWords& w, int g, int col);

@@ -1,8 +1,8 @@
 // Okuma M-tool compound fixed cycles (manual SECTION 7 §8, ln 4073-4937) for turn-mills with a C axis and a
-// live tool: G181 drilling, G182 boring, G183 deep-hole drilling, G184 tapping, G189 reaming, G190 key ways
-// (face with K, side with I; repeated at each C or Q times around), G185/G186 thread cutting with C turning
-// at SA= and the straight chained threads G187/G188; G180 cancels. The cycle starts the live tool and clamps
-// and unclamps C itself (ln 4522-4526); its words are modal within the mode.
+// live tool: G181 drilling, G182 boring, G183 deep-hole drilling, G184 tapping, G189 reaming, G190 key ways,
+// G178/G179 synchronized tapping (face with K, side with I; repeated at each C or Q times around), G185/G186
+// thread cutting with C turning at SA= and the straight chained threads G187/G188; G180 cancels. The cycle
+// starts the live tool and clamps and unclamps C itself (ln 4522-4526); its words are modal within the mode.
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -55,11 +55,12 @@ void OkRun::MToolChecks(const BlockWords& w, int g, bool fresh, int col) {
       Fail(m.col, fmt::format("no M code (M{}) in M-tool compound fixed cycle mode", m.code));
   }
   for (const auto& c : w.g) {
-    if (!((c.code >= 181 && c.code <= 190) || c.code == 94 || c.code == 95)) {
+    if (!(IsMToolCycle(c.code) || c.code == 94 || c.code == 95)) {
       Fail(c.col, fmt::format("G{} in M-tool compound fixed cycle mode: cancel it with G180 first", c.code));
     }
   }
   const bool thread = g >= 185 && g <= 188;
+  if (g == 178 || g == 179) return;  // F per minute or per M-tool revolution (ln 4569-4577)
   if (thread && !modal_.per_rev)
     Fail(col, fmt::format("G{} takes its feed only in G95 (mm per C revolution)", g));
   if (!thread && modal_.per_rev) Fail(col, fmt::format("G{} takes its feed only in G94 (mm/min)", g));
@@ -70,7 +71,7 @@ void OkRun::MToolMerge(const BlockWords& w) {
   BlockWords& m = mc_.words;
   if (w.Has('I') && w.Has('K')) Fail(w.Col('K'), "I and K in one M-tool cycle block: give one of them");
   if (w.Has('C') && std::fabs(w.Get('C')) > 359.999 + 1e-9) Fail(w.Col('C'), "C is 0 to +-359.999 degrees");
-  const uint32_t keep = Bits("XZCRIKDELUW");
+  const uint32_t keep = Bits("XZCRIKDELUWJ");
   if (w.Has('I')) m.has &= ~Bits("K");
   if (w.Has('K')) m.has &= ~Bits("I");
   for (int i = 0; i < 26; ++i) {
@@ -106,7 +107,7 @@ void OkRun::MToolBlock(const BlockWords& w, int g, bool fresh, int col) {
   if (w.HasM(213) || w.HasM(214)) mc_.equal = w.HasM(214);
   MToolMerge(w);
   // Q3/Q4 run again for each block with C, Q or another position (ln 4132, 4797-4799); F alone changes F.
-  if (!(w.has & Bits("XZCRIKQDELUW")) && !w.HasExt(kSa)) return;
+  if (!(w.has & Bits("XZCRIKQDELUWJ")) && !w.HasExt(kSa)) return;
   if (g >= 185 && g <= 188) {
     if (w.Has('Q')) Fail(w.Col('Q'), "the thread cutting cycles G185-G188 have no repeat function");
     MToolThread(mc_.words, g, col);
@@ -170,47 +171,64 @@ void OkRun::MToolDrill(const BlockWords& w, int g, int col) {
     const double c = c0 + 360.0 * i / n;
     if (g == 190) {
       MToolKeyway(m, c, col);
+    } else if (g == 178 || g == 179) {
+      MToolSyncTap(m, g, c, col);
     } else {
       MToolHole(m, g, c, col);
     }
   }
 }
 
-// Q1-Q4 of one hole (ln 4116-4123, 4249-4339, 4435-4453): face work (K) feeds along Z at the X given, side
-// work (I) along X at the Z given; the cutting start is K (I) from the cycle start toward the bottom, or by
-// R's sign; I and R along X are diameters.
-void OkRun::MToolHole(const BlockWords& m, int g, double c, int col) {
+// A hole's axes (ln 4116-4123): face work (K) feeds along Z at the X given, side work (I) along X at the Z
+// given; the cutting start is K (I) from the cycle start toward the bottom, or by R's sign; I and R along X
+// are diameters.
+OkRun::HolePath OkRun::MToolHolePath(const BlockWords& m, int g, int col) {
+  HolePath h;
   const bool face = m.Has('K');
-  const int da = face ? kZ : kX, pa = face ? kX : kZ;
-  const char dl = face ? 'Z' : 'X', pl = face ? 'X' : 'Z';
-  const double d0 = mc_.start[static_cast<size_t>(da)];
+  h.da = face ? kZ : kX;
+  h.pa = face ? kX : kZ;
+  const char dl = face ? 'Z' : 'X';
+  h.d0 = mc_.start[static_cast<size_t>(h.da)];
   const double shift = m.Get(face ? 'K' : 'I');
-  const double unit = ToMachine(da, 1) - ToMachine(da, 0);  // +1, or -1 for X on turret B
-  double dir, ds, bottom;
+  const double unit = ToMachine(h.da, 1) - ToMachine(h.da, 0);  // +1, or -1 for X on turret B
   if (m.Has('R')) {
-    dir = Sign(m.Get('R')) * unit;
-    ds = d0 + dir * shift;
-    bottom = ds + m.Get('R') * unit;
+    h.dir = Sign(m.Get('R')) * unit;
+    h.ds = h.d0 + h.dir * shift;
+    h.bottom = h.ds + m.Get('R') * unit;
   } else {
     if (!m.Has(dl)) Fail(col, fmt::format("G{} needs the hole bottom {} or the depth R", g, dl));
-    bottom = ToMachine(da, m.Get(dl));
-    dir = Sign(bottom - d0);
-    ds = d0 + dir * shift;
+    h.bottom = ToMachine(h.da, m.Get(dl));
+    h.dir = Sign(h.bottom - h.d0);
+    h.ds = h.d0 + h.dir * shift;
   }
-  if (dir == 0 || (bottom - ds) * dir < -1e-9) {
+  if (h.dir == 0 || (h.bottom - h.ds) * h.dir < -1e-9) {
     Fail(col, fmt::format("G{}: the hole bottom lies before the cutting start point", g));
   }
-  // Q1: the hole's position and C at rapid, then the live tool forward.
+  return h;
+}
+
+// Q1 of a hole: its position (X for face work, Z for side work) and C at rapid.
+void OkRun::MToolHoleIndex(const BlockWords& m, const HolePath& h, double c) {
+  const char pl = h.pa == kX ? 'X' : 'Z';
   AxisArray t = pos_;
-  t[static_cast<size_t>(pa)] = m.Has(pl) ? ToMachine(pa, m.Get(pl)) : pos_[static_cast<size_t>(pa)];
-  MToolIndex(t, 1u << pa, c);
+  t[static_cast<size_t>(h.pa)] = m.Has(pl) ? ToMachine(h.pa, m.Get(pl)) : pos_[static_cast<size_t>(h.pa)];
+  MToolIndex(t, 1u << h.pa, c);
+}
+
+// Q1-Q4 of one hole (ln 4116-4123, 4249-4339, 4435-4453).
+void OkRun::MToolHole(const BlockWords& m, int g, double c, int col) {
+  const HolePath h = MToolHolePath(m, g, col);
+  const int da = h.da;
+  const double ds = h.ds, bottom = h.bottom;
+  // Q1: the hole's position and C at rapid, then the live tool forward.
+  MToolHoleIndex(m, h, c);
   MToolStart();
   // Q2: the cutting start at rapid, then C clamps (not with M141, ln 4168-4171).
   MToolMove(da, ds, true, 0);
   if (!words_.HasM(141)) MToolClamp(true);
   // Q3: the cut (pecks for G183), the dwell E, the live tool's stop (G182) or reversal (G184).
   if (g == 183) {
-    MToolPecks(da, ds, bottom, dir, col);
+    MToolPecks(da, ds, bottom, h.dir, col);
   } else {
     MToolMove(da, bottom, false, f_);
   }
@@ -220,10 +238,45 @@ void OkRun::MToolHole(const BlockWords& m, int g, double c, int col) {
   // Q4: back to the cutting start (at feed for G184/G189), to the cycle start with M136 or the parameter,
   // C unclamps; the live tool turns forward again.
   MToolMove(da, ds, !(g == 184 || g == 189), f_);
-  if (words_.HasM(136) || multi_return_start_) MToolMove(da, d0, true, 0);
+  if (words_.HasM(136) || multi_return_start_) MToolMove(da, h.d0, true, 0);
   MToolClamp(false);
   if (g == 184) EmitMTool(SpindleDir::kStop);
   if (g == 182 || g == 184) EmitMTool(SpindleDir::kCw);
+}
+
+// G178/G179 synchronized tapping (ln 4530-4627; judgement 63): Q1 the hole's X (Z) and C at rapid, the live
+// tool stopped; Q2 the cutting start at rapid (D, the live tool's start angle, is not kept: OK01's live tool
+// has no one-point clutch, ln 4585); Q3 C clamps, feed and live-tool overrides at 100 % (ln 4615), the live
+// tool forward (G179: reverse) at SB=, the tap fed to the bottom at P x SB mm/min and in position there
+// (ln 4610); Q4 the live tool reversed, back to the cutting start at the same feed, the overrides given back,
+// C unclamps (the text's "clamped", as G184's, judgement 53), then the cycle start with M136, the live tool
+// stops (ln 4623). P is F per M-tool revolution in G95 (ln 4573), F / SB in G94 (ln 4571); with J, F / J.
+void OkRun::MToolSyncTap(const BlockWords& m, int g, double c, int col) {
+  if (sb_ <= 0) Fail(col, fmt::format("G{} needs the M-tool spindle speed SB= > 0", g));
+  if (f_ <= 0) Fail(col, fmt::format("G{} needs a cutting feedrate F", g));
+  if (m.Has('D') && std::fabs(m.Get('D')) > 359.999 + 1e-9) Fail(m.Col('D'), "D is 0 to 359.999 degrees");
+  const double j = m.Has('J') ? m.Get('J') : 1;
+  if (j < 1 || j != std::floor(j)) Fail(m.Col('J'), "J (threads within F) must be a whole number >= 1");
+  const double feed = (modal_.per_rev ? f_ * sb_ : f_) / j;  // mm/min
+  const HolePath h = MToolHolePath(m, g, col);
+  const SpindleDir fwd = g == 178 ? SpindleDir::kCw : SpindleDir::kCcw;
+  const SpindleDir rev = g == 178 ? SpindleDir::kCcw : SpindleDir::kCw;
+  MToolHoleIndex(m, h, c);
+  if (modal_.mtool != SpindleDir::kStop) EmitMTool(SpindleDir::kStop);
+  MToolMove(h.da, h.ds, true, 0);
+  if (!words_.HasM(141)) MToolClamp(true);
+  CycleFeedFixed(true);
+  EmitMTool(fwd);
+  const bool droop = modal_.droop;
+  modal_.droop = true;  // each synchronized move ends in position (ln 4610)
+  MToolMove(h.da, h.bottom, false, feed);
+  EmitMTool(rev);
+  MToolMove(h.da, h.ds, false, feed);
+  modal_.droop = droop;
+  CycleFeedFixed(false);
+  MToolClamp(false);
+  if (words_.HasM(136) || multi_return_start_) MToolMove(h.da, h.d0, true, 0);
+  EmitMTool(SpindleDir::kStop);
 }
 
 // G183's step feed (ln 4305-4316, 4659-4673): D per step, back alpha at rapid after each; with L, once the

@@ -73,9 +73,9 @@ class Panel {
   std::uint64_t CycleStarts() const;
   // The scheduler cancelled the running dispatch: the servo stops it too.
   void AbortRun(std::int32_t run_id);
-  // The program fixes feed and spindle speed at 100 % (KT-APL M49, an `overrides` op) or gives the
-  // selectors back (M48, M06, the program's end). While fixed the servo gets a feed override of 100 % (0 %
-  // stays 0 %: "axis motion is inhibited", ln 2917); the operator's setting is kept, changes to it are
+  // The program fixes feed and spindle speed at 100 % (KT-APL M49, Okuma M161: an `overrides` op) or gives
+  // the selectors back (M48, M06, the program's end). While fixed the servo gets a feed override of 100 % (0
+  // % stays 0 %: "axis motion is inhibited", ln 2917); the operator's setting is kept, changes to it are
   // recorded, and it is published again when the program releases the selectors. The servo's spindle has no
   // override, so the spindle is always at 100 %. Not persisted: a restarted interpreter starts no program.
   void FixOverrides(bool fixed);
