@@ -57,7 +57,8 @@ bool IsStationRole(Role r) {
 
 // Who writes and reads each topic today (the services' bus bindings), narrowed to that. The viewer and the
 // operator read every state and event topic meant for people (a person sees the cell through them), not
-// the machine-internal ones (credits, servo control, segments, probe results, part models) nor any reply.
+// the machine-internal ones (credits, servo control, segments, probe results, part models) nor any reply
+// but the scheduler's: the viewer asks it the plan, the one request the scheduler answers a viewer.
 const std::vector<TopicRule>& Table() {
   static const std::vector<TopicRule> table{
       {"cell/health",
@@ -218,11 +219,12 @@ const std::vector<TopicRule>& Table() {
        Scope::kSharedService,
        "the program store answers"},
       {"cell/scheduler/request",
-       {kOp},
+       {kOp, kView},
        {kSch},
        Scope::kCell,
-       "`cellctl pallet`, `route`, `schedule`, `job`: pallet maps, routes, dispatches, jobs"},
-      {"cell/scheduler/reply", {kSch}, {kOp}, Scope::kCell, "the scheduler answers"},
+       "`cellctl pallet`, `route`, `schedule`, `job`, `plan`: pallet maps, routes, dispatches, jobs; the "
+       "dashboard's Gantt chart asks the plan (the scheduler refuses the viewer every other request)"},
+      {"cell/scheduler/reply", {kSch}, {kOp, kView}, Scope::kCell, "the scheduler answers"},
       {"cell/inspection/request",
        {kInt, kOp},
        {kIw},

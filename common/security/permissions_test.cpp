@@ -129,9 +129,10 @@ TEST(Grants, OnlyOperatorsCommandTheCell) {
   for (const std::string t : {"cell/program_store/request", "cell/scheduler/request",
                               "cell/station/KT01/command/request", "cell/station/KT02/command/request"})
     EXPECT_TRUE(MayPublish("operator", t)) << t;
-  // Routes, pallet maps and jobs go through the scheduler's service: the operator's alone.
+  // Routes, pallet maps and jobs go through the scheduler's service: the operator's, and the viewer's for
+  // the plan alone (the scheduler refuses it every other request: scheduler_service_test).
   for (const auto& n : AllIdentityNames())
-    if (n != "operator") {
+    if (n != "operator" && n != "viewer") {
       EXPECT_FALSE(MayPublish(n, "cell/scheduler/request")) << n;
     }
   // Panel verbs: the operator's, and the scheduler's for VSET (the topic carries every op).
@@ -143,16 +144,18 @@ TEST(Grants, OnlyOperatorsCommandTheCell) {
     EXPECT_FALSE(MayPublish(n, "cell/program_store/request")) << n;
 }
 
-TEST(Grants, TheViewerReadsStateAndEventsAndWritesNothing) {
+TEST(Grants, TheViewerReadsStateAndEventsAndAsksOnlyTheScheduler) {
   const Grants g = GrantsFor(*ParseIdentity("viewer"));
-  EXPECT_TRUE(g.publish.empty());
+  // The dashboard's Gantt chart asks the scheduler's plan (SCHED_PLAN): its one request topic.
+  EXPECT_EQ(g.publish, std::vector<std::string>{"cell/scheduler/request"});
+  EXPECT_TRUE(MaySubscribe("viewer", "cell/scheduler/reply"));
   for (const std::string t :
        {"cell/station/status", "cell/station/tools", "cell/scheduler/state", "cell/job/state",
         "cell/run/status", "cell/inspection/stored", "cell/motion/axes", "cell/health"})
     EXPECT_TRUE(MaySubscribe("viewer", t)) << t;
   // No service's answers, and not the machines' internal streams.
   for (const std::string t :
-       {"cell/scheduler/reply", "cell/program_store/reply", "cell/station/KT01/segments",
+       {"cell/program_store/reply", "cell/inspection/reply", "cell/station/KT01/segments",
         "cell/station/KT01/progress", "cell/station/KT01/command/reply"})
     EXPECT_FALSE(MaySubscribe("viewer", t)) << t;
 }
@@ -229,7 +232,9 @@ TEST(Documents, PermissionsGrantTheTableAndDenyTheRest) {
 
   const std::string v =
       PermissionsXml(*ParseIdentity("viewer"), "2026-01-01T00:00:00", "2036-01-01T00:00:00");
-  EXPECT_EQ(v.find("<publish>"), std::string::npos);
+  // The viewer's one write: the plan request, in its own partition.
+  EXPECT_EQ(CriterionOf(v, "cell/scheduler/request"), "publish id/viewer");
+  EXPECT_EQ(v.find("<publish>"), v.rfind("<publish>"));
   EXPECT_NE(v.find("<subscribe>"), std::string::npos);
 }
 

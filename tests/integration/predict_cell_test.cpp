@@ -5,13 +5,16 @@
 // the cycle_s the station measured, and after the run the estimate has learned from it.
 #include <chrono>
 #include <cmath>
+#include <ctime>
 #include <fstream>
+#include <functional>
 #include <iostream>
 #include <string>
 #include <thread>
 #include <vector>
 
 #include <gtest/gtest.h>
+#include <httplib.h>
 #include <nlohmann/json.hpp>
 
 #include "cell/testing/cell_fixture.h"
@@ -26,6 +29,35 @@ class PredictCell : public CellFixture {
  protected:
   PredictCell() : CellFixture("cell-predict-") {}
   void SetUp() override { Up("KT01,EM01"); }
+
+  // The dashboard's /api/plan once `ready` holds of it (it asks the scheduler every 3 s and after job
+  // events), or null after 30 s.
+  json GanttWhen(const std::function<bool(const json&)>& ready) {
+    std::string url = ReadFile(cell_.data_dir() + "/dashboard.url");
+    url = url.substr(0, url.find('\n'));
+    httplib::Client web("127.0.0.1", std::stoi(url.substr(url.rfind(':') + 1)));
+    for (auto until = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+         std::chrono::steady_clock::now() < until;
+         std::this_thread::sleep_for(std::chrono::milliseconds(200))) {
+      auto r = web.Get("/api/plan");
+      if (!r || r->status != 200) continue;
+      json g = json::parse(r->body, nullptr, false);
+      if (g.is_object() && ready(g)) return g;
+    }
+    return json();
+  }
+  static json Pallet(const json& rows, int pallet) {
+    for (const json& r : rows)
+      if (r["pallet"] == pallet) return r;
+    return json();
+  }
+  // Seconds since the epoch of an ISO-8601 UTC time in whole seconds ("2026-11-30T12:00:00Z").
+  static double Secs(const json& iso) {
+    std::tm tm{};
+    const std::string text = iso.is_string() ? iso.get<std::string>() : "";
+    if (!strptime(text.c_str(), "%Y-%m-%dT%H:%M:%SZ", &tm)) return -1;
+    return static_cast<double>(timegm(&tm));
+  }
 
   // `program show --json` until the scheduler's answer for `station` has come (a number, or the reason there
   // is none): it predicts on a worker of its own, after the first show asked (docs/scheduler.md §14). The
@@ -125,8 +157,9 @@ TEST_F(PredictCell, CorpusProgramsOnKt01) {
   }
 }
 
-// `cellctl plan`: a pallet whose only station is down waits, with the reason, and no times.
-TEST_F(PredictCell, PlanShowsAWaitingPallet) {
+// `cellctl plan`: a pallet whose only station is down waits, with the reason, and no times; the dashboard's
+// Gantt chart shows the same plan.
+TEST_F(PredictCell, PlanShowsAWaitingPalletAndTheDashboardDrawsIt) {
   const std::string path = cell_.data_dir() + "/P1.ktapl";
   std::ofstream(path) << "%\n(NAM,P1)\n(UCY,120)\nG71 G90\nG0 X100. Y100. Z100. F0\nM30\n";
   ASSERT_EQ(Ctl({"program", "put", path, "--name", "P1", "--dialect", "ktapl"}).code, 0);
@@ -142,6 +175,48 @@ TEST_F(PredictCell, PlanShowsAWaitingPallet) {
   EXPECT_TRUE(plan[0]["start"].is_null()) << plan.dump();
   EXPECT_TRUE(plan[0]["end"].is_null()) << plan.dump();
   EXPECT_NE(plan[0]["waiting_for"].get<std::string>().find("KT02"), std::string::npos) << plan.dump();
+
+  // The dashboard's Gantt chart (issue 40 item 4): KT01 stops its first pallet at an M00, so the second is
+  // queued behind it; /api/plan lists both on KT01 with their times as `cellctl plan --json` does, the
+  // waiting pallet with its reason, and what ran so far.
+  const std::string stop = cell_.data_dir() + "/S1.ktapl";
+  std::ofstream(stop) << "%\n(NAM,S1)\n(UCY,300)\nG71 G90\nG0 X100. Y100. Z100. F0\nM00\nM30\n";
+  ASSERT_EQ(Ctl({"program", "put", stop, "--name", "S1", "--dialect", "ktapl"}).code, 0);
+  ASSERT_EQ(Ctl({"route", "define", "G", "--op", "KT01:S1"}).code, 0);
+  ASSERT_EQ(Ctl({"route", "operate", "G", "--pallet", "4"}).code, 0);
+  ASSERT_EQ(Ctl({"route", "operate", "G", "--pallet", "5"}).code, 0);
+  const json gantt = GanttWhen([](const json& g) {
+    for (const json& r : g["planned"])
+      if (r["pallet"] == 5) return true;
+    return false;
+  });
+  plan = CtlJson({"plan", "--json"});
+  std::cout << "cellctl plan: " << plan.dump() << "\n/api/plan: " << gantt.dump() << "\n";
+  ASSERT_TRUE(gantt.is_object()) << "no /api/plan with pallet 5";
+  EXPECT_TRUE(gantt["error"].is_null()) << gantt.dump();
+  for (int pallet : {4, 5}) {
+    const json want = Pallet(plan, pallet), got = Pallet(gantt["planned"], pallet);
+    ASSERT_TRUE(want.is_object() && got.is_object()) << pallet << plan.dump() << gantt.dump();
+    EXPECT_EQ(got["station"], "KT01");
+    EXPECT_EQ(got["job"], want["job"]);
+    EXPECT_EQ(got["op"], want["op"]);
+    EXPECT_EQ(got["station"], want["station"]);
+    // The dashboard's plan is at most a few seconds older than cellctl's: the same visits, as long.
+    EXPECT_NEAR(Secs(got["start"]), Secs(want["start"]), 10) << pallet;
+    EXPECT_NEAR(Secs(got["end"]), Secs(want["end"]), 10) << pallet;
+    EXPECT_NEAR(Secs(got["end"]) - Secs(got["start"]), Secs(want["end"]) - Secs(want["start"]), 2) << pallet;
+  }
+  // Pallet 5 follows pallet 4 on KT01, its 300 s of UCY after it; pallet 3 waits with its reason.
+  EXPECT_EQ(Pallet(gantt["planned"], 5)["start"], Pallet(gantt["planned"], 4)["end"]);
+  EXPECT_NEAR(Secs(Pallet(gantt["planned"], 5)["end"]) - Secs(Pallet(gantt["planned"], 5)["start"]), 300, 1);
+  ASSERT_TRUE(Pallet(gantt["waiting"], 3).is_object()) << gantt.dump();
+  EXPECT_NE(Pallet(gantt["waiting"], 3)["waiting_for"].get<std::string>().find("KT02"), std::string::npos);
+  EXPECT_EQ(gantt["next"]["KT01"]["pallet"], 5) << gantt.dump();
+  const json ran = GanttWhen([](const json& g) { return !g["ran"].empty(); });
+  ASSERT_TRUE(ran.is_object()) << "the dashboard saw nothing run";
+  EXPECT_EQ(ran["ran"][0]["station"], "KT01");
+  EXPECT_EQ(ran["ran"][0]["pallet"], 4);
+  EXPECT_TRUE(ran["ran"][0]["end"].is_null()) << "pallet 4 is stopped at its M00, not ended";
 }
 
 }  // namespace

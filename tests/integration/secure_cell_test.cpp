@@ -91,6 +91,21 @@ TEST_F(SecureCell, PalletsRunEndToEndThroughTheSecuredBus) {
   auto other = web.Get("/api/station/KT01/path?program=BYNOBODY");
   ASSERT_TRUE(other);
   EXPECT_NE(other->status, 200) << other->body;
+  // The Gantt chart's plan: the viewer may ask the scheduler SCHED_PLAN (docs/security.md), and the page
+  // has what ran on KT01 beside it.
+  json plan;
+  for (auto until = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+       std::chrono::steady_clock::now() < until;
+       std::this_thread::sleep_for(std::chrono::milliseconds(200))) {
+    auto r = web.Get("/api/plan");
+    if (r && r->status == 200) plan = json::parse(r->body, nullptr, false);
+    if (plan.is_object() && !plan["fetched"].is_null() && !plan["ran"].empty()) break;
+  }
+  ASSERT_TRUE(plan.is_object()) << "no /api/plan from the secured dashboard";
+  EXPECT_FALSE(plan["fetched"].is_null()) << plan.dump();
+  EXPECT_TRUE(plan["error"].is_null()) << plan.dump();
+  ASSERT_FALSE(plan["ran"].empty()) << plan.dump();
+  EXPECT_EQ(plan["ran"][0]["station"], "KT01") << plan.dump();
 }
 
 TEST_F(SecureCell, TheViewerReadsButCannotWrite) {
@@ -101,6 +116,14 @@ TEST_F(SecureCell, TheViewerReadsButCannotWrite) {
   EXPECT_NE(refused.code, 0);
   EXPECT_NE(refused.err.find("may not publish cell/program_store/request"), std::string::npos) << refused.err;
   EXPECT_EQ(refused.err.find('\n'), refused.err.size() - 1) << "one line: " << refused.err;
+  // The scheduler answers the viewer the plan and refuses it the rest (the topic carries every op).
+  auto plan = As("viewer", {"plan", "--json"});
+  EXPECT_EQ(plan.code, 0) << plan.err;
+  auto define = As("viewer", {"route", "define", "RV", "--op", "KT01:BYOPER"});
+  EXPECT_NE(define.code, 0);
+  EXPECT_NE(define.err.find("identity 'viewer' may ask the scheduler the plan only"), std::string::npos)
+      << define.err;
+  EXPECT_NE(As("", {"route", "show", "RV"}).code, 0) << "the viewer's route was defined";
   // The viewer's read works: it sees the station the cell runs.
   auto ls = As("viewer", {"station", "ls", "--json"});
   ASSERT_EQ(ls.code, 0) << ls.err;

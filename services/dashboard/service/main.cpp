@@ -1,7 +1,8 @@
 // cell-dashboard: the shop-floor view. Subscribes to the cell's state and event topics and serves the live
 // page and the MTConnect agent interface over HTTP (CELL_HTTP, default 127.0.0.1:7878). Read-only: it
-// writes nothing to the cell (only its own heartbeat, like every process); its one request is the program
-// store's GET of the program a station runs, to draw its toolpath (docs/dashboard.md, "Toolpath").
+// writes nothing to the cell (only its own heartbeat, like every process); its requests are the program
+// store's GET of the program a station runs, to draw its toolpath (docs/dashboard.md, "Toolpath"), and the
+// scheduler's plan for the Gantt chart ("Plan").
 #include <spdlog/spdlog.h>
 
 #include <cstdlib>
@@ -13,6 +14,7 @@
 #include "cell/daemon/daemon.h"
 #include "cell/dashboard/feed.h"
 #include "cell/dashboard/path.h"
+#include "cell/dashboard/plan_source.h"
 #include "cell/dashboard/server.h"
 #include "cell/health/health.h"
 #include "cell/identity/identity.h"
@@ -51,7 +53,9 @@ int main() {
     }
     cell::dashboard::Feed feed(bus, view);
     cell::dashboard::Paths paths(bus);
+    cell::dashboard::PlanSource plan(bus);
     cell::dashboard::HttpServer http(view, http_opts);
+    http.SetPlanSource([&plan] { return plan.Latest(); });
     http.SetPathSource([&paths](const std::string& station, const std::string& program) {
       auto a = paths.Path(station, program);
       return std::make_pair(a.status, std::move(a.body));

@@ -256,6 +256,7 @@ void CellView::Axes(const AxesIn& a) {
 
 void CellView::Run(const RunIn& r) {
   std::lock_guard lk(mu_);
+  TrackVisit(r);
   RunTrack& tr = runs_[r.dispatch_id];
   if (r.programs_done <= tr.done) return;  // an older or repeated sample
   // A sample at a program's end names that program and the machine seconds so far: the difference from
@@ -274,6 +275,42 @@ void CellView::Run(const RunIn& r) {
   tr.done = r.programs_done;
   tr.end_s = r.machine_s;
   while (runs_.size() > 4096) runs_.erase(runs_.begin());
+}
+
+// A visit starts at the run's first ACTIVE sample (its started time, else now) and ends at its end; one
+// first seen at its end (the dashboard started later) started its machine seconds before.
+void CellView::TrackVisit(const RunIn& r) {
+  const bool ended = r.state == "COMPLETED" || r.state == "FAILED" || r.state == "CANCELLED";
+  auto it = std::find_if(visits_.begin(), visits_.end(),
+                         [&](const Visit& v) { return v.dispatch == r.dispatch_id; });
+  if (it == visits_.end()) {
+    if (r.state != "ACTIVE" && !ended) return;  // QUEUED: not on the machine yet
+    Visit v{r.dispatch_id, r.job_id, r.pallet, 1, r.station, r.state, r.started_ns, 0};
+    if (auto j = jobs_.find(r.job_id); j != jobs_.end()) v.op = j->second.op_index;
+    if (v.start_ns <= 0)
+      v.start_ns = ended && r.time_ns > 0 ? r.time_ns - static_cast<std::int64_t>(r.machine_s * 1e9) : Now();
+    visits_.push_back(v);
+    if (visits_.size() > 200) visits_.pop_front();
+    it = std::prev(visits_.end());
+  }
+  if (ended && it->end_ns == 0) {
+    it->end_ns = r.time_ns > 0 ? r.time_ns : Now();
+    it->state = r.state;
+  }
+}
+
+json CellView::Ran() const {
+  std::lock_guard lk(mu_);
+  json out = json::array();
+  for (const Visit& v : visits_)
+    out.push_back({{"job", v.job},
+                   {"pallet", v.pallet},
+                   {"op", v.op},
+                   {"station", v.station},
+                   {"start", records::TimeOrNull(v.start_ns)},
+                   {"end", records::TimeOrNull(v.end_ns)},
+                   {"state", v.state}});
+  return out;
 }
 
 void CellView::Stored(const StoredIn& in) {

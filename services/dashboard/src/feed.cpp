@@ -51,6 +51,7 @@ Feed::Feed(bus::Participant& p, CellView& view, FeedOptions opts)
               in.programs_done = r.programs_done();
               in.machine_s = r.machine_s();
               in.time_ns = r.finished_ns() > 0 ? r.finished_ns() : 0;
+              in.started_ns = r.started_ns() > 0 ? r.started_ns() : 0;
               view_.Run(in);
             }),
       stored_(p, topics::kInspectionStored, bus::QosKind::kEvent,

@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "cell/error/error.h"
+#include "cell/records/time.h"
 
 namespace cell::dashboard {
 
@@ -189,6 +190,18 @@ void HttpServer::Routes() {
   s.Get("/api/state", [this](const httplib::Request&, httplib::Response& res) {
     res.set_header("Cache-Control", "no-store");
     res.set_content(view_.Snapshot().dump(), "application/json");
+  });
+  s.Get("/api/plan", [this](const httplib::Request&, httplib::Response& res) {
+    PlanFetch plan;
+    if (plan_) {
+      plan = plan_();
+    } else {
+      plan.error = "this dashboard asks no scheduler for a plan";
+    }
+    std::vector<std::string> stations;
+    for (const auto& st : view_.model().stations()) stations.push_back(st.id);
+    res.set_header("Cache-Control", "no-store");
+    res.set_content(GanttJson(stations, plan, view_.Ran(), records::NowNs()).dump(), "application/json");
   });
   s.Get(R"(/api/job/(\d+))", [this](const httplib::Request& req, httplib::Response& res) {
     auto id = Int(req.matches[1]);

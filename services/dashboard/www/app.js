@@ -607,10 +607,122 @@
     drawAxes();
   }
 
+  // ---- the plan (Gantt chart): /api/plan every few seconds and soon after a job changes ----
+  // One lane per station: the planned visits (the scheduler's projection: label pallet, route and operation)
+  // and, below them, what actually ran; a red line at now; the waiting pallets listed with their reason.
+  let plan = null;
+  let planTimer = null;
+  function ms(iso) { return iso ? Date.parse(iso) : null; }
+  function planLabel(r) {
+    return 'P' + r.pallet + (r.route ? ' ' + r.route : '') + ' op ' + r.op;
+  }
+  function planWindow(p, now) {
+    let end = now;
+    for (const r of p.planned) end = Math.max(end, ms(r.end));
+    const ahead = Math.min(Math.max(end - now, 10 * 60e3), 12 * 3600e3);
+    return [now - ahead / 3, now + ahead * 1.04];
+  }
+  function tickStep(span) {
+    for (const m of [1, 2, 5, 10, 15, 30, 60, 120, 240]) if (span / (m * 60e3) <= 10) return m * 60e3;
+    return 480 * 60e3;
+  }
+  function bar(track, cls, from, to, w, text, title) {
+    const [a, b] = w;
+    const l = Math.max(from, a), r = Math.min(to, b);
+    if (r <= l) return;
+    const e = el('div', 'gbar ' + cls, text);
+    e.style.left = ((l - a) / (b - a) * 100) + '%';
+    e.style.width = 'calc(' + ((r - l) / (b - a) * 100) + '% - 1px)';
+    e.title = title;
+    track.append(e);
+  }
+  function laneLabel(id, p) {
+    const lab = el('div', 'glabel');
+    lab.append(el('b', '', id));
+    const cur = p.current && p.current[id], nxt = p.next && p.next[id];
+    if (cur) lab.append(el('div', 'gnext', 'now: ' + planLabel(cur) + ' until ' + time(cur.end)));
+    if (nxt) lab.append(el('div', 'gnext', 'next: ' + planLabel(nxt) + ' at ' + time(nxt.start)));
+    if (!cur && !nxt) lab.append(el('div', '', 'nothing planned'));
+    return lab;
+  }
+  function renderAxis(box, w) {
+    const axis = el('div', 'gaxis');
+    const step = tickStep(w[1] - w[0]);
+    for (let t = Math.ceil(w[0] / step) * step; t < w[1]; t += step) {
+      const tk = el('span', 'gtick', new Date(t).toLocaleTimeString([], { hour12: false, hour: '2-digit', minute: '2-digit' }));
+      tk.style.left = ((t - w[0]) / (w[1] - w[0]) * 100) + '%';
+      axis.append(tk);
+    }
+    box.append(axis);
+    return step;
+  }
+  function renderLane(box, id, p, w, now, step) {
+    const lane = el('div', 'glane');
+    lane.id = 'lane-' + id;
+    const track = el('div', 'gtrack');
+    for (let t = Math.ceil(w[0] / step) * step; t < w[1]; t += step) {
+      const g = el('div', 'gtickline');
+      g.style.left = ((t - w[0]) / (w[1] - w[0]) * 100) + '%';
+      track.append(g);
+    }
+    for (const r of p.planned.filter((x) => x.station === id)) {
+      const a = ms(r.start), b = ms(r.end);
+      const cur = a <= now && now < b;
+      bar(track, cur ? 'now' : '', a, Math.max(b, a + 1000), w, planLabel(r),
+          'job ' + r.job + ' · pallet ' + r.pallet + (r.route ? ' · route ' + r.route : '') + ' · op ' + r.op +
+          '\nplanned ' + time(r.start) + ' – ' + time(r.end) + ' (' + dur((b - a) / 1000) + ')');
+    }
+    for (const r of p.ran.filter((x) => x.station === id)) {
+      const a = ms(r.start), b = r.end ? ms(r.end) : now;
+      bar(track, 'actual ' + (r.end ? r.state : 'running'), a, Math.max(b, a + 1000), w, 'P' + r.pallet + ' op ' + r.op,
+          'ran: job ' + r.job + ' · pallet ' + r.pallet + ' · op ' + r.op + ' · ' + r.state +
+          '\n' + time(r.start) + ' – ' + (r.end ? time(r.end) : 'now') + ' (' + dur((b - a) / 1000) + ')');
+    }
+    const line = el('div', 'gnow');
+    line.style.left = ((now - w[0]) / (w[1] - w[0]) * 100) + '%';
+    track.append(line);
+    lane.append(laneLabel(id, p), track);
+    box.append(lane);
+  }
+  function renderPlan() {
+    const p = plan;
+    const box = byId('gantt'), status = byId('planstatus'), waiting = byId('planwaiting');
+    if (!p) return;
+    const now = Date.now();
+    const w = planWindow(p, now);
+    box.replaceChildren();
+    const step = renderAxis(box, w);
+    // A lane for each station the cell runs (online) or that has a visit planned or run; the rest of the
+    // configured stations are not in this cell.
+    const used = new Set([...p.planned, ...p.ran].map((r) => r.station));
+    const lanes = p.stations.filter((id) => used.has(id) || (stations.get(id) && stations.get(id).data.online));
+    for (const id of lanes) renderLane(box, id, p, w, now, step);
+    if (!lanes.length) box.append(el('div', 'empty', 'No station online and nothing planned'));
+    status.className = 'planstatus' + (p.error ? ' bad' : '');
+    status.textContent = p.error ? p.error + (p.fetched ? ' (plan of ' + time(p.fetched) + ')' : '')
+                                 : 'planned at ' + time(p.fetched);
+    waiting.replaceChildren();
+    for (const r of p.waiting) {
+      const d = el('div');
+      d.append(el('b', '', 'Pallet ' + r.pallet + ' waits'),
+               document.createTextNode(' (job ' + r.job + (r.route ? ', route ' + r.route : '') + ', op ' + r.op + '): ' + val(r.waiting_for)));
+      waiting.append(d);
+    }
+  }
+  function loadPlan() {
+    fetch('/api/plan', { cache: 'no-store' })
+      .then((r) => r.json())
+      .then((p) => { plan = p; renderPlan(); })
+      .catch(() => {});
+  }
+  function planSoon() {
+    if (planTimer === null) planTimer = setTimeout(() => { planTimer = null; loadPlan(); }, 400);
+  }
+
   function apply(ev) {
     switch (ev.type) {
       case 'station': renderStation(ev.station); break;
-      case 'job': jobs.set(ev.job.id, ev.job); jobRow(ev.job); break;
+      case 'job': jobs.set(ev.job.id, ev.job); jobRow(ev.job); planSoon(); break;
       case 'axes': pushAxes(ev.station, ev.t, ev.pos, ev.feed, ev.spindle_rpm); break;
       case 'cycle': addCycle(ev.cycle); renderCycles(); break;
       case 'inspection':
@@ -648,7 +760,9 @@
 
   renderAll();
   connect();
+  loadPlan();
   setInterval(drawAxes, 500);
+  setInterval(loadPlan, 3000);
   setInterval(() => {
     byId('clock').textContent = new Date().toLocaleTimeString([], { hour12: false });
     if (lostAt !== null) setLive(false);

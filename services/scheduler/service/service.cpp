@@ -57,6 +57,16 @@ std::string Describe(const cell::SchedulerRequest& r) {
   }
 }
 
+// The viewer (the dashboard under DDS Security) is granted the request topic for the Gantt chart's plan
+// alone (docs/security.md): the topic carries every op, so the scheduler refuses it the rest.
+void CheckRequester(const cell::SchedulerRequest& r) {
+  const std::string& who = bus::RequesterIdentity();
+  if (who == "viewer" && r.op() != cell::SCHED_PLAN)
+    throw Error(Errc::kPermissionDenied,
+                fmt::format("identity '{}' may ask the scheduler the plan only (SCHED_PLAN), not op {}", who,
+                            static_cast<int>(r.op())));
+}
+
 }  // namespace
 
 Service::Service(bus::Participant& p, const std::filesystem::path& data_dir)
@@ -248,6 +258,7 @@ void Service::PublishBacklog() {
 }
 
 cell::SchedulerReply Service::Handle(const cell::SchedulerRequest& r) {
+  CheckRequester(r);
   std::lock_guard lk(mu_);
   cell::SchedulerReply rep;
   const std::string key = Key(r), name = r.name().to_string();

@@ -50,7 +50,8 @@ struct RunIn {  // cell/run/status
   std::string station, program, state;  // state: QUEUED, ACTIVE, COMPLETED, FAILED, CANCELLED
   int job_id = 0, pallet = 0, programs_done = 0;
   double machine_s = 0;
-  std::int64_t time_ns = 0;
+  std::int64_t time_ns = 0;     // when it finished (0: not yet)
+  std::int64_t started_ns = 0;  // when it started (0: not yet, or not said)
 };
 
 struct StoredIn {    // cell/inspection/stored
@@ -103,6 +104,9 @@ class CellView {
   // ---- the page ----
   nlohmann::json Snapshot() const;                        // whole state; "event" = the last event id in it
   std::optional<nlohmann::json> JobDetail(int id) const;  // a job with its decisions
+  // What actually ran, for the Gantt chart beside the plan (gantt.h): the newest 200 visits, each a dispatch
+  // from its start to its end (null while it runs): [{job, pallet, op, station, start, end, state}].
+  nlohmann::json Ran() const;
   struct Event {
     std::uint64_t id;
     std::string data;  // JSON text
@@ -152,6 +156,12 @@ class CellView {
     int done = 0;
     double end_s = 0;
   };
+  struct Visit {  // one dispatch as it ran (Ran)
+    int dispatch = 0, job = 0, pallet = 0, op = 1;
+    std::string station, state;
+    std::int64_t start_ns = 0, end_ns = 0;
+  };
+  void TrackVisit(const RunIn& r);  // with mu_ held
 
   std::int64_t Now() const;
   void Observe(int station, const std::string& key, std::string value, std::int64_t t,
@@ -175,6 +185,7 @@ class CellView {
   std::map<std::int64_t, JobIn> jobs_;
   std::map<int, RunTrack> runs_;
   std::deque<CycleTime> cycles_;
+  std::deque<Visit> visits_;
   std::deque<StoredIn> stored_;
   std::deque<EventIn> program_events_;  // newest first, the last 50
   std::set<std::string> stored_names_;

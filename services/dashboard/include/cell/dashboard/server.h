@@ -8,6 +8,7 @@
 //   /api/events            server-sent events after Last-Event-ID (or ?after=N); `resync` when too old
 //   /api/station/<ID>/path[?program=]   the toolpath of what the station runs (cell/dashboard/path.h), JSON
 //   /station/<ID>/path.svg[?program=]   the same plot as a plain SVG page
+//   /api/plan              the scheduler's plan beside what actually ran, for the Gantt chart (gantt.h)
 //   /probe /current /sample?from=&count= /assets /asset/<id>, and /<device>/probe|current|sample
 #pragma once
 
@@ -19,6 +20,7 @@
 #include <utility>
 
 #include "cell/dashboard/cell_view.h"
+#include "cell/dashboard/gantt.h"
 
 namespace httplib {
 class Server;
@@ -51,6 +53,9 @@ ServerOptions ServerOptionsFromEnv();
 using PathSource =
     std::function<std::pair<int, nlohmann::json>(const std::string& station, const std::string& program)>;
 
+// The scheduler's plan as last fetched (cell::dashboard::PlanSource in cell-dashboard); it must not block.
+using PlanSourceFn = std::function<PlanFetch()>;
+
 class HttpServer {
  public:
   HttpServer(CellView& view, ServerOptions opts);
@@ -62,6 +67,8 @@ class HttpServer {
   void Start();
   // Before Start. Without one the path routes answer 404.
   void SetPathSource(PathSource source) { paths_ = std::move(source); }
+  // Before Start. Without one /api/plan has no rows and says why.
+  void SetPlanSource(PlanSourceFn source) { plan_ = std::move(source); }
   void Stop();
   int port() const { return port_; }
   std::string url() const;  // http(s)://host:port/
@@ -72,6 +79,7 @@ class HttpServer {
   void Routes();
   void PathRoutes();
   PathSource paths_;
+  PlanSourceFn plan_;
   CellView& view_;
   ServerOptions opts_;
   std::unique_ptr<httplib::Server> srv_;

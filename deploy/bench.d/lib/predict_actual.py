@@ -1,0 +1,97 @@
+#!/usr/bin/env python3
+"""Predicted against actual machine time per corpus program (issue 40 "Measured"; deploy/bench.d/48-predict.sh).
+
+Drives a running cell (cellctl up --clock virtual, KT01 OK01 EM01 BS01) through cellctl: for each dialect,
+the positive conformance programs (tests/conformance/<d>/NAME.<d> with NAME.expected, no NAME.diag) in name
+order, stored under a short name; once the scheduler's prediction on the dialect's station is in
+(`program show --json`, predicted_s), the program runs as a pallet on that station (`pallet run`) and the
+job's cycle_s (machine seconds the station measured on the virtual clock) is the actual. Programs without a
+prediction (input waits, probes without a part model, under a second) or whose run does not complete in 30 s
+are listed and skipped. The first PER_DIALECT that ran count. Prints one line per program, a summary per
+dialect, and "figure predict.<d>.worst_ratio V" (1 + the largest |predicted / actual - 1|).
+
+Usage: predict_actual.py SOURCE_DIR CELLCTL PER_DIALECT
+"""
+import glob
+import json
+import os
+import subprocess
+import sys
+import time
+
+ROOT, CTL, PER = sys.argv[1], sys.argv[2], int(sys.argv[3])
+STATIONS = (("ktapl", "KT01", "K"), ("okuma", "OK01", "O"), ("emco", "EM01", "E"), ("balt", "BS01", "B"))
+
+
+def ctl(*args, check=True):
+    r = subprocess.run([CTL, *args], capture_output=True, text=True, timeout=120)
+    if check and r.returncode != 0:
+        raise RuntimeError(f"cellctl {' '.join(args)}: {r.stderr.strip()}")
+    return r
+
+
+def corpus(dialect):
+    def positive(f):
+        stem = f[: f.rfind(".")]
+        return os.path.exists(stem + ".expected") and not os.path.exists(stem + ".diag")
+    return sorted(f for f in glob.glob(f"{ROOT}/tests/conformance/{dialect}/*.{dialect}") if positive(f))
+
+
+def predicted(name, station):
+    """The scheduler's prediction (a number or None) and its reason, once it has answered (10 s at most)."""
+    shown = {}
+    for _ in range(200):
+        shown = json.loads(ctl("program", "show", name, "--json").stdout)
+        why = shown["predicted_why"].get(station)
+        if shown["predicted_s"].get(station) is not None or (why and not why.startswith("not predicted yet")):
+            break
+        time.sleep(0.05)
+    return shown["predicted_s"].get(station), shown["predicted_why"].get(station)
+
+
+def main():
+    seq = pallet = 0
+    rows = []
+    for dialect, station, letter in STATIONS:
+        taken = 0
+        for f in corpus(dialect):
+            if taken >= PER:
+                break
+            seq += 1
+            name, base = f"{letter}{seq:03d}", os.path.basename(f)
+            put = ctl("program", "put", f, "--name", name, "--dialect", dialect, check=False)
+            if put.returncode:
+                print(f"  {dialect:6} {base:40} not stored: {put.stderr.strip()}")
+                continue
+            pred, why = predicted(name, station)
+            if pred is None or pred < 1:
+                print(f"  {dialect:6} {base:40} no prediction: {why or f'{pred} s'}")
+                continue
+            pallet = pallet % 200 + 1
+            ctl("pallet", "set", str(pallet), name)
+            job = ctl("pallet", "run", str(pallet), "--station", station).stdout.split()[0]
+            waited = ctl("job", "wait", job, "--timeout", "30", check=False)
+            j = json.loads(ctl("job", "show", job, "--json").stdout)
+            if waited.returncode != 0 or j.get("cycle_s") is None:
+                ctl("job", "cancel", job, check=False)
+                print(f"  {dialect:6} {base:40} predicted {pred:8.2f} s, the run {j.get('state')}: {j.get('reason')}")
+                continue
+            actual = j["cycle_s"]
+            taken += 1
+            rows.append((dialect, pred, actual))
+            print(f"{dialect:6} {station} {base:40} predicted {pred:8.2f} s  actual {actual:8.2f} s  "
+                  f"ratio {pred / actual:.4f}", flush=True)
+    print()
+    for dialect, station, _ in STATIONS:
+        r = [(p, a) for d, p, a in rows if d == dialect]
+        if not r:
+            print(f"{dialect}: no program ran on {station}")
+            continue
+        errors = [abs(p / a - 1) for p, a in r]
+        within = sum(1 for e in errors if e <= 0.01)
+        print(f"{dialect} on {station}: {len(r)} programs, {within} within 1% (target: each), "
+              f"mean |predicted/actual - 1| {sum(errors) / len(errors):.4f}, worst {max(errors):.4f}")
+        print(f"figure predict.{dialect}.worst_ratio {1 + max(errors):.4f}")
+
+
+main()
