@@ -137,6 +137,19 @@ TEST(CellView, EventsCarryEachChangeOnceAndResyncWhenTooOld) {
   EXPECT_TRUE(v.EventsAfter(v.LastEvent() - 3, 100));
 }
 
+// The default sequence buffer is the dashboard's largest container (issue 39: its RSS still grew at pallet
+// 10,000 while the old 131,072 filled): 16,384 observations at most, so after 20,000 `from` may go back
+// exactly 16,384 from nextSequence and no further.
+TEST(CellView, DefaultSequenceBufferKeeps16384Observations) {
+  CellView v(TwoStations());
+  v.Online("KT01", true);
+  for (int i = 1; i <= 20000; ++i) v.Status(Status("KT01", "ACTIVE", "P", i));  // a new line each time
+  const auto next = static_cast<std::int64_t>(v.NextSequence());
+  ASSERT_GT(next, 20000);
+  EXPECT_EQ(v.Sample(next - 16384, 1, -1).status, 200);
+  EXPECT_EQ(v.Sample(next - 16385, 1, -1).status, 404) << "older observations must have left the buffer";
+}
+
 TEST(CellView, CycleTimesPerProgramFromProgramEnds) {
   CellView v(TwoStations());
   // Two programs on one visit: ends at 100 s and 160 s of machine time; a repeated sample changes nothing.

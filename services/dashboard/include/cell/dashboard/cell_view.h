@@ -73,12 +73,12 @@ struct EventIn {  // cell/station/event: what a program recorded (KT-APL EVT)
 };
 
 struct ViewOptions {
-  std::size_t buffer_size = 131072;  // MTConnect observations kept for /sample
-  std::size_t event_log = 4096;      // page events kept for reconnecting browsers
-  std::size_t jobs_kept = 1024;      // finished jobs kept (live ones always)
-  double axis_window_s = 60;         // the page's axis plot
-  double axis_period_s = 0.2;        // one page point per station per period
-  double mtc_axis_period_s = 0.1;    // MTConnect position samples at most this often per station
+  std::size_t buffer_size = 16384;  // MTConnect observations kept for /sample (~120 B each: 2 MB)
+  std::size_t event_log = 4096;     // page events kept for reconnecting browsers
+  std::size_t jobs_kept = 1024;     // finished jobs kept (live ones always)
+  double axis_window_s = 60;        // the page's axis plot
+  double axis_period_s = 0.2;       // one page point per station per period
+  double mtc_axis_period_s = 0.1;   // MTConnect position samples at most this often per station
   // The page's words for what the station files name: {"dialects": {name: title}, "kinds": {kind: title}}
   // (the interpreter registry's and the machine tables' own; the page keeps no list of them).
   nlohmann::json vocabulary = nlohmann::json::object();
