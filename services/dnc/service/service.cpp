@@ -102,7 +102,7 @@ cell::DncReply Service::Send(const cell::DncRequest& r, bool drip) {
   } catch (const Error& e) {
     throw Error(e.code(), fmt::format("{}: {}", where, e.what()));
   }
-  Begin(drip ? cell::DNC_DRIPPING : cell::DNC_SENDING, where);
+  Begin(drip ? cell::DNC_DRIPPING : cell::DNC_SENDING, where, bytes.size());
   SendOptions o;
   o.flow = serial_.flow;
   o.bytes_per_s = LineRate(serial_);
@@ -173,10 +173,12 @@ cell::DncReply Service::Status() {
   return Reply(station_, StatusJson(status_));
 }
 
-void Service::Begin(cell::DncState state, const std::string& program) {
+void Service::Begin(cell::DncState state, const std::string& program, uint64_t total) {
   std::lock_guard lk(mu_);
   status_.state(state);
   status_.program(program.substr(0, 160));
+  status_.total(total);
+  status_.failed(false);
   status_.bytes(0);
   status_.seconds(0);
   status_.rate(0);
@@ -206,6 +208,7 @@ void Service::End(const Stats& st, const std::string& error) {
   std::lock_guard lk(mu_);
   status_.state(cell::DNC_IDLE);
   status_.transfers(status_.transfers() + 1);
+  status_.failed(!error.empty());
   if (!error.empty()) {
     status_.errors(status_.errors() + 1);
     status_.last_error(error.substr(0, 512));
