@@ -8,6 +8,7 @@
 // such; the dashboard's view (its CellView fed from the bus by its Feed) shows a transfer and a killed line.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
+#include <poll.h>
 #include <signal.h>
 
 #include <chrono>
@@ -258,6 +259,21 @@ TEST_F(DncTest, SendDeliversTheStoredProgramByteExactInEachControlsCode) {
   r = Ctl({"dnc", "send", "KT01", "NOPE"});
   EXPECT_EQ(r.code, 1);
   EXPECT_THAT(r.err, HasSubstr("no program 'NOPE' in KT01 or HOST"));
+
+  // Longer than the EMCOTRONIC's 20 kB program memory (ln 608: 20 x 1024 = 20,480 characters): refused before
+  // a byte goes out, one line naming the size and the limit and the drip feed.
+  const std::string big = Program("%13", 700);
+  ASSERT_GT(big.size(), 20480u);
+  Put("O13", "EM01", big);
+  r = Ctl({"dnc", "send", "EM01", "O13"});
+  EXPECT_EQ(r.code, 1);
+  EXPECT_THAT(r.err, HasSubstr(fmt::format("EM01:O13: {} characters, more than the EMCOTRONIC memory holds "
+                                           "(20480 characters, [serial] memory): feed it with `cellctl dnc "
+                                           "drip EM01 O13`",
+                                           big.size())));
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  pollfd pfd{ptys_["EM01"]->master(), POLLIN, 0};
+  EXPECT_EQ(::poll(&pfd, 1, 200), 0) << "bytes on the line";
 }
 
 TEST_F(DncTest, ReceiveStoresWhatTheControlPunchesAsANewRevisionAndADamagedOneNothing) {

@@ -96,6 +96,7 @@ cell::DncReply Service::Send(const cell::DncRequest& r, bool drip) {
                                               : fmt::format("no program '{}' in {}", name, node));
   }
   const std::string where = fmt::format("{}:{}", file->info.value("node", node), name);
+  if (!drip) CheckMemory(where, file->content.size());
   std::vector<uint8_t> bytes;
   try {
     bytes = Encode(serial_.format, file->content);
@@ -122,6 +123,15 @@ cell::DncReply Service::Send(const cell::DncRequest& r, bool drip) {
   nlohmann::json info = Figures(st);
   info["program"] = where;
   return Reply(station_, info);
+}
+
+// A program longer than the control's memory is refused before a byte goes out (MemoryRefusal); a drip feed
+// is for such programs.
+void Service::CheckMemory(const std::string& where, size_t characters) const {
+  const std::string why = MemoryRefusal(serial_, characters);
+  if (why.empty()) return;
+  throw Error(Errc::kFailedPrecondition, fmt::format("{}: {}: feed it with `cellctl dnc drip {} {}`", where,
+                                                     why, station_, where.substr(where.find(':') + 1)));
 }
 
 cell::DncReply Service::Receive(const cell::DncRequest& r) {

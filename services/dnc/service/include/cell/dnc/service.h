@@ -42,6 +42,8 @@ class Service {
   cell::DncReply Handle(const cell::DncRequest& r);
   cell::DncReply Send(const cell::DncRequest& r, bool drip);
   cell::DncReply Receive(const cell::DncRequest& r);
+  // Throws when a program of `characters` is longer than the control's memory (Serial::memory).
+  void CheckMemory(const std::string& where, size_t characters) const;
   cell::DncReply Status();
   // The line, opened if it is not; a failed transfer closes it.
   Port& Line();
