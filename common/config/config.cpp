@@ -253,7 +253,8 @@ std::vector<config::AuxOutput> ParseIo(const fs::path& file, const toml::node& i
 config::SerialTable ParseSerial(const fs::path& file, const toml::node& node) {
   const toml::table* t = node.as_table();
   if (t == nullptr) Fail(file, &node, "serial must be a table [serial]");
-  static const std::set<std::string, std::less<>> kInts = {"baud", "data_bits", "stop_bits", "leader"};
+  static const std::set<std::string, std::less<>> kInts = {"baud", "data_bits", "stop_bits", "leader",
+                                                           "memory"};
   static const std::set<std::string, std::less<>> kTexts = {"device", "parity", "code", "flow", "end"};
   config::SerialTable s;
   for (auto&& [k, v] : *t) {
@@ -266,6 +267,7 @@ config::SerialTable ParseSerial(const fs::path& file, const toml::node& node) {
       std::optional<int>& slot = key == "baud"        ? s.baud
                                  : key == "data_bits" ? s.data_bits
                                  : key == "stop_bits" ? s.stop_bits
+                                 : key == "memory"    ? s.memory
                                                       : s.leader;
       slot = static_cast<int>(n);
     } else if (kTexts.contains(key)) {
@@ -279,7 +281,7 @@ config::SerialTable ParseSerial(const fs::path& file, const toml::node& node) {
       Fail(file, &v,
            fmt::format(
                "[serial]: unknown key '{}' (allowed: device, baud, data_bits, parity, stop_bits, code, "
-               "flow, end, leader)",
+               "flow, end, leader, memory)",
                key));
     }
   }

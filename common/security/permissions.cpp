@@ -140,7 +140,8 @@ const std::vector<TopicRule>& Table() {
        {kDnc},
        {kOp, kView},
        Scope::kSharedKeyed,
-       "cell-dnc writes its serial line's state (transfer, bytes, rate, stalls, errors); `dnc status` reads"},
+       "cell-dnc writes its serial line's state (transfer, bytes, rate, stalls, errors); `dnc status` and "
+       "the dashboard read"},
       {"cell/inspection/stored",
        {kIw},
        {kOp, kView},

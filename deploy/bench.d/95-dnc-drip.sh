@@ -4,10 +4,22 @@
 # 7 minutes; CELL_DNC_DRIP_MB=1 for a short run). Target: 0 bytes lost or changed, at least 90% of the line rate.
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
+# shellcheck source=lib/figures.sh
+source "$ROOT/deploy/bench.d/lib/figures.sh"
 BENCH="${CELL_BUILD_DIR:-$ROOT/build}/bin/dnc_drip_bench"
 if [ ! -x "$BENCH" ]; then
   echo "dnc-drip: $BENCH not built (cmake --build build --target dnc_drip_bench)" >&2
   exit 1
 fi
-"$BENCH" --mb "${CELL_DNC_DRIP_MB:-10}" --scale 25 | sed 's/^/  /'
-exit "${PIPESTATUS[0]}"
+out="$(mktemp)"
+trap 'rm -f "$out"' EXIT
+rc=0
+"$BENCH" --mb "${CELL_DNC_DRIP_MB:-10}" --scale 25 >"$out" || rc=$?
+sed 's/^/  /' "$out"
+# The guard's figures (lib/figures.sh): the share of the line rate the feed kept (0.957 = 95.7%), and 1 when
+# 0 bytes were lost or changed (0 otherwise: a relative guard cannot watch a count whose baseline is 0).
+bench_figure dnc.drip.line_rate_share \
+  "$(sed -n 's/^drip: .* bytes\/s line (\([0-9.]*\)%.*/\1/p' "$out" | awk '{ printf "%.3f", $1 / 100 }')" higher
+bench_figure dnc.drip.byte_exact \
+  "$(grep -q ' 0 bytes lost, program byte-exact' "$out" && echo 1 || echo 0)" higher
+exit "$rc"

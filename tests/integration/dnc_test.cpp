@@ -3,10 +3,12 @@
 // sim_control.h), and cellctl. KT01 (KT-APL, ISO 7-bit even parity, NUL end) and EM01 (EMCOTRONIC, ISO
 // 7-bit even parity, CR LF blocks, ctrl-Z end): `cellctl dnc send` delivers the stored program byte-exact in
 // the control's code; `receive` stores what the control punches as a new revision; a parity-damaged receive
-// stores nothing and exits 1 naming the byte; a kill -9 of cell-dnc mid-receive leaves the store as it was
-// and a restarted cell-dnc serves again; `dnc status` lists every line, one without a process as such.
+// stores nothing and exits 1 naming the byte; a kill -9 of cell-dnc mid-receive or mid-send leaves the store
+// as it was and a restarted cell-dnc serves again; `dnc status` lists every line, one without a process as
+// such; the dashboard's view (its CellView fed from the bus by its Feed) shows a transfer and a killed line.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
+#include <poll.h>
 #include <signal.h>
 
 #include <chrono>
@@ -21,6 +23,8 @@
 
 #include "cell/bus/bus.h"
 #include "cell/bus/topics.h"
+#include "cell/dashboard/cell_view.h"
+#include "cell/dashboard/feed.h"
 #include "cell/dnc/codes.h"
 #include "cell/dnc/line.h"
 #include "cell/dnc/settings.h"
@@ -56,6 +60,36 @@ std::string Program(const std::string& start, int blocks) {
     p += fmt::format("N{:04d} G01 X{}.{:03d} Z-{}.500 F0.2\n", i * 10, i, i * 7 % 1000, i % 40);
   return p + "M30\n";
 }
+
+// The dashboard's view of the lines, fed from the bus as cell-dashboard feeds it (docs/dashboard.md).
+struct Dashboard {
+  explicit Dashboard(cell::bus::Participant& p)
+      : view({{"KT01", "ktapl", "", "", {}}, {"EM01", "emco", "", "", {}}}),
+        feed(p, view, cell::dashboard::FeedOptions{false}) {}
+  // The station's row on the page ("" when the view has none), the feed's heartbeats followed first.
+  nlohmann::json Row(const std::string& station) {
+    feed.Tick();
+    const nlohmann::json snap = view.Snapshot();
+    for (auto& row : snap["dnc"])
+      if (row["station"] == station) return row;
+    return {};
+  }
+  // Waits until the station's row satisfies `ok`; the last row seen otherwise.
+  bool WaitRow(const std::string& station, const std::function<bool(const nlohmann::json&)>& ok,
+               nlohmann::json* last = nullptr) {
+    nlohmann::json row;
+    bool got = cell::bus::WaitUntil(
+        [&] {
+          row = Row(station);
+          return !row.is_null() && ok(row);
+        },
+        std::chrono::seconds(30));
+    if (last) *last = row;
+    return got;
+  }
+  cell::dashboard::CellView view;
+  cell::dashboard::Feed feed;
+};
 
 class DncTest : public ::testing::Test {
  protected:
@@ -225,6 +259,21 @@ TEST_F(DncTest, SendDeliversTheStoredProgramByteExactInEachControlsCode) {
   r = Ctl({"dnc", "send", "KT01", "NOPE"});
   EXPECT_EQ(r.code, 1);
   EXPECT_THAT(r.err, HasSubstr("no program 'NOPE' in KT01 or HOST"));
+
+  // Longer than the EMCOTRONIC's 20 kB program memory (ln 608: 20 x 1024 = 20,480 characters): refused before
+  // a byte goes out, one line naming the size and the limit and the drip feed.
+  const std::string big = Program("%13", 700);
+  ASSERT_GT(big.size(), 20480u);
+  Put("O13", "EM01", big);
+  r = Ctl({"dnc", "send", "EM01", "O13"});
+  EXPECT_EQ(r.code, 1);
+  EXPECT_THAT(r.err, HasSubstr(fmt::format("EM01:O13: {} characters, more than the EMCOTRONIC memory holds "
+                                           "(20480 characters, [serial] memory): feed it with `cellctl dnc "
+                                           "drip EM01 O13`",
+                                           big.size())));
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  pollfd pfd{ptys_["EM01"]->master(), POLLIN, 0};
+  EXPECT_EQ(::poll(&pfd, 1, 200), 0) << "bytes on the line";
 }
 
 TEST_F(DncTest, ReceiveStoresWhatTheControlPunchesAsANewRevisionAndADamagedOneNothing) {
@@ -295,6 +344,53 @@ TEST_F(DncTest, AKilledDncMidReceiveStoresNothingAndARestartedOneServesAgain) {
   EXPECT_EQ(wire, Encode(FormatOf(kKt), Program("%", 3)));
 }
 
+// Issue 42 item 5: a kill -9 of cell-dnc during `dnc send`. cellctl exits 1 with one line, the store is as it
+// was (the same revision, the same bytes), the page shows the line without its process, and a restarted
+// cell-dnc sends the program again byte-exact. The kill comes once the control has pulled bytes off the line
+// (no fixed sleep).
+TEST_F(DncTest, AKilledDncMidSendLeavesTheStoreAsItWasAndARestartedOneSendsAgain) {
+  const std::string text = Program("%", 150);  // about 5 KB: 5 s at 960 bytes/s
+  Put("P99", "KT01", text);
+  const nlohmann::json before = Show("P99", "KT01");
+  Dashboard page(*bus_);
+  {
+    test::SimControl sim(*ptys_["KT01"], Sim(kKt));
+    sim.StartReading();
+    auto send = CtlInBackground({"dnc", "send", "KT01", "P99"}, "send");
+    ASSERT_TRUE(cell::bus::WaitUntil([&] { return sim.pulled() >= 300; }, std::chrono::seconds(30)))
+        << cell::testing::ReadFile(dir_ + "/send.err");
+    dnc_["KT01"]->Signal(SIGKILL);
+    ASSERT_TRUE(dnc_["KT01"]->Wait(std::chrono::seconds(10)).has_value());
+    auto code = send->Wait(std::chrono::seconds(30));
+    EXPECT_EQ(code, std::optional<int>(1));
+    const std::string err = cell::testing::ReadFile(dir_ + "/send.err");
+    EXPECT_THAT(err, HasSubstr("cell-dnc/KT01 stopped during the transfer"));
+    EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
+    sim.Stop();
+    EXPECT_LT(sim.wire().size(), Encode(FormatOf(kKt), text).size());  // it was cut short
+  }
+  // The page: KT01's line has no process (its last state said "sending").
+  nlohmann::json row;
+  EXPECT_TRUE(page.WaitRow(
+      "KT01", [](const nlohmann::json& r) { return r["state"] == "offline"; }, &row))
+      << row;
+  // The store: a send reads, never writes, and a killed one leaves nothing behind.
+  const nlohmann::json after = Show("P99", "KT01");
+  EXPECT_EQ(after.value("revision", 0), before.value("revision", -1));
+  EXPECT_EQ(after.value("size", 0), before.value("size", -1));
+  EXPECT_EQ(Ctl({"program", "get", "P99", "--node", "KT01"}).out, text);
+
+  StartDnc(kKt);
+  RunResult r;
+  std::vector<uint8_t> wire = SendTo(kKt, "P99", r);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(wire, Encode(FormatOf(kKt), text));
+  EXPECT_TRUE(page.WaitRow(
+      "KT01", [&](const nlohmann::json& x) { return x["state"] == "idle" && x["bytes"] == wire.size(); },
+      &row))
+      << row;
+}
+
 TEST_F(DncTest, DripKeepsASmallControlBufferFedWhileTheControlExecutes) {
   // 150 blocks (about 5 KB), 20 times the control's 256-byte buffer, which it empties at 3/4 of the line
   // rate and with a 50 ms pause every 512 bytes (a long block): the cell must stop and go on with every
@@ -307,9 +403,21 @@ TEST_F(DncTest, DripKeepsASmallControlBufferFedWhileTheControlExecutes) {
   so.pause_s = 0.05;
   test::SimControl sim(*ptys_["KT01"], so);
   sim.StartReading();
+  Dashboard page(*bus_);
+  const uint64_t total = Encode(FormatOf(kKt), big).size();
   ForgetStates();
   auto drip = CtlInBackground({"dnc", "drip", "KT01", "BIG"}, "drip");
   EXPECT_TRUE(WaitState("KT01", cell::DNC_DRIPPING, 1000));  // under way, as `dnc status` shows it
+  // The page shows it too: dripping, bytes done of the total, a rate.
+  nlohmann::json row;
+  EXPECT_TRUE(page.WaitRow(
+      "KT01",
+      [](const nlohmann::json& r) { return r["state"] == "dripping" && r["bytes"].get<int>() >= 1000; },
+      &row))
+      << row;
+  EXPECT_EQ(row["total"], total);
+  EXPECT_EQ(row["program"], "HOST:BIG");
+  EXPECT_GT(row["rate"].get<double>(), 0.0);
   auto code = drip->Wait(std::chrono::seconds(90));
   // A drip that failed or hangs never sends the end of data the control waits for: stop it, and say why.
   if (code != std::optional<int>(0)) sim.Stop();
@@ -325,6 +433,11 @@ TEST_F(DncTest, DripKeepsASmallControlBufferFedWhileTheControlExecutes) {
   EXPECT_LE(sim.max_fill(), 256u);
   EXPECT_EQ(sim.text(), big);
   EXPECT_EQ(sim.wire(), Encode(FormatOf(kKt), big));
+  EXPECT_TRUE(page.WaitRow(
+      "KT01", [&](const nlohmann::json& r) { return r["state"] == "idle" && r["bytes"] == total; }, &row))
+      << row;
+  EXPECT_EQ(row["stalls"], sim.xoffs());
+  EXPECT_EQ(row["errors"], 0);
 }
 
 TEST_F(DncTest, StatusListsEveryLineAndOneWithoutAProcessAsSuch) {

@@ -13,8 +13,11 @@
 #include <httplib.h>
 #include <nlohmann/json.hpp>
 
+#include "cell/dnc/codes.h"
+#include "cell/dnc/settings.h"
 #include "cell/testing/local_cell.h"
 #include "cell/testing/process.h"
+#include "sim_control.h"
 
 using namespace cell::testing;
 using nlohmann::json;
@@ -235,6 +238,62 @@ TEST(SecureCellMixed, ASecuredCellThatMixesDdsStacksIsRefusedAtStart) {
             std::string::npos)
       << r.err;
   EXPECT_FALSE(std::filesystem::exists(cell.data_dir() + "/cell-up.json")) << "nothing was started";
+}
+
+// Issue 42 item 5 under DDS Security: `cellctl up --secure` starts KT01's cell-dnc (its file has a [serial]
+// line, a pseudo-terminal with the simulated control on the master) as the identity dnc-KT01. The operator's
+// `dnc status` and `dnc send` go through the secured bus (the send reads the program from the store as
+// dnc-KT01 and delivers it byte-exact); the viewer reads the line's state too.
+TEST(SecureCellDnc, CellDncRunsAsItsStationIdentityAndServesTheOperator) {
+  namespace dnc = cell::dnc;
+  LocalCell cell("cell-secure-dnc-");
+  const std::string config = cell.data_dir() + "/config";
+  std::filesystem::copy(SourceDir() + "/deploy", config, std::filesystem::copy_options::recursive);
+  dnc::test::Pty pty;
+  std::ofstream(config + "/stations/KT01.toml", std::ios::app)
+      << "\n[serial]\ndevice = \"" << pty.slave() << "\"\nflow = \"xonxoff\"\n";
+  cell.SetEnv("CELL_CONFIG_DIR", config);
+  auto r = cell.Up("KT01", "virtual", {"--secure"});
+  ASSERT_EQ(r.code, 0) << r.out << r.err;
+  cell.SetEnv("CELL_SECURITY", "on");
+  auto status = cell.Ctl({"dnc", "status", "--json"});
+  ASSERT_EQ(status.code, 0) << status.err;
+  json rows = json::parse(status.out);
+  ASSERT_EQ(rows.size(), 1u) << status.out;
+  EXPECT_EQ(rows[0]["station"], "KT01");
+  EXPECT_EQ(rows[0]["dnc"], true) << "cell-dnc/KT01 is not heard on cell/dnc/status: " << status.out;
+  EXPECT_EQ(rows[0]["state"], "idle");
+
+  const std::string text = "%\nN10 G01 X100. Y50. F1000.\nN20 M30\n";
+  const std::string path = cell.data_dir() + "/DNC1.txt";
+  std::ofstream(path) << text;
+  r = cell.Ctl({"program", "put", path, "--name", "DNC1", "--node", "HOST", "--dialect", "ktapl", "--force"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  cell::config::SerialTable keys;
+  keys.device = pty.slave();
+  const dnc::Format format = dnc::Resolve(dnc::Control::kKtApl, keys).format;
+  dnc::test::SimOptions so;
+  so.format = format;
+  so.line_bytes_per_s = 960;  // 9600 baud, 7E1: the KT-APL's default (docs/dnc.md judgement call 5)
+  dnc::test::SimControl sim(pty, so);
+  sim.StartReading();
+  r = cell.Ctl({"dnc", "send", "KT01", "DNC1"});
+  if (r.code != 0) sim.Stop();
+  sim.Join();
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("sent HOST:DNC1 to KT01"), std::string::npos) << r.out;
+  EXPECT_EQ(sim.wire(), dnc::Encode(format, text));
+
+  auto env = cell.env();
+  env["CELL_IDENTITY"] = "viewer";
+  auto viewer = RunCommand({BinDir() + "/cellctl", "dnc", "status", "--json"}, env, std::chrono::seconds(60));
+  ASSERT_EQ(viewer.code, 0) << viewer.err;
+  rows = json::parse(viewer.out);
+  ASSERT_EQ(rows.size(), 1u) << viewer.out;
+  EXPECT_EQ(rows[0]["program"], "HOST:DNC1");
+  EXPECT_EQ(rows[0]["transfers"], 1);
+  r = cell.Down();
+  EXPECT_EQ(r.code, 0) << r.err;
 }
 
 }  // namespace

@@ -448,6 +448,7 @@ json CellView::Snapshot() const {
           {"jobs", jobs},
           {"cycles", cycles},
           {"inspections", stored},
+          {"dnc", DncRows()},
           {"axes", axes},
           {"services", services_},
           {"vocabulary", opts_.vocabulary},

@@ -2,12 +2,37 @@
 
 #include "cell/bus/topics.h"
 #include "cell/config/config.h"
+#include "cell/dnc/client.h"
 #include "cell/records/names.h"
 #include "cell/tooltable/wire.h"
 
 namespace cell::dashboard {
 
 namespace topics = bus::topics;
+
+namespace {
+
+DncIn DncFromWire(const cell::DncStatus& d) {
+  DncIn in;
+  in.station = d.station().to_string();
+  in.device = d.device().to_string();
+  in.state = std::string(dnc::StateName(d.state()));
+  in.program = d.program().to_string();
+  in.bytes = d.bytes();
+  in.total = d.total();
+  in.seconds = d.seconds();
+  in.rate = d.rate();
+  in.stopped_s = d.stopped_s();
+  in.stalls = d.stalls();
+  in.transfers = d.transfers();
+  in.errors = d.errors();
+  in.last_error = d.last_error().to_string();
+  in.failed = d.failed();
+  in.time_ns = d.updated_ns();
+  return in;
+}
+
+}  // namespace
 
 Feed::Feed(bus::Participant& p, CellView& view, FeedOptions opts)
     : p_(p),
@@ -85,7 +110,9 @@ Feed::Feed(bus::Participant& p, CellView& view, FeedOptions opts)
                 in.line = e.line();
                 in.time_ns = e.time_ns();
                 view_.ProgramEvent(in);
-              }) {
+              }),
+      dnc_(p, topics::kDncStatus, bus::QosKind::kState,
+           [this](const cell::DncStatus& d, const bus::SampleInfo&) { view_.Dnc(DncFromWire(d)); }) {
   if (opts.axes)
     axes_.emplace(p, topics::kAxisState, bus::QosKind::kTelemetry,
                   [this](const cell::AxisState& a, const bus::SampleInfo&) {
@@ -103,6 +130,7 @@ void Feed::Tick() {
   for (auto& st : view_.model().stations()) view_.Online(st.id, live_.StationOnline(st.id));
   for (const char* s : {"cell-program-store", "cell-scheduler", "cell-inspection-writer"})
     view_.Service(s, live_.Online(s));
+  for (auto& station : view_.DncStations()) view_.DncOnline(station, live_.Online("cell-dnc/" + station));
 }
 
 bool Feed::Settled(std::chrono::milliseconds waited) const {

@@ -571,6 +571,78 @@
     }
   }
 
+  // ---- DNC lines (cell/dnc/status): one row per station with a serial line; a line in error is red, and the
+  // header names it so that it shows from anywhere on the page ----
+  const dncLines = new Map();  // station -> row
+  const DNC_WORDS = { idle: 'idle', sending: 'sending', receiving: 'receiving', dripping: 'dripping',
+                      error: 'ERROR', offline: 'no DNC process' };
+  function num(n) { return Number(n).toLocaleString('en-US'); }
+  // Byte counts: exact up to 100 kB (a program's size as the store shows it), in MB beyond (a drip feed).
+  function size(n) { return n < 100000 ? num(n) + ' B' : (n / 1e6).toFixed(2) + ' MB'; }
+  function dncProgress(d) {
+    const cell = el('td', 'dnc-progress');
+    if (!d.program) { cell.textContent = '—'; return cell; }
+    if (d.total > 0) {
+      const bar = el('div', 'bar');
+      const fill = el('i');
+      fill.style.width = Math.min(100, (100 * d.bytes) / d.total).toFixed(1) + '%';
+      bar.append(fill);
+      cell.append(bar, el('span', null, size(d.bytes) + ' of ' + size(d.total)));
+    } else {
+      cell.append(el('span', null, size(d.bytes)));
+    }
+    return cell;
+  }
+  function dncRow(d) {
+    const r = el('tr', 'dnc-' + d.state);
+    r.id = 'dnc-' + d.station;
+    r.dataset.state = d.state;
+    const line = el('td');
+    line.append(el('span', 'dnc-state s-' + d.state, DNC_WORDS[d.state] || d.state), el('small', null, ' ' + d.device));
+    const err = el('td', 'dnc-error-text', d.last_error || '—');
+    if (d.last_error && !d.failed) err.classList.add('old');
+    err.title = d.last_error || '';
+    r.append(el('td', 'dnc-station', d.station), line, el('td', null, val(d.program)), dncProgress(d),
+             el('td', null, d.rate > 0 ? num(Math.round(d.rate)) + ' B/s' : '—'),
+             el('td', null, d.stopped_s.toFixed(1) + ' s'), el('td', null, String(d.stalls)),
+             el('td', null, d.transfers + (d.errors ? ' (' + d.errors + ' failed)' : '')), err);
+    return r;
+  }
+  // The station's card says it too (its kind row, which renderStation leaves alone): a transfer under way,
+  // a line in error, a line without its process; nothing for an idle line.
+  function dncMark(d) {
+    const rec = stations.get(d.station);
+    if (!rec) return;
+    let mark = rec.el.dncMark;
+    if (!mark) {
+      mark = rec.el.dncMark = el('span', 'dncmark');
+      rec.el.kindRow.insertBefore(mark, rec.el.pathBtn);
+    }
+    const pct = d.total > 0 ? ' ' + Math.floor((100 * d.bytes) / d.total) + '%' : '';
+    const words = { error: 'DNC line error', offline: 'no DNC process', sending: 'DNC sending' + pct,
+                    dripping: 'DNC dripping' + pct, receiving: 'DNC receiving' };
+    mark.hidden = !words[d.state];
+    mark.className = 'dncmark s-' + d.state;
+    mark.textContent = words[d.state] || '';
+    mark.title = d.state === 'error' ? d.last_error : d.program;
+  }
+  byId('dnc-alert').addEventListener('click', () => byId('dnc-row').scrollIntoView());
+  function renderDnc() {
+    byId('dnc-row').hidden = dncLines.size === 0;
+    const body = document.querySelector('#dnc tbody');
+    body.replaceChildren();
+    const bad = [];
+    for (const d of [...dncLines.values()].sort((a, b) => a.station.localeCompare(b.station))) {
+      body.append(dncRow(d));
+      dncMark(d);
+      if (d.state === 'error') bad.push(d.station + ' line error');
+      if (d.state === 'offline') bad.push(d.station + ' no DNC process');
+    }
+    const alert = byId('dnc-alert');
+    alert.hidden = bad.length === 0;
+    alert.textContent = 'DNC: ' + bad.join(' · ');
+  }
+
   function renderServices() {
     const names = { 'cell-program-store': 'program store', 'cell-scheduler': 'scheduler', 'cell-inspection-writer': 'inspection writer' };
     const box = byId('services');
@@ -604,6 +676,9 @@
     renderInspections();
     renderProgramEvents();
     renderServices();
+    dncLines.clear();
+    for (const d of S.dnc || []) dncLines.set(d.station, d);
+    renderDnc();
     drawAxes();
   }
 
@@ -734,6 +809,7 @@
         renderProgramEvents();
         break;
       case 'services': S.services = ev.services; renderServices(); break;
+      case 'dnc': dncLines.set(ev.dnc.station, ev.dnc); renderDnc(); break;
     }
   }
 

@@ -42,13 +42,15 @@ nlohmann::json StatusJson(const cell::DncStatus& s) {
           {"state", StateName(s.state())},
           {"program", s.program().to_string()},
           {"bytes", s.bytes()},
+          {"total", s.total()},
           {"seconds", s.seconds()},
           {"rate", s.rate()},
           {"stalls", s.stalls()},
           {"stopped_s", s.stopped_s()},
           {"transfers", s.transfers()},
           {"errors", s.errors()},
-          {"last_error", s.last_error().to_string()}};
+          {"last_error", s.last_error().to_string()},
+          {"failed", s.failed()}};
 }
 
 Client::Client(bus::Participant& p, const std::string& station)

@@ -96,13 +96,14 @@ cell::DncReply Service::Send(const cell::DncRequest& r, bool drip) {
                                               : fmt::format("no program '{}' in {}", name, node));
   }
   const std::string where = fmt::format("{}:{}", file->info.value("node", node), name);
+  if (!drip) CheckMemory(where, file->content.size());
   std::vector<uint8_t> bytes;
   try {
     bytes = Encode(serial_.format, file->content);
   } catch (const Error& e) {
     throw Error(e.code(), fmt::format("{}: {}", where, e.what()));
   }
-  Begin(drip ? cell::DNC_DRIPPING : cell::DNC_SENDING, where);
+  Begin(drip ? cell::DNC_DRIPPING : cell::DNC_SENDING, where, bytes.size());
   SendOptions o;
   o.flow = serial_.flow;
   o.bytes_per_s = LineRate(serial_);
@@ -122,6 +123,15 @@ cell::DncReply Service::Send(const cell::DncRequest& r, bool drip) {
   nlohmann::json info = Figures(st);
   info["program"] = where;
   return Reply(station_, info);
+}
+
+// A program longer than the control's memory is refused before a byte goes out (MemoryRefusal); a drip feed
+// is for such programs.
+void Service::CheckMemory(const std::string& where, size_t characters) const {
+  const std::string why = MemoryRefusal(serial_, characters);
+  if (why.empty()) return;
+  throw Error(Errc::kFailedPrecondition, fmt::format("{}: {}: feed it with `cellctl dnc drip {} {}`", where,
+                                                     why, station_, where.substr(where.find(':') + 1)));
 }
 
 cell::DncReply Service::Receive(const cell::DncRequest& r) {
@@ -173,10 +183,12 @@ cell::DncReply Service::Status() {
   return Reply(station_, StatusJson(status_));
 }
 
-void Service::Begin(cell::DncState state, const std::string& program) {
+void Service::Begin(cell::DncState state, const std::string& program, uint64_t total) {
   std::lock_guard lk(mu_);
   status_.state(state);
   status_.program(program.substr(0, 160));
+  status_.total(total);
+  status_.failed(false);
   status_.bytes(0);
   status_.seconds(0);
   status_.rate(0);
@@ -206,6 +218,7 @@ void Service::End(const Stats& st, const std::string& error) {
   std::lock_guard lk(mu_);
   status_.state(cell::DNC_IDLE);
   status_.transfers(status_.transfers() + 1);
+  status_.failed(!error.empty());
   if (!error.empty()) {
     status_.errors(status_.errors() + 1);
     status_.last_error(error.substr(0, 512));

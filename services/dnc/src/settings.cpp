@@ -83,6 +83,15 @@ std::string_view FlowName(Flow f) {
   return "?";
 }
 
+// The controls' memories, in characters of program text (docs/dnc.md "Memory", judgement calls 16-17).
+// Balt-System: "The size of the user memory is 64,000 characters" (ln 223), the figure the program store
+// holds a memory MP0-MP6 to (program_store::kMemoryCapacity). EMCOTRONIC: "20 kB program memory" (ln 608),
+// 20 x 1024. OSP-E100L: the one program capacity, 320 m of tape by default (ln 717-721), at the tape's 10
+// characters an inch: 320 m / 2.54 mm = 125,984 characters.
+constexpr int kBaltMemory = 64000;
+constexpr int kEmcoMemory = 20 * 1024;
+constexpr int kOkumaMemory = 125984;
+
 Serial Defaults(Control c) {
   Serial s;
   s.format.control = c;
@@ -95,15 +104,19 @@ Serial Defaults(Control c) {
   s.flow = Flow::kXonXoff;
   s.format.end = End::kNul;
   switch (c) {
-    case Control::kKtApl:  // J1-J3
-    case Control::kBalt:   // J4-J5
+    case Control::kKtApl:  // J1-J3; the manual gives no memory size (J16)
+      break;
+    case Control::kBalt:  // J4-J5
+      s.memory = kBaltMemory;
       break;
     case Control::kEmco:  // J6-J9
+      s.memory = kEmcoMemory;
       s.baud = 2400;
       s.flow = Flow::kRtsCts;
       s.format.end = End::kCtrlZ;
       break;
     case Control::kOkuma:  // J10-J11
+      s.memory = kOkumaMemory;
       s.format.end = End::kPercent;
       break;
   }
@@ -119,6 +132,7 @@ Serial Resolve(Control c, const config::SerialTable& k) {
   if (k.data_bits) s.format.data_bits = *k.data_bits;
   if (k.stop_bits) s.stop_bits = *k.stop_bits;
   if (k.leader) s.format.leader = *k.leader;
+  if (k.memory) s.memory = *k.memory;
   ApplyNames(s, k);
   // An EIA line is the tape's eight channels: 8 data bits unless the table says otherwise (and is refused).
   if (k.code && s.format.code == Code::kEia) {
@@ -127,6 +141,12 @@ Serial Resolve(Control c, const config::SerialTable& k) {
   }
   Check(c, s);
   return s;
+}
+
+std::string MemoryRefusal(const Serial& s, size_t characters) {
+  if (s.memory <= 0 || characters <= static_cast<size_t>(s.memory)) return "";
+  return fmt::format("{} characters, more than the {} memory holds ({} characters, [serial] memory)",
+                     characters, ControlName(s.format.control), s.memory);
 }
 
 }  // namespace cell::dnc

@@ -241,6 +241,28 @@ TEST(DncCodes, DecoderTakesTheBytesInAnyPieces) {
   EXPECT_EQ(d.text(), text);
 }
 
+// The controls' memories (docs/dnc.md "Memory"): Balt-System 64,000 characters (ln 223, the program store's
+// kMemoryCapacity), EMCOTRONIC 20 kB = 20 x 1024 = 20,480 (ln 608), OSP-E100L 320 m of tape at 10 characters
+// an inch = 320,000 mm / 2.54 mm = 125,984 (ln 717-721); KT-APL none given (no check). A program of exactly
+// the memory fits; one character more is refused naming the size and the limit; `memory = 0` turns it off.
+TEST(DncSettings, ASendLongerThanTheControlsMemoryIsRefused) {
+  EXPECT_EQ(Defaults(Control::kBalt).memory, 64000);
+  EXPECT_EQ(Defaults(Control::kEmco).memory, 20480);
+  EXPECT_EQ(Defaults(Control::kOkuma).memory, 125984);
+  EXPECT_EQ(Defaults(Control::kKtApl).memory, 0);
+  const Serial balt = Defaults(Control::kBalt);
+  EXPECT_EQ(MemoryRefusal(balt, 64000), "");
+  EXPECT_EQ(MemoryRefusal(balt, 64001),
+            "64001 characters, more than the Balt-System memory holds (64000 characters, [serial] memory)");
+  EXPECT_EQ(MemoryRefusal(Defaults(Control::kKtApl), 10000000), "");
+  config::SerialTable k;
+  k.device = "/dev/ttyS0";
+  k.memory = 128 * 1024;  // an EMCOTRONIC with DC 5.00's 128 kB extension (ln 205-215)
+  EXPECT_EQ(MemoryRefusal(Resolve(Control::kEmco, k), 100000), "");
+  k.memory = 0;
+  EXPECT_EQ(MemoryRefusal(Resolve(Control::kBalt, k), 1000000), "");
+}
+
 TEST(DncSettings, DefaultsAndRefusals) {
   EXPECT_EQ(Defaults(Control::kEmco).baud, 2400);
   EXPECT_EQ(Defaults(Control::kBalt).baud, 9600);

@@ -123,6 +123,7 @@ void SimControl::ReadLoop() {
       max_fill_ = std::max(max_fill_, buffer.size());
     }
     if (n > 0) pulled += static_cast<double>(n);
+    pulled_ = wire_.size();
     if (n < static_cast<ssize_t>(want)) pulled = std::max(pulled, o_.line_bytes_per_s * t - fifo);
     if (buffer.size() >= o_.high) Flow(true);
     Execute(buffer, executed, pause_until, since_pause, rate, t, fifo);

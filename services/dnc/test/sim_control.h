@@ -56,6 +56,8 @@ class SimControl {
   void Join();                                     // waits for the thread (reading: up to the end of data)
   void Stop();
 
+  // Bytes pulled off the line so far: safe to read while it runs (a test waits for a send under way).
+  size_t pulled() const { return pulled_; }
   // After Join.
   const std::vector<uint8_t>& wire() const {
     return wire_;
@@ -81,6 +83,7 @@ class SimControl {
   std::thread thread_;
   std::atomic<bool> stop_{false};
   std::vector<uint8_t> wire_;
+  std::atomic<size_t> pulled_{0};
   size_t lost_ = 0, xoffs_ = 0, max_fill_ = 0;
   bool xoff_sent_ = false;
   std::string error_;

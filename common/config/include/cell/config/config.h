@@ -109,6 +109,8 @@ struct AuxOutput {
 struct SerialTable {
   std::string device;
   std::optional<int> baud, data_bits, stop_bits, leader;
+  std::optional<int>
+      memory;  // characters the control's memory takes (0: no limit); cell-dnc's default otherwise
   std::optional<std::string> parity, code, flow, end;
   bool operator==(const SerialTable&) const = default;
 };

@@ -72,6 +72,18 @@ struct EventIn {  // cell/station/event: what a program recorded (KT-APL EVT)
   std::int64_t time_ns = 0;
 };
 
+struct DncIn {  // cell/dnc/status: a station's serial line, as its cell-dnc publishes it (docs/dnc.md)
+  std::string station, device;
+  std::string state;                   // idle, sending, receiving, dripping
+  std::string program;                 // "NODE:NAME" of the transfer running or last run
+  std::uint64_t bytes = 0, total = 0;  // total 0: not known (a receive)
+  double seconds = 0, rate = 0, stopped_s = 0;
+  std::uint32_t stalls = 0, transfers = 0, errors = 0;
+  std::string last_error;
+  bool failed = false;  // the last transfer ended with last_error
+  std::int64_t time_ns = 0;
+};
+
 struct ViewOptions {
   std::size_t buffer_size = 16384;  // MTConnect observations kept for /sample (~120 B each: 2 MB)
   std::size_t event_log = 4096;     // page events kept for reconnecting browsers
@@ -79,6 +91,7 @@ struct ViewOptions {
   double axis_window_s = 60;        // the page's axis plot
   double axis_period_s = 0.2;       // one page point per station per period
   double mtc_axis_period_s = 0.1;   // MTConnect position samples at most this often per station
+  double dnc_grace_s = 3;            // a DNC line's sample this young outweighs a heartbeat not heard yet
   // The page's words for what the station files name: {"dialects": {name: title}, "kinds": {kind: title}}
   // (the interpreter registry's and the machine tables' own; the page keeps no list of them).
   nlohmann::json vocabulary = nlohmann::json::object();
@@ -100,6 +113,11 @@ class CellView {
   void Run(const RunIn& r);
   void Stored(const StoredIn& s);
   void ProgramEvent(const EventIn& e);
+  // DNC lines (dnc_view.cpp): a line's state, and whether its cell-dnc still heartbeats (a killed one's last
+  // state stays on the topic; a sample younger than dnc_grace_s outweighs a heartbeat not heard yet).
+  void Dnc(const DncIn& d);
+  void DncOnline(const std::string& station, bool online);
+  std::vector<std::string> DncStations() const;
 
   // ---- the page ----
   nlohmann::json Snapshot() const;                        // whole state; "event" = the last event id in it
@@ -173,6 +191,7 @@ class CellView {
   nlohmann::json StationJson(int s) const;
   nlohmann::json StoredJson(const StoredIn& s) const;
   static nlohmann::json EventJson(const EventIn& e);
+  nlohmann::json DncRows() const;  // with mu_ held
   std::vector<mtc::ToolAsset> ToolAssets() const;
 
   mtc::DeviceModel model_;
@@ -189,6 +208,12 @@ class CellView {
   std::deque<StoredIn> stored_;
   std::deque<EventIn> program_events_;  // newest first, the last 50
   std::set<std::string> stored_names_;
+  struct DncLine {
+    DncIn in;
+    bool online = true;
+    std::chrono::steady_clock::time_point heard;  // when the last sample arrived
+  };
+  std::map<std::string, DncLine> dnc_;  // by station
   SequenceBuffer buffer_;
   std::deque<Event> events_;
   std::uint64_t next_event_ = 1;

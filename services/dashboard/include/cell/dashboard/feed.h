@@ -15,6 +15,7 @@
 #include "cell/bus/bus.h"
 #include "cell/dashboard/cell_view.h"
 #include "cell/health/health.h"
+#include "cell/idl/dnc.h"
 #include "cell/idl/health.h"
 #include "cell/idl/inspection.h"
 #include "cell/idl/motion.h"
@@ -62,6 +63,7 @@ class Feed {
   bus::Reader<cell::RunStatus> runs_;
   bus::Reader<cell::InspectionStored> stored_;
   bus::Reader<cell::StationEvent> events_;
+  bus::Reader<cell::DncStatus> dnc_;  // the stations' serial lines (cell-dnc)
   std::optional<bus::Reader<cell::AxisState>> axes_;
 };
 

@@ -20,6 +20,9 @@ struct Serial {
   int stop_bits = 1;
   Flow flow = Flow::kXonXoff;
   Format format;  // code, data bits, parity, end of data, leader/trailer
+  // The characters of one program the control's memory takes (docs/dnc.md "Memory"; 0: not known, no
+  // check): a send (not a drip) of a longer program is refused before a byte goes out.
+  int memory = 0;
 };
 
 // The control's defaults (device empty).
@@ -30,5 +33,10 @@ Serial Defaults(Control c);
 // stop bits, EIA with 8 data bits and odd or no parity and no ctrl-Z, leader 0-1000. Throws
 // Error(kInvalidArgument) naming the key, the value and what is allowed.
 Serial Resolve(Control c, const config::SerialTable& keys);
+
+// Why a program of `characters` (its text, one per end of block) cannot be sent, as opposed to dripped: a
+// send fills the control's memory, and a longer program would overflow it part-way after minutes on the
+// line. "" when it fits or the memory is not known.
+std::string MemoryRefusal(const Serial& s, size_t characters);
 
 }  // namespace cell::dnc

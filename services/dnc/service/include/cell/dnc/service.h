@@ -42,11 +42,14 @@ class Service {
   cell::DncReply Handle(const cell::DncRequest& r);
   cell::DncReply Send(const cell::DncRequest& r, bool drip);
   cell::DncReply Receive(const cell::DncRequest& r);
+  // Throws when a program of `characters` is longer than the control's memory (Serial::memory).
+  void CheckMemory(const std::string& where, size_t characters) const;
   cell::DncReply Status();
   // The line, opened if it is not; a failed transfer closes it.
   Port& Line();
   // The transfer's state: begun, under way (at most every half second on the bus), ended.
-  void Begin(cell::DncState state, const std::string& program);
+  // `total`: the transfer's bytes when known (a send's), 0 for a receive.
+  void Begin(cell::DncState state, const std::string& program, uint64_t total = 0);
   void Progress(const Stats& st, bool force = false);
   void End(const Stats& st, const std::string& error);
   void Publish();  // under mu_
