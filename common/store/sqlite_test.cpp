@@ -46,7 +46,8 @@ TEST(Database, OpenCreatesParentDirectoriesInWalModeWithFullSync) {
   EXPECT_EQ(db.QueryInt64("PRAGMA foreign_keys"), 1);
   EXPECT_EQ(db.path(), file);
   EXPECT_EQ(db.QueryInt64("PRAGMA cache_size"), -2000);  // SQLite's default unless asked
-  EXPECT_EQ(Database::Open(tmp.path() / "small.db", {.cache_kib = 512}).QueryInt64("PRAGMA cache_size"), -512);
+  EXPECT_EQ(Database::Open(tmp.path() / "small.db", {.cache_kib = 512}).QueryInt64("PRAGMA cache_size"),
+            -512);
 }
 
 TEST(Database, OpenFailureIsACellError) {

@@ -9,11 +9,9 @@ set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 # shellcheck source=lib/figures.sh
 source "$ROOT/deploy/bench.d/lib/figures.sh"
-BENCH="${CELL_BUILD_DIR:-$ROOT/build}/bin/plan_bench"
-if [ ! -x "$BENCH" ]; then
-  echo "plan: $BENCH not built (cmake --build build --target plan_bench)" >&2
-  exit 1
-fi
+# shellcheck source=lib/exe.sh
+source "$ROOT/deploy/bench.d/lib/exe.sh"
+bench_exe plan plan_bench
 out="$(mktemp)"
 trap 'rm -f "$out"' EXIT
 "$BENCH" "$ROOT" | tee "$out"

@@ -5,11 +5,9 @@
 # Figures: CPU ms per export, the ratio to the baseline, and the target (under 1 s per 10,000 measurements).
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
-BENCH="${CELL_BUILD_DIR:-$ROOT/build}/bin/inspection_export_bench"
-if [ ! -x "$BENCH" ]; then
-  echo "inspection-export: $BENCH not built (cmake --build build --target inspection_export_bench)" >&2
-  exit 1
-fi
+# shellcheck source=lib/exe.sh
+source "$ROOT/deploy/bench.d/lib/exe.sh"
+bench_exe inspection-export inspection_export_bench
 out="$(mktemp)"
 trap 'rm -f "$out"' EXIT
 "$BENCH" --benchmark_min_time=0.5 >"$out" 2>&1 || { cat "$out" >&2; echo "inspection-export: bench failed" >&2; exit 1; }

@@ -6,11 +6,9 @@ set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 # shellcheck source=lib/figures.sh
 source "$ROOT/deploy/bench.d/lib/figures.sh"
-BENCH="${CELL_BUILD_DIR:-$ROOT/build}/bin/dnc_drip_bench"
-if [ ! -x "$BENCH" ]; then
-  echo "dnc-drip: $BENCH not built (cmake --build build --target dnc_drip_bench)" >&2
-  exit 1
-fi
+# shellcheck source=lib/exe.sh
+source "$ROOT/deploy/bench.d/lib/exe.sh"
+bench_exe dnc-drip dnc_drip_bench
 out="$(mktemp)"
 trap 'rm -f "$out"' EXIT
 rc=0

@@ -91,7 +91,7 @@ struct ViewOptions {
   double axis_window_s = 60;        // the page's axis plot
   double axis_period_s = 0.2;       // one page point per station per period
   double mtc_axis_period_s = 0.1;   // MTConnect position samples at most this often per station
-  double dnc_grace_s = 3;            // a DNC line's sample this young outweighs a heartbeat not heard yet
+  double dnc_grace_s = 3;           // a DNC line's sample this young outweighs a heartbeat not heard yet
   // The page's words for what the station files name: {"dialects": {name: title}, "kinds": {kind: title}}
   // (the interpreter registry's and the machine tables' own; the page keeps no list of them).
   nlohmann::json vocabulary = nlohmann::json::object();
