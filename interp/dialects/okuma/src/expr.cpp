@@ -86,6 +86,26 @@ Value Int(double v) {
   return {v, true};
 }
 
+// A name of up to 7 characters and its length in one integer: the reserved-name test is a run of integer
+// compares (it runs for every local variable name a block reads).
+constexpr uint64_t NameKey(std::string_view name) {
+  uint64_t out = static_cast<uint64_t>(name.size()) << 56;
+  for (size_t i = 0; i < name.size() && i < 7; ++i)
+    out |= static_cast<uint64_t>(static_cast<unsigned char>(name[i])) << (8 * i);
+  return out;
+}
+constexpr auto kReservedKeys = [] {
+  std::array<uint64_t, kReserved.size() + kFunctions.size()> keys{};
+  size_t n = 0;
+  for (std::string_view r : kReserved) keys[n++] = NameKey(r);
+  for (const FnName& f : kFunctions) keys[n++] = NameKey(f.name);
+  return keys;
+}();
+static_assert(std::all_of(kReserved.begin(), kReserved.end(),
+                          [](std::string_view r) { return r.size() <= 7; }));
+static_assert(std::all_of(kFunctions.begin(), kFunctions.end(),
+                          [](const FnName& f) { return f.name.size() <= 7; }));
+
 }  // namespace
 
 uint64_t PackName(std::string_view name) {
@@ -109,8 +129,9 @@ bool IsSystemVariable(std::string_view name) {
 }
 
 bool IsReservedName(std::string_view name) {
-  return FindFunction(name) != nullptr ||
-         std::find(kReserved.begin(), kReserved.end(), name) != kReserved.end();
+  if (name.size() > 7) return false;  // longer than any reserved name
+  const uint64_t key = NameKey(name);
+  return std::find(kReservedKeys.begin(), kReservedKeys.end(), key) != kReservedKeys.end();
 }
 
 bool IsLocalName(std::string_view name) {
@@ -184,6 +205,17 @@ bool ExprParser::AtOperatorAfterBlanks() {
          w == "GT" || w == "GE";
 }
 
+bool ExprParser::WordOperatorAfterBlanks() const {
+  size_t i = pos_;
+  while (i < s_.size() && (s_[i] == ' ' || s_[i] == '\t')) ++i;
+  size_t j = i;
+  while (j < s_.size() && IsLetter(s_[j])) ++j;
+  if (j == i || j - i > 3 || (j < s_.size() && IsDigit(s_[j]))) return false;
+  const std::string_view w = s_.substr(i, j - i);
+  return w == "OR" || w == "AND" || w == "EOR" || w == "LT" || w == "LE" || w == "EQ" || w == "NE" ||
+         w == "GT" || w == "GE";
+}
+
 bool ExprParser::AcceptWord(std::string_view w) {
   if (!AtOperatorAfterBlanks()) return false;
   size_t i = pos_;
@@ -213,6 +245,7 @@ int32_t ExprParser::Binary(NodeOp op, int32_t a, int32_t b, int col) {
 int32_t ExprParser::Or() {
   int32_t l = And();
   for (;;) {
+    if (!WordOperatorAfterBlanks()) return l;  // what AcceptWord below needs (most expressions end here)
     int col = Col();
     NodeOp op;
     if (AcceptWord("OR")) {
@@ -229,6 +262,7 @@ int32_t ExprParser::Or() {
 int32_t ExprParser::And() {
   int32_t l = Compare();
   for (;;) {
+    if (!WordOperatorAfterBlanks()) return l;
     int col = Col();
     if (!AcceptWord("AND")) return l;
     l = Binary(NodeOp::kAnd, l, Compare(), col);
@@ -244,6 +278,7 @@ int32_t ExprParser::Compare() {
                                                                                {"GT", NodeOp::kGt},
                                                                                {"GE", NodeOp::kGe}}};
   for (;;) {
+    if (!WordOperatorAfterBlanks()) return l;
     int col = Col();
     bool found = false;
     for (const auto& [w, op] : kOps) {
@@ -377,7 +412,8 @@ int32_t ExprParser::Primary() {
   while (pos_ < s_.size() && IsAlnumC(s_[pos_])) ++pos_;
   std::string name(s_.substr(start, pos_ - start));
   for (char& ch : name) ch = Up(ch);
-  if (const FnName* f = FindFunction(name)) {
+  // No function name begins with V: variables (most names) skip the function table.
+  if (const FnName* f = name[0] == 'V' ? nullptr : FindFunction(name)) {
     SkipBlanks();
     if (pos_ >= s_.size() || s_[pos_] != '[') Fail(col, fmt::format("{} needs its argument in [ ]", name));
     ++pos_;
@@ -402,7 +438,8 @@ int32_t ExprParser::Primary() {
   }
   if (name[0] == 'V' && name.size() > 1 && std::all_of(name.begin() + 1, name.end(), IsDigit)) {
     if (name.size() > 4) Fail(col, fmt::format("common variable {}: common variables are V1-V200", name));
-    int v = std::stoi(name.substr(1));
+    int v = 0;  // at most three digits (checked above)
+    for (size_t k = 1; k < name.size(); ++k) v = v * 10 + (name[k] - '0');
     if (v < 1 || v > 200) Fail(col, fmt::format("common variable {}: common variables are V1-V200", name));
     Node n;
     n.op = NodeOp::kCommon;

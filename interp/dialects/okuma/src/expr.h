@@ -141,6 +141,9 @@ class ExprParser {
   bool AtOperatorAfterBlanks();
   std::string_view PeekWord() const;
   bool AcceptWord(std::string_view w);
+  // The next non-blank word is a word operator (OR, AND, EOR, LT ... GE) standing alone: AcceptWord can
+  // only succeed there, so the operator levels test this once instead of trying each word.
+  bool WordOperatorAfterBlanks() const;
   int Col() const { return static_cast<int>(pos_) + col0_; }
   [[noreturn]] void Error(const std::string& text) const;
 

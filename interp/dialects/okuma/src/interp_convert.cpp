@@ -587,10 +587,7 @@ uint32_t OkRun::UsedAddresses(const NcGCodes& k, int* g) const {
 void OkRun::RefuseUnusedAddresses(const BlockWords& w, const NcGCodes& k) const {
   int g = 0;
   const uint32_t unused = w.has & ~UsedAddresses(k, &g);
-  // No motion code in force: only after G137 (coordinate conversion cancels the mode, judgement 58).
-  std::string what = unused == 0 ? std::string()
-                     : g < 0     ? std::string("a block after G137")
-                                 : fmt::format("a G{:02} block", g);
+  if (unused == 0 && w.ext_has == 0) return;  // nearly every block: nothing to refuse
   // Extended addresses: QA= with a C word (ln 2075), DA= in G73/G74 (ln 3933), the G84 change points of a
   // G85/G86 call (ln 5145-5173), SA= in G185-G188, SB= anywhere; PZ=, PW= are refused before.
   uint32_t ext_used = 0;
@@ -606,6 +603,8 @@ void OkRun::RefuseUnusedAddresses(const BlockWords& w, const NcGCodes& k) const 
     Fail(col, fmt::format("address {}= is not used by a G{:02} block", AddrName(kExt[i]), g));
   }
   if (unused == 0) return;
+  // No motion code in force: only after G137 (coordinate conversion cancels the mode, judgement 58).
+  std::string what = g < 0 ? std::string("a block after G137") : fmt::format("a G{:02} block", g);
   char a = 'A';
   while (!((unused >> (a - 'A')) & 1u)) ++a;
   if (k.chamfer == 0 && a == 'L' && (modal_.motion == 0 || modal_.motion == 1) && k.cycle == 0 && !k.lap) {

@@ -16,9 +16,25 @@ bool IsBlank(char c) {
 
 // Extended addresses that take a value (ln 537, 1537, 1871, 2075, 3933, 4234, 5121, 1612).
 bool IsExtendedAddress(std::string_view n) {
-  static constexpr std::string_view kAddrs[] = {"SA", "SB", "QA", "DA", "DB", "FA", "FB",
-                                                "XA", "XB", "ZA", "ZB", "PZ", "PW"};
-  return std::find(std::begin(kAddrs), std::end(kAddrs), n) != std::end(kAddrs);
+  if (n.size() != 2) return false;  // every block's two-letter names pass here: no string compares
+  switch (MakeAddr(n[0], n[1])) {
+    case MakeAddr('S', 'A'):
+    case MakeAddr('S', 'B'):
+    case MakeAddr('Q', 'A'):
+    case MakeAddr('D', 'A'):
+    case MakeAddr('D', 'B'):
+    case MakeAddr('F', 'A'):
+    case MakeAddr('F', 'B'):
+    case MakeAddr('X', 'A'):
+    case MakeAddr('X', 'B'):
+    case MakeAddr('Z', 'A'):
+    case MakeAddr('Z', 'B'):
+    case MakeAddr('P', 'Z'):
+    case MakeAddr('P', 'W'):
+      return true;
+    default:
+      return false;
+  }
 }
 
 class Lexer {
@@ -102,8 +118,9 @@ class Lexer {
   }
 
   bool Keyword(std::string_view kw, bool needs_blank) {
-    if (s_.size() - i_ < kw.size()) return false;
-    for (size_t k = 0; k < kw.size(); ++k) {
+    // Every block tries each keyword: the first letter rejects nearly all of them at once.
+    if (s_.size() - i_ < kw.size() || Up(s_[i_]) != kw[0]) return false;
+    for (size_t k = 1; k < kw.size(); ++k) {
       if (Up(s_[i_ + k]) != kw[k]) return false;
     }
     size_t end = i_ + kw.size();
@@ -343,7 +360,10 @@ class Lexer {
     Assign a;
     a.col = static_cast<int>(at) + 1;
     if (name[0] == 'V' && name.size() > 1 && std::all_of(name.begin() + 1, name.end(), IsDigit)) {
-      int n = name.size() <= 4 ? std::stoi(name.substr(1)) : 0;
+      int n = 0;  // V and at most three digits, else out of range
+      if (name.size() <= 4) {
+        for (size_t k = 1; k < name.size(); ++k) n = n * 10 + (name[k] - '0');
+      }
       if (n < 1 || n > 200)
         ErrorAt(at, fmt::format("common variable {}: common variables are V1-V200", name));
       a.kind = VarKind::kCommon;
