@@ -100,5 +100,36 @@ TEST(OkumaExpr, Errors) {
   EXPECT_THROW(ExprParser(sys, 0, pool).Parse(), RunError);
 }
 
+// The names a local variable may not take (ln 7593-7603), tested as packed integers: every one of them, and
+// names that only share letters with one.
+TEST(OkumaExpr, ReservedNames) {
+  for (const char* r :
+       {"AA",  "ZB",  "BC",  "LT",  "GE",   "OR",   "AND",  "EOR",  "NOT", "QA",    "PZ",     "PW", "IF",
+        "END", "RTS", "GET", "PUT", "CALL", "GOTO", "READ", "VSET", "SIN", "ATAN2", "DROUND", "MOD"}) {
+    EXPECT_TRUE(IsReservedName(r)) << r;
+  }
+  for (const char* ok : {"DP", "AC", "ORR", "AN", "CAL", "CALLS", "ATAN3", "DROUNDX", "GOTOA", "SI"}) {
+    EXPECT_FALSE(IsReservedName(ok)) << ok;
+  }
+  EXPECT_TRUE(IsLocalName("DP"));
+  EXPECT_FALSE(IsLocalName("LT"));
+  EXPECT_FALSE(IsLocalName("END"));
+}
+
+// An expression ends at a blank unless an operator follows; a word operator counts only as a whole word.
+TEST(OkumaExpr, WordOperatorAfterBlank) {
+  Vars v;
+  v.common[1] = 1;
+  EXPECT_EQ(Eval("V1 LT 2", v), 1);
+  EXPECT_EQ(Eval("V1+1 EQ 2 AND 1", v), 1);
+  EXPECT_EQ(Eval("0 OR V1", v), 1);
+  for (std::string t : {"V1+2 LTX=1", "V1+2 LT2", "V1+2 ORX=1", "V1+2 DP=3"}) {
+    std::vector<Node> pool;
+    ExprParser p(t, 0, pool);
+    Evaluate(pool, p.Parse(), v);
+    EXPECT_EQ(p.pos(), 4u) << t;
+  }
+}
+
 }  // namespace
 }  // namespace cell::interp::okuma

@@ -185,7 +185,9 @@ class Lexer {
   }
 
   bool Statement() {
-    if (Keyword("NOEX", true)) {
+    // Only the keywords that begin with the block's first letter are tried (most blocks begin with none).
+    const char c0 = i_ < s_.size() ? Up(s_[i_]) : '\0';
+    if (c0 == 'N' && Keyword("NOEX", true)) {
       b_.noex = true;
       b_.stmt_col = 1;
       Blanks();
@@ -193,13 +195,13 @@ class Lexer {
       Items();
       return true;
     }
-    if (Keyword("GOTO", true)) {
+    if (c0 == 'G' && Keyword("GOTO", true)) {
       b_.stmt = Stmt::kGoto;
       b_.label = Label();
       ExpectEnd("the GOTO target");
       return true;
     }
-    if (Keyword("IF", false)) {
+    if (c0 == 'I' && Keyword("IF", false)) {
       b_.stmt = Stmt::kIf;
       Blanks();
       if (i_ < s_.size() && s_[i_] == '[') {
@@ -220,7 +222,7 @@ class Lexer {
       ExpectEnd("the IF target");
       return true;
     }
-    if (Keyword("CALL", true) || Keyword("MODIN", true)) {
+    if ((c0 == 'C' && Keyword("CALL", true)) || (c0 == 'M' && Keyword("MODIN", true))) {
       b_.stmt = Up(s_[b_.stmt_col - 1]) == 'C' ? Stmt::kCall : Stmt::kModin;
       b_.program = ProgramArg();
       // Arguments: assignments registered when the subprogram is called (ln 8029-8042).
@@ -233,17 +235,17 @@ class Lexer {
       }
       return true;
     }
-    if (Keyword("RTS", true)) {
+    if (c0 == 'R' && Keyword("RTS", true)) {
       b_.stmt = Stmt::kRts;
       ExpectEnd("RTS");
       return true;
     }
-    if (Keyword("MODOUT", true)) {
+    if (c0 == 'M' && Keyword("MODOUT", true)) {
       b_.stmt = Stmt::kModout;
       ExpectEnd("MODOUT");
       return true;
     }
-    if (Keyword("READ", true) || Keyword("WRITE", true)) {
+    if ((c0 == 'R' && Keyword("READ", true)) || (c0 == 'W' && Keyword("WRITE", true))) {
       b_.stmt = Up(s_[b_.stmt_col - 1]) == 'R' ? Stmt::kRead : Stmt::kWrite;
       Blanks();
       if (i_ >= s_.size() || !IsDigit(s_[i_])) Error("RS232C channel number expected");
@@ -253,13 +255,13 @@ class Lexer {
       ExpectEnd("the channel");
       return true;
     }
-    if (Keyword("GET", true) || Keyword("PUT", true)) {
+    if ((c0 == 'G' && Keyword("GET", true)) || (c0 == 'P' && Keyword("PUT", true))) {
       b_.stmt = Up(s_[b_.stmt_col - 1]) == 'G' ? Stmt::kGet : Stmt::kPut;
       GetPut();
       return true;
     }
     for (std::string_view kw : {"PSELECT", "VSET", "END"}) {
-      if (Keyword(kw, kw != "END")) {
+      if (c0 == kw[0] && Keyword(kw, kw != "END")) {
         b_.stmt = Stmt::kSchedule;
         b_.stmt_word = std::string(kw);
         i_ = s_.size();
@@ -434,6 +436,7 @@ class Lexer {
       if (c == 'O') Error("a program name must stand alone in its block");
       if (c == 'V' || two_letters) {
         std::string name = Run(true);
+        const size_t after_name = i_;
         Blanks();
         const bool assign = i_ < s_.size() && (s_[i_] == '=' || (name[0] == 'V' && s_[i_] == '['));
         if (!assign && name == "CALRG") {
@@ -466,8 +469,7 @@ class Lexer {
           }
           ErrorAt(at, fmt::format("unknown word {}", name));
         }
-        i_ = at;
-        Run(true);
+        i_ = after_name;
         Assignment(name, at);
         continue;
       }
