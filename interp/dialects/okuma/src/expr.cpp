@@ -293,17 +293,17 @@ int32_t ExprParser::Compare() {
 }
 
 int32_t ExprParser::Sum() {
-  return LeftAssociative('+', NodeOp::kAdd, '-', NodeOp::kSub, &ExprParser::Product);
+  return LeftAssociative<&ExprParser::Product>('+', NodeOp::kAdd, '-', NodeOp::kSub);
 }
 
 int32_t ExprParser::Product() {
-  return LeftAssociative('*', NodeOp::kMul, '/', NodeOp::kDiv, &ExprParser::Unary);
+  return LeftAssociative<&ExprParser::Unary>('*', NodeOp::kMul, '/', NodeOp::kDiv);
 }
 
 // One precedence level of two left-associative operators over `operand`; an operator counts only where
 // AtOperatorAfterBlanks says the expression goes on (ln 6601: a blank ends it otherwise).
-int32_t ExprParser::LeftAssociative(char c1, NodeOp op1, char c2, NodeOp op2,
-                                    int32_t (ExprParser::*operand)()) {
+template <int32_t (ExprParser::*operand)()>
+int32_t ExprParser::LeftAssociative(char c1, NodeOp op1, char c2, NodeOp op2) {
   int32_t l = (this->*operand)();
   for (;;) {
     if (!AtOperatorAfterBlanks()) return l;

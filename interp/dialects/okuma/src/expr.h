@@ -133,7 +133,9 @@ class ExprParser {
   int32_t Sum();
   int32_t Product();
   int32_t Binary(NodeOp op, int32_t a, int32_t b, int col);  // adds the node a op b
-  int32_t LeftAssociative(char c1, NodeOp op1, char c2, NodeOp op2, int32_t (ExprParser::*operand)());
+  // The operand is a template argument: a direct call the compiler can inline (this runs for every operand).
+  template <int32_t (ExprParser::*operand)()>
+  int32_t LeftAssociative(char c1, NodeOp op1, char c2, NodeOp op2);
   int32_t Unary();
   int32_t Primary();
   int32_t Add(Node n);
