@@ -57,6 +57,7 @@ Result Run(Machine& m, const Program& p, bool contour) {
   const double c0 = CpuSeconds();
   const std::uint64_t t0 = m.ticks();
   bool measuring = false;
+  std::vector<Event> events;  // reused: the machine keeps the buffer (as the Runner does)
   const std::uint64_t last_id = p.segs.back().id;
   while (true) {
     while (next < p.segs.size() && m.credits() > 0) m.Push(p.segs[next++]);
@@ -65,7 +66,8 @@ Result Run(Machine& m, const Program& p, bool contour) {
       continue;
     }
     if (m.HasEvents()) {
-      for (const auto& e : m.TakeEvents()) {
+      m.TakeEvents(events);
+      for (const auto& e : events) {
         if (e.kind == EventKind::kStarted && first < 0) first = e.machine_time - m.period();
         // Contour error counts from the end of the first contour block: before that the axes may still be
         // inside the rapid's 0.025 mm in-position window (exact stop semantics, not path tolerance).

@@ -333,7 +333,8 @@ bool Receiver::LookAheadStarved(TimePoint now) const {
 }
 
 void Receiver::HandleEvents() {
-  for (const Event& e : machine_.TakeEvents()) {
+  machine_.TakeEvents(events_);
+  for (const Event& e : events_) {
     auto it = seq_of_.find(e.segment_id);
     switch (e.kind) {
       case EventKind::kStarted:

@@ -288,6 +288,11 @@ std::vector<Event> Machine::TakeEvents() {
   return out;
 }
 
+void Machine::TakeEvents(std::vector<Event>& into) {
+  into.clear();
+  into.swap(events_);
+}
+
 void Machine::RaiseAlarm(AlarmCode code, const std::string& text, std::uint64_t seg) {
   alarm_ = {code, text};
   alarm_seg_ = seg;

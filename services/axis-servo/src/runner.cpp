@@ -74,7 +74,7 @@ void Runner::Loop() {
       if (!running_) break;
     }
     const bool ran = machine_.StepNow();
-    if (machine_.HasEvents()) events = machine_.TakeEvents();
+    if (machine_.HasEvents()) machine_.TakeEvents(events);
     if (!events.empty()) {
       lock.unlock();
       for (const auto& e : events) sink_(e);

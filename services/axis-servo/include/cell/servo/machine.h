@@ -122,6 +122,9 @@ class Machine {
   // ---- Observation.
   // Events since the last call (started, completed with probe results, flushed, alarms), in order.
   std::vector<Event> TakeEvents();
+  // The same into `into` (cleared first), whose buffer the machine keeps for the next events: a loop that
+  // takes events every few periods allocates nothing (the by-value form allocates a new buffer each call).
+  void TakeEvents(std::vector<Event>& into);
   bool HasEvents() const { return !events_.empty(); }
   AxisState State() const;
   Execution execution() const;

@@ -115,9 +115,10 @@ class Receiver {
   std::uint64_t next_id_ = 0;
   std::map<std::uint64_t, std::uint64_t> seq_of_;  // machine segment id -> run seq
   std::set<std::uint64_t> probe_;                  // machine ids of probe segments
-  std::deque<cell::MotionSegment> inbox_;          // taken, not yet pushed (held while a run is abandoned)
-  bool abandoning_ = false;                        // aborting the previous run's leftovers
-  bool end_received_ = false;                      // the run's END segment has arrived
+  std::vector<Event> events_;  // HandleEvents()'s buffer, swapped with the machine's (no allocation per take)
+  std::deque<cell::MotionSegment> inbox_;  // taken, not yet pushed (held while a run is abandoned)
+  bool abandoning_ = false;                // aborting the previous run's leftovers
+  bool end_received_ = false;              // the run's END segment has arrived
   TimePoint last_segment_at_{};
   std::uint64_t received_seq_ = 0;  // highest seq of this run taken in order (re-sent duplicates are dropped)
   std::uint64_t completed_seq_ = 0;
