@@ -10,6 +10,10 @@
 //   - no backlog is left on any station;
 //   - every program put (before or during the chaos) reads back byte for byte;
 //   - the cell still works: one more pallet per route completes.
+//   - every SQLite database of the cell passes PRAGMA integrity_check;
+// The librarian's first put during the chaos is a large program (CELL_CHAOS_BIG_MB, default 1; the chunked
+// put path, retried under its key across kills of the store: issue 39 item 4); a campaign on a release build
+// sets it to 20 (docs/operations.md, "kill -9 campaign").
 // CELL_CHAOS_SEED fixes the random choices (the seed is printed either way).
 // The test is the cell's child subreaper, so it learns how every service process ended: one that ends without
 // the test killing it fails the test with its wait status and the tail of its log, except for the one known
@@ -38,6 +42,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "cell/store/sqlite.h"
 #include "cell/testing/local_cell.h"
 
 using namespace cell::testing;
@@ -223,6 +228,8 @@ TEST_F(Chaos, KillNineAtRandomMomentsWhileRoutesOperate) {
       seed_env && *seed_env ? static_cast<unsigned>(std::stoul(seed_env)) : std::random_device{}();
   std::printf("chaos seed %u (CELL_CHAOS_SEED=%u reproduces the random choices)\n", seed, seed);
   std::mt19937 rng(seed);
+  const char* big_env = std::getenv("CELL_CHAOS_BIG_MB");
+  const double big_mb = big_env && *big_env ? std::stod(big_env) : 1.0;
   const auto t_start = std::chrono::steady_clock::now();
 
   auto up = cell_.Up("KT01,KT02,KT03,KT04", "virtual");
@@ -332,7 +339,9 @@ TEST_F(Chaos, KillNineAtRandomMomentsWhileRoutesOperate) {
     // The librarian: now and then a new program, put under its key and retried across the kills.
     if (std::uniform_int_distribution<int>(0, 2)(rng) == 0) {
       std::string name = fmt::format("LIB{}", ++puts);
-      std::string text = Program(name, 5 + puts, puts);
+      // About 40 bytes a move: the first is big_mb megabytes, the rest a few hundred bytes.
+      const int moves = puts == 1 ? static_cast<int>(big_mb * 1e6 / 40) : 5 + puts;
+      std::string text = Program(name, moves, puts);
       std::string path = cell_.data_dir() + "/" + name + ".apl";
       std::ofstream(path) << text;
       ASSERT_EQ(Retry({"program", "put", path}, "put-" + name).code, 0) << name;
@@ -408,7 +417,10 @@ TEST_F(Chaos, KillNineAtRandomMomentsWhileRoutesOperate) {
   for (auto& s : stations) EXPECT_EQ(s["backlog_s"].get<double>(), 0.0) << s.dump();
 
   // Every program reads back byte for byte.
+  std::size_t program_bytes = 0, largest = 0;
   for (auto& [name, text] : programs_) {
+    program_bytes += text.size();
+    largest = std::max(largest, text.size());
     auto r = cell_.Ctl({"program", "get", name});
     EXPECT_EQ(r.code, 0) << name << ": " << r.err;
     EXPECT_TRUE(r.out == text) << name << " differs (" << r.out.size() << " bytes, put " << text.size()
@@ -427,14 +439,28 @@ TEST_F(Chaos, KillNineAtRandomMomentsWhileRoutesOperate) {
     ++pallet;
   }
 
+  // Every database of the cell is whole (read-only connections beside the running services).
+  int databases = 0;
+  for (auto& e : fs::recursive_directory_iterator(cell_.data_dir())) {
+    if (!e.is_regular_file() || e.path().extension() != ".db") continue;
+    cell::store::OpenOptions ro;
+    ro.read_only = true;
+    auto db = cell::store::Database::Open(e.path(), ro);
+    EXPECT_EQ(db.QueryText("PRAGMA integrity_check"), "ok") << e.path();
+    ++databases;
+  }
+  EXPECT_GE(databases, 3) << "the scheduler's, the program store's and the stations' databases";
+
   const auto secs = [](auto d) { return std::chrono::duration_cast<std::chrono::seconds>(d).count(); };
   std::string by_kind;
   for (auto& [k, n] : kills_by_kind) by_kind += fmt::format(" {} {}", k, n);
   std::printf(
       "chaos: %d kills (%d while a job was running;%s), %d Fast DDS aborts restarted, %zu pallets: %d "
-      "completed, %d failed; %d programs put during the chaos; %lld s of chaos, %lld s in all\n",
+      "completed, %d failed; %d programs put during the chaos; %zu programs byte-equal (%zu bytes, the "
+      "largest %zu); %d databases pass integrity_check; %lld s of chaos, %lld s in all\n",
       kills, kills_running, by_kind.c_str(), reaper_.vendor_crashes(), pallet_job_.size(), completed, failed,
-      puts, static_cast<long long>(secs(t_chaos - t_start)),
+      puts, programs_.size(), program_bytes, largest, databases,
+      static_cast<long long>(secs(t_chaos - t_start)),
       static_cast<long long>(secs(std::chrono::steady_clock::now() - t_start)));
   for (auto& e : reaper_.Unexpected()) ADD_FAILURE() << e;
   EXPECT_GE(kills, kMinKills);

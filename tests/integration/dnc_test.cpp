@@ -65,7 +65,7 @@ std::string Program(const std::string& start, int blocks) {
 struct Dashboard {
   explicit Dashboard(cell::bus::Participant& p)
       : view({{"KT01", "ktapl", "", "", {}}, {"EM01", "emco", "", "", {}}}),
-        feed(p, view, cell::dashboard::FeedOptions{false}) {}
+        feed(p, view, cell::dashboard::FeedOptions{false, {}}) {}
   // The station's row on the page ("" when the view has none), the feed's heartbeats followed first.
   nlohmann::json Row(const std::string& station) {
     feed.Tick();

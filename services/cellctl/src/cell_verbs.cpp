@@ -375,7 +375,7 @@ void AddCellWatch(CLI::App& app, Context& ctx, const OptsPtr& o) {
   watch->callback([o, &ctx] {
     // The same view the dashboard serves (services/dashboard), fed from the same topics.
     cell::dashboard::CellView view(cell::dashboard::LoadStationDefs());
-    cell::dashboard::Feed feed(ctx.Bus(), view, {.axes = false});
+    cell::dashboard::Feed feed(ctx.Bus(), view, {.axes = false, .on_job = {}});
     const bool tty = isatty(STDOUT_FILENO) != 0;
     cell::dashboard::TextStyle style;
     style.color = tty && !std::getenv("NO_COLOR");

@@ -51,9 +51,11 @@ int main() {
       cell::identity::Claim claim(bus, *health);
       claim.Confirm();  // one dashboard per cell: before it binds its port and writes dashboard.url
     }
-    cell::dashboard::Feed feed(bus, view);
-    cell::dashboard::Paths paths(bus);
     cell::dashboard::PlanSource plan(bus);
+    cell::dashboard::FeedOptions feed_opts;
+    feed_opts.on_job = [&plan] { plan.Poke(); };
+    cell::dashboard::Feed feed(bus, view, feed_opts);
+    cell::dashboard::Paths paths(bus);
     cell::dashboard::HttpServer http(view, http_opts);
     http.SetPlanSource([&plan] { return plan.Latest(); });
     http.SetPathSource([&paths](const std::string& station, const std::string& program) {

@@ -1,5 +1,7 @@
 #include "cell/dashboard/feed.h"
 
+#include <utility>
+
 #include "cell/bus/topics.h"
 #include "cell/config/config.h"
 #include "cell/dnc/client.h"
@@ -37,6 +39,7 @@ DncIn DncFromWire(const cell::DncStatus& d) {
 Feed::Feed(bus::Participant& p, CellView& view, FeedOptions opts)
     : p_(p),
       view_(view),
+      on_job_(std::move(opts.on_job)),
       live_(p),
       status_(p, topics::kStationStatus, bus::QosKind::kState,
               [this](const cell::StationStatus& s, const bus::SampleInfo&) {
@@ -63,7 +66,10 @@ Feed::Feed(bus::Participant& p, CellView& view, FeedOptions opts)
                 view_.Alarm(a.station().to_string(), records::FromWire(a));
               }),
       jobs_(p, topics::kJobState, bus::QosKind::kState,
-            [this](const cell::JobInfo& j, const bus::SampleInfo&) { view_.Job(records::FromWire(j)); }),
+            [this](const cell::JobInfo& j, const bus::SampleInfo&) {
+              view_.Job(records::FromWire(j));
+              if (on_job_) on_job_();
+            }),
       runs_(p, topics::kRunStatus, bus::QosKind::kEvent,
             [this](const cell::RunStatus& r, const bus::SampleInfo&) {
               RunIn in;

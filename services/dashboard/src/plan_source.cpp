@@ -13,11 +13,7 @@ constexpr auto kTimeout = bus::Millis(5000);
 }  // namespace
 
 PlanSource::PlanSource(bus::Participant& p, std::chrono::milliseconds period)
-    : p_(p),
-      period_(period),
-      jobs_(p, bus::topics::kJobStatus, bus::QosKind::kEvent,
-            [this](const cell::JobStatus&, const bus::SampleInfo&) { Poke(); }),
-      thread_([this] { Loop(); }) {}
+    : p_(p), period_(period), thread_([this] { Loop(); }) {}
 
 PlanSource::~PlanSource() {
   {

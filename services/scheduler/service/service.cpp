@@ -80,7 +80,7 @@ Service::Service(bus::Participant& p, const std::filesystem::path& data_dir)
         std::string type = f->info.is_object() ? f->info.value("type", std::string()) : std::string();
         return StoredProgram{std::move(f->content), f->dialect(), std::move(type)};
       }),
-      sched_(Options{(data_dir / "scheduler.db").string(), false, {}}, source_),
+      sched_(Options{(data_dir / "scheduler.db").string(), {}}, source_),
       predictor_(p),
       live_(p),
       jobs_w_(p, bus::topics::kJobStatus, bus::QosKind::kEvent),

@@ -163,9 +163,8 @@ Scheduler::Impl::Impl(Options o, ProgramSource& p) : opt(std::move(o)), programs
 }
 
 void Scheduler::Impl::CheckPallet(int pallet) const {
-  if (pallet < 1 || pallet > MaxPallet()) {
-    throw Error(Errc::kInvalidArgument, fmt::format("pallet {} outside 1-{}{}", pallet, MaxPallet(),
-                                                    opt.coded_pallets ? " (coded pallets)" : ""));
+  if (pallet < 1 || pallet > kMaxPallet) {
+    throw Error(Errc::kInvalidArgument, fmt::format("pallet {} outside 1-{}", pallet, kMaxPallet));
   }
 }
 

@@ -36,7 +36,9 @@ struct Scheduler::Impl : State {
   std::int64_t NowMs() const {
     return std::chrono::duration_cast<std::chrono::milliseconds>(opt.clock().time_since_epoch()).count();
   }
-  int MaxPallet() const { return opt.coded_pallets ? 127 : 255; }
+  // Pallet numbers 1-255 (KT-APL seed line 852); a coded-pallet module's 1-127 is a per-station rule
+  // (ListedFor).
+  static constexpr int kMaxPallet = 255;
   void CheckPallet(int pallet) const;
   // The operation's listed stations that can hold `pallet`: a coded-pallet module takes 1-127 only (KT-APL
   // seed lines 4081-4083), so for pallets 128-255 it is left out (into `scratch`); otherwise op.stations.

@@ -65,10 +65,7 @@ class TempDir {
 
 class FakeCell {
  public:
-  explicit FakeCell(std::string db_path = {}, bool coded = false)
-      : db_path_(std::move(db_path)), coded_(coded) {
-    Open();
-  }
+  explicit FakeCell(std::string db_path = {}) : db_path_(std::move(db_path)) { Open(); }
 
   // Simulates a scheduler restart on the same database (the old object is dropped without any shutdown).
   void Restart() {
@@ -147,13 +144,11 @@ class FakeCell {
   void Open() {
     Options o;
     o.db_path = db_path_;
-    o.coded_pallets = coded_;
     o.kept_ended_jobs = kept_ended;
     o.clock = [this] { return std::chrono::system_clock::time_point(std::chrono::milliseconds(now_ms)); };
     sched = std::make_unique<Scheduler>(o, programs);
   }
   std::string db_path_;
-  bool coded_;
   int counter_ = 0;
 };
 

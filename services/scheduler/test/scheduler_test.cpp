@@ -410,7 +410,8 @@ TEST(Jobs, IdempotencyKeysAndPalletRules) {
   EXPECT_EQ(CodeOf([&] { c.Operate("R", 256); }), Errc::kInvalidArgument);
   EXPECT_EQ(CodeOf([&] { c.Operate("NOPE", 2); }), Errc::kNotFound);
   EXPECT_NO_THROW(c.Operate("R", 255));
-  FakeCell coded({}, true);  // coded pallets: 1-127 (seed line 852)
+  FakeCell coded;  // a coded-pallet module: 1-127 (seed lines 852, 4081-4083)
+  coded.sched->ConfigureStation("KT01", "ktapl", true);
   coded.Program("A", {}, 1);
   coded.Route("R", {"KT01:A"});
   EXPECT_EQ(CodeOf([&] { coded.Operate("R", 128); }), Errc::kInvalidArgument);

@@ -27,6 +27,9 @@ namespace cell::dashboard {
 
 struct FeedOptions {
   bool axes = true;  // cellctl watch does not plot, so it skips the 50 Hz telemetry
+  // Called on the bus thread after each job state sample (the dashboard's PlanSource asks for the plan
+  // again); must not block.
+  std::function<void()> on_job;
 };
 
 // What a settled scheduler says of each station (SettledSchedulerView).
@@ -50,6 +53,7 @@ class Feed {
   // What the readers' callbacks write: constructed before the readers, whose callbacks run on the bus thread
   // as soon as each reader exists (a transient-local sample can arrive during the constructor).
   mutable std::mutex mu_;
+  const std::function<void()> on_job_;
   std::set<std::string> status_seen_;
   bool backlog_seen_ = false;
   SchedulerView sched_;

@@ -1,6 +1,7 @@
 // The scheduler's plan for the Gantt chart (docs/dashboard.md, "Plan"): the dashboard asks SCHED_PLAN, the
-// request `cellctl plan` sends, on its own thread every few seconds and soon after a job changes
-// (cell/job/status), and keeps the answer. Every browser's /api/plan reads the kept answer: many browsers
+// request `cellctl plan` sends, on its own thread every few seconds and soon after a job changes (Poke:
+// cell-dashboard's Feed calls it for each job state sample, so the dashboard reads the job topic once), and
+// keeps the answer. Every browser's /api/plan reads the kept answer: many browsers
 // cost the scheduler one request per period, and no page request waits on the bus or on another lock.
 #pragma once
 
@@ -37,7 +38,6 @@ class PlanSource {
   std::condition_variable cv_;
   bool poked_ = true, stop_ = false;
   PlanFetch latest_;
-  bus::Reader<cell::JobStatus> jobs_;
   std::thread thread_;
 };
 

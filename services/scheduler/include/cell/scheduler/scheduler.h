@@ -169,8 +169,6 @@ struct RunReport {
 
 struct Options {
   std::string db_path;  // SQLite file; empty = in memory only (tests, benchmarks)
-  // Pallet numbers 1-255, or 1-127 on coded-pallet FMS modules (KT-APL seed lines 852, 4081-4083).
-  bool coded_pallets = false;
   std::function<std::chrono::system_clock::time_point()> clock;  // default: system_clock::now
   // With a database, the ended jobs kept in memory beyond the live ones (the newest, by id); the others are
   // read back from the database when asked for, so memory stays flat over months of pallets (issue 39).
