@@ -299,18 +299,28 @@ void OkRun::Assignment(const Assign& a, const Block& b, bool call_arg) {
   }
 }
 
-// READ / WRITE / GET / PUT on a virtual RS232C channel (ln 8075-8229). Offline the READ data is the run's
-// RS232C parameter; WRITE sends the write area as one file_write command.
+// READ / WRITE / GET / PUT on the RS232C channel (ln 8075-8229): the station's serial line through the
+// environment (docs/dnc.md "Okuma READ/WRITE"); where there is none (offline), a virtual channel whose READ
+// data is the run's RS232C parameter and whose WRITE is one file_write command.
 void OkRun::ExecIo(const Block& b) {
   switch (b.stmt) {
-    case Stmt::kRead:
+    case Stmt::kRead: {
+      Environment::SerialResult got = env_->SerialRead();
+      if (got.line) {
+        if (!got.error.empty()) Fail(b.stmt_col, "Alarm B RS232C: " + got.error);
+        read_area_ = std::move(got.record);
+      }
       if (read_area_.size() > 160) Fail(b.stmt_col, "Alarm B RS232C: more than 160 characters received");
       rrp_ = 0;
       return;
-    case Stmt::kWrite:
-      Out<FileWriteOp>().text = write_area_;
-      write_area_.clear();
+    }
+    case Stmt::kWrite: {
+      Environment::SerialResult sent = env_->SerialWrite(write_area_);
+      if (sent.line && !sent.error.empty()) Fail(b.stmt_col, "Alarm B RS232C: " + sent.error);
+      if (!sent.line) Out<FileWriteOp>().text = write_area_;
+      write_area_.clear();  // WWP to the start (ln 8141)
       return;
+    }
     case Stmt::kGet: {
       double c = Evaluate(b.pool, b.count, *this).v;
       if (c < 1 || c != std::floor(c))
