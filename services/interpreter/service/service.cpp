@@ -29,7 +29,7 @@ Service::Service(bus::Participant& p, config::StationConfig cfg, const std::file
       probe_r_(p, bus::topics::Probe(cfg.id), bus::QosKind::kCommand,
                [this](const cell::ProbeResult& r, const bus::SampleInfo&) { station_.OnProbe(r); }),
       station_id_(cfg.id) {
-  if (!cfg.serial) return;
+  if (!cfg.serial || cfg.dialect != "okuma") return;  // READ/WRITE are the Okuma User Task's alone
   dnc_ = std::make_unique<dnc::Client>(p, cfg.id);
   dnc_state_r_ = std::make_unique<bus::Reader<cell::DncStatus>>(
       p, bus::topics::kDncStatus, bus::QosKind::kState,
