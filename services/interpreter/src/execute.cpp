@@ -9,6 +9,7 @@
 
 #include "cell/error/error.h"
 #include "cell/interp/interp.h"
+#include "cell/interp/serial.h"
 #include "cell/interp/station_rules.h"
 #include "cell/names/names.h"
 #include "cell/names/program_ref.h"
@@ -28,13 +29,14 @@ struct Station::ActiveRun {
 
 // Queue busters answered by the machine: the run's Next() blocks here until the servo reports (a probe) or
 // the inputs match (WAI).
-class Station::RunEnvironment : public interp::Environment {
+class Station::RunEnvironment : public interp::Environment, public interp::SerialChannel {
  public:
   RunEnvironment(Station& station, SegmentStream& stream, double probe_feed, ProgramFiles& files)
       : station_(station), stream_(stream), probe_feed_(probe_feed), files_(files) {}
   void WaitInputs(const std::string& spec) override { station_.WaitInputs(spec); }
-  SerialResult SerialRead() override { return station_.SerialRead(dispatch_id_); }
-  SerialResult SerialWrite(const std::string& record) override {
+  // Okuma READ/WRITE: the station's [serial] line (docs/dnc.md "Okuma READ/WRITE").
+  Result SerialRead() override { return station_.SerialRead(dispatch_id_); }
+  Result SerialWrite(const std::string& record) override {
     return station_.SerialWrite(dispatch_id_, record);
   }
   interp::ProbeResult Probe(const interp::ProbeMove& m) override {
@@ -395,8 +397,8 @@ std::string NoLine(const config::StationConfig& cfg, std::string_view what) {
 
 }  // namespace
 
-interp::Environment::SerialResult Station::SerialRead(std::int32_t dispatch_id) {
-  if (!cfg_.serial) return {true, "", NoLine(cfg_, "READ")};
+interp::SerialChannel::Result Station::SerialRead(std::int32_t dispatch_id) {
+  if (!cfg_.serial) return {"", NoLine(cfg_, "READ")};
   stream_.WaitDrained();  // the block goes active after the motion before it
   const std::string holder = fmt::format("dispatch {}", dispatch_id);
   const std::string line = fmt::format("station {} line {}", cfg_.id, cfg_.serial->device);
@@ -404,7 +406,7 @@ interp::Environment::SerialResult Station::SerialRead(std::int32_t dispatch_id) 
   spdlog::info("{}", text);
   board_.Waiting(text);
   board_.Publish();
-  interp::Environment::SerialResult r{true, "", ""};
+  interp::SerialChannel::Result r;
   try {
     // Asked after at the stream's pace (200 ms): a stop, a reset or a cancel ends the wait (the run's
     // checkpoint throws), and cell-dnc ends a READ its station stopped asking after (kReadLease).
@@ -428,16 +430,16 @@ interp::Environment::SerialResult Station::SerialRead(std::int32_t dispatch_id) 
   return r;
 }
 
-interp::Environment::SerialResult Station::SerialWrite(std::int32_t dispatch_id, const std::string& record) {
-  if (!cfg_.serial) return {true, "", NoLine(cfg_, "WRITE")};
+interp::SerialChannel::Result Station::SerialWrite(std::int32_t dispatch_id, const std::string& record) {
+  if (!cfg_.serial) return {"", NoLine(cfg_, "WRITE")};
   stream_.WaitDrained();
   Checkpoint(dispatch_id);
   try {
     io_.LineWrite(fmt::format("dispatch {}", dispatch_id), record);
   } catch (const Error& e) {
-    return {true, "", fmt::format("station {} line {}: {}", cfg_.id, cfg_.serial->device, e.what())};
+    return {"", fmt::format("station {} line {}: {}", cfg_.id, cfg_.serial->device, e.what())};
   }
-  return {true, "", ""};
+  return {};
 }
 
 // Outputs change when their block goes active (KT-APL manual ln 3958-3959), so after the motion before it.

@@ -1,13 +1,14 @@
 // Okuma variables (manual SECTION 13, seed ln 7549-7918, 8236-8474): common variables V1-V200 (the station
 // keeps them), local variables with their CALL/RTS registration rules, system variables (zero offsets and
 // shifts, tool offsets, nose radius, positions, limits, user alarm comments), I/O variables with the user
-// alarms VDOUT[991-993], and the virtual RS232C channel of READ/WRITE/GET/PUT.
+// alarms VDOUT[991-993], and the RS232C channel of READ/WRITE/GET/PUT (the station's line, or a virtual one).
 #include <fmt/format.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
 
+#include "cell/interp/serial.h"
 #include "interp_internal.h"
 
 namespace cell::interp::okuma {
@@ -299,14 +300,14 @@ void OkRun::Assignment(const Assign& a, const Block& b, bool call_arg) {
   }
 }
 
-// READ / WRITE / GET / PUT on the RS232C channel (ln 8075-8229): the station's serial line through the
-// environment (docs/dnc.md "Okuma READ/WRITE"); where there is none (offline), a virtual channel whose READ
-// data is the run's RS232C parameter and whose WRITE is one file_write command.
+// READ / WRITE / GET / PUT on the RS232C channel (ln 8075-8229): the station's serial line when the
+// environment is a SerialChannel (docs/dnc.md "Okuma READ/WRITE"); where there is none (offline), a virtual
+// channel whose READ data is the run's RS232C parameter and whose WRITE is one file_write command.
 void OkRun::ExecIo(const Block& b) {
   switch (b.stmt) {
     case Stmt::kRead: {
-      Environment::SerialResult got = env_->SerialRead();
-      if (got.line) {
+      if (auto* line = dynamic_cast<SerialChannel*>(env_)) {
+        SerialChannel::Result got = line->SerialRead();
         if (!got.error.empty()) Fail(b.stmt_col, "Alarm B RS232C: " + got.error);
         read_area_ = std::move(got.record);
       }
@@ -315,9 +316,12 @@ void OkRun::ExecIo(const Block& b) {
       return;
     }
     case Stmt::kWrite: {
-      Environment::SerialResult sent = env_->SerialWrite(write_area_);
-      if (sent.line && !sent.error.empty()) Fail(b.stmt_col, "Alarm B RS232C: " + sent.error);
-      if (!sent.line) Out<FileWriteOp>().text = write_area_;
+      if (auto* line = dynamic_cast<SerialChannel*>(env_)) {
+        SerialChannel::Result sent = line->SerialWrite(write_area_);
+        if (!sent.error.empty()) Fail(b.stmt_col, "Alarm B RS232C: " + sent.error);
+      } else {
+        Out<FileWriteOp>().text = write_area_;
+      }
       write_area_.clear();  // WWP to the start (ln 8141)
       return;
     }

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "cell/interp/okuma.h"
+#include "cell/interp/serial.h"
 
 namespace cell::interp {
 namespace {
@@ -197,21 +198,21 @@ TEST(OkumaCall, RepeatCountForms) {
 // READ/WRITE on a station's serial line (ln 8075-8109): the environment carries the records; WRITE sends the
 // write area (no file_write op), READ's record is what GET takes (ln 8119-8135); a line that fails is Alarm
 // B.
-struct SerialEnv : Environment {
+struct SerialEnv : Environment, SerialChannel {
   std::vector<std::string> written;
   std::vector<std::string> replies;
   std::string error;
-  SerialResult SerialRead() override {
-    SerialResult r{true, "", error};
+  Result SerialRead() override {
+    Result r{"", error};
     if (error.empty()) {
       r.record = replies.front();
       replies.erase(replies.begin());
     }
     return r;
   }
-  SerialResult SerialWrite(const std::string& record) override {
+  Result SerialWrite(const std::string& record) override {
     written.push_back(record);
-    return {true, "", ""};
+    return {};
   }
 };
 

@@ -99,21 +99,6 @@ class Environment {
     (void)op;
     return {};
   }
-  // The control's serial channel (Okuma User Task READ/WRITE, ln 8075-8109): a station's [serial] line.
-  // SerialRead blocks until a record arrives and returns its characters without the end code; SerialWrite
-  // returns when the record and its end code are on the line. `line` false: there is no line here (offline:
-  // the virtual channel, the run's RS232C parameter and a file_write op); `error`: the line failed or
-  // refused (the run alarms with it). Both throw what ends the run (a cancel, a stop).
-  struct SerialResult {
-    bool line = false;
-    std::string record;
-    std::string error;
-  };
-  virtual SerialResult SerialRead() { return {}; }
-  virtual SerialResult SerialWrite(const std::string& record) {
-    (void)record;
-    return {};
-  }
 };
 
 struct RunOptions {

@@ -22,7 +22,7 @@
 #include "cell/idl/motion.h"
 #include "cell/idl/run.h"
 #include "cell/idl/station.h"
-#include "cell/interp/run.h"
+#include "cell/interp/serial.h"
 #include "cell/station/clock.h"
 #include "cell/station/io.h"
 #include "cell/station/memory.h"
@@ -145,10 +145,10 @@ class Station {
   void ProgramStop(const std::string& program, int line, const interp::StopOp& stop);
   // KT-APL WAI (interp::Environment::WaitInputs): after the motion before it, until the inputs match.
   void WaitInputs(const std::string& spec);
-  // Okuma READ/WRITE (interp::Environment::SerialRead/SerialWrite) on the station's [serial] line, after the
-  // motion before them; a READ waits until a record arrives or the run ends (cancel, stop, reset).
-  interp::Environment::SerialResult SerialRead(std::int32_t dispatch_id);
-  interp::Environment::SerialResult SerialWrite(std::int32_t dispatch_id, const std::string& record);
+  // Okuma READ/WRITE (interp::SerialChannel) on the station's [serial] line, after the motion before them; a
+  // READ waits until a record arrives or the run ends (a cancel, the station's stop).
+  interp::SerialChannel::Result SerialRead(std::int32_t dispatch_id);
+  interp::SerialChannel::Result SerialWrite(std::int32_t dispatch_id, const std::string& record);
   // OutputOp and the station file's M codes; throws cell::Error to stop the run.
   void ExecuteIo(const std::string& program, const interp::Canon& c, AuxIo& aux);
   void Checkpoint(std::int32_t run_id) const;  // throws when the run was cancelled or the station stops
