@@ -108,7 +108,8 @@ TEST(Grants, OnlyAStationsOwnDncServesItsLineAndTheOperatorCommandsIt) {
   EXPECT_FALSE(MayPublish("dnc-KT01", "cell/station/KT02/dnc/reply"));
   EXPECT_TRUE(MayPublish("operator", "cell/station/KT02/dnc/request"));
   EXPECT_FALSE(MayPublish("viewer", "cell/station/KT01/dnc/request"));
-  EXPECT_FALSE(MayPublish("interpreter-KT01", "cell/station/KT01/dnc/request"));
+  EXPECT_TRUE(MayPublish("interpreter-KT01", "cell/station/KT01/dnc/request"));  // an Okuma READ/WRITE
+  EXPECT_FALSE(MayPublish("interpreter-KT01", "cell/station/KT02/dnc/request"));
   // It reads and stores programs through the store, writes its line's state, and nothing of the machine.
   EXPECT_TRUE(MayPublish("dnc-KT01", "cell/program_store/request"));
   EXPECT_TRUE(MayPublish("dnc-KT01", "cell/dnc/status"));

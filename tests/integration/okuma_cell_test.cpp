@@ -1,11 +1,14 @@
 // Okuma through the cell (issue 16): the station OK01 (Okuma dialect, lathe servo kind, virtual clock) runs
 // the manual's worked schedule program from `cellctl schedule run`, and the schedule survives a kill -9 of
 // the scheduler.
+#include <poll.h>
 #include <signal.h>
+#include <unistd.h>
 
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <map>
 #include <mutex>
@@ -13,13 +16,20 @@
 #include <thread>
 #include <vector>
 
+#include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
 #include "cell/bus/bus.h"
 #include "cell/bus/topics.h"
+#include "cell/dnc/codes.h"
+#include "cell/dnc/record.h"
+#include "cell/dnc/settings.h"
 #include "cell/idl/motion.h"
 #include "cell/testing/cell_fixture.h"
+#include "cell/testing/process.h"
+#include "sim_control.h"
 
 using namespace cell::testing;
 using nlohmann::json;
@@ -325,3 +335,129 @@ TEST_F(OkumaCell, MilledFlatE61CutsTheChordAtTheManualsXAndCPositions) {
 }
 
 }  // namespace
+
+// Issue 42 item 2: the User Task READ/WRITE/GET/PUT (ln 8075-8229) on OK01's real serial line. OK01's file
+// has a [serial] table on a pseudo-terminal (JIS 7-bit, even parity in the eighth bit, end code '%': the
+// OSP-E100L's defaults, docs/dnc.md), `cellctl up` starts cell-dnc/OK01 on it, and the test holds the master
+// as the external device. A program dispatched through `cellctl pallet run` PUTs variables and WRITEs the
+// record (checked byte-exact here), then READs the device's reply, which GET puts into V3 and a move uses.
+// While the READ waits, the line is the program's: `cellctl dnc send` is refused and `dnc status` shows it
+// reading. Then cell-dnc is killed and the next READ ends the run with one line naming station and line.
+namespace {
+
+// Bytes from the device end of the pty up to and including `end`, within `timeout` (what arrived so far
+// otherwise).
+std::vector<uint8_t> ReadUpTo(int fd, uint8_t end, std::chrono::seconds timeout) {
+  std::vector<uint8_t> got;
+  const auto deadline = std::chrono::steady_clock::now() + timeout;
+  while (std::chrono::steady_clock::now() < deadline) {
+    pollfd p{fd, POLLIN, 0};
+    if (poll(&p, 1, 100) <= 0) continue;
+    uint8_t b = 0;
+    if (read(fd, &b, 1) != 1) continue;
+    got.push_back(b);
+    if (b == end) break;
+  }
+  return got;
+}
+
+}  // namespace
+
+TEST(OkumaSerialLine, ReadAndWriteReachTheStationsSerialLine) {
+  namespace dnc = cell::dnc;
+  LocalCell cell("cell-okuma-line-");
+  const std::string config = cell.data_dir() + "/config";
+  std::filesystem::copy(SourceDir() + "/deploy", config, std::filesystem::copy_options::recursive);
+  dnc::test::Pty pty;
+  std::ofstream(config + "/stations/OK01.toml", std::ios::app)
+      << "\n[serial]\ndevice = \"" << pty.slave() << "\"\nflow = \"xonxoff\"\n";
+  cell.SetEnv("CELL_CONFIG_DIR", config);
+  auto up = cell.Up("OK01");
+  ASSERT_EQ(up.code, 0) << up.out << up.err;
+
+  // SI (shift in, $0F) first and SO ($0E) last, as the manual asks of JIS 7-bit (ln 8109): data like the
+  // rest.
+  const std::string program =
+      "%\nO10\nN1 V1=3 V2=-1.5\nN2 PUT $0F\nN3 PUT 'P='\nN4 PUT V1,4\nN5 PUT V2,6\nN6 PUT $0E\nN7 WRITE 0\n"
+      "N8 READ 0\nN9 GET ,2\nN10 GET V3,6\nN11 G00 X=V3 Z5\nN12 M02\n%\n";
+  std::ofstream(cell.data_dir() + "/RW.MIN") << program;
+  ASSERT_EQ(cell.Ctl({"program", "put", cell.data_dir() + "/RW.MIN", "--name", "RW.MIN", "--dialect", "okuma",
+                      "--node", "HOST"})
+                .code,
+            0);
+  ASSERT_EQ(cell.Ctl({"pallet", "set", "1", "RW.MIN"}).code, 0);
+  auto run = cell.Ctl({"pallet", "run", "1", "--station", "OK01"});
+  ASSERT_EQ(run.code, 0) << run.err;
+  const std::string job = run.out.substr(0, run.out.find('\n'));
+
+  // WRITE: SI, "P=", V1 in 4 and V2 in 6 characters right-justified (ln 8137-8141), SO, then the end code
+  // '%'; every byte with even parity in the eighth bit: 'P' 0x50 has two ones (0x50), '=' 0x3D five (0xBD),
+  // SO 0x0E three (0x8E).
+  const std::vector<uint8_t> wire = ReadUpTo(pty.master(), 0xA5, std::chrono::seconds(60));
+  const std::vector<uint8_t> expected = {0x0F, 0x50, 0xBD, 0xA0, 0xA0, 0xA0, 0x33, 0xA0,
+                                         0xA0, 0x2D, 0xB1, 0x2E, 0x35, 0x8E, 0xA5};
+  ASSERT_EQ(wire, expected) << fmt::format("{:02X}", fmt::join(wire, " "));
+  dnc::Format jis7 = dnc::Defaults(dnc::Control::kOkuma).format;
+  EXPECT_EQ(dnc::EncodeRecord(jis7, "\x0fP=   3  -1.5\x0e"), expected);  // the same through the line's code
+
+  // The READ now waits for a record: the line is the program's.
+  nlohmann::json st;
+  ASSERT_TRUE(cell::bus::WaitUntil(
+      [&] {
+        auto s = cell.Ctl({"dnc", "status", "--json"});
+        st = json::parse(s.out, nullptr, false);
+        return st.is_array() && !st.empty() && st[0].value("state", "") == "reading";
+      },
+      std::chrono::seconds(30)))
+      << st.dump();
+  // The plain table has the JSON's columns, `total` among them (the READ's is 0: its size comes at its end).
+  auto plain = cell.Ctl({"dnc", "status"});
+  EXPECT_NE(plain.out.find("total"), std::string::npos) << plain.out;
+  EXPECT_NE(plain.out.find("reading"), std::string::npos) << plain.out;
+  // `cellctl watch` shows the line too, with the run that holds it.
+  const std::string waiting = "OK01 READ: waiting for a record on " + pty.slave();
+  RunResult frame;
+  // A frame is what the watch has heard by then: the line's row may come after the stations'.
+  for (int i = 0; i < 10; ++i) {
+    frame = cell.Ctl({"watch", "--count", "1"});
+    if (frame.out.find("SERIAL LINES") != std::string::npos && frame.out.find(waiting) != std::string::npos)
+      break;
+  }
+  EXPECT_NE(frame.out.find("SERIAL LINES"), std::string::npos) << frame.out << frame.err;
+  EXPECT_NE(frame.out.find("reading    dispatch "), std::string::npos) << frame.out;
+  EXPECT_NE(frame.out.find(waiting), std::string::npos) << frame.out;
+  auto refused = cell.Ctl({"dnc", "send", "OK01", "RW.MIN"});
+  EXPECT_EQ(refused.code, 1);
+  EXPECT_NE(refused.err.find("held by station OK01's program (dispatch "), std::string::npos) << refused.err;
+
+  // The device answers "X=  24.5" (GET skips 2, takes 6): V3 = 24.5, and the move goes to X24.5.
+  const std::vector<uint8_t> reply = dnc::EncodeRecord(jis7, "X=  24.5");
+  ASSERT_EQ(write(pty.master(), reply.data(), reply.size()), static_cast<ssize_t>(reply.size()));
+  auto w = cell.Ctl({"job", "wait", job, "--timeout", "60"});
+  ASSERT_EQ(w.out, "COMPLETED\n") << w.err << cell.Json({"job", "show", job, "--json"}).dump();
+  auto vars = cell.Json({"station", "vars", "OK01", "--json"});
+  EXPECT_EQ(vars["V3"], 24.5) << vars;
+  EXPECT_EQ(vars["V1"], 3) << vars;
+
+  // cell-dnc gone: the next run's READ ends with Alarm B naming the station and its line (no hang).
+  const auto pids = cell.Pids();
+  ASSERT_TRUE(pids.count("cell-dnc/OK01")) << up.out;
+  ASSERT_EQ(kill(pids.at("cell-dnc/OK01"), SIGKILL), 0);
+  std::ofstream(cell.data_dir() + "/R.MIN") << "%\nO20\nN1 READ 0\nN2 M02\n%\n";
+  ASSERT_EQ(cell.Ctl({"program", "put", cell.data_dir() + "/R.MIN", "--name", "R.MIN", "--dialect", "okuma",
+                      "--node", "HOST"})
+                .code,
+            0);
+  ASSERT_EQ(cell.Ctl({"pallet", "set", "2", "R.MIN"}).code, 0);
+  run = cell.Ctl({"pallet", "run", "2", "--station", "OK01"});
+  ASSERT_EQ(run.code, 0) << run.err;
+  const std::string job2 = run.out.substr(0, run.out.find('\n'));
+  EXPECT_EQ(cell.Ctl({"job", "wait", job2, "--timeout", "60"}).code, 1);
+  json shown = cell.Json({"job", "show", job2, "--json"});
+  EXPECT_EQ(shown["state"], "FAILED") << shown.dump();
+  EXPECT_NE(shown.value("reason", "")
+                .find("Alarm B RS232C: station OK01 line " + pty.slave() +
+                      ": no DNC process: cell-dnc@OK01 does not answer"),
+            std::string::npos)
+      << shown.dump();
+}

@@ -124,7 +124,7 @@ void AddStatus(CLI::App& dnc, Context& ctx) {
       if (std::find(lines.begin(), lines.end(), s) == lines.end())
         rows.push_back(cell::dnc::StatusJson(status));
     Print(ctx, rows,
-          {"station", "state", "device", "program", "bytes", "rate", "stalls", "stopped_s", "errors",
+          {"station", "state", "device", "program", "bytes", "total", "rate", "stalls", "stopped_s", "errors",
            "last_error"});
   });
 }

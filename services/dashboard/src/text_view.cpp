@@ -173,6 +173,23 @@ std::string RenderText(const json& snap, const TextStyle& style) {
     }
   }
 
+  // Serial lines (DNC, docs/dnc.md): state, what they carry and how far, the last error of a line in error.
+  if (!snap.value("dnc", json::array()).empty()) {
+    out += "\n" + paint("SERIAL LINES", "1") + "\n";
+    for (auto& d : snap["dnc"]) {
+      const std::string st = Str(d["state"]);
+      const char* colour = st == "error" || st == "offline" ? "1;31" : st == "idle" ? "2" : "1;32";
+      const auto bytes = d.value("bytes", std::uint64_t{0}), total = d.value("total", std::uint64_t{0});
+      std::string tail =
+          fmt::format(" {:<20} {}", Fit(Str(d["program"]), 20),
+                      total > 0 ? fmt::format("{}/{} bytes", bytes, total) : fmt::format("{} bytes", bytes));
+      if (st == "error") tail += "  " + Str(d["last_error"], "");
+      const size_t head = 2 + 6 + 1 + 14 + 1 + 10;  // the columns before `tail`
+      out += fmt::format("  {:<6} {:<14} ", Fit(Str(d["station"]), 6), Fit(Str(d["device"]), 14)) +
+             Pad(paint(st, colour), st.size(), 10) + Fit(tail, W - head) + "\n";
+    }
+  }
+
   // Jobs
   out += "\n" +
          paint(fmt::format("{:>5} {:<10} {:<12} {:>6} {:<7} {:>5} {:>9}  {}", "JOB", "STATE", "ROUTE",

@@ -63,5 +63,40 @@ TEST(TextView, ProgramEventsNewestFirst) {
   EXPECT_LT(f.find("PART 7"), f.find("PART 6"));
 }
 
+// The serial lines (cell/dnc/status, docs/dnc.md): one row each with state, program and bytes of the total; a
+// line in error shows its last error; none without a cell-dnc heard.
+TEST(TextView, SerialLines) {
+  CellView v(testing::TwoStations());
+  EXPECT_EQ(RenderText(v.Snapshot(), {100, false, 10}).find("SERIAL LINES"), std::string::npos);
+  DncIn d;
+  d.station = "OK01";
+  d.device = "/dev/ttyS0";
+  d.state = "reading";
+  d.program = "dispatch 12";
+  v.Dnc(d);
+  d.station = "KT01";
+  d.state = "sending";
+  d.program = "HOST:O1000";
+  d.bytes = 300;
+  d.total = 1234;
+  v.Dnc(d);
+  std::string f = RenderText(v.Snapshot(), {100, false, 10});
+  EXPECT_NE(f.find("SERIAL LINES"), std::string::npos) << f;
+  EXPECT_NE(f.find("  OK01   /dev/ttyS0     reading    dispatch 12          0 bytes"), std::string::npos)
+      << f;
+  EXPECT_NE(f.find("  KT01   /dev/ttyS0     sending    HOST:O1000           300/1234 bytes"),
+            std::string::npos)
+      << f;
+  d.state = "idle";
+  d.failed = true;
+  d.last_error = "device /dev/ttyS0: byte 120: parity error (0x32)";
+  v.Dnc(d);
+  f = RenderText(v.Snapshot(), {160, false, 10});  // wide enough for the whole error
+  EXPECT_NE(f.find("KT01   /dev/ttyS0     error      HOST:O1000           300/1234 bytes  device /dev/ttyS0: "
+                   "byte 120: parity error (0x32)"),
+            std::string::npos)
+      << f;
+}
+
 }  // namespace
 }  // namespace cell::dashboard

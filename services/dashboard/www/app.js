@@ -575,6 +575,7 @@
   // header names it so that it shows from anywhere on the page ----
   const dncLines = new Map();  // station -> row
   const DNC_WORDS = { idle: 'idle', sending: 'sending', receiving: 'receiving', dripping: 'dripping',
+                      reading: 'program READ', writing: 'program WRITE',
                       error: 'ERROR', offline: 'no DNC process' };
   function num(n) { return Number(n).toLocaleString('en-US'); }
   // Byte counts: exact up to 100 kB (a program's size as the store shows it), in MB beyond (a drip feed).
@@ -620,7 +621,7 @@
     }
     const pct = d.total > 0 ? ' ' + Math.floor((100 * d.bytes) / d.total) + '%' : '';
     const words = { error: 'DNC line error', offline: 'no DNC process', sending: 'DNC sending' + pct,
-                    dripping: 'DNC dripping' + pct, receiving: 'DNC receiving' };
+                    dripping: 'DNC dripping' + pct, receiving: 'DNC receiving', reading: 'DNC program READ' };
     mark.hidden = !words[d.state];
     mark.className = 'dncmark s-' + d.state;
     mark.textContent = words[d.state] || '';

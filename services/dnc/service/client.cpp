@@ -17,6 +17,10 @@ std::string_view OpName(cell::DncOp op) {
       return "drip";
     case cell::DNC_STATUS:
       return "status";
+    case cell::DNC_READ:
+      return "read";
+    case cell::DNC_WRITE:
+      return "write";
   }
   return "?";
 }
@@ -31,6 +35,10 @@ std::string_view StateName(cell::DncState s) {
       return "receiving";
     case cell::DNC_DRIPPING:
       return "dripping";
+    case cell::DNC_READING:
+      return "reading";
+    case cell::DNC_WRITING:
+      return "writing";
   }
   return "?";
 }
@@ -68,6 +76,18 @@ cell::DncReply Client::Run(cell::DncOp op, const std::string& node, const std::s
   constexpr bus::Millis kNoDeadline{std::chrono::hours(24 * 365)};
   cell::DncReply rep =
       client_.Call(req, op == cell::DNC_STATUS ? bus::Millis(10000) : kNoDeadline, bus::Millis(1000), gone);
+  bus::ThrowIfError(rep);
+  return rep;
+}
+
+cell::DncReply Client::Record(cell::DncOp op, const std::string& holder, const std::string& record,
+                              bus::Millis timeout) {
+  cell::DncRequest req;
+  req.station(station_);
+  req.op(op);
+  req.name(holder.substr(0, 128));
+  req.data(std::vector<uint8_t>(record.begin(), record.end()));
+  cell::DncReply rep = client_.Call(req, timeout);
   bus::ThrowIfError(rep);
   return rep;
 }

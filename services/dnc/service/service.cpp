@@ -50,7 +50,10 @@ Service::Service(bus::Participant& p, std::string station, std::string dialect, 
       server_(
           p, bus::topics::StationDnc(station_), [this](const cell::DncRequest& r) { return Handle(r); },
           [](const cell::DncRequest& r) {
-            if (r.op() == cell::DNC_STATUS) return std::string();
+            // A READ is asked after every 200 ms while it waits: the run's READ and WRITE are its station's
+            // own (logged by cell-dnc as they end), not the operator's requests.
+            if (r.op() == cell::DNC_STATUS || r.op() == cell::DNC_READ || r.op() == cell::DNC_WRITE)
+              return std::string();
             return fmt::format("dnc {} {} {}:{}", OpName(r.op()), r.station().to_string(),
                                r.node().to_string(), r.name().to_string());
           }) {
@@ -63,6 +66,12 @@ Service::Service(bus::Participant& p, std::string station, std::string dialect, 
 
 Service::~Service() {
   cancel_ = true;  // the transfer under way (on the bus's thread) ends now, so the server can go
+  std::unique_ptr<ReadTask> t;
+  {
+    std::lock_guard lk(task_mu_);
+    t = std::move(task_);
+  }
+  Abandon(std::move(t));
 }
 
 Port& Service::Line() {
@@ -83,6 +92,10 @@ cell::DncReply Service::Handle(const cell::DncRequest& r) {
       return Receive(r);
     case cell::DNC_STATUS:
       return Status();
+    case cell::DNC_READ:
+      return Read(r);
+    case cell::DNC_WRITE:
+      return Write(r);
   }
   throw Error(Errc::kInvalidArgument, fmt::format("unknown DNC operation {}", static_cast<int>(r.op())));
 }
@@ -96,6 +109,7 @@ cell::DncReply Service::Send(const cell::DncRequest& r, bool drip) {
                                               : fmt::format("no program '{}' in {}", name, node));
   }
   const std::string where = fmt::format("{}:{}", file->info.value("node", node), name);
+  CheckNotHeld(drip ? "dnc drip" : "dnc send");
   if (!drip) CheckMemory(where, file->content.size());
   std::vector<uint8_t> bytes;
   try {
@@ -138,6 +152,7 @@ cell::DncReply Service::Receive(const cell::DncRequest& r) {
   const std::string name = r.name().to_string();
   const std::string node = r.node().size() == 0 ? station_ : r.node().to_string();
   const std::string where = fmt::format("{}:{}", node, name);
+  CheckNotHeld("dnc receive");
   ReceiveOptions o;
   o.flow = serial_.flow;
   o.progress = [this](const Stats& st) { Progress(st); };
@@ -178,6 +193,112 @@ cell::DncReply Service::Receive(const cell::DncRequest& r) {
   return Reply(station_, info, revision);
 }
 
+void Service::CheckNotHeld(std::string_view what) {
+  std::lock_guard lk(task_mu_);
+  if (!task_) return;
+  throw Error(Errc::kFailedPrecondition,
+              fmt::format("device {}: held by station {}'s program ({}, READ waiting for a record): {} is "
+                          "refused until that READ ends",
+                          serial_.device, station_, task_->holder, what));
+}
+
+void Service::Abandon(std::unique_ptr<ReadTask> t) {
+  if (!t) return;
+  t->cancel = true;
+  if (t->thread.joinable()) t->thread.join();
+}
+
+// The READ waits on its own thread, so that the line's other requests are answered meanwhile: a transfer
+// is refused while it holds the line, and a stop of the program (the station no longer asking) ends it.
+cell::DncReply Service::Read(const cell::DncRequest& r) {
+  const std::string holder = r.name().to_string();
+  std::unique_lock lk(task_mu_);
+  if (task_ && task_->holder != holder) {  // an earlier run's READ, left when that run ended
+    auto old = std::move(task_);
+    lk.unlock();
+    Abandon(std::move(old));
+    lk.lock();
+  }
+  if (!task_) {
+    if (const std::string why = RecordRefusal(serial_.format); !why.empty())
+      throw Error(Errc::kFailedPrecondition, fmt::format("device {}: {}", serial_.device, why));
+    task_ = std::make_unique<ReadTask>();
+    task_->holder = holder;
+    task_->asked = std::chrono::steady_clock::now();
+    task_->thread = std::thread([this, t = task_.get()] { ReadLoop(*t); });
+    return Reply(station_, {{"done", false}});
+  }
+  task_->asked = std::chrono::steady_clock::now();
+  if (!task_->done) return Reply(station_, {{"done", false}});
+  auto t = std::move(task_);
+  lk.unlock();
+  t->thread.join();
+  if (!t->error.empty()) throw Error(Errc::kUnavailable, t->error);
+  cell::DncReply rep = Reply(station_, {{"done", true}, {"characters", t->record.size()}});
+  rep.data(std::vector<uint8_t>(t->record.begin(), t->record.end()));
+  return rep;
+}
+
+void Service::ReadLoop(ReadTask& t) {
+  Stats st;
+  try {
+    Begin(cell::DNC_READING, t.holder);
+    RecordOptions o;
+    o.cancel = &t.cancel;
+    t.record = ReadRecord(Line(), serial_.format, o);
+    st.bytes = t.record.size() + 1;
+    End(st, "");
+    spdlog::info("READ of {}: {} characters", t.holder, t.record.size());
+  } catch (const Error& e) {
+    if (t.cancel) {
+      End(st, "");  // the program stopped: no fault of the line
+      spdlog::info("READ of {} ended: its run no longer waits", t.holder);
+    } else {
+      t.error = e.what();
+      End(st, t.error);
+    }
+  }
+  t.done = true;
+}
+
+cell::DncReply Service::Write(const cell::DncRequest& r) {
+  const std::string holder = r.name().to_string();
+  {
+    std::unique_lock lk(task_mu_);
+    if (task_ && task_->holder == holder && !task_->done)
+      throw Error(Errc::kFailedPrecondition,
+                  fmt::format("device {}: a READ of {} is waiting on the line", serial_.device, holder));
+    if (task_ && task_->holder != holder) {
+      auto old = std::move(task_);
+      lk.unlock();
+      Abandon(std::move(old));
+    }
+  }
+  const std::string record(r.data().begin(), r.data().end());
+  std::vector<uint8_t> bytes;
+  try {
+    bytes = EncodeRecord(serial_.format, record);
+  } catch (const Error& e) {
+    throw Error(e.code(), fmt::format("device {}: {}", serial_.device, e.what()));
+  }
+  Begin(cell::DNC_WRITING, holder, bytes.size());
+  SendOptions o;
+  o.flow = serial_.flow;
+  o.bytes_per_s = LineRate(serial_);
+  o.stall_timeout = kSendStall;
+  o.cancel = &cancel_;
+  Stats st;
+  try {
+    st = dnc::Send(Line(), bytes, o);
+  } catch (const Error& e) {
+    End(st, e.what());
+    throw;
+  }
+  End(st, "");
+  spdlog::info("WRITE of {}: {} characters", holder, record.size());
+  return Reply(station_, Figures(st));
+}
+
 cell::DncReply Service::Status() {
   std::lock_guard lk(mu_);
   return Reply(station_, StatusJson(status_));
@@ -209,6 +330,12 @@ void Service::Progress(const Stats& st, bool force) {
 }
 
 void Service::Tick() {
+  std::unique_ptr<ReadTask> gone;
+  {
+    std::lock_guard lk(task_mu_);
+    if (task_ && std::chrono::steady_clock::now() - task_->asked > kReadLease) gone = std::move(task_);
+  }
+  Abandon(std::move(gone));
   std::lock_guard lk(mu_);
   if (dirty_) Publish();
 }

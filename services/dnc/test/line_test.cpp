@@ -2,6 +2,7 @@
 // simulated line: every control's format sent and received byte-exact, flow control holding the control's
 // 256-byte buffer, and the one-line errors naming device and byte offset.
 #include <fcntl.h>
+#include <termios.h>
 #include <unistd.h>
 
 #include <deque>
@@ -12,6 +13,7 @@
 #include <gtest/gtest.h>
 
 #include "cell/dnc/line.h"
+#include "cell/dnc/record.h"
 #include "cell/dnc/transfer.h"
 #include "sim_control.h"
 
@@ -341,6 +343,64 @@ TEST(DncLine, RtsCtsHoldsTheControlsBuffer) {
   EXPECT_EQ(line.lost_, 0u);
   EXPECT_GT(st.stalls, 0u);
   EXPECT_EQ(line.got_, bytes);
+}
+
+// Okuma READ/WRITE records (ln 8075-8109): the write area and its end code in JIS 7-bit with even parity in
+// the eighth bit, or JIS 8-bit with '%' as the end; a record read byte-exact up to its end code, the bytes
+// after it left for the next READ; more than 160 characters, a parity error and a cancel end a READ.
+TEST(DncRecord, EncodesTheWriteAreaInTheLinesCodeAndParity) {
+  Format jis7 = Defaults(Control::kOkuma).format;  // JIS 7-bit even, '%' (judgement call 13)
+  EXPECT_EQ(EncodeRecord(jis7, "A1 "), (std::vector<uint8_t>{0x41, 0xB1, 0xA0, 0xA5}));  // A 1 space %
+  Format jis8 = jis7;
+  jis8.data_bits = 8;
+  jis8.parity = Parity::kNone;
+  jis8.end = End::kNul;
+  EXPECT_EQ(EncodeRecord(jis8,
+                         "\x0f"
+                         "A\xb1"),
+            (std::vector<uint8_t>{0x0F, 0x41, 0xB1, 0x00}));
+  EXPECT_THAT([&] { EncodeRecord(jis7, "5%"); },
+              ::testing::ThrowsMessage<Error>(HasSubstr("end code % inside")));
+  EXPECT_THAT([&] { EncodeRecord(jis7, "\xb1"); },
+              ::testing::ThrowsMessage<Error>(HasSubstr("no JIS 7-bit code")));
+  EXPECT_THAT([&] { EncodeRecord(jis7, std::string(161, 'A')); },
+              ::testing::ThrowsMessage<Error>(HasSubstr("more than the write area's 160")));
+  Format eia = jis7;
+  eia.code = Code::kEia;
+  EXPECT_THAT([&] { EncodeRecord(eia, "A"); }, ::testing::ThrowsMessage<Error>(HasSubstr("set to EIA")));
+}
+
+TEST(DncRecord, ReadsOneRecordUpToItsEndCode) {
+  Pty pty;
+  Serial s = OnPty(Control::kOkuma, pty);
+  auto port = TtyPort::Open(s);
+  std::vector<uint8_t> two = EncodeRecord(s.format, "X= 12.5");
+  const std::vector<uint8_t> second = EncodeRecord(s.format, "7");
+  two.insert(two.end(), second.begin(), second.end());
+  ASSERT_EQ(write(pty.master(), two.data(), two.size()), static_cast<ssize_t>(two.size()));
+  EXPECT_EQ(ReadRecord(*port, s.format, RecordOptions{}), "X= 12.5");
+  EXPECT_EQ(ReadRecord(*port, s.format, RecordOptions{}), "7");  // left on the line for the next READ
+
+  std::vector<uint8_t> bad = EncodeRecord(s.format, "12");
+  bad[1] ^= 0x80;
+  ASSERT_EQ(write(pty.master(), bad.data(), bad.size()), static_cast<ssize_t>(bad.size()));
+  EXPECT_THAT([&] { ReadRecord(*port, s.format, RecordOptions{}); },
+              ::testing::ThrowsMessage<Error>(
+                  StartsWith(fmt::format("device {}: byte 1: parity error", pty.slave()))));
+  tcflush(port->fd(), TCIFLUSH);
+
+  std::vector<uint8_t> long_one(161, WithParity(s.format, '1'));
+  long_one.push_back(WithParity(s.format, '%'));
+  ASSERT_EQ(write(pty.master(), long_one.data(), long_one.size()), static_cast<ssize_t>(long_one.size()));
+  EXPECT_THAT([&] { ReadRecord(*port, s.format, RecordOptions{}); },
+              ::testing::ThrowsMessage<Error>(HasSubstr("more than 160 characters before the end code")));
+  tcflush(port->fd(), TCIFLUSH);
+
+  std::atomic<bool> cancel{true};  // the program was stopped while its READ waited
+  RecordOptions o;
+  o.cancel = &cancel;
+  EXPECT_THAT([&] { ReadRecord(*port, s.format, o); },
+              ::testing::ThrowsMessage<Error>(HasSubstr("cancelled")));
 }
 
 }  // namespace

@@ -1,6 +1,7 @@
 #include "cell/station/service.h"
 
 #include <fmt/format.h>
+#include <nlohmann/json.hpp>
 
 #include "cell/bus/topics.h"
 #include "cell/error/error.h"
@@ -26,7 +27,18 @@ Service::Service(bus::Participant& p, config::StationConfig cfg, const std::file
       progress_r_(p, bus::topics::Progress(cfg.id), bus::QosKind::kState,
                   [this](const cell::SegmentProgress& s, const bus::SampleInfo&) { station_.OnProgress(s); }),
       probe_r_(p, bus::topics::Probe(cfg.id), bus::QosKind::kCommand,
-               [this](const cell::ProbeResult& r, const bus::SampleInfo&) { station_.OnProbe(r); }) {}
+               [this](const cell::ProbeResult& r, const bus::SampleInfo&) { station_.OnProbe(r); }),
+      station_id_(cfg.id) {
+  if (!cfg.serial || cfg.dialect != "okuma") return;  // READ/WRITE are the Okuma User Task's alone
+  dnc_ = std::make_unique<dnc::Client>(p, cfg.id);
+  dnc_state_r_ = std::make_unique<bus::Reader<cell::DncStatus>>(
+      p, bus::topics::kDncStatus, bus::QosKind::kState,
+      [this](const cell::DncStatus& s, const bus::SampleInfo&) {
+        if (s.station().to_string() != station_id_) return;
+        std::lock_guard lk(dnc_mu_);
+        dnc_state_ = s;
+      });
+}
 
 Service::~Service() {
   Stop();
@@ -136,6 +148,46 @@ bool Service::StoreRecord(const cell::InspectionRequest& request) {
   if (!inspection_.WaitForServer(bus::Millis(0))) return false;
   bus::ThrowIfError(inspection_.Call(request, std::chrono::seconds(5)));
   return true;
+}
+
+// The Okuma READ/WRITE through the station's cell-dnc (docs/dnc.md "Okuma READ/WRITE"): refused at once
+// while the line carries a `cellctl dnc` transfer; one line naming cell-dnc when none answers.
+cell::DncReply Service::DncCall(cell::DncOp op, const std::string& holder, const std::string& record,
+                                bus::Millis timeout) {
+  if (!dnc_) throw Error(Errc::kFailedPrecondition, "no [serial] table");
+  auto busy = [&]() -> std::string {
+    std::lock_guard lk(dnc_mu_);
+    if (!dnc_state_) return "";
+    const cell::DncState st = dnc_state_->state();
+    if (st != cell::DNC_SENDING && st != cell::DNC_RECEIVING && st != cell::DNC_DRIPPING) return "";
+    return fmt::format("busy: cell-dnc@{} is {} {} (cellctl dnc), {} refused", station_id_,
+                       dnc::StateName(st), dnc_state_->program().to_string(), dnc::OpName(op));
+  };
+  if (std::string why = busy(); !why.empty()) throw Error(Errc::kFailedPrecondition, why);
+  try {
+    return dnc_->Record(op, holder, record, timeout);
+  } catch (const Error& e) {
+    if (e.code() != Errc::kTimeout && e.code() != Errc::kUnavailable) throw;
+    if (std::string why = busy(); !why.empty()) throw Error(Errc::kFailedPrecondition, why);
+    const std::string what = e.what();
+    if (what.find(" service on DDS domain") != std::string::npos || e.code() == Errc::kTimeout)
+      throw Error(e.code(),
+                  fmt::format("no DNC process: cell-dnc@{} does not answer ({})", station_id_, what));
+    throw;
+  }
+}
+
+std::optional<std::string> Service::LineRead(const std::string& holder) {
+  const cell::DncReply rep = DncCall(cell::DNC_READ, holder, "", bus::Millis(5000));
+  if (!nlohmann::json::parse(rep.info().to_string(), nullptr, false).value("done", false))
+    return std::nullopt;
+  return std::string(rep.data().begin(), rep.data().end());
+}
+
+void Service::LineWrite(const std::string& holder, const std::string& record) {
+  // The line's own limits end a WRITE the device holds up (XOFF for 30 s); 160 characters at 110 baud is 15
+  // s.
+  DncCall(cell::DNC_WRITE, holder, record, bus::Millis(60000));
 }
 
 bool Service::WaitForServo(Clock::Duration timeout) {

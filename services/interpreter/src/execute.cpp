@@ -9,6 +9,7 @@
 
 #include "cell/error/error.h"
 #include "cell/interp/interp.h"
+#include "cell/interp/serial.h"
 #include "cell/interp/station_rules.h"
 #include "cell/names/names.h"
 #include "cell/names/program_ref.h"
@@ -28,11 +29,16 @@ struct Station::ActiveRun {
 
 // Queue busters answered by the machine: the run's Next() blocks here until the servo reports (a probe) or
 // the inputs match (WAI).
-class Station::RunEnvironment : public interp::Environment {
+class Station::RunEnvironment : public interp::Environment, public interp::SerialChannel {
  public:
   RunEnvironment(Station& station, SegmentStream& stream, double probe_feed, ProgramFiles& files)
       : station_(station), stream_(stream), probe_feed_(probe_feed), files_(files) {}
   void WaitInputs(const std::string& spec) override { station_.WaitInputs(spec); }
+  // Okuma READ/WRITE: the station's [serial] line (docs/dnc.md "Okuma READ/WRITE").
+  Result SerialRead() override { return station_.SerialRead(dispatch_id_); }
+  Result SerialWrite(const std::string& record) override {
+    return station_.SerialWrite(dispatch_id_, record);
+  }
   interp::ProbeResult Probe(const interp::ProbeMove& m) override {
     cell::MotionSegment seg;
     for (size_t i = 0; i < m.to.size(); ++i) seg.target()[i] = m.to[i];
@@ -72,6 +78,7 @@ class Station::RunEnvironment : public interp::Environment {
     return interp::ParamNumber(station_.cfg_, name);
   }
   void SetPallet(int pallet) { pallet_ = pallet; }
+  void SetDispatch(std::int32_t id) { dispatch_id_ = id; }
 
  private:
   Station& station_;
@@ -79,6 +86,7 @@ class Station::RunEnvironment : public interp::Environment {
   double probe_feed_;
   ProgramFiles& files_;
   int pallet_ = 0;
+  std::int32_t dispatch_id_ = 0;
 };
 
 void Station::Execute(const Dispatch& d) {
@@ -247,6 +255,7 @@ void Station::RunProgram(ActiveRun& run, const std::string& entry) {
       [this, id = run.d.dispatch_id] { Checkpoint(id); }, options_.writer_wait);
   RunEnvironment env(*this, stream_, options_.probe_feed, files);
   env.SetPallet(run.d.pallet);
+  env.SetDispatch(run.d.dispatch_id);
   AuxIo aux(cfg_.aux);  // interlocks ON and the spindle stopped: each program starts from the reset state
   opt.env = &env;
   auto program = interp::StartRun(opt);
@@ -374,6 +383,63 @@ void Station::WaitInputs(const std::string& spec) {
   spdlog::info("inputs {} present: the run goes on", Describe(*want));
   board_.Waiting("");
   board_.Publish();
+}
+
+// Okuma READ/WRITE (ln 8075-8109) on the station's [serial] line, which its cell-dnc owns (docs/dnc.md "Okuma
+// READ/WRITE"). A station without one refuses them with Alarm B, case 4, "RS232C is no longer in ready
+// status" (ln 8103; docs/dialects/okuma.md judgement call): the program's data would go nowhere.
+namespace {
+
+std::string NoLine(const config::StationConfig& cfg, std::string_view what) {
+  return fmt::format("{} on station {}: it has no serial line (no [serial] table in {}), RS232C not ready",
+                     what, cfg.id, cfg.file.string());
+}
+
+}  // namespace
+
+interp::SerialChannel::Result Station::SerialRead(std::int32_t dispatch_id) {
+  if (!cfg_.serial) return {"", NoLine(cfg_, "READ")};
+  stream_.WaitDrained();  // the block goes active after the motion before it
+  const std::string holder = fmt::format("dispatch {}", dispatch_id);
+  const std::string line = fmt::format("station {} line {}", cfg_.id, cfg_.serial->device);
+  const std::string text = "READ: waiting for a record on " + cfg_.serial->device;
+  spdlog::info("{}", text);
+  board_.Waiting(text);
+  board_.Publish();
+  interp::SerialChannel::Result r;
+  try {
+    // Asked after at the stream's pace (200 ms): a stop, a reset or a cancel ends the wait (the run's
+    // checkpoint throws), and cell-dnc ends a READ its station stopped asking after (kReadLease).
+    stream_.WaitUntil([&] {
+      try {
+        std::optional<std::string> got = io_.LineRead(holder);
+        if (!got) return false;
+        r.record = std::move(*got);
+      } catch (const Error& e) {
+        r.error = fmt::format("{}: {}", line, e.what());
+      }
+      return true;
+    });
+  } catch (...) {
+    board_.Waiting("");
+    throw;
+  }
+  board_.Waiting("");
+  board_.Publish();
+  if (r.error.empty()) spdlog::info("READ: {} characters from {}", r.record.size(), cfg_.serial->device);
+  return r;
+}
+
+interp::SerialChannel::Result Station::SerialWrite(std::int32_t dispatch_id, const std::string& record) {
+  if (!cfg_.serial) return {"", NoLine(cfg_, "WRITE")};
+  stream_.WaitDrained();
+  Checkpoint(dispatch_id);
+  try {
+    io_.LineWrite(fmt::format("dispatch {}", dispatch_id), record);
+  } catch (const Error& e) {
+    return {"", fmt::format("station {} line {}: {}", cfg_.id, cfg_.serial->device, e.what())};
+  }
+  return {};
 }
 
 // Outputs change when their block goes active (KT-APL manual ln 3958-3959), so after the motion before it.

@@ -257,6 +257,21 @@ class FakeIo final : public StationIo {
     records.push_back(request);
     return true;
   }
+  // The station's serial line (Okuma READ/WRITE): a READ is answered once `replies` holds a record.
+  std::optional<std::string> LineRead(const std::string& holder) override {
+    ++line_asks;
+    line_holders.push_back(holder);
+    if (!line_error.empty()) throw Error(Errc::kUnavailable, line_error);
+    if (replies.empty()) return std::nullopt;
+    std::string r = replies.front();
+    replies.erase(replies.begin());
+    return r;
+  }
+  void LineWrite(const std::string& holder, const std::string& record) override {
+    line_holders.push_back(holder);
+    if (!line_error.empty()) throw Error(Errc::kUnavailable, line_error);
+    written.push_back(record);
+  }
   // The last run status of a dispatch.
   std::optional<cell::RunStatus> LastRun(std::int32_t dispatch) const {
     for (auto it = runs.rbegin(); it != runs.rend(); ++it)
@@ -288,6 +303,9 @@ class FakeIo final : public StationIo {
   std::vector<cell::ServoControl> control;
   std::function<void(const cell::ServoControl&)> on_control;  // at each publication
   std::vector<cell::InspectionRequest> records;
+  std::vector<std::string> replies, written, line_holders;  // the serial line's records in and out
+  std::string line_error;                                   // LineRead/LineWrite fail with it
+  int line_asks = 0;
   std::vector<std::string> fetched;
 };
 

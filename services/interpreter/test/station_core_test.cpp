@@ -1,5 +1,6 @@
 // The station core without DDS: queue order, execution, cancel, the panel, and what programs leave in the
 // CNC's memory (KT-APL machine parameters and TLD, manual ln 8513-8525 and 3975-4097), at each step.
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -841,6 +842,80 @@ TEST_F(StationCore, EvtPublishesTheProgramsEvent) {
   EXPECT_EQ(e.line(), 2);
   EXPECT_EQ(e.text().to_string(), "PART 7 DONE");
   EXPECT_GT(e.time_ns(), 0);
+}
+
+// Okuma READ/WRITE (ln 8075-8109) on a station with a [serial] line: WRITE hands the write area to the line,
+// READ waits (asked after at each of the core's waits) until a record arrives, and GET takes it; a cancel
+// ends a READ that waits; a line that fails is Alarm B naming the station and line; a station without
+// [serial] refuses them with Alarm B (judgement 64 in docs/dialects/okuma.md).
+class StationSerial : public StationHarness {
+ protected:
+  void Okuma(bool serial) {
+    cfg_.dialect = "okuma";
+    if (serial) {
+      cfg_.serial = config::SerialTable{};
+      cfg_.serial->device = "/dev/ttyS9";
+    }
+    Make();
+  }
+};
+
+TEST_F(StationSerial, WriteSendsAndReadWaitsForTheRecord) {
+  Okuma(true);
+  Put("P", "V1=7\nPUT 'N='\nPUT V1,3\nWRITE 0\nREAD 0\nGET ,2\nGET V2,5\nG00 X=V2 Z1\nM02\n");
+  Dispatch(1, {"P"});
+  int waits = 0;
+  std::string waiting;
+  script_ = [&] {
+    if (io_.line_asks == 0) return;
+    if (++waits == 5) {  // the READ has waited through five of the core's waits
+      waiting = station_->Status().status_text().to_string();
+      io_.replies.push_back("X= 12.5");
+    }
+  };
+  const cell::RunStatus st = RunOne(1);
+  EXPECT_EQ(st.state(), cell::RUN_COMPLETED) << st.reason().to_string();
+  EXPECT_EQ(io_.written, (std::vector<std::string>{"N=  7"}));
+  EXPECT_GE(io_.line_asks, 5);
+  EXPECT_EQ(io_.line_holders.front(), "dispatch 1");
+  EXPECT_EQ(waiting, "READ: waiting for a record on /dev/ttyS9");
+  EXPECT_DOUBLE_EQ(Variables().at("V2"), 12.5);
+}
+
+TEST_F(StationSerial, ACancelEndsAReadThatWaits) {
+  Okuma(true);
+  Put("P", "READ 0\nM02\n");
+  Dispatch(1, {"P"});
+  script_ = [&] {
+    if (io_.line_asks == 3) Cancel(1);
+  };
+  EXPECT_EQ(RunOne(1).state(), cell::RUN_CANCELLED);
+}
+
+TEST_F(StationSerial, ALineThatFailsIsAlarmBNamingStationAndLine) {
+  Okuma(true);
+  io_.line_error = "no DNC process: cell-dnc@KT01 does not answer";
+  Put("P", "READ 0\nM02\n");
+  Dispatch(1, {"P"});
+  const cell::RunStatus st = RunOne(1);
+  EXPECT_EQ(st.state(), cell::RUN_FAILED);
+  EXPECT_THAT(
+      st.reason().to_string(),
+      ::testing::HasSubstr("Alarm B RS232C: station KT01 line /dev/ttyS9: no DNC process: cell-dnc@KT01"));
+}
+
+TEST_F(StationSerial, WithoutASerialTableReadAndWriteAreAlarmB) {
+  Okuma(false);
+  std::int32_t id = 0;
+  for (const char* text : {"READ 0\nM02\n", "PUT 'A'\nWRITE 0\nM02\n"}) {
+    Put("P", text);
+    Dispatch(++id, {"P"});
+    const cell::RunStatus st = RunOne(id);
+    EXPECT_EQ(st.state(), cell::RUN_FAILED);
+    EXPECT_THAT(st.reason().to_string(), ::testing::HasSubstr("it has no serial line (no [serial] table"));
+  }
+  EXPECT_EQ(io_.line_asks, 0);
+  EXPECT_TRUE(io_.written.empty());
 }
 
 }  // namespace

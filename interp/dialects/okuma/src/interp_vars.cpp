@@ -1,13 +1,14 @@
 // Okuma variables (manual SECTION 13, seed ln 7549-7918, 8236-8474): common variables V1-V200 (the station
 // keeps them), local variables with their CALL/RTS registration rules, system variables (zero offsets and
 // shifts, tool offsets, nose radius, positions, limits, user alarm comments), I/O variables with the user
-// alarms VDOUT[991-993], and the virtual RS232C channel of READ/WRITE/GET/PUT.
+// alarms VDOUT[991-993], and the RS232C channel of READ/WRITE/GET/PUT (the station's line, or a virtual one).
 #include <fmt/format.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
 
+#include "cell/interp/serial.h"
 #include "interp_internal.h"
 
 namespace cell::interp::okuma {
@@ -299,18 +300,31 @@ void OkRun::Assignment(const Assign& a, const Block& b, bool call_arg) {
   }
 }
 
-// READ / WRITE / GET / PUT on a virtual RS232C channel (ln 8075-8229). Offline the READ data is the run's
-// RS232C parameter; WRITE sends the write area as one file_write command.
+// READ / WRITE / GET / PUT on the RS232C channel (ln 8075-8229): the station's serial line when the
+// environment is a SerialChannel (docs/dnc.md "Okuma READ/WRITE"); where there is none (offline), a virtual
+// channel whose READ data is the run's RS232C parameter and whose WRITE is one file_write command.
 void OkRun::ExecIo(const Block& b) {
   switch (b.stmt) {
-    case Stmt::kRead:
+    case Stmt::kRead: {
+      if (auto* line = dynamic_cast<SerialChannel*>(env_)) {
+        SerialChannel::Result got = line->SerialRead();
+        if (!got.error.empty()) Fail(b.stmt_col, "Alarm B RS232C: " + got.error);
+        read_area_ = std::move(got.record);
+      }
       if (read_area_.size() > 160) Fail(b.stmt_col, "Alarm B RS232C: more than 160 characters received");
       rrp_ = 0;
       return;
-    case Stmt::kWrite:
-      Out<FileWriteOp>().text = write_area_;
-      write_area_.clear();
+    }
+    case Stmt::kWrite: {
+      if (auto* line = dynamic_cast<SerialChannel*>(env_)) {
+        SerialChannel::Result sent = line->SerialWrite(write_area_);
+        if (!sent.error.empty()) Fail(b.stmt_col, "Alarm B RS232C: " + sent.error);
+      } else {
+        Out<FileWriteOp>().text = write_area_;
+      }
+      write_area_.clear();  // WWP to the start (ln 8141)
       return;
+    }
     case Stmt::kGet: {
       double c = Evaluate(b.pool, b.count, *this).v;
       if (c < 1 || c != std::floor(c))

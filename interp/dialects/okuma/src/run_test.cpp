@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "cell/interp/okuma.h"
+#include "cell/interp/serial.h"
 
 namespace cell::interp {
 namespace {
@@ -192,6 +193,49 @@ TEST(OkumaCall, RepeatCountForms) {
   }
   auto bad = RunText("O1\nN2 CALL O2 Q0\nN3 M02\nO2\nN3 RTS\n");
   EXPECT_NE(bad.diag.find("repeat count is 1-9999"), std::string::npos) << bad.diag;
+}
+
+// READ/WRITE on a station's serial line (ln 8075-8109): the environment carries the records; WRITE sends the
+// write area (no file_write op), READ's record is what GET takes (ln 8119-8135); a line that fails is Alarm
+// B.
+struct SerialEnv : Environment, SerialChannel {
+  std::vector<std::string> written;
+  std::vector<std::string> replies;
+  std::string error;
+  Result SerialRead() override {
+    Result r{"", error};
+    if (error.empty()) {
+      r.record = replies.front();
+      replies.erase(replies.begin());
+    }
+    return r;
+  }
+  Result SerialWrite(const std::string& record) override {
+    written.push_back(record);
+    return {};
+  }
+};
+
+TEST(OkumaSerial, WriteSendsTheAreaAndReadFillsGet) {
+  SerialEnv env;
+  env.replies = {"X= 12.5"};
+  Result r = RunText("V1=7\nPUT 'N='\nPUT V1,3\nWRITE 0\nREAD 0\nGET ,2\nGET V2,5\nPUT 'A'\nWRITE 0\nM02\n",
+                     {}, {}, &env);
+  EXPECT_EQ(r.diag, "");
+  EXPECT_EQ(env.written, (std::vector<std::string>{"N=  7", "A"}));  // WWP back to the start (ln 8141)
+  EXPECT_EQ(r.run->Variables().at("V2"), 12.5);
+  for (const auto& op : r.ops) EXPECT_EQ(op.find("file_write"), std::string::npos) << op;
+}
+
+TEST(OkumaSerial, ALineThatFailsIsAlarmB) {
+  SerialEnv env;
+  env.error = "station OK01 has no serial line ([serial] in its station file)";
+  Result r = RunText("READ 0\nM02\n", {}, {}, &env);
+  EXPECT_NE(r.diag.find("Alarm B RS232C: station OK01 has no serial line"), std::string::npos) << r.diag;
+  env.replies = {std::string(161, '1')};
+  env.error.clear();
+  r = RunText("READ 0\nM02\n", {}, {}, &env);
+  EXPECT_NE(r.diag.find("more than 160 characters"), std::string::npos) << r.diag;
 }
 
 }  // namespace

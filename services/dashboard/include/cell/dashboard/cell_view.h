@@ -74,7 +74,7 @@ struct EventIn {  // cell/station/event: what a program recorded (KT-APL EVT)
 
 struct DncIn {  // cell/dnc/status: a station's serial line, as its cell-dnc publishes it (docs/dnc.md)
   std::string station, device;
-  std::string state;                   // idle, sending, receiving, dripping
+  std::string state;                   // idle, sending, receiving, dripping, reading, writing
   std::string program;                 // "NODE:NAME" of the transfer running or last run
   std::uint64_t bytes = 0, total = 0;  // total 0: not known (a receive)
   double seconds = 0, rate = 0, stopped_s = 0;

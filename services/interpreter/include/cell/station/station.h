@@ -17,10 +17,12 @@
 #include <string>
 
 #include "cell/config/config.h"
+#include "cell/error/error.h"
 #include "cell/idl/inspection.h"
 #include "cell/idl/motion.h"
 #include "cell/idl/run.h"
 #include "cell/idl/station.h"
+#include "cell/interp/serial.h"
 #include "cell/station/clock.h"
 #include "cell/station/io.h"
 #include "cell/station/memory.h"
@@ -70,6 +72,20 @@ class StationIo {
   // Hands a run record to the inspection writer: false when no writer is there (the record stays in the
   // outbox); throws cell::Error when the writer refused it or did not answer.
   virtual bool StoreRecord(const cell::InspectionRequest& request) = 0;
+  // The station's serial line through its cell-dnc (Okuma READ/WRITE, docs/dnc.md "Okuma READ/WRITE"), for
+  // the run `holder` ("dispatch 12"). LineRead starts a READ of one record, or asks after the one started:
+  // the record once it has arrived, nullopt while it has not. LineWrite returns when the record and its end
+  // code are on the line. Both throw cell::Error with the one-line reason: refused (the line is busy with a
+  // transfer), the line failed, no cell-dnc answering.
+  virtual std::optional<std::string> LineRead(const std::string& holder) {
+    (void)holder;
+    throw Error(Errc::kUnavailable, "no DNC link in this process");
+  }
+  virtual void LineWrite(const std::string& holder, const std::string& record) {
+    (void)holder;
+    (void)record;
+    throw Error(Errc::kUnavailable, "no DNC link in this process");
+  }
 };
 
 struct StationOptions {
@@ -129,6 +145,10 @@ class Station {
   void ProgramStop(const std::string& program, int line, const interp::StopOp& stop);
   // KT-APL WAI (interp::Environment::WaitInputs): after the motion before it, until the inputs match.
   void WaitInputs(const std::string& spec);
+  // Okuma READ/WRITE (interp::SerialChannel) on the station's [serial] line, after the motion before them; a
+  // READ waits until a record arrives or the run ends (a cancel, the station's stop).
+  interp::SerialChannel::Result SerialRead(std::int32_t dispatch_id);
+  interp::SerialChannel::Result SerialWrite(std::int32_t dispatch_id, const std::string& record);
   // OutputOp and the station file's M codes; throws cell::Error to stop the run.
   void ExecuteIo(const std::string& program, const interp::Canon& c, AuxIo& aux);
   void Checkpoint(std::int32_t run_id) const;  // throws when the run was cancelled or the station stops

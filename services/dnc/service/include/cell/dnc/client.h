@@ -15,8 +15,8 @@
 
 namespace cell::dnc {
 
-std::string_view OpName(cell::DncOp op);       // "send", "receive", "drip", "status"
-std::string_view StateName(cell::DncState s);  // "idle", "sending", "receiving", "dripping"
+std::string_view OpName(cell::DncOp op);       // "send", "receive", "drip", "status", "read", "write"
+std::string_view StateName(cell::DncState s);  // "idle", "sending", "receiving", "dripping", "reading", ...
 
 // One line's state as `cellctl dnc status --json` prints it: {station, dnc, device, state, program, bytes,
 // seconds, rate, stalls, stopped_s, transfers, errors, last_error}.
@@ -30,6 +30,11 @@ class Client {
   // service's one-line reason.
   cell::DncReply Run(cell::DncOp op, const std::string& node, const std::string& name,
                      const std::function<std::string()>& gone);
+  // A program's READ or WRITE (docs/dnc.md "Okuma READ/WRITE"), answered at once (a READ: started, or done
+  // with the record in `data`) within `timeout`. `holder` names the run. Throws cell::Error: the service's
+  // refusal or failure, kUnavailable/kTimeout when no cell-dnc answers.
+  cell::DncReply Record(cell::DncOp op, const std::string& holder, const std::string& record,
+                        bus::Millis timeout);
 
  private:
   std::string station_;

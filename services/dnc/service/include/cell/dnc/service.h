@@ -7,9 +7,11 @@
 #include <memory>
 #include <mutex>
 #include <string>
+#include <thread>
 
 #include "cell/bus/bus.h"
 #include "cell/dnc/line.h"
+#include "cell/dnc/record.h"
 #include "cell/dnc/settings.h"
 #include "cell/dnc/transfer.h"
 #include "cell/idl/dnc.h"
@@ -22,6 +24,9 @@ namespace cell::dnc {
 // holds, a long block or a dwell (judgement call 14).
 inline constexpr std::chrono::seconds kSendStall{30};
 inline constexpr std::chrono::seconds kDripStall{600};
+// A program's READ whose station stopped asking after it this long is ended (the run was stopped, reset or
+// its station died): the station asks every 200 ms while the READ waits (docs/dnc.md "Okuma READ/WRITE").
+inline constexpr std::chrono::seconds kReadLease{3};
 
 class Service {
  public:
@@ -34,6 +39,7 @@ class Service {
   ~Service();  // a transfer under way is cancelled
   // From the main loop: publishes figures that changed since the line state was last written (a transfer's
   // progress is written at most every half second, and a line gone quiet calls no progress).
+  // It also ends a program's READ whose station stopped asking after it (kReadLease).
   void Tick();
   Service(const Service&) = delete;
   Service& operator=(const Service&) = delete;
@@ -42,6 +48,23 @@ class Service {
   cell::DncReply Handle(const cell::DncRequest& r);
   cell::DncReply Send(const cell::DncRequest& r, bool drip);
   cell::DncReply Receive(const cell::DncRequest& r);
+  // A program's READ (started on its own thread, then asked after) and WRITE (docs/dnc.md "Okuma
+  // READ/WRITE").
+  cell::DncReply Read(const cell::DncRequest& r);
+  cell::DncReply Write(const cell::DncRequest& r);
+  // Throws when a program's READ holds the line: `what` ("dnc send") is refused until it ends.
+  void CheckNotHeld(std::string_view what);
+  struct ReadTask {
+    std::string holder;  // "dispatch 12"
+    std::thread thread;
+    std::atomic<bool> cancel{false};
+    std::atomic<bool> done{false};
+    std::string record, error;  // once done
+    std::chrono::steady_clock::time_point asked;
+  };
+  void ReadLoop(ReadTask& t);
+  // Cancels a READ (its station went away) and waits for its thread.
+  static void Abandon(std::unique_ptr<ReadTask> t);
   // Throws when a program of `characters` is longer than the control's memory (Serial::memory).
   void CheckMemory(const std::string& where, size_t characters) const;
   cell::DncReply Status();
@@ -66,6 +89,8 @@ class Service {
   std::chrono::steady_clock::time_point published_;
   bool dirty_ = false;  // status_ has figures not yet written
   bus::Writer<cell::DncStatus> status_w_;
+  std::mutex task_mu_;
+  std::unique_ptr<ReadTask> task_;  // a program's READ: it holds the line until asked after once done
   bus::Server<cell::DncRequest, cell::DncReply> server_;
 };
 

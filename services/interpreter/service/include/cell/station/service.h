@@ -6,10 +6,14 @@
 #include <atomic>
 #include <filesystem>
 #include <memory>
+#include <mutex>
+#include <optional>
 #include <thread>
 
 #include "cell/bus/bus.h"
 #include "cell/config/config.h"
+#include "cell/dnc/client.h"
+#include "cell/idl/dnc.h"
 #include "cell/idl/inspection.h"
 #include "cell/idl/motion.h"
 #include "cell/idl/run.h"
@@ -60,6 +64,8 @@ class Service final : public StationIo, public ServoLink {
     programs_.Put(name, text, o);
   }
   bool StoreRecord(const cell::InspectionRequest& request) override;
+  std::optional<std::string> LineRead(const std::string& holder) override;
+  void LineWrite(const std::string& holder, const std::string& record) override;
   // ServoLink
   void Write(const cell::MotionSegment& segment) override { seg_w_.Write(segment); }
   std::size_t Matched() override { return static_cast<std::size_t>(seg_w_.Matched()); }
@@ -86,6 +92,14 @@ class Service final : public StationIo, public ServoLink {
   Station station_;  // after the endpoints it uses, before the readers that feed it
   bus::Reader<cell::SegmentProgress> progress_r_;
   bus::Reader<cell::ProbeResult> probe_r_;
+  // A station with a [serial] line: its cell-dnc, for the Okuma READ/WRITE, and the line's state, so that a
+  // READ/WRITE while `cellctl dnc` transfers is refused at once (cell-dnc answers requests one at a time).
+  std::string station_id_;
+  std::mutex dnc_mu_;
+  std::optional<cell::DncStatus> dnc_state_;  // under dnc_mu_
+  std::unique_ptr<dnc::Client> dnc_;
+  std::unique_ptr<bus::Reader<cell::DncStatus>> dnc_state_r_;
+  cell::DncReply DncCall(cell::DncOp op, const std::string& holder, const std::string& record, bus::Millis t);
   std::unique_ptr<bus::Server<cell::RunRequest, cell::RunReply>> run_srv_;
   std::unique_ptr<bus::Server<cell::StationRequest, cell::StationReply>> cmd_srv_;
   std::atomic<bool> worker_alive_{false};
