@@ -83,6 +83,9 @@ class Station::RunEnvironment : public interp::Environment {
 
 void Station::Execute(const Dispatch& d) {
   ActiveRun run{d, clock_.WallNs(), 0, ""};
+  // The servo starts each run from the state a pallet arrives in, A and C at their zero among it
+  // (Machine::ToArrival): the rotary axes unwrap from there.
+  unwrap_ = RotaryUnwrap{};
   db_.MarkActive(d.dispatch_id, run.started_ns);
   stream_.Begin(d.dispatch_id, [this, id = d.dispatch_id] { Checkpoint(id); });
   board_.RunStarted(d.pallet, d.dispatch_id);
