@@ -3,9 +3,9 @@
 # docs/predict.md): a cell of KT01, OK01, EM01 and BS01 on the virtual clock (cellctl up) runs the first
 # CELL_BENCH_PREDICT_N (default 8) positive conformance programs of each dialect that the scheduler predicts,
 # each as a pallet on its station, one after another; the prediction (`program show`, predicted_s) against
-# the job's cycle_s (lib/predict_actual.py). Target: within 1% each. A prediction starts from the machine at
-# rest at its zero (docs/predict.md, judgement call 4); a station starts each run where the last one left it,
-# so the first program of each station is the like-for-like figure. About a minute.
+# the job's cycle_s (lib/predict_actual.py). Target: within 1% each. A prediction and every run on a station
+# start from the state a pallet arrives in (docs/predict.md, judgement call 4), so every program is like for
+# like. About a minute.
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 # shellcheck source=lib/figures.sh

@@ -176,6 +176,37 @@ void Machine::SetPallets(int on_table, int on_shuttle) {
   pallet_shuttle_ = on_shuttle;
 }
 
+// Shortest way round the magazine (or the turret) from where it stands to `socket`.
+int Machine::MagazineSteps(int socket) const {
+  const int n = std::max(1, cfg_.magazine_sockets);
+  const int steps = std::abs(socket - magazine_at_) % n;
+  return std::min(steps, n - steps);
+}
+
+std::vector<Segment> Machine::ToArrival() const {
+  std::vector<Segment> out;
+  auto add = [&](SegmentKind kind) -> Segment& {
+    Segment& s = out.emplace_back();
+    s.kind = kind;
+    return s;
+  };
+  if (spindle_.Active()) add(SegmentKind::kSpindle);  // kStop
+  if (live_tool_.Active()) add(SegmentKind::kSpindle).live_tool = true;
+  if (coolant_ != CoolantMode::kOff) add(SegmentKind::kCoolant);  // kOff
+  // The axes at the zero; an index table's B on its own (an index move is a move of B alone).
+  const bool index_b = present_[kB] && cfg_.axes[kB].type == AxisType::kIndex;
+  std::uint8_t path = 0, b = 0;
+  const AxisVector& at = planner_.EndOfPath();
+  for (int i = 0; i < kNumAxes; ++i) {
+    if (!present_[i] || (std::abs(at[i]) <= 1e-9 && std::abs(servos_[i].position()) <= 1e-9)) continue;
+    (i == kB && index_b ? b : path) |= static_cast<std::uint8_t>(1u << i);
+  }
+  if (path) add(SegmentKind::kRapid).axes = path;  // end{} is the zero
+  if (b) add(SegmentKind::kRapid).axes = b;
+  if (!spindle_tool_.empty() || magazine_at_ != 1) add(SegmentKind::kToolChange).tool_socket = 1;
+  return out;
+}
+
 void Machine::Push(const Segment& segment) {
   if (alarm_.code != AlarmCode::kNone)
     throw Error(Errc::kFailedPrecondition, fmt::format("segment {} refused: alarm {} active, reset first",
@@ -468,6 +499,7 @@ bool Machine::StartBarrier(Entry& e) {
     case SegmentKind::kToolChange: {
       if (s.tool.empty() || s.tool == "0") {  // empty the spindle
         double t = spindle_tool_.empty() ? 0.0 : cfg_.tool_change_time;
+        if (s.tool_socket > 0) t += MagazineSteps(s.tool_socket) * cfg_.magazine_index_time;
         timer(t);
         break;
       }
@@ -485,10 +517,7 @@ bool Machine::StartBarrier(Entry& e) {
                    fmt::format("segment {}: tool {} is not in the magazine", s.id, s.tool), s.id);
         return false;
       }
-      const int n = cfg_.magazine_sockets;
-      int steps = std::abs(socket - magazine_at_) % n;
-      steps = std::min(steps, n - steps);
-      double t = cfg_.tool_change_time + steps * cfg_.magazine_index_time;
+      double t = cfg_.tool_change_time + MagazineSteps(socket) * cfg_.magazine_index_time;
       // A machining centre stops the spindle to change tools; a lathe's turret indexes while it turns.
       if (cfg_.kind != "lathe") {
         t += std::abs(spindle_.rpm()) / cfg_.spindle_accel_rpm_s;
@@ -607,7 +636,9 @@ void Machine::StepOp() {
           spindle_tool_.clear();
           spindle_tool_socket_ = 0;
           cut_index_ = -1;
-          if (!s.tool.empty() && s.tool != "0") {
+          if (s.tool.empty() || s.tool == "0") {
+            if (s.tool_socket > 0) magazine_at_ = s.tool_socket;
+          } else {
             for (auto it = magazine_.begin(); it != magazine_.end(); ++it)
               if (IsRequested(s, it->first, it->second)) {
                 spindle_tool_ = it->second;

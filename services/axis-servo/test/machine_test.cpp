@@ -336,6 +336,52 @@ TEST(Devices, ToolChangeTakesTheAlternateTheControlChose) {
   EXPECT_EQ(m.alarm().code, AlarmCode::kToolNotInMagazine);
 }
 
+// The state a pallet arrives in is the power-up state (docs/predict.md judgement call 4): ToArrival's
+// segments take the machine back to it from wherever a program left it, and a second run of the same program
+// from there takes what the first took.
+TEST(Devices, ToArrivalBringsTheMachineBackToItsPowerUpState) {
+  Machine m = Kt();
+  m.SetToolTable(tooltable::ToolTable({{.tool = "1001", .socket = 1}, {.tool = "1002", .socket = 5}}));
+  EXPECT_TRUE(m.ToArrival().empty());  // at power-up it is there
+  auto program = [&](std::uint64_t id) {
+    Segment t;
+    t.id = id;
+    t.kind = SegmentKind::kToolChange;
+    t.tool = "1002";
+    Segment on;
+    on.id = id + 1;
+    on.kind = SegmentKind::kSpindle;
+    on.spindle_rpm = 2000;
+    on.spindle_dir = SpindleDirection::kCW;
+    Segment cool;
+    cool.id = id + 2;
+    cool.kind = SegmentKind::kCoolant;
+    cool.coolant = CoolantMode::kFlood;
+    for (const Segment& s :
+         {t, on, cool, Rapid(id + 3, 300, 200, 100), Line(id + 4, 350, 200, 100, 600, true)})
+      m.Push(s);
+    const double t0 = m.machine_time();
+    m.RunUntilIdle();
+    return m.machine_time() - t0;
+  };
+  const double first = program(1);
+  std::uint64_t id = 10;
+  for (Segment s : m.ToArrival()) {
+    s.id = ++id;
+    m.Push(s);
+  }
+  m.RunUntilIdle();
+  ASSERT_EQ(m.alarm().code, AlarmCode::kNone);
+  const AxisState at = m.State();
+  EXPECT_LT(m.actual().norm(), 1e-6);
+  EXPECT_EQ(at.tool, "");
+  EXPECT_EQ(at.spindle_rpm, 0);
+  EXPECT_EQ(at.coolant, CoolantMode::kOff);
+  EXPECT_TRUE(m.ToArrival().empty());
+  // The magazine stands at socket 1 again: the second run indexes 4 steps to socket 5 as the first did.
+  EXPECT_NEAR(program(20), first, 2 * m.period());
+}
+
 // Tool life is charged with cutting time: machine seconds of feed moves with the spindle turning, per tool
 // and socket; rapids, and feed moves with the spindle stopped, do not count.
 TEST(Devices, CuttingTimeCountsFeedMovesWithTheSpindleTurning) {

@@ -91,6 +91,9 @@ class Station::RunEnvironment : public interp::Environment, public interp::Seria
 
 void Station::Execute(const Dispatch& d) {
   ActiveRun run{d, clock_.WallNs(), 0, ""};
+  // The servo starts each run from the state a pallet arrives in, A and C at their zero among it
+  // (Machine::ToArrival): the rotary axes unwrap from there.
+  unwrap_ = RotaryUnwrap{};
   db_.MarkActive(d.dispatch_id, run.started_ns);
   stream_.Begin(d.dispatch_id, [this, id = d.dispatch_id] { Checkpoint(id); });
   board_.RunStarted(d.pallet, d.dispatch_id);
@@ -237,6 +240,13 @@ void Station::RunProgram(ActiveRun& run, const std::string& entry) {
   };
   opt.tools = start.image.tools;
   opt.variables = start.image.variables;
+  if (run.programs_done == 0 && cfg_.dialect == "emco") {
+    // The TM02 carries T, M03/M04/M05 and M08/M09 into the next program (manual ln 1212-1292), but a pallet
+    // arrives with the tool put away and the spindle and the coolant stopped (Machine::ToArrival,
+    // docs/predict.md judgement call 4): its first program starts knowing that, so its T changes the tool.
+    for (const auto& [name, value] : {std::pair<const char*, double>{"ACT.T", 0}, {"M.0", 5}, {"M.3", 9}})
+      if (opt.variables.count(name)) opt.variables[name] = value;
+  }
   opt.params = cfg_.params;  // the station config's [params]: the dialect's machine settings (EMCO's monitor)
   opt.params["PALLET"] = std::to_string(run.d.pallet);
   // A coded-pallet module's TLD W is 1-127 (KT-APL ln 4081-4083; the dialect's CODED_PALLETS setting).

@@ -205,6 +205,8 @@ void Io(const interp::Canon& c, station::AuxIo& aux, Sim& sim, const std::string
       if (station::ParseOutputSpec(o->spec)) sim.Drain();
     } else if (const auto* a = c.If<interp::AuxOp>()) {
       if (aux.Aux(a->m)) sim.Drain();
+    } else if (c.If<interp::OverridesOp>()) {
+      sim.Drain();  // KT-APL M48/M49, Okuma M160/M161: from this block on, the motion before it drained
     } else if (c.If<interp::StopOp>()) {
       sim.Drain();  // M00/M01: the operator's wait is not machine time on the virtual clock
     }

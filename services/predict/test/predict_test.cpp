@@ -97,6 +97,17 @@ TEST(Predict, ToolChangesAndSpindleRamp) {
 
 // EM01 (EMCO lathe): emco_station_test works this thread cycle (G85, manual ln 4176-4188) by hand from EM01's
 // machine data: 20.12 .. 21.16 s, + 0.2 s for the servo's own settling.
+// M49 (KT-APL ln 2896-2937) fixes the overrides from its block on: the station drains the motion before it
+// (Station::ExecuteIo), so the path stops there, which the prediction must take too: two collinear lines at
+// 3000 mm/min blend through X200 without it, and stop there with it: at least the ramps and the filter
+// (V/a + N Ts, 0.07 s), and the settling into the in-position window (measured: 0.259 s in all).
+TEST(Predict, AnOverridesBlockStopsThePathAsOnTheStation) {
+  const double through = Seconds("KT01", Kt("N3 G01 X200. F3000.\nN4 X300.\n"));
+  const double stopped = Seconds("KT01", Kt("N3 G01 X200. F3000.\nN4 M49\nN5 X300.\n"));
+  EXPECT_GT(stopped - through, 50.0 / 2450.0 + kFilter);
+  EXPECT_LT(stopped - through, 0.5);
+}
+
 TEST(Predict, EmcoThreadAsWorkedByHand) {
   const double t = Seconds("EM01",
                            "%\nN0010 T0202 G00 X50. Z10.\nN0020 G97 S600 M04\nN0030 G00 X31. Z2.\n"

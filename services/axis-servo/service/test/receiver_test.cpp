@@ -229,6 +229,32 @@ TEST_F(ReceiverTest, TheMagazineIsTheStationsPublishedToolTable) {
   EXPECT_FALSE(Last().alarm());
 }
 
+// Every run starts from the state a pallet arrives in (docs/predict.md judgement call 4): the same program
+// run twice takes the same machine time, although the first left the axes, the spindle, the coolant and the
+// magazine elsewhere; the way back is not the run's (its run_machine_s and its seqs).
+TEST_F(ReceiverTest, EveryRunStartsFromThePalletsArrivalState) {
+  auto run = [&](std::int32_t id) {
+    auto change = Seg(id, 1, cell::SEGMENT_TOOL_CHANGE);
+    change.tool("1003");  // KT01's socket 3: two magazine steps from socket 1
+    auto spindle = Seg(id, 2, cell::SEGMENT_SPINDLE);
+    spindle.spindle_mode(1);
+    spindle.spindle_rpm(1500);
+    auto coolant = Seg(id, 3, cell::SEGMENT_COOLANT);
+    coolant.coolant(1);
+    for (const auto& m :
+         {change, spindle, coolant, Seg(id, 4, cell::SEGMENT_RAPID, 300, 200, 100),
+          Seg(id, 5, cell::SEGMENT_LINEAR, 350, 200, 100, 800), Seg(id, 6, cell::SEGMENT_END)})
+      Send(m);
+    EXPECT_TRUE(Turn([&] { return Completed(id, 6); }));
+    EXPECT_FALSE(Last().alarm());
+    return Last().run_machine_s();
+  };
+  const double first = run(1);
+  EXPECT_GT(first, 1.0);
+  EXPECT_NEAR(run(2), first, 0.002);
+  EXPECT_NEAR(rx_.machine().State().commanded[0], 350.0, kInPosition);
+}
+
 // Axis state at a rate in wall time: 50 Hz while the machine moves, 4 Hz at rest with the first sample at
 // rest at once (Receiver::kRestAxisPeriod; issue 43: 32 resting servos at 50 Hz were a third of an idle
 // 32-station cell's CPU).

@@ -108,6 +108,11 @@ class Machine {
   // The tools the operator says are broken (ServoControl), beside the station file's [magazine] broken: a
   // G38 check of such a tool finds it broken.
   void SetBrokenSockets(const std::vector<int>& sockets);
+  // The state a pallet arrives in, which is the state the machine starts in: the axes at the zero, the
+  // spindles stopped, the coolant off, the spindle empty and the magazine at socket 1 (docs/predict.md
+  // judgement call 4). The segments that take the machine there from where it stands, none when it is
+  // there; the receiver runs them before a new run's first segment, outside the run's cycle time.
+  std::vector<Segment> ToArrival() const;
 
   // Cutting time since ResetCutting(), per tool that was in the spindle: machine seconds of feed moves
   // (linear, arc, thread) with the spindle turning. The station charges it to the tools' life.
@@ -169,6 +174,7 @@ class Machine {
   double FeedNow(const Segment& s, double length) const;  // units/s at today's spindle speed
   bool PlanThread(const Segment& s, const AxisVector& start, const AxisVector& end, std::string& why);
   bool StartSpindle(const Segment& s);
+  int MagazineSteps(int socket) const;
   bool StartLiveTool(const Segment& s);
   double XDiameter() const { return 2.0 * std::abs(filter_.Output()[kX]); }  // constant surface speed
   void Emit(EventKind kind, std::uint64_t seg, const Alarm* alarm = nullptr,

@@ -66,7 +66,8 @@ struct Segment {
   ArcDirection direction = ArcDirection::kCCW;
   std::uint32_t turns = 0;
   double dwell_s = 0.0;  // kDwell
-  std::string tool;      // kToolChange, e.g. "1001" or "33412.5"
+  std::string tool;      // kToolChange, e.g. "1001" or "33412.5"; "" or "0": the spindle emptied (with a
+                         // tool_socket, the magazine then brings that socket to the change position)
   int tool_socket =
       0;  // kToolChange: the socket the control chose (an alternate tool); 0: the first holding it
   // kSpindle. Every spindle segment states the whole spindle command; nothing carries over from the last.

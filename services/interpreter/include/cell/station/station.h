@@ -165,7 +165,7 @@ class Station {
   Memory memory_;
   DiscreteIo dio_;
   SegmentStream stream_;
-  RotaryUnwrap unwrap_;  // A and C as the servo runs them, across runs (the servo keeps its position)
+  RotaryUnwrap unwrap_;  // A and C as the servo runs them, within a run (from the zero: ToArrival)
   std::atomic<std::int32_t> cancel_id_{0};
   std::atomic<bool> stop_{false};
   std::mutex work_mu_;  // for work_cv_ and work_pending_ only: the queue itself is in db_

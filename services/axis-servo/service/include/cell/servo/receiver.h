@@ -118,7 +118,8 @@ class Receiver {
   std::vector<Event> events_;  // HandleEvents()'s buffer, swapped with the machine's (no allocation per take)
   std::deque<cell::MotionSegment> inbox_;  // taken, not yet pushed (held while a run is abandoned)
   bool abandoning_ = false;                // aborting the previous run's leftovers
-  bool end_received_ = false;              // the run's END segment has arrived
+  bool arriving_ = false;      // taking the machine to the state a pallet arrives in (Machine::ToArrival)
+  bool end_received_ = false;  // the run's END segment has arrived
   TimePoint last_segment_at_{};
   std::uint64_t received_seq_ = 0;  // highest seq of this run taken in order (re-sent duplicates are dropped)
   std::uint64_t completed_seq_ = 0;
