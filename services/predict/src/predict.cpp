@@ -195,12 +195,9 @@ interp::RunOptions Options(const Input& in, Env& env) {
 void Io(const interp::Canon& c, station::AuxIo& aux, Sim& sim, const std::string& program) {
   try {
     if (const auto* sp = c.If<interp::SpindleOp>()) {
-      if (sp->spindle == interp::SpindleId::kMain) {
-        aux.Spindle(*sp);
-      } else if (sp->dir == interp::SpindleDir::kCw || sp->dir == interp::SpindleDir::kCcw) {
-        throw Error(Errc::kFailedPrecondition,
-                    "the live-tool (M-tool) spindle cannot start: the axis servo has no live-tool spindle");
-      }
+      // The work spindle's interlocks; a live tool is the servo model's alone, as on the station (a machine
+      // without one raises the servo's alarm).
+      if (sp->spindle == interp::SpindleId::kMain) aux.Spindle(*sp);
     } else if (const auto* o = c.If<interp::OutputOp>()) {
       if (station::ParseOutputSpec(o->spec)) sim.Drain();
     } else if (const auto* a = c.If<interp::AuxOp>()) {

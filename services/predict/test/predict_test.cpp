@@ -129,6 +129,21 @@ TEST(Predict, CorpusProgramsOnKt01) {
   }
 }
 
+// OK01 has a live-tool spindle (deploy/stations/OK01.toml live_tool_max_rpm; Okuma M13 M-tool spindle CW, M12
+// stop, manual ln 1945-1946, 2060): a turn-mill program has a number, and its live tool's ramp is in it (0 ->
+// 2000 rpm at live_tool_acceleration 2000 rpm/s: 1 s, worked by hand). Before, the prediction refused M13 as
+// if the servo had no live tool, although the station runs it.
+TEST(Predict, ALiveToolProgramHasANumberWithItsRamp) {
+  const std::string head = "%\nO1\nN1 G00 X200 Z200\nN2 M110\n";
+  const std::string tail = "N5 G00 X200 Z200 M12\nN6 M109\nN7 M02\n%\n";
+  Prediction with = PredictOn("OK01", head + "N3 G00 X100 C90 T0101 SB=2000\nN4 G94 Z150 M13\n" + tail);
+  ASSERT_TRUE(with.seconds) << with.why;
+  Prediction without = PredictOn("OK01", head + "N3 G00 X100 C90 T0101\nN4 G94 Z150\n" + tail);
+  ASSERT_TRUE(without.seconds) << without.why;
+  EXPECT_GT(*with.seconds - *without.seconds, 0.9);
+  EXPECT_LT(*with.seconds - *without.seconds, 2.5);
+}
+
 TEST(Predict, ADifferentDialectCannotRun) {
   Prediction p = PredictOn("OK01", Kt(""), "ktapl");
   EXPECT_FALSE(p.seconds);
