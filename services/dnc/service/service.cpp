@@ -100,6 +100,27 @@ cell::DncReply Service::Handle(const cell::DncRequest& r) {
   throw Error(Errc::kInvalidArgument, fmt::format("unknown DNC operation {}", static_cast<int>(r.op())));
 }
 
+// The bytes out on the line, paced by its rate and flow control, after Begin(): the transfer's End() either
+// way (SEND/DRIP with progress samples, a WRITE's short record without).
+Stats Service::SendPaced(const std::vector<uint8_t>& bytes, decltype(SendOptions::stall_timeout) stall,
+                         bool progress) {
+  SendOptions o;
+  o.flow = serial_.flow;
+  o.bytes_per_s = LineRate(serial_);
+  o.stall_timeout = stall;
+  if (progress) o.progress = [this](const Stats& st) { Progress(st); };
+  o.cancel = &cancel_;
+  Stats st;
+  try {
+    st = dnc::Send(Line(), bytes, o);
+  } catch (const Error& e) {
+    End(st, e.what());
+    throw;
+  }
+  End(st, "");
+  return st;
+}
+
 cell::DncReply Service::Send(const cell::DncRequest& r, bool drip) {
   const std::string name = r.name().to_string();
   const std::string node = r.node().to_string();
@@ -118,20 +139,7 @@ cell::DncReply Service::Send(const cell::DncRequest& r, bool drip) {
     throw Error(e.code(), fmt::format("{}: {}", where, e.what()));
   }
   Begin(drip ? cell::DNC_DRIPPING : cell::DNC_SENDING, where, bytes.size());
-  SendOptions o;
-  o.flow = serial_.flow;
-  o.bytes_per_s = LineRate(serial_);
-  o.stall_timeout = drip ? kDripStall : kSendStall;
-  o.progress = [this](const Stats& st) { Progress(st); };
-  o.cancel = &cancel_;
-  Stats st;
-  try {
-    st = dnc::Send(Line(), bytes, o);
-  } catch (const Error& e) {
-    End(st, e.what());
-    throw;
-  }
-  End(st, "");
+  const Stats st = SendPaced(bytes, drip ? kDripStall : kSendStall, true);
   spdlog::info("{} {}: {} bytes in {:.1f} s, {} stops", drip ? "dripped" : "sent", where, st.bytes,
                st.seconds, st.stalls);
   nlohmann::json info = Figures(st);
@@ -282,19 +290,7 @@ cell::DncReply Service::Write(const cell::DncRequest& r) {
     throw Error(e.code(), fmt::format("device {}: {}", serial_.device, e.what()));
   }
   Begin(cell::DNC_WRITING, holder, bytes.size());
-  SendOptions o;
-  o.flow = serial_.flow;
-  o.bytes_per_s = LineRate(serial_);
-  o.stall_timeout = kSendStall;
-  o.cancel = &cancel_;
-  Stats st;
-  try {
-    st = dnc::Send(Line(), bytes, o);
-  } catch (const Error& e) {
-    End(st, e.what());
-    throw;
-  }
-  End(st, "");
+  const Stats st = SendPaced(bytes, kSendStall, false);
   spdlog::info("WRITE of {}: {} characters", holder, record.size());
   return Reply(station_, Figures(st));
 }

@@ -75,6 +75,8 @@ class Service {
   void Begin(cell::DncState state, const std::string& program, uint64_t total = 0);
   void Progress(const Stats& st, bool force = false);
   void End(const Stats& st, const std::string& error);
+  Stats SendPaced(const std::vector<uint8_t>& bytes, decltype(SendOptions::stall_timeout) stall,
+                  bool progress);
   void Publish();  // under mu_
 
   std::string station_;
