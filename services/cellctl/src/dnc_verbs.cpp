@@ -116,7 +116,9 @@ void AddStatus(CLI::App& dnc, Context& ctx) {
   st->add_flag("--json", ctx.json);
   st->callback([&ctx] {
     const std::vector<std::string> lines = StationsWithLines();
-    auto heard = cell::dnc::Statuses(ctx.Bus(), lines, bus::Millis(lines.empty() ? 1500 : 3000));
+    // Returns as soon as every expected line is heard. The bound is for a line whose cell-dnc is not running:
+    // a secured participant's handshakes on a loaded host take several seconds (3 s missed a running one).
+    auto heard = cell::dnc::Statuses(ctx.Bus(), lines, bus::Millis(lines.empty() ? 1500 : 10000));
     nlohmann::json rows = nlohmann::json::array();
     for (const auto& s : lines)
       rows.push_back(heard.count(s) ? cell::dnc::StatusJson(heard[s]) : NoProcess(s));

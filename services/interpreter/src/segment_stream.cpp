@@ -39,6 +39,9 @@ void SegmentStream::Send(cell::MotionSegment seg) {
   last_progress_ = clock_.Now();
   WaitCredit(lk, seg.seq());
   ResendMissing(lk);  // the earlier segments first: the servo takes them in seq order only
+  // A servo that had taken everything owed no report: its silence counts from this segment, not from its last
+  // report before the run waited (an input, a writer) for longer than kServoGone.
+  if (received_seq_ + 1 >= seg.seq()) last_report_ = clock_.Now();
   unacked_.push_back(seg);
   lk.unlock();
   link_.Write(seg);

@@ -2,6 +2,9 @@
 // re-sends after a lost match or a silent servo, and the ends of a run for want of a servo.
 #include <gtest/gtest.h>
 
+#include <chrono>
+#include <optional>
+
 #include "harness.h"
 
 namespace cell::station::testing {
@@ -144,6 +147,25 @@ TEST_F(SegmentStreamTest, AServoThatTakesNothingFailsTheRun) {
   auto end = RunOne(1);
   EXPECT_EQ(end.state(), cell::RUN_FAILED);
   EXPECT_EQ(end.reason(), "axis servo of KT01 has taken no segment for 10 s");
+}
+
+// A run that waited longer than kServoGone (here a WAI on an input, KT-APL ln 4357) with everything taken
+// goes on: the servo's silence while it owed nothing is not deafness. The END after the wait is drained at
+// once, so the check runs before the servo's next report (the probe test failed so on a loaded machine).
+TEST_F(SegmentStreamTest, ALongWaitWithNothingOwedIsNotSilence) {
+  Put("WAI", "G71 G90\nG01 X0 Y0 Z100. F0\nX10. F1000.\n(WAI,I04D,1=1)\nM30\n");
+  Dispatch(1, {"WAI"});
+  const auto waited = SegmentStream::kServoGone + std::chrono::seconds(5);
+  std::optional<Clock::TimePoint> wait_began;
+  script_ = [&] {
+    if (station_->Status().execution() != cell::EXECUTION_WAIT) return;
+    if (!wait_began) wait_began = clock_.Now();
+    if (clock_.Now() - *wait_began >= waited) SetInput("I04D.1", 1);
+  };
+  auto end = RunOne(1);
+  EXPECT_EQ(end.state(), cell::RUN_COMPLETED) << end.reason();
+  ASSERT_TRUE(wait_began.has_value());
+  EXPECT_EQ(servo_.Ran(1, cell::SEGMENT_END).size(), 1u);
 }
 
 TEST_F(SegmentStreamTest, NoServoOnTheBusFailsTheRunAtOnce) {
