@@ -75,6 +75,10 @@ std::string Dialect::CheckVariable(std::string_view name, double value) const {
          " station keeps (it keeps none)";
 }
 
+void Dialect::PalletArrives(std::map<std::string, double>& variables) const {
+  (void)variables;
+}
+
 std::unique_ptr<Run> UnimplementedRuns::StartRun(const RunOptions& options) const {
   (void)options;
   throw Error(Errc::kUnimplemented, "dialect '" + std::string(name()) + "' is not implemented yet");

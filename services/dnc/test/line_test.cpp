@@ -115,6 +115,25 @@ TEST(DncLine, SendsEveryControlsFormatByteExactIntoASlowControl) {
   }
 }
 
+// The judge above can fail: a sender that does not stop at XOFF overflows the same slow control's buffer.
+TEST(DncLine, ASenderDeafToXoffOverflowsTheSlowControl) {
+  Pty pty;
+  const Serial s = OnPty(Control::kKtApl, pty);
+  std::string text = Program(s.format.control);
+  auto bytes = Encode(s.format, text);
+  auto port = TtyPort::Open(s);
+  SimOptions so = SimFor(s);
+  so.exec_bytes_per_s = so.line_bytes_per_s / 2;
+  SimControl sim(pty, so);
+  sim.StartReading();
+  SendOptions o;
+  o.flow = Flow::kNone;
+  o.bytes_per_s = so.line_bytes_per_s;
+  Send(*port, bytes, o);
+  sim.Join();
+  EXPECT_GT(sim.lost(), 0u) << "max fill " << sim.max_fill();
+}
+
 TEST(DncLine, ReceivesEveryControlsFormatByteExact) {
   Pty pty;
   for (const Serial& s : EveryFormat(pty)) {

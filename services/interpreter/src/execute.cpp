@@ -240,13 +240,9 @@ void Station::RunProgram(ActiveRun& run, const std::string& entry) {
   };
   opt.tools = start.image.tools;
   opt.variables = start.image.variables;
-  if (run.programs_done == 0 && cfg_.dialect == "emco") {
-    // The TM02 carries T, M03/M04/M05 and M08/M09 into the next program (manual ln 1212-1292), but a pallet
-    // arrives with the tool put away and the spindle and the coolant stopped (Machine::ToArrival,
-    // docs/predict.md judgement call 4): its first program starts knowing that, so its T changes the tool.
-    for (const auto& [name, value] : {std::pair<const char*, double>{"ACT.T", 0}, {"M.0", 5}, {"M.3", 9}})
-      if (opt.variables.count(name)) opt.variables[name] = value;
-  }
+  // A pallet's first program starts from the state the pallet arrives in (Machine::ToArrival).
+  if (run.programs_done == 0)
+    if (const interp::Dialect* d = interp::FindDialect(cfg_.dialect)) d->PalletArrives(opt.variables);
   opt.params = cfg_.params;  // the station config's [params]: the dialect's machine settings (EMCO's monitor)
   opt.params["PALLET"] = std::to_string(run.d.pallet);
   // A coded-pallet module's TLD W is 1-127 (KT-APL ln 4081-4083; the dialect's CODED_PALLETS setting).

@@ -182,6 +182,9 @@ interp::RunOptions Options(const Input& in, Env& env) {
   opt.library = in.library;
   opt.tools = in.tools ? *in.tools : tooltable::ToolTable(in.station.tools);
   opt.variables = in.variables;
+  // The program is predicted as a pallet's first, from the state the pallet arrives in (as the station runs
+  // it).
+  if (const interp::Dialect* d = interp::FindDialect(in.station.dialect)) d->PalletArrives(opt.variables);
   opt.params = in.station.params;
   if (in.pallet) opt.params["PALLET"] = std::to_string(in.pallet);
   if (in.station.coded_pallets) opt.params["CODED_PALLETS"] = "1";

@@ -137,6 +137,14 @@ class Emco final : public Dialect {
   std::string CheckVariable(std::string_view name, double value) const override {
     return emco::CheckKeptVariable(name, value);
   }
+
+  // The TM02 carries T, M03/M04/M05 and M08/M09 into the next program (ln 1212-1292); a pallet's first
+  // program starts knowing the tool was put away (T 0) and spindle and coolant stopped (M05, M09), so its T
+  // changes the tool.
+  void PalletArrives(std::map<std::string, double>& variables) const override {
+    for (const auto& [name, value] : {std::pair<const char*, double>{"ACT.T", 0}, {"M.0", 5}, {"M.3", 9}})
+      if (variables.count(name)) variables[name] = value;
+  }
 };
 
 }  // namespace

@@ -134,6 +134,11 @@ class Dialect {
   // E parameters when those dialects run). "" when `name` is one of them and `value` fits it; otherwise a
   // one-line reason (the station refuses `cellctl station vars --set` with it). The default keeps none.
   virtual std::string CheckVariable(std::string_view name, double value) const;
+  // A pallet arrives with the tool put away and the spindle and coolant stopped (the servo's
+  // Machine::ToArrival, docs/predict.md judgement call 4). A dialect whose kept variables carry that state
+  // into the next program (CheckVariable's) sets them so for a pallet's first program; the default keeps
+  // none.
+  virtual void PalletArrives(std::map<std::string, double>& variables) const;
 };
 
 // A dialect whose executor is not built yet: identity, names, detection and headings of its own, and
