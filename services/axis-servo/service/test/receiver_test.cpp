@@ -255,6 +255,27 @@ TEST_F(ReceiverTest, EveryRunStartsFromThePalletsArrivalState) {
   EXPECT_NEAR(rx_.machine().State().commanded[0], 350.0, kInPosition);
 }
 
+// Virtual clock: once every segment sent has completed and the run has not ended, no machine time passes
+// until the producer sends the next one (Receiver::AwaitingProducer): its wall time (a file written, the
+// operator's cycle start) is no machine time, and the next move starts where the prediction starts it
+// (issue 40: KT-APL p2_6_01_g98_at_centre predicted 0.84 of its run, the axes settling for 0.22 machine
+// seconds while the station wrote its FWR file).
+TEST_F(ReceiverTest, NoMachineTimePassesWhileTheProducerWorksOutTheNextBlock) {
+  auto run = [&](std::int32_t id, int busy_ms) {
+    Send(Seg(id, 1, cell::SEGMENT_RAPID, 300, 200, 100));
+    EXPECT_TRUE(Turn([&] { return Completed(id, 1); }));
+    const double completed = rx_.machine().machine_time();
+    Turn([] { return false; }, busy_ms);  // the producer busy for busy_ms of wall time
+    EXPECT_EQ(rx_.machine().machine_time(), completed);
+    Send(Seg(id, 2, cell::SEGMENT_RAPID, 0, 0, 100));
+    Send(Seg(id, 3, cell::SEGMENT_END));
+    EXPECT_TRUE(Turn([&] { return Completed(id, 3); }));
+    return Last().run_machine_s();
+  };
+  const double at_once = run(1, 0);
+  EXPECT_NEAR(run(2, 100), at_once, 0.0015);
+}
+
 // Axis state at a rate in wall time: 50 Hz while the machine moves, 4 Hz at rest with the first sample at
 // rest at once (Receiver::kRestAxisPeriod; issue 43: 32 resting servos at 50 Hz were a third of an idle
 // 32-station cell's CPU).

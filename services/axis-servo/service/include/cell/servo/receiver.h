@@ -87,6 +87,7 @@ class Receiver {
   void StartRun(std::int32_t run_id);
   void ApplyControl();
   bool LookAheadStarved(TimePoint now) const;
+  bool AwaitingProducer() const;
   void HandleEvents();
   void PublishAxes(TimePoint now);
 
