@@ -202,6 +202,13 @@ void Receiver::TakeArrived(TimePoint now) {
       if (!machine_.Idle() && machine_.alarm().code == AlarmCode::kNone) break;
       arriving_ = false;
     }
+    if (const cell::MotionSegment& w = inbox_.front();
+        w.waits() && w.run_id() == run_id_ && w.seq() <= received_seq_) {
+      // The producer now waits for what it sent (SegmentStream::WaitDrained): the flag, not a duplicate.
+      waits_seq_ = std::max(waits_seq_, w.seq());
+      inbox_.pop_front();
+      continue;
+    }
     if (!Accept(inbox_.front())) {
       inbox_.pop_front();
       continue;
@@ -225,6 +232,7 @@ void Receiver::TakeArrived(TimePoint now) {
     cell::MotionSegment m = std::move(inbox_.front());
     inbox_.pop_front();
     received_seq_ = m.seq();
+    if (m.waits()) waits_seq_ = m.seq();
     dirty_ = true;  // the producer learns what arrived (it re-sends what did not)
     if (alarm_.code != AlarmCode::kNone || machine_.alarm().code != AlarmCode::kNone) {
       // The run is stopped by an alarm: later segments of it (sent within their credits before the
@@ -258,6 +266,7 @@ void Receiver::StartRun(std::int32_t run_id) {
   run_id_ = run_id;
   received_seq_ = 0;
   completed_seq_ = 0;
+  waits_seq_ = 0;
   seq_of_.clear();
   probe_.clear();
   run_start_s_.reset();
@@ -342,14 +351,17 @@ void Receiver::ApplyControl() {
 }
 
 // On the virtual clock the machine runs ~1000x faster than real time, so a look-ahead queue starved by the
-// credit round trip (the producer refills it only after it has seen the progress) would make the planner
-// brake for a stop that a real-time machine never sees, and the cycle time would depend on DDS latency.
-// While a run is under way (no END yet), the queue is less than half full and the producer sent something
-// within the last kLookAheadWait, the machine waits for it. A producer that stops sending (a slow or
-// finished interpreter) costs at most kLookAheadWait of wall time per refill, no machine time.
+// credit round trip (the producer refills it only after it has seen the progress) or by a producer short of
+// CPU would make the planner brake for a stop that a real-time machine never sees, and the cycle time would
+// depend on DDS latency and the machine's load. While a run is under way (no END yet), the queue is less
+// than half full and the producer has not said it waits for the machine (MotionSegment.waits: a drain, a
+// probe), the machine waits for the refill, up to kLookAheadWait of wall time after the last segment (a
+// producer that waits for something else: a file written, the program store). That bound costs wall time,
+// no machine time.
 bool Receiver::LookAheadStarved(TimePoint now) const {
   if (clock_ != ClockKind::kVirtual || end_received_ || abandoning_ || seq_of_.empty()) return false;
   if (alarm_.code != AlarmCode::kNone || machine_.alarm().code != AlarmCode::kNone) return false;
+  if (waits_seq_ >= received_seq_) return false;
   if (machine_.credits() <= machine_.capacity() / 2) return false;
   return now - last_segment_at_ < kLookAheadWait;
 }
