@@ -304,8 +304,10 @@ TEST_F(ReceiverTest, AxisStateIsPublishedOnTheWallClock) {
   EXPECT_GE(sink_.axes.size(), 4u);
   EXPECT_LE(sink_.axes.size(), 6u);
   sink_.axes.clear();
-  Send(Seg(1, 1, cell::SEGMENT_LINEAR, 500, 0, 100, 500));  // a minute of motion
-  Turn([] { return false; }, 200);                          // 200 ms of it: every 20 ms
+  auto minute = Seg(1, 1, cell::SEGMENT_LINEAR, 500, 0, 100, 500);  // a minute of motion
+  minute.waits(true);  // nothing else comes: the look-ahead does not wait for a refill
+  Send(minute);
+  Turn([] { return false; }, 200);  // 200 ms of it: every 20 ms
   EXPECT_GE(sink_.axes.size(), 9u);
   EXPECT_LE(sink_.axes.size(), 11u);
   // The first goes out at the turn the segment arrives (the last sample at rest was 250 ms before); every one
