@@ -166,6 +166,9 @@ Receiver::Turn Receiver::Tick(TimePoint now) {
     turn.waiting = true;
   } else if (machine_.Resting()) {
     turn.resting = true;
+  } else if (AwaitingProducer()) {
+    // Virtual clock, every segment of the run completed: no machine time passes until the producer sends
+    // the next one (the loop sleeps as when idle).
   } else {
     // Every step: a reset (new run, alarm cleared) releases the planner's hold, never the operator's.
     if (feed_hold_) machine_.FeedHold();
@@ -199,6 +202,13 @@ void Receiver::TakeArrived(TimePoint now) {
       if (!machine_.Idle() && machine_.alarm().code == AlarmCode::kNone) break;
       arriving_ = false;
     }
+    if (const cell::MotionSegment& w = inbox_.front();
+        w.waits() && w.run_id() == run_id_ && w.seq() <= received_seq_) {
+      // The producer now waits for what it sent (SegmentStream::WaitDrained): the flag, not a duplicate.
+      waits_seq_ = std::max(waits_seq_, w.seq());
+      inbox_.pop_front();
+      continue;
+    }
     if (!Accept(inbox_.front())) {
       inbox_.pop_front();
       continue;
@@ -222,6 +232,7 @@ void Receiver::TakeArrived(TimePoint now) {
     cell::MotionSegment m = std::move(inbox_.front());
     inbox_.pop_front();
     received_seq_ = m.seq();
+    if (m.waits()) waits_seq_ = m.seq();
     dirty_ = true;  // the producer learns what arrived (it re-sends what did not)
     if (alarm_.code != AlarmCode::kNone || machine_.alarm().code != AlarmCode::kNone) {
       // The run is stopped by an alarm: later segments of it (sent within their credits before the
@@ -255,6 +266,7 @@ void Receiver::StartRun(std::int32_t run_id) {
   run_id_ = run_id;
   received_seq_ = 0;
   completed_seq_ = 0;
+  waits_seq_ = 0;
   seq_of_.clear();
   probe_.clear();
   run_start_s_.reset();
@@ -339,16 +351,34 @@ void Receiver::ApplyControl() {
 }
 
 // On the virtual clock the machine runs ~1000x faster than real time, so a look-ahead queue starved by the
-// credit round trip (the producer refills it only after it has seen the progress) would make the planner
-// brake for a stop that a real-time machine never sees, and the cycle time would depend on DDS latency.
-// While a run is under way (no END yet), the queue is less than half full and the producer sent something
-// within the last kLookAheadWait, the machine waits for it. A producer that stops sending (a slow or
-// finished interpreter) costs at most kLookAheadWait of wall time per refill, no machine time.
+// credit round trip (the producer refills it only after it has seen the progress) or by a producer short of
+// CPU would make the planner brake for a stop that a real-time machine never sees, and the cycle time would
+// depend on DDS latency and the machine's load. While a run is under way (no END yet), the queue is less
+// than half full and the producer has not said it waits for the machine (MotionSegment.waits: a drain, a
+// probe), the machine waits for the refill, up to kLookAheadWait of wall time after the last segment (a
+// producer that waits for something else: a file written, the program store). That bound costs wall time,
+// no machine time.
 bool Receiver::LookAheadStarved(TimePoint now) const {
   if (clock_ != ClockKind::kVirtual || end_received_ || abandoning_ || seq_of_.empty()) return false;
   if (alarm_.code != AlarmCode::kNone || machine_.alarm().code != AlarmCode::kNone) return false;
+  if (waits_seq_ >= received_seq_) return false;
   if (machine_.credits() <= machine_.capacity() / 2) return false;
   return now - last_segment_at_ < kLookAheadWait;
+}
+
+// Virtual clock: the run is under way (no END yet) and every segment it sent has completed. The producer is
+// working out the next block, or waiting for something off the machine (the operator's cycle start, an
+// input, a file written, the program store). A real-time machine would have that block queued long before
+// (the interpreter takes microseconds, the motion seconds) or would stand where the last one left it; on a
+// machine ~1000x faster than the wall clock, running on meanwhile would turn the producer's wall time into
+// machine time (the axes settling for as long as a file write took: KT-APL FWR cost 0.22 s in a 1.2 s
+// program, and a turning spindle's phase at the next thread moved with it). So time stands still until the
+// next segment, as the prediction's model does (docs/predict.md, "What is run, and how").
+bool Receiver::AwaitingProducer() const {
+  if (clock_ != ClockKind::kVirtual || end_received_ || abandoning_ || arriving_ || run_id_ == 0)
+    return false;
+  if (alarm_.code != AlarmCode::kNone || machine_.alarm().code != AlarmCode::kNone) return false;
+  return seq_of_.empty() && machine_.credits() == machine_.capacity();
 }
 
 void Receiver::HandleEvents() {

@@ -190,7 +190,10 @@ std::vector<Segment> Machine::ToArrival() const {
     s.kind = kind;
     return s;
   };
-  if (spindle_.Active()) add(SegmentKind::kSpindle);  // kStop
+  // The spindle stopped at its index mark (oriented), where it stands at power-up: where a thread's index
+  // pulse comes, and so its wait, is then the same on every run (docs/predict.md judgement call 4).
+  if (spindle_.Active() || spindle_.angle() != 0.0)
+    add(SegmentKind::kSpindle).spindle_dir = SpindleDirection::kOrient;
   if (live_tool_.Active()) add(SegmentKind::kSpindle).live_tool = true;
   if (coolant_ != CoolantMode::kOff) add(SegmentKind::kCoolant);  // kOff
   // The axes at the zero; an index table's B on its own (an index move is a move of B alone).
@@ -626,6 +629,7 @@ void Machine::StepOp() {
           }
           spindle_.Snap(XDiameter());
           spindle_oriented_ = s.spindle_dir == SpindleDirection::kOrient;
+          if (spindle_oriented_) spindle_.Orient();
           break;
         case SegmentKind::kCoolant:
           coolant_ = s.coolant;

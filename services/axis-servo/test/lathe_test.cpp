@@ -404,6 +404,46 @@ TEST(Lathe, StraightThreadTravelsOneLeadPerRevolutionFromTheStartAngle) {
   EXPECT_LE(t_thread, ideal + v / a + filter + 0.005);
 }
 
+// The state a pallet arrives in has the spindle at its index mark, as at power-up (docs/predict.md judgement
+// call 4): ToArrival orients it, so a thread's wait for its start angle, and with it the run's time, is the
+// same on every run whatever angle the run before stopped the spindle at (issue 40: Okuma threads 1.017-1.031
+// and EMCO's 0.989 against their predictions, each run waiting a different fraction of a revolution).
+TEST(Lathe, AThreadAfterThePalletsArrivalWaitsAsAfterPowerUp) {
+  auto thread = [](Machine& m, std::uint64_t id) {
+    m.Push(Rapid(id, 40, 5));
+    m.Push(Spindle(id + 1, 600));
+    m.Push(Thread(id + 2, 40, -40, 1.5, 0, 30));
+    const double t0 = m.machine_time();
+    m.RunUntilIdle();
+    EXPECT_EQ(m.alarm().code, AlarmCode::kNone) << m.alarm().text;
+    return m.machine_time() - t0;
+  };
+  Machine fresh = Lathe();
+  const double at_power_up = thread(fresh, 1);
+
+  Machine m = Lathe();
+  Segment dwell;
+  dwell.id = 2;
+  dwell.kind = SegmentKind::kDwell;
+  dwell.dwell_s = 0.337;
+  m.Push(Spindle(1, 437));
+  m.Push(dwell);
+  m.Push(Spindle(3, 0, SpindleDirection::kStop));
+  m.RunUntilIdle();
+  ASSERT_GT(std::abs(m.State().spindle_angle - 180), 1)
+      << "the spindle stopped at " << m.State().spindle_angle;
+  ASSERT_GT(m.State().spindle_angle, 1);
+  std::uint64_t id = 10;
+  for (Segment s : m.ToArrival()) {
+    s.id = ++id;
+    m.Push(s);
+  }
+  m.RunUntilIdle();
+  EXPECT_EQ(m.State().spindle_angle, 0.0);
+  EXPECT_TRUE(m.ToArrival().empty());
+  EXPECT_NEAR(thread(m, 20), at_power_up, 1.5 * m.period());
+}
+
 TEST(Lathe, AZeroLengthBlockBeforeAThreadDoesNotStartItEarly) {
   // A feed move to where the tool already is (common in generated programs) is a transparent marker to
   // the planner; the thread behind it still starts from rest at its start angle.

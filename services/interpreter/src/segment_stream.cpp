@@ -66,6 +66,7 @@ void SegmentStream::SendPart(cell::PartModel part) {
 
 cell::ProbeResult SegmentStream::Probe(cell::MotionSegment seg) {
   seg.kind(cell::SEGMENT_PROBE);
+  seg.waits(true);  // nothing follows until its result is in
   Send(seg);
   std::unique_lock lk(mu_);
   const std::uint64_t want = sent_seq_;
@@ -82,6 +83,17 @@ cell::ProbeResult SegmentStream::Probe(cell::MotionSegment seg) {
 
 void SegmentStream::WaitDrained() {
   std::unique_lock lk(mu_);
+  if (completed_seq_ < sent_seq_ && !unacked_.empty() && !unacked_.back().waits() &&
+      unacked_.back().kind() != cell::SEGMENT_END) {
+    // Tell a virtual-clock servo that nothing more comes until these are done: its look-ahead runs on at
+    // once instead of waiting for a refill (the last segment again, flagged; the servo keeps the flag only).
+    // After END it runs on anyway.
+    unacked_.back().waits(true);
+    const cell::MotionSegment again = unacked_.back();
+    lk.unlock();  // never write under the lock
+    link_.Write(again);
+    lk.lock();
+  }
   while (completed_seq_ < sent_seq_) {
     Check(lk);
     clock_.Wait(lk, cv_, kPoll);

@@ -105,9 +105,11 @@ TEST_F(StationIoTest, WaiBlocksTheRunInWaitUntilTheInputsMatch) {
     if (s.execution() != cell::EXECUTION_WAIT) return;
     EXPECT_EQ(s.status_text().to_string(), "waiting for I04D.1=1 I03D.3=0");
     if (++waits_in_wait == 1) sent_while_waiting = servo_.written.size();
-    // Nothing after the WAI is streamed while it waits; the two moves before it have completed.
+    // Nothing after the WAI is streamed while it waits; the two moves before it have completed (the last
+    // one was written again, flagged `waits`: the run waits for the machine).
     EXPECT_EQ(servo_.written.size(), sent_while_waiting);
-    EXPECT_EQ(servo_.ran.size(), sent_while_waiting);
+    EXPECT_TRUE(servo_.written.back().waits());
+    EXPECT_EQ(servo_.ran.size(), servo_.written.back().seq());
     if (waits_in_wait == 20) SetInput("I04D.1", 1);  // one of two: still waiting
     if (waits_in_wait == 40) SetInput("I03D.3", 0);  // both: it goes on
   };

@@ -178,6 +178,31 @@ TEST_F(SegmentStreamTest, NoServoOnTheBusFailsTheRunAtOnce) {
   EXPECT_TRUE(servo_.written.empty());
 }
 
+// Where the run waits for the machine (M00's drain here), the servo is told: the last segment sent is written
+// again, seq unchanged, flagged `waits`, so that a virtual-clock servo's look-ahead runs on at once instead
+// of waiting for a refill that is not coming (docs/axis-servo.md "Clocks"). It runs once all the same.
+TEST_F(SegmentStreamTest, AWaitForTheMachineFlagsTheLastSegmentSent) {
+  Put("P", "G71 G90\nG01 X0 Y0 Z100. F1000.\nX10. M00\nX20.\nM30\n");
+  Dispatch(1, {"P"});
+  script_ = [&] {
+    if (station_->Status().execution() == cell::EXECUTION_PROGRAM_STOPPED) Command(cell::STATION_CYCLE_START);
+  };
+  ASSERT_EQ(RunOne(1).state(), cell::RUN_COMPLETED);
+  int flagged = 0;
+  std::uint64_t flagged_seq = 0, sent_before = 0, last = 0;
+  for (std::size_t i = 0; i < servo_.written.size(); ++i) {
+    const auto& w = servo_.written[i];
+    last = std::max<std::uint64_t>(last, w.seq());
+    if (!w.waits()) continue;
+    ++flagged;
+    flagged_seq = w.seq();
+    sent_before = i > 0 ? servo_.written[i - 1].seq() : 0;
+  }
+  EXPECT_EQ(flagged, 1);  // the M00 (the END's drain: the servo runs on after END anyway)
+  EXPECT_EQ(flagged_seq, sent_before);
+  EXPECT_EQ(RanSeqs(servo_, 1), OneTo(last));
+}
+
 TEST_F(SegmentStreamTest, ProbeMovesWaitForTheServosResult) {
   // G22 (manual ln 11084): the contact position latches into L3042-L3049; the program reads it back.
   servo_.probe_contact_z = 53;
@@ -189,6 +214,7 @@ TEST_F(SegmentStreamTest, ProbeMovesWaitForTheServosResult) {
   EXPECT_DOUBLE_EQ(probes[0].target()[2], 0.0);
   EXPECT_DOUBLE_EQ(probes[0].feed(), 200.0);  // the program's F (a probe move without F: the station's)
   EXPECT_FALSE(probes[0].probe_break());      // G22: trip on contact
+  EXPECT_TRUE(probes[0].waits());             // nothing follows until its result is in
   EXPECT_DOUBLE_EQ(station_->MemoryState().image.variables.at("L1500"), 53.0);
 }
 

@@ -54,11 +54,13 @@ class Sim {
   }
   void Push(const cell::MotionSegment& wire) { Push(servo::FromWire(wire, 0)); }
 
-  // Everything sent so far completed: where the station waits (WaitDrained) the look-ahead ends at rest.
+  // Everything sent so far completed: where the station waits (WaitDrained) the look-ahead ends there. Not
+  // on to Idle (the axes settled to the micron): the station's virtual-clock servo lets no time pass once
+  // every segment sent has completed, until the next one comes (Receiver::AwaitingProducer).
   void Drain() {
-    while (!m_.Idle() && Step()) {
-    }
     Take();
+    while (done_ < segments_ && Step()) {
+    }
   }
 
   // A probe move or G38 check: sent, then waited for (SegmentStream::Probe), so the path stops there too.
@@ -97,6 +99,7 @@ class Sim {
   void Take() {
     for (const servo::Event& e : m_.TakeEvents()) {
       if (e.kind == servo::EventKind::kStarted && !first_) first_ = e.machine_time;
+      if (e.kind == servo::EventKind::kCompleted || e.kind == servo::EventKind::kFlushed) ++done_;
       if (e.kind == servo::EventKind::kCompleted) {
         last_ = e.machine_time;
         if (e.segment_id == want_probe_) probe_ = e.probe;
@@ -115,7 +118,7 @@ class Sim {
   servo::ProbeResult probe_;
   std::optional<double> first_;
   double last_ = 0;
-  long segments_ = 0;
+  long segments_ = 0, done_ = 0;  // pushed; completed or flushed
 };
 
 // What the station's RunEnvironment answers (services/interpreter/src/execute.cpp), on the model.

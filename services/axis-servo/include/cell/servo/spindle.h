@@ -2,6 +2,8 @@
 // the angle from the index mark (the one-per-revolution pulse) that threads synchronise with.
 #pragma once
 
+#include <cmath>
+
 namespace cell::servo {
 
 class Spindle {
@@ -27,6 +29,8 @@ class Spindle {
   }
   // End of a commanded ramp: exactly at the target.
   void Snap(double x_diameter) { rpm_ = target_ = TargetAt(x_diameter); }
+  // Oriented (M19, stopped): at the index mark, angle() 0, as at power-up.
+  void Orient() { pos_ = prev_pos_ = std::round(pos_); }
   bool AtSpeed() const { return rpm_ == target_; }
   // Turning, or commanded to: Step() has something to do.
   bool Active() const { return rpm_ != 0 || cmd_rpm_ != 0 || css_v_ > 0; }

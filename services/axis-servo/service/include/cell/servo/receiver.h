@@ -48,8 +48,10 @@ class Receiver {
   // rest goes out at once, so the position it stopped at is never late.
   static constexpr auto kRestAxisPeriod = std::chrono::milliseconds(250);
   // Virtual clock: how long (wall) the machine waits for the producer to refill a look-ahead queue that is
-  // less than half full before it runs on with what it has (see LookAheadStarved()).
-  static constexpr auto kLookAheadWait = std::chrono::milliseconds(5);
+  // less than half full before it runs on with what it has, unless the producer said it waits for the
+  // machine (see LookAheadStarved()). Was 5 ms, which a producer short of CPU overran (a thread chain cut
+  // in two: Okuma G34/G35 0.973 against its prediction under a load of 12 on 2 cores).
+  static constexpr auto kLookAheadWait = std::chrono::milliseconds(250);
   static constexpr std::size_t kMaxCutTools = 128;  // SegmentProgress.cutting's bound
 
   Receiver(machine::MachineConfig cfg, ClockKind clock, std::uint64_t boot_id, ReceiverSink& sink);
@@ -87,6 +89,7 @@ class Receiver {
   void StartRun(std::int32_t run_id);
   void ApplyControl();
   bool LookAheadStarved(TimePoint now) const;
+  bool AwaitingProducer() const;
   void HandleEvents();
   void PublishAxes(TimePoint now);
 
@@ -123,6 +126,7 @@ class Receiver {
   TimePoint last_segment_at_{};
   std::uint64_t received_seq_ = 0;  // highest seq of this run taken in order (re-sent duplicates are dropped)
   std::uint64_t completed_seq_ = 0;
+  std::uint64_t waits_seq_ = 0;  // the producer waits for the machine once this seq is done (.waits)
   std::optional<double> run_start_s_;
   double run_end_s_ = 0;
   Alarm alarm_;
