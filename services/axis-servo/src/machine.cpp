@@ -122,6 +122,7 @@ Machine::Machine(MachineConfig config, ClockKind clock)
   filter_.Reset(home);
   spindle_.Configure(cfg_.spindle_max_rpm, cfg_.spindle_accel_rpm_s);
   live_tool_.Configure(cfg_.live_tool_max_rpm, cfg_.live_tool_accel_rpm_s);
+  c_is_spindle_ = cfg_.kind == "lathe" && present_[kC];
   prev_cmd_ = home;
   SetToolTable(cfg_.tools);
   for (const auto& ref : cfg_.part_models) parts_[ref.pallet] = partmodel::LoadPartModel(ref.file);
@@ -190,7 +191,7 @@ std::vector<Segment> Machine::ToArrival() const {
     s.kind = kind;
     return s;
   };
-  if (spindle_.Active()) add(SegmentKind::kSpindle);  // kStop
+  if (spindle_.Active() && !c_joined_) add(SegmentKind::kSpindle);  // kStop
   if (live_tool_.Active()) add(SegmentKind::kSpindle).live_tool = true;
   if (coolant_ != CoolantMode::kOff) add(SegmentKind::kCoolant);  // kOff
   // The axes at the zero; an index table's B on its own (an index move is a move of B alone).
@@ -201,8 +202,12 @@ std::vector<Segment> Machine::ToArrival() const {
     if (!present_[i] || (std::abs(at[i]) <= 1e-9 && std::abs(servos_[i].position()) <= 1e-9)) continue;
     (i == kB && index_b ? b : path) |= static_cast<std::uint8_t>(1u << i);
   }
+  // A lathe positions C only joined; it powers up released (the spindle in speed control).
+  const bool join = c_is_spindle_ && !c_joined_ && (path >> kC & 1);
+  if (join) add(SegmentKind::kSpindle).spindle_dir = SpindleDirection::kAxis;
   if (path) add(SegmentKind::kRapid).axes = path;  // end{} is the zero
   if (b) add(SegmentKind::kRapid).axes = b;
+  if (c_joined_ || join) add(SegmentKind::kSpindle);  // kStop: released
   if (!spindle_tool_.empty() || magazine_at_ != 1) add(SegmentKind::kToolChange).tool_socket = 1;
   return out;
 }
@@ -413,6 +418,14 @@ void Machine::FeedPlanner() {
     };
     if (IsPathMotion(s.kind) && (!index_move || s.kind == SegmentKind::kThread)) {
       if (planner_.Full()) break;
+      // A lathe's C is its spindle: it turns as an axis only joined (segments after a joint or a release
+      // are planned once it is done: it is a barrier).
+      if (c_is_spindle_ && !c_joined_ && (s.axes >> kC & 1) && std::abs(s.end[kC] - start[kC]) > 1e-9) {
+        defer(AlarmCode::kInvalidSegment,
+              fmt::format("C {:.4f} while the C axis is not joined (M110): the spindle is in speed control",
+                          s.end[kC]));
+        break;
+      }
       std::string why;
       if (!SoftLimitCheck(s, start, why)) {
         defer(AlarmCode::kSoftLimit, why);
@@ -483,6 +496,12 @@ bool Machine::StartBarrier(Entry& e) {
         if (!StartLiveTool(s)) return false;
         // Complete when the live tool is at speed, as the work spindle's command.
         timer(std::abs(live_tool_.TargetAt(0) - live_tool_.rpm()) / cfg_.live_tool_accel_rpm_s);
+        break;
+      }
+      if (c_is_spindle_ && (c_joined_ || s.spindle_dir == SpindleDirection::kAxis)) {
+        double t = 0;
+        if (!StartJoint(s, t)) return false;
+        timer(t);
         break;
       }
       if (!StartSpindle(s)) return false;
@@ -626,6 +645,7 @@ void Machine::StepOp() {
           }
           spindle_.Snap(XDiameter());
           spindle_oriented_ = s.spindle_dir == SpindleDirection::kOrient;
+          if (c_is_spindle_) c_joined_ = s.spindle_dir == SpindleDirection::kAxis;
           break;
         case SegmentKind::kCoolant:
           coolant_ = s.coolant;
@@ -1042,6 +1062,8 @@ AxisState Machine::State() const {
   s.spindle_angle = spindle_.angle();
   s.spindle_revolutions = spindle_.position();
   s.spindle_oriented = spindle_oriented_;
+  s.c_joined = c_joined_;
+  s.live_tool_rpm = live_tool_.rpm();
   s.coolant = coolant_;
   s.tool = spindle_tool_;
   s.pallet_on_table = pallet_table_;
