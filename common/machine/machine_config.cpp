@@ -246,6 +246,8 @@ MachineConfig ParseMachineConfig(std::string_view text, const std::string& sourc
   if ((m.live_tool_max_rpm > 0) != (m.live_tool_accel_rpm_s > 0))
     sp.Fail("live_tool_acceleration",
             "a live-tool spindle needs live_tool_max_rpm and live_tool_acceleration");
+  // The manual gives no figure for the C-axis joint (ln 1983-1984): the station file does, or 1 s.
+  m.c_joint_time = sp.Number("c_joint_time", 0, 60, 1.0, "s");
   sp.Done();
 
   TableReader mag(source, "magazine.", root["magazine"].as_table());

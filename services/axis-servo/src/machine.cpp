@@ -122,6 +122,7 @@ Machine::Machine(MachineConfig config, ClockKind clock)
   filter_.Reset(home);
   spindle_.Configure(cfg_.spindle_max_rpm, cfg_.spindle_accel_rpm_s);
   live_tool_.Configure(cfg_.live_tool_max_rpm, cfg_.live_tool_accel_rpm_s);
+  c_is_spindle_ = cfg_.kind == "lathe" && present_[kC];
   prev_cmd_ = home;
   SetToolTable(cfg_.tools);
   for (const auto& ref : cfg_.part_models) parts_[ref.pallet] = partmodel::LoadPartModel(ref.file);
@@ -191,8 +192,9 @@ std::vector<Segment> Machine::ToArrival() const {
     return s;
   };
   // The spindle stopped at its index mark (oriented), where it stands at power-up: where a thread's index
-  // pulse comes, and so its wait, is then the same on every run (docs/predict.md judgement call 4).
-  if (spindle_.Active() || spindle_.angle() != 0.0)
+  // pulse comes, and so its wait, is then the same on every run (docs/predict.md judgement call 4). A spindle
+  // joined as C is taken to C 0 and released below, then oriented.
+  if (!c_joined_ && (spindle_.Active() || spindle_.angle() != 0.0))
     add(SegmentKind::kSpindle).spindle_dir = SpindleDirection::kOrient;
   if (live_tool_.Active()) add(SegmentKind::kSpindle).live_tool = true;
   if (coolant_ != CoolantMode::kOff) add(SegmentKind::kCoolant);  // kOff
@@ -204,8 +206,15 @@ std::vector<Segment> Machine::ToArrival() const {
     if (!present_[i] || (std::abs(at[i]) <= 1e-9 && std::abs(servos_[i].position()) <= 1e-9)) continue;
     (i == kB && index_b ? b : path) |= static_cast<std::uint8_t>(1u << i);
   }
+  // A lathe positions C only joined; it powers up released (the spindle in speed control).
+  const bool join = c_is_spindle_ && !c_joined_ && (path >> kC & 1);
+  if (join) add(SegmentKind::kSpindle).spindle_dir = SpindleDirection::kAxis;
   if (path) add(SegmentKind::kRapid).axes = path;  // end{} is the zero
   if (b) add(SegmentKind::kRapid).axes = b;
+  if (c_joined_ || join) {
+    add(SegmentKind::kSpindle);  // kStop: released
+    add(SegmentKind::kSpindle).spindle_dir = SpindleDirection::kOrient;
+  }
   if (!spindle_tool_.empty() || magazine_at_ != 1) add(SegmentKind::kToolChange).tool_socket = 1;
   return out;
 }
@@ -416,6 +425,14 @@ void Machine::FeedPlanner() {
     };
     if (IsPathMotion(s.kind) && (!index_move || s.kind == SegmentKind::kThread)) {
       if (planner_.Full()) break;
+      // A lathe's C is its spindle: it turns as an axis only joined (segments after a joint or a release
+      // are planned once it is done: it is a barrier).
+      if (c_is_spindle_ && !c_joined_ && (s.axes >> kC & 1) && std::abs(s.end[kC] - start[kC]) > 1e-9) {
+        defer(AlarmCode::kInvalidSegment,
+              fmt::format("C {:.4f} while the C axis is not joined (M110): the spindle is in speed control",
+                          s.end[kC]));
+        break;
+      }
       std::string why;
       if (!SoftLimitCheck(s, start, why)) {
         defer(AlarmCode::kSoftLimit, why);
@@ -486,6 +503,12 @@ bool Machine::StartBarrier(Entry& e) {
         if (!StartLiveTool(s)) return false;
         // Complete when the live tool is at speed, as the work spindle's command.
         timer(std::abs(live_tool_.TargetAt(0) - live_tool_.rpm()) / cfg_.live_tool_accel_rpm_s);
+        break;
+      }
+      if (c_is_spindle_ && (c_joined_ || s.spindle_dir == SpindleDirection::kAxis)) {
+        double t = 0;
+        if (!StartJoint(s, t)) return false;
+        timer(t);
         break;
       }
       if (!StartSpindle(s)) return false;
@@ -630,6 +653,7 @@ void Machine::StepOp() {
           spindle_.Snap(XDiameter());
           spindle_oriented_ = s.spindle_dir == SpindleDirection::kOrient;
           if (spindle_oriented_) spindle_.Orient();
+          if (c_is_spindle_) c_joined_ = s.spindle_dir == SpindleDirection::kAxis;
           break;
         case SegmentKind::kCoolant:
           coolant_ = s.coolant;
@@ -1046,6 +1070,8 @@ AxisState Machine::State() const {
   s.spindle_angle = spindle_.angle();
   s.spindle_revolutions = spindle_.position();
   s.spindle_oriented = spindle_oriented_;
+  s.c_joined = c_joined_;
+  s.live_tool_rpm = live_tool_.rpm();
   s.coolant = coolant_;
   s.tool = spindle_tool_;
   s.pallet_on_table = pallet_table_;

@@ -20,6 +20,14 @@ int Sign(SpindleDirection d) {
 }  // namespace
 
 bool Machine::StartSpindle(const Segment& s) {
+  if (s.spindle_dir == SpindleDirection::kAxis) {  // a machine whose C is not its spindle
+    RaiseAlarm(AlarmCode::kInvalidSegment,
+               fmt::format("segment {}: this machine's spindle cannot be joined as a C axis (a lathe with "
+                           "axes.c)",
+                           s.id),
+               s.id);
+    return false;
+  }
   const int dir = Sign(s.spindle_dir);
   if (dir != 0 && s.css_surface_speed > 0) {
     if (!cfg_.axes[kX].diameter) {
@@ -65,6 +73,28 @@ bool Machine::StartLiveTool(const Segment& s) {
     return false;
   }
   live_tool_.SetRpm(dir * rpm);
+  return true;
+}
+
+// The C-axis joint of a lathe (Okuma M110/M109, ln 1983-1984, 2057-2069). Joining stops the spindle (its
+// ramp down) and then engages in `c_joint_time`; a stop while joined releases in `c_joint_time`, the spindle
+// left stopped in speed control. Turning or orienting while joined is refused: the spindle is an axis.
+bool Machine::StartJoint(const Segment& s, double& t) {
+  if (s.spindle_dir == SpindleDirection::kAxis) {
+    t = std::abs(spindle_.rpm()) / cfg_.spindle_accel_rpm_s + (c_joined_ ? 0.0 : cfg_.c_joint_time);
+    spindle_.SetRpm(0);
+    spindle_oriented_ = false;
+    return true;
+  }
+  if (s.spindle_dir != SpindleDirection::kStop) {
+    RaiseAlarm(AlarmCode::kInvalidSegment,
+               fmt::format("segment {}: the spindle is joined as the C axis (M110) and cannot {}; M109 "
+                           "releases it",
+                           s.id, s.spindle_dir == SpindleDirection::kOrient ? "orient" : "turn"),
+               s.id);
+    return false;
+  }
+  t = cfg_.c_joint_time;
   return true;
 }
 

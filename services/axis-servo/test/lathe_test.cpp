@@ -676,5 +676,130 @@ TEST(Lathe, InvalidThreadsAreAlarms) {
             std::string::npos);
 }
 
+// ---- The C-axis joint (Okuma M110/M109, manual ln 1983-1984, 2057-2069), on OK01's station file: X, Z and
+// C, spindle 1500 rpm/s, c_joint_time 1 s, C at 7200 deg/min.
+
+Machine Ok01() {
+  return Machine(machine::LoadMachineConfig(std::string(CELL_SOURCE_DIR) + "/deploy/stations/OK01.toml"),
+                 ClockKind::kVirtual);
+}
+
+Segment Joint(std::uint64_t id, bool join) {
+  return Spindle(id, 0, join ? SpindleDirection::kAxis : SpindleDirection::kStop);
+}
+
+Segment CMove(std::uint64_t id, double c) {
+  Segment s;
+  s.id = id;
+  s.kind = SegmentKind::kRapid;
+  s.end[kC] = c;
+  s.axes = 1u << kC;
+  return s;
+}
+
+double Took(const std::vector<Event>& ev, std::uint64_t id) {
+  return Find(ev, EventKind::kCompleted, id)->machine_time - Find(ev, EventKind::kStarted, id)->machine_time;
+}
+
+// M03 S900, M110 (the spindle stops: 900 / 1500 = 0.6 s, then the joint: 1 s), C90, M109 (1 s): C moves
+// joined, and after the release a C move is the servo's alarm, not executed (C stays at 90, commanded and
+// actual).
+TEST(Lathe, CMovesOnlyWhileJoinedAndTheJointTakesTheStationsTime) {
+  Machine m = Ok01();
+  ASSERT_EQ(m.config().c_joint_time, 1.0);
+  m.Push(Spindle(1, 900));
+  m.Push(Joint(2, true));
+  m.Push(CMove(3, 90));
+  m.Push(Joint(4, false));
+  m.Push(CMove(5, 180));
+  std::vector<Event> ev;
+  RunSampled(m, ev);
+  EXPECT_NEAR(Took(ev, 2), 0.6 + 1.0, 2 * m.period());
+  EXPECT_NEAR(Took(ev, 4), 1.0, 2 * m.period());
+  ASSERT_NE(Find(ev, EventKind::kCompleted, 3), nullptr);
+  EXPECT_EQ(m.alarm().code, AlarmCode::kInvalidSegment);
+  EXPECT_NE(m.alarm().text.find("segment 5: C 180.0000 while the C axis is not joined (M110)"),
+            std::string::npos)
+      << m.alarm().text;
+  EXPECT_EQ(Find(ev, EventKind::kStarted, 5), nullptr);
+  EXPECT_NEAR(m.State().commanded[kC], 90, 1e-6);
+  EXPECT_NEAR(m.State().actual[kC], 90, 1e-3);
+  EXPECT_FALSE(m.State().c_joined);
+  EXPECT_EQ(m.State().spindle_rpm, 0);
+}
+
+// From power-up C is released: the first C move is the alarm, nothing moves.
+TEST(Lathe, ACMoveWithoutTheJointIsAnAlarmOfTheServo) {
+  Machine m = Ok01();
+  EXPECT_FALSE(m.State().c_joined);
+  m.Push(CMove(1, 45));
+  std::vector<Event> ev;
+  RunSampled(m, ev);
+  EXPECT_EQ(m.alarm().code, AlarmCode::kInvalidSegment);
+  EXPECT_EQ(Find(ev, EventKind::kStarted, 1), nullptr);
+  EXPECT_EQ(m.State().actual[kC], 0);
+  // The built-in lathe has no C axis: its spindle cannot be joined.
+  Machine plain = Lathe();
+  plain.Push(Joint(1, true));
+  plain.RunUntilIdle();
+  EXPECT_NE(plain.alarm().text.find("cannot be joined as a C axis"), std::string::npos) << plain.alarm().text;
+}
+
+// While joined the spindle is an axis: M03, M04 and M19 are alarms (the manual stops the spindle before
+// M110 and returns it with M109 before turning, ln 2042-2053, 2079-2140).
+TEST(Lathe, TheSpindleCannotTurnOrOrientWhileCIsJoined) {
+  for (SpindleDirection d : {SpindleDirection::kCW, SpindleDirection::kCCW, SpindleDirection::kOrient}) {
+    Machine m = Ok01();
+    m.Push(Joint(1, true));
+    m.Push(Spindle(2, 500, d));
+    std::vector<Event> ev;
+    RunSampled(m, ev);
+    EXPECT_EQ(m.alarm().code, AlarmCode::kInvalidSegment);
+    EXPECT_NE(m.alarm().text.find("segment 2: the spindle is joined as the C axis (M110)"), std::string::npos)
+        << m.alarm().text;
+    EXPECT_EQ(m.State().spindle_rpm, 0);
+    EXPECT_TRUE(m.State().c_joined);  // the alarm does not release it (M110 survives a reset, ln 2059)
+    m.Reset();
+    EXPECT_TRUE(m.State().c_joined);
+  }
+}
+
+// The state a pallet arrives in has C released at 0: joined, the machine goes there and releases; released
+// off 0, it joins to get there.
+TEST(Lathe, TheArrivalStateReleasesCAtZero) {
+  for (bool release_first : {false, true}) {
+    Machine m = Ok01();
+    m.Push(Joint(1, true));
+    m.Push(CMove(2, 270));
+    if (release_first) m.Push(Joint(3, false));
+    m.RunUntilIdle();
+    ASSERT_EQ(m.alarm().code, AlarmCode::kNone) << m.alarm().text;
+    std::vector<Segment> arrival = m.ToArrival();
+    std::uint64_t id = 10;
+    for (Segment s : arrival) {
+      s.id = id++;
+      m.Push(s);
+    }
+    m.RunUntilIdle();
+    ASSERT_EQ(m.alarm().code, AlarmCode::kNone) << m.alarm().text;
+    EXPECT_FALSE(m.State().c_joined);
+    EXPECT_NEAR(m.State().actual[kC], 0, 1e-3);
+    EXPECT_TRUE(m.ToArrival().empty());
+    EXPECT_EQ(arrival.size(), release_first ? 3u : 2u);
+  }
+}
+
+// The live tool's speed is in the machine's state, beside the work spindle's (the service publishes both on
+// cell/motion/axes).
+TEST(Lathe, TheStateCarriesTheLiveToolsSpeed) {
+  Machine m = Ok01();
+  Segment live = Spindle(1, 400, SpindleDirection::kCCW);
+  live.live_tool = true;
+  m.Push(live);
+  m.RunUntilIdle();
+  EXPECT_EQ(m.State().live_tool_rpm, -400);
+  EXPECT_EQ(m.State().spindle_rpm, 0);
+}
+
 }  // namespace
 }  // namespace cell::servo

@@ -77,6 +77,7 @@ std::optional<cell::MotionSegment> ToSegment(const interp::Canon& c) {
       s.spindle_mode(sp.dir == interp::SpindleDir::kCw       ? 1
                      : sp.dir == interp::SpindleDir::kCcw    ? 2
                      : sp.dir == interp::SpindleDir::kOrient ? 3
+                     : sp.dir == interp::SpindleDir::kAxis   ? 4
                                                              : 0);
       // The whole spindle state on every spindle segment: constant surface speed and the spindle limit.
       s.css_surface_speed(sp.css);

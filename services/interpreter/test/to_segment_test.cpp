@@ -49,10 +49,10 @@ TEST(ToSegment, LiveToolSpindleIsTheLiveToolsSegment) {
   EXPECT_EQ(ToSegment(c)->spindle_mode(), 1);
   EXPECT_DOUBLE_EQ(ToSegment(c)->spindle_rpm(), 400);
   sp.spindle = interp::SpindleId::kMain;
-  sp.dir = interp::SpindleDir::kAxis;  // joined as C: the spindle no longer turns as a spindle
+  sp.dir = interp::SpindleDir::kAxis;  // joined as C: the servo's C-axis joint (docs/axis-servo.md)
   ASSERT_TRUE(ToSegment(c));
   EXPECT_FALSE(ToSegment(c)->live_tool());
-  EXPECT_EQ(ToSegment(c)->spindle_mode(), 0);
+  EXPECT_EQ(ToSegment(c)->spindle_mode(), 4);
 }
 
 TEST(ToSegment, SpindleCarriesConstantSurfaceSpeedAndTheLimit) {

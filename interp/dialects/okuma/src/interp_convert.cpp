@@ -307,7 +307,9 @@ void OkRun::ReadNcGCodes(const BlockWords& w, NcGCodes& k) {
       case 189:
       case 190:
         if (k.cycle) Fail(g.col, "two cycle G codes in one block");
-        k.cycle = g.code;
+        // G184 calls the synchronized tapping cycle G178 when the "G184 tapping mode" parameter is 1
+        // (ln 4539, judgement 66).
+        k.cycle = g.code == 184 && g184_sync_ ? 178 : g.code;
         k.cycle_col = g.col;
         k.mtool_fresh = true;
         break;
@@ -767,6 +769,14 @@ void OkRun::SpindleAndM(const BlockWords& w, bool before_motion) {
   // M codes: spindle first, then the others (M00/M01/M02/M30 wait for the motion).
   bool spindle_m = false;
   for (const auto& m : w.m) {
+    // Joined as C (M110) the spindle is an axis: it turns or orients only after M109 (ln 1983-1984); M05
+    // finds it stopped and leaves it joined (judgement 65).
+    if (modal_.c_joined && (m.code == 3 || m.code == 4 || m.code == 19)) {
+      Fail(m.col, fmt::format("M{:02d}: the spindle is joined as the C axis (M110); M109 returns it to "
+                              "spindle control",
+                              m.code));
+    }
+    if (modal_.c_joined && m.code == 5) continue;
     switch (m.code) {
       case 3:
       case 4: {

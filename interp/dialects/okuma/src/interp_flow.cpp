@@ -110,6 +110,8 @@ OkRun::OkRun(const RunOptions& o) : RunBase(o) {
       multi_peck_ = std::max(0.0, ParamNumber(val, 0.5));
     } else if (key == "MULTI_RETURN_POINT") {
       multi_return_start_ = ParamNumber(val, 0) != 0;
+    } else if (key == "G184_TAPPING_MODE") {
+      g184_sync_ = ParamNumber(val, 0) != 0;  // MULTIPLE MACHINING "G184 tapping mode" (ln 4539)
     } else if (key == "LAP_RELIEF") {
       lap_relief_ = std::max(0.0, ParamNumber(val, 0.1));
     } else if (key == "LAP_CLEARANCE") {

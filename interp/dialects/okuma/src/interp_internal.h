@@ -370,6 +370,7 @@ class OkRun final : public RunBase, public VarReader {
   double peck_retract_ = 0.5;        // long word No. 7, mm
   double multi_peck_ = 0.5;          // MULTIPLE MACHINING pecking amount alpha of G183 (mm; X a diameter)
   bool multi_return_start_ = false;  // MULTIPLE MACHINING multi cycle return point: the cycle start point
+  bool g184_sync_ = false;           // MULTIPLE MACHINING G184 tapping mode 1: G184 is G178 (ln 4539)
   double lap_relief_ = 0.1;          // LAP bar turning relief, mm
   double lap_clearance_ = 2.0;       // LAP4 clearance Lc, mm
   double thread_chamfer_feed_ = 0;   // OTHER FUNCTION 1, unused offline

@@ -75,6 +75,8 @@ struct MachineConfig {
   // A lathe's live-tool (M-tool) spindle, for rotating tools on the turret; 0: the machine has none.
   double live_tool_max_rpm = 0.0;
   double live_tool_accel_rpm_s = 0.0;
+  // A lathe with a C axis: seconds to join the work spindle as C (Okuma M110) or release it (M109).
+  double c_joint_time = 1.0;
   // Devices
   int magazine_sockets = 60;
   double magazine_index_time = 0.1;  // s per socket step

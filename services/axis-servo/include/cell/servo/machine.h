@@ -46,6 +46,8 @@ struct AxisState {
   double spindle_angle = 0;        // degrees from the index mark, [0, 360), clockwise
   double spindle_revolutions = 0;  // signed, since start-up (+ cw)
   bool spindle_oriented = false;
+  bool c_joined = false;     // a lathe's work spindle is joined as the C axis (Okuma M110)
+  double live_tool_rpm = 0;  // a lathe's live-tool (M-tool) spindle, signed: + cw (M13), - ccw (M14)
   CoolantMode coolant = CoolantMode::kOff;
   std::string tool;  // in the spindle ("" none)
   int pallet_on_table = 0, pallet_on_shuttle = 0;
@@ -176,6 +178,8 @@ class Machine {
   bool StartSpindle(const Segment& s);
   int MagazineSteps(int socket) const;
   bool StartLiveTool(const Segment& s);
+  // A lathe's C-axis joint (M110) or its release (M109): false after an alarm; `t` the seconds it takes.
+  bool StartJoint(const Segment& s, double& t);
   double XDiameter() const { return 2.0 * std::abs(filter_.Output()[kX]); }  // constant surface speed
   void Emit(EventKind kind, std::uint64_t seg, const Alarm* alarm = nullptr,
             const ProbeResult* probe = nullptr);
@@ -217,6 +221,10 @@ class Machine {
   Spindle spindle_;
   Spindle live_tool_;  // a lathe's live-tool (M-tool) spindle, when the machine has one
   bool spindle_oriented_ = false;
+  // A lathe whose C axis is its work spindle in position control: C moves only while joined (M110), and
+  // the spindle cannot turn while it is. Kept through Reset(), as M110 is through the NC's reset (ln 2059).
+  bool c_is_spindle_ = false;
+  bool c_joined_ = false;
   CoolantMode coolant_ = CoolantMode::kOff;
   std::map<int, std::string> magazine_;  // socket -> tool
   std::string spindle_tool_;

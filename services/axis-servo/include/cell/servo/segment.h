@@ -20,13 +20,13 @@ using enum machine::Axis;
 using AxisVector = Eigen::Matrix<double, kNumAxes, 1>;
 
 enum class SegmentKind : std::uint8_t {
-  kRapid,         // straight line at the machine's rapid rates, exact stop at its end
-  kLinear,        // straight line at `feed`; `exact_stop` demands deceleration (KT-APL G00 with a feed)
-  kArc,           // circle or helix around `center` in `plane`, `turns` extra full revolutions
-  kDwell,         // wait `dwell_s` machine seconds
-  kToolChange,    // put `tool` in the spindle (must be in the magazine)
-  kSpindle,       // `spindle_dir` (stop, cw, ccw, orient) at `spindle_rpm`, or at constant surface speed
-  kCoolant,       // `coolant` on/off
+  kRapid,       // straight line at the machine's rapid rates, exact stop at its end
+  kLinear,      // straight line at `feed`; `exact_stop` demands deceleration (KT-APL G00 with a feed)
+  kArc,         // circle or helix around `center` in `plane`, `turns` extra full revolutions
+  kDwell,       // wait `dwell_s` machine seconds
+  kToolChange,  // put `tool` in the spindle (must be in the magazine)
+  kSpindle,  // `spindle_dir` (stop, cw, ccw, orient, C joint) at `spindle_rpm`, or at constant surface speed
+  kCoolant,  // `coolant` on/off
   kPalletChange,  // shuttle `pallet` onto the table (0: swap table and shuttle)
   kProbe,         // straight move towards `end` at `feed`, stops where the probe makes contact with the part
                   // model (G22) or, with `probe_break`, loses it (G23); with `tool_check` a G38 check
@@ -44,7 +44,9 @@ struct ArcPlane {
 // Seen with the first axis pointing right and the second up (from the positive end of first x second).
 enum class ArcDirection : std::uint8_t { kCW, kCCW };
 enum class FeedMode : std::uint8_t { kPerMinute, kPerRevolution, kInverseTime };
-enum class SpindleDirection : std::uint8_t { kStop, kCW, kCCW, kOrient };
+// kAxis: a lathe's work spindle joined as the rotary axis C (position control, Okuma M110); a later kStop
+// releases the joint (M109). C moves only while joined; the spindle cannot turn while it is.
+enum class SpindleDirection : std::uint8_t { kStop, kCW, kCCW, kOrient, kAxis };
 enum class CoolantMode : std::uint8_t { kOff, kFlood, kMist, kThroughSpindle };
 
 struct Segment {
