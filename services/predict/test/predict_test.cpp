@@ -100,7 +100,7 @@ TEST(Predict, ToolChangesAndSpindleRamp) {
 // M49 (KT-APL ln 2896-2937) fixes the overrides from its block on: the station drains the motion before it
 // (Station::ExecuteIo), so the path stops there, which the prediction must take too: two collinear lines at
 // 3000 mm/min blend through X200 without it, and stop there with it: at least the ramps and the filter
-// (V/a + N Ts, 0.07 s), and the settling into the in-position window (measured: 0.259 s in all).
+// (V/a + N Ts, 0.07 s), and the settling into the in-position window.
 TEST(Predict, AnOverridesBlockStopsThePathAsOnTheStation) {
   const double through = Seconds("KT01", Kt("N3 G01 X200. F3000.\nN4 X300.\n"));
   const double stopped = Seconds("KT01", Kt("N3 G01 X200. F3000.\nN4 M49\nN5 X300.\n"));
