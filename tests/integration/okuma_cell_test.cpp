@@ -5,6 +5,7 @@
 #include <signal.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
 #include <chrono>
 #include <cmath>
@@ -50,12 +51,15 @@ std::string Part(const std::string& o, int first, int last, double dia) {
 }
 
 // What OK01's servo is sent and where it stands (the turn-mill tests): X (a diameter), Z and C of each feed
-// segment on cell/station/OK01/segments, and the position the servo last published.
+// segment on cell/station/OK01/segments, and the position the servo last published, with its C-axis joint
+// and the live tool's speed (cell/motion/axes).
 struct ServoWatch {
   cell::bus::Participant observer{"okuma-test/observer"};
   std::mutex mu;
   std::vector<std::array<double, 3>> feeds;  // X (diameter), Z, C of each feed segment
   std::array<double, 3> at{-1, -1, -1};
+  bool joined = false, ever_joined = false;  // the work spindle joined as C (M110), now and at any sample
+  double live_tool_max = 0;                  // the highest |live tool rpm| published
   cell::bus::Reader<cell::MotionSegment> segments{
       observer, cell::bus::topics::Segments("OK01"), cell::bus::QosKind::kStream,
       [this](const cell::MotionSegment& m, const cell::bus::SampleInfo&) {
@@ -63,13 +67,16 @@ struct ServoWatch {
         std::lock_guard lk(mu);
         feeds.push_back({m.target()[0], m.target()[2], m.target()[5]});
       }};
-  cell::bus::Reader<cell::AxisState> axes{observer, cell::bus::topics::kAxisState,
-                                          cell::bus::QosKind::kTelemetry,
-                                          [this](const cell::AxisState& a, const cell::bus::SampleInfo&) {
-                                            if (a.station().to_string() != "OK01") return;
-                                            std::lock_guard lk(mu);
-                                            at = {a.actual()[0], a.actual()[2], a.actual()[5]};
-                                          }};
+  cell::bus::Reader<cell::AxisState> axes{
+      observer, cell::bus::topics::kAxisState, cell::bus::QosKind::kTelemetry,
+      [this](const cell::AxisState& a, const cell::bus::SampleInfo&) {
+        if (a.station().to_string() != "OK01") return;
+        std::lock_guard lk(mu);
+        at = {a.actual()[0], a.actual()[2], a.actual()[5]};
+        joined = a.c_joined();
+        ever_joined |= joined;
+        live_tool_max = std::max(live_tool_max, std::abs(a.live_tool_rpm()));
+      }};
   bool Matched() {
     return cell::bus::WaitUntil([&] { return segments.Matched() > 0; }, std::chrono::seconds(10));
   }
@@ -261,8 +268,9 @@ TEST_F(OkumaCell, ThreadCycleTimeFollowsLeadAndSpindleSpeed) {
 // Machine time: the four feeds are 4 x 27 mm / 40 mm/min = 4 x 40.5 s = 162 s; the rest (the live tool's
 // ramps, 400 / 2000 rpm/s = 0.2 s each way, OK01.toml [spindle]; one turret index, 1.2 + 0.3 s; four C
 // indexes of 90 degrees at 7200 deg/min, 0.75 s plus 0.17 s of acceleration each; about 1,000 mm of rapids
-// at 200-250 mm/s) is under 15 s. Before the servo had a live tool, the station refused M13 and the job
-// failed.
+// at 200-250 mm/s; M110's joint and M109's release, 1 s each, OK01.toml c_joint_time) is under 15 s. Before
+// the servo had a live tool, the station refused M13 and the job failed. The servo publishes the joint while
+// the holes are drilled and the live tool at 400 rpm; C is released at the end (M109).
 TEST_F(OkumaCell, CrossDrillingE52RunsWithTheLiveToolAtTheManualsCPositions) {
   ServoWatch servo;
   ASSERT_TRUE(servo.Matched());
@@ -285,6 +293,16 @@ TEST_F(OkumaCell, CrossDrillingE52RunsWithTheLiveToolAtTheManualsCPositions) {
   }
   // Where N108 left it, C at 270 (never turned back).
   EXPECT_TRUE(servo.RestsAt(400, 200, 270)) << servo.at[0] << " " << servo.at[1] << " " << servo.at[2];
+  // M109 released C before the run's end; a sample at rest (4 Hz) shows it.
+  EXPECT_TRUE(cell::bus::WaitUntil(
+      [&] {
+        std::lock_guard lk(servo.mu);
+        return !servo.joined;
+      },
+      std::chrono::seconds(10)));
+  std::lock_guard lk(servo.mu);
+  EXPECT_TRUE(servo.ever_joined);
+  EXPECT_EQ(servo.live_tool_max, 400.0);
 }
 
 // Issue 36 item 4: the manual's milled flat, E-61 program 1 (ln 6466-6488: G101 straight line cutting on the
@@ -303,7 +321,8 @@ TEST_F(OkumaCell, CrossDrillingE52RunsWithTheLiveToolAtTheManualsCPositions) {
 // radially at 200 mm/s and Z 200 mm at 250 mm/s: 1.0 s plus ramps); T0101 (one index at most: 1.2 s + 6
 // stations x 0.3 s = 3.0 s, OK01.toml); N103's C300 at 7200 deg/min (2.5 s + 0.2 s of ramps) with X 50 mm
 // radially; N104 Z 80 mm (0.32 s) and the live tool to 250 rpm at 2000 rpm/s (0.125 s); N106 back (about
-// 0.5 s) and the live tool's stop (0.125 s): about 8 s with the ramps and the segments' round trips.
+// 0.5 s) and the live tool's stop (0.125 s); M110's joint and M109's release (1 s each): about 10 s with the
+// ramps and the segments' round trips.
 TEST_F(OkumaCell, MilledFlatE61CutsTheChordAtTheManualsXAndCPositions) {
   ServoWatch servo;
   ASSERT_TRUE(servo.Matched());

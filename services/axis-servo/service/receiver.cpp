@@ -75,6 +75,7 @@ Segment FromWire(const cell::MotionSegment& m, uint64_t id) {
   s.spindle_dir = m.spindle_mode() == 1   ? SpindleDirection::kCW
                   : m.spindle_mode() == 2 ? SpindleDirection::kCCW
                   : m.spindle_mode() == 3 ? SpindleDirection::kOrient
+                  : m.spindle_mode() == 4 ? SpindleDirection::kAxis
                                           : SpindleDirection::kStop;
   s.coolant = m.coolant() == 0   ? CoolantMode::kOff
               : m.coolant() == 2 ? CoolantMode::kMist
@@ -465,6 +466,8 @@ void Receiver::PublishAxes(TimePoint now) {
   a.machine_s(s.machine_time);
   a.spindle_rpm(s.spindle_rpm);
   a.path_feed(s.path_feed);
+  a.live_tool_rpm(s.live_tool_rpm);
+  a.c_joined(s.c_joined);
   a.wall_ns(std::chrono::duration_cast<std::chrono::nanoseconds>(
                 std::chrono::system_clock::now().time_since_epoch())
                 .count());

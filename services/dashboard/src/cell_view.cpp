@@ -227,6 +227,7 @@ void CellView::Axes(const AxesIn& a) {
   const double t = static_cast<double>(tns) * 1e-9;
   x.feed = a.path_feed;
   x.spindle_rpm = a.spindle_rpm;
+  x.live_tool_rpm = a.live_tool_rpm;
   std::vector<double> pos;
   for (auto& ax : def.axes) pos.push_back(a.actual[ax.index]);
   if (t - x.last_trail >= opts_.axis_period_s) {
@@ -238,7 +239,8 @@ void CellView::Axes(const AxesIn& a) {
           {"t", t},
           {"pos", pos},
           {"feed", a.path_feed},
-          {"spindle_rpm", a.spindle_rpm}});
+          {"spindle_rpm", a.spindle_rpm},
+          {"live_tool_rpm", a.live_tool_rpm}});
   }
   if (t - x.last_mtc >= opts_.mtc_axis_period_s) {
     x.last_mtc = t;
@@ -249,7 +251,10 @@ void CellView::Axes(const AxesIn& a) {
       Observe(s, "pos:" + def.axes[i].name, Fixed(pos[i], 4), tns);
     }
     Observe(s, "spindle_speed", Fixed(std::fabs(a.spindle_rpm), 0), tns);
-    Observe(s, "spindle_mode", "SPINDLE", tns);
+    // A lathe's spindle joined as C (M110) is a contouring axis (MTConnect RotaryMode CONTOUR).
+    Observe(s, "spindle_mode", a.c_joined ? "CONTOUR" : "SPINDLE", tns);
+    Observe(s, "live_tool_speed", Fixed(std::fabs(a.live_tool_rpm), 0), tns);  // none without a live tool
+    Observe(s, "live_tool_mode", "SPINDLE", tns);
     Observe(s, "feed", Fixed(a.path_feed / 60.0, 2), tns);
   }
 }
@@ -387,6 +392,7 @@ json CellView::StationJson(int s) const {
   row["kind"] = d.kind;
   row["axes"] = axes;
   row["axis_defs"] = axis_defs;
+  row["live_tool"] = d.live_tool;
   row["queued"] = x.status.queued;
   row["tools"] = {{"count", x.tools.size()}, {"worn", worn}, {"broken", broken}};
   row["waiting"] = waiting;
@@ -421,8 +427,11 @@ json CellView::Snapshot() const {
       t.push_back(ts);
       pos.push_back(p);
     }
-    axes[model_.stations()[s].id] = {
-        {"t", t}, {"pos", pos}, {"feed", x.feed}, {"spindle_rpm", x.spindle_rpm}};
+    axes[model_.stations()[s].id] = {{"t", t},
+                                     {"pos", pos},
+                                     {"feed", x.feed},
+                                     {"spindle_rpm", x.spindle_rpm},
+                                     {"live_tool_rpm", x.live_tool_rpm}};
   }
   // Newest first: every live job, then finished ones up to 200 rows.
   json jobs = json::array();

@@ -127,6 +127,8 @@ Feed::Feed(bus::Participant& p, CellView& view, FeedOptions opts)
                     for (size_t i = 0; i < 9; ++i) in.actual[i] = a.actual()[i];
                     in.spindle_rpm = a.spindle_rpm();
                     in.path_feed = a.path_feed();
+                    in.live_tool_rpm = a.live_tool_rpm();
+                    in.c_joined = a.c_joined();
                     in.time_ns = a.wall_ns();
                     view_.Axes(in);
                   });

@@ -143,6 +143,16 @@ DeviceModel::DeviceModel(std::vector<StationDef> stations) : stations_(std::move
            "S", "RotaryVelocity", 1, 0.1});
       Add(s, cid, {s, "spindle_mode", cid + "_mode", "", "EVENT", "ROTARY_MODE", "", "", "", "RotaryMode"});
     }
+    if (st.live_tool) {
+      // A lathe's live-tool (M-tool) spindle is a second spindle: a Rotary of its own, its speed named SB as
+      // Okuma's address.
+      const std::string cid = b + "_LT";
+      components_.push_back({s, "Rotary", cid, "LT", b + "_axes"});
+      Add(s, cid,
+          {s, "live_tool_speed", cid + "_speed", "", "SAMPLE", "ROTARY_VELOCITY", "ACTUAL",
+           "REVOLUTION/MINUTE", "SB", "RotaryVelocity", 1, 0.1});
+      Add(s, cid, {s, "live_tool_mode", cid + "_mode", "", "EVENT", "ROTARY_MODE", "", "", "", "RotaryMode"});
+    }
 
     components_.push_back({s, "Controller", b + "_ctrl", "controller", b});
     const std::string p = b + "_path";

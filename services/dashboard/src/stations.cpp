@@ -25,6 +25,7 @@ StationDef MakeStationDef(const cell::config::StationConfig& station,
     x.diameter = a.diameter;
     d.axes.push_back(x);
   }
+  d.live_tool = machine.live_tool_max_rpm > 0;
   return d;
 }
 

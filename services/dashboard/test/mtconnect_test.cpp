@@ -123,6 +123,56 @@ TEST(MTConnect, CurrentAndSampleValidateAndCarryTheState) {
   EXPECT_EQ(one.body.find("OK01"), std::string::npos);
 }
 
+// A turn-mill (OK01 as shipped: X, Z, C and a live tool): the live tool is a second spindle, Rotary LT with
+// its RotaryVelocity (named SB, Okuma's address); the work spindle's RotaryMode is CONTOUR while it is joined
+// as C (M110), SPINDLE otherwise. Both documents validate against the 2.4 schemas.
+TEST(MTConnect, ALiveToolIsASecondSpindleAndAJoinedCIsAContouringAxis) {
+  StationDef ok{"OK01",
+                "okuma",
+                "Okuma turn-mill",
+                "lathe",
+                {{"X", 0, false, true}, {"Z", 2, false, false}, {"C", 5, true, false}}};
+  ok.live_tool = true;
+  CellView v({ok});
+  v.Online("OK01", true);
+  v.Status(Status("OK01", "ACTIVE", "O1", 3, 0));
+  std::string probe = v.Probe(-1);
+  EXPECT_EQ(Validate(probe, kDevices), "") << probe;
+  EXPECT_NE(probe.find("<Rotary id=\"OK01_C\" name=\"C\">"), std::string::npos);
+  EXPECT_NE(probe.find("<Rotary id=\"OK01_LT\" name=\"LT\">"), std::string::npos) << probe;
+  EXPECT_NE(probe.find("id=\"OK01_LT_speed\""), std::string::npos);
+  // The value of a data item in a Streams document.
+  auto value = [](const std::string& doc, const std::string& id) {
+    const size_t at = doc.find("dataItemId=\"" + id + "\"");
+    if (at == std::string::npos) return std::string("(absent)");
+    const size_t gt = doc.find('>', at), lt = doc.find('<', gt);
+    return doc.substr(gt + 1, lt - gt - 1);
+  };
+  AxesIn a;
+  a.station = "OK01";
+  a.live_tool_rpm = -450;  // M14 SB=450
+  a.c_joined = true;
+  a.time_ns = 1'000'000'000;
+  v.Axes(a);
+  std::string cur = v.Current(-1);
+  EXPECT_EQ(Validate(cur, kStreams), "") << cur;
+  EXPECT_EQ(value(cur, "OK01_LT_speed"), "450");
+  EXPECT_EQ(value(cur, "OK01_LT_mode"), "SPINDLE");
+  EXPECT_EQ(value(cur, "OK01_C_mode"), "CONTOUR");
+  EXPECT_EQ(value(cur, "OK01_C_speed"), "0");
+  a.c_joined = false;  // M109
+  a.live_tool_rpm = 0;
+  a.spindle_rpm = 800;
+  a.time_ns = 2'000'000'000;
+  v.Axes(a);
+  cur = v.Current(-1);
+  EXPECT_EQ(value(cur, "OK01_C_mode"), "SPINDLE");
+  EXPECT_EQ(value(cur, "OK01_C_speed"), "800");
+  EXPECT_EQ(value(cur, "OK01_LT_speed"), "0");
+  // A station without a live tool has no such component.
+  EXPECT_EQ(CellView(TwoStations()).Probe(-1).find("_LT"), std::string::npos);
+}
+
 TEST(MTConnect, AssetsAreTheToolTablesAsCuttingTools) {
   CellView v(TwoStations());
   EXPECT_EQ(Validate(v.AssetsDoc(""), kAssets), "");

@@ -196,13 +196,14 @@
     pathStation(st);
   }
 
-  function pushAxes(id, t, pos, feed, rpm) {
+  function pushAxes(id, t, pos, feed, rpm, liveRpm) {
     const rec = stations.get(id);
     if (!rec) return;
     rec.trail.push([t, pos]);
     while (rec.trail.length && rec.trail[0][0] < t - 60) rec.trail.shift();
     pathAxes(rec, pos);
     rec.el.motion.textContent = 'feed ' + Math.round(feed) + ' mm/min · spindle ' + Math.round(Math.abs(rpm)) + ' rpm' +
+      (rec.data.live_tool ? ' · live tool ' + Math.round(Math.abs(liveRpm || 0)) + ' rpm' : '') +
       (pos.length ? ' · ' + rec.data.axes.map((n, i) => n.split(' ')[0] + ' ' + pos[i].toFixed(3)).join('  ') : '');
   }
 
@@ -665,7 +666,7 @@
       if (!rec) continue;
       rec.trail = [];
       a.t.forEach((t, i) => rec.trail.push([t, a.pos[i]]));
-      if (a.t.length) pushAxes(id, a.t[a.t.length - 1], a.pos[a.pos.length - 1], a.feed, a.spindle_rpm);
+      if (a.t.length) pushAxes(id, a.t[a.t.length - 1], a.pos[a.pos.length - 1], a.feed, a.spindle_rpm, a.live_tool_rpm);
     }
     document.querySelector('#jobs tbody').replaceChildren();
     jobs.clear();
@@ -799,7 +800,7 @@
     switch (ev.type) {
       case 'station': renderStation(ev.station); break;
       case 'job': jobs.set(ev.job.id, ev.job); jobRow(ev.job); planSoon(); break;
-      case 'axes': pushAxes(ev.station, ev.t, ev.pos, ev.feed, ev.spindle_rpm); break;
+      case 'axes': pushAxes(ev.station, ev.t, ev.pos, ev.feed, ev.spindle_rpm, ev.live_tool_rpm); break;
       case 'cycle': addCycle(ev.cycle); renderCycles(); break;
       case 'inspection':
         S.inspections = [ev.record, ...S.inspections.filter((x) => x.name !== ev.record.name)].slice(0, 50);

@@ -315,5 +315,66 @@ TEST_F(ReceiverTest, AxisStateIsPublishedOnTheWallClock) {
   for (std::size_t i = 1; i < sink_.axes.size(); ++i) EXPECT_NE(sink_.axes[i].velocity()[0], 0.0) << i;
 }
 
+// A turn-mill over the wire (OK01): spindle_mode 4 joins the spindle as C (Okuma M110), so the C move after
+// it runs; the axis state carries the joint and the live tool's signed speed (M14 SB=400). A C move sent
+// without the joint is the servo's alarm 601, not executed.
+TEST(ReceiverTurnMill, TheJointAndTheLiveToolAreOnTheWireBothWays) {
+  Sink sink;
+  Receiver rx(LoadMachineConfig(std::string(CELL_SOURCE_DIR) + "/deploy/stations/OK01.toml"),
+              ClockKind::kVirtual, 7, sink);
+  Receiver::TimePoint now{std::chrono::hours(1)};
+  auto turn = [&](const std::function<bool()>& done) {
+    for (int i = 0; i < 3'000'000; ++i) {
+      now += std::chrono::milliseconds(1);
+      rx.Tick(now);
+      if (done()) return true;
+    }
+    return false;
+  };
+  auto seg = [](std::int32_t run, std::uint64_t seq, cell::SegmentKind kind) {
+    cell::MotionSegment m;
+    m.station("OK01");
+    m.run_id(run);
+    m.seq(seq);
+    m.kind(kind);
+    return m;
+  };
+  auto done = [&](std::int32_t run, std::uint64_t seq) {
+    return !sink.progress.empty() &&
+           (sink.progress.back().alarm() ||
+            (sink.progress.back().run_id() == run && sink.progress.back().completed_seq() >= seq));
+  };
+  auto join = seg(1, 1, cell::SEGMENT_SPINDLE);
+  join.spindle_mode(4);
+  auto c90 = seg(1, 2, cell::SEGMENT_RAPID);
+  c90.target()[5] = 90;
+  c90.axis_mask(1u << 5);
+  auto live = seg(1, 3, cell::SEGMENT_SPINDLE);
+  live.live_tool(true);
+  live.spindle_mode(2);
+  live.spindle_rpm(400);
+  for (const auto& m : {join, c90, live}) rx.OnSegment(m);
+  ASSERT_TRUE(turn([&] { return done(1, 3); }));
+  ASSERT_FALSE(sink.progress.back().alarm()) << sink.progress.back().alarm_text().to_string();
+  sink.axes.clear();
+  ASSERT_TRUE(turn([&] { return !sink.axes.empty(); }));
+  EXPECT_TRUE(sink.axes.back().c_joined());
+  EXPECT_EQ(sink.axes.back().live_tool_rpm(), -400);
+  EXPECT_NEAR(sink.axes.back().actual()[5], 90, 1e-3);
+  // Run 2 starts released (the arrival state): its C move without spindle_mode 4 is the alarm.
+  auto c45 = seg(2, 1, cell::SEGMENT_RAPID);
+  c45.target()[5] = 45;
+  c45.axis_mask(1u << 5);
+  rx.OnSegment(c45);
+  ASSERT_TRUE(turn([&] { return !sink.progress.empty() && sink.progress.back().alarm(); }));
+  EXPECT_EQ(sink.progress.back().alarm_code(), "601");
+  EXPECT_NE(sink.progress.back().alarm_text().to_string().find("not joined (M110)"), std::string::npos)
+      << sink.progress.back().alarm_text().to_string();
+  sink.axes.clear();
+  ASSERT_TRUE(turn([&] { return !sink.axes.empty(); }));
+  EXPECT_FALSE(sink.axes.back().c_joined());
+  EXPECT_NEAR(sink.axes.back().actual()[5], 0, 1e-3);
+}
+
 }  // namespace
 }  // namespace cell::servo

@@ -37,7 +37,9 @@ struct AxesIn {  // cell/motion/axes
   std::string station;
   double actual[9] = {};
   double spindle_rpm = 0;
-  double path_feed = 0;  // units/min
+  double path_feed = 0;      // units/min
+  double live_tool_rpm = 0;  // a lathe's live tool, signed as spindle_rpm
+  bool c_joined = false;     // the work spindle is joined as the C axis (Okuma M110)
   std::int64_t time_ns = 0;
 };
 
@@ -158,7 +160,7 @@ class CellView {
     double backlog_s = 0;
     std::vector<tooltable::ToolEntry> tools;
     std::int64_t tools_ns = 0;  // when the table last arrived (the assets' timestamp)
-    double feed = 0, spindle_rpm = 0;
+    double feed = 0, spindle_rpm = 0, live_tool_rpm = 0;
     // Page plot: wall seconds and one position per configured axis.
     std::deque<std::pair<double, std::vector<double>>> trail;
     double last_trail = -1e18, last_mtc = -1e18;

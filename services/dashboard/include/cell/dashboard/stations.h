@@ -28,6 +28,7 @@ struct StationDef {
   std::string description;
   std::string kind;  // "hmc", "lathe", ... as the machine table says
   std::vector<AxisDef> axes;
+  bool live_tool = false;  // a lathe's live-tool (M-tool) spindle: a second spindle
 };
 
 // From the two config readers' results (tests build these without files).
