@@ -9,6 +9,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
@@ -109,9 +110,15 @@ TEST_F(Offline, ACellThatIsDownIsSaidSoAtOnce) {
                                         {"job", "ls"},
                                         {"program", "ls"},
                                         {"route", "show", "R"}}) {
-    const auto t0 = std::chrono::steady_clock::now();
-    auto r = Ctl(verb);
-    const auto took = std::chrono::steady_clock::now() - t0;
+    // The quickest of up to three tries: the old path waited out the 5 s bound every time, while a loaded
+    // machine (three sanitized cells on 2 cores) once stretched one start-up of this one to 5.2 s.
+    auto took = std::chrono::steady_clock::duration::max();
+    RunResult r;
+    for (int attempt = 0; attempt < 3 && took >= 4500ms; ++attempt) {
+      const auto t0 = std::chrono::steady_clock::now();
+      r = Ctl(verb);
+      took = std::min(took, std::chrono::steady_clock::now() - t0);
+    }
     const std::string what = verb[0] + " " + verb[1];
     EXPECT_EQ(r.code, 1) << what << ": " << r.out << r.err;
     EXPECT_EQ(r.out, "") << what;
