@@ -191,13 +191,6 @@ std::vector<Segment> Machine::ToArrival() const {
     s.kind = kind;
     return s;
   };
-  // The spindle stopped at its index mark (oriented), where it stands at power-up: where a thread's index
-  // pulse comes, and so its wait, is then the same on every run (docs/predict.md judgement call 4). A spindle
-  // joined as C is taken to C 0 and released below, then oriented.
-  if (!c_joined_ && (spindle_.Active() || spindle_.angle() != 0.0))
-    add(SegmentKind::kSpindle).spindle_dir = SpindleDirection::kOrient;
-  if (live_tool_.Active()) add(SegmentKind::kSpindle).live_tool = true;
-  if (coolant_ != CoolantMode::kOff) add(SegmentKind::kCoolant);  // kOff
   // The axes at the zero; an index table's B on its own (an index move is a move of B alone).
   const bool index_b = present_[kB] && cfg_.axes[kB].type == AxisType::kIndex;
   std::uint8_t path = 0, b = 0;
@@ -208,6 +201,13 @@ std::vector<Segment> Machine::ToArrival() const {
   }
   // A lathe positions C only joined; it powers up released (the spindle in speed control).
   const bool join = c_is_spindle_ && !c_joined_ && (path >> kC & 1);
+  // The spindle stopped at its index mark (oriented), where it stands at power-up: where a thread's index
+  // pulse comes, and so its wait, is then the same on every run (docs/predict.md judgement call 4). A spindle
+  // joined as C (or to be joined to bring C to 0) is released at C 0 below, then oriented.
+  if (!c_joined_ && !join && (spindle_.Active() || spindle_.angle() != 0.0))
+    add(SegmentKind::kSpindle).spindle_dir = SpindleDirection::kOrient;
+  if (live_tool_.Active()) add(SegmentKind::kSpindle).live_tool = true;
+  if (coolant_ != CoolantMode::kOff) add(SegmentKind::kCoolant);  // kOff
   if (join) add(SegmentKind::kSpindle).spindle_dir = SpindleDirection::kAxis;
   if (path) add(SegmentKind::kRapid).axes = path;  // end{} is the zero
   if (b) add(SegmentKind::kRapid).axes = b;

@@ -790,6 +790,29 @@ TEST(Lathe, TheArrivalStateReleasesCAtZero) {
   }
 }
 
+// A turning spindle released with C off 0: the join stops it, so the arrival orients it once, at the end.
+TEST(Lathe, TheArrivalOrientsATurningSpindleOnceAfterCReachesZero) {
+  Machine m = Ok01();
+  m.Push(Joint(1, true));
+  m.Push(CMove(2, 90));
+  m.Push(Joint(3, false));
+  m.Push(Spindle(4, 500, SpindleDirection::kCW));
+  m.RunUntilIdle();
+  ASSERT_EQ(m.alarm().code, AlarmCode::kNone) << m.alarm().text;
+  std::vector<Segment> arrival = m.ToArrival();
+  ASSERT_EQ(arrival.size(), 4u);  // join, C to 0, release, orient
+  EXPECT_EQ(arrival.front().spindle_dir, SpindleDirection::kAxis);
+  EXPECT_EQ(arrival.back().spindle_dir, SpindleDirection::kOrient);
+  std::uint64_t id = 10;
+  for (Segment s : arrival) {
+    s.id = id++;
+    m.Push(s);
+  }
+  m.RunUntilIdle();
+  ASSERT_EQ(m.alarm().code, AlarmCode::kNone) << m.alarm().text;
+  EXPECT_TRUE(m.ToArrival().empty());
+}
+
 // The live tool's speed is in the machine's state, beside the work spindle's (the service publishes both on
 // cell/motion/axes).
 TEST(Lathe, TheStateCarriesTheLiveToolsSpeed) {
