@@ -4,7 +4,7 @@
 # conformance programs of each dialect that the scheduler predicts, in name order until CELL_BENCH_PREDICT_N
 # (default 8; 0: the whole corpus, 17 minutes on a loaded 2-core machine) of a second or more have run, each as a pallet on its
 # station, one after another; the prediction (`program show`, predicted_s) against the job's cycle_s
-# (lib/predict_actual.py). Target: within 1% each. A prediction and every run on a station start from the
+# (lib/predict_actual.py; CELL_BENCH_PREDICT_ONLY=NAME,NAME: those corpus programs alone). Target: within 1% each. A prediction and every run on a station start from the
 # state a pallet arrives in (docs/predict.md, judgement call 4), so every program is like for like. About a
 # minute.
 set -euo pipefail
