@@ -697,6 +697,16 @@ Segment CMove(std::uint64_t id, double c) {
   return s;
 }
 
+// The arrival's segments run as the station sends them (ids from 10).
+void RunArrival(Machine& m, std::vector<Segment> arrival) {
+  std::uint64_t id = 10;
+  for (Segment& s : arrival) {
+    s.id = id++;
+    m.Push(s);
+  }
+  m.RunUntilIdle();
+}
+
 double Took(const std::vector<Event>& ev, std::uint64_t id) {
   return Find(ev, EventKind::kCompleted, id)->machine_time - Find(ev, EventKind::kStarted, id)->machine_time;
 }
@@ -775,12 +785,7 @@ TEST(Lathe, TheArrivalStateReleasesCAtZero) {
     m.RunUntilIdle();
     ASSERT_EQ(m.alarm().code, AlarmCode::kNone) << m.alarm().text;
     std::vector<Segment> arrival = m.ToArrival();
-    std::uint64_t id = 10;
-    for (Segment s : arrival) {
-      s.id = id++;
-      m.Push(s);
-    }
-    m.RunUntilIdle();
+    RunArrival(m, arrival);
     ASSERT_EQ(m.alarm().code, AlarmCode::kNone) << m.alarm().text;
     EXPECT_FALSE(m.State().c_joined);
     EXPECT_NEAR(m.State().actual[kC], 0, 1e-3);
@@ -803,12 +808,7 @@ TEST(Lathe, TheArrivalOrientsATurningSpindleOnceAfterCReachesZero) {
   ASSERT_EQ(arrival.size(), 4u);  // join, C to 0, release, orient
   EXPECT_EQ(arrival.front().spindle_dir, SpindleDirection::kAxis);
   EXPECT_EQ(arrival.back().spindle_dir, SpindleDirection::kOrient);
-  std::uint64_t id = 10;
-  for (Segment s : arrival) {
-    s.id = id++;
-    m.Push(s);
-  }
-  m.RunUntilIdle();
+  RunArrival(m, arrival);
   ASSERT_EQ(m.alarm().code, AlarmCode::kNone) << m.alarm().text;
   EXPECT_TRUE(m.ToArrival().empty());
 }
