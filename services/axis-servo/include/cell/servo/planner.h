@@ -163,7 +163,7 @@ class Planner {
     return std::min(e.vgeom, e.vfeed * rps_ * feed_ovr_);  // feed per revolution
   }
   void SpindleChanged();
-  void Append(PathElement e);
+  void Append(PathElement& e);  // by reference: an element is some 600 bytes, copied once into its slot
   void Link(PathElement& a, PathElement& b, bool a_is_current);
   void BackwardPass(std::size_t changed_from);  // elements from this index on may have changed (0: all)
   void FinishCurrent();
