@@ -316,13 +316,12 @@ bool Machine::SoftLimitCheck(const Segment& s, const AxisVector& start, std::str
 }
 
 void Machine::Emit(EventKind kind, std::uint64_t seg, const Alarm* alarm, const ProbeResult* probe) {
-  Event ev;
+  Event& ev = events_.emplace_back();  // in place: an Event carries a string and a probe result
   ev.kind = kind;
   ev.segment_id = seg;
   ev.machine_time = machine_time();
   if (alarm) ev.alarm = *alarm;
   if (probe) ev.probe = *probe;
-  events_.push_back(std::move(ev));
 }
 
 std::vector<Event> Machine::TakeEvents() {

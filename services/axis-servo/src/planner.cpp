@@ -270,7 +270,9 @@ void Planner::Link(PathElement& a, PathElement& b, bool a_is_current) {
       }
       if (T > 1e-6 && R > 1e-6) {
         const AxisVector corner = a.p1;
-        PathElement f;
+        // Built in its slot, the one after the queue's last element (Append places `b` after it).
+        PathElement& f = elems_[(head_ + count_) % elems_.size()];
+        f = PathElement{};
         f.arc = true;
         AxisVector n = b.u - cos_t * a.u;
         n.normalize();
@@ -317,7 +319,6 @@ void Planner::Link(PathElement& a, PathElement& b, bool a_is_current) {
         b.seg_total = b.len;
         a.v_junction = std::min({a.vgeom, f.vgeom});
         f.v_junction = std::min({f.vgeom, b.vgeom});
-        pending_fillet_ = f;
         has_pending_fillet_ = true;
         return;
       }
@@ -353,8 +354,7 @@ void Planner::Append(PathElement& e) {
     Link(prev, e, prev_i == 0 && started_);
     if (has_pending_fillet_) {
       has_pending_fillet_ = false;
-      elems_[(head_ + count_) % elems_.size()] = pending_fillet_;
-      ++count_;
+      ++count_;  // Link() built the fillet in place
     }
   }
   elems_[(head_ + count_) % elems_.size()] = e;

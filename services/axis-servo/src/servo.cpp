@@ -50,11 +50,7 @@ void AxisServo::Step(double x_cmd, double v_cmd, double a_cmd) {
   if (!saturated_) integral_ += e * period_;  // conditional integration (anti-windup)
   error_ = e;
   torque_ = u;
-  // Written out (the same products and sums, in Eigen's order): the matrix product went through a
-  // temporary, as Eigen assumes aliasing for products.
-  const double s0 = state_[0], s1 = state_[1];
-  state_[0] = (phi_(0, 0) * s0 + phi_(0, 1) * s1) + gamma_[0] * u;
-  state_[1] = (phi_(1, 0) * s0 + phi_(1, 1) * s1) + gamma_[1] * u;
+  state_ = phi_ * state_ + gamma_ * u;
 }
 
 void JerkFilter::Configure(int n) {
@@ -73,10 +69,7 @@ void JerkFilter::Reset(const AxisVector& p) {
 }
 
 const AxisVector& JerkFilter::Push(const AxisVector& p) {
-  // A plain loop: Eigen's == (a reduction over cwiseEqual) cost more than the rest of the push.
-  bool same = true;
-  for (int i = 0; i < kNumAxes; ++i) same &= p[i] == last_in_[i];
-  steady_ = same ? std::min(steady_ + 1, n_) : 0;
+  steady_ = (p == last_in_) ? std::min(steady_ + 1, n_) : 0;
   last_in_ = p;
   sum_ += p - ring_[idx_];
   ring_[idx_] = p;

@@ -181,8 +181,7 @@ class Planner {
   double feed_ovr_ = 1.0, rapid_ovr_ = 1.0;
   AxisVector pos_ = AxisVector::Zero(), tail_ = AxisVector::Zero();
   std::vector<Mark> marks_;
-  PathElement pending_fillet_;
-  bool has_pending_fillet_ = false;
+  bool has_pending_fillet_ = false;  // Link() built a fillet in the slot after the last element
   // Spindle and thread synchronisation.
   enum class Sync { kNone, kAwaitIndex, kTracking, kBraking };
   Sync sync_ = Sync::kNone;
