@@ -114,6 +114,7 @@ Machine::Machine(MachineConfig config, ClockKind clock)
   for (int i = 0; i < kNumAxes; ++i) {
     present_[i] = cfg_.axes[i].present;
     if (!present_[i]) continue;
+    axes_[num_axes_++] = i;
     home[i] = std::clamp(0.0, cfg_.axes[i].min, cfg_.axes[i].max);
     servos_[i].Configure(cfg_.axes[i], cfg_.servo_period_s);
     servos_[i].Reset(home[i]);
@@ -315,13 +316,12 @@ bool Machine::SoftLimitCheck(const Segment& s, const AxisVector& start, std::str
 }
 
 void Machine::Emit(EventKind kind, std::uint64_t seg, const Alarm* alarm, const ProbeResult* probe) {
-  Event ev;
+  Event& ev = events_.emplace_back();  // in place: an Event carries a string and a probe result
   ev.kind = kind;
   ev.segment_id = seg;
   ev.machine_time = machine_time();
   if (alarm) ev.alarm = *alarm;
   if (probe) ev.probe = *probe;
-  events_.push_back(std::move(ev));
 }
 
 std::vector<Event> Machine::TakeEvents() {
@@ -379,8 +379,8 @@ void Machine::Complete(std::uint64_t seg, const ProbeResult* probe) {
 
 bool Machine::InPosition(const AxisVector& target, double tol) const {
   if (tol <= 0) tol = cfg_.in_position;
-  for (int i = 0; i < kNumAxes; ++i) {
-    if (!present_[i]) continue;
+  for (int n = 0; n < num_axes_; ++n) {
+    const int i = axes_[n];
     if (std::abs(filter_.Output()[i] - target[i]) > tol) return false;
     if (std::abs(servos_[i].position() - target[i]) > tol) return false;
   }
@@ -389,8 +389,7 @@ bool Machine::InPosition(const AxisVector& target, double tol) const {
 
 AxisVector Machine::actual() const {
   AxisVector a = AxisVector::Zero();
-  for (int i = 0; i < kNumAxes; ++i)
-    if (present_[i]) a[i] = servos_[i].position();
+  for (int n = 0; n < num_axes_; ++n) a[axes_[n]] = servos_[axes_[n]].position();
   return a;
 }
 
@@ -406,6 +405,9 @@ void Machine::FeedPlanner() {
   while (next_ < queue_.size() && op_.phase == OpPhase::kNone) {
     Entry& e = queue_[next_];
     const Segment& s = e.seg;
+    // A full planner waits (most ticks of a long program): checked before anything is computed. A barrier
+    // (an index move among them) would wait too, as the planner is not idle.
+    if (IsPathMotion(s.kind) && planner_.Full()) break;
     const AxisVector start = planner_.EndOfPath();
     const bool index_move = IsPathMotion(s.kind) && present_[kB] && cfg_.axes[kB].type == AxisType::kIndex &&
                             (s.axes >> kB & 1) && std::abs(s.end[kB] - start[kB]) > 1e-9;
@@ -424,7 +426,6 @@ void Machine::FeedPlanner() {
       return true;
     };
     if (IsPathMotion(s.kind) && (!index_move || s.kind == SegmentKind::kThread)) {
-      if (planner_.Full()) break;
       // A lathe's C is its spindle: it turns as an axis only joined (segments after a joint or a release
       // are planned once it is done: it is a barrier).
       if (c_is_spindle_ && !c_joined_ && (s.axes >> kC & 1) && std::abs(s.end[kC] - start[kC]) > 1e-9) {
@@ -827,8 +828,8 @@ bool Machine::Idle() const {
                              (planner_.Holding() && planner_.Speed() == 0 && !aborting_);
   if (!nothing_to_do || alarm_pending_) return false;
   if (!filter_.Settled() || !spindle_.AtSpeed()) return false;  // constant surface speed still ramping
-  for (int i = 0; i < kNumAxes; ++i) {
-    if (!present_[i]) continue;
+  for (int n = 0; n < num_axes_; ++n) {
+    const int i = axes_[n];
     if (std::abs(servos_[i].following_error()) > 1e-5 || std::abs(servos_[i].velocity()) > 1e-3) return false;
   }
   return true;
@@ -930,13 +931,15 @@ bool Machine::StepNow() {
   const AxisVector acc = (vel - prev_vel_) / ts;
   prev_cmd_ = cmd;
   prev_vel_ = vel;
-  for (int i = 0; i < kNumAxes; ++i)
-    if (present_[i]) servos_[i].Step(cmd[i], vel[i], acc[i]);
+  for (int n = 0; n < num_axes_; ++n) {
+    const int i = axes_[n];
+    servos_[i].Step(cmd[i], vel[i], acc[i]);
+  }
 
   // Following-error supervision ("DIFF over").
   if (alarm_.code == AlarmCode::kNone) {
-    for (int i = 0; i < kNumAxes; ++i) {
-      if (!present_[i]) continue;
+    for (int n = 0; n < num_axes_; ++n) {
+      const int i = axes_[n];
       const double fe = servos_[i].following_error();
       if (std::abs(fe) > cfg_.axes[i].following_error_limit) {
         std::uint64_t seg = 0;

@@ -255,7 +255,8 @@ void Planner::Link(PathElement& a, PathElement& b, bool a_is_current) {
     if (theta > 1e-4 && theta < M_PI * 0.97) {
       const double half = 0.5 * theta;
       const double d = kFilletShare * lim_.path_tolerance;
-      double R = d * std::cos(half) / (1 - std::cos(half));
+      const double cos_half = std::cos(half);
+      double R = d * cos_half / (1 - cos_half);
       double T = R * std::tan(half);
       double tmax = 0.5 * std::min(a.orig_len, b.orig_len);
       if (a_is_current) {
@@ -269,7 +270,9 @@ void Planner::Link(PathElement& a, PathElement& b, bool a_is_current) {
       }
       if (T > 1e-6 && R > 1e-6) {
         const AxisVector corner = a.p1;
-        PathElement f;
+        // Built in its slot, the one after the queue's last element (Append places `b` after it).
+        PathElement& f = elems_[(head_ + count_) % elems_.size()];
+        f = PathElement{};
         f.arc = true;
         AxisVector n = b.u - cos_t * a.u;
         n.normalize();
@@ -316,7 +319,6 @@ void Planner::Link(PathElement& a, PathElement& b, bool a_is_current) {
         b.seg_total = b.len;
         a.v_junction = std::min({a.vgeom, f.vgeom});
         f.v_junction = std::min({f.vgeom, b.vgeom});
-        pending_fillet_ = f;
         has_pending_fillet_ = true;
         return;
       }
@@ -332,7 +334,7 @@ void Planner::Link(PathElement& a, PathElement& b, bool a_is_current) {
   a.v_junction = std::min(v, v_corner);
 }
 
-void Planner::Append(PathElement e) {
+void Planner::Append(PathElement& e) {
   e.p0 = tail_;
   // Link with the last element that has a length, across transparent zero-length markers.
   std::size_t prev_i = count_;
@@ -352,8 +354,7 @@ void Planner::Append(PathElement e) {
     Link(prev, e, prev_i == 0 && started_);
     if (has_pending_fillet_) {
       has_pending_fillet_ = false;
-      elems_[(head_ + count_) % elems_.size()] = pending_fillet_;
-      ++count_;
+      ++count_;  // Link() built the fillet in place
     }
   }
   elems_[(head_ + count_) % elems_.size()] = e;
@@ -367,8 +368,9 @@ void Planner::BackwardPass(std::size_t changed_from) {
   for (std::size_t n = count_; n-- > 0;) {
     PathElement& e = At(n);
     const bool last = n + 1 == count_;
-    const double exit = (last || e.stop_end) ? 0.0 : std::min({e.v_junction, v_next_entry, Cap(e)});
-    double entry = std::min(std::max(Cap(e), 0.0), std::sqrt(exit * exit + 2 * e.at * e.len));
+    const double cap = Cap(e);
+    const double exit = (last || e.stop_end) ? 0.0 : std::min({e.v_junction, v_next_entry, cap});
+    double entry = std::min(std::max(cap, 0.0), std::sqrt(exit * exit + 2 * e.at * e.len));
     if (e.rapid && rapid_ovr_ == 0) entry = 0;
     // Elements before `changed_from` only depend on their successor's entry speed: once an element's
     // plan is unchanged, everything before it is too.

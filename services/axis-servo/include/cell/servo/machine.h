@@ -199,6 +199,9 @@ class Machine {
   JerkFilter filter_;
   std::array<AxisServo, kNumAxes> servos_{};
   std::array<bool, kNumAxes> present_{};
+  // The present axes' indices in axis order, for the per-tick loops (no branch per absent axis).
+  std::array<int, kNumAxes> axes_{};
+  int num_axes_ = 0;
 
   std::deque<Entry> queue_;
   std::size_t next_ = 0;  // first queue entry not yet planned

@@ -163,7 +163,7 @@ class Planner {
     return std::min(e.vgeom, e.vfeed * rps_ * feed_ovr_);  // feed per revolution
   }
   void SpindleChanged();
-  void Append(PathElement e);
+  void Append(PathElement& e);  // by reference: an element is some 600 bytes, copied once into its slot
   void Link(PathElement& a, PathElement& b, bool a_is_current);
   void BackwardPass(std::size_t changed_from);  // elements from this index on may have changed (0: all)
   void FinishCurrent();
@@ -181,8 +181,7 @@ class Planner {
   double feed_ovr_ = 1.0, rapid_ovr_ = 1.0;
   AxisVector pos_ = AxisVector::Zero(), tail_ = AxisVector::Zero();
   std::vector<Mark> marks_;
-  PathElement pending_fillet_;
-  bool has_pending_fillet_ = false;
+  bool has_pending_fillet_ = false;  // Link() built a fillet in the slot after the last element
   // Spindle and thread synchronisation.
   enum class Sync { kNone, kAwaitIndex, kTracking, kBraking };
   Sync sync_ = Sync::kNone;
