@@ -207,7 +207,7 @@ void Planner::AddArc(PathElement e, Feed feed, bool exact_stop, std::uint64_t se
   Append(e);
 }
 
-void Planner::Link(PathElement& a, PathElement& b, bool a_is_current) {
+bool Planner::Link(PathElement& a, PathElement& b, bool a_is_current) {
   if (a.sync || b.sync) {
     // A thread after a thread that has not begun to stop continues its synchronisation at the spindle's
     // pace; any other thread starts from rest (it waits for the index pulse), and ends at rest.
@@ -217,11 +217,11 @@ void Planner::Link(PathElement& a, PathElement& b, bool a_is_current) {
       a.stop_end = a.wait_in_position = true;
       a.v_junction = 0;
     }
-    return;
+    return false;
   }
   if (a.stop_end || a.len == 0 || b.len == 0) {
     a.v_junction = 0;
-    return;
+    return false;
   }
   const AxisVector ta = a.Tangent(a.len), tb = b.Tangent(0);
   // The jerk filter averages the path over L seconds. Near a corner of deflection theta passed at speed v
@@ -243,7 +243,7 @@ void Planner::Link(PathElement& a, PathElement& b, bool a_is_current) {
         a.wait_in_position = true;
         a.settle = eps;
         a.v_junction = 0;
-        return;
+        return false;
       }
       v_corner = (eps / s2 - acc_err) * 4 / L;
     }
@@ -319,8 +319,7 @@ void Planner::Link(PathElement& a, PathElement& b, bool a_is_current) {
         b.seg_total = b.len;
         a.v_junction = std::min({a.vgeom, f.vgeom});
         f.v_junction = std::min({f.vgeom, b.vgeom});
-        has_pending_fillet_ = true;
-        return;
+        return true;
       }
     }
   }
@@ -332,6 +331,7 @@ void Planner::Link(PathElement& a, PathElement& b, bool a_is_current) {
     if (lim_.present[i] && std::abs(dt[i]) > 1e-12)
       v = std::min(v, kKinkShare * lim_.max_acceleration[i] * lim_.period / std::abs(dt[i]));
   a.v_junction = std::min(v, v_corner);
+  return false;
 }
 
 void Planner::Append(PathElement& e) {
@@ -351,11 +351,7 @@ void Planner::Append(PathElement& e) {
   if (prev_i < count_ && e.len > 0) {
     PathElement& prev = At(prev_i);
     changed = prev_i;
-    Link(prev, e, prev_i == 0 && started_);
-    if (has_pending_fillet_) {
-      has_pending_fillet_ = false;
-      ++count_;  // Link() built the fillet in place
-    }
+    if (Link(prev, e, prev_i == 0 && started_)) ++count_;  // Link() built a fillet in the next slot
   }
   elems_[(head_ + count_) % elems_.size()] = e;
   ++count_;
@@ -402,7 +398,6 @@ void Planner::Flush(const AxisVector& pos) {
   s_ = v_ = 0;
   started_ = false;
   waiting_ = false;
-  has_pending_fillet_ = false;
   sync_ = Sync::kNone;
   break_sync_ = false;
   pos_ = tail_ = pos;

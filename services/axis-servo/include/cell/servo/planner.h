@@ -164,7 +164,8 @@ class Planner {
   }
   void SpindleChanged();
   void Append(PathElement& e);  // by reference: an element is some 600 bytes, copied once into its slot
-  void Link(PathElement& a, PathElement& b, bool a_is_current);
+  // Links `b` after `a`; true when it built a fillet between them in the slot after the last element.
+  bool Link(PathElement& a, PathElement& b, bool a_is_current);
   void BackwardPass(std::size_t changed_from);  // elements from this index on may have changed (0: all)
   void FinishCurrent();
   PathElement LineElement(const AxisVector& end, bool rapid, bool exact_stop) const;
@@ -181,7 +182,6 @@ class Planner {
   double feed_ovr_ = 1.0, rapid_ovr_ = 1.0;
   AxisVector pos_ = AxisVector::Zero(), tail_ = AxisVector::Zero();
   std::vector<Mark> marks_;
-  bool has_pending_fillet_ = false;  // Link() built a fillet in the slot after the last element
   // Spindle and thread synchronisation.
   enum class Sync { kNone, kAwaitIndex, kTracking, kBraking };
   Sync sync_ = Sync::kNone;
