@@ -38,7 +38,7 @@ def corpus(dialect):
     def positive(f):
         stem = f[: f.rfind(".")]
         return os.path.exists(stem + ".expected") and not os.path.exists(stem + ".diag")
-    # CELL_BENCH_PREDICT_ONLY=e35_g03,e34_g02: those programs alone, each on a cell no other program has changed
+    # CELL_BENCH_PREDICT_ONLY=e35_g03_abs,e34_g02_abs: those programs alone, in name order, on the fresh cell
     only = set(filter(None, os.environ.get("CELL_BENCH_PREDICT_ONLY", "").split(",")))
     def chosen(f):
         return not only or os.path.basename(f).rsplit(".", 1)[0] in only
