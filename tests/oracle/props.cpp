@@ -222,7 +222,7 @@ bool ParseArgs(int argc, char** argv, Options& o) {
   }
   return o.blocks > 0 && o.chunk > 0 &&
          (o.property == "all" || o.property == "nogouge" || o.property == "corners" ||
-          PropertyTable().count(o.property));
+          o.property == "rapids" || PropertyTable().count(o.property));
 }
 
 // One variant through cell-interp: its moves, or the refusal in `error`.
@@ -406,7 +406,7 @@ int Properties(int argc, char** argv) {
   Options o;
   if (!ParseArgs(argc, argv, o)) {
     std::cerr << "usage: cell-oracle-gen prop --property "
-                 "absinc|units|subprogram|transforms|nogouge|corners|all --dialect "
+                 "absinc|units|subprogram|transforms|nogouge|corners|rapids|all --dialect "
                  "D|all --seed "
                  "S --blocks N "
                  "[--chunk M] [--interp PATH] [--keep DIR] [--plant]\n";
@@ -446,6 +446,8 @@ int Properties(int argc, char** argv) {
   PropRun run{o.interp, o.keep, o.seed, o.blocks, o.plant};
   if (o.property == "all" || o.property == "corners")
     for (const std::string& name : names) all = Corners(run, name, tmpl) == 0 && all;
+  if (o.property == "all" || o.property == "rapids")
+    for (const std::string& name : names) all = Rapids(run, name, tmpl) == 0 && all;
   fs::remove_all(tmpl);
   return all ? 0 : 1;
 }

@@ -57,6 +57,9 @@ struct PropRun {
 // `prop --property corners` (corners.cpp): chamfer and radius insertion stays inside the corner. Returns the
 // number of corners that break it.
 int Corners(const PropRun& o, const std::string& dialect, const std::filesystem::path& dir);
+// `prop --property rapids` (rapids.cpp): a cycle's rapids never enter the stock it cuts. Returns the number
+// of cycles that break it.
+int Rapids(const PropRun& o, const std::string& dialect, const std::filesystem::path& dir);
 
 // `cell-oracle-gen prop`: the properties every program keeps (props.cpp).
 int Properties(int argc, char** argv);
