@@ -366,11 +366,155 @@ int TurnRapids(const PropRun& o, const std::string& dialect, const fs::path& dir
   return failing;
 }
 
+// One Okuma LAP bar turning cycle (G85, AP mode I, ln 5124-5143, 5258-5437): a contour from its G00 start
+// point at the front (index 0) to the start diameter at the back, radius non-decreasing as Z decreases, lines
+// only; U (a diameter value, okuma.md judgement call 10) and W the allowances. The finished part plus the
+// allowances is the region under the contour moved out by U/2 and toward +Z by W (it contains the contour's
+// own region: the contour climbs toward -Z); behind the contour it is the start diameter, in front of its
+// first point there is none.
+struct Lap {
+  std::vector<std::array<double, 2>> contour;  // z, r
+  double u = 0, w = 0;
+  std::vector<std::string> blocks;
+  int first = 0, last = 0;
+};
+
+Lap OkumaLap(Rng& g, int index) {
+  Lap l;
+  char name[8];
+  std::snprintf(name, sizeof name, "NA%02d", index);
+  double z = Grid(g.Real(0, 60), 0.001), r = Grid(g.Real(5, 20), 0.0005);
+  l.contour = {{z + 2, r}, {z, r}};  // G00 to 2 mm in front of the face, G01 onto it
+  int n = g.Int(2, 6);
+  for (int i = 0; i < n; ++i) {
+    int kind = g.Int(0, 2);  // along -Z, up a shoulder, a taper
+    double dz = kind == 1 ? 0 : Grid(g.Real(3, 20), 0.001), dr = kind == 0 ? 0 : Grid(g.Real(1, 8), 0.0005);
+    z -= dz, r += dr;
+    l.contour.push_back({z, r});
+  }
+  double rs = Grid(r + g.Real(2, 10), 0.0005);
+  l.contour.push_back({z, rs});  // the last shoulder up to the start diameter
+  l.u = Grid(g.Real(0, 1), 0.01) * (g.Int(0, 2) == 0 ? 0 : 1);
+  l.w = Grid(g.Real(0, 0.5), 0.01) * (g.Int(0, 2) == 0 ? 0 : 1);
+  double d = Grid(g.Real(1, 10), 0.01);
+  auto x = [](double v) { return Num(2 * v, 3, true); };
+  l.blocks.push_back("G00 X" + x(rs) + " Z" + Num(l.contour[0][0], 3, true));
+  l.blocks.push_back("G85 " + std::string(name) + " D" + Num(d, 2, true) + " U" + Num(l.u, 2, true) + " W" +
+                     Num(l.w, 2, true) + " F0.3");
+  // The contour after the call, skipped in normal flow (okuma.md: found by sequence name).
+  l.blocks.push_back(std::string(name) + " G81");
+  l.blocks.push_back("G00 X" + x(l.contour[0][1]) + " Z" + Num(l.contour[0][0], 3, true));
+  for (std::size_t i = 1; i < l.contour.size(); ++i)
+    l.blocks.push_back(std::string(i == 1 ? "G01 " : "") + "X" + x(l.contour[i][1]) + " Z" +
+                       Num(l.contour[i][0], 3, true) + (i == 1 ? " F0.2" : ""));
+  l.blocks.push_back("G80");
+  return l;
+}
+
+// The contour's radius at z: the highest radius of the contour at z (a shoulder's top), the start diameter
+// behind it, none (-1) in front of its first point.
+double ContourR(const Lap& l, double z) {
+  const auto& c = l.contour;
+  if (z > c.front()[0]) return -1;
+  double best = -1;
+  for (std::size_t i = 0; i + 1 < c.size(); ++i) {
+    double z0 = c[i][0], z1 = c[i + 1][0];
+    if (z > z0 || z < z1) continue;
+    double r =
+        z0 == z1 ? std::max(c[i][1], c[i + 1][1]) : c[i][1] + (c[i + 1][1] - c[i][1]) * (z0 - z) / (z0 - z1);
+    best = std::max(best, r);
+  }
+  return z < c.back()[0] ? c.back()[1] : best;
+}
+
+std::string CheckLap(const Lap& l, const std::vector<Move>& all, bool plant) {
+  const double tol = 1e-3, grow = plant ? 0.01 : 0;  // --plant: the stock 0.01 mm larger
+  // Inside the stock less tol: the point moved tol outward and toward +Z is still under the contour.
+  auto inside = [&](double r, double z) {
+    double zz = z + tol - l.w - grow;
+    if (zz > l.contour.front()[0] - l.w - grow) return false;
+    double c = ContourR(l, std::min(zz, l.contour.front()[0]));
+    return c >= 0 && r + tol < c + l.u / 2 + grow;
+  };
+  Vec3 from{};
+  bool seen = false;
+  char buf[256];
+  for (const Move& m : all) {
+    if (m.line >= l.first && m.line <= l.last && m.kind == MoveKind::kRapid) {
+      seen = true;
+      for (int k = 0; k <= 32; ++k) {
+        double u = k / 32.0, r = from[0] + u * (m.end[0] - from[0]), z = from[2] + u * (m.end[2] - from[2]);
+        if (!inside(r, z)) continue;
+        std::snprintf(buf, sizeof buf,
+                      "line %d: a rapid passes X%.4f Z%.4f (diameter), inside the contour plus U%.2f W%.2f",
+                      m.line, 2 * r, z, l.u, l.w);
+        return buf;
+      }
+    }
+    from = m.end;
+  }
+  return seen ? "" : "no rapids";
+}
+
+int LapRapids(const PropRun& o, const fs::path& dir) {
+  const std::string head = "(rapids property, tests/oracle/rapids.cpp)\nO0001\nG95 S500 M03\n";
+  int cycles = 0, failing = 0, programs = 0;
+  const int per_program = 10;
+  for (int i = 0, total = std::max(1, o.blocks / 10); i < total; i += per_program, ++programs) {
+    std::uint64_t seed = ProgramSeed(o.seed, "okuma/rapids", i);
+    Rng g(seed);
+    std::vector<Lap> ls;
+    std::string text = head;
+    int line = static_cast<int>(std::count(text.begin(), text.end(), '\n'));
+    for (int j = 0; j < per_program && i + j < total; ++j) {
+      Lap l = OkumaLap(g, j + 1);
+      text += "G00 X300. Z150.\n";  // clear of every stock
+      ++line;
+      l.first = line + 1;
+      for (const std::string& b : l.blocks) text += b + "\n";
+      line += static_cast<int>(l.blocks.size());
+      l.last = line;
+      ls.push_back(l);
+    }
+    text += "M02\n";
+    fs::path prog = dir / "rapids.okuma", out = dir / "rapids.out", err = dir / "rapids.err";
+    Spit(prog, text);
+    int rc =
+        Shell(Quote(o.interp) + " --dialect okuma " + Quote(prog) + " >" + Quote(out) + " 2>" + Quote(err));
+    std::string error;
+    auto moves = ParseCellInterp(Slurp(out), true, &error);
+    bool kept = true;
+    for (std::size_t j = 0; j < ls.size(); ++j) {
+      ++cycles;
+      std::string why = !error.empty() ? "cell-interp's output: " + error
+                        : rc != 0      ? "refused: " + Slurp(err)
+                                       : CheckLap(ls[j], moves, o.plant);
+      if (why.empty()) continue;
+      ++failing;
+      kept = false;
+      std::cout << "okuma rapids: program seed " << seed << ", G85 at line " << ls[j].first << ": " << why
+                << "\n";
+      if (rc != 0 || !error.empty()) {
+        failing += static_cast<int>(ls.size() - j - 1);
+        break;
+      }
+    }
+    if (!kept && !o.keep.empty()) {
+      fs::create_directories(o.keep);
+      Spit(fs::path(o.keep) / ("okuma-rapids-" + std::to_string(seed) + ".okuma"), text);
+    }
+  }
+  std::printf("okuma rapids: %d of %d LAP G85 cycles keep the property (%d programs)\n", cycles - failing,
+              cycles, programs);
+  return failing;
+}
+
 }  // namespace
 
 int Rapids(const PropRun& o, const std::string& dialect, const fs::path& dir) {
   if (dialect == "balt" || dialect == "ktapl") return DrillRapids(o, dialect, dir);
   if (dialect == "emco") return TurnRapids(o, dialect, dir);
+  if (dialect == "okuma") return LapRapids(o, dir);
   std::printf("%s rapids: not yet\n", dialect.c_str());
   return 0;
 }
