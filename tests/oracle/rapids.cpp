@@ -509,12 +509,138 @@ int LapRapids(const PropRun& o, const fs::path& dir) {
   return failing;
 }
 
+// One lathe threading cycle, outside, toward -Z: from S (rs, zs) to the thread's end ze; the stock it cuts is
+// the thread's blank to its major radius `rmaj` between S's Z and ze, less the groove the passes have cut so
+// far (the deepest pass's radius).
+struct Thread {
+  double rs = 0, zs = 0, ze = 0, rmaj = 0;
+  std::vector<std::string> blocks;
+  int first = 0, last = 0;
+};
+
+// EMCO G85 (ln 3568-4404): K the minor diameter, D6 the thread depth and D3 the first infeed in micrometres,
+// F the lead in micrometres (E59, ln 4176-4188); decremental infeed, the monitor's idle passes.
+Thread EmcoThread(Rng& g) {
+  Thread t;
+  t.rmaj = Grid(g.Real(5, 40), 0.001);
+  t.rs = Grid(t.rmaj + g.Real(0.5, 3), 0.001);
+  t.zs = Grid(g.Real(-20, 40), 0.001);
+  t.ze = Grid(t.zs - g.Real(10, 60), 0.001);
+  int d6 = g.Int(300, 2000), d3 = g.Int(100, d6), lead = g.Int(5, 30) * 100;
+  t.blocks = {"G00 X" + Num(2 * t.rs, 3, true) + " Z" + Num(t.zs, 3, true),
+              "G85 X" + Num(2 * (t.rmaj - d6 / 1000.0), 3, true) + " Z" + Num(t.ze, 3, true) +
+                  " D3=" + std::to_string(d3) + " D6=" + std::to_string(d6) + " F" + std::to_string(lead)};
+  return t;
+}
+
+// Okuma G33 fixed thread cycle (ln 3228-3465): G33 X.. Z.. F.. and repeated passes by X alone, each from
+// S's Z and back to S at rapid; M23 (odd draws) pulls out with a chamfer, M22 does not (ln 1953-1954).
+Thread OkumaThread(Rng& g) {
+  Thread t;
+  double r1 = Grid(g.Real(5, 40), 0.0005);
+  t.rmaj = Grid(r1 + g.Real(0.05, 1), 0.0005);
+  t.rs = Grid(t.rmaj + g.Real(0.5, 3), 0.0005);
+  t.zs = Grid(g.Real(-20, 40), 0.001);
+  t.ze = Grid(t.zs - g.Real(10, 60), 0.001);
+  t.blocks = {
+      "G00 X" + Num(2 * t.rs, 3, true) + " Z" + Num(t.zs, 3, true) + (g.Int(0, 1) ? " M23" : " M22"),
+      "G33 X" + Num(2 * r1, 3, true) + " Z" + Num(t.ze, 3, true) + " F" + Num(g.Int(5, 30) / 10.0, 1, true)};
+  double r = r1;
+  for (int n = g.Int(1, 5); n > 0; --n) {
+    r = Grid(r - g.Real(0.02, 0.4), 0.0005);
+    t.blocks.push_back("X" + Num(2 * r, 3, true));
+  }
+  return t;
+}
+
+std::string CheckThread(const Thread& t, const std::vector<Move>& all, bool plant) {
+  const double tol = 1e-3, grow = plant ? 0.01 : 0;  // --plant: the stock 0.01 mm larger
+  double groove = t.rmaj + grow;                     // the stock's outer radius: the deepest pass so far
+  Vec3 from{};
+  bool seen = false;
+  char buf[256];
+  for (const Move& m : all) {
+    if (m.line >= t.first && m.line <= t.last) {
+      if (m.kind == MoveKind::kThread) groove = std::min({groove, m.end[0] + grow, from[0] + grow});
+      if (m.kind == MoveKind::kRapid) {
+        seen = true;
+        for (int k = 0; k <= 32; ++k) {
+          double u = k / 32.0, r = from[0] + u * (m.end[0] - from[0]), z = from[2] + u * (m.end[2] - from[2]);
+          if (z <= t.ze - grow + tol || z >= t.zs + grow - tol || r >= groove - tol) continue;
+          std::snprintf(buf, sizeof buf,
+                        "line %d: a rapid passes X%.4f Z%.4f (diameter), inside the thread's stock (to X%.4f "
+                        "between Z%.3f and Z%.3f)",
+                        m.line, 2 * r, z, 2 * groove, t.zs, t.ze);
+          return buf;
+        }
+      }
+    }
+    from = m.end;
+  }
+  return seen ? "" : "no rapids";
+}
+
+int ThreadRapids(const PropRun& o, const std::string& dialect, const fs::path& dir) {
+  bool emco = dialect == "emco";
+  const std::string head = emco ? "(rapids property, tests/oracle/rapids.cpp)\n%\nG95 M04 S600\n"
+                                : "(rapids property, tests/oracle/rapids.cpp)\nO0002\nG97 S600 M03\n";
+  int cycles = 0, failing = 0, programs = 0;
+  const int per_program = 10;
+  for (int i = 0, total = std::max(1, o.blocks / 10); i < total; i += per_program, ++programs) {
+    std::uint64_t seed = ProgramSeed(o.seed, dialect + "/rapids/thread", i);
+    Rng g(seed);
+    std::vector<Thread> ts;
+    std::string text = head;
+    int line = static_cast<int>(std::count(text.begin(), text.end(), '\n'));
+    for (int j = 0; j < per_program && i + j < total; ++j) {
+      Thread t = emco ? EmcoThread(g) : OkumaThread(g);
+      text += "G00 X150. Z80.\n";  // clear of every stock
+      ++line;
+      t.first = line + 1;
+      for (const std::string& b : t.blocks) text += b + "\n";
+      line += static_cast<int>(t.blocks.size());
+      t.last = line;
+      ts.push_back(t);
+    }
+    text += emco ? "M30\n" : "M02\n";
+    fs::path prog = dir / ("rapids." + dialect), out = dir / "rapids.out", err = dir / "rapids.err";
+    Spit(prog, text);
+    int rc = Shell(Quote(o.interp) + " --dialect " + dialect + " " + Quote(prog) + " >" + Quote(out) + " 2>" +
+                   Quote(err));
+    std::string error;
+    auto moves = ParseCellInterp(Slurp(out), true, &error, true);
+    bool kept = true;
+    for (std::size_t j = 0; j < ts.size(); ++j) {
+      ++cycles;
+      std::string why = !error.empty() ? "cell-interp's output: " + error
+                        : rc != 0      ? "refused: " + Slurp(err)
+                                       : CheckThread(ts[j], moves, o.plant);
+      if (why.empty()) continue;
+      ++failing;
+      kept = false;
+      std::cout << dialect << " rapids: program seed " << seed << ", " << (emco ? "G85" : "G33")
+                << " thread at line " << ts[j].first << ": " << why << "\n";
+      if (rc != 0 || !error.empty()) {
+        failing += static_cast<int>(ts.size() - j - 1);
+        break;
+      }
+    }
+    if (!kept && !o.keep.empty()) {
+      fs::create_directories(o.keep);
+      Spit(fs::path(o.keep) / (dialect + "-rapids-thread-" + std::to_string(seed) + "." + dialect), text);
+    }
+  }
+  std::printf("%s rapids: %d of %d thread cycles keep the property (%d programs; %s)\n", dialect.c_str(),
+              cycles - failing, cycles, programs, emco ? "G85" : "G33 with repeated passes");
+  return failing;
+}
+
 }  // namespace
 
 int Rapids(const PropRun& o, const std::string& dialect, const fs::path& dir) {
   if (dialect == "balt" || dialect == "ktapl") return DrillRapids(o, dialect, dir);
-  if (dialect == "emco") return TurnRapids(o, dialect, dir);
-  if (dialect == "okuma") return LapRapids(o, dir);
+  if (dialect == "emco") return TurnRapids(o, dialect, dir) + ThreadRapids(o, dialect, dir);
+  if (dialect == "okuma") return LapRapids(o, dir) + ThreadRapids(o, dialect, dir);
   std::printf("%s rapids: not yet\n", dialect.c_str());
   return 0;
 }
