@@ -367,13 +367,17 @@ int TurnRapids(const PropRun& o, const std::string& dialect, const fs::path& dir
 }
 
 // One Okuma LAP bar turning cycle (G85, AP mode I, ln 5124-5143, 5258-5437): a contour from its G00 start
-// point at the front (index 0) to the start diameter at the back, radius non-decreasing as Z decreases, lines
-// only; U (a diameter value, okuma.md judgement call 10) and W the allowances. The finished part plus the
-// allowances is the region under the contour moved out by U/2 and toward +Z by W (it contains the contour's
-// own region: the contour climbs toward -Z); behind the contour it is the start diameter, in front of its
-// first point there is none.
+// point at the front (index 0) to the start diameter at the back, radius non-decreasing as Z decreases (lines
+// and quarter arcs); U (a diameter value, okuma.md judgement call 10) and W the allowances. The finished part
+// plus the allowances is the region under the contour moved out by U/2 and toward +Z by W (it contains the
+// contour's own region: the contour climbs toward -Z); behind the contour it is the start diameter, in front
+// of its first point there is none.
 struct Lap {
   std::vector<std::array<double, 2>> contour;  // z, r
+  // How each element reaches contour[i] from contour[i - 1]: 0 a line, 1 a quarter arc from -Z to +X about
+  // (z, r + R) of its start (a fillet at a shoulder's foot, E-59's G02 I), 2 a quarter arc from +X to -Z
+  // about (z - R, r) of its start (a shoulder's rounded edge).
+  std::vector<int> kind;
   double u = 0, w = 0;
   std::vector<std::string> blocks;
   int first = 0, last = 0;
@@ -385,15 +389,25 @@ Lap OkumaLap(Rng& g, int index) {
   std::snprintf(name, sizeof name, "NA%02d", index);
   double z = Grid(g.Real(0, 60), 0.001), r = Grid(g.Real(5, 20), 0.0005);
   l.contour = {{z + 2, r}, {z, r}};  // G00 to 2 mm in front of the face, G01 onto it
+  l.kind = {0, 0};
   int n = g.Int(2, 6);
   for (int i = 0; i < n; ++i) {
-    int kind = g.Int(0, 2);  // along -Z, up a shoulder, a taper
+    int kind = g.Int(0, 4);  // along -Z, up a shoulder, a taper, a fillet, a rounded edge
+    if (kind >= 3) {
+      double rad = Grid(g.Real(0.5, 5), 0.001);
+      z -= rad, r += rad;
+      l.contour.push_back({z, r});
+      l.kind.push_back(kind - 2);
+      continue;
+    }
     double dz = kind == 1 ? 0 : Grid(g.Real(3, 20), 0.001), dr = kind == 0 ? 0 : Grid(g.Real(1, 8), 0.0005);
     z -= dz, r += dr;
     l.contour.push_back({z, r});
+    l.kind.push_back(0);
   }
   double rs = Grid(r + g.Real(2, 10), 0.0005);
   l.contour.push_back({z, rs});  // the last shoulder up to the start diameter
+  l.kind.push_back(0);
   l.u = Grid(g.Real(0, 1), 0.01) * (g.Int(0, 2) == 0 ? 0 : 1);
   l.w = Grid(g.Real(0, 0.5), 0.01) * (g.Int(0, 2) == 0 ? 0 : 1);
   double d = Grid(g.Real(1, 10), 0.01);
@@ -404,9 +418,18 @@ Lap OkumaLap(Rng& g, int index) {
   // The contour after the call, skipped in normal flow (okuma.md: found by sequence name).
   l.blocks.push_back(std::string(name) + " G81");
   l.blocks.push_back("G00 X" + x(l.contour[0][1]) + " Z" + Num(l.contour[0][0], 3, true));
-  for (std::size_t i = 1; i < l.contour.size(); ++i)
-    l.blocks.push_back(std::string(i == 1 ? "G01 " : "") + "X" + x(l.contour[i][1]) + " Z" +
-                       Num(l.contour[i][0], 3, true) + (i == 1 ? " F0.2" : ""));
+  int mode = 0;
+  for (std::size_t i = 1; i < l.contour.size(); ++i) {
+    int k = l.kind[i];
+    double rad = l.contour[i - 1][0] - l.contour[i][0];
+    // G02 about a centre I above the start (E-59's N005 "G02 X66 Z80 I3"), G03 about a centre K behind it.
+    std::string centre = k == 1 ? " I" + Num(rad, 3, true) : k == 2 ? " K" + Num(-rad, 3, true) : "";
+    int want = k == 0 ? 1 : k == 1 ? 2 : 3;
+    l.blocks.push_back((want != mode ? "G0" + std::to_string(want) + " " : std::string()) + "X" +
+                       x(l.contour[i][1]) + " Z" + Num(l.contour[i][0], 3, true) + centre +
+                       (i == 1 ? " F0.2" : ""));
+    mode = want;
+  }
   l.blocks.push_back("G80");
   return l;
 }
@@ -420,8 +443,15 @@ double ContourR(const Lap& l, double z) {
   for (std::size_t i = 0; i + 1 < c.size(); ++i) {
     double z0 = c[i][0], z1 = c[i + 1][0];
     if (z > z0 || z < z1) continue;
-    double r =
-        z0 == z1 ? std::max(c[i][1], c[i + 1][1]) : c[i][1] + (c[i + 1][1] - c[i][1]) * (z0 - z) / (z0 - z1);
+    double r = 0, rad = z0 - z1;
+    if (z0 == z1)
+      r = std::max(c[i][1], c[i + 1][1]);
+    else if (l.kind[i + 1] == 1)  // about (z0, r0 + R): the lower quarter toward -Z
+      r = c[i][1] + rad - std::sqrt(std::max(0.0, rad * rad - (z - z0) * (z - z0)));
+    else if (l.kind[i + 1] == 2)  // about (z0 - R, r0): the upper quarter
+      r = c[i][1] + std::sqrt(std::max(0.0, rad * rad - (z - z1) * (z - z1)));
+    else
+      r = c[i][1] + (c[i + 1][1] - c[i][1]) * (z0 - z) / (z0 - z1);
     best = std::max(best, r);
   }
   return z < c.back()[0] ? c.back()[1] : best;
