@@ -378,6 +378,7 @@ struct Lap {
   // (z, r + R) of its start (a fillet at a shoulder's foot, E-59's G02 I), 2 a quarter arc from +X to -Z
   // about (z - R, r) of its start (a shoulder's rounded edge).
   std::vector<int> kind;
+  bool copy = false;  // G86
   double u = 0, w = 0;
   std::vector<std::string> blocks;
   int first = 0, last = 0;
@@ -413,8 +414,9 @@ Lap OkumaLap(Rng& g, int index) {
   double d = Grid(g.Real(1, 10), 0.01);
   auto x = [](double v) { return Num(2 * v, 3, true); };
   l.blocks.push_back("G00 X" + x(rs) + " Z" + Num(l.contour[0][0], 3, true));
-  l.blocks.push_back("G85 " + std::string(name) + " D" + Num(d, 2, true) + " U" + Num(l.u, 2, true) + " W" +
-                     Num(l.w, 2, true) + " F0.3");
+  l.copy = g.Int(0, 2) == 0;  // G86 copy turning (AP mode II, ln 5438-5592): passes parallel to the contour
+  l.blocks.push_back(std::string(l.copy ? "G86 " : "G85 ") + name + " D" + Num(d, 2, true) + " U" +
+                     Num(l.u, 2, true) + " W" + Num(l.w, 2, true) + " F0.3");
   // The contour after the call, skipped in normal flow (okuma.md: found by sequence name).
   l.blocks.push_back(std::string(name) + " G81");
   l.blocks.push_back("G00 X" + x(l.contour[0][1]) + " Z" + Num(l.contour[0][0], 3, true));
@@ -488,7 +490,7 @@ std::string CheckLap(const Lap& l, const std::vector<Move>& all, bool plant) {
 
 int LapRapids(const PropRun& o, const fs::path& dir) {
   const std::string head = "(rapids property, tests/oracle/rapids.cpp)\nO0001\nG95 S500 M03\n";
-  int cycles = 0, failing = 0, programs = 0;
+  int cycles = 0, failing = 0, programs = 0, copies = 0;
   const int per_program = 10;
   for (int i = 0, total = std::max(1, o.blocks / 10); i < total; i += per_program, ++programs) {
     std::uint64_t seed = ProgramSeed(o.seed, "okuma/rapids", i);
@@ -516,14 +518,15 @@ int LapRapids(const PropRun& o, const fs::path& dir) {
     bool kept = true;
     for (std::size_t j = 0; j < ls.size(); ++j) {
       ++cycles;
+      copies += ls[j].copy;
       std::string why = !error.empty() ? "cell-interp's output: " + error
                         : rc != 0      ? "refused: " + Slurp(err)
                                        : CheckLap(ls[j], moves, o.plant);
       if (why.empty()) continue;
       ++failing;
       kept = false;
-      std::cout << "okuma rapids: program seed " << seed << ", G85 at line " << ls[j].first << ": " << why
-                << "\n";
+      std::cout << "okuma rapids: program seed " << seed << (ls[j].copy ? ", G86" : ", G85") << " at line "
+                << ls[j].first << ": " << why << "\n";
       if (rc != 0 || !error.empty()) {
         failing += static_cast<int>(ls.size() - j - 1);
         break;
@@ -534,8 +537,8 @@ int LapRapids(const PropRun& o, const fs::path& dir) {
       Spit(fs::path(o.keep) / ("okuma-rapids-" + std::to_string(seed) + ".okuma"), text);
     }
   }
-  std::printf("okuma rapids: %d of %d LAP G85 cycles keep the property (%d programs)\n", cycles - failing,
-              cycles, programs);
+  std::printf("okuma rapids: %d of %d LAP cycles keep the property (%d programs; %d G86 copy turning)\n",
+              cycles - failing, cycles, programs, copies);
   return failing;
 }
 
