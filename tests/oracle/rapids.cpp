@@ -547,6 +547,7 @@ int LapRapids(const PropRun& o, const fs::path& dir) {
 // far (the deepest pass's radius).
 struct Thread {
   double rs = 0, zs = 0, ze = 0, rmaj = 0;
+  bool compound = false;  // Okuma G71
   std::vector<std::string> blocks;
   int first = 0, last = 0;
 };
@@ -575,9 +576,23 @@ Thread OkumaThread(Rng& g) {
   t.rs = Grid(t.rmaj + g.Real(0.5, 3), 0.0005);
   t.zs = Grid(g.Real(-20, 40), 0.001);
   t.ze = Grid(t.zs - g.Real(10, 60), 0.001);
-  t.blocks = {
-      "G00 X" + Num(2 * t.rs, 3, true) + " Z" + Num(t.zs, 3, true) + (g.Int(0, 1) ? " M23" : " M22"),
-      "G33 X" + Num(2 * r1, 3, true) + " Z" + Num(t.ze, 3, true) + " F" + Num(g.Int(5, 30) / 10.0, 1, true)};
+  std::string start =
+      "G00 X" + Num(2 * t.rs, 3, true) + " Z" + Num(t.zs, 3, true) + (g.Int(0, 1) ? " M23" : " M22");
+  std::string lead = " F" + Num(g.Int(5, 30) / 10.0, 1, true);
+  if (g.Int(0, 1)) {
+    // G71 compound cycle (ln 3640-3695, E-46): X the root diameter, H the thread height and D the first
+    // depth and U the finishing allowance, all on the diameter; straight (no I), radial infeed (no B).
+    double h = Grid(g.Real(0.5, 4), 0.001), d = Grid(g.Real(0.1, h / 2), 0.001);
+    double u = Grid(g.Real(0, std::min(0.3, h / 4)), 0.001);
+    t.rmaj = Grid(g.Real(5, 40), 0.0005);
+    t.rs = Grid(t.rmaj + g.Real(0.5, 3), 0.0005);
+    start = "G00 X" + Num(2 * t.rs, 3, true) + " Z" + Num(t.zs, 3, true) + (g.Int(0, 1) ? " M23" : " M22");
+    t.blocks = {start, "G71 X" + Num(2 * t.rmaj - h, 3, true) + " Z" + Num(t.ze, 3, true) + " D" +
+                           Num(d, 3, true) + " U" + Num(u, 3, true) + " H" + Num(h, 3, true) + lead};
+    t.compound = true;
+    return t;
+  }
+  t.blocks = {start, "G33 X" + Num(2 * r1, 3, true) + " Z" + Num(t.ze, 3, true) + lead};
   double r = r1;
   for (int n = g.Int(1, 5); n > 0; --n) {
     r = Grid(r - g.Real(0.02, 0.4), 0.0005);
@@ -651,7 +666,10 @@ int ThreadRapids(const PropRun& o, const std::string& dialect, const fs::path& d
       if (why.empty()) continue;
       ++failing;
       kept = false;
-      std::cout << dialect << " rapids: program seed " << seed << ", " << (emco ? "G85" : "G33")
+      std::cout << dialect << " rapids: program seed " << seed << ", "
+                << (emco             ? "G85"
+                    : ts[j].compound ? "G71"
+                                     : "G33")
                 << " thread at line " << ts[j].first << ": " << why << "\n";
       if (rc != 0 || !error.empty()) {
         failing += static_cast<int>(ts.size() - j - 1);
@@ -664,7 +682,7 @@ int ThreadRapids(const PropRun& o, const std::string& dialect, const fs::path& d
     }
   }
   std::printf("%s rapids: %d of %d thread cycles keep the property (%d programs; %s)\n", dialect.c_str(),
-              cycles - failing, cycles, programs, emco ? "G85" : "G33 with repeated passes");
+              cycles - failing, cycles, programs, emco ? "G85" : "G33 with repeated passes or G71");
   return failing;
 }
 
