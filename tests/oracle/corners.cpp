@@ -78,7 +78,12 @@ struct Corner {
   bool chamfer = false;
   double v = 0;                     // the chamfer's leg or the radius
   std::vector<std::string> blocks;  // the rapid to `a`, then the corner's blocks
-  int first = 0, last = 0;          // the program lines of the corner's blocks (cell-interp counts from 1)
+  // EMCO chains (P words on two blocks in a row, emco.md judgement call 27): `chained` is the first corner,
+  // whose second element goes on into the next insertion; `tail` the second corner (its blocks are the
+  // first's).
+  bool chained = false;
+  std::vector<Corner> tail;
+  int first = 0, last = 0;  // the program lines of the corner's blocks (cell-interp counts from 1)
 };
 
 // The plane point of a move's end (lathe: z and the radius).
@@ -143,6 +148,7 @@ Outcome Check(const Corner& k, const std::vector<Move>& all, bool lathe, bool pl
   std::vector<Move> moves;
   for (const Move& m : all)
     if (m.line >= k.first && m.line <= k.last) moves.push_back(m);
+  if (k.chained && moves.size() > 3) moves.resize(3);  // the line, the insertion, the middle line
   if (moves.size() != 3) {
     out.ok = false;
     out.why = "expected three moves from the corner's first block on (the line, the " +
@@ -171,7 +177,7 @@ Outcome Check(const Corner& k, const std::vector<Move>& all, bool lathe, bool pl
     std::snprintf(buf, sizeof buf, "ends at %.4f %.4f, %.4f mm off the second element", p2[0], p2[1], off2);
     return fail(buf);
   }
-  if (Len(Sub(end, k.b)) > tol || moves[2].kind != (k.arc ? MoveKind::kArc : MoveKind::kLine))
+  if ((!k.chained && Len(Sub(end, k.b)) > tol) || moves[2].kind != (k.arc ? MoveKind::kArc : MoveKind::kLine))
     return fail("the second element does not run on to its programmed end");
   if (k.arc && Len(Sub(PlaneOf(moves[2].center, lathe), k.o)) > tol)
     return fail("the second element's centre moved");
@@ -251,14 +257,37 @@ double TurnDeg(const Corner& k) {
 }
 
 // EMCO: G01 X.. Z.. P1=v (chamfer) or P0=v (radius), then G01 X.. Z.. (ln 55-116, 91); decimal points, X a
-// diameter.
+// diameter. One in four draws a chain: a P word on the second line too, the third line closing the second
+// corner (judgement call 27: each insertion in its own corner, both on the middle line, so each trims at
+// most 45 % of it here).
 bool EmcoCorner(Rng& g, Corner& k) {
   if (!RandomLines(g, k, true)) return false;
   k.chamfer = g.Int(0, 1) == 1;
-  k.v = RandomSize(g, k, TurnDeg(k));
   auto xz = [](P2 p) { return "X" + Fixed(2 * p[1], 3, true) + " Z" + Fixed(p[0], 3, true); };
-  k.blocks = {"G00 " + xz(k.a), "G01 " + xz(k.c) + (k.chamfer ? " P1=" : " P0=") + Fixed(k.v, 3, true),
-              "G01 " + xz(k.b)};
+  auto word = [](const Corner& c) { return (c.chamfer ? " P1=" : " P0=") + Fixed(c.v, 3, true); };
+  if (g.Int(0, 3) == 0) {
+    Corner k2;
+    k2.a = k.c, k2.c = k.b;
+    double h = std::atan2(k.b[1] - k.c[1], k.b[0] - k.c[0]);
+    double turn = g.Real(20, 160) * M_PI / 180 * (g.Int(0, 1) ? 1 : -1), l3 = g.Real(10, 60);
+    k2.b = {Grid(k2.c[0] + l3 * std::cos(h + turn), 0.001), Grid(k2.c[1] + l3 * std::sin(h + turn), 0.001)};
+    if (k2.b[1] < 5 || k2.b[1] > 60) return false;
+    k2.chamfer = g.Int(0, 1) == 1;
+    double middle = Len(Sub(k.b, k.c));
+    auto size = [&](Corner& c, double other) {
+      double trim = g.Real(0.05, 0.45) * std::min(middle, other);
+      c.v = std::max(0.1, Grid(c.chamfer ? trim : trim / std::tan(TurnDeg(c) * M_PI / 360), 0.001));
+    };
+    size(k, Len(Sub(k.c, k.a)));
+    size(k2, l3);
+    k.chained = true;
+    k.blocks = {"G00 " + xz(k.a), "G01 " + xz(k.c) + word(k), "G01 " + xz(k2.c) + word(k2),
+                "G01 " + xz(k2.b)};
+    k.tail.push_back(k2);
+    return true;
+  }
+  k.v = RandomSize(g, k, TurnDeg(k));
+  k.blocks = {"G00 " + xz(k.a), "G01 " + xz(k.c) + word(k), "G01 " + xz(k.b)};
   return true;
 }
 
@@ -371,7 +400,7 @@ int Corners(const PropRun& o, const std::string& dialect, const fs::path& dir) {
   }
   bool lathe = dialect != "balt";
   Frame frame = FrameOf(dialect);
-  int corners = 0, failing = 0, refused = 0, chamfers = 0, radii = 0, arcs = 0, programs = 0;
+  int corners = 0, failing = 0, refused = 0, chamfers = 0, radii = 0, arcs = 0, programs = 0, chains = 0;
   // One corner per ten blocks of --blocks, ten corners to a program (one cell-interp run).
   const int per_program = 10;
   for (int i = 0, total = std::max(1, o.blocks / 10); i < total; i += per_program, ++programs) {
@@ -389,6 +418,15 @@ int Corners(const PropRun& o, const std::string& dialect, const fs::path& dir) {
       for (const std::string& b : k.blocks) text += b + "\n";
       line += static_cast<int>(k.blocks.size());
       k.last = line;
+      if (k.chained) {  // the first corner's moves run into the second's lines; the second's from its block
+        Corner k2 = k.tail.front();
+        k.last = k.first + 1;
+        k2.first = k.first + 1, k2.last = k.first + 2;
+        ks.push_back(k);
+        ks.push_back(k2);
+        ++chains;
+        continue;
+      }
       ks.push_back(k);
     }
     text += frame.end;
@@ -430,9 +468,9 @@ int Corners(const PropRun& o, const std::string& dialect, const fs::path& dir) {
     }
   }
   std::printf(
-      "%s corners: %d of %d corners keep the property (%d chamfers, %d radii, %d of them line-arc; %d "
-      "refused; %d programs)\n",
-      dialect.c_str(), corners - failing, corners, chamfers, radii, arcs, refused, programs);
+      "%s corners: %d of %d corners keep the property (%d chamfers, %d radii, %d of them line-arc, %d "
+      "chains of two; %d refused; %d programs)\n",
+      dialect.c_str(), corners - failing, corners, chamfers, radii, arcs, chains, refused, programs);
   return failing;
 }
 
