@@ -221,7 +221,8 @@ bool ParseArgs(int argc, char** argv, Options& o) {
       return false;
   }
   return o.blocks > 0 && o.chunk > 0 &&
-         (o.property == "all" || o.property == "nogouge" || PropertyTable().count(o.property));
+         (o.property == "all" || o.property == "nogouge" || o.property == "corners" ||
+          o.property == "rapids" || PropertyTable().count(o.property));
 }
 
 // One variant through cell-interp: its moves, or the refusal in `error`.
@@ -404,11 +405,11 @@ int NoGouge(const Options& o, const fs::path& dir) {
 int Properties(int argc, char** argv) {
   Options o;
   if (!ParseArgs(argc, argv, o)) {
-    std::cerr
-        << "usage: cell-oracle-gen prop --property absinc|units|subprogram|transforms|nogouge|all --dialect "
-           "D|all --seed "
-           "S --blocks N "
-           "[--chunk M] [--interp PATH] [--keep DIR] [--plant]\n";
+    std::cerr << "usage: cell-oracle-gen prop --property "
+                 "absinc|units|subprogram|transforms|nogouge|corners|rapids|all --dialect "
+                 "D|all --seed "
+                 "S --blocks N "
+                 "[--chunk M] [--interp PATH] [--keep DIR] [--plant]\n";
     return 2;
   }
   std::vector<std::string> names = o.dialect == "all" ? ModuleNames() : std::vector<std::string>{o.dialect};
@@ -442,6 +443,11 @@ int Properties(int argc, char** argv) {
   // One contour per ten blocks, Balt-System only (the lathe dialects' nose radius and KT-APL's not yet).
   bool balt = o.dialect == "all" || o.dialect == "balt";
   if (balt && (o.property == "all" || o.property == "nogouge")) all = NoGouge(o, tmpl) == 0 && all;
+  PropRun run{o.interp, o.keep, o.seed, o.blocks, o.plant};
+  if (o.property == "all" || o.property == "corners")
+    for (const std::string& name : names) all = Corners(run, name, tmpl) == 0 && all;
+  if (o.property == "all" || o.property == "rapids")
+    for (const std::string& name : names) all = Rapids(run, name, tmpl) == 0 && all;
   fs::remove_all(tmpl);
   return all ? 0 : 1;
 }

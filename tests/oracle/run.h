@@ -46,6 +46,21 @@ inline std::uint64_t ProgramSeed(std::uint64_t seed, const std::string& dialect,
   return z ^ (z >> 33);
 }
 
+// What a property check that writes its own programs runs with (props.cpp parses it): one program per ten
+// blocks of `blocks`.
+struct PropRun {
+  std::string interp, keep;
+  std::uint64_t seed = 1;
+  int blocks = 1000;
+  bool plant = false;  // the check's planted error: it must fail
+};
+// `prop --property corners` (corners.cpp): chamfer and radius insertion stays inside the corner. Returns the
+// number of corners that break it.
+int Corners(const PropRun& o, const std::string& dialect, const std::filesystem::path& dir);
+// `prop --property rapids` (rapids.cpp): a cycle's rapids never enter the stock it cuts. Returns the number
+// of cycles that break it.
+int Rapids(const PropRun& o, const std::string& dialect, const std::filesystem::path& dir);
+
 // `cell-oracle-gen prop`: the properties every program keeps (props.cpp).
 int Properties(int argc, char** argv);
 // `cell-oracle-gen parts`: one part in every dialect of its kind (parts_cli.cpp).
