@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <array>
+#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -267,19 +268,18 @@ void Key(Buf& out, const char (&k)[N]) {
 void Axes(Buf& out, const Target& t) {
   static constexpr std::string_view kKeys[kAxisCount] = {
       ",\"x\":", ",\"y\":", ",\"z\":", ",\"a\":", ",\"b\":", ",\"c\":", ",\"u\":", ",\"v\":", ",\"w\":"};
-  for (int i = 0; i < kAxisCount; ++i) {
-    if (t.used & (1u << i)) {
-      out += kKeys[i];
-      Num(out, t.pos[i]);
-    }
+  // Only the set bits, lowest axis first (the order of kKeys): most moves name two or three of nine axes.
+  for (uint32_t m = t.used & ((1u << kAxisCount) - 1); m != 0; m &= m - 1) {
+    const int i = std::countr_zero(m);
+    out += kKeys[i];
+    Num(out, t.pos[i]);
   }
-  for (int i = 0; i < kAxisCount; ++i) {
-    if (t.travel_mask & (1u << i)) {
-      out += ",\"";
-      out += AxisName(i);
-      out += "_travel\":";
-      Num(out, t.travel[i]);
-    }
+  for (uint32_t m = t.travel_mask & ((1u << kAxisCount) - 1); m != 0; m &= m - 1) {
+    const int i = std::countr_zero(m);
+    out += ",\"";
+    out += AxisName(i);
+    out += "_travel\":";
+    Num(out, t.travel[i]);
   }
 }
 

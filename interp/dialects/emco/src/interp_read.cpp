@@ -263,23 +263,25 @@ void ParseBlock(std::string_view text, Block& out) {
   out.count = 0;
   if (!text.empty() && text.back() == '\r') text.remove_suffix(1);
 
-  // Length without comments and trailing blanks (ln 860: 3-4 screen lines).
+  // Length without comments and trailing blanks (ln 860: 3-4 screen lines). It is at most the text's size,
+  // so only a text longer than the limit is counted (almost no block is).
   std::size_t length = 0, pending_blanks = 0;
   bool in_comment = false;
-  for (char ch : text) {
-    if (in_comment) {
-      if (ch == ')') in_comment = false;
-      continue;
+  if (text.size() > kMaxBlockChars)
+    for (char ch : text) {
+      if (in_comment) {
+        if (ch == ')') in_comment = false;
+        continue;
+      }
+      if (ch == '(') {
+        in_comment = true;
+      } else if (IsBlank(ch)) {
+        ++pending_blanks;
+      } else {
+        length += pending_blanks + 1;
+        pending_blanks = 0;
+      }
     }
-    if (ch == '(') {
-      in_comment = true;
-    } else if (IsBlank(ch)) {
-      ++pending_blanks;
-    } else {
-      length += pending_blanks + 1;
-      pending_blanks = 0;
-    }
-  }
   if (length > kMaxBlockChars) {
     Alarm(650, static_cast<int>(kMaxBlockChars) + 1,
           fmt::format("{} characters, at most {}", length, kMaxBlockChars));
