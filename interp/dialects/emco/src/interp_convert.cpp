@@ -278,8 +278,10 @@ void EmRun::ConvertValues(BlockWords& bw) const {
   if (bw.s.set && bw.s.point) Alarm(620, bw.s.col, "S is S4, without a decimal point");
   // F4, S4, D45 (and T, L) are "digits without decimal point and sign" (ln 1146, 1154-1156): a sign is
   // outside the format (judgement 29).
-  for (const Val* v : {&bw.f, &bw.s, &bw.t, &bw.l}) {
-    if (v->set && v->sign) Alarm(620, v->col, "F, S, T and L are written without a sign");
+  if (bw.set_mask & 0xf0u) {  // any of F, S, T, L (slots 4-7)
+    for (const Val* v : {&bw.f, &bw.s, &bw.t, &bw.l}) {
+      if (v->set && v->sign) Alarm(620, v->col, "F, S, T and L are written without a sign");
+    }
   }
   whole(bw.f, 9999, "F is 0-9999 (F4)");
   whole(bw.s, 9999, "S is 0-9999 (S4)");
@@ -443,7 +445,7 @@ void EmRun::Execute(const Block& b) {
   SpindleWords(bw, m[0], g[1] == 96, g[1] == 97, g92);
   if (m[1] >= 0) mode_.exact_stop = m[1] == 38;
   if (m[3] == 8) Coolant(true);
-  for (int grp : {5, 6, 7, 8, 9, 10}) {
+  for (int grp = 5; grp <= 10 && bw.nm > 0; ++grp) {  // without M words every group is empty
     if (m[grp] >= 0) AuxBefore(m[grp], mcol[grp]);
   }
   if (ZeroShifts(bw, g[3], g[5], g92, gcol[3], gcol[5]) && corner_block) {
