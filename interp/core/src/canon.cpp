@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <array>
+#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -148,17 +149,11 @@ constexpr char kPairs[] =
     "40414243444546474849505152535455565758596061626364656667686970717273747576777879"
     "8081828384858687888990919293949596979899";
 
-void Num(Buf& out, double v) {
+// A number the cache does not hold: formatted, and kept in `hit` when the fast path wrote it. Out of line, so
+// that the cache hit (most numbers) is a short function that saves no registers.
+[[gnu::noinline]] void NumMiss(Buf& out, double v, uint64_t bits, NumCacheEntry& hit) {
   if (!std::isfinite(v)) {
     out += '0';
-    return;
-  }
-  uint64_t bits;
-  std::memcpy(&bits, &v, sizeof bits);
-  NumCacheEntry& hit = num_cache[(bits * 0x9E3779B97F4A7C15ull) >> 58];
-  if (hit.len != 0 && hit.bits == bits) {
-    std::memcpy(out.Room(sizeof hit.text), hit.text, sizeof hit.text);  // all of it: a fixed-size move
-    out.Advance(hit.len);
     return;
   }
   if (std::fabs(v) < 5e-7) v = 0;  // no "-0.000000"
@@ -203,6 +198,19 @@ void Num(Buf& out, double v) {
   auto dot = s.find('.');
   while (s.size() > dot + 5 && s.back() == '0') s.pop_back();
   out += std::string_view(s);
+}
+
+void Num(Buf& out, double v) {
+  uint64_t bits;
+  std::memcpy(&bits, &v, sizeof bits);
+  NumCacheEntry& hit = num_cache[(bits * 0x9E3779B97F4A7C15ull) >> 58];
+  // A non-finite value is never cached (the miss path writes it without filling the entry).
+  if (hit.len != 0 && hit.bits == bits) [[likely]] {
+    std::memcpy(out.Room(sizeof hit.text), hit.text, sizeof hit.text);  // all of it: a fixed-size move
+    out.Advance(hit.len);
+    return;
+  }
+  NumMiss(out, v, bits, hit);
 }
 
 void Int(Buf& out, long v) {
@@ -265,21 +273,22 @@ void Key(Buf& out, const char (&k)[N]) {
 }
 
 void Axes(Buf& out, const Target& t) {
-  static constexpr std::string_view kKeys[kAxisCount] = {
+  // `,"x":` is five characters for every axis: a fixed-size copy (padded to eight), not a call of memcpy.
+  static constexpr char kKeys[kAxisCount][8] = {
       ",\"x\":", ",\"y\":", ",\"z\":", ",\"a\":", ",\"b\":", ",\"c\":", ",\"u\":", ",\"v\":", ",\"w\":"};
-  for (int i = 0; i < kAxisCount; ++i) {
-    if (t.used & (1u << i)) {
-      out += kKeys[i];
-      Num(out, t.pos[i]);
-    }
+  // Only the set bits, lowest axis first (the order of kKeys): most moves name two or three of nine axes.
+  for (uint32_t m = t.used & ((1u << kAxisCount) - 1); m != 0; m &= m - 1) {
+    const int i = std::countr_zero(m);
+    std::memcpy(out.Room(8), kKeys[i], 8);
+    out.Advance(5);
+    Num(out, t.pos[i]);
   }
-  for (int i = 0; i < kAxisCount; ++i) {
-    if (t.travel_mask & (1u << i)) {
-      out += ",\"";
-      out += AxisName(i);
-      out += "_travel\":";
-      Num(out, t.travel[i]);
-    }
+  for (uint32_t m = t.travel_mask & ((1u << kAxisCount) - 1); m != 0; m &= m - 1) {
+    const int i = std::countr_zero(m);
+    out += ",\"";
+    out += AxisName(i);
+    out += "_travel\":";
+    Num(out, t.travel[i]);
   }
 }
 

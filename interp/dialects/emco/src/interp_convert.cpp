@@ -278,14 +278,18 @@ void EmRun::ConvertValues(BlockWords& bw) const {
   if (bw.s.set && bw.s.point) Alarm(620, bw.s.col, "S is S4, without a decimal point");
   // F4, S4, D45 (and T, L) are "digits without decimal point and sign" (ln 1146, 1154-1156): a sign is
   // outside the format (judgement 29).
-  for (const Val* v : {&bw.f, &bw.s, &bw.t, &bw.l}) {
-    if (v->set && v->sign) Alarm(620, v->col, "F, S, T and L are written without a sign");
+  if (bw.set_mask & 0xf0u) {  // any of F, S, T, L (slots 4-7)
+    for (const Val* v : {&bw.f, &bw.s, &bw.t, &bw.l}) {
+      if (v->set && v->sign) Alarm(620, v->col, "F, S, T and L are written without a sign");
+    }
   }
   whole(bw.f, 9999, "F is 0-9999 (F4)");
   whole(bw.s, 9999, "S is 0-9999 (S4)");
   whole(bw.t, 9999, "T is 0000-9999 (TTCC)");
   whole(bw.l, 25599, "L is at most 25599 (subroutine O0255, 99 runs)");
+  // Most blocks have no D word: the loop only when one is set (set_mask bits 16-23).
   for (Val& d : bw.d) {
+    if ((bw.set_mask & 0xff0000u) == 0) break;
     if (!d.set) continue;
     // D45 has no point (ln 1154-1156); the printed "D3 = 2.000" is 2000 um with a thousands separator (the
     // listing importer reads it so), and on tape 2.000 would be 2 um: refused (judgement 29).
@@ -337,7 +341,8 @@ void EmRun::CheckWords(const BlockWords& bw, Motion motion, bool g04, bool g92, 
         break;
     }
   }
-  for (int i = 0; i < 8; ++i) {
+  // Only when the block has a P or D word (set_mask bits 8-23): most have none.
+  for (int i = 0; i < 8 && (bw.set_mask & 0xffff00u) != 0; ++i) {
     if (bw.p[i].set && !(p_ok & (1u << i)))
       Alarm(g51 ? 374 : 480, bw.p[i].col, fmt::format("P{} not used here", i));
     if (bw.d[i].set && !(d_ok & (1u << i)))
@@ -351,10 +356,13 @@ void EmRun::Execute(const Block& b) {
   Collect(b, bw);
 
   // G codes: the last of a group wins (ln 878-883).
-  std::array<int, 10> g;
-  std::array<int, 10> gcol;
-  g.fill(-1);
-  gcol.fill(1);
+  // Group slots start empty (-1, column 1); copied from constants, not filled element by element.
+  static constexpr std::array<int, 10> kNoG = {-1, -1, -1, -1, -1, -1, -1, -1, -1, -1};
+  static constexpr std::array<int, 11> kNoM = {-1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1};
+  static constexpr std::array<int, 10> kGCol1 = {1, 1, 1, 1, 1, 1, 1, 1, 1, 1};
+  static constexpr std::array<int, 11> kMCol1 = {1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1};
+  std::array<int, 10> g = kNoG;
+  std::array<int, 10> gcol = kGCol1;
   bool g04 = false;
   int g04col = 1;
   for (int n = 0; n < bw.ng; ++n) {
@@ -369,10 +377,8 @@ void EmRun::Execute(const Block& b) {
     g[grp] = code;
     gcol[grp] = bw.g[n].col;
   }
-  std::array<int, 11> m;
-  std::array<int, 11> mcol;
-  m.fill(-1);
-  mcol.fill(1);
+  std::array<int, 11> m = kNoM;
+  std::array<int, 11> mcol = kMCol1;
   for (int n = 0; n < bw.nm; ++n) {
     int grp = GroupOfM(bw.m[n].code);
     if (grp < 0) Alarm(420, bw.m[n].col, fmt::format("M{:02d}", bw.m[n].code));
@@ -439,7 +445,7 @@ void EmRun::Execute(const Block& b) {
   SpindleWords(bw, m[0], g[1] == 96, g[1] == 97, g92);
   if (m[1] >= 0) mode_.exact_stop = m[1] == 38;
   if (m[3] == 8) Coolant(true);
-  for (int grp : {5, 6, 7, 8, 9, 10}) {
+  for (int grp = 5; grp <= 10 && bw.nm > 0; ++grp) {  // without M words every group is empty
     if (m[grp] >= 0) AuxBefore(m[grp], mcol[grp]);
   }
   if (ZeroShifts(bw, g[3], g[5], g92, gcol[3], gcol[5]) && corner_block) {
