@@ -26,6 +26,7 @@
 #include <iostream>
 
 #include "cell/oracle/oracle.h"
+#include "cell/oracle/rng.h"
 #include "run.h"
 
 namespace fs = std::filesystem;
@@ -46,26 +47,6 @@ double Cross(P2 a, P2 b) {
 }
 double Len(P2 a) {
   return std::hypot(a[0], a[1]);
-}
-
-class Rng {
- public:
-  explicit Rng(std::uint64_t seed) : s_(seed) {}
-  std::uint64_t Next() {  // splitmix64
-    std::uint64_t z = (s_ += 0x9E3779B97F4A7C15ull);
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-    return z ^ (z >> 31);
-  }
-  int Int(int lo, int hi) { return lo + static_cast<int>(Next() % static_cast<std::uint64_t>(hi - lo + 1)); }
-  double Real(double lo, double hi) { return lo + (hi - lo) * static_cast<double>(Next() >> 11) * 0x1.0p-53; }
-
- private:
-  std::uint64_t s_;
-};
-
-double Grid(double v, double step) {
-  return std::round(v / step) * step;
 }
 
 // One corner: the first element from `a` to `c`, the second from `c` to `b` (a line, or a Balt-System arc

@@ -14,32 +14,13 @@
 #include <map>
 
 #include "cell/oracle/oracle.h"
+#include "cell/oracle/rng.h"
 #include "run.h"
 
 namespace fs = std::filesystem;
 
 namespace cell::oracle {
 namespace {
-
-class Rng {
- public:
-  explicit Rng(std::uint64_t seed) : s_(seed) {}
-  std::uint64_t Next() {  // splitmix64
-    std::uint64_t z = (s_ += 0x9E3779B97F4A7C15ull);
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-    return z ^ (z >> 31);
-  }
-  int Int(int lo, int hi) { return lo + static_cast<int>(Next() % static_cast<std::uint64_t>(hi - lo + 1)); }
-  double Real(double lo, double hi) { return lo + (hi - lo) * static_cast<double>(Next() >> 11) * 0x1.0p-53; }
-
- private:
-  std::uint64_t s_;
-};
-
-double Grid(double v, double step) {
-  return std::round(v / step) * step;
-}
 
 // One drilling cycle: its holes, its R plane (the stock's top) and the program lines of its blocks.
 struct Drill {
@@ -137,6 +118,76 @@ Frame FrameOf(const std::string& dialect) {
           "M2\n"};
 }
 
+// How the programs of one kind of cycle are framed: the text before the cycles, the block before each cycle
+// (clear of every stock), the end, and what cell-interp's output is parsed as.
+struct Batch {
+  std::string dialect, seed_tag, head, between, end;
+  bool lathe = true, threads = false;
+};
+
+struct Tally {
+  int cycles = 0, failing = 0, programs = 0;
+};
+
+// Writes programs of ten cycles each (`make` draws one: its blocks; the driver sets its first and last
+// line), runs cell-interp on each, and checks every cycle (`check`: empty when it keeps the property);
+// `name` says which cycle failed, `count` tallies each for the summary. A refused or unreadable program
+// fails all its cycles; --keep keeps every failing program.
+template <class Case, class Make, class Check, class Name, class Count>
+Tally RunBatches(const PropRun& o, const Batch& b, const fs::path& dir, Make make, Check check, Name name,
+                 Count count) {
+  Tally n;
+  const int per_program = 10;
+  for (int i = 0, total = std::max(1, o.blocks / 10); i < total; i += per_program, ++n.programs) {
+    std::uint64_t seed = ProgramSeed(o.seed, b.dialect + b.seed_tag, i);
+    Rng g(seed);
+    std::vector<Case> cs;
+    std::string text = b.head;
+    int line = static_cast<int>(std::count(text.begin(), text.end(), '\n'));
+    for (int j = 0; j < per_program && i + j < total; ++j) {
+      Case c = make(g, j);
+      text += b.between + "\n";
+      ++line;
+      c.first = line + 1;
+      for (const std::string& block : c.blocks) text += block + "\n";
+      line += static_cast<int>(c.blocks.size());
+      c.last = line;
+      cs.push_back(c);
+    }
+    text += b.end;
+    fs::path prog = dir / ("rapids." + b.dialect), out = dir / "rapids.out", err = dir / "rapids.err";
+    Spit(prog, text);
+    int rc = Shell(Quote(o.interp) + " --dialect " + b.dialect + " " + Quote(prog) + " >" + Quote(out) +
+                   " 2>" + Quote(err));
+    std::string error;
+    auto moves = ParseCellInterp(Slurp(out), b.lathe, &error, b.threads);
+    bool kept = true;
+    for (std::size_t j = 0; j < cs.size(); ++j) {
+      ++n.cycles;
+      count(cs[j]);
+      std::string why = !error.empty() ? "cell-interp's output: " + error
+                        : rc != 0      ? "refused: " + Slurp(err)
+                                       : check(cs[j], moves, o.plant);
+      if (why.empty()) continue;
+      ++n.failing;
+      kept = false;
+      std::cout << b.dialect << " rapids: program seed " << seed << ", " << name(cs[j]) << " at line "
+                << cs[j].first << ": " << why << "\n";
+      if (rc != 0 || !error.empty()) {
+        n.failing += static_cast<int>(cs.size() - j - 1);
+        break;
+      }
+    }
+    if (!kept && !o.keep.empty()) {
+      fs::create_directories(o.keep);
+      std::string tag = b.seed_tag.substr(1);  // "rapids" or "rapids/thread"
+      std::replace(tag.begin(), tag.end(), '/', '-');
+      Spit(fs::path(o.keep) / (b.dialect + "-" + tag + "-" + std::to_string(seed) + "." + b.dialect), text);
+    }
+  }
+  return n;
+}
+
 // Every rapid of the cycle's moves outside its stock; the first rapid that enters it in words.
 std::string CheckDrill(const Drill& d, const std::vector<Move>& all, bool plant) {
   const double tol = 1e-3, top = d.r + (plant ? 0.01 : 0);  // --plant: the stock's top 0.01 mm higher
@@ -192,59 +243,17 @@ std::string CheckDrill(const Drill& d, const std::vector<Move>& all, bool plant)
 int DrillRapids(const PropRun& o, const std::string& dialect, const fs::path& dir) {
   Drill (*make)(Rng&) = dialect == "balt" ? BaltDrill : KtaplDrill;
   Frame frame = FrameOf(dialect);
-  int cycles = 0, failing = 0, programs = 0;
   std::map<int, int> per_code;
-  const int per_program = 10;
-  for (int i = 0, total = std::max(1, o.blocks / 10); i < total; i += per_program, ++programs) {
-    std::uint64_t seed = ProgramSeed(o.seed, dialect + "/rapids", i);
-    Rng g(seed);
-    std::vector<Drill> ds;
-    std::string text = frame.head;
-    int line = static_cast<int>(std::count(text.begin(), text.end(), '\n'));
-    for (int j = 0; j < per_program && i + j < total; ++j) {
-      Drill d = make(g);
-      text += frame.between + "\n";
-      ++line;
-      d.first = line + 1;
-      for (const std::string& b : d.blocks) text += b + "\n";
-      line += static_cast<int>(d.blocks.size());
-      d.last = line;
-      ds.push_back(d);
-    }
-    text += frame.end;
-    fs::path prog = dir / ("rapids." + dialect), out = dir / "rapids.out", err = dir / "rapids.err";
-    Spit(prog, text);
-    int rc = Shell(Quote(o.interp) + " --dialect " + dialect + " " + Quote(prog) + " >" + Quote(out) + " 2>" +
-                   Quote(err));
-    std::string error;
-    auto moves = ParseCellInterp(Slurp(out), false, &error);
-    bool kept = true;
-    for (const Drill& d : ds) {
-      ++cycles;
-      ++per_code[d.code];
-      std::string why = !error.empty() ? "cell-interp's output: " + error
-                        : rc != 0      ? "refused: " + Slurp(err)
-                                       : CheckDrill(d, moves, o.plant);
-      if (why.empty()) continue;
-      ++failing;
-      kept = false;
-      std::cout << dialect << " rapids: program seed " << seed << ", G" << d.code << " at line " << d.first
-                << ": " << why << "\n";
-      if (rc != 0 || !error.empty()) {
-        failing += static_cast<int>(ds.size()) - static_cast<int>(&d - ds.data()) - 1;
-        break;
-      }
-    }
-    if (!kept && !o.keep.empty()) {
-      fs::create_directories(o.keep);
-      Spit(fs::path(o.keep) / (dialect + "-rapids-" + std::to_string(seed) + "." + dialect), text);
-    }
-  }
+  Tally n = RunBatches<Drill>(
+      o, {dialect, "/rapids", frame.head, frame.between, frame.end, false, false}, dir,
+      [&](Rng& g, int) { return make(g); }, CheckDrill,
+      [](const Drill& d) { return "G" + std::to_string(d.code); },
+      [&](const Drill& d) { ++per_code[d.code]; });
   std::string codes;
-  for (const auto& [code, n] : per_code) codes += " G" + std::to_string(code) + " " + std::to_string(n);
+  for (const auto& [code, k] : per_code) codes += " G" + std::to_string(code) + " " + std::to_string(k);
   std::printf("%s rapids: %d of %d drilling cycles keep the property (%d programs;%s)\n", dialect.c_str(),
-              cycles - failing, cycles, programs, codes.c_str());
-  return failing;
+              n.cycles - n.failing, n.cycles, n.programs, codes.c_str());
+  return n.failing;
 }
 
 // One lathe roughing cycle: from the start point S (radius rs, zs) to the finished corner (rf, ze) with the
@@ -311,59 +320,18 @@ std::string CheckTurn(const Turn& t, const std::vector<Move>& all, bool plant) {
 }
 
 int TurnRapids(const PropRun& o, const std::string& dialect, const fs::path& dir) {
-  const std::string head = "(rapids property, tests/oracle/rapids.cpp)\n%\nG95 M03 S1000 F200\n";
-  int cycles = 0, failing = 0, programs = 0, faces = 0;
-  const int per_program = 10;
-  for (int i = 0, total = std::max(1, o.blocks / 10); i < total; i += per_program, ++programs) {
-    std::uint64_t seed = ProgramSeed(o.seed, dialect + "/rapids", i);
-    Rng g(seed);
-    std::vector<Turn> ts;
-    std::string text = head;
-    int line = static_cast<int>(std::count(text.begin(), text.end(), '\n'));
-    for (int j = 0; j < per_program && i + j < total; ++j) {
-      Turn t = EmcoRough(g);
-      text += "G00 X150. Z80.\n";  // clear of every stock: the last cycle's end to this one's start
-      ++line;
-      t.first = line + 1;
-      for (const std::string& b : t.blocks) text += b + "\n";
-      line += static_cast<int>(t.blocks.size());
-      t.last = line;
-      ts.push_back(t);
-    }
-    text += "M30\n";
-    fs::path prog = dir / ("rapids." + dialect), out = dir / "rapids.out", err = dir / "rapids.err";
-    Spit(prog, text);
-    int rc = Shell(Quote(o.interp) + " --dialect " + dialect + " " + Quote(prog) + " >" + Quote(out) + " 2>" +
-                   Quote(err));
-    std::string error;
-    auto moves = ParseCellInterp(Slurp(out), true, &error);
-    bool kept = true;
-    for (std::size_t j = 0; j < ts.size(); ++j) {
-      const Turn& t = ts[j];
-      ++cycles;
-      faces += t.face;
-      std::string why = !error.empty() ? "cell-interp's output: " + error
-                        : rc != 0      ? "refused: " + Slurp(err)
-                                       : CheckTurn(t, moves, o.plant);
-      if (why.empty()) continue;
-      ++failing;
-      kept = false;
-      std::cout << dialect << " rapids: program seed " << seed << ", G84" << (t.face ? " face" : "")
-                << " at line " << t.first << ": " << why << "\n";
-      if (rc != 0 || !error.empty()) {
-        failing += static_cast<int>(ts.size() - j - 1);
-        break;
-      }
-    }
-    if (!kept && !o.keep.empty()) {
-      fs::create_directories(o.keep);
-      Spit(fs::path(o.keep) / (dialect + "-rapids-" + std::to_string(seed) + "." + dialect), text);
-    }
-  }
+  int faces = 0;
+  Tally n = RunBatches<Turn>(
+      o,
+      {dialect, "/rapids", "(rapids property, tests/oracle/rapids.cpp)\n%\nG95 M03 S1000 F200\n",
+       "G00 X150. Z80.", "M30\n", true, false},
+      dir, [](Rng& g, int) { return EmcoRough(g); }, CheckTurn,
+      [](const Turn& t) { return std::string(t.face ? "G84 face" : "G84"); },
+      [&](const Turn& t) { faces += t.face; });
   std::printf(
       "%s rapids: %d of %d roughing cycles keep the property (%d programs; G84 %d longitudinal, %d face)\n",
-      dialect.c_str(), cycles - failing, cycles, programs, cycles - faces, faces);
-  return failing;
+      dialect.c_str(), n.cycles - n.failing, n.cycles, n.programs, n.cycles - faces, faces);
+  return n.failing;
 }
 
 // One Okuma LAP bar turning cycle (G85, AP mode I, ln 5124-5143, 5258-5437): a contour from its G00 start
@@ -489,57 +457,17 @@ std::string CheckLap(const Lap& l, const std::vector<Move>& all, bool plant) {
 }
 
 int LapRapids(const PropRun& o, const fs::path& dir) {
-  const std::string head = "(rapids property, tests/oracle/rapids.cpp)\nO0001\nG95 S500 M03\n";
-  int cycles = 0, failing = 0, programs = 0, copies = 0;
-  const int per_program = 10;
-  for (int i = 0, total = std::max(1, o.blocks / 10); i < total; i += per_program, ++programs) {
-    std::uint64_t seed = ProgramSeed(o.seed, "okuma/rapids", i);
-    Rng g(seed);
-    std::vector<Lap> ls;
-    std::string text = head;
-    int line = static_cast<int>(std::count(text.begin(), text.end(), '\n'));
-    for (int j = 0; j < per_program && i + j < total; ++j) {
-      Lap l = OkumaLap(g, j + 1);
-      text += "G00 X300. Z150.\n";  // clear of every stock
-      ++line;
-      l.first = line + 1;
-      for (const std::string& b : l.blocks) text += b + "\n";
-      line += static_cast<int>(l.blocks.size());
-      l.last = line;
-      ls.push_back(l);
-    }
-    text += "M02\n";
-    fs::path prog = dir / "rapids.okuma", out = dir / "rapids.out", err = dir / "rapids.err";
-    Spit(prog, text);
-    int rc =
-        Shell(Quote(o.interp) + " --dialect okuma " + Quote(prog) + " >" + Quote(out) + " 2>" + Quote(err));
-    std::string error;
-    auto moves = ParseCellInterp(Slurp(out), true, &error);
-    bool kept = true;
-    for (std::size_t j = 0; j < ls.size(); ++j) {
-      ++cycles;
-      copies += ls[j].copy;
-      std::string why = !error.empty() ? "cell-interp's output: " + error
-                        : rc != 0      ? "refused: " + Slurp(err)
-                                       : CheckLap(ls[j], moves, o.plant);
-      if (why.empty()) continue;
-      ++failing;
-      kept = false;
-      std::cout << "okuma rapids: program seed " << seed << (ls[j].copy ? ", G86" : ", G85") << " at line "
-                << ls[j].first << ": " << why << "\n";
-      if (rc != 0 || !error.empty()) {
-        failing += static_cast<int>(ls.size() - j - 1);
-        break;
-      }
-    }
-    if (!kept && !o.keep.empty()) {
-      fs::create_directories(o.keep);
-      Spit(fs::path(o.keep) / ("okuma-rapids-" + std::to_string(seed) + ".okuma"), text);
-    }
-  }
+  int copies = 0;
+  Tally n = RunBatches<Lap>(
+      o,
+      {"okuma", "/rapids", "(rapids property, tests/oracle/rapids.cpp)\nO0001\nG95 S500 M03\n",
+       "G00 X300. Z150.", "M02\n", true, false},
+      dir, [](Rng& g, int j) { return OkumaLap(g, j + 1); }, CheckLap,
+      [](const Lap& l) { return std::string(l.copy ? "G86" : "G85"); },
+      [&](const Lap& l) { copies += l.copy; });
   std::printf("okuma rapids: %d of %d LAP cycles keep the property (%d programs; %d G86 copy turning)\n",
-              cycles - failing, cycles, programs, copies);
-  return failing;
+              n.cycles - n.failing, n.cycles, n.programs, copies);
+  return n.failing;
 }
 
 // One lathe threading cycle, outside, toward -Z: from S (rs, zs) to the thread's end ze; the stock it cuts is
@@ -630,60 +558,20 @@ std::string CheckThread(const Thread& t, const std::vector<Move>& all, bool plan
 
 int ThreadRapids(const PropRun& o, const std::string& dialect, const fs::path& dir) {
   bool emco = dialect == "emco";
-  const std::string head = emco ? "(rapids property, tests/oracle/rapids.cpp)\n%\nG95 M04 S600\n"
-                                : "(rapids property, tests/oracle/rapids.cpp)\nO0002\nG97 S600 M03\n";
-  int cycles = 0, failing = 0, programs = 0;
-  const int per_program = 10;
-  for (int i = 0, total = std::max(1, o.blocks / 10); i < total; i += per_program, ++programs) {
-    std::uint64_t seed = ProgramSeed(o.seed, dialect + "/rapids/thread", i);
-    Rng g(seed);
-    std::vector<Thread> ts;
-    std::string text = head;
-    int line = static_cast<int>(std::count(text.begin(), text.end(), '\n'));
-    for (int j = 0; j < per_program && i + j < total; ++j) {
-      Thread t = emco ? EmcoThread(g) : OkumaThread(g);
-      text += "G00 X150. Z80.\n";  // clear of every stock
-      ++line;
-      t.first = line + 1;
-      for (const std::string& b : t.blocks) text += b + "\n";
-      line += static_cast<int>(t.blocks.size());
-      t.last = line;
-      ts.push_back(t);
-    }
-    text += emco ? "M30\n" : "M02\n";
-    fs::path prog = dir / ("rapids." + dialect), out = dir / "rapids.out", err = dir / "rapids.err";
-    Spit(prog, text);
-    int rc = Shell(Quote(o.interp) + " --dialect " + dialect + " " + Quote(prog) + " >" + Quote(out) + " 2>" +
-                   Quote(err));
-    std::string error;
-    auto moves = ParseCellInterp(Slurp(out), true, &error, true);
-    bool kept = true;
-    for (std::size_t j = 0; j < ts.size(); ++j) {
-      ++cycles;
-      std::string why = !error.empty() ? "cell-interp's output: " + error
-                        : rc != 0      ? "refused: " + Slurp(err)
-                                       : CheckThread(ts[j], moves, o.plant);
-      if (why.empty()) continue;
-      ++failing;
-      kept = false;
-      std::cout << dialect << " rapids: program seed " << seed << ", "
-                << (emco             ? "G85"
-                    : ts[j].compound ? "G71"
-                                     : "G33")
-                << " thread at line " << ts[j].first << ": " << why << "\n";
-      if (rc != 0 || !error.empty()) {
-        failing += static_cast<int>(ts.size() - j - 1);
-        break;
-      }
-    }
-    if (!kept && !o.keep.empty()) {
-      fs::create_directories(o.keep);
-      Spit(fs::path(o.keep) / (dialect + "-rapids-thread-" + std::to_string(seed) + "." + dialect), text);
-    }
-  }
+  Tally n = RunBatches<Thread>(
+      o,
+      {dialect, "/rapids/thread",
+       emco ? "(rapids property, tests/oracle/rapids.cpp)\n%\nG95 M04 S600\n"
+            : "(rapids property, tests/oracle/rapids.cpp)\nO0002\nG97 S600 M03\n",
+       "G00 X150. Z80.", emco ? "M30\n" : "M02\n", true, true},
+      dir, [&](Rng& g, int) { return emco ? EmcoThread(g) : OkumaThread(g); }, CheckThread,
+      [&](const Thread& t) {
+        return std::string(emco ? "G85" : t.compound ? "G71" : "G33") + " thread";
+      },
+      [](const Thread&) {});
   std::printf("%s rapids: %d of %d thread cycles keep the property (%d programs; %s)\n", dialect.c_str(),
-              cycles - failing, cycles, programs, emco ? "G85" : "G33 with repeated passes or G71");
-  return failing;
+              n.cycles - n.failing, n.cycles, n.programs, emco ? "G85" : "G33 with repeated passes or G71");
+  return n.failing;
 }
 
 }  // namespace

@@ -5,28 +5,12 @@
 #include <cstdio>
 
 #include "cell/oracle/oracle.h"
+#include "cell/oracle/rng.h"
 
 namespace cell::oracle {
 namespace {
 
 constexpr double kMm = 25.4;
-
-// splitmix64: the same sequence on every platform (std distributions are implementation-defined).
-struct Rng {
-  std::uint64_t s;
-  std::uint64_t Next() {
-    std::uint64_t z = (s += 0x9E3779B97F4A7C15ull);
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-    return z ^ (z >> 31);
-  }
-  int Int(int lo, int hi) { return lo + static_cast<int>(Next() % static_cast<std::uint64_t>(hi - lo + 1)); }
-  bool Chance(int percent) { return Int(1, 100) <= percent; }
-  template <class T>
-  const T& Pick(const std::vector<T>& v) {
-    return v[Next() % v.size()];
-  }
-};
 
 // Integer vectors of one length (a*a + b*b = r*r): the arcs' start and end radii.
 std::vector<std::array<int, 2>> Representations(int r) {
