@@ -354,7 +354,7 @@ struct Lap {
 
 Lap OkumaLap(Rng& g, int index) {
   Lap l;
-  char name[8];
+  char name[16];  // NA and any int: the sanitizer build checks the whole range
   std::snprintf(name, sizeof name, "NA%02d", index);
   double z = Grid(g.Real(0, 60), 0.001), r = Grid(g.Real(5, 20), 0.0005);
   l.contour = {{z + 2, r}, {z, r}};  // G00 to 2 mm in front of the face, G01 onto it
