@@ -232,11 +232,30 @@ class LoopbackCapture {
       std::vector<char> buf(70000);
       while (!stop_) {
         const ssize_t n = recv(fd_, buf.data(), buf.size(), 0);
-        if (n > 0 &&
-            std::string_view(buf.data(), static_cast<size_t>(n)).find(needle_) != std::string_view::npos)
-          seen_ = true;
+        if (n <= 0) continue;
+        const std::string_view packet(buf.data(), static_cast<size_t>(n));
+        if (packet.find(needle_) != std::string_view::npos) seen_ = true;
+        if (packet.find(marker_) != std::string_view::npos) marked_ = true;
       }
     });
+  }
+  // Sends a marker datagram on loopback and waits until the capture has read it: one socket reads the
+  // interface's packets in order, so by then it has read everything sent before. A fixed sleep here was a
+  // flake under load (issue 44: the unsecured control saw no program text).
+  bool Drain(std::chrono::milliseconds timeout) {
+    const int s = socket(AF_INET, SOCK_DGRAM, 0);
+    if (s < 0) return false;
+    sockaddr_in a{};
+    a.sin_family = AF_INET;
+    a.sin_port = htons(9);  // discard: nobody needs to listen, the capture sees it on lo
+    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    const auto deadline = std::chrono::steady_clock::now() + timeout;
+    while (!marked_ && std::chrono::steady_clock::now() < deadline) {
+      sendto(s, marker_.data(), marker_.size(), 0, reinterpret_cast<sockaddr*>(&a), sizeof a);
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+    close(s);
+    return marked_;
   }
   ~LoopbackCapture() {
     stop_ = true;
@@ -248,8 +267,9 @@ class LoopbackCapture {
 
  private:
   std::string needle_;
+  std::string marker_ = "CAPTURE-MARKER-" + std::to_string(getpid());
   int fd_ = -1;
-  std::atomic<bool> stop_{false}, seen_{false};
+  std::atomic<bool> stop_{false}, seen_{false}, marked_{false};
   std::thread t_;
 };
 
@@ -266,7 +286,7 @@ bool ProgramTextOnTheWire(const std::string& vendor, const std::string& client, 
   cell::ProgramRequest req;
   req.data().assign(text.begin(), text.end());
   cl.Call(req, kMatch);
-  std::this_thread::sleep_for(300ms);  // the capture thread reads what was sent
+  EXPECT_TRUE(cap.Drain(std::chrono::seconds(10))) << "the capture never read its own marker";
   return cap.seen();
 }
 
