@@ -291,32 +291,46 @@ Turn EmcoRough(Rng& g) {
   return t;
 }
 
+// Where a lathe cycle's rapids (its moves from line `first` to `last`) first enter its stock: 33 points along
+// each rapid in the XZ half-plane (radius, z). `any`: the cycle had rapids at all.
+struct RapidHit {
+  bool any = false, inside = false;
+  int line = 0;
+  double r = 0, z = 0;
+};
+template <class Inside>
+RapidHit FirstRapidInside(const std::vector<Move>& all, int first, int last, Inside inside) {
+  RapidHit h;
+  Vec3 from{};
+  for (const Move& m : all) {
+    if (m.line >= first && m.line <= last && m.kind == MoveKind::kRapid) {
+      h.any = true;
+      for (int k = 0; k <= 32; ++k) {
+        double u = k / 32.0, r = from[0] + u * (m.end[0] - from[0]), z = from[2] + u * (m.end[2] - from[2]);
+        if (!inside(r, z)) continue;
+        h.inside = true, h.line = m.line, h.r = r, h.z = z;
+        return h;
+      }
+    }
+    from = m.end;
+  }
+  return h;
+}
+
 std::string CheckTurn(const Turn& t, const std::vector<Move>& all, bool plant) {
   const double tol = 1e-3, grow = plant ? 0.01 : 0;  // --plant: the stock 0.01 mm larger on every side
   const double rs = t.rs + grow, zs = t.zs + grow, r_part = t.rf + t.ax + grow, z_part = t.ze + t.az + grow;
   auto inside = [&](double r, double z) {
     return (z < zs - tol && r < r_part - tol) || (z < z_part - tol && r < rs - tol);
   };
-  Vec3 from{};
-  bool seen = false;
+  const RapidHit h = FirstRapidInside(all, t.first, t.last, inside);
+  if (!h.inside) return h.any ? "" : "no rapids";
   char buf[256];
-  for (const Move& m : all) {
-    if (m.line >= t.first && m.line <= t.last && m.kind == MoveKind::kRapid) {
-      seen = true;
-      for (int k = 0; k <= 32; ++k) {
-        double u = k / 32.0, r = from[0] + u * (m.end[0] - from[0]), z = from[2] + u * (m.end[2] - from[2]);
-        if (!inside(r, z)) continue;
-        std::snprintf(
-            buf, sizeof buf,
-            "line %d: a rapid passes X%.4f Z%.4f (diameter), inside the stock (finished X%.3f Z%.3f "
-            "plus X%.3f Z%.3f, start X%.3f Z%.3f)",
-            m.line, 2 * r, z, 2 * t.rf, t.ze, 2 * t.ax, t.az, 2 * t.rs, t.zs);
-        return buf;
-      }
-    }
-    from = m.end;
-  }
-  return seen ? "" : "no rapids";
+  std::snprintf(buf, sizeof buf,
+                "line %d: a rapid passes X%.4f Z%.4f (diameter), inside the stock (finished X%.3f Z%.3f "
+                "plus X%.3f Z%.3f, start X%.3f Z%.3f)",
+                h.line, 2 * h.r, h.z, 2 * t.rf, t.ze, 2 * t.ax, t.az, 2 * t.rs, t.zs);
+  return buf;
 }
 
 int TurnRapids(const PropRun& o, const std::string& dialect, const fs::path& dir) {
@@ -436,24 +450,13 @@ std::string CheckLap(const Lap& l, const std::vector<Move>& all, bool plant) {
     double c = ContourR(l, std::min(zz, l.contour.front()[0]));
     return c >= 0 && r + tol < c + l.u / 2 + grow;
   };
-  Vec3 from{};
-  bool seen = false;
+  const RapidHit h = FirstRapidInside(all, l.first, l.last, inside);
+  if (!h.inside) return h.any ? "" : "no rapids";
   char buf[256];
-  for (const Move& m : all) {
-    if (m.line >= l.first && m.line <= l.last && m.kind == MoveKind::kRapid) {
-      seen = true;
-      for (int k = 0; k <= 32; ++k) {
-        double u = k / 32.0, r = from[0] + u * (m.end[0] - from[0]), z = from[2] + u * (m.end[2] - from[2]);
-        if (!inside(r, z)) continue;
-        std::snprintf(buf, sizeof buf,
-                      "line %d: a rapid passes X%.4f Z%.4f (diameter), inside the contour plus U%.2f W%.2f",
-                      m.line, 2 * r, z, l.u, l.w);
-        return buf;
-      }
-    }
-    from = m.end;
-  }
-  return seen ? "" : "no rapids";
+  std::snprintf(buf, sizeof buf,
+                "line %d: a rapid passes X%.4f Z%.4f (diameter), inside the contour plus U%.2f W%.2f", h.line,
+                2 * h.r, h.z, l.u, l.w);
+  return buf;
 }
 
 int LapRapids(const PropRun& o, const fs::path& dir) {
