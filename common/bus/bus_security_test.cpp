@@ -3,9 +3,11 @@
 // does not. The PKIs are made once per run with `openssl` (cell::security::InitPki) in a temporary directory.
 #include <arpa/inet.h>
 #include <fcntl.h>
+#include <linux/filter.h>
 #include <linux/if_ether.h>
 #include <linux/if_packet.h>
 #include <net/if.h>
+#include <netinet/in.h>
 #include <spawn.h>
 #include <sys/socket.h>
 #include <sys/wait.h>
@@ -20,6 +22,7 @@
 #include <fstream>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -228,6 +231,32 @@ class LoopbackCapture {
     }
     timeval tv{0, 100000};
     setsockopt(fd_, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
+    // Each participant's first announcements go to every port of the peer range at once (ten bursts of
+    // config::DdsParticipants datagrams): with the default 208 kB buffer a slow (sanitized, loaded) reader
+    // lost packets, among them the request this test looks for (issue 44). So the kernel keeps only UDP to
+    // an odd port (user data goes to 7411 + 250 d + 2 n, discovery to the even ports below them; the
+    // marker to port 9), each packet once (not its outgoing copy too), in up to 32 MB, and Dropped() counts
+    // what it still loses (such a run is repeated).
+    static sock_filter code[] = {
+        BPF_STMT(BPF_LD | BPF_H | BPF_ABS, 12),  // ethertype (lo frames carry a zero Ethernet header)
+        BPF_JUMP(BPF_JMP | BPF_JEQ | BPF_K, ETH_P_IP, 0, 6),
+        BPF_STMT(BPF_LD | BPF_B | BPF_ABS, 23),  // IP protocol
+        BPF_JUMP(BPF_JMP | BPF_JEQ | BPF_K, IPPROTO_UDP, 0, 4),
+        BPF_STMT(BPF_LDX | BPF_B | BPF_MSH, 14),  // IP header length
+        BPF_STMT(BPF_LD | BPF_H | BPF_IND, 16),   // UDP destination port
+        BPF_JUMP(BPF_JMP | BPF_JSET | BPF_K, 1, 0, 1),
+        BPF_STMT(BPF_RET | BPF_K, 0x40000),
+        BPF_STMT(BPF_RET | BPF_K, 0),
+    };
+    const sock_fprog prog{static_cast<unsigned short>(sizeof code / sizeof code[0]), code};
+    setsockopt(fd_, SOL_SOCKET, SO_ATTACH_FILTER, &prog, sizeof prog);
+    const int one = 1, big = 32 << 20;
+    setsockopt(fd_, SOL_PACKET, PACKET_IGNORE_OUTGOING, &one, sizeof one);
+    if (setsockopt(fd_, SOL_SOCKET, SO_RCVBUFFORCE, &big, sizeof big) != 0)
+      setsockopt(fd_, SOL_SOCKET, SO_RCVBUF, &big, sizeof big);
+    tpacket_stats st{};
+    socklen_t len = sizeof st;
+    getsockopt(fd_, SOL_PACKET, PACKET_STATISTICS, &st, &len);  // resets the counters
     t_ = std::thread([this] {
       std::vector<char> buf(70000);
       while (!stop_) {
@@ -264,6 +293,12 @@ class LoopbackCapture {
   }
   bool ok() const { return fd_ >= 0; }
   bool seen() const { return seen_; }
+  // Packets the kernel dropped since the last call: a capture that lost any cannot say "not on the wire".
+  unsigned Dropped() const {
+    tpacket_stats st{};
+    socklen_t len = sizeof st;
+    return getsockopt(fd_, SOL_PACKET, PACKET_STATISTICS, &st, &len) == 0 ? st.tp_drops : 0;
+  }
 
  private:
   std::string needle_;
@@ -273,9 +308,11 @@ class LoopbackCapture {
   std::thread t_;
 };
 
-// Puts a program through the program store's request topic and says whether its text was seen on the wire.
-bool ProgramTextOnTheWire(const std::string& vendor, const std::string& client, const std::string& server,
-                          const std::string& text) {
+// Puts a program through the program store's request topic and says whether its text was seen on the wire;
+// nullopt when the capture lost packets (where the buffer cannot be raised, e.g. without CAP_NET_ADMIN), so
+// that neither answer can be trusted.
+std::optional<bool> ProgramTextOnTheWireOnce(const std::string& vendor, const std::string& client,
+                                             const std::string& server, const std::string& text) {
   LoopbackCapture cap(text);
   if (!cap.ok()) return false;
   auto c = Make(vendor, client);
@@ -287,7 +324,19 @@ bool ProgramTextOnTheWire(const std::string& vendor, const std::string& client, 
   req.data().assign(text.begin(), text.end());
   cl.Call(req, kMatch);
   EXPECT_TRUE(cap.Drain(std::chrono::seconds(10))) << "the capture never read its own marker";
+  if (const unsigned lost = cap.Dropped()) {
+    std::printf("the capture lost %u packets: run again\n", lost);
+    return std::nullopt;
+  }
   return cap.seen();
+}
+
+bool ProgramTextOnTheWire(const std::string& vendor, const std::string& client, const std::string& server,
+                          const std::string& text) {
+  for (int attempt = 0; attempt < 5; ++attempt)
+    if (const auto seen = ProgramTextOnTheWireOnce(vendor, client, server, text)) return *seen;
+  ADD_FAILURE() << "the capture lost packets in 5 runs out of 5: it cannot tell what crossed the wire";
+  return false;
 }
 
 // A participant of `identity`'s files that writes in `partition`: what a station would do to pass for
