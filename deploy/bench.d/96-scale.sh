@@ -6,8 +6,13 @@
 #             in the scheduler's view);
 #   cores     the idle cell's CPU over CELL_BENCH_SCALE_IDLE seconds (default 10) after 10 s of settling;
 #   rss_mb    the cell's resident memory; udp_in_per_s the host's UDP datagrams received per second;
-#   join_ms   a new process (bus_discovery_bench --join) until it has heard every service's heartbeat.
-# Prints the table, then per station and per doubling of the cell. About 6 minutes on a 2-core machine.
+#   join_ms   a new process (bus_discovery_bench --join) until it has heard every service's heartbeat;
+#   dec_per_s the scheduler's decisions per second with every station busy: a cell of as many KT-APL
+#             stations (the demo's programs are KT-APL), `up --clock virtual`, route PUMP (the tools of
+#             KT01's file) over every station, memory_bench keeping one job live per station and asking `job show` of each as it ends
+#             (one page of listings every 10th), 4 pallets per station (40 at least); a pallet's route has one
+#             operation, so each is one allocation decision, and the figure is pallets ended per wall second.
+# Prints the table, then per station and per doubling of the cell. About 8 minutes on a 2-core machine.
 # Env: CELL_BUILD_DIR (default build/), CELL_BENCH_DOMAIN (default 103), CELL_BENCH_SCALE_SIZES (default
 # "2 8 16 32"), CELL_BENCH_SCALE_STACKS (default "fastdds cyclonedds"), CELL_BENCH_SCALE_IDLE (default 10).
 set -euo pipefail
@@ -16,7 +21,7 @@ ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 source "$ROOT/deploy/bench.d/lib/figures.sh"
 # shellcheck source=lib/cell.sh
 source "$ROOT/deploy/bench.d/lib/cell.sh"
-bench_cell 96-scale 103 bus_discovery_bench
+bench_cell 96-scale 103 bus_discovery_bench memory_bench
 CTL="$BIN/cellctl"
 sizes=(${CELL_BENCH_SCALE_SIZES:-2 8 16 32})
 stacks=(${CELL_BENCH_SCALE_STACKS:-fastdds cyclonedds})
@@ -38,8 +43,39 @@ make_config() {
   done
 }
 
-printf '%-11s %8s %9s %7s %7s %8s %12s %8s\n' stack stations processes up_s cores rss_mb udp_in_per_s join_ms \
-  | tee "$work/table"
+# make_kt_config N DIR: the same with N KT-APL stations (KT01 ... KTnn), each a copy of KT01.
+make_kt_config() {
+  local n=$1 dir=$2 i id
+  rm -rf "$dir"
+  mkdir -p "$dir/stations"
+  cp -r "$ROOT/deploy/systemd" "$ROOT/deploy/dds" "$dir/"
+  for ((i = 1; i <= n; i++)); do
+    id=KT$(printf '%02d' "$i")
+    sed "s/^id = \"KT01\"/id = \"$id\"/" "$ROOT/deploy/stations/KT01.toml" >"$dir/stations/$id.toml"
+  done
+}
+
+# decisions_per_s N: pallets ended per second on an N-station KT-APL cell kept busy ("-" if it failed).
+decisions_per_s() {
+  local n=$1 list pallets out
+  export CELL_CONFIG_DIR="$work/kt-config-$n" CELL_DATA_DIR="$work/kt-data-$CELL_DDS-$n"
+  make_kt_config "$n" "$CELL_CONFIG_DIR"
+  "$CTL" up --stations all --clock virtual >"$work/up.out" 2>&1 || { "$CTL" down >/dev/null 2>&1; echo -; return; }
+  list=$(cd "$CELL_CONFIG_DIR/stations" && ls ./*.toml | sed 's#./##; s/.toml$//' | paste -sd,)
+  "$CTL" program put "$ROOT/deploy/demo.d/PUMP341.apl" >/dev/null
+  "$CTL" route define PUMP --op "$list:PUMP341" >/dev/null
+  pallets=$((4 * n > 40 ? 4 * n : 40))
+  if out=$("$BIN/memory_bench" --routes PUMP --cellctl "$CTL" --inflight "$((n > 100 ? 100 : n))" \
+           --checkpoints "$pallets" --cellctl-every 0 --idle 0 2>"$work/throughput.err"); then
+    sed -n 's/.*(\([0-9.]*\) pallets\/s, 0 failed).*/\1/p' <<<"$out" | grep . || echo -
+  else
+    echo -
+  fi
+  "$CTL" down >/dev/null
+}
+
+printf '%-11s %8s %9s %7s %7s %8s %12s %8s %9s\n' stack stations processes up_s cores rss_mb udp_in_per_s join_ms \
+  dec_per_s | tee "$work/table"
 for stack in "${stacks[@]}"; do
   for n in "${sizes[@]}"; do
     export CELL_DDS=$stack CELL_CONFIG_DIR="$work/config-$n" CELL_DATA_DIR="$work/data-$stack-$n"
@@ -54,28 +90,30 @@ for stack in "${stacks[@]}"; do
     usage=$(python3 "$ROOT/deploy/bench.d/lib/cell_usage.py" "$idle" "$CELL_DATA_DIR")
     procs=$(sed 's/.*processes=\([0-9]*\).*/\1/' <<<"$usage")
     join_ms=$("$BIN/bus_discovery_bench" --join "$procs" | awk '/services heard/ { ms = $1 } /gave up/ { ms = "-" } END { print ms }')
-    printf '%-11s %8s %9s %7s %7s %8s %12s %8s\n' "$stack" "$n" "$procs" "$up_s" \
-      "$(sed 's/.*cores=\([0-9.]*\).*/\1/' <<<"$usage")" "$(sed 's/.*rss_mb=\([0-9]*\).*/\1/' <<<"$usage")" \
-      "$(sed 's/.*udp_in_per_s=\([0-9]*\).*/\1/' <<<"$usage")" "$join_ms" | tee -a "$work/table"
     "$CTL" down >/dev/null
+    dps=$(decisions_per_s "$n")
+    printf '%-11s %8s %9s %7s %7s %8s %12s %8s %9s\n' "$stack" "$n" "$procs" "$up_s" \
+      "$(sed 's/.*cores=\([0-9.]*\).*/\1/' <<<"$usage")" "$(sed 's/.*rss_mb=\([0-9]*\).*/\1/' <<<"$usage")" \
+      "$(sed 's/.*udp_in_per_s=\([0-9]*\).*/\1/' <<<"$usage")" "$join_ms" "$dps" | tee -a "$work/table"
   done
 done
 
 echo
 echo "per station (figure / stations) and per doubling (figure at 2n / figure at n):"
-awk 'NR > 1 && NF == 8 {
+awk 'NR > 1 && NF == 9 {
        k = $1; n = $2; seen[k] = seen[k] " " n
-       up[k, n] = $4; cores[k, n] = $5; rss[k, n] = $6; udp[k, n] = $7; join[k, n] = $8 }
+       up[k, n] = $4; cores[k, n] = $5; rss[k, n] = $6; udp[k, n] = $7; join[k, n] = $8; dec[k, n] = $9 }
      END {
        for (k in seen) {
          m = split(substr(seen[k], 2), ns, " ")
          for (i = 1; i <= m; i++) {
            n = ns[i]
-           line = sprintf("%-11s %3d stations: %.1f s up, %.4f cores, %.1f MB, %.0f datagrams/s per station", k, n,
-                          up[k, n], cores[k, n] / n, rss[k, n] / n, udp[k, n] / n)
+           line = sprintf("%-11s %3d stations: %.1f s up, %.4f cores, %.1f MB, %.0f datagrams/s, %.3f decisions/s per station",
+                          k, n, up[k, n], cores[k, n] / n, rss[k, n] / n, udp[k, n] / n, dec[k, n] / n)
            if (i > 1 && ns[i - 1] * 2 == n)
-             line = line sprintf("; doubling: up x%.2f, cores x%.2f, rss x%.2f, datagrams x%.2f", up[k, n] / up[k, ns[i - 1]],
-                                 cores[k, n] / cores[k, ns[i - 1]], rss[k, n] / rss[k, ns[i - 1]], udp[k, n] / udp[k, ns[i - 1]])
+             line = line sprintf("; doubling: up x%.2f, cores x%.2f, rss x%.2f, datagrams x%.2f, decisions x%.2f",
+                                 up[k, n] / up[k, ns[i - 1]], cores[k, n] / cores[k, ns[i - 1]], rss[k, n] / rss[k, ns[i - 1]],
+                                 udp[k, n] / udp[k, ns[i - 1]], dec[k, ns[i - 1]] > 0 ? dec[k, n] / dec[k, ns[i - 1]] : 0)
            print line
          }
        }
@@ -83,5 +121,9 @@ awk 'NR > 1 && NF == 8 {
 # The guard's figures (lib/figures.sh): idle cores per station at the largest size, per stack (lower is better).
 for stack in "${stacks[@]}"; do
   bench_figure "scale.$stack.idle_cores_per_station" "$(awk -v k="$stack" -v n="${sizes[-1]}" \
-    '$1 == k && $2 == n && NF == 8 { printf "%.4f", $5 / n }' "$work/table")" lower
+    '$1 == k && $2 == n && NF == 9 { printf "%.4f", $5 / n }' "$work/table")" lower
+  # Decisions per second per station at the largest size over the smallest (1.0: the cell scales linearly).
+  bench_figure "scale.$stack.decisions_per_station_largest_vs_smallest" "$(awk -v k="$stack" -v a="${sizes[0]}" \
+    -v b="${sizes[-1]}" '$1 == k && NF == 9 && $9 != "-" { d[$2] = $9 / $2 }
+      END { if (d[a] > 0 && d[b] > 0) printf "%.3f", d[b] / d[a] }' "$work/table")" higher
 done
