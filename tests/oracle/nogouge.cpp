@@ -290,10 +290,15 @@ bool Check(const PropRun& o, const std::string& dialect, std::uint64_t seed, boo
       bool far_only = d.own >= need;
       // Balt-System at a corner turning away from the cutter where an arc meets: the offsets' intersection
       // (balt.md judgement call 50) lies on the arc's circle past its end and can come back into the contour
-      // (docs/testing.md, "What the properties found"); open, reported, not failed.
-      std::size_t k = static_cast<std::size_t>(m.line - w.first) % c.p.size();
-      bool away = c.left ? Turn(c, k) < 0 : Turn(c, k) > 0;
-      bool arc_corner = dialect == "balt" && away && (c.sweep[k] != 0 || c.sweep[c.Next(k)] != 0);
+      // (docs/testing.md, "What the properties found" 5); open, reported, not failed.
+      // The corners at both ends of the move's element: the extension may belong to either.
+      std::size_t n = c.p.size(), k = static_cast<std::size_t>(m.line - w.first) % n;
+      bool arc_corner = false;
+      for (std::size_t j : {(k + n - 1) % n, k}) {
+        bool away = c.left ? Turn(c, j) < 0 : Turn(c, j) > 0;
+        arc_corner =
+            arc_corner || (dialect == "balt" && away && (c.sweep[j] != 0 || c.sweep[c.Next(j)] != 0));
+      }
       std::cout << dialect << " nogouge: program seed " << seed << ", line " << m.line
                 << (far_only     ? " (a non-adjacent element)"
                     : arc_corner ? " (Balt-System's outside arc corner, open)"
