@@ -279,127 +279,6 @@ bool CheckCase(const Options& o, const Module& mod, const std::string& prop, std
   return ok;
 }
 
-// No gouge (cutter radius compensation), Balt-System (G41/G42/G40, ln 3064-3264): a random star-shaped closed
-// contour (5-9 corners, convex and concave, on the 0.001 mm grid) cut once around and on to its second
-// corner, left or right of it, with a tool of radius 2, 3 or 5 (the tool file's K is the diameter). The
-// tool centre of every move but the entry, the first and last contour blocks and the exit (whose corners
-// depend on the approach) keeps at least the radius less 2e-3 mm from every element of the contour. A
-// refusal makes no motion and gouges nothing; it is counted.
-struct Contour {
-  std::vector<std::array<double, 2>> p;
-  double r = 0;
-  bool left = true;
-};
-
-Contour RandomContour(std::uint64_t seed) {
-  std::uint64_t st = seed;
-  auto next = [&st](int lo, int hi) {
-    std::uint64_t z = (st += 0x9E3779B97F4A7C15ull);
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-    return lo + static_cast<int>((z ^ (z >> 31)) % static_cast<std::uint64_t>(hi - lo + 1));
-  };
-  Contour c;
-  static const double radii[] = {2, 3, 5};
-  c.r = radii[next(0, 2)];
-  c.left = next(0, 1) == 1;
-  int n = next(5, 14);
-  for (int i = 0; i < n; ++i) {
-    double a = 2 * M_PI * (i + next(-30, 30) / 100.0) / n;
-    double rho = next(8000, 60000) / 1000.0;
-    c.p.push_back({std::round(rho * std::cos(a) * 1000) / 1000, std::round(rho * std::sin(a) * 1000) / 1000});
-  }
-  return c;
-}
-
-double SegmentDistance(const std::array<double, 2>& q, const std::array<double, 2>& a,
-                       const std::array<double, 2>& b) {
-  double dx = b[0] - a[0], dy = b[1] - a[1], len2 = dx * dx + dy * dy;
-  double t = len2 > 0 ? std::clamp(((q[0] - a[0]) * dx + (q[1] - a[1]) * dy) / len2, 0.0, 1.0) : 0;
-  return std::hypot(q[0] - a[0] - t * dx, q[1] - a[1] - t * dy);
-}
-
-// The least distance from the points of a move (from `from`) to the contour.
-double MoveDistance(const Move& m, const Vec3& from, const Contour& c) {
-  double best = 1e9;
-  for (int k = 0; k <= 32; ++k) {
-    double t = k / 32.0;
-    std::array<double, 2> q{from[0] + t * (m.end[0] - from[0]), from[1] + t * (m.end[1] - from[1])};
-    if (m.kind == MoveKind::kArc) {
-      double a0 = std::atan2(from[1] - m.center[1], from[0] - m.center[0]);
-      double a1 = std::atan2(m.end[1] - m.center[1], m.end[0] - m.center[0]);
-      double sweep = m.cw ? a0 - a1 : a1 - a0;
-      while (sweep <= 1e-12) sweep += 2 * M_PI;
-      double a = a0 + (m.cw ? -1 : 1) * t * sweep,
-             rad = std::hypot(from[0] - m.center[0], from[1] - m.center[1]);
-      q = {m.center[0] + rad * std::cos(a), m.center[1] + rad * std::sin(a)};
-    }
-    for (std::size_t i = 0; i < c.p.size(); ++i)
-      best = std::min(best, SegmentDistance(q, c.p[i], c.p[(i + 1) % c.p.size()]));
-  }
-  return best;
-}
-
-struct GougeTally {
-  int refused = 0, before_refusal = 0;
-};
-
-// One contour: true when it keeps the property. A refused program's moves before the refusal are counted in
-// `before_refusal` when they come too close (the element too short for the radius is read after the corner
-// before it was cut: docs/testing.md), not failed.
-bool GougeCheck(const Options& o, std::uint64_t seed, const fs::path& dir, GougeTally* tally) {
-  Contour c = RandomContour(seed);
-  auto xy = [](const std::array<double, 2>& p) { return "X" + Num(p[0], 3) + " Y" + Num(p[1], 3); };
-  std::string t = "; no-gouge property (tests/oracle)\nT1.1 M6\nS1000 M3\nG X100 Y0 Z0\n";
-  t += std::string("G1 ") + (c.left ? "G41 " : "G42 ") + xy(c.p[0]) + " F200\n";  // line 5
-  const int first = 6, last = first + static_cast<int>(c.p.size());               // lines of p1 .. p0, p1
-  for (std::size_t i = 1; i <= c.p.size() + 1; ++i) t += xy(c.p[i % c.p.size()]) + "\n";
-  t += "G40 X100 Y0\nM2\n";
-  Spit(dir / "gouge.balt", t);
-  Spit(dir / "gouge.tools", "1 Z0 K" + Num(2 * c.r, 3) + "\n");
-  int rc =
-      Shell(Quote(o.interp) + " --dialect balt --tools " + Quote(dir / "gouge.tools") + " " +
-            Quote(dir / "gouge.balt") + " >" + Quote(dir / "gouge.out") + " 2>" + Quote(dir / "gouge.err"));
-  std::string error;
-  auto moves = ParseCellInterp(Slurp(dir / "gouge.out"), false, &error);
-  if (rc != 0) ++tally->refused;
-  const double need = c.r - 2e-3 + (o.plant ? 0.1 : 0);  // --plant: 0.1 mm more than the radius
-  Vec3 from{};
-  for (const Move& m : moves) {
-    bool checked = m.line > first && m.line < last;
-    double d = checked ? MoveDistance(m, from, c) : 1e9;
-    if (d < need && rc != 0) {
-      ++tally->before_refusal;
-      return true;
-    }
-    if (d < need) {
-      std::cout << "balt nogouge: program seed " << seed << ", line " << m.line << ": the tool centre comes "
-                << d << " mm from the contour, radius " << c.r << "\n  " << Describe(m) << "\n";
-      if (!o.keep.empty()) {
-        fs::create_directories(o.keep);
-        Spit(fs::path(o.keep) / ("balt-nogouge-" + std::to_string(seed) + ".balt"), t);
-        Spit(fs::path(o.keep) / ("balt-nogouge-" + std::to_string(seed) + ".tools"),
-             Slurp(dir / "gouge.tools"));
-      }
-      return false;
-    }
-    from = m.end;
-  }
-  return true;
-}
-
-int NoGouge(const Options& o, const fs::path& dir) {
-  int programs = 0, failing = 0;
-  GougeTally t;
-  for (int done = 0, i = 0; done < o.blocks; done += 10, ++i, ++programs)
-    if (!GougeCheck(o, ProgramSeed(o.seed, "balt/nogouge", i), dir, &t)) ++failing;
-  std::printf(
-      "balt nogouge: %d of %d contours keep the property (%d refused, %d of them too close before the "
-      "refusal)\n",
-      programs - failing, programs, t.refused, t.before_refusal);
-  return failing;
-}
-
 }  // namespace
 
 int Properties(int argc, char** argv) {
@@ -440,10 +319,9 @@ int Properties(int argc, char** argv) {
       all = all && failing == 0;
     }
   }
-  // One contour per ten blocks, Balt-System only (the lathe dialects' nose radius and KT-APL's not yet).
-  bool balt = o.dialect == "all" || o.dialect == "balt";
-  if (balt && (o.property == "all" || o.property == "nogouge")) all = NoGouge(o, tmpl) == 0 && all;
   PropRun run{o.interp, o.keep, o.seed, o.blocks, o.plant};
+  if (o.property == "all" || o.property == "nogouge")
+    for (const std::string& name : names) all = NoGouge(run, name, tmpl) == 0 && all;
   if (o.property == "all" || o.property == "corners")
     for (const std::string& name : names) all = Corners(run, name, tmpl) == 0 && all;
   if (o.property == "all" || o.property == "rapids")

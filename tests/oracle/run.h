@@ -54,6 +54,9 @@ struct PropRun {
   int blocks = 1000;
   bool plant = false;  // the check's planted error: it must fail
 };
+// `prop --property nogouge` (nogouge.cpp): no gouge under cutter radius compensation, Balt-System and KT-APL.
+// Returns the number of contours that break it.
+int NoGouge(const PropRun& o, const std::string& dialect, const std::filesystem::path& dir);
 // `prop --property corners` (corners.cpp): chamfer and radius insertion stays inside the corner. Returns the
 // number of corners that break it.
 int Corners(const PropRun& o, const std::string& dialect, const std::filesystem::path& dir);

@@ -72,7 +72,12 @@ void Compensator::Out(Canon&& c) {
     last_ = t->pos;
     actual_ = PlaneOf(last_);
   }
-  ready_.push_back(std::move(c));
+  staged_.push_back(std::move(c));
+}
+
+void Compensator::Settle() {
+  for (Canon& c : staged_) ready_.push_back(std::move(c));
+  staged_.clear();
 }
 
 Vec2 Compensator::OwnEnd(const Pending& p) const {
@@ -91,6 +96,9 @@ void Compensator::ReleaseHeld() {
 }
 
 void Compensator::Release(Vec2 end, double trim_end, const Canon* fill) {
+  // The held block passed its checks against the next one: the block before it, which ends at their
+  // corner, stands (judgement call 88).
+  Settle();
   Canon c = std::move(pend_.c);
   Target& t = *c.target();
   SetPlane(t.pos, end);
@@ -143,6 +151,11 @@ void Compensator::TakeOther(Canon&& c) {
 }
 
 void Compensator::Take(Canon&& c) {
+  TakeOne(std::move(c));
+  if (state_ != kOn) Settle();
+}
+
+void Compensator::TakeOne(Canon&& c) {
   if (!IsMove(c.op())) {
     TakeOther(std::move(c));
     return;
@@ -325,6 +338,7 @@ void Compensator::EndBlock(bool counts) {
     }
   }
   if (block_clears_ && state_ == kResidual) state_ = kOff;
+  if (state_ != kOn) Settle();
   plan_ = kNoPlan;
   block_motion_ = false;
   block_clears_ = false;
@@ -334,6 +348,7 @@ void Compensator::EndBlock(bool counts) {
 void Compensator::Finish() {
   if (state_ == kOn) Release(OwnEnd(pend_), 0, nullptr);
   ReleaseHeld();
+  Settle();
   state_ = kOff;
   plan_ = kNoPlan;
   block_motion_ = false;

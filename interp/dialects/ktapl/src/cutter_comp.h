@@ -3,11 +3,12 @@
 // Two layers:
 // - geometry on the two axes of the active plane (offset lines and arcs, corner intersections, fill-in
 //   arcs), free functions on Vec2/Path;
-// - Compensator: the one-block look-ahead. While compensation is on, the executor hands it every canonical
+// - Compensator: the look-ahead. While compensation is on, the executor hands it every canonical
 //   command (in programmed, uncompensated positions). A motion block's compensated end depends on the next
 //   motion block, so it is held (with the ops of the blocks after it) until that block, G40 or the end of
-//   the program is known; then it is made final (Ready()) with its compensated end point, followed by a
-//   fill-in arc where the path turns away from the compensation side.
+//   the program is known; then it is written with its compensated end point, followed by a fill-in arc
+//   where the path turns away from the compensation side, and made final (Ready()) once the block after
+//   it has passed its checks too (the manual's "current" and "previous look ahead block", ln 6627).
 #pragma once
 
 #include <array>
@@ -96,6 +97,9 @@ class Compensator {
   }
   void Update() { engaged_ = state_ != kOff || plan_ != kNoPlan; }
   void Out(Canon&& c);
+  // Moves what is staged to Ready().
+  void Settle();
+  void TakeOne(Canon&& c);
   Vec2 OwnEnd(const Pending& p) const;
   // Writes the held block ending at `end` (arcs: cut back by `trim_end` degrees), then `fill` if any, then
   // the ops held behind it.
@@ -110,6 +114,9 @@ class Compensator {
   std::string AxesText() const;
 
   std::vector<Canon> ready_;
+  // Written but not final while compensation is on: the last released block (with its fill-in arc and the
+  // ops behind it) until the block after it has passed its own corner checks (judgement call 88).
+  std::vector<Canon> staged_;
   std::deque<Canon> held_;  // ops of the blocks after the held one (bounded: error 0003 after 4 blocks)
   bool engaged_ = false;
   State state_ = kOff;

@@ -88,23 +88,26 @@ TEST(CutterCompLookAhead, RampCornersAndHeldOps) {
   EXPECT_TRUE(f.out.empty());  // held until the next path is known
   f.Move(20, 0, 2);            // +X: next path; left normal (0, 1) -> ramp ends at (0, 5)
   f.End();
+  EXPECT_TRUE(f.out.empty());  // written, final once block 2 has passed its checks (judgement call 88)
+  f.Other(Op::kCoolant, 3);    // a block without motion: held behind block 2
+  f.End();
+  EXPECT_TRUE(f.out.empty());
+  f.Move(20, 20, 4);  // +Y: a left turn, toward G41 -> block 2 ends at (15, 5)
+  f.End();
   ASSERT_EQ(f.out.size(), 1u);
   EXPECT_EQ(f.out[0].line, 1);
   EXPECT_NEAR(f.out[0].target()->pos[kX], 0, 1e-9);
   EXPECT_NEAR(f.out[0].target()->pos[kY], 5, 1e-9);
-  f.Other(Op::kCoolant, 3);  // a block without motion: held behind block 2
-  f.End();
-  EXPECT_EQ(f.out.size(), 1u);
-  f.Move(20, 20, 4);  // +Y: a left turn, toward G41 -> block 2 ends at (15, 5)
+  f.Move(40, 20, 5);  // +X: a right turn, away -> block 4 ends at (15, 20), fill-in cw to (20, 25)
   f.End();
   ASSERT_EQ(f.out.size(), 3u);
   EXPECT_EQ(f.out[1].line, 2);
   EXPECT_NEAR(f.out[1].target()->pos[kX], 15, 1e-9);
   EXPECT_NEAR(f.out[1].target()->pos[kY], 5, 1e-9);
   EXPECT_EQ(f.out[2].op(), Op::kCoolant);
-  f.Move(40, 20, 5);  // +X: a right turn, away -> block 4 ends at (15, 20), fill-in cw to (20, 25)
-  f.End();
-  ASSERT_EQ(f.out.size(), 5u);
+  f.comp.Finish();
+  f.Drain();
+  ASSERT_EQ(f.out.size(), 6u);
   EXPECT_NEAR(f.out[3].target()->pos[kX], 15, 1e-9);
   EXPECT_NEAR(f.out[3].target()->pos[kY], 20, 1e-9);
   EXPECT_EQ(f.out[4].op(), Op::kArc);
@@ -117,9 +120,6 @@ TEST(CutterCompLookAhead, RampCornersAndHeldOps) {
   EXPECT_NEAR(f.out[4].As<ArcOp>().angle, 90, 1e-9);
   EXPECT_EQ(f.out[4].As<ArcOp>().plane.first, kX);
   EXPECT_EQ(f.out[4].As<ArcOp>().plane.second, kY);
-  f.comp.Finish();
-  f.Drain();
-  ASSERT_EQ(f.out.size(), 6u);
   EXPECT_NEAR(f.out[5].target()->pos[kX], 40, 1e-9);  // its own offset end
   EXPECT_NEAR(f.out[5].target()->pos[kY], 25, 1e-9);
   EXPECT_FALSE(f.comp.engaged());
@@ -200,6 +200,11 @@ TEST(CutterCompLookAhead, Errors) {
     f.Move(20, 8, 3);
     f.End();
     ExpectCompError([&] { f.Move(0, 8, 4); }, "0001");
+    // Block 2 ends at (15, 5) on block 3's offset, 3 from block 4's path y = 8: it is not final before block
+    // 3 has passed its checks, so only the ramp-on was output (judgement call 88; the no-gouge property).
+    f.Drain();
+    ASSERT_EQ(f.out.size(), 1u);
+    EXPECT_EQ(f.out[0].line, 1);
   }
   {  // a 4 mm path cut back by 5 at its start: error in the current block
     Feeder f;

@@ -1,0 +1,343 @@
+// `cell-oracle-gen prop --property nogouge` (issue 33 item 2, docs/testing.md "Properties"): no gouge under
+// cutter radius compensation. A random star-shaped closed contour (5-14 corners, convex and concave, on the
+// 0.001 mm grid; every other contour with arcs between some corners) cut with G41 (inside) or G42 (outside)
+// once around and on to its second corner, with a tool of radius 2, 3 or 5:
+// - Balt-System (G41/G42/G40, ln 3064-3264): the tools file's K is the diameter; arcs `G2/G3 X Y I J`, I J
+//   absolute in G90.
+// - KT-APL (G40-G42, ln 1599-1671, 6437-6696): the tools file's (TLD,T1D..) the diameter (ln 6447), taken at
+//   the ramp-on (ktapl.md judgement call 45); arcs `G02/G03 X Y I J`, I J absolute in G90.
+// The tool centre of every move but the entry, the first and last contour blocks and the exit (whose corners
+// depend on the approach and the dialect's ramp rule) keeps at least the radius less 2e-3 mm from every
+// element of the contour. A refusal makes no motion and gouges nothing; it is counted.
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+
+#include "cell/oracle/oracle.h"
+#include "cell/oracle/rng.h"
+#include "run.h"
+
+namespace fs = std::filesystem;
+
+namespace cell::oracle {
+namespace {
+
+using P2 = std::array<double, 2>;
+
+// Element i runs from p[i] to p[i+1]: a line, or (sweep != 0) an arc about centre[i], ccw when sweep > 0.
+// The corners go counterclockwise about the origin, so the part is on the left: a ccw arc bulges out
+// (convex), a cw arc in (concave).
+struct Contour {
+  std::vector<P2> p;
+  std::vector<double> sweep;  // degrees, signed
+  std::vector<P2> centre;
+  double r = 0;
+  bool left = true;
+  std::size_t Next(std::size_t i) const { return (i + 1) % p.size(); }
+};
+
+double Norm(double a) {  // to [0, 2 pi)
+  a = std::fmod(a, 2 * M_PI);
+  return a < 0 ? a + 2 * M_PI : a;
+}
+
+double SegmentDistance(const P2& q, const P2& a, const P2& b) {
+  double dx = b[0] - a[0], dy = b[1] - a[1], len2 = dx * dx + dy * dy;
+  double t = len2 > 0 ? std::clamp(((q[0] - a[0]) * dx + (q[1] - a[1]) * dy) / len2, 0.0, 1.0) : 0;
+  return std::hypot(q[0] - a[0] - t * dx, q[1] - a[1] - t * dy);
+}
+
+// The least distance from q to element i.
+double ElementDistance(const P2& q, const Contour& c, std::size_t i) {
+  const P2 &a = c.p[i], &b = c.p[c.Next(i)];
+  if (c.sweep[i] == 0) return SegmentDistance(q, a, b);
+  const P2& o = c.centre[i];
+  double a0 = std::atan2(a[1] - o[1], a[0] - o[0]), aq = std::atan2(q[1] - o[1], q[0] - o[0]);
+  double along = c.sweep[i] > 0 ? Norm(aq - a0) : Norm(a0 - aq);
+  double ends = std::min(std::hypot(q[0] - a[0], q[1] - a[1]), std::hypot(q[0] - b[0], q[1] - b[1]));
+  if (along > std::fabs(c.sweep[i]) * M_PI / 180) return ends;
+  return std::fabs(std::hypot(q[0] - o[0], q[1] - o[1]) - std::hypot(a[0] - o[0], a[1] - o[1]));
+}
+
+// Points along element i, both ends included.
+std::vector<P2> Samples(const Contour& c, std::size_t i, int n) {
+  const P2 &a = c.p[i], &b = c.p[c.Next(i)];
+  std::vector<P2> out;
+  const P2& o = c.centre[i];
+  double a0 = std::atan2(a[1] - o[1], a[0] - o[0]), rad = std::hypot(a[0] - o[0], a[1] - o[1]);
+  for (int k = 0; k <= n; ++k) {
+    double t = static_cast<double>(k) / n;
+    if (c.sweep[i] == 0)
+      out.push_back({a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])});
+    else {
+      double ang = a0 + t * c.sweep[i] * M_PI / 180;
+      out.push_back({o[0] + rad * std::cos(ang), o[1] + rad * std::sin(ang)});
+    }
+  }
+  return out;
+}
+
+// The direction of element k at its start or end, radians.
+double Tangent(const Contour& c, std::size_t k, bool at_end) {
+  const P2 &a = c.p[k], &b = c.p[c.Next(k)];
+  if (c.sweep[k] == 0) return std::atan2(b[1] - a[1], b[0] - a[0]);
+  const P2& q = at_end ? b : a;
+  return std::atan2(q[1] - c.centre[k][1], q[0] - c.centre[k][0]) + (c.sweep[k] > 0 ? M_PI / 2 : -M_PI / 2);
+}
+
+// The turn at the end of element k, radians, left positive.
+double Turn(const Contour& c, std::size_t k) {
+  return Norm(Tangent(c, c.Next(k), false) - Tangent(c, k, true) + M_PI) - M_PI;
+}
+
+// The arc of element i stays if it keeps more than a cutter diameter (and 0.5 mm) from every element but its
+// neighbours, and they from it: an arc adds no narrow neck that no compensation looking one element ahead can
+// cut (balt.md judgement call 49), and the contour stays simple.
+bool ArcFits(const Contour& c, std::size_t i) {
+  std::size_t n = c.p.size();
+  const double clear = 2 * c.r + 0.5;
+  for (std::size_t j = 0; j < n; ++j) {
+    if (j == i || j == c.Next(i) || c.Next(j) == i) continue;
+    for (const P2& q : Samples(c, i, 24))
+      if (ElementDistance(q, c, j) < clear) return false;
+    for (const P2& q : Samples(c, j, 24))
+      if (ElementDistance(q, c, i) < clear) return false;
+  }
+  // The corners at its ends turn by less than 165 degrees (no fold back onto its neighbour), and the contour
+  // stays simple.
+  for (std::size_t k : {(i + n - 1) % n, i})
+    if (std::fabs(Turn(c, k)) > 165 * M_PI / 180) return false;
+  std::vector<P2> poly;
+  for (std::size_t k = 0; k < n; ++k) {
+    auto s = Samples(c, k, 24);
+    poly.insert(poly.end(), s.begin(), s.end() - 1);
+  }
+  auto cross = [](const P2& o, const P2& a, const P2& b) {
+    return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0]);
+  };
+  std::size_t m = poly.size();
+  for (std::size_t a = 0; a < m; ++a)
+    for (std::size_t b = a + 2; b < m; ++b) {
+      if (a == 0 && b == m - 1) continue;  // neighbours across the start
+      const P2 &p1 = poly[a], &p2 = poly[(a + 1) % m], &q1 = poly[b], &q2 = poly[(b + 1) % m];
+      if (cross(p1, p2, q1) * cross(p1, p2, q2) < 0 && cross(q1, q2, p1) * cross(q1, q2, p2) < 0)
+        return false;
+    }
+  return true;
+}
+
+// The line-only contour of a seed is the one this property drew before arcs (the same draws): seeds found
+// then still name the same contour. `arcs`: a second stream from the seed turns some sides into arcs, convex
+// and concave, of 20-120 degrees and a radius at least the cutter's plus 0.5 mm (an inside arc no larger than
+// the cutter is KT-APL's [0004] and Balt-System's refusal, not a gouge), where they fit.
+Contour RandomContour(std::uint64_t seed, bool arcs) {
+  Rng rng(seed);
+  Contour c;
+  static const double radii[] = {2, 3, 5};
+  c.r = radii[rng.Int(0, 2)];
+  c.left = rng.Int(0, 1) == 1;
+  int n = rng.Int(5, 14);
+  for (int i = 0; i < n; ++i) {
+    double a = 2 * M_PI * (i + rng.Int(-30, 30) / 100.0) / n;
+    double rho = rng.Int(8000, 60000) / 1000.0;
+    c.p.push_back({std::round(rho * std::cos(a) * 1000) / 1000, std::round(rho * std::sin(a) * 1000) / 1000});
+  }
+  c.sweep.assign(c.p.size(), 0);
+  c.centre.assign(c.p.size(), P2{0, 0});
+  if (!arcs) return c;
+  Rng more(seed ^ 0xA5C3u);
+  for (std::size_t i = 0; i < c.p.size(); ++i) {
+    if (!more.Chance(60)) continue;
+    double sweep = more.Int(20, 120) * (more.Chance(50) ? 1 : -1);
+    const P2 &a = c.p[i], &b = c.p[c.Next(i)];
+    double chord = std::hypot(b[0] - a[0], b[1] - a[1]), h = std::fabs(sweep) * M_PI / 360;
+    double rad = chord / (2 * std::sin(h)), d = rad * std::cos(h);
+    if (rad < c.r + 0.5) continue;
+    double s = sweep > 0 ? 1 : -1;  // the centre on the left of the chord for a ccw arc
+    P2 o{(a[0] + b[0]) / 2 - s * d * (b[1] - a[1]) / chord,
+         (a[1] + b[1]) / 2 + s * d * (b[0] - a[0]) / chord};
+    c.centre[i] = {std::round(o[0] * 1000) / 1000, std::round(o[1] * 1000) / 1000};
+    c.sweep[i] = sweep;
+    if (!ArcFits(c, i)) c.sweep[i] = 0;
+  }
+  return c;
+}
+
+// The least distance from the points of a move (from `from`) to the contour's elements, and to element `near`
+// (the move's own) and its neighbours.
+struct Distance {
+  double all = 1e9, own = 1e9;  // own: to `near` and its neighbours
+};
+Distance MoveDistance(const Move& m, const Vec3& from, const Contour& c, std::size_t near) {
+  Distance best;
+  std::size_t n = c.p.size();
+  for (int k = 0; k <= 32; ++k) {
+    double t = k / 32.0;
+    P2 q{from[0] + t * (m.end[0] - from[0]), from[1] + t * (m.end[1] - from[1])};
+    if (m.kind == MoveKind::kArc) {
+      double a0 = std::atan2(from[1] - m.center[1], from[0] - m.center[0]);
+      double a1 = std::atan2(m.end[1] - m.center[1], m.end[0] - m.center[0]);
+      double sweep = m.cw ? a0 - a1 : a1 - a0;
+      while (sweep <= 1e-12) sweep += 2 * M_PI;
+      double a = a0 + (m.cw ? -1 : 1) * t * sweep,
+             rad = std::hypot(from[0] - m.center[0], from[1] - m.center[1]);
+      q = {m.center[0] + rad * std::cos(a), m.center[1] + rad * std::sin(a)};
+    }
+    for (std::size_t i = 0; i < n; ++i) {
+      double d = ElementDistance(q, c, i);
+      best.all = std::min(best.all, d);
+      if (i == near || i == (near + 1) % n || i == (near + n - 1) % n) best.own = std::min(best.own, d);
+    }
+  }
+  return best;
+}
+
+struct Tally {
+  int contours = 0, with_arcs = 0, arcs = 0, refused = 0, refused_with_arcs = 0, before_refusal = 0, far = 0,
+      arc_corner = 0;
+};
+
+// The program in the dialect and its tools file; `first`/`last`: the lines of the first contour block and of
+// the block that ends the second time at the second corner.
+struct Written {
+  std::string text, tools;
+  int first = 0, last = 0;
+};
+
+Written Write(const std::string& dialect, const Contour& c) {
+  bool kt = dialect == "ktapl";
+  auto num = [kt](double v) { return Num(v, 3, kt); };
+  auto xy = [&](const P2& p) { return "X" + num(p[0]) + " Y" + num(p[1]); };
+  Written w;
+  std::vector<std::string> lines;
+  if (kt) {
+    lines = {"! no-gouge property (tests/oracle)", "G71 T1", "M06", "G90 G0 X100. Y0. Z0. F0",
+             std::string("G1 ") + (c.left ? "G41 " : "G42 ") + xy(c.p[0]) + " F200."};
+    w.tools = "G71\n(TLD,T1D" + Num(2 * c.r, 3, true) + ")\n";
+  } else {
+    lines = {"; no-gouge property (tests/oracle)", "T1.1 M6", "S1000 M3", "G X100 Y0 Z0",
+             std::string("G1 ") + (c.left ? "G41 " : "G42 ") + xy(c.p[0]) + " F200"};
+    w.tools = "1 Z0 K" + Num(2 * c.r, 3) + "\n";
+  }
+  w.first = static_cast<int>(lines.size()) + 1;
+  std::size_t n = c.p.size();
+  for (std::size_t k = 0; k <= n; ++k) {  // elements 0 .. n-1, then element 0 again
+    std::size_t i = k % n;
+    const P2& e = c.p[c.Next(i)];
+    if (c.sweep[i] == 0) {
+      lines.push_back((kt ? "G1 " : "G1 ") + xy(e));
+    } else {
+      std::string g = c.sweep[i] > 0 ? (kt ? "G03 " : "G3 ") : (kt ? "G02 " : "G2 ");
+      lines.push_back(g + xy(e) + " I" + num(c.centre[i][0]) + " J" + num(c.centre[i][1]));
+    }
+  }
+  w.last = static_cast<int>(lines.size());
+  lines.push_back(kt ? "G1 G40 X100. Y0." : "G1 G40 X100 Y0");
+  lines.push_back(kt ? "M30" : "M2");
+  for (const auto& l : lines) w.text += l + "\n";
+  return w;
+}
+
+// One contour: true when it keeps the property. A refused program's moves before the refusal are counted in
+// `before_refusal` when they come too close (the element too short for the radius is read after the corner
+// before it was cut: docs/testing.md), not failed.
+bool Check(const PropRun& o, const std::string& dialect, std::uint64_t seed, bool arcs, const fs::path& dir,
+           Tally* tally) {
+  Contour c = RandomContour(seed, arcs);
+  Written w = Write(dialect, c);
+  int arc_count = static_cast<int>(std::count_if(c.sweep.begin(), c.sweep.end(), [](double s) { return s; }));
+  ++tally->contours;
+  tally->arcs += arc_count;
+  if (arc_count) ++tally->with_arcs;
+  fs::path prog = dir / ("gouge." + dialect), tools = dir / "gouge.tools";
+  Spit(prog, w.text);
+  Spit(tools, w.tools);
+  int rc = Shell(Quote(o.interp) + " --dialect " + dialect + " --tools " + Quote(tools) + " " + Quote(prog) +
+                 " >" + Quote(dir / "gouge.out") + " 2>" + Quote(dir / "gouge.err"));
+  std::string error;
+  auto moves = ParseCellInterp(Slurp(dir / "gouge.out"), false, &error);
+  auto keep = [&] {  // --keep: the program of a failing or refused contour
+    if (o.keep.empty()) return;
+    fs::create_directories(o.keep);
+    std::string stem = dialect + "-nogouge-" + std::to_string(seed);
+    Spit(fs::path(o.keep) / (stem + "." + dialect), w.text);
+    Spit(fs::path(o.keep) / (stem + ".tools"), w.tools);
+  };
+  if (rc != 0) {
+    keep();
+    ++tally->refused;
+    if (arc_count) ++tally->refused_with_arcs;
+  }
+  const double need = c.r - 2e-3 + (o.plant ? 0.1 : 0);  // --plant: 0.1 mm more than the radius
+  Vec3 from{};
+  for (const Move& m : moves) {
+    bool checked = m.line > w.first && m.line < w.last;
+    Distance d = checked ? MoveDistance(m, from, c, static_cast<std::size_t>(m.line - w.first) % c.p.size())
+                         : Distance{};
+    if (d.all < need && rc != 0) {  // reported, not failed
+      ++tally->before_refusal;
+      std::cout << dialect << " nogouge: program seed " << seed << " (refused: " << Slurp(dir / "gouge.err")
+                << "), line " << m.line << " before the refusal comes " << d.all
+                << " mm from the contour, radius " << c.r << "\n";
+      return true;
+    }
+    if (d.all < need) {
+      // Too close to an element the move's own element does not meet: the offset reaching a part of the
+      // contour further on, which compensation looking one element ahead does not see (balt.md judgement call
+      // 49); reported, not failed. Too close to its own element or a neighbour is a wrong corner: failed.
+      bool far_only = d.own >= need;
+      // Balt-System at a corner turning away from the cutter where an arc meets: the offsets' intersection
+      // (balt.md judgement call 50) lies on the arc's circle past its end and can come back into the contour
+      // (docs/testing.md, "What the properties found" 5); open, reported, not failed.
+      // The corners at both ends of the move's element: the extension may belong to either.
+      std::size_t n = c.p.size(), k = static_cast<std::size_t>(m.line - w.first) % n;
+      bool arc_corner = false;
+      for (std::size_t j : {(k + n - 1) % n, k}) {
+        bool away = c.left ? Turn(c, j) < 0 : Turn(c, j) > 0;
+        arc_corner =
+            arc_corner || (dialect == "balt" && away && (c.sweep[j] != 0 || c.sweep[c.Next(j)] != 0));
+      }
+      std::cout << dialect << " nogouge: program seed " << seed << ", line " << m.line
+                << (far_only     ? " (a non-adjacent element)"
+                    : arc_corner ? " (Balt-System's outside arc corner, open)"
+                                 : "")
+                << ": the tool centre comes " << d.all << " mm from the contour, radius " << c.r << "\n  "
+                << Describe(m) << "\n";
+      keep();
+      if (far_only || arc_corner) {
+        ++(far_only ? tally->far : tally->arc_corner);
+        return true;
+      }
+      return false;
+    }
+    from = m.end;
+  }
+  return true;
+}
+
+}  // namespace
+
+int NoGouge(const PropRun& o, const std::string& dialect, const fs::path& dir) {
+  if (dialect != "balt" && dialect != "ktapl") {
+    std::printf("%s nogouge: does not apply (the lathes' tool-nose compensation not yet)\n", dialect.c_str());
+    return 0;
+  }
+  int failing = 0;
+  Tally t;
+  // One contour per ten blocks; the odd ones with arcs.
+  for (int done = 0, i = 0; done < o.blocks; done += 10, ++i)
+    if (!Check(o, dialect, ProgramSeed(o.seed, dialect + "/nogouge", i), i % 2 == 1, dir, &t)) ++failing;
+  std::printf(
+      "%s nogouge: %d of %d contours keep the property (%d with %d arcs; %d refused, %d of them with arcs, "
+      "%d "
+      "too close before the refusal; %d too close to a non-adjacent element only; %d at Balt-System's "
+      "outside arc "
+      "corners)\n",
+      dialect.c_str(), t.contours - failing, t.contours, t.with_arcs, t.arcs, t.refused, t.refused_with_arcs,
+      t.before_refusal, t.far, t.arc_corner);
+  return failing;
+}
+
+}  // namespace cell::oracle
