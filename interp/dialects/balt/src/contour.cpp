@@ -80,6 +80,32 @@ void CutStart(Path& p, Vec2 q) {
   p.start = q;
 }
 
+// An outside corner where an arc meets (balt.md judgement call 50): the line-line rule (ln 3082, 3150-3190)
+// applied to the elements' tangents at the corner. The offset elements themselves meet on an arc's offset
+// circle past its end, which can come back into the contour when they meet far from the corner
+// (docs/testing.md "What the properties found" 5). `via`: where the tangents' offsets meet, the tool going
+// there straight from an arc's offset end and from there straight to an arc's offset start; unset when the
+// line-line rule adds a fill-in arc instead (they do not meet ahead of both ends: a reversal).
+geom::Corner TangentCorner(const Path& a, const Path& b, double r, int side, std::optional<Vec2>* via) {
+  Path ta, tb;  // the tangent lines, ending / starting at the corner (their length does not matter)
+  ta.end = a.end;
+  ta.start = a.end - EndTangent(a);
+  tb.start = b.start;
+  tb.end = b.start + StartTangent(b);
+  geom::Corner k = ComputeCorner(ta, tb, r, side, true);
+  if (k.fill_in) return k;  // the same fill-in arc as ComputeCorner(a, b) without the intersection
+  *via = k.a_end;
+  if (a.arc) {
+    k.a_end = OffsetEnd(a, r, side);
+    k.a_trim = 0;
+  }
+  if (b.arc) {
+    k.b_start = OffsetStart(b, r, side);
+    k.b_trim = 0;
+  }
+  return k;
+}
+
 }  // namespace
 
 void Contour::Sync(const AxisArray& pos) {
@@ -304,6 +330,10 @@ void Contour::Join(Pending& next) {
     return;
   }
   geom::Corner k = ComputeCorner(a.path, next.path, r, side_, !a.roll);
+  std::optional<Vec2> via;
+  if (k.kind == geom::Corner::kAway && !a.roll && (a.path.arc || next.path.arc)) {
+    k = TangentCorner(a.path, next.path, r, side_, &via);
+  }
   if (k.kind == geom::Corner::kToward && !k.intersects) Undefined("the offset elements do not intersect");
   if (a.kind != kVirtual && RemainingLength(a.path, r, side_, a.trim_start, k.a_trim) < -kTiny) {
     Undefined("the element is shorter than the compensation needs");
@@ -327,12 +357,36 @@ void Contour::Join(Pending& next) {
       ramp_ = false;
       hold_ = std::move(ramp_move_);
       held_ = true;
-      EmitHeld(k.a_end, 0);
+      EmitHeld(via ? *via : k.a_end, 0);  // the profile starts at the corner point
     }
   } else {
     EmitHeld(k.a_end, k.a_trim);
+    if (via && Norm(*via - actual_) >= kTiny) Out(Segment(*via, line, feed ? &*feed : nullptr, used));
   }
   if (k.fill_in) Out(FillIn(k, corner, line, feed ? &*feed : nullptr, used));
+  // On to the next arc's offset start, unless a profile ends here (a virtual element) or its start
+  // was not cut from the corner point.
+  if (via && next.kind != kVirtual && Norm(actual_ - *via) < kTiny && Norm(k.b_start - *via) >= kTiny) {
+    Out(Segment(k.b_start, line, feed ? &*feed : nullptr, used));
+  }
+}
+
+Canon Contour::Segment(Vec2 to, int line, const Feed* feed, std::uint32_t used) const {
+  // A straight move at a corner, at the position of every other axis after the element before it.
+  Canon c;
+  c.line = line;
+  Target t;
+  t.pos = last_;
+  t.used = used;
+  SetPlaneOf(t.pos, to);
+  if (feed) {
+    LinearOp& l = c.Set<LinearOp>();
+    l.to = t;
+    l.feed = *feed;
+  } else {
+    c.Set<RapidOp>().to = t;
+  }
+  return c;
 }
 
 void Contour::Take(Canon&& c, const Path* path, bool hold) {

@@ -11,7 +11,8 @@
 //
 // The rules (ln 3080-3216): the start move (the G41/G42 block, or the first move in the plane after it) is
 // linear and ends with the cutter at 90 degrees to the next element; corners join at the intersection of the
-// offset elements (a fill-in arc about the corner only where they do not meet, or with r0); a G40 block's
+// offset elements (where an arc meets a corner turning away, of its tangent's offset: balt.md judgement call
+// 50; a fill-in arc about the corner only where they do not meet, or with r0); a G40 block's
 // move leaves the last element at 90 degrees and goes to its programmed end point (an arc in a G40 block is
 // cut compensated and left straight to its end point); G40 without a move leaves the cutter at the offset
 // point until the next move in the plane.
@@ -102,6 +103,7 @@ class Contour {
   Canon FillIn(const geom::Corner& k, geom::Vec2 corner, int line, const Feed* feed,
                std::uint32_t used) const;
   Canon Straight(const Canon& like, geom::Vec2 to) const;
+  Canon Segment(geom::Vec2 to, int line, const Feed* feed, std::uint32_t used) const;
 
   void Checked() { checked_ = ready_.size(); }  // everything written so far is settled
   std::vector<Canon> ready_;

@@ -178,5 +178,49 @@ TEST(Contour, AnElementTooShortForBothCornersLeavesTheCornerBeforeItUnwritten) {
   EXPECT_NEAR(f.At(0).y, 5, 1e-9);
 }
 
+// An outside corner where an arc meets (balt.md judgement call 50, ln 3082): G41 radius 5, a CCW arc about
+// (0,0) of radius 13 from -60 to 0 degrees (the cutter inside it: offset radius 8), then the line
+// (13,0)->(40,0), a right turn of 90 degrees, away from the cutter. The offset elements meet on the
+// arc's offset circle 38.7 degrees past its end, at (6.245,5); the tangents' offsets (x = 8, y = 5) meet
+// at (8,5): the arc ends at its offset end (8,0), the tool goes straight to (8,5) and along the line's
+// offset to (40,5).
+TEST(Contour, OutsideCornerAfterAnArcMeetsOnTheTangent) {
+  Fixture f;
+  f.k.Sync({});
+  f.k.Start(geom::kLeft, 5, 41);
+  const Vec2 s{6.5, -13 * std::sqrt(3.0) / 2};
+  f.Move({6.5, -30}, s, 1);  // the start move, to the arc's offset start (4,-6.928)
+  Path arc;
+  arc.arc = true;
+  arc.start = s;
+  arc.end = {13, 0};
+  arc.center = {0, 0};
+  arc.sweep = 60;
+  Canon c;
+  c.line = 2;
+  ArcOp& a = c.Set<ArcOp>();
+  a.to.pos[kX] = 13;
+  a.to.used = 3;
+  a.feed.rate = 100;
+  a.angle = 60;
+  a.plane = {kX, kY};
+  f.k.Take(std::move(c), &arc, false);
+  f.Drain();
+  f.Move({13, 0}, {40, 0}, 3);
+  f.k.Release();
+  f.Drain();
+  ASSERT_EQ(f.out.size(), 4u);
+  EXPECT_NEAR(f.At(0).x, 4, 1e-9);
+  EXPECT_NEAR(f.At(0).y, -4 * std::sqrt(3.0), 1e-9);
+  EXPECT_NEAR(f.out[1].As<ArcOp>().angle, 60, 1e-9);  // not extended along its circle
+  EXPECT_NEAR(f.At(1).x, 8, 1e-9);
+  EXPECT_NEAR(f.At(1).y, 0, 1e-9);
+  EXPECT_EQ(f.out[2].line, 2);
+  EXPECT_NEAR(f.At(2).x, 8, 1e-9);  // straight along the arc's tangent offset
+  EXPECT_NEAR(f.At(2).y, 5, 1e-9);
+  EXPECT_NEAR(f.At(3).x, 40, 1e-9);
+  EXPECT_NEAR(f.At(3).y, 5, 1e-9);
+}
+
 }  // namespace
 }  // namespace cell::interp::balt
