@@ -2,7 +2,7 @@
 §5.8.5, §5.8.6, §5.17.5-5.17.7, §5.20, §6.4-6.6."""
 import math
 
-from corpus import Case
+from corpus import Case, sweep
 
 # ln 2472-2488: Ttool.offset, the offset active from M06: its length on the axis its record names, added to
 # that axis's coordinates (offset 1: Z100; offset 2: X50; offset 10: Z-20 -- "T1.10" is offset 10, not 1);
@@ -179,6 +179,53 @@ c.lin("N93", 170, x=50, y=18)
 c.rapid("N94", x=50, y=32)
 c.rapid("N95", z=0)
 c.spindle("N95", "stop", 1100)
+
+# ln 3082 "the exact intersection point" at outside corners where an arc meets (balt.md judgement call 50):
+# the line-line rule applied to the arcs' tangents at the corner. G41, cutter radius 5 (K10): a CCW arc
+# about (0,0) of radius 13 from (5,-12) to (13,0) (the cutter inside it: offset radius 8), the line
+# (13,0)->(40,0) (a right turn of 90 degrees, away from the cutter), a CCW arc about (53,0) of radius 13
+# from (40,0) to (48,-12) (again a right turn of 90 degrees; the cutter inside). At the first corner the
+# arc's tangent (0,1) at (13,0) and the line, both offset 5 to the left, meet at X1; the arc ends at its
+# offset end and the tool goes straight to X1. At the second the line's offset meets the arc's tangent (0,-1)
+# at (40,0) offset 5 to the left at X2: the line runs on to X2, the tool goes straight to the arc's offset
+# start. (The offset elements themselves would meet on the offset circles, at (6.245,5) and (46.755,5).)
+c1, c2 = (0, 0), (53, 0)
+a1s, a1e, a2s, a2e = (5, -12), (13, 0), (40, 0), (48, -12)
+t1 = (-(a1e[1] - c1[1]), a1e[0] - c1[0])  # CCW tangent at the first arc's end: (0,13)
+t2 = (-(a2s[1] - c2[1]), a2s[0] - c2[0])  # CCW tangent at the second arc's start: (0,-13)
+x1 = meet(offset_line((a1e[0] - t1[0], a1e[1] - t1[1]), a1e, -5), offset_line(a1e, (40, 0), -5))
+x2 = meet(offset_line(a1e, (40, 0), -5), offset_line(a2s, (a2s[0] + t2[0], a2s[1] + t2[1]), -5))
+
+
+def on_offset_circle(c, p, rr):
+    """The point of p's radius about c at radius rr."""
+    d = math.hypot(p[0] - c[0], p[1] - c[1])
+    return (c[0] + rr * (p[0] - c[0]) / d, c[1] + rr * (p[1] - c[1]) / d)
+
+
+c = Case("cc_outside_arc_corners_g41", """
+; ln 3082 outside corners where arcs meet (balt.md judgement call 50); cutter radius 5
+T1.1 M6
+G X5 Y-30
+G1 G41 X5 Y-12 F200
+G3 X13 Y0 I0 J0
+G1 X40 Y0
+G3 X48 Y-12 I53 J0
+G1 G40 X60 Y-20
+""", "L3082", tools="1 Z0 K10\n")
+c.units(2)
+c.op("tool_select", 2, tool="1")
+c.op("tool_change", 2, tool="1", offset=1)
+c.rapid(3, x=5, y=-30)
+s1, e1 = on_offset_circle(c1, a1s, 8), on_offset_circle(c1, a1e, 8)
+c.lin(4, 200, x=s1[0], y=s1[1])  # the start move ends at 90 degrees to the arc (ln 3088)
+c.arc(5, 200, c1, False, sweep(a1s, a1e, c1, False), x=e1[0], y=e1[1])
+c.lin(5, 200, x=x1[0], y=x1[1])  # the first corner, straight along the arc's tangent offset
+c.lin(6, 200, x=x2[0], y=x2[1])  # the line's offset from X1 on to X2
+s2, e2 = on_offset_circle(c2, a2s, 8), on_offset_circle(c2, a2e, 8)
+c.lin(6, 200, x=s2[0], y=s2[1])  # the second corner, straight along the arc's tangent offset
+c.arc(7, 200, c2, False, sweep(a2s, a2e, c2, False), x=e2[0], y=e2[1])
+c.lin(8, 200, x=60, y=-20)  # the G40 move from the arc's offset end (ln 3130)
 
 # ln 3172-3185 the automatic radius between two lines, here without compensation: (0,0)->(100,100), r-1,
 # ->(-100,100). The radius rounds the corner on the side it turns (left; the sign is not used for lines
