@@ -86,6 +86,8 @@ void CutStart(Path& p, Vec2 q) {
 // (docs/testing.md "What the properties found" 5). `via`: where the tangents' offsets meet, the tool going
 // there straight from an arc's offset end and from there straight to an arc's offset start; unset when the
 // line-line rule adds a fill-in arc instead (they do not meet ahead of both ends: a reversal).
+// Called only where the offset elements themselves meet ahead of both ends (the caller keeps the fill-in
+// arc elsewhere).
 geom::Corner TangentCorner(const Path& a, const Path& b, double r, int side, std::optional<Vec2>* via) {
   Path ta, tb;  // the tangent lines, ending / starting at the corner (their length does not matter)
   ta.end = a.end;
@@ -331,7 +333,9 @@ void Contour::Join(Pending& next) {
   }
   geom::Corner k = ComputeCorner(a.path, next.path, r, side_, !a.roll);
   std::optional<Vec2> via;
-  if (k.kind == geom::Corner::kAway && !a.roll && (a.path.arc || next.path.arc)) {
+  // Only where the offset elements meet ahead of both ends: where they do not, the tangents' offsets meet far
+  // out at a corner that turns back and would pass inside a neighbour, so the fill-in arc stays (call 50).
+  if (k.kind == geom::Corner::kAway && !k.fill_in && !a.roll && (a.path.arc || next.path.arc)) {
     k = TangentCorner(a.path, next.path, r, side_, &via);
   }
   if (k.kind == geom::Corner::kToward && !k.intersects) Undefined("the offset elements do not intersect");
