@@ -222,5 +222,44 @@ TEST(Contour, OutsideCornerAfterAnArcMeetsOnTheTangent) {
   EXPECT_NEAR(f.At(3).y, 5, 1e-9);
 }
 
+// The same arc, then a line turning 150 degrees right, (13,0)->(13,0)+20(0.5,-0.866): its offset (through
+// (17.330,2.5)) misses the arc's offset circle of radius 8, and the tangents' offsets would meet far out
+// at (8,18.660); the fill-in arc about the corner stays (judgement call 50), CW 150 degrees from (8,0).
+TEST(Contour, OutsideCornerAfterAnArcKeepsTheFillInWhereTheOffsetsDoNotMeet) {
+  Fixture f;
+  f.k.Sync({});
+  f.k.Start(geom::kLeft, 5, 41);
+  const Vec2 s{6.5, -13 * std::sqrt(3.0) / 2};
+  f.Move({6.5, -30}, s, 1);
+  Path arc;
+  arc.arc = true;
+  arc.start = s;
+  arc.end = {13, 0};
+  arc.center = {0, 0};
+  arc.sweep = 60;
+  Canon c;
+  c.line = 2;
+  ArcOp& a = c.Set<ArcOp>();
+  a.to.pos[kX] = 13;
+  a.to.used = 3;
+  a.feed.rate = 100;
+  a.angle = 60;
+  a.plane = {kX, kY};
+  f.k.Take(std::move(c), &arc, false);
+  f.Drain();
+  const Vec2 d{0.5, -std::sqrt(3.0) / 2};
+  f.Move({13, 0}, {13 + 20 * d.x, 20 * d.y}, 3);
+  f.k.Release();
+  f.Drain();
+  ASSERT_EQ(f.out.size(), 4u);
+  EXPECT_NEAR(f.At(1).x, 8, 1e-9);
+  EXPECT_NEAR(f.At(1).y, 0, 1e-9);
+  const ArcOp& fill = f.out[2].As<ArcOp>();
+  EXPECT_TRUE(fill.cw);
+  EXPECT_NEAR(fill.angle, 150, 1e-9);
+  EXPECT_NEAR(f.At(2).x, 13 - 5 * d.y, 1e-9);
+  EXPECT_NEAR(f.At(2).y, 5 * d.x, 1e-9);
+}
+
 }  // namespace
 }  // namespace cell::interp::balt
