@@ -195,8 +195,7 @@ Distance MoveDistance(const Move& m, const Vec3& from, const Contour& c, std::si
 }
 
 struct Tally {
-  int contours = 0, with_arcs = 0, arcs = 0, refused = 0, refused_with_arcs = 0, before_refusal = 0, far = 0,
-      arc_corner = 0;
+  int contours = 0, with_arcs = 0, arcs = 0, refused = 0, refused_with_arcs = 0, before_refusal = 0, far = 0;
 };
 
 // The program in the dialect and its tools file; `first`/`last`: the lines of the first contour block and of
@@ -288,26 +287,12 @@ bool Check(const PropRun& o, const std::string& dialect, std::uint64_t seed, boo
       // contour further on, which compensation looking one element ahead does not see (balt.md judgement call
       // 49); reported, not failed. Too close to its own element or a neighbour is a wrong corner: failed.
       bool far_only = d.own >= need;
-      // Balt-System at a corner turning away from the cutter where an arc meets: the offsets' intersection
-      // (balt.md judgement call 50) lies on the arc's circle past its end and can come back into the contour
-      // (docs/testing.md, "What the properties found" 5); open, reported, not failed.
-      // The corners at both ends of the move's element: the extension may belong to either.
-      std::size_t n = c.p.size(), k = static_cast<std::size_t>(m.line - w.first) % n;
-      bool arc_corner = false;
-      for (std::size_t j : {(k + n - 1) % n, k}) {
-        bool away = c.left ? Turn(c, j) < 0 : Turn(c, j) > 0;
-        arc_corner =
-            arc_corner || (dialect == "balt" && away && (c.sweep[j] != 0 || c.sweep[c.Next(j)] != 0));
-      }
       std::cout << dialect << " nogouge: program seed " << seed << ", line " << m.line
-                << (far_only     ? " (a non-adjacent element)"
-                    : arc_corner ? " (Balt-System's outside arc corner, open)"
-                                 : "")
-                << ": the tool centre comes " << d.all << " mm from the contour, radius " << c.r << "\n  "
-                << Describe(m) << "\n";
+                << (far_only ? " (a non-adjacent element)" : "") << ": the tool centre comes " << d.all
+                << " mm from the contour, radius " << c.r << "\n  " << Describe(m) << "\n";
       keep();
-      if (far_only || arc_corner) {
-        ++(far_only ? tally->far : tally->arc_corner);
+      if (far_only) {
+        ++tally->far;
         return true;
       }
       return false;
@@ -331,12 +316,9 @@ int NoGouge(const PropRun& o, const std::string& dialect, const fs::path& dir) {
     if (!Check(o, dialect, ProgramSeed(o.seed, dialect + "/nogouge", i), i % 2 == 1, dir, &t)) ++failing;
   std::printf(
       "%s nogouge: %d of %d contours keep the property (%d with %d arcs; %d refused, %d of them with arcs, "
-      "%d "
-      "too close before the refusal; %d too close to a non-adjacent element only; %d at Balt-System's "
-      "outside arc "
-      "corners)\n",
+      "%d too close before the refusal; %d too close to a non-adjacent element only)\n",
       dialect.c_str(), t.contours - failing, t.contours, t.with_arcs, t.arcs, t.refused, t.refused_with_arcs,
-      t.before_refusal, t.far, t.arc_corner);
+      t.before_refusal, t.far);
   return failing;
 }
 
