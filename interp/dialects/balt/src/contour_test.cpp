@@ -178,18 +178,13 @@ TEST(Contour, AnElementTooShortForBothCornersLeavesTheCornerBeforeItUnwritten) {
   EXPECT_NEAR(f.At(0).y, 5, 1e-9);
 }
 
-// An outside corner where an arc meets (balt.md judgement call 50, ln 3082): G41 radius 5, a CCW arc about
-// (0,0) of radius 13 from -60 to 0 degrees (the cutter inside it: offset radius 8), then the line
-// (13,0)->(40,0), a right turn of 90 degrees, away from the cutter. The offset elements meet on the
-// arc's offset circle 38.7 degrees past its end, at (6.245,5); the tangents' offsets (x = 8, y = 5) meet
-// at (8,5): the arc ends at its offset end (8,0), the tool goes straight to (8,5) and along the line's
-// offset to (40,5).
-TEST(Contour, OutsideCornerAfterAnArcMeetsOnTheTangent) {
-  Fixture f;
+// G41 with radius 5 on: the start move to the offset start (4,-6.928) of a CCW arc of radius 13 about the
+// origin from 300 to 360 degrees, (6.5,-11.258) -> (13,0), taken (its corner waits for the next move).
+void StartAndArc(Fixture& f) {
   f.k.Sync({});
   f.k.Start(geom::kLeft, 5, 41);
   const Vec2 s{6.5, -13 * std::sqrt(3.0) / 2};
-  f.Move({6.5, -30}, s, 1);  // the start move, to the arc's offset start (4,-6.928)
+  f.Move({6.5, -30}, s, 1);
   Path arc;
   arc.arc = true;
   arc.start = s;
@@ -206,6 +201,17 @@ TEST(Contour, OutsideCornerAfterAnArcMeetsOnTheTangent) {
   a.plane = {kX, kY};
   f.k.Take(std::move(c), &arc, false);
   f.Drain();
+}
+
+// An outside corner where an arc meets (balt.md judgement call 50, ln 3082): G41 radius 5, a CCW arc about
+// (0,0) of radius 13 from -60 to 0 degrees (the cutter inside it: offset radius 8), then the line
+// (13,0)->(40,0), a right turn of 90 degrees, away from the cutter. The offset elements meet on the
+// arc's offset circle 38.7 degrees past its end, at (6.245,5); the tangents' offsets (x = 8, y = 5) meet
+// at (8,5): the arc ends at its offset end (8,0), the tool goes straight to (8,5) and along the line's
+// offset to (40,5).
+TEST(Contour, OutsideCornerAfterAnArcMeetsOnTheTangent) {
+  Fixture f;
+  StartAndArc(f);
   f.Move({13, 0}, {40, 0}, 3);
   f.k.Release();
   f.Drain();
@@ -227,26 +233,7 @@ TEST(Contour, OutsideCornerAfterAnArcMeetsOnTheTangent) {
 // at (8,18.660); the fill-in arc about the corner stays (judgement call 50), CW 150 degrees from (8,0).
 TEST(Contour, OutsideCornerAfterAnArcKeepsTheFillInWhereTheOffsetsDoNotMeet) {
   Fixture f;
-  f.k.Sync({});
-  f.k.Start(geom::kLeft, 5, 41);
-  const Vec2 s{6.5, -13 * std::sqrt(3.0) / 2};
-  f.Move({6.5, -30}, s, 1);
-  Path arc;
-  arc.arc = true;
-  arc.start = s;
-  arc.end = {13, 0};
-  arc.center = {0, 0};
-  arc.sweep = 60;
-  Canon c;
-  c.line = 2;
-  ArcOp& a = c.Set<ArcOp>();
-  a.to.pos[kX] = 13;
-  a.to.used = 3;
-  a.feed.rate = 100;
-  a.angle = 60;
-  a.plane = {kX, kY};
-  f.k.Take(std::move(c), &arc, false);
-  f.Drain();
+  StartAndArc(f);
   const Vec2 d{0.5, -std::sqrt(3.0) / 2};
   f.Move({13, 0}, {13 + 20 * d.x, 20 * d.y}, 3);
   f.k.Release();
