@@ -204,21 +204,25 @@ void Contour::EmitHeld(Vec2 end, double trim_end) {
   ReleaseAfter();
 }
 
-Canon Contour::Straight(const Canon& like, Vec2 to) const {
+Canon Contour::StraightTo(int line, Target t, Vec2 to, const Feed* feed) const {
   Canon c;
-  c.line = like.line;
+  c.line = line;
+  SetPlaneOf(t.pos, to);
+  if (feed) {
+    LinearOp& l = c.Set<LinearOp>();
+    l.to = t;
+    l.feed = *feed;
+  } else {
+    c.Set<RapidOp>().to = t;
+  }
+  return c;
+}
+
+Canon Contour::Straight(const Canon& like, Vec2 to) const {
   Target tgt = *like.target();
   tgt.travel = {};
   tgt.travel_mask = 0;
-  SetPlaneOf(tgt.pos, to);
-  if (const Feed* f = like.feed()) {
-    LinearOp& l = c.Set<LinearOp>();
-    l.to = tgt;
-    l.feed = *f;
-  } else {
-    c.Set<RapidOp>().to = tgt;
-  }
-  return c;
+  return StraightTo(like.line, tgt, to, like.feed());
 }
 
 Canon Contour::FillIn(const geom::Corner& k, Vec2 corner, int line, const Feed* feed,
@@ -377,20 +381,10 @@ void Contour::Join(Pending& next) {
 
 Canon Contour::Segment(Vec2 to, int line, const Feed* feed, std::uint32_t used) const {
   // A straight move at a corner, at the position of every other axis after the element before it.
-  Canon c;
-  c.line = line;
   Target t;
   t.pos = last_;
   t.used = used;
-  SetPlaneOf(t.pos, to);
-  if (feed) {
-    LinearOp& l = c.Set<LinearOp>();
-    l.to = t;
-    l.feed = *feed;
-  } else {
-    c.Set<RapidOp>().to = t;
-  }
-  return c;
+  return StraightTo(line, t, to, feed);
 }
 
 void Contour::Take(Canon&& c, const Path* path, bool hold) {

@@ -104,6 +104,8 @@ class Contour {
                std::uint32_t used) const;
   Canon Straight(const Canon& like, geom::Vec2 to) const;
   Canon Segment(geom::Vec2 to, int line, const Feed* feed, std::uint32_t used) const;
+  // A feed move to `to` in the plane (a rapid without a feed), the rest of `t` as it is.
+  Canon StraightTo(int line, Target t, geom::Vec2 to, const Feed* feed) const;
 
   void Checked() { checked_ = ready_.size(); }  // everything written so far is settled
   std::vector<Canon> ready_;
