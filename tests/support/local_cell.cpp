@@ -4,8 +4,10 @@
 
 #include <cstdio>
 #include <cstdlib>
+#include <deque>
 #include <filesystem>
 #include <fstream>
+#include <string>
 
 #include <gtest/gtest.h>
 
@@ -38,6 +40,21 @@ RunResult LocalCell::Up(const std::string& stations, const std::string& clock,
   args.insert(args.end(), more.begin(), more.end());
   RunResult r = Ctl(args);
   up_ = r.code == 0;
+  if (!up_) {
+    // What each service said before `up` gave up on it: a cell that did not come up under load in a full run
+    // (issue 44) left nothing else to read once the test's data directory was gone.
+    std::error_code ec;
+    for (const auto& f : std::filesystem::directory_iterator(data_ + "/logs", ec)) {
+      std::ifstream in(f.path());
+      std::deque<std::string> tail;
+      for (std::string line; std::getline(in, line);) {
+        tail.push_back(line);
+        if (tail.size() > 12) tail.pop_front();
+      }
+      std::fprintf(stderr, "--- %s (last %zu lines)\n", f.path().filename().c_str(), tail.size());
+      for (auto& line : tail) std::fprintf(stderr, "%s\n", line.c_str());
+    }
+  }
   return r;
 }
 
