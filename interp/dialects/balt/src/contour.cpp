@@ -357,6 +357,7 @@ void Contour::Join(Pending& next) {
   std::optional<Feed> feed;
   if (a.kind != kVirtual && a.c.feed()) feed = *a.c.feed();
   if (!feed && next.c.feed()) feed = *next.c.feed();
+  const Feed* corner_feed = feed ? &*feed : nullptr;  // the moves made at the corner (none: rapids)
   const std::uint32_t used = next.c.target() ? next.c.target()->used : 0;
   if (a.kind == kVirtual) {
     // A closed GTL profile starts at the corner of its last and first elements.
@@ -369,13 +370,13 @@ void Contour::Join(Pending& next) {
     }
   } else {
     EmitHeld(k.a_end, k.a_trim);
-    if (via && Norm(*via - actual_) >= kTiny) Out(Segment(*via, line, feed ? &*feed : nullptr, used));
+    if (via && Norm(*via - actual_) >= kTiny) Out(Segment(*via, line, corner_feed, used));
   }
-  if (k.fill_in) Out(FillIn(k, corner, line, feed ? &*feed : nullptr, used));
+  if (k.fill_in) Out(FillIn(k, corner, line, corner_feed, used));
   // On to the next arc's offset start, unless a profile ends here (a virtual element) or its start
   // was not cut from the corner point.
   if (via && next.kind != kVirtual && Norm(actual_ - *via) < kTiny && Norm(k.b_start - *via) >= kTiny) {
-    Out(Segment(k.b_start, line, feed ? &*feed : nullptr, used));
+    Out(Segment(k.b_start, line, corner_feed, used));
   }
 }
 
