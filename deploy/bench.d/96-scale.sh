@@ -27,31 +27,22 @@ sizes=(${CELL_BENCH_SCALE_SIZES:-2 8 16 32})
 stacks=(${CELL_BENCH_SCALE_STACKS:-fastdds cyclonedds})
 idle=${CELL_BENCH_SCALE_IDLE:-10}
 
-# make_config N DIR: deploy/'s configuration with N stations, KT/OK/EM/BS in turn (KT01, OK01, EM01, BS01,
-# KT02, ...), each a copy of the repository's first station of that dialect under a new id.
+# make_config N DIR [TEMPLATE...]: deploy/'s configuration with N stations, copies of the templates in turn
+# (default KT01 OK01 EM01 BS01: KT01, OK01, EM01, BS01, KT02, ...), each under a new id of its template's
+# prefix, with the template's tools file if it has one.
 make_config() {
   local n=$1 dir=$2 i k id
-  local tpl=(KT01 OK01 EM01 BS01) pre=(KT OK EM BS)
+  shift 2
+  local tpl=("$@")
+  [ ${#tpl[@]} -gt 0 ] || tpl=(KT01 OK01 EM01 BS01)
   rm -rf "$dir"
   mkdir -p "$dir/stations"
   cp -r "$ROOT/deploy/systemd" "$ROOT/deploy/dds" "$dir/"
   for ((i = 0; i < n; i++)); do
-    k=$((i % 4))
-    id=${pre[$k]}$(printf '%02d' $((i / 4 + 1)))
+    k=$((i % ${#tpl[@]}))
+    id=${tpl[$k]:0:2}$(printf '%02d' $((i / ${#tpl[@]} + 1)))
     sed "s/^id = \"${tpl[$k]}\"/id = \"$id\"/" "$ROOT/deploy/stations/${tpl[$k]}.toml" >"$dir/stations/$id.toml"
     [ ! -f "$ROOT/deploy/stations/${tpl[$k]}.tools" ] || cp "$ROOT/deploy/stations/${tpl[$k]}.tools" "$dir/stations/$id.tools"
-  done
-}
-
-# make_kt_config N DIR: the same with N KT-APL stations (KT01 ... KTnn), each a copy of KT01.
-make_kt_config() {
-  local n=$1 dir=$2 i id
-  rm -rf "$dir"
-  mkdir -p "$dir/stations"
-  cp -r "$ROOT/deploy/systemd" "$ROOT/deploy/dds" "$dir/"
-  for ((i = 1; i <= n; i++)); do
-    id=KT$(printf '%02d' "$i")
-    sed "s/^id = \"KT01\"/id = \"$id\"/" "$ROOT/deploy/stations/KT01.toml" >"$dir/stations/$id.toml"
   done
 }
 
@@ -59,7 +50,7 @@ make_kt_config() {
 decisions_per_s() {
   local n=$1 list pallets out
   export CELL_CONFIG_DIR="$work/kt-config-$n" CELL_DATA_DIR="$work/kt-data-$CELL_DDS-$n"
-  make_kt_config "$n" "$CELL_CONFIG_DIR"
+  make_config "$n" "$CELL_CONFIG_DIR" KT01
   "$CTL" up --stations all --clock virtual >"$work/up.out" 2>&1 || { "$CTL" down >/dev/null 2>&1; echo -; return; }
   list=$(cd "$CELL_CONFIG_DIR/stations" && ls ./*.toml | sed 's#./##; s/.toml$//' | paste -sd,)
   "$CTL" program put "$ROOT/deploy/demo.d/PUMP341.apl" >/dev/null
