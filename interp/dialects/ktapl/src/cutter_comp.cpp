@@ -21,8 +21,10 @@ CompError Error(const char* alarm, const std::string& text, CompError::At at = C
   return e;
 }
 
+// A G33 thread is a straight move of the path like G01 (the G833/G834 cycles cut it under G41/G42, ln
+// 7298-7301).
 bool IsMove(Op op) {
-  return op == Op::kRapid || op == Op::kLinear || op == Op::kArc;
+  return op == Op::kRapid || op == Op::kLinear || op == Op::kArc || op == Op::kThread;
 }
 
 }  // namespace
@@ -89,7 +91,7 @@ void Compensator::ReleaseHeld() {
     Canon h = std::move(held_.front());
     held_.pop_front();
     // Moves without travel in the plane (and G38 checks) happen where the cutter is.
-    if (h.op() == Op::kRapid || h.op() == Op::kLinear || h.op() == Op::kProbe)
+    if (h.op() == Op::kRapid || h.op() == Op::kLinear || h.op() == Op::kThread || h.op() == Op::kProbe)
       SetPlane(h.target()->pos, actual_);
     Out(std::move(h));
   }

@@ -190,6 +190,9 @@ void KtRun::ConvertGCodes(const GWords& gs, bool pass800, BlockCodes& k) {
         CloseOpenFile(col, true);
         mode_.inspection_recording = false;
         break;
+      case 33:
+        k.g33_col = col;
+        break;
       case 38:
         k.g38_col = col;
         break;
@@ -584,6 +587,44 @@ bool KtRun::LengthBypass(const Words& words, bool arc) {
   return true;
 }
 
+// G33 (ln 7247-7322): modal until a feedrate is programmed ("F COMMAND CANCELS G33" in its own block); E the
+// lead per spindle revolution, required in the G33 block and modal after it; D the change of the lead per
+// revolution, in G33 only, for its own block (judgement call 89); only Z and U may move.
+void KtRun::ThreadWords(const Words& words, const BlockCodes& k, const Word* f, uint32_t axis_mask,
+                        bool passes) {
+  thread_block_ = false;
+  thread_change_ = 0;
+  if (passes) return;  // the letters of a cycle call are the cycle's values
+  const Word* e = Find(words, 'E');
+  const Word* d = Find(words, 'D');
+  if (k.g33_col) {
+    if (f) Fail(f->col, "F COMMAND CANCELS G33");
+    if (!e) Fail(k.g33_col, "LEAD SPECIFICATION REQUIRED");
+    if (!mode_.threading) thread_angle_ = 0;
+    mode_.threading = true;
+  } else if (f && mode_.threading) {
+    mode_.threading = false;  // ln 7251: "cleared ... thru programming a feedrate"
+  }
+  if (d) {
+    if (!mode_.threading) Fail(d->col, "D COMMAND ALLOWED IN G33 ONLY");
+    if (d->v < 0) Fail(d->col, "FEEDRATE IS 0 BEFORE END POINT IS REACHED");
+    thread_change_ = ToMm(d->v);
+  }
+  if (!mode_.threading) return;
+  if (e) {
+    if (e->v <= 0) Fail(e->col, "LEAD SPECIFICATION REQUIRED");
+    thread_lead_ = ToMm(e->v);
+  }
+  for (const auto& w : words) {
+    int a = AxisOfLetter(w.letter);
+    if (a >= 0 && a != kZ && a != kU) Fail(w.col, "ILLEGAL THREADING AXIS");
+  }
+  if (k.arc) Fail(k.arc_col, "CIRCULAR MOVES ARE NOT ALLOWED IN G33");
+  if (k.probe || k.dwell) Fail(k.g33_col ? k.g33_col : 1, "G33 ALLOWS ONLY Z AND U MOVES");
+  if (axis_mask && mode_.obstruction_detection) Fail(MotionCol(words), "G33 MOVES ARE NOT ALLOWED IN G28");
+  thread_block_ = axis_mask != 0;
+}
+
 void KtRun::ExecTypeI(BlockCtx& bc, const ParsedBlock* pb) {
   const auto& raw = bc.words;
   if (raw.empty()) return;
@@ -643,6 +684,8 @@ void KtRun::ExecTypeI(BlockCtx& bc, const ParsedBlock* pb) {
   ToolAndSpeed(words, mc, k.g38_col != 0);  // ln 7082: "G38 S16", S the flutes of the cutter
 
   const Word* f = Find(words, 'F');
+  if (k.g33_col || mode_.threading || Find(words, 'D')) [[unlikely]]
+    ThreadWords(words, k, f, axis_mask, trigger || passes_letters);
   const std::optional<double> block_feed = BlockFeed(f, k, mc);
 
   if (trigger) {
@@ -657,6 +700,7 @@ void KtRun::ExecTypeI(BlockCtx& bc, const ParsedBlock* pb) {
   length_bypass_ = !passes_letters && LengthBypass(words, k.arc != 0);
   Motion(words, k, mc, axis_mask, motion_col, f, block_feed);
   length_bypass_ = false;
+  thread_block_ = false;
   AfterMCode(mc);
   if (mc.m99 && mc.after == 0 && !operator_) {
     // In cycle and library code the operator cannot see the block: its comment is the message (App. E

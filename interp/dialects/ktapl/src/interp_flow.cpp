@@ -198,8 +198,17 @@ void KtRun::ExecBlock(std::string_view text, size_t start) {
     }
   }
   ExecTypeI(bc, &pb);
-  if (comp_.engaged()) [[unlikely]]
-    CompEndBlock(!pb.words.empty() || !pb.stmts.empty());
+  if (comp_.engaged()) [[unlikely]] {
+    // Error 0003 counts blocks that reach the ready list: Type I words and statements that act on the
+    // machine or the operator; PAR, IFT, GTO and LBL only compute and branch (the manual's own G833/G834
+    // loops run five of them between Z/U moves under G41/G42, ln 7298-7311 and 7395-7408; judgement call 42).
+    bool counts = !pb.words.empty();
+    for (const auto& st : pb.stmts) {
+      if (st.mnemonic != "PAR" && st.mnemonic != "IFT" && st.mnemonic != "GTO" && st.mnemonic != "LBL")
+        counts = true;
+    }
+    CompEndBlock(counts);
+  }
   if (bc.cycle_return) {
     ReturnFromCycle();
     return;

@@ -197,6 +197,7 @@ struct Modal {
   bool obstruction_detection = false;           // G28 (G29)
   bool inspection_recording = false;            // G36 (G37)
   bool fill_in_bypass = false;                  // G46
+  bool threading = false;                       // G33 (cleared by an F word, ln 7251)
   bool calculated_offsets = false;              // G47 (G39)
   bool explicit_fixtures = false;               // G48: H selects the fixture line (G49: implicit)
   Adaptive adaptive = Adaptive::kOff;           // G50 / G51 / G53
@@ -223,6 +224,7 @@ struct BlockCodes {
   bool probe = false;   // G22 / G23
   int probe_g = 0;
   int g38_col = 0;              // G38 in the block (its column): S is the number of flutes
+  int g33_col = 0;              // G33 in the block (its column)
   int probe_cycle = 0;          // G24-G27
   bool inhibit_cycle = false;   // G77
   bool drop_undefined = false;  // G78
@@ -298,6 +300,7 @@ class KtRun final : public RunBase, public ExprContext {
   void StDlp(const Statement& st, BlockCtx& bc, bool in_ift);
   void StHeading(const Statement& st, BlockCtx& bc, bool in_ift);
   void StRefused(const Statement& st, BlockCtx& bc, bool in_ift);
+  void StSsa(const Statement& st, BlockCtx& bc, bool in_ift);
   void StMsg(const Statement& st, BlockCtx& bc, bool in_ift);
   void StOif(const Statement& st, BlockCtx& bc, bool in_ift);
   void StOpf(const Statement& st, BlockCtx& bc, bool in_ift);
@@ -358,6 +361,8 @@ class KtRun final : public RunBase, public ExprContext {
   void ResetAtEnd();
   void Motion(const Words& words, const BlockCodes& k, const BlockMCodes& mc, uint32_t axis_mask,
               int motion_col, const Word* f, std::optional<double> block_feed);
+  // G33 threading with the U-head (ln 7247-7322): the block's E, D and F words and its axes.
+  void ThreadWords(const Words& words, const BlockCodes& k, const Word* f, uint32_t axis_mask, bool passes);
   void LinearMotion(const Words& words, const BlockCodes& k, const BlockMCodes& mc, uint32_t axis_mask,
                     int motion_col, std::optional<double> eff, const Word* fw);
   void GuardedMove(uint32_t axis_mask, const AxisArray& target, bool rapid, double feed, FeedMode fm,
@@ -417,6 +422,10 @@ class KtRun final : public RunBase, public ExprContext {
   bool length_bypass_ = false;  // P0 in the block being executed: no tool length compensation (ln 1185)
   bool mir_x_ = false, mir_y_ = false;
   double u88_x_ = 0.254, u88_y_ = 0;  // mm
+  // G33: the modal lead E (mm/rev), this block's lead change D (mm/rev per rev), the SSA start angle (deg),
+  // and whether this block's move is the thread.
+  double thread_lead_ = 0, thread_change_ = 0, thread_angle_ = 0;
+  bool thread_block_ = false;
   std::array<double, 26> letters_{};
 
   // Tools.

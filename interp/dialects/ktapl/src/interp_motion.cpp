@@ -96,6 +96,15 @@ void KtRun::EmitMove(const AxisArray& target, uint32_t moved, bool rapid, double
   Target* to;
   if (rapid) {
     to = &Out<RapidOp>().to;
+  } else if (thread_block_) [[unlikely]] {
+    // ln 7263-7265: "G33E.1D.01Z-2.000" moves .11 in the first revolution, .12 in the second: the lead at
+    // the start is E + D/2 for a lead that grows by D per revolution (judgement call 89).
+    ThreadOp& t = Out<ThreadOp>();
+    t.lead = thread_lead_ + thread_change_ / 2;
+    t.lead_change = thread_change_;
+    t.start_angle = thread_angle_;
+    t.exact_stop = exact;
+    to = &t.to;
   } else {
     LinearOp& l = Out<LinearOp>();
     l.feed = {feed, fm, exact};
@@ -241,7 +250,9 @@ void KtRun::LinearMotion(const Words& words, const BlockCodes& k, const BlockMCo
   const bool rotary_only = !linear_moves && travel_mask && !(b_index_ && b_moves);
   if (fw && fw->v != 0)
     CheckFeedFormat(*fw, rotary_only ? FeedFormat::kRotary : FeedFormat::kLinear, metric_);
-  bool rapid = mc.m25 || (eff && *eff == 0);
+  // A G33 thread runs at the spindle's pace, whatever the modal feed (F0 included).
+  if (thread_block_ && mc.m25) Fail(motion_col, "M25 IS NOT ALLOWED IN A G33 BLOCK");
+  bool rapid = !thread_block_ && (mc.m25 || (eff && *eff == 0));
   const uint32_t linear_mask = axis_mask & ~rotary_mask;
   if (b_index_ && (axis_mask & (1u << kB)) && !rapid) {
     if (linear_mask || (axis_mask & ((1u << kA) | (1u << kC)))) {
@@ -249,10 +260,10 @@ void KtRun::LinearMotion(const Words& words, const BlockCodes& k, const BlockMCo
     }
     rapid = true;  // an index-only block is forced to F0 for the block
   }
-  if (!rapid && !eff) Fail(motion_col, "NO FEEDRATE PROGRAMMED");
+  if (!rapid && !eff && !thread_block_) Fail(motion_col, "NO FEEDRATE PROGRAMMED");
   double feed = 0;
   FeedMode fm = FeedMode::kPerMinute;
-  if (!rapid) {
+  if (!rapid && eff) {
     if (mode_.inverse_time) {
       fm = FeedMode::kInverseTime;
       feed = *eff;

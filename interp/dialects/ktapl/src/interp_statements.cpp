@@ -14,7 +14,7 @@ const std::map<std::string_view, KtRun::StatementFn>& KtRun::StatementTable() {
       {"PAR", &KtRun::StPar},       {"IFT", &KtRun::StIft},       {"GTO", &KtRun::StGto},
       {"LBL", &KtRun::StLbl},       {"END", &KtRun::StEnd},       {"CLS", &KtRun::StCls},
       {"DLP", &KtRun::StDlp},       {"NAM", &KtRun::StHeading},   {"UTL", &KtRun::StHeading},
-      {"UCY", &KtRun::StHeading},   {"ACP", &KtRun::StRefused},   {"SSA", &KtRun::StRefused},
+      {"UCY", &KtRun::StHeading},   {"ACP", &KtRun::StRefused},   {"SSA", &KtRun::StSsa},
       {"MSG", &KtRun::StMsg},       {"OIF", &KtRun::StOif},       {"OPF", &KtRun::StOpf},
       {"CLF", &KtRun::StClf},       {"FWR", &KtRun::StFwr},       {"DAT", &KtRun::StDat},
       {"CPY", &KtRun::StFileOp},    {"DLF", &KtRun::StFileOp},    {"PRT", &KtRun::StFileOp},
@@ -191,14 +191,18 @@ void KtRun::StHeading(const Statement&, BlockCtx&, bool) {
 }
 
 // ln 3171-3226: ACP sets the target horsepower of adaptive control, which the cell cannot measure (G51).
-// ln 7253: SSA sets the spindle start angle of a G33 thread and "must be given while the G33 is modal"; G33
-// threading with the U-head is refused (ILLEGAL G CODE), so SSA never has a thread to act on (call 82).
 void KtRun::StRefused(const Statement& st, BlockCtx&, bool) {
-  if (st.mnemonic == "SSA")
-    Fail(st.col, "SSA IS NOT AVAILABLE: THREADING WITH THE U-HEAD (G33) IS NOT IMPLEMENTED IN THE CELL");
   Fail(st.col, st.mnemonic +
                    " IS NOT AVAILABLE: ADAPTIVE CONTROL NEEDS SPINDLE HORSEPOWER, WHICH THE CELL "
                    "CANNOT MEASURE");
+}
+
+// ln 7253: (SSA,angle) "must be given while the G33 is modal"; the threads after it start that many
+// degrees from the first lead's start (a multiple-lead thread). It holds until another SSA or the end of G33
+// (judgement call 89).
+void KtRun::StSsa(const Statement& st, BlockCtx&, bool) {
+  if (!mode_.threading) Fail(st.col, "SSA MUST BE GIVEN WHILE G33 IS MODAL");
+  thread_angle_ = Eval(Trim(st.body), st.col);
 }
 
 void KtRun::StDat(const Statement&, BlockCtx&, bool) {
