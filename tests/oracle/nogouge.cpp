@@ -168,12 +168,36 @@ Contour RandomContour(std::uint64_t seed, bool arcs) {
   return c;
 }
 
+// The contour as a polygon (arcs in pieces of at most 5 degrees), a lathe's profile closed down the axis: the
+// part's region, for the side a point is on.
+std::vector<P2> Outline(const Contour& c) {
+  std::vector<P2> poly;
+  for (std::size_t k = 0; k < c.Elements(); ++k) {
+    auto s = Samples(c, k, 24);
+    poly.insert(poly.end(), s.begin(), s.end() - 1);
+  }
+  if (c.open) poly.insert(poly.end(), {c.p.back(), {c.p.back()[0], 0}, {c.p.front()[0], 0}});
+  return poly;
+}
+
+bool Inside(const P2& q, const std::vector<P2>& poly) {
+  bool in = false;
+  for (std::size_t i = 0, j = poly.size() - 1; i < poly.size(); j = i++)
+    if ((poly[i][1] > q[1]) != (poly[j][1] > q[1]) &&
+        q[0] < poly[j][0] + (q[1] - poly[j][1]) * (poly[i][0] - poly[j][0]) / (poly[i][1] - poly[j][1]))
+      in = !in;
+  return in;
+}
+
 // The least distance from the points of a move (from `from`) to the contour's elements, and to element `near`
-// (the move's own) and its neighbours.
+// (the move's own) and its neighbours; negative for a point on the side away from the compensation's (inside
+// the contour under G42, outside under G41: the mills' contours run counterclockwise, the lathes' profile
+// has the part under it), so the radius is kept "on the compensated side".
 struct Distance {
   double all = 1e9, own = 1e9;  // own: to `near` and its neighbours
 };
-Distance MoveDistance(const Move& m, const Vec3& from, const Contour& c, std::size_t near) {
+Distance MoveDistance(const Move& m, const Vec3& from, const Contour& c, const std::vector<P2>& outline,
+                      std::size_t near) {
   Distance best;
   std::size_t n = c.Elements();
   for (int k = 0; k <= 32; ++k) {
@@ -188,8 +212,9 @@ Distance MoveDistance(const Move& m, const Vec3& from, const Contour& c, std::si
              rad = std::hypot(from[0] - m.center[0], from[1] - m.center[1]);
       q = {m.center[0] + rad * std::cos(a), m.center[1] + rad * std::sin(a)};
     }
+    const double sign = Inside(q, outline) == c.left ? 1 : -1;
     for (std::size_t i = 0; i < n; ++i) {
-      double d = ElementDistance(q, c, i);
+      double d = sign * ElementDistance(q, c, i);
       best.all = std::min(best.all, d);
       bool neighbour = c.open ? i + 1 >= near && i <= near + 1
                               : i == near || i == (near + 1) % n || i == (near + n - 1) % n;
@@ -368,6 +393,7 @@ bool Check(const PropRun& o, const std::string& dialect, std::uint64_t seed, boo
     if (arc_count) ++tally->refused_with_arcs;
   }
   const double need = c.r - 2e-3 + (o.plant ? 0.1 : 0);  // --plant: 0.1 mm more than the radius
+  const std::vector<P2> outline = Outline(c);
   Vec3 from{};
   bool back = false, was_back = false;  // this move, the one before, runs back against its line element
   for (std::size_t i = 0; i < moves.size(); ++i) {
@@ -375,7 +401,7 @@ bool Check(const PropRun& o, const std::string& dialect, std::uint64_t seed, boo
     bool checked = m.line > w.first && m.line < w.last;
     tally->moves += checked;
     std::size_t e = static_cast<std::size_t>(m.line - w.first) % c.p.size();
-    Distance d = checked ? MoveDistance(m, from, c, e) : Distance{};
+    Distance d = checked ? MoveDistance(m, from, c, outline, e) : Distance{};
     was_back = back;
     back = checked && m.kind != MoveKind::kArc && c.sweep[e] == 0 &&
            (m.end[0] - from[0]) * (c.p[c.Next(e)][0] - c.p[e][0]) +
