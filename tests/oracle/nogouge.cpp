@@ -6,9 +6,12 @@
 //   absolute in G90.
 // - KT-APL (G40-G42, ln 1599-1671, 6437-6696): the tools file's (TLD,T1D..) the diameter (ln 6447), taken at
 //   the ramp-on (ktapl.md judgement call 45); arcs `G02/G03 X Y I J`, I J absolute in G90.
-// The tool centre of every move but the entry, the first and last contour blocks and the exit (whose corners
-// depend on the approach and the dialect's ramp rule) keeps at least the radius less 2e-3 mm from every
-// element of the contour. A refusal makes no motion and gouges nothing; it is counted.
+// The lathes, EMCO and Okuma (LatheCase): a random turned profile (profile.h) finished under G42 with a nose
+// radius of 0.2-1.6 mm and tip code 3; both write the imaginary tip, so the checker takes the nose centre
+// back from it (NoseCentre). The tool centre of every move but the entry, the first and last contour blocks
+// and the exit (whose corners depend on the approach and the dialect's ramp rule) keeps at least the radius
+// less 2e-3 mm from every element of the contour, on the compensated side. A refusal makes no motion and
+// gouges nothing; it is counted.
 #include <algorithm>
 #include <array>
 #include <cmath>
