@@ -291,7 +291,14 @@ int Properties(int argc, char** argv) {
                  "[--chunk M] [--interp PATH] [--keep DIR] [--plant]\n";
     return 2;
   }
-  std::vector<std::string> names = o.dialect == "all" ? ModuleNames() : std::vector<std::string>{o.dialect};
+  // `--dialect all`, one dialect, or a list (`emco,okuma`: ctest runs the lathes' nogouge beside the mills').
+  std::vector<std::string> names;
+  if (o.dialect == "all") names = ModuleNames();
+  for (std::size_t at = 0; o.dialect != "all" && at <= o.dialect.size();) {
+    std::size_t comma = std::min(o.dialect.find(',', at), o.dialect.size());
+    names.push_back(o.dialect.substr(at, comma - at));
+    at = comma + 1;
+  }
   char tmpl[] = "/tmp/cell-oracle-prop.XXXXXX";
   if (!mkdtemp(tmpl)) return 2;
   bool all = true;

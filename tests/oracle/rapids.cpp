@@ -15,6 +15,7 @@
 
 #include "cell/oracle/oracle.h"
 #include "cell/oracle/rng.h"
+#include "profile.h"
 #include "run.h"
 
 namespace fs = std::filesystem;
@@ -354,12 +355,7 @@ int TurnRapids(const PropRun& o, const std::string& dialect, const fs::path& dir
 // plus the allowances is the region under the contour moved out by U/2 and toward +Z by W (it contains the
 // contour's own region: the contour climbs toward -Z); behind the contour it is the start diameter, in front
 // of its first point there is none.
-struct Lap {
-  std::vector<std::array<double, 2>> contour;  // z, r
-  // How each element reaches contour[i] from contour[i - 1]: 0 a line, 1 a quarter arc from -Z to +X about
-  // (z, r + R) of its start (a fillet at a shoulder's foot, E-59's G02 I), 2 a quarter arc from +X to -Z
-  // about (z - R, r) of its start (a shoulder's rounded edge).
-  std::vector<int> kind;
+struct Lap : TurnedProfile {
   bool copy = false;  // G86
   double u = 0, w = 0;
   std::vector<std::string> blocks;
@@ -370,27 +366,8 @@ Lap OkumaLap(Rng& g, int index) {
   Lap l;
   char name[16];  // NA and any int: the sanitizer build checks the whole range
   std::snprintf(name, sizeof name, "NA%02d", index);
-  double z = Grid(g.Real(0, 60), 0.001), r = Grid(g.Real(5, 20), 0.0005);
-  l.contour = {{z + 2, r}, {z, r}};  // G00 to 2 mm in front of the face, G01 onto it
-  l.kind = {0, 0};
-  int n = g.Int(2, 6);
-  for (int i = 0; i < n; ++i) {
-    int kind = g.Int(0, 4);  // along -Z, up a shoulder, a taper, a fillet, a rounded edge
-    if (kind >= 3) {
-      double rad = Grid(g.Real(0.5, 5), 0.001);
-      z -= rad, r += rad;
-      l.contour.push_back({z, r});
-      l.kind.push_back(kind - 2);
-      continue;
-    }
-    double dz = kind == 1 ? 0 : Grid(g.Real(3, 20), 0.001), dr = kind == 0 ? 0 : Grid(g.Real(1, 8), 0.0005);
-    z -= dz, r += dr;
-    l.contour.push_back({z, r});
-    l.kind.push_back(0);
-  }
-  double rs = Grid(r + g.Real(2, 10), 0.0005);
-  l.contour.push_back({z, rs});  // the last shoulder up to the start diameter
-  l.kind.push_back(0);
+  static_cast<TurnedProfile&>(l) = RandomTurnedProfile(g);
+  double rs = l.contour.back()[1];
   l.u = Grid(g.Real(0, 1), 0.01) * (g.Int(0, 2) == 0 ? 0 : 1);
   l.w = Grid(g.Real(0, 0.5), 0.01) * (g.Int(0, 2) == 0 ? 0 : 1);
   double d = Grid(g.Real(1, 10), 0.01);

@@ -135,6 +135,14 @@ void NoseComp::Release(Vec2 end_centre) {
     // An arc whose compensated end falls just behind its start (a complete or nearly complete circle) keeps
     // its programmed sweep.
     if (sweep > 359.999 && pend_->e.path.sweep < 359.999) sweep = 0;
+    // An arc whose compensated end falls behind its start (the nose larger than what is left of the arc
+    // between the corners at its ends) would go nearly round its centre, through the part: the path in
+    // contact "with each arc or its extension" (ln 2745) cannot be had going forward, an alarm as where such
+    // a point "cannot be obtained" (ln 2716, 2748; okuma.md judgement call 68).
+    else if (sweep > pend_->e.path.sweep + 180)
+      Fail(1, fmt::format("nose radius compensation: the nose radius {:.3f} is too large for the arc (its "
+                          "compensated path would run back {:.3f} degrees)",
+                          r_, 360 - sweep));
     a->angle = sweep;
   }
   centre_ = end_centre;
