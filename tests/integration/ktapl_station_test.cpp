@@ -9,7 +9,9 @@
 // - USF on pallet 38 saves the fixture table as PALLET38;FXT in KT01's namespace (manual ln 4253-4284, E48)
 //   and a later pallet's ULF restores it (`cellctl station offsets`);
 // - G28 obstruction detection (manual ln 1539-1541, 9416): the servo runs each G28 move as a guarded probe
-//   move against the pallet's part model; a clear path completes, a clamp in the path is an E-STOP.
+//   move against the pallet's part model; a clear path completes, a clamp in the path is an E-STOP;
+// - G33 threading (manual ln 7247-7322): the thread reaches the servo as a spindle-synchronised segment and
+//   runs; a U move on KT01, which has no U-head (no U axis), fails the job (ktapl.md judgement call 89).
 #include <chrono>
 #include <fstream>
 #include <string>
@@ -191,6 +193,31 @@ TEST_F(KtaplStation, G28GuardedMovesStopAtAnObstructionOnTheServo) {
   auto shown = CtlJson({"job", "show", blocked, "--json"});
   EXPECT_EQ(shown["state"], "FAILED") << shown.dump();
   EXPECT_NE(shown.value("reason", "").find("BLOCKED:9:5: error: [E-STOP] OBSTRUCTION DETECTED"),
+            std::string::npos)
+      << shown.dump();
+}
+
+TEST_F(KtaplStation, G33ThreadRunsOnTheServoAndAUMoveNeedsTheUHead) {
+  LoadTools("KT01", "%\n(TLD,S10T1P150.D6.L1000)\n%\n");
+  // S300 with E2. (2 mm/rev): Z at 600 mm/min, inside KT01's max_velocity; N50's F0 clears G33 (ln 7251).
+  const std::string head = "\n(UCY,5)\nN10 G71 G90 G0 X0 Y0 Z100. F0 T1\nN20 M06\nN30 S300 M03\n";
+  Put("THREAD", "%\n(NAM,THREAD)" + head + "N40 G01 G33 E2. Z50.\nN50 Z100. F0\nN60 M30\n%\n");
+  Put("UHEAD", "%\n(NAM,UHEAD)" + head + "N40 G18 G21 U10. F0\nN50 M30\n%\n");
+  ASSERT_EQ(Ctl({"pallet", "set", "9", "THREAD"}).code, 0);
+  auto run = Ctl({"pallet", "run", "9", "--station", "KT01"});
+  ASSERT_EQ(run.code, 0) << run.err;
+  const std::string thread = FirstLine(run.out);
+  auto w = Ctl({"job", "wait", thread, "--timeout", "60"});
+  EXPECT_EQ(w.out, "COMPLETED\n") << w.err << CtlJson({"job", "show", thread, "--json"}).dump();
+  ASSERT_EQ(Ctl({"pallet", "set", "10", "UHEAD"}).code, 0);
+  run = Ctl({"pallet", "run", "10", "--station", "KT01"});
+  ASSERT_EQ(run.code, 0) << run.err;
+  const std::string uhead = FirstLine(run.out);
+  EXPECT_NE(Ctl({"job", "wait", uhead, "--timeout", "60"}).code, 0);
+  auto shown = CtlJson({"job", "show", uhead, "--json"});
+  EXPECT_EQ(shown["state"], "FAILED") << shown.dump();
+  // The servo refuses the segment rather than run the block without U (N40 is line 7 of UHEAD).
+  EXPECT_NE(shown.value("reason", "").find("the station has no U axis (U 10.0000 commanded, line 7)"),
             std::string::npos)
       << shown.dump();
 }

@@ -1,8 +1,10 @@
 #include "cell/servo/receiver.h"
 
+#include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
+#include <cmath>
 
 #include "cell/error/error.h"
 #include "cell/tooltable/wire.h"
@@ -248,6 +250,7 @@ void Receiver::TakeArrived(TimePoint now) {
     if (m.kind() == cell::SEGMENT_PROBE) probe_.insert(id);
     if (m.kind() == cell::SEGMENT_END) end_received_ = true;
     try {
+      RefuseAbsentAxes(m);
       machine_.Push(FromWire(m, id));
     } catch (const Error& e) {
       seq_of_.erase(id);
@@ -258,6 +261,23 @@ void Receiver::TakeArrived(TimePoint now) {
       alarm_ = Alarm{AlarmCode::kInvalidSegment, e.what()};
       spdlog::error("alarm {}: {}", static_cast<int>(alarm_.code), alarm_.text);
     }
+  }
+}
+
+// An axis the station does not have stands at 0: a segment that puts one elsewhere (a U-head program on a KT
+// station without the head, ktapl.md call 89; any U V W, which the machine does not carry) stops the run with
+// its refusal. Dropping the axis would run the rest of the move as a toolpath nobody programmed
+// (docs/axis-servo.md, "Axes a station lacks").
+void Receiver::RefuseAbsentAxes(const cell::MotionSegment& m) {
+  static constexpr char kNames[] = "XYZABCUVW";
+  const auto& axes = machine_.config().axes;
+  for (std::size_t i = 0; i < m.target().size(); ++i) {
+    if (!(m.axis_mask() >> i & 1) || (i < axes.size() && axes[i].present)) continue;
+    const double to = m.target()[i];
+    if (std::abs(to) > 1e-6)
+      throw Error(Errc::kInvalidArgument,
+                  fmt::format("segment {} refused: the station has no {} axis ({} {:.4f} commanded, line {})",
+                              m.seq(), kNames[i], kNames[i], to, m.line()));
   }
 }
 

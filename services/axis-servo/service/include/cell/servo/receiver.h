@@ -86,6 +86,7 @@ class Receiver {
  private:
   void TakeArrived(TimePoint now);
   bool Accept(const cell::MotionSegment& m);
+  void RefuseAbsentAxes(const cell::MotionSegment& m);
   void StartRun(std::int32_t run_id);
   void ApplyControl();
   bool LookAheadStarved(TimePoint now) const;
