@@ -17,26 +17,13 @@
 
 #include "cell/oracle/oracle.h"
 #include "cell/oracle/rng.h"
+#include "contour.h"
 #include "run.h"
 
 namespace fs = std::filesystem;
 
 namespace cell::oracle {
 namespace {
-
-using P2 = std::array<double, 2>;
-
-// Element i runs from p[i] to p[i+1]: a line, or (sweep != 0) an arc about centre[i], ccw when sweep > 0.
-// The corners go counterclockwise about the origin, so the part is on the left: a ccw arc bulges out
-// (convex), a cw arc in (concave).
-struct Contour {
-  std::vector<P2> p;
-  std::vector<double> sweep;  // degrees, signed
-  std::vector<P2> centre;
-  double r = 0;
-  bool left = true;
-  std::size_t Next(std::size_t i) const { return (i + 1) % p.size(); }
-};
 
 double Norm(double a) {  // to [0, 2 pi)
   a = std::fmod(a, 2 * M_PI);
@@ -50,7 +37,7 @@ double SegmentDistance(const P2& q, const P2& a, const P2& b) {
 }
 
 // The least distance from q to element i.
-double ElementDistance(const P2& q, const Contour& c, std::size_t i) {
+double ElementDistance(const P2& q, const CompContour& c, std::size_t i) {
   const P2 &a = c.p[i], &b = c.p[c.Next(i)];
   if (c.sweep[i] == 0) return SegmentDistance(q, a, b);
   const P2& o = c.centre[i];
@@ -62,7 +49,7 @@ double ElementDistance(const P2& q, const Contour& c, std::size_t i) {
 }
 
 // Points along element i, both ends included.
-std::vector<P2> Samples(const Contour& c, std::size_t i, int n) {
+std::vector<P2> Samples(const CompContour& c, std::size_t i, int n) {
   const P2 &a = c.p[i], &b = c.p[c.Next(i)];
   std::vector<P2> out;
   const P2& o = c.centre[i];
@@ -80,7 +67,7 @@ std::vector<P2> Samples(const Contour& c, std::size_t i, int n) {
 }
 
 // The direction of element k at its start or end, radians.
-double Tangent(const Contour& c, std::size_t k, bool at_end) {
+double Tangent(const CompContour& c, std::size_t k, bool at_end) {
   const P2 &a = c.p[k], &b = c.p[c.Next(k)];
   if (c.sweep[k] == 0) return std::atan2(b[1] - a[1], b[0] - a[0]);
   const P2& q = at_end ? b : a;
@@ -88,14 +75,14 @@ double Tangent(const Contour& c, std::size_t k, bool at_end) {
 }
 
 // The turn at the end of element k, radians, left positive.
-double Turn(const Contour& c, std::size_t k) {
+double Turn(const CompContour& c, std::size_t k) {
   return Norm(Tangent(c, c.Next(k), false) - Tangent(c, k, true) + M_PI) - M_PI;
 }
 
 // The arc of element i stays if it keeps more than a cutter diameter (and 0.5 mm) from every element but its
 // neighbours, and they from it: an arc adds no narrow neck that no compensation looking one element ahead can
 // cut (balt.md judgement call 49), and the contour stays simple.
-bool ArcFits(const Contour& c, std::size_t i) {
+bool ArcFits(const CompContour& c, std::size_t i) {
   std::size_t n = c.p.size();
   const double clear = 2 * c.r + 0.5;
   for (std::size_t j = 0; j < n; ++j) {
@@ -128,13 +115,15 @@ bool ArcFits(const Contour& c, std::size_t i) {
   return true;
 }
 
+}  // namespace
+
 // The line-only contour of a seed is the one this property drew before arcs (the same draws): seeds found
 // then still name the same contour. `arcs`: a second stream from the seed turns some sides into arcs, convex
 // and concave, of 20-120 degrees and a radius at least the cutter's plus 0.5 mm (an inside arc no larger than
 // the cutter is KT-APL's [0004] and Balt-System's refusal, not a gouge), where they fit.
-Contour RandomContour(std::uint64_t seed, bool arcs) {
+CompContour RandomContour(std::uint64_t seed, bool arcs) {
   Rng rng(seed);
-  Contour c;
+  CompContour c;
   static const double radii[] = {2, 3, 5};
   c.r = radii[rng.Int(0, 2)];
   c.left = rng.Int(0, 1) == 1;
@@ -165,51 +154,11 @@ Contour RandomContour(std::uint64_t seed, bool arcs) {
   return c;
 }
 
-// The least distance from the points of a move (from `from`) to the contour's elements, and to element `near`
-// (the move's own) and its neighbours.
-struct Distance {
-  double all = 1e9, own = 1e9;  // own: to `near` and its neighbours
-};
-Distance MoveDistance(const Move& m, const Vec3& from, const Contour& c, std::size_t near) {
-  Distance best;
-  std::size_t n = c.p.size();
-  for (int k = 0; k <= 32; ++k) {
-    double t = k / 32.0;
-    P2 q{from[0] + t * (m.end[0] - from[0]), from[1] + t * (m.end[1] - from[1])};
-    if (m.kind == MoveKind::kArc) {
-      double a0 = std::atan2(from[1] - m.center[1], from[0] - m.center[0]);
-      double a1 = std::atan2(m.end[1] - m.center[1], m.end[0] - m.center[0]);
-      double sweep = m.cw ? a0 - a1 : a1 - a0;
-      while (sweep <= 1e-12) sweep += 2 * M_PI;
-      double a = a0 + (m.cw ? -1 : 1) * t * sweep,
-             rad = std::hypot(from[0] - m.center[0], from[1] - m.center[1]);
-      q = {m.center[0] + rad * std::cos(a), m.center[1] + rad * std::sin(a)};
-    }
-    for (std::size_t i = 0; i < n; ++i) {
-      double d = ElementDistance(q, c, i);
-      best.all = std::min(best.all, d);
-      if (i == near || i == (near + 1) % n || i == (near + n - 1) % n) best.own = std::min(best.own, d);
-    }
-  }
-  return best;
-}
-
-struct Tally {
-  int contours = 0, with_arcs = 0, arcs = 0, refused = 0, refused_with_arcs = 0, before_refusal = 0, far = 0;
-};
-
-// The program in the dialect and its tools file; `first`/`last`: the lines of the first contour block and of
-// the block that ends the second time at the second corner.
-struct Written {
-  std::string text, tools;
-  int first = 0, last = 0;
-};
-
-Written Write(const std::string& dialect, const Contour& c) {
+ContourProgram WriteContour(const std::string& dialect, const CompContour& c) {
   bool kt = dialect == "ktapl";
   auto num = [kt](double v) { return Num(v, 3, kt); };
   auto xy = [&](const P2& p) { return "X" + num(p[0]) + " Y" + num(p[1]); };
-  Written w;
+  ContourProgram w;
   std::vector<std::string> lines;
   if (kt) {
     lines = {"! no-gouge property (tests/oracle)", "G71 T1", "M06", "G90 G0 X100. Y0. Z0. F0",
@@ -239,13 +188,48 @@ Written Write(const std::string& dialect, const Contour& c) {
   return w;
 }
 
+namespace {
+
+// The least distance from the points of a move (from `from`) to the contour's elements, and to element `near`
+// (the move's own) and its neighbours.
+struct Distance {
+  double all = 1e9, own = 1e9;  // own: to `near` and its neighbours
+};
+Distance MoveDistance(const Move& m, const Vec3& from, const CompContour& c, std::size_t near) {
+  Distance best;
+  std::size_t n = c.p.size();
+  for (int k = 0; k <= 32; ++k) {
+    double t = k / 32.0;
+    P2 q{from[0] + t * (m.end[0] - from[0]), from[1] + t * (m.end[1] - from[1])};
+    if (m.kind == MoveKind::kArc) {
+      double a0 = std::atan2(from[1] - m.center[1], from[0] - m.center[0]);
+      double a1 = std::atan2(m.end[1] - m.center[1], m.end[0] - m.center[0]);
+      double sweep = m.cw ? a0 - a1 : a1 - a0;
+      while (sweep <= 1e-12) sweep += 2 * M_PI;
+      double a = a0 + (m.cw ? -1 : 1) * t * sweep,
+             rad = std::hypot(from[0] - m.center[0], from[1] - m.center[1]);
+      q = {m.center[0] + rad * std::cos(a), m.center[1] + rad * std::sin(a)};
+    }
+    for (std::size_t i = 0; i < n; ++i) {
+      double d = ElementDistance(q, c, i);
+      best.all = std::min(best.all, d);
+      if (i == near || i == (near + 1) % n || i == (near + n - 1) % n) best.own = std::min(best.own, d);
+    }
+  }
+  return best;
+}
+
+struct Tally {
+  int contours = 0, with_arcs = 0, arcs = 0, refused = 0, refused_with_arcs = 0, before_refusal = 0, far = 0;
+};
+
 // One contour: true when it keeps the property. A refused program's moves before the refusal are counted in
 // `before_refusal` when they come too close (the element too short for the radius is read after the corner
 // before it was cut: docs/testing.md), not failed.
 bool Check(const PropRun& o, const std::string& dialect, std::uint64_t seed, bool arcs, const fs::path& dir,
            Tally* tally) {
-  Contour c = RandomContour(seed, arcs);
-  Written w = Write(dialect, c);
+  CompContour c = RandomContour(seed, arcs);
+  ContourProgram w = WriteContour(dialect, c);
   int arc_count = static_cast<int>(std::count_if(c.sweep.begin(), c.sweep.end(), [](double s) { return s; }));
   ++tally->contours;
   tally->arcs += arc_count;
