@@ -68,6 +68,7 @@ int Rapids(const PropRun& o, const std::string& dialect, const std::filesystem::
 // KT-APL: random compensated contours until `o.blocks` contour blocks; the first `show` findings printed.
 struct CompTally {
   int programs = 0, blocks = 0, agreeing = 0, disagreeing = 0, rs274_refused = 0, cell_refused = 0, shown = 0;
+  int bent = 0;    // corners at a small turn whose point is not compared (comp.cpp)
   long moves = 0;  // moves compared
 };
 CompTally CompCheck(const PropRun& o, const std::string& rs274, const std::string& dialect,
