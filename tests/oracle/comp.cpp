@@ -329,8 +329,7 @@ CompTally CompCheck(const PropRun& o, const std::string& rs274, const std::strin
     DropStill(nm);
     std::vector<Seg> cell = Segs(cm), ngc = Segs(nm);
     int bent = 0;
-    RestoreFillIns(cell, k, &bent);
-    RestoreFillIns(ngc, k, &bent);
+    RestoreFillIns(ngc, k, &bent);  // LinuxCNC's; a dialect's joint line to an intersection is no bent corner
     std::string kind, detail;
     std::size_t cf = 0, ct = 0, nf = 0, nt = 0;
     if (!err.empty()) {
