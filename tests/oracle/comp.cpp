@@ -204,6 +204,8 @@ bool Window(const std::vector<Seg>& s, const CompContour& k, std::size_t* from, 
   std::size_t n = k.p.size(), first = s.size(), last = s.size();
   for (std::size_t i = 0; i < s.size() && first == s.size(); ++i)
     if (OnElement(s[i], k, 0, 0.5)) first = i;  // its start is the entry's (LinuxCNC: up to 5e-3 mm off)
+  // The entry may run on element 0's offset too (the contour's element 0 points at the start X100 Y0).
+  while (first + 1 < s.size() && OnElement(s[first + 1], k, 0, 0.5)) ++first;
   for (std::size_t i = first + 1; i < s.size(); ++i)
     if (OnElement(s[i], k, n - 1)) last = i;
   if (first == s.size() || last == s.size()) return false;
