@@ -110,7 +110,8 @@ std::vector<Seg> Expected(const std::vector<Seg>& ngc, const std::vector<Seg>& c
     }
     Seg& before = out.back();
     const Seg& after = ngc[i + 1];
-    P2 d1 = Direction(before, true), d2 = Direction(after, false);
+    // The directions of LinuxCNC's own moves (a start moved to the previous X would tilt a line).
+    P2 d1 = Direction(ngc[i - 1], true), d2 = Direction(after, false);
     double den = d1[0] * d2[1] - d1[1] * d2[0];  // before.b + t d1 = after.a - u d2
     P2 w{after.a[0] - before.b[0], after.a[1] - before.b[1]};
     double t = (w[0] * d2[1] - w[1] * d2[0]) / (std::fabs(den) > 1e-12 ? den : 1e-12);
