@@ -5,7 +5,7 @@
 //                   [--report] [--keep DIR] [--plant]
 // check runs cell-interp on each generated program and rs274 on its NGC twin and compares every move; it
 // exits 1 on any disagreement (--report: prints the agreement per dialect and exits 0 unless a run could not
-// start).
+// start). `check --comp` (comp.cpp): the same under cutter radius compensation, Balt-System and KT-APL.
 #include <sys/wait.h>
 #include <unistd.h>
 
