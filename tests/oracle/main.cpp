@@ -5,7 +5,7 @@
 //                   [--report] [--keep DIR] [--plant]
 // check runs cell-interp on each generated program and rs274 on its NGC twin and compares every move; it
 // exits 1 on any disagreement (--report: prints the agreement per dialect and exits 0 unless a run could not
-// start).
+// start). `check --comp` (comp.cpp): the same under cutter radius compensation, Balt-System and KT-APL.
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -31,7 +31,7 @@ struct Options {
   std::string command, dialect = "all", out, interp = "cell-interp", rs274, keep;
   std::uint64_t seed = 1;
   int blocks = 1000, chunk = 250, show = 3;
-  bool report = false, plant = false;
+  bool report = false, plant = false, comp = false;
 };
 
 bool ParseArgs(int argc, char** argv, Options& o) {
@@ -62,6 +62,8 @@ bool ParseArgs(int argc, char** argv, Options& o) {
       o.report = true;
     else if (a == "--plant")
       o.plant = true;
+    else if (a == "--comp")
+      o.comp = true;
     else
       return false;
   }
@@ -186,6 +188,26 @@ int Check(const Options& o) {
   if (!mkdtemp(tmpl)) return 2;
   fs::path dir = tmpl;
   bool all_agree = true;
+  if (o.comp) {
+    if (o.dialect == "all") names = {"balt", "ktapl"};
+    for (const std::string& name : names) {
+      if (name != "balt" && name != "ktapl") {
+        std::cout << "oracle: --comp has Balt-System and KT-APL only\n";
+        return 2;
+      }
+      CompTally t = CompCheck(PropRun{o.interp, o.keep, o.seed, o.blocks, o.plant}, rs274, name, dir, o.show);
+      std::printf(
+          "%s comp: %d of %d programs agree (%d contour blocks, %ld moves compared; %d disagree, %d refused "
+          "by "
+          "rs274, %d by cell-interp; %d corner points at a small turn not compared)\n",
+          name.c_str(), t.agreeing, t.programs, t.blocks, t.moves, t.disagreeing, t.rs274_refused,
+          t.cell_refused, t.bent);
+      // rs274 refusing a contour (its own gouge check at a concave corner) is counted, not failed.
+      all_agree = all_agree && t.disagreeing == 0 && t.cell_refused == 0;
+    }
+    fs::remove_all(dir);
+    return all_agree || o.report ? 0 : 1;
+  }
   for (const std::string& name : names) {
     const Module* mod = FindModule(name);
     if (!mod) {
@@ -218,6 +240,7 @@ int main(int argc, char** argv) {
         << "usage: cell-oracle-gen gen --dialect D --seed S --blocks N --out PREFIX\n"
            "       cell-oracle-gen check --dialect D|all --seed S --blocks N [--chunk M] [--interp PATH]\n"
            "                       [--rs274 PATH] [--report] [--keep DIR] [--show N] [--plant]\n"
+           "                       [--comp]   (cutter compensation: --dialect balt|ktapl|all)\n"
            "       cell-oracle-gen prop --property absinc|units|subprogram|transforms|nogouge|all --dialect "
            "D|all "
            "--seed S "

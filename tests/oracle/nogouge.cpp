@@ -20,6 +20,7 @@
 
 #include "cell/oracle/oracle.h"
 #include "cell/oracle/rng.h"
+#include "contour.h"
 #include "profile.h"
 #include "run.h"
 
@@ -27,22 +28,6 @@ namespace fs = std::filesystem;
 
 namespace cell::oracle {
 namespace {
-
-using P2 = std::array<double, 2>;
-
-// Element i runs from p[i] to p[i+1]: a line, or (sweep != 0) an arc about centre[i], ccw when sweep > 0.
-// The corners go counterclockwise about the origin, so the part is on the left: a ccw arc bulges out
-// (convex), a cw arc in (concave).
-struct Contour {
-  std::vector<P2> p;
-  std::vector<double> sweep;  // degrees, signed
-  std::vector<P2> centre;
-  double r = 0;
-  bool left = true;
-  bool open = false;  // a lathe's profile: no element from the last point back to the first
-  std::size_t Next(std::size_t i) const { return (i + 1) % p.size(); }
-  std::size_t Elements() const { return open ? p.size() - 1 : p.size(); }
-};
 
 double Norm(double a) {  // to [0, 2 pi)
   a = std::fmod(a, 2 * M_PI);
@@ -56,7 +41,7 @@ double SegmentDistance(const P2& q, const P2& a, const P2& b) {
 }
 
 // The least distance from q to element i.
-double ElementDistance(const P2& q, const Contour& c, std::size_t i) {
+double ElementDistance(const P2& q, const CompContour& c, std::size_t i) {
   const P2 &a = c.p[i], &b = c.p[c.Next(i)];
   if (c.sweep[i] == 0) return SegmentDistance(q, a, b);
   const P2& o = c.centre[i];
@@ -68,7 +53,7 @@ double ElementDistance(const P2& q, const Contour& c, std::size_t i) {
 }
 
 // Points along element i, both ends included.
-std::vector<P2> Samples(const Contour& c, std::size_t i, int n) {
+std::vector<P2> Samples(const CompContour& c, std::size_t i, int n) {
   const P2 &a = c.p[i], &b = c.p[c.Next(i)];
   std::vector<P2> out;
   const P2& o = c.centre[i];
@@ -86,7 +71,7 @@ std::vector<P2> Samples(const Contour& c, std::size_t i, int n) {
 }
 
 // The direction of element k at its start or end, radians.
-double Tangent(const Contour& c, std::size_t k, bool at_end) {
+double Tangent(const CompContour& c, std::size_t k, bool at_end) {
   const P2 &a = c.p[k], &b = c.p[c.Next(k)];
   if (c.sweep[k] == 0) return std::atan2(b[1] - a[1], b[0] - a[0]);
   const P2& q = at_end ? b : a;
@@ -94,14 +79,14 @@ double Tangent(const Contour& c, std::size_t k, bool at_end) {
 }
 
 // The turn at the end of element k, radians, left positive.
-double Turn(const Contour& c, std::size_t k) {
+double Turn(const CompContour& c, std::size_t k) {
   return Norm(Tangent(c, c.Next(k), false) - Tangent(c, k, true) + M_PI) - M_PI;
 }
 
 // The arc of element i stays if it keeps more than a cutter diameter (and 0.5 mm) from every element but its
 // neighbours, and they from it: an arc adds no narrow neck that no compensation looking one element ahead can
 // cut (balt.md judgement call 49), and the contour stays simple.
-bool ArcFits(const Contour& c, std::size_t i) {
+bool ArcFits(const CompContour& c, std::size_t i) {
   std::size_t n = c.p.size();
   const double clear = 2 * c.r + 0.5;
   for (std::size_t j = 0; j < n; ++j) {
@@ -134,13 +119,15 @@ bool ArcFits(const Contour& c, std::size_t i) {
   return true;
 }
 
+}  // namespace
+
 // The line-only contour of a seed is the one this property drew before arcs (the same draws): seeds found
 // then still name the same contour. `arcs`: a second stream from the seed turns some sides into arcs, convex
 // and concave, of 20-120 degrees and a radius at least the cutter's plus 0.5 mm (an inside arc no larger than
 // the cutter is KT-APL's [0004] and Balt-System's refusal, not a gouge), where they fit.
-Contour RandomContour(std::uint64_t seed, bool arcs) {
+CompContour RandomContour(std::uint64_t seed, bool arcs) {
   Rng rng(seed);
-  Contour c;
+  CompContour c;
   static const double radii[] = {2, 3, 5};
   c.r = radii[rng.Int(0, 2)];
   c.left = rng.Int(0, 1) == 1;
@@ -171,9 +158,11 @@ Contour RandomContour(std::uint64_t seed, bool arcs) {
   return c;
 }
 
+namespace {
+
 // The contour as a polygon (arcs in pieces of at most 5 degrees), a lathe's profile closed down the axis: the
 // part's region, for the side a point is on.
-std::vector<P2> Outline(const Contour& c) {
+std::vector<P2> Outline(const CompContour& c) {
   std::vector<P2> poly;
   for (std::size_t k = 0; k < c.Elements(); ++k) {
     auto s = Samples(c, k, 24);
@@ -199,7 +188,7 @@ bool Inside(const P2& q, const std::vector<P2>& poly) {
 struct Distance {
   double all = 1e9, own = 1e9;  // own: to `near` and its neighbours
 };
-Distance MoveDistance(const Move& m, const Vec3& from, const Contour& c, const std::vector<P2>& outline,
+Distance MoveDistance(const Move& m, const Vec3& from, const CompContour& c, const std::vector<P2>& outline,
                       std::size_t near) {
   Distance best;
   std::size_t n = c.Elements();
@@ -233,18 +222,13 @@ struct Tally {
   int contours = 0, with_arcs = 0, arcs = 0, refused = 0, refused_with_arcs = 0, before_refusal = 0, far = 0;
 };
 
-// The program in the dialect and its tools file; `first`/`last`: the lines of the first contour block and of
-// the block that ends the second time at the second corner.
-struct Written {
-  std::string text, tools;
-  int first = 0, last = 0;
-};
+}  // namespace
 
-Written Write(const std::string& dialect, const Contour& c) {
+ContourProgram WriteContour(const std::string& dialect, const CompContour& c) {
   bool kt = dialect == "ktapl";
   auto num = [kt](double v) { return Num(v, 3, kt); };
   auto xy = [&](const P2& p) { return "X" + num(p[0]) + " Y" + num(p[1]); };
-  Written w;
+  ContourProgram w;
   std::vector<std::string> lines;
   if (kt) {
     lines = {"! no-gouge property (tests/oracle)", "G71 T1", "M06", "G90 G0 X100. Y0. Z0. F0",
@@ -274,19 +258,21 @@ Written Write(const std::string& dialect, const Contour& c) {
   return w;
 }
 
+namespace {
+
 // A lathe's finishing pass: a random turned profile (profile.h) with 3 mm more along -Z at
 // the start diameter behind its last shoulder (so that shoulder and its top corner are checked), cut under
 // G42 (the tool above the part moving toward -Z: EMCO E42 ln 2586-2755, Okuma E-22 ln 2337-2361) with tip
 // code 3 and a nose radius of 0.2-1.6 mm. X is a radius here (the program writes diameters).
 struct Lathe {
-  Contour c;
-  Written w;
+  CompContour c;
+  ContourProgram w;
 };
 
 Lathe LatheCase(const std::string& dialect, std::uint64_t seed) {
   Rng g(seed);
   Lathe l;
-  Contour& c = l.c;
+  CompContour& c = l.c;
   c.r = Grid(g.Real(0.2, 1.6), 0.001);
   c.left = false;
   c.open = true;
@@ -359,15 +345,15 @@ Move NoseCentre(const Move& m, double r) {
 bool Check(const PropRun& o, const std::string& dialect, std::uint64_t seed, bool arcs, const fs::path& dir,
            Tally* tally) {
   const bool lathe = dialect == "emco" || dialect == "okuma";
-  Contour c;
-  Written w;
+  CompContour c;
+  ContourProgram w;
   if (lathe) {
     Lathe l = LatheCase(dialect, seed);
     c = std::move(l.c);
     w = std::move(l.w);
   } else {
     c = RandomContour(seed, arcs);
-    w = Write(dialect, c);
+    w = WriteContour(dialect, c);
   }
   int arc_count = static_cast<int>(std::count_if(c.sweep.begin(), c.sweep.end(), [](double s) { return s; }));
   ++tally->contours;

@@ -64,6 +64,16 @@ int Corners(const PropRun& o, const std::string& dialect, const std::filesystem:
 // of cycles that break it.
 int Rapids(const PropRun& o, const std::string& dialect, const std::filesystem::path& dir);
 
+// `check --comp` (comp.cpp): the LinuxCNC differential under cutter radius compensation, Balt-System and
+// KT-APL: random compensated contours until `o.blocks` contour blocks; the first `show` findings printed.
+struct CompTally {
+  int programs = 0, blocks = 0, agreeing = 0, disagreeing = 0, rs274_refused = 0, cell_refused = 0, shown = 0;
+  int bent = 0;    // corners at a small turn whose point is not compared (comp.cpp)
+  long moves = 0;  // moves compared
+};
+CompTally CompCheck(const PropRun& o, const std::string& rs274, const std::string& dialect,
+                    const std::filesystem::path& dir, int show);
+
 // `cell-oracle-gen prop`: the properties every program keeps (props.cpp).
 int Properties(int argc, char** argv);
 // `cell-oracle-gen parts`: one part in every dialect of its kind (parts_cli.cpp).

@@ -1,0 +1,41 @@
+// The random closed contour under cutter radius compensation and its Balt-System and KT-APL programs
+// (nogouge.cpp): the no-gouge property (nogouge.cpp) and the compensated differential (comp.cpp) cut the same
+// contours.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace cell::oracle {
+
+using P2 = std::array<double, 2>;
+
+// Element i runs from p[i] to p[i+1]: a line, or (sweep != 0) an arc about centre[i], ccw when sweep > 0.
+// The corners go counterclockwise about the origin, so the part is on the left: a ccw arc bulges out
+// (convex), a cw arc in (concave).
+struct CompContour {
+  std::vector<P2> p;
+  std::vector<double> sweep;  // degrees, signed
+  std::vector<P2> centre;
+  double r = 0;
+  bool left = true;
+  bool open = false;  // a lathe's profile (nogouge.cpp): no element from the last point back to the first
+  std::size_t Next(std::size_t i) const { return (i + 1) % p.size(); }
+  std::size_t Elements() const { return open ? p.size() - 1 : p.size(); }
+};
+
+// 5-14 corners on the 0.001 mm grid, a tool of radius 2, 3 or 5, G41 or G42; `arcs`: some sides arcs.
+CompContour RandomContour(std::uint64_t seed, bool arcs);
+
+// The program in the dialect and its tools file: from X100 Y0 a compensated line to p[0], the elements
+// 0 .. n-1 and element 0 again, a G40 line back to X100 Y0. `first`/`last`: the lines of the first contour
+// block and of the block that ends the second time at the second corner.
+struct ContourProgram {
+  std::string text, tools;
+  int first = 0, last = 0;
+};
+ContourProgram WriteContour(const std::string& dialect, const CompContour& c);
+
+}  // namespace cell::oracle
