@@ -16,6 +16,7 @@
 #include <fstream>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -52,6 +53,18 @@ class KtaplStation : public CellFixture {
     for (auto& t : CtlJson({"station", "tools", station, "--json"}))
       if (t["tool"] == tool && t["socket"] == socket) return t;
     return nullptr;
+  }
+  // Sets pallet `pallet`'s map (an optional part model, then programs), runs it on KT01 and waits for the
+  // job's end: its `job show` record.
+  json RunOnKt01(const std::string& pallet, const std::vector<std::string>& map) {
+    std::vector<std::string> set = {"pallet", "set", pallet};
+    set.insert(set.end(), map.begin(), map.end());
+    EXPECT_EQ(Ctl(set).code, 0);
+    auto run = Ctl({"pallet", "run", pallet, "--station", "KT01"});
+    EXPECT_EQ(run.code, 0) << run.err;
+    const std::string job = FirstLine(run.out);
+    Ctl({"job", "wait", job, "--timeout", "60"});
+    return CtlJson({"job", "show", job, "--json"});
   }
   json Station(const std::string& id) {
     for (auto& s : CtlJson({"station", "ls", "--json"}))
@@ -179,18 +192,9 @@ TEST_F(KtaplStation, G28GuardedMovesStopAtAnObstructionOnTheServo) {
   const std::string head = "\n(UCY,5)\nN10 G71 G90 G0 X0 Y0 Z100. F0 T1\nN20 M06\nN30 Z100.\n";
   Put("CLEAR", "%\n(NAM,CLEAR)" + head + "N40 G28 X50. Z25.\nN50 Z50.\nN60 X150.\nN70 G29\nN80 M30\n%\n");
   Put("BLOCKED", "%\n(NAM,BLOCKED)" + head + "N40 G28 X50. Z25.\nN50 Z25.\nN60 X150.\nN70 G29\nN80 M30\n%\n");
-  ASSERT_EQ(Ctl({"pallet", "set", "7", "CLAMP_PART", "CLEAR"}).code, 0);
-  auto run = Ctl({"pallet", "run", "7", "--station", "KT01"});
-  ASSERT_EQ(run.code, 0) << run.err;
-  const std::string clear = FirstLine(run.out);
-  auto w = Ctl({"job", "wait", clear, "--timeout", "60"});
-  ASSERT_EQ(w.out, "COMPLETED\n") << w.err << CtlJson({"job", "show", clear, "--json"}).dump();
-  ASSERT_EQ(Ctl({"pallet", "set", "8", "CLAMP_PART", "BLOCKED"}).code, 0);
-  run = Ctl({"pallet", "run", "8", "--station", "KT01"});
-  ASSERT_EQ(run.code, 0) << run.err;
-  const std::string blocked = FirstLine(run.out);
-  EXPECT_NE(Ctl({"job", "wait", blocked, "--timeout", "60"}).code, 0);
-  auto shown = CtlJson({"job", "show", blocked, "--json"});
+  json shown = RunOnKt01("7", {"CLAMP_PART", "CLEAR"});
+  ASSERT_EQ(shown["state"], "COMPLETED") << shown.dump();
+  shown = RunOnKt01("8", {"CLAMP_PART", "BLOCKED"});
   EXPECT_EQ(shown["state"], "FAILED") << shown.dump();
   EXPECT_NE(shown.value("reason", "").find("BLOCKED:9:5: error: [E-STOP] OBSTRUCTION DETECTED"),
             std::string::npos)
@@ -203,18 +207,9 @@ TEST_F(KtaplStation, G33ThreadRunsOnTheServoAndAUMoveNeedsTheUHead) {
   const std::string head = "\n(UCY,5)\nN10 G71 G90 G0 X0 Y0 Z100. F0 T1\nN20 M06\nN30 S300 M03\n";
   Put("THREAD", "%\n(NAM,THREAD)" + head + "N40 G01 G33 E2. Z50.\nN50 Z100. F0\nN60 M30\n%\n");
   Put("UHEAD", "%\n(NAM,UHEAD)" + head + "N40 G18 G21 U10. F0\nN50 M30\n%\n");
-  ASSERT_EQ(Ctl({"pallet", "set", "9", "THREAD"}).code, 0);
-  auto run = Ctl({"pallet", "run", "9", "--station", "KT01"});
-  ASSERT_EQ(run.code, 0) << run.err;
-  const std::string thread = FirstLine(run.out);
-  auto w = Ctl({"job", "wait", thread, "--timeout", "60"});
-  EXPECT_EQ(w.out, "COMPLETED\n") << w.err << CtlJson({"job", "show", thread, "--json"}).dump();
-  ASSERT_EQ(Ctl({"pallet", "set", "10", "UHEAD"}).code, 0);
-  run = Ctl({"pallet", "run", "10", "--station", "KT01"});
-  ASSERT_EQ(run.code, 0) << run.err;
-  const std::string uhead = FirstLine(run.out);
-  EXPECT_NE(Ctl({"job", "wait", uhead, "--timeout", "60"}).code, 0);
-  auto shown = CtlJson({"job", "show", uhead, "--json"});
+  json shown = RunOnKt01("9", {"THREAD"});
+  EXPECT_EQ(shown["state"], "COMPLETED") << shown.dump();
+  shown = RunOnKt01("10", {"UHEAD"});
   EXPECT_EQ(shown["state"], "FAILED") << shown.dump();
   // The servo refuses the segment rather than run the block without U (N40 is line 7 of UHEAD).
   EXPECT_NE(shown.value("reason", "").find("the station has no U axis (U 10.0000 commanded, line 7)"),
