@@ -523,12 +523,14 @@ void KtRun::ReadGWords(const RawWords& raw, bool drop_undefined, GWords& gs) {
 // The axis words of the block as a mask; E I J K P Q R H D stay as the letters' values.
 uint32_t KtRun::KeepLetters(const Words& words) {
   uint32_t axis_mask = 0;
+  block_d_ = false;
   for (const auto& w : words) {
     int a = AxisOfLetter(w.letter);
     if (a >= 0) axis_mask |= 1u << a;
     if (w.letter == 'E' || w.letter == 'I' || w.letter == 'J' || w.letter == 'K' || w.letter == 'P' ||
         w.letter == 'Q' || w.letter == 'R' || w.letter == 'H' || w.letter == 'D') {
       letters_[w.letter - 'A'] = w.v;
+      if (w.letter == 'D') block_d_ = true;
     }
   }
   return axis_mask;
@@ -684,7 +686,7 @@ void KtRun::ExecTypeI(BlockCtx& bc, const ParsedBlock* pb) {
   ToolAndSpeed(words, mc, k.g38_col != 0);  // ln 7082: "G38 S16", S the flutes of the cutter
 
   const Word* f = Find(words, 'F');
-  if (k.g33_col || mode_.threading || Find(words, 'D')) [[unlikely]]
+  if (k.g33_col || mode_.threading || block_d_) [[unlikely]]
     ThreadWords(words, k, f, axis_mask, trigger || passes_letters);
   const std::optional<double> block_feed = BlockFeed(f, k, mc);
 

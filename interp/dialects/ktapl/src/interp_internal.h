@@ -426,6 +426,7 @@ class KtRun final : public RunBase, public ExprContext {
   // and whether this block's move is the thread.
   double thread_lead_ = 0, thread_change_ = 0, thread_angle_ = 0;
   bool thread_block_ = false;
+  bool block_d_ = false;  // the block has a D word (KeepLetters)
   std::array<double, 26> letters_{};
 
   // Tools.
