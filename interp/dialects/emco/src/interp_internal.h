@@ -200,6 +200,8 @@ class NoseComp {
   void Emit(const Move& m, Vec2 end, const Vec2* center, double sweep);
   void FillArc(const geom::Corner& k, const Move& like);
   void Check570(bool ok);
+  void Put(Item&& it) { staged_.push_back(std::move(it)); }
+  void Settle();
 
   Sink out_;
   State state_ = kOff;
@@ -211,7 +213,8 @@ class NoseComp {
   Vec2 prog_;    // programmed position at the end of the moves taken so far
   bool has_held_ = false;
   Held held_;
-  std::deque<Item> after_;  // other commands after the held move
+  std::deque<Item> after_;   // other commands after the held move
+  std::deque<Item> staged_;  // written, final once the next move has passed its checks (Settle)
 };
 
 // ---------------------------------------------------------------------------------------------------------
