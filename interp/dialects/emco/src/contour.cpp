@@ -162,6 +162,14 @@ void NoseComp::Settle() {
   }
 }
 
+// What was held behind the released move follows it.
+void NoseComp::PutAfter() {
+  while (!after_.empty()) {
+    Put(std::move(after_.front()));
+    after_.pop_front();
+  }
+}
+
 // The held move ends at `end` (nose centre), an arc cut back by `trim_end` degrees; then what was held
 // behind it.
 void NoseComp::Release(Vec2 end, double trim_end) {
@@ -195,12 +203,6 @@ void NoseComp::Take(Item&& it) {
   geom::Path b = PathOf(m, prog_);
   if (!b.arc && geom::Norm(b.end - b.start) < geom::kTiny) return;      // no travel in the plane
   if (b.arc) Check570(geom::OffsetRadiusAtStart(b, r_, side_) > 1e-9);  // an arc smaller than the nose
-  auto flush = [&] {
-    while (!after_.empty()) {
-      Put(std::move(after_.front()));
-      after_.pop_front();
-    }
-  };
   if (state_ == kSelectPending) {
     held_ = Held{b, m, true, 0};
     has_held_ = true;
@@ -221,7 +223,7 @@ void NoseComp::Take(Item&& it) {
     Move held = held_.m;
     Release(geom::OffsetEnd(a, r_, side_), 0);
     if (outside && !reversal) FillArc(k, held.kind == Move::kRapid ? m : held);
-    flush();
+    PutAfter();
     state_ = kOff;
     Put(std::move(it));
     Settle();  // compensation is off: nothing after can undo these
@@ -251,7 +253,7 @@ void NoseComp::Take(Item&& it) {
     Release(k.a_end, 0);
     if (outside) FillArc(k, fill_like);
   }
-  flush();
+  PutAfter();
   held_ = Held{b, m, false, b_trim};
   has_held_ = true;
   prog_ = m.end;
@@ -260,10 +262,7 @@ void NoseComp::Take(Item&& it) {
 void NoseComp::Finish() {
   if (has_held_) {
     Release(geom::OffsetEnd(held_.path, r_, side_), 0);
-    while (!after_.empty()) {
-      Put(std::move(after_.front()));
-      after_.pop_front();
-    }
+    PutAfter();
   }
   Settle();
   state_ = kOff;

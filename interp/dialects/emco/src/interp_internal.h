@@ -201,6 +201,7 @@ class NoseComp {
   void FillArc(const geom::Corner& k, const Move& like);
   void Check570(bool ok);
   void Put(Item&& it) { staged_.push_back(std::move(it)); }
+  void PutAfter();
   void Settle();
 
   Sink out_;
