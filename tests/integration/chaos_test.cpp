@@ -408,14 +408,21 @@ TEST_F(Chaos, KillNineAtRandomMomentsWhileRoutesOperate) {
     const long id = j["id"].get<long>();
     auto& recs = records[id];
     std::set<std::string> ops_done;
+    // What a failure needs to be understood: the job and its completed records (station, dispatch).
+    const auto said = [&] {
+      std::string out = j.dump();
+      for (auto& r : recs)
+        out += fmt::format("\n  completed on {} as dispatch {}: {}", r["station"].get<std::string>(),
+                           r["dispatch_id"].get<long>(), r["programs"].dump());
+      return out;
+    };
     for (auto& r : recs)
       EXPECT_TRUE(ops_done.insert(r["programs"].dump()).second)
-          << "job " << id << " ran " << r["programs"] << " twice";
+          << "job " << id << " ran " << r["programs"] << " twice: " << said();
     if (j["state"] == "COMPLETED")
-      EXPECT_EQ(recs.size(), static_cast<size_t>(ops_of[j["route"].get<std::string>()]))
-          << "job " << id << " (" << j["route"] << ")";
+      EXPECT_EQ(recs.size(), static_cast<size_t>(ops_of[j["route"].get<std::string>()])) << said();
     else
-      EXPECT_LT(recs.size(), static_cast<size_t>(ops_of[j["route"].get<std::string>()])) << "job " << id;
+      EXPECT_LT(recs.size(), static_cast<size_t>(ops_of[j["route"].get<std::string>()])) << said();
   }
 
   // No backlog is left behind.

@@ -325,10 +325,12 @@ TEST_F(Fms, ServoStoppedPastItsLeaseRejoinsAndFinishesTheRun) {
   ExpectCompleted(Operate("RLEASE1", 10));
 }
 
-// (e) The same for a station's interpreter stopped past its lease in the middle of a run: it stays stopped
-// until the scheduler has taken the station for vanished and failed the pallet (docs/scheduler.md: it needs
-// an operator) and the lease has run out (watched through a writer on the station's run request topic).
-// When it continues it rejoins the bus, files the run's record, and the station takes the next pallet.
+// (e) The same for a station's interpreter stopped past its lease in the middle of a run: while it is stopped
+// the scheduler takes the station for vanished and waits for its word on the pallet it holds (docs/
+// scheduler.md §5), and the lease runs out (watched through a writer on the station's run request topic).
+// When it continues it rejoins the bus, the scheduler asks it about the pallet, and the run it never stopped
+// completes: once, one record. Before stop 55 the pallet was failed at once ("needs an operator") although
+// the station went on to finish it.
 TEST_F(Fms, InterpreterStoppedPastItsLeaseRejoinsAndTheStationGoesOn) {
   cell::bus::Participant observer("fms-test/observer");
   cell::bus::Writer<cell::RunRequest> watch(
@@ -336,37 +338,47 @@ TEST_F(Fms, InterpreterStoppedPastItsLeaseRejoinsAndTheStationGoesOn) {
   ASSERT_TRUE(watch.WaitForMatched(1, std::chrono::seconds(10)));
   const std::string job = HeldMidRun("STOP1", 20, 13);
   Freeze("cell-interpreter/KT01");
-  auto failed = WaitJob(job, [](const json& j) { return j["state"] == "FAILED"; });
-  EXPECT_NE(failed["reason"].get<std::string>().find("went offline while running pallet 13"),
-            std::string::npos)
-      << failed;
+  auto waiting = WaitJob(job, [](const json& j) { return j["reason"].is_string(); });
+  EXPECT_EQ(waiting["state"], "RUNNING") << waiting;
+  EXPECT_NE(
+      waiting["reason"].get<std::string>().find("went offline holding pallet 13: waiting for its report"),
+      std::string::npos)
+      << waiting;
   ASSERT_TRUE(cell::bus::WaitUntil([&] { return watch.Matched() == 0; }, std::chrono::seconds(15)))
       << "the stopped interpreter's lease did not run out";
   Thaw("cell-interpreter/KT01");
   Resume("KT01");
+  ExpectCompleted(job);
   ExpectCompleted(Operate("RSTOP1", 14));
   const std::string log = ReadFile(data_ + "/logs/cell-interpreter@KT01.service.log");
   EXPECT_NE(log.find("joining the bus anew"), std::string::npos) << log;
   auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
   while (RunRecords(13).empty() && std::chrono::steady_clock::now() < deadline)
     std::this_thread::sleep_for(std::chrono::milliseconds(100));
-  EXPECT_EQ(RunRecords(13).size(), 1u) << "the held run's record was not filed";
+  auto recs = RunRecords(13);
+  ASSERT_EQ(recs.size(), 1u) << "the held run's record was not filed";
+  EXPECT_EQ(recs[0]["completed"], true);
 }
 
-// (e2) kill -9 of a station's interpreter in the middle of a run: the job fails as documented (the station
-// went offline), and the restarted interpreter files the lost run's record, so there is one record per
+// (e2) kill -9 of a station's interpreter in the middle of a run: the scheduler waits for the station's word
+// (the station went offline holding the pallet); the restarted interpreter says the run was lost, so the job
+// fails (the pallet needs an operator) and the lost run's record is filed, so there is one record per
 // dispatch, failed ones included (docs/inspection-writer.md; issue 39 item 7: there was none).
 TEST_F(Fms, InterpreterKilledMidRunLeavesOneFailedRunRecord) {
   const std::string job = HeldMidRun("KILL2", 20, 15);
   const pid_t interp = Pid("cell-interpreter/KT01");
   ASSERT_GT(interp, 0);
   ASSERT_EQ(kill(interp, SIGKILL), 0);
-  auto failed = WaitJob(job, [](const json& j) { return j["state"] == "FAILED"; });
-  EXPECT_NE(failed["reason"].get<std::string>().find("went offline while running pallet 15"),
-            std::string::npos)
-      << failed;
+  auto waiting = WaitJob(job, [](const json& j) { return j["reason"].is_string(); });
+  EXPECT_EQ(waiting["state"], "RUNNING") << waiting;
   auto restart = Ctl({"restart", "cell-interpreter/KT01"});
   ASSERT_EQ(restart.code, 0) << restart.err;
+  auto failed = WaitJob(job, [](const json& j) { return j["state"] == "FAILED"; });
+  EXPECT_EQ(
+      failed["reason"],
+      "station KT01 went offline while running pallet 15 (program 1 of 1): station restarted during the "
+      "run; the pallet needs an operator")
+      << failed;
   auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
   while (RunRecords(15).empty() && std::chrono::steady_clock::now() < deadline)
     std::this_thread::sleep_for(std::chrono::milliseconds(100));

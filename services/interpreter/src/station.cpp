@@ -116,16 +116,34 @@ cell::RunReply Station::OnRun(const cell::RunRequest& r) {
       db_.EndRun(end);
       board_.Queued(db_.Count(RunState::kQueued));
       board_.Publish();
+      PublishRecorded(r.dispatch_id());
     }
     if (state == RunState::kActive) {
       cancel_id_ = r.dispatch_id();
       panel_.AbortRun(r.dispatch_id());  // the machine stops too, not only the sending
       stream_.Wake();
+    } else if (state && state != RunState::kQueued) {
+      PublishRecorded(r.dispatch_id());  // ended before the cancel came: said again
+    } else if (!state) {
+      // Never received: kept as cancelled, so that the request itself, arriving late, cannot start it, and
+      // said on the run topic, since the scheduler may be waiting for this station's word on it
+      // (docs/scheduler.md §5). It never started here (started_ns 0).
+      Dispatch d;
+      d.dispatch_id = r.dispatch_id();
+      d.job_id = r.job_id();
+      d.pallet = r.pallet();
+      d.node = cfg_.id;
+      for (const auto& p : r.programs()) d.programs.push_back(p.to_string());
+      db_.EnqueueCancelled(d, "cancelled by the scheduler before the station received it", clock_.WallNs());
+      PublishRecorded(d.dispatch_id);
     }
     rep.state(state ? ToWire(*state) : cell::RUN_CANCELLED);
     return rep;
   }
-  if (state) {  // a re-sent dispatch (scheduler restart): the station de-duplicates on the id
+  if (state) {  // a re-sent dispatch (scheduler restart, station back online): de-duplicated on the id
+    // An ended run is said again: its end may have been published by a process that died before anyone read
+    // it, and the scheduler asks because it is still waiting for it.
+    if (*state != RunState::kQueued && *state != RunState::kActive) PublishRecorded(r.dispatch_id());
     rep.state(ToWire(*state));
     return rep;
   }
@@ -240,6 +258,23 @@ void Station::OnProgress(const cell::SegmentProgress& p) {
 void Station::OnProbe(const cell::ProbeResult& r) {
   if (r.station() != cfg_.id) return;
   stream_.OnProbe(r);
+}
+
+void Station::PublishRecorded(std::int32_t dispatch_id) {
+  const auto v = db_.View(dispatch_id);
+  if (!v) return;
+  cell::RunStatus s;
+  s.dispatch_id(dispatch_id);
+  s.station(cfg_.id);
+  s.job_id(v->d.job_id);
+  s.pallet(v->d.pallet);
+  s.state(ToWire(v->state));
+  s.programs_done(v->programs_done);
+  s.machine_s(v->machine_s);
+  s.started_ns(v->started_ns);
+  s.finished_ns(v->finished_ns);
+  s.reason(v->reason.substr(0, 255));
+  io_.PublishRun(s);
 }
 
 void Station::Recover() {

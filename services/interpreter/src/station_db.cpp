@@ -163,6 +163,18 @@ void StationDb::Enqueue(const Dispatch& d, std::int64_t received_ns) {
   ins.Run();
 }
 
+void StationDb::EnqueueCancelled(const Dispatch& d, const std::string& reason, std::int64_t now_ns) {
+  nlohmann::json progs = d.programs;
+  std::lock_guard lk(mu_);
+  auto ins = db_.Prepare(
+      "INSERT INTO runs(dispatch_id, job_id, pallet, node, programs, repeat, state, reason, received_ns, "
+      "finished_ns) VALUES(?,?,?,?,?,?,'CANCELLED',?,?,?)");
+  ins.BindInt64(1, d.dispatch_id).BindInt64(2, d.job_id).BindInt64(3, d.pallet).BindText(4, d.node);
+  ins.BindText(5, progs.dump()).BindInt64(6, d.repeat).BindText(7, reason).BindInt64(8, now_ns);
+  ins.BindInt64(9, now_ns);
+  ins.Run();
+}
+
 std::optional<Dispatch> StationDb::NextQueued() {
   std::lock_guard lk(mu_);
   auto q = db_.Prepare(std::string("SELECT ") + kDispatchColumns +
@@ -250,6 +262,24 @@ void StationDb::EndRun(const RunProgress& run) {
   store::Transaction tx(db_);
   WriteProgress(run);
   tx.Commit();
+}
+
+std::optional<StationDb::RunView> StationDb::View(std::int32_t dispatch_id) {
+  std::lock_guard lk(mu_);
+  auto q = db_.Prepare(std::string("SELECT ") + kDispatchColumns +
+                       ", state, COALESCE(programs_done, 0), COALESCE(reason, ''), COALESCE(machine_s, 0),"
+                       " COALESCE(started_ns, 0), COALESCE(finished_ns, 0) FROM runs WHERE dispatch_id=?");
+  q.BindInt64(1, dispatch_id);
+  if (!q.Step()) return std::nullopt;
+  RunView v;
+  v.d = ReadDispatch(q);
+  v.state = StateFromText(q.ColumnText(6));
+  v.programs_done = static_cast<int>(q.ColumnInt64(7));
+  v.reason = q.ColumnText(8);
+  v.machine_s = q.ColumnDouble(9);
+  v.started_ns = q.ColumnInt64(10);
+  v.finished_ns = q.ColumnInt64(11);
+  return v;
 }
 
 std::vector<std::pair<std::int32_t, std::string>> StationDb::Outbox(int limit) {

@@ -459,6 +459,7 @@ void Service::OnRun(const cell::RunStatus& s) {
     case cell::RUN_CANCELLED:
       r.status = RunStatus::kFailed;
       r.reason = s.reason().to_string().empty() ? "run failed" : s.reason().to_string();
+      r.started = s.started_ns() != 0;
       break;
   }
   std::lock_guard lk(mu_);

@@ -521,25 +521,26 @@ void Scheduler::Impl::ReevaluateWaiting(int station, std::string_view trigger) {
   }
 }
 
-// Health policy (Interrupt): a station that vanished or faulted gives up its pallets. The dispatch it was
-// handed is cancelled on the station too (delivered when it answers again): a station that comes back must
-// not run a pallet that has been moved on or failed here (the chaos test found a re-queued pallet run twice).
-void Scheduler::Impl::Interrupt(int s, const std::string& why) {
+// Health policy (Interrupt): a station that vanished or faulted gives up the pallets allocated to it and not
+// yet handed out.
+void Scheduler::Impl::Interrupt(int s, const std::string& why, bool cancel) {
   StationRec& st = stations[static_cast<std::size_t>(s)];
   std::vector<std::int64_t> requeue;
   if (st.inflight != 0) {
+    // Handed out: only the station knows whether it never received the dispatch, has it queued, is running
+    // it or has finished it (its queue and runs are durable). The pallet stays with it until the station's
+    // own report settles the dispatch (ReportRun): giving it away ran an operation twice, and failing it at
+    // once called finished pallets failed (both found by the chaos test; docs/scheduler.md §5).
     DispatchRec& d = dispatches.at(st.inflight);
     JobRec& j = jobs.at(d.job);
-    fx.cancels.push_back(CancelAction{d.id, st.id, j.id});
-    if (d.state == DState::kRunning) {
-      Detach(d, DState::kFailed);
-      const std::string what = d.pallet != 0 ? fmt::format("pallet {}", d.pallet) : d.programs.at(0);
-      FinishJob(j, JobState::kFailed,
-                fmt::format("{} while running {} (program {} of {}): the {} needs an operator", why, what,
-                            d.done + 1, d.programs.size(), d.pallet != 0 ? "pallet" : "part"));
-    } else {
-      Detach(d, DState::kRevoked);
-      requeue.push_back(j.id);
+    if (cancel) fx.cancels.push_back(CancelAction{d.id, st.id, j.id});
+    if (d.interrupted.empty()) {
+      d.interrupted = why;
+      dirty_dispatches.insert(d.id);
+      j.reason =
+          fmt::format("{} holding {}: waiting for its report on dispatch {} (job cancel releases it)", why,
+                      d.pallet != 0 ? fmt::format("pallet {}", d.pallet) : d.programs.at(0), d.id);
+      JobChanged(j);
     }
   }
   while (!st.queue.empty()) {
@@ -555,6 +556,26 @@ void Scheduler::Impl::Interrupt(int s, const std::string& why) {
     j.station = -1;
     Evaluate(j, fmt::format("re-queued: {}", why));
   }
+}
+
+void Scheduler::Impl::AskAgain(int s) {
+  const StationRec& st = stations[static_cast<std::size_t>(s)];
+  if (st.inflight == 0 || states[static_cast<std::size_t>(s)].fault) return;
+  const DispatchRec& d = dispatches.at(st.inflight);
+  if (!d.interrupted.empty()) fx.dispatches.push_back(Action(d, true));
+}
+
+void Scheduler::Impl::GiveBack(DispatchRec& d) {
+  const int s = d.station;
+  JobRec& j = jobs.at(d.job);
+  const std::string why = d.interrupted;
+  Detach(d, DState::kRevoked);
+  j.state = JobState::kQueued;
+  j.dispatch = 0;
+  j.station = -1;
+  j.reason.clear();
+  Evaluate(j, fmt::format("re-queued: {} before starting it", why));
+  TrySend(s);
 }
 
 // ---- idempotency ----
@@ -642,6 +663,8 @@ Effects Scheduler::Recover() {
       const auto& d = m.dispatches.at(st.inflight);
       if (d.state == DState::kSent) {
         m.fx.dispatches.push_back(m.Action(d, true));
+      } else {
+        m.AskAgain(static_cast<int>(s));  // a dispatch awaiting its station's word: ask for it
       }
     }
     for (std::size_t s = 0; s < m.stations.size(); ++s) m.TrySend(static_cast<int>(s));

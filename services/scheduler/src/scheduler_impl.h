@@ -87,7 +87,14 @@ struct Scheduler::Impl : State {
   // Re-evaluates waiting jobs whose current operation lists `station` (-1: all).
   void ReevaluateWaiting(int station, std::string_view trigger);
   // A station that vanished or faulted gives up its pallets.
-  void Interrupt(int s, const std::string& why);
+  // A station went offline (cancel = false) or raised a fault (cancel = true: the station is sent a cancel
+  // for the dispatch it holds). Its queue is re-queued; the dispatch it holds waits for its report.
+  void Interrupt(int s, const std::string& why, bool cancel);
+  // Station s answers again (online, no fault): the dispatch it held when it was interrupted is sent again
+  // under its id, so the station says what became of it (it re-publishes an ended run's status).
+  void AskAgain(int s);
+  // An interrupted dispatch the station never started: revoked, and its job allocated again.
+  void GiveBack(DispatchRec& d);
 
   // ---- idempotency ----
   std::optional<std::int64_t> Seen(std::string_view key, const std::string& command);

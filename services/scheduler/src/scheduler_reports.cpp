@@ -41,6 +41,7 @@ Effects Scheduler::StationOnline(std::string_view id, std::string_view dialect) 
     if (m.states[static_cast<std::size_t>(s)].online) return;
     m.states[static_cast<std::size_t>(s)].online = true;
     m.dirty_stations.insert(s);
+    m.AskAgain(s);
     m.ReevaluateWaiting(s, fmt::format("station {} online", id));
     m.TrySend(s);
   });
@@ -54,7 +55,7 @@ Effects Scheduler::StationOffline(std::string_view id) {
     if (s < 0 || !m.states[static_cast<std::size_t>(s)].online) return;
     m.states[static_cast<std::size_t>(s)].online = false;
     m.dirty_stations.insert(s);
-    m.Interrupt(s, fmt::format("station {} went offline", id));
+    m.Interrupt(s, fmt::format("station {} went offline", id), false);
     m.ReevaluateWaiting(s, fmt::format("station {} offline", id));
   });
   return m.TakeEffects();
@@ -73,7 +74,7 @@ Effects Scheduler::StationCondition(std::string_view id, bool fault, std::string
     if (ss.fault == fault) return;
     ss.fault = fault;
     if (fault) {
-      m.Interrupt(s, fmt::format("station {} raised fault{}{}", id, code.empty() ? "" : " ", code));
+      m.Interrupt(s, fmt::format("station {} raised fault{}{}", id, code.empty() ? "" : " ", code), true);
     } else {
       m.ReevaluateWaiting(s, fmt::format("station {} fault cleared", id));
       m.TrySend(s);
@@ -145,6 +146,15 @@ Effects Scheduler::DispatchAcknowledged(std::int64_t dispatch_id) {
 
 namespace {
 void MarkRunning(Scheduler::Impl& m, DispatchRec& d) {
+  const auto& ss = m.states[static_cast<std::size_t>(d.station)];
+  if (!d.interrupted.empty() && ss.online && !ss.fault) {
+    // The station is back and says it holds the run: nothing is left to wait for.
+    d.interrupted.clear();
+    m.dirty_dispatches.insert(d.id);
+    auto& j = m.jobs.at(d.job);
+    j.reason.clear();
+    m.JobChanged(j);
+  }
   if (d.state == DState::kRunning) return;
   d.state = DState::kRunning;
   m.dirty_dispatches.insert(d.id);
@@ -209,6 +219,7 @@ Effects Scheduler::RunFinished(std::int64_t dispatch_id, std::optional<double> c
     auto& j = m.jobs.at(d->job);
     if (cycle_s) j.cycle = j.cycle.value_or(0) + *cycle_s;
     j.dispatch = 0;
+    j.reason.clear();  // an interruption the station's report has settled
     ++j.op;
     if (j.kind == "schedule") {
       j.op = 0;
@@ -236,10 +247,16 @@ Effects Scheduler::RunFailed(std::int64_t dispatch_id, std::string_view reason) 
     if (!d) return;
     const int s = d->station;
     m.stations[static_cast<std::size_t>(s)].pending_vars.clear();  // as at a run's end
-    m.Detach(*d, DState::kFailed);
     auto& j = m.jobs.at(d->job);
-    m.FinishJob(j, JobState::kFailed,
-                fmt::format("station {}: {}", m.stations[static_cast<std::size_t>(s)].id, reason));
+    std::string why = fmt::format("station {}: {}", m.stations[static_cast<std::size_t>(s)].id, reason);
+    if (!d->interrupted.empty()) {
+      why =
+          fmt::format("{} while running {} (program {} of {}): {}; the {} needs an operator", d->interrupted,
+                      d->pallet != 0 ? fmt::format("pallet {}", d->pallet) : d->programs.at(0), d->done + 1,
+                      d->programs.size(), reason, d->pallet != 0 ? "pallet" : "part");
+    }
+    m.Detach(*d, DState::kFailed);
+    m.FinishJob(j, JobState::kFailed, std::move(why));
     m.TrySend(s);
   });
   return m.TakeEffects();
@@ -267,6 +284,14 @@ Effects Scheduler::ReportRun(const RunReport& report) {
   }
   add(DispatchAcknowledged(id));
   if (report.status == RunStatus::kAccepted) return all;
+  if (report.status == RunStatus::kFailed && !report.started && report.programs_done == 0 &&
+      !impl_->dispatches.at(id).interrupted.empty()) {
+    // The station never started it (cancelled from its queue, or never received): the pallet is free.
+    Impl& m = *impl_;
+    m.Call([&] { m.GiveBack(m.dispatches.at(id)); });
+    add(m.TakeEffects());
+    return all;
+  }
   if (report.status != RunStatus::kFailed || report.programs_done > 0) add(RunStarted(id));
   const int programs = static_cast<int>(impl_->dispatches.at(id).programs.size());
   const int done = std::min(report.programs_done, programs);

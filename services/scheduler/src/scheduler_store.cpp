@@ -55,6 +55,9 @@ CREATE TABLE estimates (program TEXT NOT NULL, station TEXT NOT NULL, revision T
                         PRIMARY KEY (program, station));
 ALTER TABLE jobs ADD COLUMN predicted TEXT NOT NULL DEFAULT '{}';
 )sql"),
+      store::Migration::Sql(6, "scheduler: why a station's word is awaited on a dispatch it holds", R"sql(
+ALTER TABLE dispatches ADD COLUMN interrupted TEXT NOT NULL DEFAULT '';
+)sql"),
   };
   return m;
 }
@@ -236,7 +239,8 @@ void LoadJobs(store::Database& db, State& state, std::size_t kept_ended) {
 
 void LoadDispatches(store::Database& db, State& state) {
   auto q = db.Prepare(
-      "SELECT id, job, station, pallet, op, state, programs, ucy, done FROM dispatches ORDER BY id");
+      "SELECT id, job, station, pallet, op, state, programs, ucy, done, interrupted FROM dispatches "
+      "ORDER BY id");
   while (q.Step()) {
     DispatchRec r;
     r.id = q.ColumnInt64(0);
@@ -248,6 +252,7 @@ void LoadDispatches(store::Database& db, State& state) {
     r.programs = json::parse(q.ColumnText(6)).get<std::vector<std::string>>();
     r.ucy = json::parse(q.ColumnText(7)).get<std::vector<std::int64_t>>();
     r.done = static_cast<int>(q.ColumnInt64(8));
+    r.interrupted = q.ColumnText(9);
     if (!Live(r.state) && !state.jobs.count(r.job)) continue;  // its job's record is read when asked for
     // Backlog and station queues are rebuilt from the live dispatches.
     if (Live(r.state)) {
@@ -475,15 +480,20 @@ void FlushJobs(store::Database& db, const State& state) {
 void FlushDispatches(store::Database& db, const State& state) {
   if (state.dirty_dispatches.empty()) return;
   auto q = db.Prepare(
-      "INSERT INTO dispatches(id, job, station, pallet, op, state, programs, ucy, done) "
-      "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9) ON CONFLICT(id) DO UPDATE SET state = excluded.state, "
-      "done = excluded.done");
+      "INSERT INTO dispatches(id, job, station, pallet, op, state, programs, ucy, done, interrupted) "
+      "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10) ON CONFLICT(id) DO UPDATE SET state = "
+      "excluded.state, "
+      "done = excluded.done, interrupted = excluded.interrupted");
   for (std::int64_t id : state.dirty_dispatches) {
     const DispatchRec& r = state.dispatches.at(id);
     q.BindInt64(1, r.id).BindInt64(2, r.job).BindText(3,
                                                       state.stations[static_cast<std::size_t>(r.station)].id);
     q.BindInt64(4, r.pallet).BindInt64(5, r.op).BindText(6, kDStateNames[static_cast<int>(r.state)]);
-    q.BindText(7, json(r.programs).dump()).BindText(8, json(r.ucy).dump()).BindInt64(9, r.done).Run();
+    q.BindText(7, json(r.programs).dump())
+        .BindText(8, json(r.ucy).dump())
+        .BindInt64(9, r.done)
+        .BindText(10, r.interrupted)
+        .Run();
     q.Reset();
   }
 }

@@ -110,6 +110,9 @@ struct DispatchRec {
   std::vector<std::int64_t> ucy;
   int done = 0;  // programs finished
   DState state = DState::kQueued;
+  // Why the scheduler lost sight of the station while this dispatch was in its hands ("station KT01 went
+  // offline"); empty otherwise. Only the station's own report settles such a dispatch (docs/scheduler.md §5).
+  std::string interrupted;
   std::int64_t Remaining() const {
     std::int64_t r = 0;
     for (std::size_t i = static_cast<std::size_t>(done); i < ucy.size(); ++i) r += ucy[i];

@@ -69,19 +69,32 @@ TEST(Recovery, EverythingSurvivesARestart) {
   JobResult again = c.sched->Operate("op2", "R", 2);
   EXPECT_TRUE(again.replayed);
   EXPECT_EQ(again.job_id, j2);
-  // And the run continues where it stopped: the pallets queued on KT01 run in order.
+  // And the run continues where it stopped: the pallets queued on KT01 run in order; the one KT02 held when
+  // it vanished waits for KT02's word, which is asked for again when it is back (it never received it).
   c.Take(c.sched->Recover());
+  const auto kt02 = c.sched->Station("KT02").value().in_hand;
+  ASSERT_NE(kt02, 0);
+  c.Online("KT02", {"1"});
+  RunReport never{kt02, RunStatus::kFailed, 0, std::nullopt, "never received"};
+  never.started = false;
+  c.Take(c.sched->ReportRun(never));
   std::set<std::int64_t> done;
   for (int guard = 0; guard < 20 && done.size() < 3; ++guard) {
-    auto st = c.sched->Station("KT01").value();
-    if (st.in_hand == 0) break;
-    c.Complete(st.in_hand);
+    bool any = false;
+    for (const char* id : {"KT01", "KT02"}) {
+      auto st = c.sched->Station(id).value();
+      if (st.in_hand == 0) continue;
+      c.Complete(st.in_hand);
+      any = true;
+    }
+    if (!any) break;
     for (auto j : {j1, j2, j3}) {
       if (c.State(j) == JobState::kCompleted) done.insert(j);
     }
   }
   EXPECT_EQ(done.size(), 3u);
   EXPECT_EQ(c.Backlog("KT01"), 0);
+  EXPECT_EQ(c.Backlog("KT02"), 0);
 }
 
 // The command a key was used for is durable: after a restart the same command replays and another is refused.

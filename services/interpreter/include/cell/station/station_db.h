@@ -90,6 +90,8 @@ class StationDb {
   // ---- run queue ----
   std::optional<RunState> FindRun(std::int32_t dispatch_id);
   void Enqueue(const Dispatch& d, std::int64_t received_ns);
+  // A dispatch cancelled before it was received, kept ended so that it can never start here.
+  void EnqueueCancelled(const Dispatch& d, const std::string& reason, std::int64_t now_ns);
   std::optional<Dispatch> NextQueued();  // oldest first
   std::vector<Dispatch> Runs(RunState state);
   int Count(RunState state);
@@ -102,6 +104,16 @@ class StationDb {
   // A run's end without memory changes (cancelled while queued, lost at a restart); a record, when given,
   // goes to the outbox in the same transaction.
   void EndRun(const RunProgress& run);
+  // A dispatch as the station last recorded it: its state, how far it got and, once ended, how.
+  struct RunView {
+    Dispatch d;
+    RunState state = RunState::kQueued;
+    int programs_done = 0;
+    std::string reason;
+    double machine_s = 0;
+    std::int64_t started_ns = 0, finished_ns = 0;
+  };
+  std::optional<RunView> View(std::int32_t dispatch_id);
 
   // ---- outbox: run records until the inspection writer has them ----
   std::vector<std::pair<std::int32_t, std::string>> Outbox(int limit);

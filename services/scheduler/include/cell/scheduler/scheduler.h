@@ -106,8 +106,10 @@ struct JobView {
   std::string route;     // empty unless a route job
   std::string schedule;  // the schedule program's name for a schedule job
   int pallet = 0;
-  std::string station;            // the station of the current or last visit; empty if none
-  std::string reason;             // set while WAITING and when FAILED or CANCELLED
+  std::string station;  // the station of the current or last visit; empty if none
+  // Set while WAITING, when FAILED or CANCELLED, and while the scheduler waits for the word of a station that
+  // went offline or faulted holding the job's pallet (DISPATCHED or RUNNING; docs/scheduler.md §5).
+  std::string reason;
   std::int64_t started_ms = 0;    // first run start reported by a station; 0 = not yet
   std::int64_t finished_ms = 0;   // terminal time; 0 = not yet
   std::optional<double> cycle_s;  // sum of the stations' reported machine seconds
@@ -165,6 +167,10 @@ struct RunReport {
   int programs_done = 0;          // programs of the dispatch that reached their end
   std::optional<double> cycle_s;  // kCompleted: machine seconds of the visit
   std::string reason;             // kFailed
+  // kFailed: whether the station had started the run (its status's started_ns). A dispatch the station
+  // cancelled, or never received, before starting it goes back to the allocator when the scheduler was
+  // waiting for the station's word on it (docs/scheduler.md §5).
+  bool started = true;
 };
 
 struct Options {
