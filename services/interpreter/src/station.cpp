@@ -295,6 +295,10 @@ void Station::Recover() {
     s.job_id(d.job_id);
     s.pallet(d.pallet);
     s.state(cell::RUN_FAILED);
+    s.programs_done(done);
+    // It was active, so it started: the scheduler re-queues a run that never started (docs/scheduler.md §5),
+    // and must not take a lost run for one.
+    s.started_ns(started_ns != 0 ? started_ns : end.finished_ns);
     s.finished_ns(end.finished_ns);
     s.reason(end.reason);
     io_.PublishRun(s);
