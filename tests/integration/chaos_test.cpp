@@ -5,8 +5,8 @@
 // puts programs the same way. Afterwards:
 //   - every operated pallet is in exactly one job, and that job ended (COMPLETED, or FAILED with a reason:
 //     a pallet whose station died under it needs an operator, docs/scheduler.md §5);
-//   - every completed job has exactly one completed run record per operation, and no operation of any job ran
-//     to completion twice;
+//   - every completed job has exactly one completed run record per operation, and no operation of any job
+//     started twice (each run that started files a record, completed or not);
 //   - no backlog is left on any station;
 //   - every program put (before or during the chaos) reads back byte for byte;
 //   - the cell still works: one more pallet per route completes.
@@ -396,13 +396,20 @@ TEST_F(Chaos, KillNineAtRandomMomentsWhileRoutesOperate) {
   }
   EXPECT_EQ(jobs.size(), pallet_job_.size());
 
-  // Run records: one completed record per operation of a completed job; no operation completed twice.
-  std::map<long, std::vector<json>> records;  // job id -> completed run records
+  // Run records: one completed record per operation of a completed job; no operation completed twice; and no
+  // operation started twice (a record is filed for every run that started, completed or not: a pallet lost
+  // or aborted mid-run needs an operator, it is never run again by itself, docs/scheduler.md §5).
+  std::map<long, std::vector<json>> records;           // job id -> completed run records
+  std::map<long, std::map<std::string, int>> started;  // job id -> operation's programs -> runs started
   for (auto& e : fs::directory_iterator(cell_.data_dir() + "/records")) {
     if (!e.is_regular_file() || e.path().filename().string().rfind("run-", 0) != 0) continue;
     auto r = json::parse(ReadFile(e.path().string()), nullptr, false);
     ASSERT_FALSE(r.is_discarded()) << e.path();
-    if (r["completed"].get<bool>()) records[r["job_id"].get<long>()].push_back(r);
+    const long job = r["job_id"].get<long>();
+    if (++started[job][r["programs"].dump()] > 1)
+      ADD_FAILURE() << "job " << job << " started " << r["programs"] << " twice (" << e.path().filename()
+                    << ")";
+    if (r["completed"].get<bool>()) records[job].push_back(r);
   }
   for (auto& j : jobs) {
     const long id = j["id"].get<long>();
