@@ -537,9 +537,8 @@ void Scheduler::Impl::Interrupt(int s, const std::string& why, bool cancel) {
     if (d.interrupted.empty()) {
       d.interrupted = why;
       dirty_dispatches.insert(d.id);
-      j.reason =
-          fmt::format("{} holding {}: waiting for its report on dispatch {} (job cancel releases it)", why,
-                      d.pallet != 0 ? fmt::format("pallet {}", d.pallet) : d.programs.at(0), d.id);
+      j.reason = fmt::format("{} holding {}: waiting for its report on dispatch {} (job cancel releases it)",
+                             why, Holding(d), d.id);
       JobChanged(j);
     }
   }
@@ -556,6 +555,10 @@ void Scheduler::Impl::Interrupt(int s, const std::string& why, bool cancel) {
     j.station = -1;
     Evaluate(j, fmt::format("re-queued: {}", why));
   }
+}
+
+std::string Scheduler::Impl::Holding(const DispatchRec& d) {
+  return d.pallet != 0 ? fmt::format("pallet {}", d.pallet) : d.programs.at(0);
 }
 
 void Scheduler::Impl::AskAgain(int s) {

@@ -90,6 +90,8 @@ struct Scheduler::Impl : State {
   // A station went offline (cancel = false) or raised a fault (cancel = true: the station is sent a cancel
   // for the dispatch it holds). Its queue is re-queued; the dispatch it holds waits for its report.
   void Interrupt(int s, const std::string& why, bool cancel);
+  // What a dispatch puts on the machine, as job reasons name it: "pallet 5", or a schedule run's program.
+  static std::string Holding(const DispatchRec& d);
   // Station s answers again (online, no fault): the dispatch it held when it was interrupted is sent again
   // under its id, so the station says what became of it (it re-publishes an ended run's status).
   void AskAgain(int s);

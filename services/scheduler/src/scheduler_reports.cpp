@@ -250,10 +250,9 @@ Effects Scheduler::RunFailed(std::int64_t dispatch_id, std::string_view reason) 
     auto& j = m.jobs.at(d->job);
     std::string why = fmt::format("station {}: {}", m.stations[static_cast<std::size_t>(s)].id, reason);
     if (!d->interrupted.empty()) {
-      why =
-          fmt::format("{} while running {} (program {} of {}): {}; the {} needs an operator", d->interrupted,
-                      d->pallet != 0 ? fmt::format("pallet {}", d->pallet) : d->programs.at(0), d->done + 1,
-                      d->programs.size(), reason, d->pallet != 0 ? "pallet" : "part");
+      why = fmt::format("{} while running {} (program {} of {}): {}; the {} needs an operator",
+                        d->interrupted, Impl::Holding(*d), d->done + 1, d->programs.size(), reason,
+                        d->pallet != 0 ? "pallet" : "part");
     }
     m.Detach(*d, DState::kFailed);
     m.FinishJob(j, JobState::kFailed, std::move(why));
