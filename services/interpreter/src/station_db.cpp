@@ -153,25 +153,23 @@ std::optional<RunState> StationDb::FindRun(std::int32_t dispatch_id) {
 }
 
 void StationDb::Enqueue(const Dispatch& d, std::int64_t received_ns) {
-  nlohmann::json progs = d.programs;
-  std::lock_guard lk(mu_);
-  auto ins = db_.Prepare(
-      "INSERT INTO runs(dispatch_id, job_id, pallet, node, programs, repeat, state, received_ns) "
-      "VALUES(?,?,?,?,?,?,'QUEUED',?)");
-  ins.BindInt64(1, d.dispatch_id).BindInt64(2, d.job_id).BindInt64(3, d.pallet).BindText(4, d.node);
-  ins.BindText(5, progs.dump()).BindInt64(6, d.repeat).BindInt64(7, received_ns);
-  ins.Run();
+  Insert(d, RunState::kQueued, "", received_ns, 0);
 }
 
 void StationDb::EnqueueCancelled(const Dispatch& d, const std::string& reason, std::int64_t now_ns) {
+  Insert(d, RunState::kCancelled, reason, now_ns, now_ns);
+}
+
+void StationDb::Insert(const Dispatch& d, RunState state, const std::string& reason, std::int64_t received_ns,
+                       std::int64_t finished_ns) {
   nlohmann::json progs = d.programs;
   std::lock_guard lk(mu_);
   auto ins = db_.Prepare(
       "INSERT INTO runs(dispatch_id, job_id, pallet, node, programs, repeat, state, reason, received_ns, "
-      "finished_ns) VALUES(?,?,?,?,?,?,'CANCELLED',?,?,?)");
+      "finished_ns) VALUES(?,?,?,?,?,?,?,?,?,?)");
   ins.BindInt64(1, d.dispatch_id).BindInt64(2, d.job_id).BindInt64(3, d.pallet).BindText(4, d.node);
-  ins.BindText(5, progs.dump()).BindInt64(6, d.repeat).BindText(7, reason).BindInt64(8, now_ns);
-  ins.BindInt64(9, now_ns);
+  ins.BindText(5, progs.dump()).BindInt64(6, d.repeat).BindText(7, RunStateName(state)).BindText(8, reason);
+  ins.BindInt64(9, received_ns).BindInt64(10, finished_ns);
   ins.Run();
 }
 

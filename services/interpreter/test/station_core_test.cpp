@@ -124,6 +124,50 @@ TEST_F(StationCore, CancelOfAQueuedDispatchNeverRunsIt) {
   EXPECT_EQ(io_.LastRun(2)->state(), cell::RUN_COMPLETED);
 }
 
+// A scheduler that lost sight of the station asks again about the dispatch it held (the same request, or a
+// cancel after a fault): the station answers from its database, on the run topic too, since the end may have
+// been published by a process that died before anyone read it (docs/scheduler.md §5).
+TEST_F(StationCore, AskedAgainTheStationSaysWhatBecameOfADispatch) {
+  Put("P", Moves(1));
+  Dispatch(1, {"P"});
+  ASSERT_EQ(RunOne(1).state(), cell::RUN_COMPLETED);
+  io_.runs.clear();
+  EXPECT_EQ(Dispatch(1, {"P"}).state(), cell::RUN_COMPLETED);
+  ASSERT_EQ(io_.runs.size(), 1u);
+  EXPECT_EQ(io_.runs[0].state(), cell::RUN_COMPLETED);
+  EXPECT_EQ(io_.runs[0].programs_done(), 1);
+  EXPECT_EQ(io_.runs[0].job_id(), 101);
+  EXPECT_GT(io_.runs[0].started_ns(), 0);
+  EXPECT_GT(io_.runs[0].machine_s(), 0.0);
+  io_.runs.clear();
+  EXPECT_EQ(Cancel(1).state(), cell::RUN_COMPLETED);  // too late to cancel: said again as it ended
+  ASSERT_EQ(io_.runs.size(), 1u);
+  EXPECT_EQ(io_.runs[0].state(), cell::RUN_COMPLETED);
+
+  // Cancelled from the queue: said as a run that never started.
+  Dispatch(2, {"P"});
+  io_.runs.clear();
+  EXPECT_EQ(Cancel(2).state(), cell::RUN_QUEUED);
+  ASSERT_EQ(io_.runs.size(), 1u);
+  EXPECT_EQ(io_.runs[0].state(), cell::RUN_CANCELLED);
+  EXPECT_EQ(io_.runs[0].started_ns(), 0);
+
+  // Cancelled before it arrived: kept as cancelled and said as never started; the request arriving late
+  // cannot start it (the scheduler has given the pallet to another dispatch).
+  io_.runs.clear();
+  EXPECT_EQ(Cancel(3).state(), cell::RUN_CANCELLED);
+  ASSERT_EQ(io_.runs.size(), 1u);
+  EXPECT_EQ(io_.runs[0].state(), cell::RUN_CANCELLED);
+  EXPECT_EQ(io_.runs[0].job_id(), 103);
+  EXPECT_EQ(io_.runs[0].started_ns(), 0);
+  EXPECT_EQ(Dispatch(3, {"P"}).state(), cell::RUN_CANCELLED);
+  EXPECT_FALSE(station_->RunNext());
+  EXPECT_TRUE(servo_.Ran(3, cell::SEGMENT_END).empty());
+  Make();  // and so it stays across a restart
+  EXPECT_EQ(Dispatch(3, {"P"}).state(), cell::RUN_CANCELLED);
+  EXPECT_FALSE(station_->RunNext());
+}
+
 TEST_F(StationCore, CancelOfTheRunningDispatchStopsSendingAndAbortsTheMachine) {
   Put("LONG", Moves(40));
   Dispatch(3, {"LONG"});
@@ -403,6 +447,9 @@ TEST_F(StationCore, ACopyOfTheDatabaseAtAnyMomentOpensConsistent) {
     ASSERT_TRUE(last) << s;
     EXPECT_EQ(last->state(), cell::RUN_FAILED);
     EXPECT_EQ(last->reason(), "station restarted during the run");
+    // It had started: a scheduler waiting for this station's word must not take it for a run that never did
+    // and give the part-machined pallet to another run (docs/scheduler.md §5; fms_test found it).
+    EXPECT_GT(last->started_ns(), 0) << s;
     // Issue 39 item 7: the lost run has its record too (one per dispatch), saying why it did not complete.
     restarted.FlushOutbox();
     ASSERT_EQ(io.records.size(), 1u) << s;

@@ -132,6 +132,8 @@ class StationDb {
 
  private:
   void WriteProgress(const RunProgress& run);  // caller holds mu_ inside a transaction
+  void Insert(const Dispatch& d, RunState state, const std::string& reason, std::int64_t received_ns,
+              std::int64_t finished_ns);
 
   std::mutex mu_;
   store::Database db_;
