@@ -396,8 +396,8 @@ TEST_F(Chaos, KillNineAtRandomMomentsWhileRoutesOperate) {
   }
   EXPECT_EQ(jobs.size(), pallet_job_.size());
 
-  // Run records: one completed record per operation of a completed job; no operation completed twice; and no
-  // operation started twice (a record is filed for every run that started, completed or not: a pallet lost
+  // Run records: one completed record per operation of a completed job; no operation started (so none
+  // completed) twice (a record is filed for every run that started, completed or not: a pallet lost
   // or aborted mid-run needs an operator, it is never run again by itself, docs/scheduler.md §5).
   std::map<long, std::vector<json>> records;           // job id -> completed run records
   std::map<long, std::map<std::string, int>> started;  // job id -> operation's programs -> runs started
@@ -414,7 +414,6 @@ TEST_F(Chaos, KillNineAtRandomMomentsWhileRoutesOperate) {
   for (auto& j : jobs) {
     const long id = j["id"].get<long>();
     auto& recs = records[id];
-    std::set<std::string> ops_done;
     // What a failure needs to be understood: the job and its completed records (station, dispatch).
     const auto said = [&] {
       std::string out = j.dump();
@@ -423,9 +422,6 @@ TEST_F(Chaos, KillNineAtRandomMomentsWhileRoutesOperate) {
                            r["dispatch_id"].get<long>(), r["programs"].dump());
       return out;
     };
-    for (auto& r : recs)
-      EXPECT_TRUE(ops_done.insert(r["programs"].dump()).second)
-          << "job " << id << " ran " << r["programs"] << " twice: " << said();
     if (j["state"] == "COMPLETED")
       EXPECT_EQ(recs.size(), static_cast<size_t>(ops_of[j["route"].get<std::string>()])) << said();
     else

@@ -107,24 +107,23 @@ cell::RunReply Station::OnRun(const cell::RunRequest& r) {
   if (r.dispatch_id() <= 0) throw Error(Errc::kInvalidArgument, "dispatch id must be positive");
   const std::optional<RunState> state = db_.FindRun(r.dispatch_id());
   if (r.cancel()) {
-    if (state == RunState::kQueued) {
-      RunProgress end;
-      end.dispatch_id = r.dispatch_id();
-      end.end = RunState::kCancelled;
-      end.reason = "cancelled by the scheduler";
-      end.finished_ns = clock_.WallNs();
-      db_.EndRun(end);
-      board_.Queued(db_.Count(RunState::kQueued));
-      board_.Publish();
-      PublishRecorded(r.dispatch_id());
-    }
     if (state == RunState::kActive) {
       cancel_id_ = r.dispatch_id();
       panel_.AbortRun(r.dispatch_id());  // the machine stops too, not only the sending
       stream_.Wake();
-    } else if (state && state != RunState::kQueued) {
-      PublishRecorded(r.dispatch_id());  // ended before the cancel came: said again
-    } else if (!state) {
+    } else if (state) {
+      if (state == RunState::kQueued) {
+        RunProgress end;
+        end.dispatch_id = r.dispatch_id();
+        end.end = RunState::kCancelled;
+        end.reason = "cancelled by the scheduler";
+        end.finished_ns = clock_.WallNs();
+        db_.EndRun(end);
+        board_.Queued(db_.Count(RunState::kQueued));
+        board_.Publish();
+      }
+      PublishRecorded(r.dispatch_id());  // cancelled now, or ended before the cancel came: said (again)
+    } else {
       // Never received: kept as cancelled, so that the request itself, arriving late, cannot start it, and
       // said on the run topic, since the scheduler may be waiting for this station's word on it
       // (docs/scheduler.md §5). It never started here (started_ns 0).
@@ -289,19 +288,9 @@ void Station::Recover() {
     end.programs_done = done;
     end.record = RunRecord(d, cfg_.id, end, started_ns);
     db_.EndRun(end);
-    cell::RunStatus s;
-    s.dispatch_id(d.dispatch_id);
-    s.station(cfg_.id);
-    s.job_id(d.job_id);
-    s.pallet(d.pallet);
-    s.state(cell::RUN_FAILED);
-    s.programs_done(done);
-    // It was active, so it started: the scheduler re-queues a run that never started (docs/scheduler.md §5),
-    // and must not take a lost run for one.
-    s.started_ns(started_ns != 0 ? started_ns : end.finished_ns);
-    s.finished_ns(end.finished_ns);
-    s.reason(end.reason);
-    io_.PublishRun(s);
+    // Said as the database now has it: started (it was active; a run that never started is re-queued by the
+    // scheduler, a lost one must not be, docs/scheduler.md §5), with the programs it finished.
+    PublishRecorded(d.dispatch_id);
   }
 }
 

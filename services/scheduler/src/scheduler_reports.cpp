@@ -248,12 +248,12 @@ Effects Scheduler::RunFailed(std::int64_t dispatch_id, std::string_view reason) 
     const int s = d->station;
     m.stations[static_cast<std::size_t>(s)].pending_vars.clear();  // as at a run's end
     auto& j = m.jobs.at(d->job);
-    std::string why = fmt::format("station {}: {}", m.stations[static_cast<std::size_t>(s)].id, reason);
-    if (!d->interrupted.empty()) {
-      why = fmt::format("{} while running {} (program {} of {}): {}; the {} needs an operator",
-                        d->interrupted, Impl::Holding(*d), d->done + 1, d->programs.size(), reason,
-                        d->pallet != 0 ? "pallet" : "part");
-    }
+    std::string why =
+        d->interrupted.empty()
+            ? fmt::format("station {}: {}", m.stations[static_cast<std::size_t>(s)].id, reason)
+            : fmt::format("{} while running {} (program {} of {}): {}; the {} needs an operator",
+                          d->interrupted, Impl::Holding(*d), d->done + 1, d->programs.size(), reason,
+                          d->pallet != 0 ? "pallet" : "part");
     m.Detach(*d, DState::kFailed);
     m.FinishJob(j, JobState::kFailed, std::move(why));
     m.TrySend(s);
