@@ -1,14 +1,13 @@
 // `cell-oracle-gen check --comp` (issue 33 item 1, docs/testing.md "Cutter radius compensation"): the
 // LinuxCNC differential under G41/G42. The no-gouge property's random closed contours (contour.h: lines and
-// arcs, convex and concave corners, G17, mm) in Balt-System or KT-APL, and their NGC twin with G41.1/G42.1
-// D<the diameter> (rs274 needs no tool table then). The entry (ramp-on) and exit (ramp-off) rules differ, so
-// only the moves strictly between the first and the second cut of element 0 are compared (every corner there
-// is made of two whole offset elements): end points, arc centres and senses, 1e-3 mm, in order, anchored by
-// geometry (the moves on element 0's offset), not by index.
-// Balt-System's outside corner is the intersection of the offsets (balt.md judgement call 50): the LinuxCNC
-// path is rewritten to it before the comparison (see Expected).
-// Debugging: COMP_ONLY=<program seed> runs that contour alone; COMP_DEBUG=1 prints both move lists of a
-// finding.
+// arcs, convex and concave corners; G17 or G18 (rs274 compensates in no other plane), mm or inch) in
+// Balt-System or KT-APL, and their NGC twin with G41.1/G42.1 D<the diameter> (rs274 needs no tool table
+// then). The entry (ramp-on) and exit (ramp-off) rules differ, so only the moves strictly between the first
+// and the second cut of element 0 are compared (every corner there is made of two whole offset elements): end
+// points, arc centres and senses, 1e-3 mm (2e-3 in inch), in order, anchored by geometry (the moves on
+// element 0's offset), not by index. Balt-System's outside corner is the intersection of the offsets (balt.md
+// judgement call 50): the LinuxCNC path is rewritten to it before the comparison (see Expected). Debugging:
+// COMP_ONLY=<program seed> runs that contour alone; COMP_DEBUG=1 prints both move lists of a finding.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -24,10 +23,16 @@ namespace fs = std::filesystem;
 namespace cell::oracle {
 namespace {
 
-constexpr double kTol = 1e-3;
+// 1e-3 mm; 2e-3 mm in inch (rs274 prints four decimals of an inch, 1.27e-3 mm).
+double Tol(const CompContour& k) {
+  return k.inch ? 2e-3 : 1e-3;
+}
 // Which offset element a move runs on: the contour's arc centres are on the 0.001 mm grid, so an arc's radii
-// at its two ends differ by up to 1.5e-3 mm.
-constexpr double kOnTol = 5e-3;
+// at its two ends differ by up to 1.5e-3 mm; in inch its points are on the 0.0001 in grid (2.54e-3 mm) and
+// rs274 prints four decimals of an inch: 1e-2 mm.
+double OnTol(const CompContour& k) {
+  return k.inch ? 1e-2 : 5e-3;
+}
 
 // One feed move in the plane: a line, or an arc about c.
 struct Seg {
@@ -44,13 +49,17 @@ double Dist(const P2& p, const P2& q) {
   return std::hypot(p[0] - q[0], p[1] - q[1]);
 }
 
-std::vector<Seg> Segs(const std::vector<Move>& moves) {
+// The moves in the contour's plane: its first and second axis, z the normal one (an arc's sense is seen from
+// the plane's normal on both sides, so it is kept).
+std::vector<Seg> Segs(const std::vector<Move>& moves, int plane) {
+  const auto ax = PlaneAxes(plane);
   std::vector<Seg> out;
   P2 at{};
   for (const Move& m : moves) {
-    P2 e{m.end[0], m.end[1]};
+    P2 e{m.end[ax[0]], m.end[ax[1]]};
     if (m.kind == MoveKind::kLine || m.kind == MoveKind::kArc)
-      out.push_back({m.kind == MoveKind::kArc, at, e, {m.center[0], m.center[1]}, m.cw, m.end[2]});
+      out.push_back(
+          {m.kind == MoveKind::kArc, at, e, {m.center[ax[0]], m.center[ax[1]]}, m.cw, m.end[ax[2]]});
     at = e;
   }
   return out;
@@ -68,8 +77,9 @@ P2 Direction(const Seg& s, bool at_end) {
 }
 
 // Whether s runs on the offset of contour element i (the tool on the left for G41); `start_tol`: how far its
-// start may be off (a corner LinuxCNC bent, RestoreFillIns).
-bool OnElement(const Seg& s, const CompContour& k, std::size_t i, double start_tol = kOnTol) {
+// start may be off (a corner LinuxCNC bent, RestoreFillIns; 0: OnTol).
+bool OnElement(const Seg& s, const CompContour& k, std::size_t i, double start_tol = 0) {
+  if (start_tol == 0) start_tol = OnTol(k);
   const P2 &p = k.p[i], &q = k.p[k.Next(i)];
   double side = k.left ? 1 : -1;
   if (k.sweep[i] == 0) {
@@ -78,19 +88,19 @@ bool OnElement(const Seg& s, const CompContour& k, std::size_t i, double start_t
     auto offset = [&](const P2& x) {  // signed distance, left positive
       return ((q[0] - p[0]) * (x[1] - p[1]) - (q[1] - p[1]) * (x[0] - p[0])) / l;
     };
-    return std::fabs(offset(s.a) - side * k.r) < start_tol && std::fabs(offset(s.b) - side * k.r) < kOnTol;
+    return std::fabs(offset(s.a) - side * k.r) < start_tol && std::fabs(offset(s.b) - side * k.r) < OnTol(k);
   }
   // A ccw arc has the part, its centre, on the left.
   double want = Dist(p, k.centre[i]) - side * k.r * (k.sweep[i] > 0 ? 1 : -1);
-  return s.arc && s.cw == (k.sweep[i] < 0) && Dist(s.c, k.centre[i]) < kTol &&
-         std::fabs(Dist(s.b, s.c) - want) < kOnTol;
+  return s.arc && s.cw == (k.sweep[i] < 0) && Dist(s.c, k.centre[i]) < Tol(k) &&
+         std::fabs(Dist(s.b, s.c) - want) < OnTol(k);
 }
 
 // A fill-in arc: the cutter radius about a corner of the contour.
 bool FillIn(const Seg& s, const CompContour& k) {
-  if (!s.arc || std::fabs(Dist(s.a, s.c) - k.r) > kTol) return false;
+  if (!s.arc || std::fabs(Dist(s.a, s.c) - k.r) > Tol(k)) return false;
   for (const P2& p : k.p)
-    if (Dist(s.c, p) < kTol) return true;
+    if (Dist(s.c, p) < Tol(k)) return true;
   return false;
 }
 
@@ -124,11 +134,24 @@ std::vector<Seg> Expected(const std::vector<Seg>& ngc, const std::vector<Seg>& c
                  : P2{before.b[0] + t * d1[0], before.b[1] + t * d1[1]};
     bool ahead = small || (t > 0 && u > 0);
     // cell-interp's path took X: a line joins the arc's own offset point and X.
-    double near = small ? 0.05 : kTol / std::fabs(den);
+    // In inch rs274 prints its points to 1.27e-3 mm in each axis (four decimals of an inch; in mm 1e-4 mm,
+    // within the tolerance at any turn compared): X moves by both offset points' error (e) over the sine of
+    // the turn, and by each direction's error (2e over the length of the move it is taken from, or the arc's
+    // radius) times X's distance from that move's end.
+    double digits = 0;
+    if (k.inch) {
+      const double e = 1.27e-3 * std::sqrt(2.0);
+      auto span = [](const Seg& m, bool at_end) {
+        return m.arc ? Dist(at_end ? m.b : m.a, m.c) : Dist(m.a, m.b);
+      };
+      digits = 2 * e / std::fabs(den) + 2 * e * std::fabs(t) / span(ngc[i - 1], true) +
+               2 * e * std::fabs(u) / span(after, false);
+    }
+    double near = small ? 0.05 : Tol(k) / std::fabs(den) + digits;
     bool reached = false;
     for (const Seg& c : cell)
-      reached = reached || (!c.arc && (before.arc ? Dist(c.a, before.b) < kOnTol && Dist(c.b, x) < near
-                                                  : Dist(c.b, after.a) < kOnTol && Dist(c.a, x) < near));
+      reached = reached || (!c.arc && (before.arc ? Dist(c.a, before.b) < OnTol(k) && Dist(c.b, x) < near
+                                                  : Dist(c.b, after.a) < OnTol(k) && Dist(c.a, x) < near));
     if (!ahead || ((before.arc || after.arc) && !reached)) {
       out.push_back(s);
       continue;
@@ -139,6 +162,7 @@ std::vector<Seg> Expected(const std::vector<Seg>& ngc, const std::vector<Seg>& c
     else
       before.b = x;
     out.back().loose_end = out.back().loose_end || small;
+    out.back().slack_end = std::max(out.back().slack_end, digits);
     if (after.arc) {
       out.push_back({false, x, after.a, {}, false, s.z});
     } else {  // the line after the corner, from X
@@ -147,6 +171,7 @@ std::vector<Seg> Expected(const std::vector<Seg>& ngc, const std::vector<Seg>& c
       ++i;
     }
     out.back().loose_start = out.back().loose_start || small;
+    out.back().slack_start = std::max(out.back().slack_start, digits);
   }
   return out;
 }
@@ -256,7 +281,7 @@ void RestoreFillIns(std::vector<Seg>& s, const CompContour& k, int* bent) {
         std::size_t en = k.Next(e);
         if (!OnElement(out.back(), k, e) || !OnElement(s[i], k, en, 0.05)) continue;
         P2 end = OffsetPoint(k, e, k.p[en]), start = OffsetPoint(k, en, k.p[en]);
-        if (Dist(out.back().b, end) < kTol && Dist(s[i].a, start) > kTol && Dist(s[i].a, start) < 0.5) {
+        if (Dist(out.back().b, end) < Tol(k) && Dist(s[i].a, start) > Tol(k) && Dist(s[i].a, start) < 0.5) {
           P2 d1 = Direction(out.back(), true), d2 = Direction(s[i], false);
           bool left_turn = d1[0] * d2[1] - d1[1] * d2[0] > 0;
           if (left_turn != k.left) {
@@ -281,7 +306,7 @@ void DropTinyFillIns(std::vector<Seg>& s, const CompContour& k) {
   std::vector<Seg> out;
   for (std::size_t i = 0; i < s.size(); ++i) {
     double half = Dist(s[i].a, s[i].b) / 2;
-    if (FillIn(s[i], k) && k.r - std::sqrt(k.r * k.r - half * half) < kTol && i + 1 < s.size()) {
+    if (FillIn(s[i], k) && k.r - std::sqrt(k.r * k.r - half * half) < Tol(k) && i + 1 < s.size()) {
       s[i + 1].a = s[i].a;
       continue;
     }
@@ -290,11 +315,24 @@ void DropTinyFillIns(std::vector<Seg>& s, const CompContour& k) {
   s.swap(out);
 }
 
-// LinuxCNC's twin: G41.1/G42.1 D the diameter; I J from the start.
+// LinuxCNC's twin: G41.1/G42.1 D the diameter (in the program's unit); the centre from the start (I J in
+// G17, I K in G18); G20 for inch.
 std::string Ngc(const CompContour& k) {
-  auto xy = [](const P2& p) { return "X" + Num(p[0], 3) + " Y" + Num(p[1], 3); };
-  std::string t = "G21 G90 G94 G40 G17\nG0 X100 Y0 Z0\nG1 " + std::string(k.left ? "G41.1" : "G42.1") + " D" +
-                  Num(2 * k.r, 3) + " " + xy(k.p[0]) + " F200\n";
+  const double unit = k.inch ? 25.4 : 1;
+  const int d = k.inch ? 4 : 3;
+  const auto ax = PlaneAxes(k.plane);
+  auto words = [&](const P2& p, const char* letters) {
+    std::string s;
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 2; ++j)
+        if (ax[static_cast<std::size_t>(j)] == i)
+          s += (s.empty() ? "" : " ") + std::string(1, letters[i]) + Num(p[j] / unit, d);
+    return s;
+  };
+  auto xy = [&](const P2& p) { return words(p, "XYZ"); };
+  std::string t = std::string(k.inch ? "G20" : "G21") + " G90 G94 G40 G" + std::to_string(k.plane) + "\nG0 " +
+                  xy({100, 0}) + " " + "XYZ"[ax[2]] + "0\nG1 " + (k.left ? "G41.1" : "G42.1") + " D" +
+                  Num(2 * k.r / unit, 6) + " " + xy(k.p[0]) + " F200\n";
   std::size_t n = k.p.size();
   for (std::size_t j = 0; j <= n; ++j) {
     std::size_t i = j % n;
@@ -302,10 +340,21 @@ std::string Ngc(const CompContour& k) {
     if (k.sweep[i] == 0)
       t += "G1 " + xy(e) + "\n";
     else
-      t += std::string(k.sweep[i] > 0 ? "G3 " : "G2 ") + xy(e) + " I" + Num(k.centre[i][0] - a[0], 3) + " J" +
-           Num(k.centre[i][1] - a[1], 3) + "\n";
+      t += std::string(k.sweep[i] > 0 ? "G3 " : "G2 ") + xy(e) + " " +
+           words({k.centre[i][0] - a[0], k.centre[i][1] - a[1]}, "IJK") + "\n";
   }
-  return t + "G1 G40 X100 Y0\nM2\n";
+  return t + "G1 G40 " + xy({100, 0}) + "\nM2\n";
+}
+
+// An inch contour: its points and centres on the 0.0001 in grid (stated in mm), so both programs state them
+// exactly.
+void ToInchGrid(CompContour& k) {
+  auto snap = [](P2& p) {
+    for (double& v : p) v = std::round(v / 25.4 * 1e4) / 1e4 * 25.4;
+  };
+  for (P2& p : k.p) snap(p);
+  for (P2& c : k.centre) snap(c);
+  k.inch = true;
 }
 
 }  // namespace
@@ -316,6 +365,10 @@ CompTally CompCheck(const PropRun& o, const std::string& rs274, const std::strin
   for (int i = 0; t.blocks < o.blocks; ++i) {
     std::uint64_t seed = ProgramSeed(o.seed, dialect + "/comp", i);
     CompContour k = RandomContour(seed, i % 2 == 1);
+    // Every other pair of contours in G18 (LinuxCNC compensates in G17 and G18 only, so G19 is not compared),
+    // every other such pair in inch: G17 mm, G18 mm, G17 inch, G18 inch.
+    k.plane = (i / 2) % 2 ? 18 : 17;
+    if ((i / 4) % 2) ToInchGrid(k);
     ContourProgram w = WriteContour(dialect, k);
     t.blocks += static_cast<int>(k.p.size()) + 1;
     if (std::getenv("COMP_ONLY") && std::to_string(seed) != std::getenv("COMP_ONLY")) continue;
@@ -335,7 +388,7 @@ CompTally CompCheck(const PropRun& o, const std::string& rs274, const std::strin
     auto nm = ParseRs274(Slurp(dir / "comp.canon"), false, &err);
     DropStill(cm);
     DropStill(nm);
-    std::vector<Seg> cell = Segs(cm), ngc = Segs(nm);
+    std::vector<Seg> cell = Segs(cm, k.plane), ngc = Segs(nm, k.plane);
     int bent = 0;
     RestoreFillIns(ngc, k, &bent);  // LinuxCNC's; a dialect's joint line to an intersection is no bent corner
     std::string kind, detail;
@@ -363,7 +416,7 @@ CompTally CompCheck(const PropRun& o, const std::string& rs274, const std::strin
         std::size_t n = std::min(ct - cf, nt - nf);
         for (std::size_t m = 0; m < n && kind.empty(); ++m) {
           t.moves++;
-          if (auto f = Differs(cell[cf + m], want[nf + m], kTol)) {
+          if (auto f = Differs(cell[cf + m], want[nf + m], Tol(k))) {
             kind = *f + " differs at move " + std::to_string(m + 1) + " of the contour";
             detail = "cell-interp: " + Show(cell[cf + m]) + "\n  rs274:       " + Show(want[nf + m]);
           }
@@ -385,7 +438,8 @@ CompTally CompCheck(const PropRun& o, const std::string& rs274, const std::strin
         for (const Seg& s : ngc) std::cout << "N " << Show(s) << (OnElement(s, k, 0) ? " *" : "") << "\n";
       }
       std::cout << dialect << " comp: program seed " << seed << " (" << (k.left ? "G41" : "G42") << ", r "
-                << k.r << ", " << k.p.size() << " corners): " << kind << "\n  " << detail << "\n";
+                << k.r << ", " << k.p.size() << " corners, G" << k.plane << (k.inch ? " inch" : " mm")
+                << "): " << kind << "\n  " << detail << "\n";
       if (!o.keep.empty()) {
         fs::create_directories(o.keep);
         std::string stem = dialect + "-comp-" + std::to_string(seed);

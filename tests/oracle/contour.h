@@ -22,6 +22,11 @@ struct CompContour {
   double r = 0;
   bool left = true;
   bool open = false;  // a lathe's profile (nogouge.cpp): no element from the last point back to the first
+  // The plane the contour is cut in (comp.cpp): 17 (x y) = (X, Y), 18 = (Z, X), 19 = (Y, Z), the first axis
+  // to the right and the second up seen from the plane's normal, so a G41 stays on the left; and the unit
+  // (inch: p and centre lie on the 0.0001 in grid, still stated in mm).
+  int plane = 17;
+  bool inch = false;
   std::size_t Next(std::size_t i) const { return (i + 1) % p.size(); }
   std::size_t Elements() const { return open ? p.size() - 1 : p.size(); }
 };
@@ -37,5 +42,8 @@ struct ContourProgram {
   int first = 0, last = 0;
 };
 ContourProgram WriteContour(const std::string& dialect, const CompContour& c);
+// The machine axes (x 0, y 1, z 2) of a plane's first, second and normal axis: G17 X Y Z, G18 Z X Y, G19 Y Z
+// X.
+std::array<int, 3> PlaneAxes(int plane);
 
 }  // namespace cell::oracle

@@ -224,19 +224,54 @@ struct Tally {
 
 }  // namespace
 
+std::array<int, 3> PlaneAxes(int plane) {
+  return plane == 18   ? std::array<int, 3>{2, 0, 1}
+         : plane == 19 ? std::array<int, 3>{1, 2, 0}
+                       : std::array<int, 3>{0, 1, 2};
+}
+
 ContourProgram WriteContour(const std::string& dialect, const CompContour& c) {
   bool kt = dialect == "ktapl";
-  auto num = [kt](double v) { return Num(v, 3, kt); };
-  auto xy = [&](const P2& p) { return "X" + num(p[0]) + " Y" + num(p[1]); };
+  const double unit = c.inch ? 25.4 : 1;
+  const int decimals = c.inch ? 4 : 3;
+  auto num = [&](double v) { return Num(v / unit, decimals, kt); };
+  const auto ax = PlaneAxes(c.plane);
+  const char* letters = "XYZ";
+  // A point of the plane as axis words in X Y Z order (the normal axis left out).
+  auto xy = [&](const P2& p) {
+    std::string s;
+    for (int i = 0; i < 3; ++i)
+      for (int k = 0; k < 2; ++k)
+        if (ax[static_cast<std::size_t>(k)] == i)
+          s += (s.empty() ? "" : " ") + std::string(1, letters[i]) + num(p[k]);
+    return s;
+  };
+  // The start X100 Y0 (in the plane), the normal axis at 0.
+  std::string start = xy({100, 0}) + " " + letters[ax[2]] + (kt ? "0." : "0");
+  // The centre: KT-APL by axis letter (I J K of X Y Z), Balt-System the plane's abscissa and ordinate (I J).
+  auto centre = [&](const P2& o) {
+    if (!kt) return " I" + num(o[0]) + " J" + num(o[1]);
+    std::string s;
+    for (int i = 0; i < 3; ++i)
+      for (int k = 0; k < 2; ++k)
+        if (ax[static_cast<std::size_t>(k)] == i) s += " " + std::string(1, "IJK"[i]) + num(o[k]);
+    return s;
+  };
+  std::string plane = c.plane == 17 ? "" : "G" + std::to_string(c.plane);
   ContourProgram w;
   std::vector<std::string> lines;
   if (kt) {
-    lines = {"! no-gouge property (tests/oracle)", "G71 T1", "M06", "G90 G0 X100. Y0. Z0. F0",
+    lines = {"! no-gouge property (tests/oracle)", std::string(c.inch ? "G70" : "G71") + plane + " T1", "M06",
+             "G90 G0 " + start + " F0",
              std::string("G1 ") + (c.left ? "G41 " : "G42 ") + xy(c.p[0]) + " F200."};
     w.tools = "G71\n(TLD,T1D" + Num(2 * c.r, 3, true) + ")\n";
   } else {
-    lines = {"; no-gouge property (tests/oracle)", "T1.1 M6", "S1000 M3", "G X100 Y0 Z0",
-             std::string("G1 ") + (c.left ? "G41 " : "G42 ") + xy(c.p[0]) + " F200"};
+    lines = {"; no-gouge property (tests/oracle)", "T1.1 M6", "S1000 M3"};
+    if (c.inch) lines.push_back("G70");
+    if (!plane.empty()) lines.push_back(plane);  // alone in its block (ln 2936-2956)
+    lines.push_back("G " + start);
+    lines.push_back(std::string("G1 ") + (c.left ? "G41 " : "G42 ") + xy(c.p[0]) +
+                    (c.inch ? " F8" : " F200"));
     w.tools = "1 Z0 K" + Num(2 * c.r, 3) + "\n";
   }
   w.first = static_cast<int>(lines.size()) + 1;
@@ -245,14 +280,14 @@ ContourProgram WriteContour(const std::string& dialect, const CompContour& c) {
     std::size_t i = k % n;
     const P2& e = c.p[c.Next(i)];
     if (c.sweep[i] == 0) {
-      lines.push_back((kt ? "G1 " : "G1 ") + xy(e));
+      lines.push_back("G1 " + xy(e));
     } else {
       std::string g = c.sweep[i] > 0 ? (kt ? "G03 " : "G3 ") : (kt ? "G02 " : "G2 ");
-      lines.push_back(g + xy(e) + " I" + num(c.centre[i][0]) + " J" + num(c.centre[i][1]));
+      lines.push_back(g + xy(e) + centre(c.centre[i]));
     }
   }
   w.last = static_cast<int>(lines.size());
-  lines.push_back(kt ? "G1 G40 X100. Y0." : "G1 G40 X100 Y0");
+  lines.push_back("G1 G40 " + xy({100, 0}));
   lines.push_back(kt ? "M30" : "M2");
   for (const auto& l : lines) w.text += l + "\n";
   return w;

@@ -118,7 +118,7 @@ Case Subprogram(const Module& mod, std::uint64_t seed, int count) {
 Case Transforms(const Module& mod, std::uint64_t seed, int count) {
   Case c{mod.Capabilities(seed), {}, 1e-3};
   if (mod.Name() != "balt" && mod.Name() != "ktapl") return c;
-  c.caps.offsets = false, c.caps.rotary = false, c.caps.position_set.clear();
+  c.caps.offsets = false, c.caps.rotary = false, c.caps.rotary_linear = false, c.caps.position_set.clear();
   c.caps.planes = {17}, c.caps.swapped_planes = false;
   auto blocks = Generate(c.caps, seed, count);
   for (const Block& b : blocks)

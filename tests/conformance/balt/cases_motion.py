@@ -340,8 +340,29 @@ c.op("tool_select", 2, tool="1")
 c.op("tool_change", 2, tool="1", offset=1)
 c.rapid(3, x=40, y=0, b=0)
 c.lin(4, 200, x=35)
-c.lin(5, 200, travel={"b": 360}, x=30, b=360)
+# B turns with X (ln 3961-3976): F200 is the rate along the vector (5 mm, 360 degrees), X runs at
+# 200 * 5 / sqrt(5^2 + 360^2).
+c.lin(5, r(200 * 5 / math.hypot(5, 360)), travel={"b": 360}, x=30, b=360)
 c.rapid(6, x=40)
+
+# ln 3961-3976: rotary axes moving with linear ones in G94, F = A * sqrt(X^2 + Y^2 + Z^2 + B^2 + C^2) / L with
+# the travels in mm and degrees: F is the rate along that vector, so the tool point (X Y Z) runs at F times
+# its share of it (judgement call 21). X30 Y40 is 50 mm, B120 120 degrees: the vector is 130, so F1300 moves
+# X Y at 1300 * 50 / 130 = 500 mm/min. In G70 the travels still count in mm: X1 (25.4 mm) with A-25.4 turning
+# -25.4 degrees at F10 in/min (254 mm/min) runs at 254 / sqrt(2) mm/min. In G93 F stays the block's inverse
+# time (F = A / L); a rotary move alone is in deg/min (p5_07_feed_modes).
+c = Case("p5_13_rotary_with_linear", """
+; ln 3961-3976 rotary axes with linear axes: F is the rate along the vector of mm and degrees
+G1 X30 Y40 B120 F1300
+G70 G91 X1 A-25.4 F10
+G93 G71 Y-40 B-120 F2
+""", "L3961")
+c.units(2)
+c.lin(2, 500, travel={"b": 120}, x=30, y=40, b=120)
+c.units(3, mm=False)
+c.lin(3, r(254 / math.sqrt(2)), travel={"a": -25.4}, x=30 + 25.4, a=-25.4)
+c.units(4)
+c.lin(4, 2, mode="inverse_time", travel={"b": -120}, y=0, b=0)
 
 # L3909-3938 indexing table: B takes a number of indexes (INDEX_B=5: 5 degrees each), absolute or
 # incremental; the table turns before the other axes of its block.

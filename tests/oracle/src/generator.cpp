@@ -197,16 +197,49 @@ bool Gen::Cycle(Block& b) {
   return true;
 }
 
-// A move of one to three rotary axes alone (Balt-System: at most three axes in a block), F in deg/min.
+// A move of rotary axes (degrees): alone (Balt-System: F in deg/min, at most three axes in a block, ln 2699)
+// or, where the dialect has it, with X Y Z in one G00/G01 block (F the dialect's: Caps::rotary_vector_feed).
 bool Gen::Rotary(Block& b) {
-  if (!caps.rotary || cur.per_rev || cur.inverse || need_abs || !rng.Chance(8)) return false;
+  if (!(caps.rotary || caps.rotary_linear) || cur.per_rev || need_abs || !rng.Chance(8)) return false;
+  bool linear = caps.rotary_linear && (!caps.rotary || cur.inverse || rng.Chance(50));
+  if (!linear && cur.inverse) return false;  // rs274 times a rotary-only G93 move by its degrees
   b.kind = rng.Chance(25) ? MoveKind::kRapid : MoveKind::kLine;
   b.end = b.start;
+  std::vector<int> turn;
   for (int a = 0; a < 3; ++a)
-    if (rng.Chance(50) || a == 2) {
-      double v = rng.Int(-3600, 3600) / 10.0;
-      b.rot_end[a] = cur.incremental ? b.rot_start[a] + v : v;
+    if ((caps.rotary_axes & (1u << a)) && rng.Chance(50)) turn.push_back(a);
+  if (turn.empty()) {
+    for (int a = 0; a < 3; ++a)
+      if (caps.rotary_axes & (1u << a)) turn.push_back(a);
+    int one = rng.Pick(turn);
+    turn = {one};
+  }
+  int room = caps.max_axes ? caps.max_axes : 6;  // axis words left for the linear axes
+  if (linear && static_cast<int>(turn.size()) >= room) turn.resize(static_cast<std::size_t>(room - 1));
+  room -= static_cast<int>(turn.size());
+  for (int a : turn) {
+    long v = rng.Int(-3600, 3600);  // tenths of a degree
+    if (caps.rotary_wrap && !cur.incremental) {
+      // The word is the position mod 360 and its sign the sense (KT-APL ln 4481-4546): the travel to it.
+      long from = ((std::lround(b.rot_start[a] * 10) % 3600) + 3600) % 3600, to = std::labs(v) % 3600;
+      long travel = v < 0 ? -(((from - to) % 3600 + 3600) % 3600) : ((to - from) % 3600 + 3600) % 3600;
+      b.rot_end[a] = b.rot_start[a] + travel / 10.0;
+    } else {
+      b.rot_end[a] = cur.incremental ? b.rot_start[a] + v / 10.0 : v / 10.0;
     }
+  }
+  if (linear) {
+    Vec3 p = RandomPoint();
+    if (cur.incremental && rng.Chance(70)) {  // a short step, still inside
+      for (int i = 0; i < 3; ++i) p[i] = b.start[i] + Snap(rng.Int(-300, 300) / 10.0 / Unit());
+      if (!Inside(p)) p = RandomPoint();
+    }
+    int first = rng.Int(0, 2);  // the linear axes that move: as many as the block has room for
+    for (int k = 0; k < 3; ++k) {
+      int i = (first + k) % 3;
+      if (k < room && rng.Chance(k == 0 ? 100 : 60)) b.end[i] = p[i];
+    }
+  }
   return b.rot_end != b.rot_start;
 }
 
@@ -248,6 +281,8 @@ Block Gen::Next() {
     need_abs = false;
   }
   if (b.kind != MoveKind::kRapid) b.feed = Feed();
+  if (caps.rotary_whole_feed && RotaryAlone(b) && b.kind != MoveKind::kRapid)
+    b.feed = std::max(1.0, std::round(b.feed));  // F3.0 deg/min
   if (rng.Chance(40)) b.omit = static_cast<unsigned>(rng.Next() & 63);
   machine = ToMachine(b.end);
   rot = b.rot_end;
@@ -268,6 +303,10 @@ std::array<int, 3> AxesOf(const Modes& m) {
   if (m.plane == 19) a = {1, 2, 0};
   if (m.swapped) std::swap(a[0], a[1]);
   return a;
+}
+
+bool RotaryAlone(const Block& b) {
+  return b.rot_end != b.rot_start && b.end == b.start;
 }
 
 bool OmitAxis(const Block& b, int axis) {
@@ -304,6 +343,19 @@ std::vector<Block> Generate(const Caps& caps, std::uint64_t seed, int count) {
 }
 
 namespace {
+
+// The rate along X Y Z of a G94 move whose F is the rate along the vector of its travels in mm and degrees
+// (Caps::rotary_vector_feed): LinuxCNC applies F to X Y Z alone.
+double LinearRate(const Block& b) {
+  const double unit = b.m.inch ? kMm : 1.0;
+  double lin = 0, deg = 0;
+  for (int i = 0; i < 3; ++i) {
+    lin += (b.end[i] - b.start[i]) * unit * (b.end[i] - b.start[i]) * unit;
+    deg += (b.rot_end[i] - b.rot_start[i]) * (b.rot_end[i] - b.rot_start[i]);
+  }
+  if (b.m.inverse || b.m.per_rev || lin == 0 || deg == 0) return b.feed;
+  return b.feed * std::sqrt(lin / (lin + deg));
+}
 
 // One NGC block's words for a move (modes are written by the caller).
 std::string NgcMove(const Block& b, const Caps& caps) {
@@ -351,7 +403,7 @@ std::string NgcMove(const Block& b, const Caps& caps) {
   for (int i = 0; i < 3; ++i)
     if (b.rot_end[i] != b.rot_start[i])
       word(rotary[i], b.m.incremental ? b.rot_end[i] - b.rot_start[i] : b.rot_end[i]);
-  if (b.kind != MoveKind::kRapid) word('F', b.feed);
+  if (b.kind != MoveKind::kRapid) word('F', caps.rotary_vector_feed ? LinearRate(b) : b.feed);
   return s;
 }
 

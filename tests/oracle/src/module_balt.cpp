@@ -21,6 +21,11 @@ class Balt final : public Module {
     c.cycles_per_rev = {81, 82, 85};  // G86 G89 in G95: FILMS4 98
     c.inverse_time = true;            // G93 (ln 3685-3725)
     c.rotary = true;                  // A B C (ln 3909-4038)
+    // With X Y Z in one block, at most three axes (ln 2699); in G94 F is the rate along the vector of the
+    // travels, degrees and program units alike (ln 3961-3976, judgement call 21).
+    c.rotary_linear = true;
+    c.max_axes = 3;
+    c.rotary_vector_feed = true;
     return c;
   }
   // Several %:NAME programs in one file, CLS finds them by name (ln 7647-7667, judgement call 26); a called

@@ -28,7 +28,7 @@ std::vector<Block> Incremental(std::vector<Block> blocks, const Caps& caps) {
 std::vector<Block> ConvertibleFeeds(std::vector<Block> blocks, const Caps& caps) {
   const double step = 5 * std::pow(10.0, -caps.feed_decimals);
   for (Block& b : blocks)
-    if (b.m.inch && !b.m.per_rev && !b.m.inverse && b.feed > 0 && b.rot_end == b.rot_start)
+    if (b.m.inch && !b.m.per_rev && !b.m.inverse && b.feed > 0 && !RotaryAlone(b))
       b.feed = std::max(step, std::round(b.feed / step) * step);
   return blocks;
 }
@@ -67,7 +67,7 @@ std::vector<Block> InchToMm(std::vector<Block> blocks, const Caps& caps, bool (*
     for (auto& h : b.holes) h = {mm(h[0]), mm(h[1])};
     // 0.5 in/min is 12.7 mm/min; 0.01 in/rev 0.254 mm/rev: exact on the mm feed grids (ConvertibleFeeds).
     // A rotary move alone is fed in deg/min in either unit (Balt-System judgement call 21).
-    if (!b.m.inverse && b.rot_end == b.rot_start) b.feed = std::round(b.feed * 25.4 * 1e6) / 1e6;
+    if (!b.m.inverse && !RotaryAlone(b)) b.feed = std::round(b.feed * 25.4 * 1e6) / 1e6;
   }
   return blocks;
 }

@@ -357,7 +357,9 @@ class BaltRun final : public RunBase {
   void LinearMove(const ParsedBlock& pb, const BlockG& g, const Targets& t, bool rapid);
   void ArcMove(const ParsedBlock& pb, const BlockG& g, const Targets& t);
   void ThreadMove(const ParsedBlock& pb, const Targets& t);
-  double BlockFeed(const ParsedBlock& pb, double length_mm, bool rotary_only, FeedMode* mode, int col);
+  // `turned`: the degrees rotary axes turn along with `length_mm` of linear travel (ln 3961-3976).
+  double BlockFeed(const ParsedBlock& pb, double length_mm, bool rotary_only, FeedMode* mode, int col,
+                   double turned = 0);
   void CheckLimits(const AxisArray& from, const AxisArray& to, const geom::Path* arc, int col);
   void CheckAreas(const AxisArray& from, const AxisArray& to, const geom::Path* arc, int col);
   void RotaryTargets(const Targets& t, AxisArray& mach, AxisArray& travel, std::uint32_t& travel_mask,

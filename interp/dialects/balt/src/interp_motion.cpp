@@ -102,8 +102,8 @@ void BaltRun::RotaryTargets(const Targets& t, AxisArray& mach, AxisArray& travel
 
 // The feed of a feed move (ln 2490-2496, 3685-3725, 3982-3984): mm/min (G94; F = length / t with a t word),
 // inverse time (G93, F in every block), per revolution (G95); deg/min when only rotary axes move.
-double BaltRun::BlockFeed(const ParsedBlock& pb, double length_mm, bool rotary_only, FeedMode* mode,
-                          int col) {
+double BaltRun::BlockFeed(const ParsedBlock& pb, double length_mm, bool rotary_only, FeedMode* mode, int col,
+                          double turned) {
   const Word* t = nullptr;
   for (const Word& w : pb.words) {
     if (w.letter == 't') t = &w;
@@ -136,6 +136,10 @@ double BaltRun::BlockFeed(const ParsedBlock& pb, double length_mm, bool rotary_o
     return *feed_ / UnitFactor();  // F is degrees per minute
   }
   *mode = FeedMode::kPerMinute;
+  // Rotary axes turning with linear ones (ln 3961-3976: F = A * sqrt(X^2 + Y^2 + Z^2 + B^2 + C^2) / L, the
+  // travels in mm and degrees): F is the rate along that vector, so the linear axes run at F times their
+  // share of it (judgement call 21).
+  if (turned > 0 && length_mm > 0) return *feed_ * length_mm / std::hypot(length_mm, turned);
   return *feed_;
 }
 
@@ -186,10 +190,13 @@ void BaltRun::LinearMove(const ParsedBlock& pb, const BlockG& g, const Targets& 
   len = std::sqrt(len);
   Feed feed;
   if (!rapid) {
-    double rot = 0;
-    for (int a : {kA, kB, kC}) rot += travel[a] * travel[a];
+    double rot = 0, turned = 0;  // turned: the continuous rotary axes (an index table turns first)
+    for (int a : {kA, kB, kC}) {
+      rot += travel[a] * travel[a];
+      if (!(index_mask & (1u << a))) turned += travel[a] * travel[a];
+    }
     feed.rate = BlockFeed(pb, linear_moves ? len : std::sqrt(rot), !linear_moves && travel_mask != 0,
-                          &feed.mode, col);
+                          &feed.mode, col, linear_moves ? std::sqrt(turned) : 0);
     // G28 blends (no corner deceleration, ln 2969); G29 stops; G27 decelerates to 0 at each block end with
     // the default ERF=0 (ln 4317) and, as the canon carries no form error, with any ERF (balt.md).
     feed.exact_stop = mode_.dynamic != Dynamic::kG28 || g.decel;

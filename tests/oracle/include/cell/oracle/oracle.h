@@ -64,10 +64,18 @@ struct Caps {
   bool rapid_after_offset = false;  // a work offset change needs a G00 next (EMCO ALARM 490)
   bool incremental = true;          // G91 (or U/W) distances
   std::vector<int> planes{17, 18, 19};
-  bool swapped_planes = false;      // planes with their axes in either order
-  bool full_circle = false;         // a centre-form arc may end where it starts
-  std::string position_set;         // the code that sets the present position (Okuma G50, KT-APL G92 regrid)
-  bool rotary = false;              // A B C moves alone (degrees; F in deg/min)
+  bool swapped_planes = false;     // planes with their axes in either order
+  bool full_circle = false;        // a centre-form arc may end where it starts
+  std::string position_set;        // the code that sets the present position (Okuma G50, KT-APL G92 regrid)
+  bool rotary = false;             // A B C moves alone (degrees; F in deg/min)
+  bool rotary_linear = false;      // rotary axes moving with X Y Z in one G00/G01 block
+  unsigned rotary_axes = 7;        // which of A B C (bits 0-2) the dialect turns
+  int max_axes = 0;                // axis words a linear block may hold (0: no limit)
+  bool rotary_wrap = false;        // an absolute rotary word is the position mod 360, its sign the sense
+  bool rotary_whole_feed = false;  // a rotary-only F is whole deg/min (KT-APL F3.0)
+  // G94 F of a rotary+linear move is the rate along the vector of the travels in mm and degrees; the NGC
+  // twin states the rate along X Y Z that follows from it (Balt-System ln 3961-3976).
+  bool rotary_vector_feed = false;
   std::vector<int> cycles;          // drilling cycles against LinuxCNC's G81-G89 (G17, G90, G99 retract)
   std::vector<int> cycles_per_rev;  // those allowed in feed per revolution
   bool radius_form = true;          // arcs by R
@@ -126,6 +134,8 @@ std::array<int, 3> AxesOf(const Modes& m);
 // Whether a module may leave out axis word `axis` (absolute: the value is the start's; incremental: 0) or the
 // centre word of `axis` (its offset from the start is 0), as the block's omit bits allow.
 bool OmitAxis(const Block& b, int axis);
+// A move of rotary axes alone (F in deg/min in either unit), not one with X Y Z.
+bool RotaryAlone(const Block& b);
 bool OmitCentre(const Block& b, int axis);
 
 const Module* FindModule(const std::string& name);
