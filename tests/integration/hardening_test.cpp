@@ -79,6 +79,24 @@ class Offline : public ::testing::Test {
     EXPECT_EQ(r.err.find("no cell/"), std::string::npos) << what << ": it went to the bus: " << r.err;
     ExpectOneShortLine(r, what);
   }
+  // The quickest of three runs of `args`: how long a verb took, with what the machine's load adds to it
+  // spread thin.
+  std::chrono::steady_clock::duration Quickest(const std::vector<std::string>& args,
+                                               RunResult* last = nullptr) {
+    auto took = std::chrono::steady_clock::duration::max();
+    for (int attempt = 0; attempt < 3; ++attempt) {
+      const auto t0 = std::chrono::steady_clock::now();
+      RunResult r = Ctl(args);
+      took = std::min(took, std::chrono::steady_clock::now() - t0);
+      if (last) *last = std::move(r);
+    }
+    return took;
+  }
+  // A verb that is refused before it makes a participant (a missing file): cellctl's own start-up on this
+  // machine now, which a sanitized build on a loaded host stretches to seconds. The bounds below are over it.
+  std::chrono::steady_clock::duration StartUp() {
+    return Quickest({"program", "put", dir_ + "/missing.apl"});
+  }
   std::string dir_ = MakeTempDir("cell-hardening-offline-");
   ~Offline() override { fs::remove_all(dir_); }
 };
@@ -110,15 +128,11 @@ TEST_F(Offline, ACellThatIsDownIsSaidSoAtOnce) {
                                         {"job", "ls"},
                                         {"program", "ls"},
                                         {"route", "show", "R"}}) {
-    // The quickest of up to three tries: the old path waited out the 5 s bound every time, while a loaded
-    // machine (three sanitized cells on 2 cores) once stretched one start-up of this one to 5.2 s.
-    auto took = std::chrono::steady_clock::duration::max();
+    // The old path waited out the 5 s discovery bound every time; under load the start-up alone once took
+    // 4.8 s (issue 44), so the bound is over cellctl's start-up measured now, beside the verb.
+    const auto start_up = StartUp();
     RunResult r;
-    for (int attempt = 0; attempt < 3 && took >= 4500ms; ++attempt) {
-      const auto t0 = std::chrono::steady_clock::now();
-      r = Ctl(verb);
-      took = std::min(took, std::chrono::steady_clock::now() - t0);
-    }
+    const auto took = Quickest(verb, &r);
     const std::string what = verb[0] + " " + verb[1];
     EXPECT_EQ(r.code, 1) << what << ": " << r.out << r.err;
     EXPECT_EQ(r.out, "") << what;
@@ -126,9 +140,10 @@ TEST_F(Offline, ACellThatIsDownIsSaidSoAtOnce) {
                 r.err.find("neither the scheduler nor the program store runs") != std::string::npos)
         << what << ": " << r.err;
     ExpectOneShortLine(r, what);
-    // The old path waited 5 s for a server; this one 0.8 s for any participant (the rest is start-up under
-    // the sanitizers on a loaded machine).
-    EXPECT_LT(took, 4500ms) << what;
+    // The old path waited 5 s for a server; this one 0.8 s for any participant, plus making one.
+    EXPECT_LT(took - start_up, 4000ms)
+        << what << " (cellctl's start-up alone: "
+        << std::chrono::duration_cast<std::chrono::milliseconds>(start_up).count() << " ms)";
   }
 }
 
@@ -145,16 +160,18 @@ TEST_F(Offline, AServiceOnItsWayOutIsNoCell) {
   // Not reaped until the verb has run: wait until it is a zombie.
   siginfo_t info{};
   ASSERT_EQ(waitid(P_PID, static_cast<id_t>(zombie), &info, WEXITED | WNOWAIT), 0);
-  const auto t0 = std::chrono::steady_clock::now();
-  auto r = Ctl({"route", "show", "R"});
-  const auto took = std::chrono::steady_clock::now() - t0;
+  const auto start_up = StartUp();
+  RunResult r;
+  const auto took = Quickest({"route", "show", "R"}, &r);
   waitpid(zombie, nullptr, 0);
   EXPECT_EQ(r.code, 1) << r.err;
   EXPECT_EQ(r.err.find("cell-scheduler (pid"), std::string::npos) << r.err;
   EXPECT_TRUE(r.err.find("is the cell up?") != std::string::npos ||
               r.err.find("neither the scheduler nor the program store runs") != std::string::npos)
       << r.err;
-  EXPECT_LT(took, 4500ms);
+  EXPECT_LT(took - start_up, 4000ms)
+      << "cellctl's start-up alone: "
+      << std::chrono::duration_cast<std::chrono::milliseconds>(start_up).count() << " ms";
 }
 
 // Item 10: integers are decimal; an over-size put is refused from the file's size, before streaming.

@@ -89,12 +89,11 @@ class Station::RunEnvironment : public interp::Environment, public interp::Seria
   std::int32_t dispatch_id_ = 0;
 };
 
-void Station::Execute(const Dispatch& d) {
-  ActiveRun run{d, clock_.WallNs(), 0, ""};
+void Station::Execute(const Dispatch& d, std::int64_t started_ns) {
+  ActiveRun run{d, started_ns, 0, ""};
   // The servo starts each run from the state a pallet arrives in, A and C at their zero among it
   // (Machine::ToArrival): the rotary axes unwrap from there.
   unwrap_ = RotaryUnwrap{};
-  db_.MarkActive(d.dispatch_id, run.started_ns);
   stream_.Begin(d.dispatch_id, [this, id = d.dispatch_id] { Checkpoint(id); });
   board_.RunStarted(d.pallet, d.dispatch_id);
   board_.Queued(db_.Count(RunState::kQueued));
@@ -105,6 +104,12 @@ void Station::Execute(const Dispatch& d) {
   try {
     if (!stream_.WaitForServo(options_.servo_wait))
       throw Error(Errc::kUnavailable, "no axis servo for station " + cfg_.id + " on the bus");
+    // A store restarting (systemd brings it back in a second or two, longer on a loaded host) is waited for
+    // here, before anything of the run has happened, rather than failing the pallet at its first fetch.
+    if (!io_.WaitForProgramStore(options_.store_wait))
+      throw Error(Errc::kUnavailable,
+                  fmt::format("no program store on the bus for station {} (waited {} s)", cfg_.id,
+                              std::chrono::duration_cast<std::chrono::seconds>(options_.store_wait).count()));
     const std::vector<bool> model = SendPartModel(d);
     for (int rep = 0; rep < d.repeat; ++rep) {
       for (std::size_t i = 0; i < d.programs.size(); ++i) {

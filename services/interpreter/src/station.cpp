@@ -107,21 +107,20 @@ cell::RunReply Station::OnRun(const cell::RunRequest& r) {
   if (r.dispatch_id() <= 0) throw Error(Errc::kInvalidArgument, "dispatch id must be positive");
   const std::optional<RunState> state = db_.FindRun(r.dispatch_id());
   if (r.cancel()) {
-    if (state == RunState::kActive) {
+    std::optional<RunState> now = state;
+    if (now == RunState::kQueued) {
+      if (db_.CancelQueued(r.dispatch_id(), "cancelled by the scheduler", clock_.WallNs())) {
+        board_.Queued(db_.Count(RunState::kQueued));
+        board_.Publish();
+      } else {
+        now = db_.FindRun(r.dispatch_id());  // the work thread took it meanwhile: cancelled as running
+      }
+    }
+    if (now == RunState::kActive) {
       cancel_id_ = r.dispatch_id();
       panel_.AbortRun(r.dispatch_id());  // the machine stops too, not only the sending
       stream_.Wake();
-    } else if (state) {
-      if (state == RunState::kQueued) {
-        RunProgress end;
-        end.dispatch_id = r.dispatch_id();
-        end.end = RunState::kCancelled;
-        end.reason = "cancelled by the scheduler";
-        end.finished_ns = clock_.WallNs();
-        db_.EndRun(end);
-        board_.Queued(db_.Count(RunState::kQueued));
-        board_.Publish();
-      }
+    } else if (now) {
       PublishRecorded(r.dispatch_id());  // cancelled now, or ended before the cancel came: said (again)
     } else {
       // Never received: kept as cancelled, so that the request itself, arriving late, cannot start it, and
@@ -295,9 +294,10 @@ void Station::Recover() {
 }
 
 bool Station::RunNext() {
-  auto next = db_.NextQueued();
+  const std::int64_t started_ns = clock_.WallNs();
+  auto next = db_.TakeNext(started_ns);
   if (!next) return false;
-  Execute(*next);
+  Execute(*next, started_ns);
   return true;
 }
 

@@ -173,12 +173,30 @@ void StationDb::Insert(const Dispatch& d, RunState state, const std::string& rea
   ins.Run();
 }
 
-std::optional<Dispatch> StationDb::NextQueued() {
+std::optional<Dispatch> StationDb::TakeNext(std::int64_t started_ns) {
   std::lock_guard lk(mu_);
-  auto q = db_.Prepare(std::string("SELECT ") + kDispatchColumns +
-                       " FROM runs WHERE state='QUEUED' ORDER BY received_ns, dispatch_id LIMIT 1");
-  if (!q.Step()) return std::nullopt;
-  return ReadDispatch(q);
+  store::Transaction tx(db_);
+  Dispatch d;
+  {
+    auto q = db_.Prepare(std::string("SELECT ") + kDispatchColumns +
+                         " FROM runs WHERE state='QUEUED' ORDER BY received_ns, dispatch_id LIMIT 1");
+    if (!q.Step()) return std::nullopt;
+    d = ReadDispatch(q);
+  }
+  auto u = db_.Prepare("UPDATE runs SET state='ACTIVE', started_ns=? WHERE dispatch_id=?");
+  u.BindInt64(1, started_ns).BindInt64(2, d.dispatch_id);
+  u.Run();
+  tx.Commit();
+  return d;
+}
+
+bool StationDb::CancelQueued(std::int32_t dispatch_id, const std::string& reason, std::int64_t finished_ns) {
+  std::lock_guard lk(mu_);
+  auto u = db_.Prepare(
+      "UPDATE runs SET state='CANCELLED', reason=?, finished_ns=? WHERE dispatch_id=? AND state='QUEUED'");
+  u.BindText(1, reason).BindInt64(2, finished_ns).BindInt64(3, dispatch_id);
+  u.Run();
+  return db_.Changes() > 0;
 }
 
 std::vector<Dispatch> StationDb::Runs(RunState state) {
@@ -227,13 +245,6 @@ std::string RunRecord(const Dispatch& d, std::string_view station, const RunProg
                         {"finished_ns", end.finished_ns},
                         {"machine_s", end.machine_s}}
       .dump();
-}
-
-void StationDb::MarkActive(std::int32_t dispatch_id, std::int64_t started_ns) {
-  std::lock_guard lk(mu_);
-  auto u = db_.Prepare("UPDATE runs SET state='ACTIVE', started_ns=? WHERE dispatch_id=?");
-  u.BindInt64(1, started_ns).BindInt64(2, dispatch_id);
-  u.Run();
 }
 
 void StationDb::WriteProgress(const RunProgress& run) {

@@ -213,6 +213,10 @@ class FakeIo final : public StationIo {
     control.push_back(c);
     if (on_control) on_control(c);
   }
+  bool WaitForProgramStore(Clock::Duration timeout) override {
+    store_waited.push_back(timeout);
+    return !store_absent;
+  }
   std::optional<std::string> Program(const std::string& node, const std::string& name) override {
     fetched.push_back(name);
     if (on_fetch) on_fetch(name);
@@ -292,7 +296,9 @@ class FakeIo final : public StationIo {
   std::map<std::string, SaveAs> saved_as;          // "NODE/NAME" -> how SaveFile declared it
   std::function<void(const std::string&)> on_fetch;
   bool writer_up = true, writer_refuses = false;
-  bool store_down = false;  // SaveFile: the program store is not on the bus
+  bool store_down = false;    // SaveFile: the program store is not on the bus
+  bool store_absent = false;  // WaitForProgramStore: no store came within the time asked
+  std::vector<Clock::Duration> store_waited;
   std::vector<cell::StationStatus> status;
   std::vector<cell::ToolTable> tools;
   std::vector<cell::StationVariables> variables;

@@ -124,6 +124,45 @@ TEST_F(StationCore, CancelOfAQueuedDispatchNeverRunsIt) {
   EXPECT_EQ(io_.LastRun(2)->state(), cell::RUN_COMPLETED);
 }
 
+// A run does not start while the program store is away (restarting): it waits for it, 30 s, and only then
+// fails the run with a reason that says so, before any motion.
+TEST_F(StationCore, ARunWaitsForTheProgramStoreBeforeItStarts) {
+  Put("P", Moves(1));
+  io_.store_absent = true;
+  Dispatch(1, {"P"});
+  const auto failed = RunOne(1);
+  EXPECT_EQ(failed.state(), cell::RUN_FAILED);
+  EXPECT_EQ(failed.reason(), "no program store on the bus for station KT01 (waited 30 s)");
+  EXPECT_TRUE(io_.fetched.empty());
+  EXPECT_TRUE(servo_.Ran(1, cell::SEGMENT_END).empty());
+  io_.store_absent = false;
+  Dispatch(2, {"P"});
+  EXPECT_EQ(RunOne(2).state(), cell::RUN_COMPLETED);
+  EXPECT_EQ(io_.store_waited,
+            (std::vector<Clock::Duration>{std::chrono::seconds(30), std::chrono::seconds(30)}));
+}
+
+// The work thread takes a queued dispatch while a cancel for it is on its way: one of the two has it, whole.
+// A cancel that comes second finds the run active and stops it as a running one (Station::OnRun); a run start
+// that comes second finds nothing to take. Both are single statements under the database's lock, so the
+// cancel cannot be overwritten by the start nor the start by the cancel (docs/station.md "Run queue").
+TEST_F(StationCore, ACancelAndTheRunStartNeverBothHaveAQueuedDispatch) {
+  Put("P", Moves(1));
+  Dispatch(1, {"P"});
+  Dispatch(2, {"P"});
+  StationDb raw(db());
+  const auto taken = raw.TakeNext(5);  // the work thread had dispatch 1 first
+  ASSERT_TRUE(taken);
+  EXPECT_EQ(taken->dispatch_id, 1);
+  EXPECT_FALSE(raw.CancelQueued(1, "cancelled by the scheduler", 6));
+  EXPECT_EQ(raw.FindRun(1), RunState::kActive);
+  EXPECT_EQ(raw.Progress(1).first, 5);
+  EXPECT_TRUE(raw.CancelQueued(2, "cancelled by the scheduler", 7));  // the cancel had dispatch 2 first
+  EXPECT_FALSE(raw.TakeNext(8));
+  EXPECT_EQ(raw.FindRun(2), RunState::kCancelled);
+  EXPECT_EQ(raw.Progress(2).first, 0);  // never started
+}
+
 // A scheduler that lost sight of the station asks again about the dispatch it held (the same request, or a
 // cancel after a fault): the station answers from its database, on the run topic too, since the end may have
 // been published by a process that died before anyone read it (docs/scheduler.md §5).

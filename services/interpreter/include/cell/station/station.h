@@ -45,6 +45,9 @@ class StationIo {
   virtual void PublishProgram(const cell::StationProgram& p) = 0;  // the text a run's program starts with
   virtual void PublishRun(const cell::RunStatus& r) = 0;
   virtual void PublishControl(const cell::ServoControl& c) = 0;
+  // True once a program store answers on the bus (within `timeout`): a run does not start, and lose its
+  // pallet, while the store is restarting.
+  virtual bool WaitForProgramStore(Clock::Duration timeout) = 0;
   // A program's text from the program store: namespace `node`, then HOST; nullopt when in neither.
   virtual std::optional<std::string> Program(const std::string& node, const std::string& name) = 0;
   // The program selected for execution in one of `station`'s memories (Balt-System SPG), as a map entry
@@ -92,6 +95,7 @@ struct StationOptions {
   double probe_feed = 500.0;  // mm/min for probe moves the program does not feed itself
   Clock::Duration writer_wait = std::chrono::seconds(60);      // for an inspection writer at a file's close
   Clock::Duration servo_wait = std::chrono::seconds(10);       // for a servo on the bus at a run's start
+  Clock::Duration store_wait = std::chrono::seconds(30);       // for the program store at a run's start
   Clock::Duration idle_poll = std::chrono::milliseconds(500);  // outbox retries while idle
   Clock::Duration status_period = std::chrono::milliseconds(100);  // status while a run goes on
 };
@@ -136,7 +140,7 @@ class Station {
   struct ActiveRun;
   class RunEnvironment;
 
-  void Execute(const Dispatch& d);
+  void Execute(const Dispatch& d, std::int64_t started_ns);  // taken from the queue, marked active
   void RunProgram(ActiveRun& run, const std::string& entry);
   bool StartSelected();
   std::optional<std::string> ReadProgram(const std::string& node, const std::string& entry);

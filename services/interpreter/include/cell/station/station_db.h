@@ -92,13 +92,18 @@ class StationDb {
   void Enqueue(const Dispatch& d, std::int64_t received_ns);
   // A dispatch cancelled before it was received, kept ended so that it can never start here.
   void EnqueueCancelled(const Dispatch& d, const std::string& reason, std::int64_t now_ns);
-  std::optional<Dispatch> NextQueued();  // oldest first
+  // Takes the oldest queued dispatch and marks it active, started at `started_ns`, in one step under the
+  // database's lock: a cancel (CancelQueued) either lands before, and the run never starts, or after, and
+  // finds it active.
+  std::optional<Dispatch> TakeNext(std::int64_t started_ns);
+  // Ends a dispatch as cancelled if it is still queued; false when the work thread took it meanwhile (or it
+  // has ended).
+  bool CancelQueued(std::int32_t dispatch_id, const std::string& reason, std::int64_t finished_ns);
   std::vector<Dispatch> Runs(RunState state);
   int Count(RunState state);
   // The lowest dispatch id kept (0 when none): the operator's own runs take ids below it
   // (Station::OnCommand).
   std::int32_t LowestDispatchId();
-  void MarkActive(std::int32_t dispatch_id, std::int64_t started_ns);
   // When the run was marked active (0: never) and how many programs of its map it finished.
   std::pair<std::int64_t, int> Progress(std::int32_t dispatch_id);
   // A run's end without memory changes (cancelled while queued, lost at a restart); a record, when given,

@@ -44,6 +44,9 @@ class Service final : public StationIo, public ServoLink {
   void PublishProgram(const cell::StationProgram& p) override { program_w_.Write(p); }
   void PublishRun(const cell::RunStatus& r) override { run_w_.Write(r); }
   void PublishControl(const cell::ServoControl& c) override { control_w_.Write(c); }
+  bool WaitForProgramStore(Clock::Duration timeout) override {
+    return programs_.WaitForServer(std::chrono::duration_cast<bus::Millis>(timeout));
+  }
   std::optional<std::string> Program(const std::string& node, const std::string& name) override {
     return programs_.GetWithFallback(node, name);
   }
