@@ -23,14 +23,17 @@ echo "$out"
 while read -r dialect pct _; do
   bench_figure "oracle.${dialect%:}.agreement_pct" "${pct%\%}" higher
 done < <(grep -E '^[a-z]+: [0-9.]+% agreement' <<<"$out")
-# Under cutter radius compensation (check --comp, Balt-System and KT-APL): 3,000 contour blocks per dialect
-# (CELL_ORACLE_COMP_BLOCKS), one program per contour, about a minute. Figure: the programs that agree in percent
-# of those rs274 accepts (it refuses some concave corners of its own accord; higher is better).
+# Under cutter radius compensation (check --comp, Balt-System and KT-APL) and tool-nose radius compensation
+# (EMCO, Okuma): 3,000 contour blocks per dialect (CELL_ORACLE_COMP_BLOCKS), one program per contour, about
+# two minutes. Figure: the programs that agree in percent of those rs274 accepts and the dialect does not
+# refuse with its manual's alarm for that path (rs274 refuses some concave corners of its own accord, a lathe
+# manual names alarms where LinuxCNC goes on; higher is better).
 comp_blocks="${CELL_ORACLE_COMP_BLOCKS:-3000}"
 out="$("$BIN/cell-oracle-gen" check --comp --dialect all --seed "$seed" --blocks "$comp_blocks" --report \
   --interp "$BIN/cell-interp" ${keep:+--keep "$keep"})"
 echo "$out"
-while read -r dialect agree programs refused; do
+while read -r dialect agree programs refused alarms; do
   bench_figure "oracle.${dialect}.comp_agreement_pct" \
-    "$(awk -v a="$agree" -v p="$programs" -v r="$refused" 'BEGIN { printf "%.2f", 100 * a / (p - r) }')" higher
-done < <(sed -nE 's/^([a-z]+) comp: ([0-9]+) of ([0-9]+) programs agree .* ([0-9]+) refused by rs274.*/\1 \2 \3 \4/p' <<<"$out")
+    "$(awk -v a="$agree" -v p="$programs" -v r="$refused" -v m="$alarms" \
+      'BEGIN { printf "%.2f", 100 * a / (p - r - m) }')" higher
+done < <(sed -nE 's/^([a-z]+) comp: ([0-9]+) of ([0-9]+) programs agree .* ([0-9]+) refused by rs274, [0-9]+ by cell-interp, ([0-9]+) by the manual.s alarm.*/\1 \2 \3 \4 \5/p' <<<"$out")

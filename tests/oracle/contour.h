@@ -1,12 +1,14 @@
-// The random closed contour under cutter radius compensation and its Balt-System and KT-APL programs
-// (nogouge.cpp): the no-gouge property (nogouge.cpp) and the compensated differential (comp.cpp) cut the same
-// contours.
+// The random closed contour under cutter radius compensation and its Balt-System and KT-APL programs, and the
+// lathes' turned profile under tool-nose compensation (nogouge.cpp): the no-gouge property (nogouge.cpp) and
+// the compensated differential (comp.cpp) cut the same contours.
 #pragma once
 
 #include <array>
 #include <cstdint>
 #include <string>
 #include <vector>
+
+#include "cell/oracle/oracle.h"
 
 namespace cell::oracle {
 
@@ -42,6 +44,19 @@ struct ContourProgram {
   int first = 0, last = 0;
 };
 ContourProgram WriteContour(const std::string& dialect, const CompContour& c);
+// A lathe's finishing pass (nogouge.cpp): a random turned profile (profile.h) as an open contour in (Z, X as
+// a radius), cut under G42 with tip code 3 and a nose radius of 0.2-1.6 mm, and its EMCO or Okuma program.
+// The no-gouge property (nogouge.cpp) and the lathes' compensated differential (comp.cpp) cut the same
+// profiles.
+struct LatheContour {
+  CompContour c;
+  ContourProgram w;
+};
+LatheContour LatheCase(const std::string& dialect, std::uint64_t seed);
+// The nose centre of a move whose points are the imaginary tip of tip code 3 (the tip one radius toward -Z
+// and one toward -X from the centre; nogouge.cpp cites the manuals): end and arc centre moved by +r in Z and
+// in X (a radius), machine coordinates.
+Move NoseFromTip(const Move& m, double r);
 // The machine axes (x 0, y 1, z 2) of a plane's first, second and normal axis: G17 X Y Z, G18 Z X Y, G19 Y Z
 // X.
 std::array<int, 3> PlaneAxes(int plane);

@@ -5,7 +5,8 @@
 //                   [--report] [--keep DIR] [--plant]
 // check runs cell-interp on each generated program and rs274 on its NGC twin and compares every move; it
 // exits 1 on any disagreement (--report: prints the agreement per dialect and exits 0 unless a run could not
-// start). `check --comp` (comp.cpp): the same under cutter radius compensation, Balt-System and KT-APL.
+// start). `check --comp` (comp.cpp): the same under cutter radius compensation (Balt-System, KT-APL) and
+// tool-nose radius compensation (EMCO, Okuma).
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -189,19 +190,25 @@ int Check(const Options& o) {
   fs::path dir = tmpl;
   bool all_agree = true;
   if (o.comp) {
-    if (o.dialect == "all") names = {"balt", "ktapl"};
+    // --dialect all, one dialect, or a list (balt,ktapl: the mills; emco,okuma: the lathes' nose
+    // compensation).
+    if (o.dialect != "all") {
+      names.clear();
+      std::stringstream list(o.dialect);
+      for (std::string d; std::getline(list, d, ',');) names.push_back(d);
+    }
     for (const std::string& name : names) {
-      if (name != "balt" && name != "ktapl") {
-        std::cout << "oracle: --comp has Balt-System and KT-APL only\n";
+      if (name != "balt" && name != "ktapl" && name != "emco" && name != "okuma") {
+        std::cout << "oracle: --comp has no dialect " << name << "\n";
         return 2;
       }
       CompTally t = CompCheck(PropRun{o.interp, o.keep, o.seed, o.blocks, o.plant}, rs274, name, dir, o.show);
       std::printf(
           "%s comp: %d of %d programs agree (%d contour blocks, %ld moves compared; %d disagree, %d refused "
-          "by "
-          "rs274, %d by cell-interp; %d corner points at a small turn not compared)\n",
+          "by rs274, %d by cell-interp, %d by the manual's alarm; %d corner points at a small turn not "
+          "compared)\n",
           name.c_str(), t.agreeing, t.programs, t.blocks, t.moves, t.disagreeing, t.rs274_refused,
-          t.cell_refused, t.bent);
+          t.cell_refused, t.cell_alarm, t.bent);
       // rs274 refusing a contour (its own gouge check at a concave corner) is counted, not failed.
       all_agree = all_agree && t.disagreeing == 0 && t.cell_refused == 0;
     }
@@ -240,7 +247,7 @@ int main(int argc, char** argv) {
         << "usage: cell-oracle-gen gen --dialect D --seed S --blocks N --out PREFIX\n"
            "       cell-oracle-gen check --dialect D|all --seed S --blocks N [--chunk M] [--interp PATH]\n"
            "                       [--rs274 PATH] [--report] [--keep DIR] [--show N] [--plant]\n"
-           "                       [--comp]   (cutter compensation: --dialect balt|ktapl|all)\n"
+           "                       [--comp]   (cutter and nose compensation: --dialect D[,D..]|all)\n"
            "       cell-oracle-gen prop --property absinc|units|subprogram|transforms|nogouge|all --dialect "
            "D|all "
            "--seed S "

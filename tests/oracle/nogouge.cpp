@@ -293,20 +293,13 @@ ContourProgram WriteContour(const std::string& dialect, const CompContour& c) {
   return w;
 }
 
-namespace {
-
 // A lathe's finishing pass: a random turned profile (profile.h) with 3 mm more along -Z at
 // the start diameter behind its last shoulder (so that shoulder and its top corner are checked), cut under
 // G42 (the tool above the part moving toward -Z: EMCO E42 ln 2586-2755, Okuma E-22 ln 2337-2361) with tip
 // code 3 and a nose radius of 0.2-1.6 mm. X is a radius here (the program writes diameters).
-struct Lathe {
-  CompContour c;
-  ContourProgram w;
-};
-
-Lathe LatheCase(const std::string& dialect, std::uint64_t seed) {
+LatheContour LatheCase(const std::string& dialect, std::uint64_t seed) {
   Rng g(seed);
-  Lathe l;
+  LatheContour l;
   CompContour& c = l.c;
   c.r = Grid(g.Real(0.2, 1.6), 0.001);
   c.left = false;
@@ -365,12 +358,22 @@ Lathe LatheCase(const std::string& dialect, std::uint64_t seed) {
 // the radius, code 3 (-Z, -X) for an outside tool turning toward the chuck: EMCO "cutter position L3" for a
 // left-hand side tool (ln 2510-2514; P against S, ln 2553) and E42's tip "0.8 below and behind" (ln
 // 2586-2755), Okuma pattern 3 (okuma.md judgement call 25; E-22's tip at the centre + [-0.8, -0.8], ln
-// 2337-2361). The move in the mills' plane: x = Z, y = X as a radius, X up and Z to the right, where G02
-// is clockwise (EMCO ln 2116-2149).
-Move NoseCentre(const Move& m, double r) {
+// 2337-2361).
+Move NoseFromTip(const Move& m, double r) {
   Move c = m;
-  c.end = {m.end[2] + r, m.end[0] + r, 0};
-  c.center = {m.center[2] + r, m.center[0] + r, 0};
+  c.end[0] += r, c.end[2] += r;
+  c.center[0] += r, c.center[2] += r;
+  return c;
+}
+
+namespace {
+
+// The nose centre in the mills' plane: x = Z, y = X as a radius, X up and Z to the right, where G02 is
+// clockwise (EMCO ln 2116-2149).
+Move NoseCentre(const Move& m, double r) {
+  Move c = NoseFromTip(m, r);
+  c.end = {c.end[2], c.end[0], 0};
+  c.center = {c.center[2], c.center[0], 0};
   return c;
 }
 
@@ -383,7 +386,7 @@ bool Check(const PropRun& o, const std::string& dialect, std::uint64_t seed, boo
   CompContour c;
   ContourProgram w;
   if (lathe) {
-    Lathe l = LatheCase(dialect, seed);
+    LatheContour l = LatheCase(dialect, seed);
     c = std::move(l.c);
     w = std::move(l.w);
   } else {

@@ -65,11 +65,13 @@ int Corners(const PropRun& o, const std::string& dialect, const std::filesystem:
 int Rapids(const PropRun& o, const std::string& dialect, const std::filesystem::path& dir);
 
 // `check --comp` (comp.cpp): the LinuxCNC differential under cutter radius compensation, Balt-System and
-// KT-APL: random compensated contours until `o.blocks` contour blocks; the first `show` findings printed.
+// KT-APL, and tool-nose radius compensation, EMCO and Okuma: random compensated contours (turned profiles)
+// until `o.blocks` contour blocks; the first `show` findings printed.
 struct CompTally {
   int programs = 0, blocks = 0, agreeing = 0, disagreeing = 0, rs274_refused = 0, cell_refused = 0, shown = 0;
-  int bent = 0;    // corners at a small turn whose point is not compared (comp.cpp)
-  long moves = 0;  // moves compared
+  int bent = 0;        // corners at a small turn whose point is not compared (comp.cpp)
+  int cell_alarm = 0;  // the lathes: refused by cell-interp with the manual's alarm for that path (comp.cpp)
+  long moves = 0;      // moves compared
 };
 CompTally CompCheck(const PropRun& o, const std::string& rs274, const std::string& dialect,
                     const std::filesystem::path& dir, int show);
