@@ -4,6 +4,7 @@
 
 #include <Eigen/Core>
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <string>
 
@@ -12,12 +13,20 @@
 namespace cell::servo {
 
 // The axes are the station file's (cell::machine); the servo indexes by them everywhere.
+using machine::IsRotary;
 using machine::kAxisNames;
 using machine::kNumAxes;
 using enum machine::Axis;
 
-// Positions of the six axes: mm for X Y Z, degrees for A B C.
+// Positions of the nine axes: mm for X Y Z and U V W, degrees for A B C.
 using AxisVector = Eigen::Matrix<double, kNumAxes, 1>;
+
+// The length of a move `d`: along the linear axes (X Y Z U V W) when it moves one, else along the rotary
+// axes (degrees), which is what a feed of a move of rotary axes alone is measured along.
+inline double PathLength(const AxisVector& d) {
+  const double lin = d.head<3>().squaredNorm() + d.tail<3>().squaredNorm();
+  return lin >= 1e-18 ? std::sqrt(lin) : d.segment<3>(kA).norm();
+}
 
 enum class SegmentKind : std::uint8_t {
   kRapid,       // straight line at the machine's rapid rates, exact stop at its end
@@ -36,8 +45,8 @@ enum class SegmentKind : std::uint8_t {
 };
 
 // The plane of an arc: its first and second axis as the program selected them (indices of the station's
-// x y z a b c u v w; the servo moves x y z in a plane). Any pair and either order: Balt-System (DPI,X,Z) is
-// {kX, kZ}, G18 is {kZ, kX}.
+// x y z a b c u v w; the servo moves two linear axes, X Y Z or U V W, in a plane). Any pair and either order:
+// Balt-System (DPI,X,Z) is {kX, kZ}, G18 is {kZ, kX}.
 struct ArcPlane {
   std::uint8_t first = kX, second = kY;
 };
@@ -54,15 +63,16 @@ struct Segment {
   SegmentKind kind = SegmentKind::kLinear;
   // Absolute end position, after all offsets (mm / degrees). Lathes (x_diameter) give X as a DIAMETER;
   // the servo halves it. Axes whose bit is clear in `axes` keep their current position; axes the machine
-  // does not have are ignored.
+  // does not have are ignored (the DDS receiver refuses a segment that moves one).
   std::array<double, kNumAxes> end{};
-  std::uint8_t axes = 0x3f;
+  std::uint16_t axes = 0x1ff;
   // kLinear / kArc / kProbe: mm/min (per_rev: mm/rev of the spindle; inverse_time: 1/min).
   // kRapid ignores it and uses the machine's rapid rates.
   double feed = 0.0;
   FeedMode feed_mode = FeedMode::kPerMinute;
   bool exact_stop = false;
-  // kArc: centre (x y z; lathe x as a diameter), plane, direction, extra full turns for helices.
+  // kArc: centre (x y z; lathe x as a diameter; a co-axis U V W in the slot of its parallel X Y Z, as on the
+  // wire), plane, direction, extra full turns for helices.
   std::array<double, 3> center{};
   ArcPlane plane;
   ArcDirection direction = ArcDirection::kCCW;
