@@ -254,8 +254,8 @@ void Machine::Push(const Segment& segment) {
 
 AxisVector Machine::EndOf(const Segment& s, const AxisVector& start) const {
   AxisVector p = start;
-  for (int i = 0; i < kNumAxes; ++i)
-    if (present_[i] && (s.axes >> i & 1)) p[i] = s.end[i];
+  for (int n = 0; n < num_axes_; ++n)
+    if (const int i = axes_[n]; s.axes >> i & 1) p[i] = s.end[i];
   return p;
 }
 
