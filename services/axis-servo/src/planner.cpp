@@ -336,7 +336,8 @@ bool Planner::Link(PathElement& a, PathElement& b, bool a_is_current) {
         f.probe = false;
         f.stop_end = false;
         double v = kInf, am = kInf;
-        for (int i = 0; i < kNumAxes; ++i) {
+        for (int k = 0; k < num_axes_; ++k) {
+          const int i = axes_[k];
           if (std::abs(f.e1[i]) + std::abs(f.e2[i]) < 1e-12) continue;  // the lines are linear only
           v = std::min(v, lim_.max_velocity[i]);
           am = std::min(am, lim_.max_acceleration[i]);
