@@ -159,14 +159,14 @@ void ReadDrive(const std::string& src, const std::string& prefix, const toml::ta
 void ReadAxis(const std::string& src, int index, const toml::table* t, const MachineConfig& m,
               AxisConfig& a) {
   const char name = kAxisNames[index];
-  const bool rotary_name = index >= kA;
+  const bool rotary_name = IsRotary(index);
   TableReader r(src, fmt::format("axes.{}.", name), t);
   a.present = true;
   std::string type =
       r.Choice("type", {"linear", "rotary", "index"}, std::string(rotary_name ? "rotary" : "linear"));
   a.type = type == "linear" ? AxisType::kLinear : type == "rotary" ? AxisType::kRotary : AxisType::kIndex;
   if (rotary_name && a.type == AxisType::kLinear) r.Fail("type", "axes a, b, c are rotary or index");
-  if (!rotary_name && a.type != AxisType::kLinear) r.Fail("type", "axes x, y, z are linear");
+  if (!rotary_name && a.type != AxisType::kLinear) r.Fail("type", "axes x, y, z, u, v, w are linear");
   const bool rot = a.type != AxisType::kLinear;
   const std::string_view u = rot ? "deg" : "mm";
   a.min = r.Number("min", -1e5, 1e5, std::nullopt, u);
@@ -227,7 +227,7 @@ MachineConfig ParseMachineConfig(std::string_view text, const std::string& sourc
       if (k.size() == 1 && k[0] == kAxisNames[i]) idx = i;
     if (idx < 0)
       throw Error(Errc::kInvalidArgument,
-                  fmt::format("{}: axes.{}: unknown axis; allowed x, y, z, a, b, c", source, k));
+                  fmt::format("{}: axes.{}: unknown axis; allowed x, y, z, a, b, c, u, v, w", source, k));
     if (!node.is_table())
       throw Error(Errc::kInvalidArgument, fmt::format("{}: axes.{}: must be a table", source, k));
     ReadAxis(source, idx, node.as_table(), m, m.axes[idx]);

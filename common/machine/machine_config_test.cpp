@@ -99,6 +99,25 @@ TEST(Config, MinimalParsesAndIgnoresForeignTables) {
   EXPECT_GT(c.axes[kX].drive.bandwidth_hz, 0);
 }
 
+TEST(Config, CoAxesUVWAreLinearAxesLikeXYZ) {
+  // A KT-APL U-head (manual ln 7126-7150): [axes.u] as any linear axis; V and W the same.
+  const std::string u =
+      "[axes.u]\nmin = -5\nmax = 60\nmax_velocity = 250\nrapid = 250\n"
+      "max_acceleration = 500\nmax_jerk = 20000\nfollowing_error_limit = 0.5\n"
+      "drive = { motor_inertia = 0.001, load_inertia = 0.0005, viscous_friction = 0.001, "
+      "max_torque = 10, units_per_rev = 5 }\n[spindle]";
+  MachineConfig c = ParseMachineConfig(Replace(kMinimal, "[spindle]", u), "stations/T1.toml");
+  EXPECT_TRUE(c.axes[kU].present);
+  EXPECT_EQ(c.axes[kU].type, AxisType::kLinear);
+  EXPECT_DOUBLE_EQ(c.axes[kU].max, 60);
+  EXPECT_FALSE(c.axes[kV].present || c.axes[kW].present);
+  std::string e =
+      ErrorOf(Replace(kMinimal, "[spindle]", Replace(u, "[axes.u]\n", "[axes.w]\ntype = \"rotary\"\n")));
+  EXPECT_NE(e.find("axes.w.type: axes x, y, z, u, v, w are linear"), std::string::npos) << e;
+  e = ErrorOf(Replace(kMinimal, "[spindle]", Replace(u, "[axes.u]", "[axes.q]")));
+  EXPECT_NE(e.find("axes.q: unknown axis; allowed x, y, z, a, b, c, u, v, w"), std::string::npos) << e;
+}
+
 TEST(Config, BadValueNamesFileKeyAndRange) {
   std::string e = ErrorOf(Replace(kMinimal, "max_jerk = 50000\nfollowing", "max_jerk = -3\nfollowing"));
   EXPECT_NE(e.find("stations/T1.toml"), std::string::npos) << e;

@@ -11,9 +11,15 @@
 // - G28 obstruction detection (manual ln 1539-1541, 9416): the servo runs each G28 move as a guarded probe
 //   move against the pallet's part model; a clear path completes, a clamp in the path is an E-STOP;
 // - G33 threading (manual ln 7247-7322): the thread reaches the servo as a spindle-synchronised segment and
-//   runs; a U move on KT01, which has no U-head (no U axis), fails the job (ktapl.md judgement call 89).
+//   runs; a U move on KT01, which has no U-head (no U axis), fails the job (ktapl.md judgement call 89);
+// - the U-head (manual ch. 7, ln 7126-7433) on KT02 with a test-local [axes.u]: a taper thread (Z with U)
+//   and a quarter circle in the (Z, U) plane (G18 G21) run, U sampled along the moves from AxisState.
+#include <array>
 #include <chrono>
+#include <cmath>
+#include <filesystem>
 #include <fstream>
+#include <mutex>
 #include <string>
 #include <thread>
 #include <vector>
@@ -21,10 +27,15 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "cell/bus/bus.h"
+#include "cell/bus/topics.h"
+#include "cell/idl/motion.h"
 #include "cell/testing/cell_fixture.h"
+#include "cell/testing/process.h"
 
 using namespace cell::testing;
 using nlohmann::json;
+namespace fs = std::filesystem;
 
 namespace {
 
@@ -215,6 +226,104 @@ TEST_F(KtaplStation, G33ThreadRunsOnTheServoAndAUMoveNeedsTheUHead) {
   EXPECT_NE(shown.value("reason", "").find("the station has no U axis (U 10.0000 commanded, line 7)"),
             std::string::npos)
       << shown.dump();
+}
+
+// The D'Andreas U-head on KT02, for this test only (no shipped KT station has the option; the demo and scale
+// tests count the shipped stations): its radial slide is the 6th axis U (ln 7128). Rapid 9.843 in/min
+// = 250 mm/min (ln 7132); the servo holds U to it in every move (a programmed U feed may not exceed 10 IPM,
+// ln 7161, and a ZU circle is limited to the rapid rate, ln 7132). The manual gives no travel: -5 to 60 mm
+// (its examples put U at up to 2.0 in = 50.8 mm, ln 7203). Acceleration and jerk keep KT02's jerk filter.
+const char* kUHeadAxis = R"(
+# ---- Test-local: the D'Andreas U-head (KT-APL manual ch. 7). ----
+[axes.u]
+min = -5.0
+max = 60.0
+max_velocity = 250.0
+rapid = 250.0
+max_acceleration = 500.0
+max_jerk = 20000.0
+following_error_limit = 0.5
+[axes.u.drive]
+motor_inertia = 0.001
+load_inertia = 0.0005
+viscous_friction = 0.001
+max_torque = 10.0
+units_per_rev = 5.0
+)";
+
+// The shipped stations with KT02's file given the U-head, on the real clock: AxisState samples the moves at
+// 50 Hz of machine time.
+class KtaplUHead : public KtaplStation {
+ protected:
+  void SetUp() override {
+    const fs::path etc = fs::path(cell_.data_dir()) / "etc";
+    fs::create_directories(etc / "stations");
+    fs::copy(fs::path(SourceDir()) / "deploy" / "stations", etc / "stations",
+             fs::copy_options::overwrite_existing | fs::copy_options::recursive);
+    std::ofstream(etc / "stations" / "KT02.toml", std::ios::app) << kUHeadAxis;
+    cell_.SetEnv("CELL_CONFIG_DIR", etc.string());
+    Up("KT02", "real");
+  }
+};
+
+constexpr std::size_t kZ = 2, kU = 6;
+
+TEST_F(KtaplUHead, ATaperThreadAndAZUArcMoveUAlongThePath) {
+  // N40: G33 with Z and U (ln 7247), E the lead along the longer axis Z (call 89): 10 mm of Z at 2 mm/rev,
+  // 5 revolutions at S300, 1 s, U 5 to 6 with it (0.1 mm of U per mm of Z). N50's F clears G33 (ln 7251).
+  // N60: G18 G21 is the (Z, U) plane (ln 7140), K and I its centre words (App H ln 13143-13167): a quarter
+  // circle about Z55 U5 (R5) counter-clockwise with Z to the right and U up, from Z60 U5 to Z55 U10,
+  // 7.85 mm at 200 mm/min (2.4 s).
+  Put("UTHREAD",
+      "%\n(NAM,UTHREAD)\nN10 G71 G90 G0 X0 Y0 Z60. F0\nN20 S300 M03\nN30 G18 G21 U5. F0\n"
+      "N40 G01 G33 E2. Z50. U6.\nN50 Z60. U5. F0\nN60 G03 Z55. U10. K55. I5. F200.\nN70 M05\nN80 M30\n%\n");
+  cell::bus::Participant bus("ktapl-uhead-test");
+  std::mutex mu;
+  std::vector<std::array<double, 9>> pts;
+  cell::bus::Reader<cell::AxisState> axes(bus, cell::bus::topics::kAxisState, cell::bus::QosKind::kTelemetry,
+                                          [&](const cell::AxisState& a, const cell::bus::SampleInfo&) {
+                                            if (a.station() != "KT02") return;
+                                            std::array<double, 9> p{};
+                                            for (std::size_t i = 0; i < p.size(); ++i)
+                                              p[i] = a.commanded()[i];
+                                            std::lock_guard lk(mu);
+                                            pts.push_back(p);
+                                          });
+  std::vector<std::string> set = {"pallet", "set", "11", "UTHREAD"};
+  ASSERT_EQ(Ctl(set).code, 0);
+  auto run = Ctl({"pallet", "run", "11", "--station", "KT02"});
+  ASSERT_EQ(run.code, 0) << run.err;
+  const std::string job = FirstLine(run.out);
+  Ctl({"job", "wait", job, "--timeout", "60"});
+  json shown = CtlJson({"job", "show", job, "--json"});
+  ASSERT_EQ(shown["state"], "COMPLETED") << shown.dump();
+
+  std::lock_guard lk(mu);
+  int thread = 0, mid_thread = 0, arc = 0, mid_arc = 0;
+  for (const auto& p : pts) {
+    const double z = p[kZ], u = p[kU];
+    // The thread (and N50's rapid back along it): U = 5 + (60 - Z) / 10 all the way.
+    if (z > 51 && z < 59 && u > 4.95 && u < 6.05) {
+      EXPECT_NEAR(u, 5 + (60 - z) / 10, 0.01) << "Z " << z;
+      ++thread;
+      if (u > 5.2 && u < 5.8) ++mid_thread;
+    }
+    // The arc: on the circle, inside its quadrant (Z >= 55, U >= 5).
+    if (u > 6.05) {
+      EXPECT_NEAR(std::hypot(z - 55, u - 5), 5, 0.05) << "Z " << z << " U " << u;
+      EXPECT_GE(z, 55 - 0.05) << "U " << u;
+      ++arc;
+      const double deg = std::atan2(u - 5, z - 55) * 180 / M_PI;
+      if (deg > 20 && deg < 70) ++mid_arc;
+    }
+  }
+  // 50 samples a second: about 30 in the thread's middle 60 %, 7 in the rapid's; about 120 on the arc.
+  EXPECT_GE(mid_thread, 12) << thread;
+  EXPECT_GE(arc, 40);
+  EXPECT_GE(mid_arc, 20);
+  ASSERT_FALSE(pts.empty());
+  EXPECT_NEAR(pts.back()[kZ], 55, 1e-3);
+  EXPECT_NEAR(pts.back()[kU], 10, 1e-3);
 }
 
 }  // namespace

@@ -58,7 +58,7 @@ Segment FromWire(const cell::MotionSegment& m, uint64_t id) {
       break;
   }
   for (int i = 0; i < kNumAxes; ++i) s.end[static_cast<size_t>(i)] = m.target()[static_cast<size_t>(i)];
-  s.axes = static_cast<uint8_t>(m.axis_mask() & 0x3f);
+  s.axes = static_cast<uint16_t>(m.axis_mask() & 0x1ff);
   s.feed = m.feed();
   s.feed_mode = m.feed_mode() == 1   ? FeedMode::kPerRevolution
                 : m.feed_mode() == 2 ? FeedMode::kInverseTime
@@ -265,7 +265,7 @@ void Receiver::TakeArrived(TimePoint now) {
 }
 
 // An axis the station does not have stands at 0: a segment that puts one elsewhere (a U-head program on a KT
-// station without the head, ktapl.md call 89; any U V W, which the machine does not carry) stops the run with
+// station without the head, ktapl.md call 89; a B word on a machine without B) stops the run with
 // its refusal. Dropping the axis would run the rest of the move as a toolpath nobody programmed
 // (docs/axis-servo.md, "Axes a station lacks").
 void Receiver::RefuseAbsentAxes(const cell::MotionSegment& m) {

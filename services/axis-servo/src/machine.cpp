@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <thread>
+#include <type_traits>
 
 #include "cell/error/error.h"
 
@@ -109,7 +110,8 @@ Machine::Machine(MachineConfig config, ClockKind clock)
       planner_(limits_, 2 * static_cast<std::size_t>(cfg_.queue_capacity) + 8) {
   int n = 1;
   MakeLimits(cfg_, &n);
-  filter_.Configure(n);
+  co_axes_ = cfg_.axes[kU].present || cfg_.axes[kV].present || cfg_.axes[kW].present;
+  filter_.Configure(n, co_axes_);
   AxisVector home = AxisVector::Zero();
   for (int i = 0; i < kNumAxes; ++i) {
     present_[i] = cfg_.axes[i].present;
@@ -194,11 +196,11 @@ std::vector<Segment> Machine::ToArrival() const {
   };
   // The axes at the zero; an index table's B on its own (an index move is a move of B alone).
   const bool index_b = present_[kB] && cfg_.axes[kB].type == AxisType::kIndex;
-  std::uint8_t path = 0, b = 0;
+  std::uint16_t path = 0, b = 0;
   const AxisVector& at = planner_.EndOfPath();
   for (int i = 0; i < kNumAxes; ++i) {
     if (!present_[i] || (std::abs(at[i]) <= 1e-9 && std::abs(servos_[i].position()) <= 1e-9)) continue;
-    (i == kB && index_b ? b : path) |= static_cast<std::uint8_t>(1u << i);
+    (i == kB && index_b ? b : path) |= static_cast<std::uint16_t>(1u << i);
   }
   // A lathe positions C only joined; it powers up released (the spindle in speed control).
   const bool join = c_is_spindle_ && !c_joined_ && (path >> kC & 1);
@@ -252,8 +254,8 @@ void Machine::Push(const Segment& segment) {
 
 AxisVector Machine::EndOf(const Segment& s, const AxisVector& start) const {
   AxisVector p = start;
-  for (int i = 0; i < kNumAxes; ++i)
-    if (present_[i] && (s.axes >> i & 1)) p[i] = s.end[i];
+  for (int n = 0; n < num_axes_; ++n)
+    if (const int i = axes_[n]; s.axes >> i & 1) p[i] = s.end[i];
   return p;
 }
 
@@ -297,8 +299,8 @@ bool Machine::SoftLimitCheck(const Segment& s, const AxisVector& start, std::str
       }
     }
   }
-  for (int i = 0; i < kNumAxes; ++i) {
-    if (!present_[i]) continue;
+  for (int n = 0; n < num_axes_; ++n) {
+    const int i = axes_[n];
     const AxisConfig& a = cfg_.axes[i];
     const double f = a.diameter ? 2.0 : 1.0;
     if (hi[i] > a.max + 1e-9) {
@@ -448,9 +450,7 @@ void Machine::FeedPlanner() {
           break;
         }
       } else if (s.kind == SegmentKind::kLinear) {
-        AxisVector d = end - start;
-        double len = d.head<3>().norm();
-        if (len < 1e-9) len = d.tail<3>().norm();
+        const double len = PathLength(end - start);
         const Feed f = FeedOf(s, len);
         if (len > 1e-9 && !feed_ok(f)) break;
         planner_.AddLine(end, f, false, s.exact_stop, s.id);
@@ -574,7 +574,7 @@ bool Machine::StartBarrier(Entry& e) {
         return false;
       }
       const AxisVector end = EndOf(s, start);
-      double f = std::min(FeedNow(s, (end - start).head<3>().norm()), cfg_.probe_max_feed / 60.0);
+      double f = std::min(FeedNow(s, PathLength(end - start)), cfg_.probe_max_feed / 60.0);
       if (!(f > 0)) {
         RaiseAlarm(AlarmCode::kInvalidSegment, fmt::format("segment {}: probe feed is zero", s.id), s.id);
         return false;
@@ -755,8 +755,7 @@ void Machine::StepOp() {
       if (rest.kind == SegmentKind::kRapid) {
         planner_.AddLine(end, 0, true, true, op_.seg);
       } else if (rest.kind == SegmentKind::kLinear) {
-        planner_.AddLine(end, std::max(FeedNow(rest, (end - start).head<3>().norm()), 1e-3), false, true,
-                         op_.seg);
+        planner_.AddLine(end, std::max(FeedNow(rest, PathLength(end - start)), 1e-3), false, true, op_.seg);
       } else {
         PathElement arc;
         std::string err;
@@ -927,14 +926,22 @@ bool Machine::StepNow() {
 
   const AxisVector& cmd = filter_.Push(pre);
   const double ts = cfg_.servo_period_s;
-  const AxisVector vel = (cmd - prev_cmd_) / ts;
-  const AxisVector acc = (vel - prev_vel_) / ts;
-  prev_cmd_ = cmd;
-  prev_vel_ = vel;
-  for (int n = 0; n < num_axes_; ++n) {
-    const int i = axes_[n];
-    servos_[i].Step(cmd[i], vel[i], acc[i]);
-  }
+  // Velocity and acceleration feed-forward, six wide on a machine without U V W (which do not move there).
+  const auto step_servos = [&](auto width) {
+    constexpr int N = decltype(width)::value;
+    const Eigen::Matrix<double, N, 1> vel = (cmd.head<N>() - prev_cmd_.head<N>()) / ts;
+    const Eigen::Matrix<double, N, 1> acc = (vel - prev_vel_.head<N>()) / ts;
+    prev_cmd_.head<N>() = cmd.head<N>();
+    prev_vel_.head<N>() = vel;
+    for (int n = 0; n < num_axes_; ++n) {
+      const int i = axes_[n];
+      servos_[i].Step(cmd[i], vel[i], acc[i]);
+    }
+  };
+  if (co_axes_)
+    step_servos(std::integral_constant<int, kNumAxes>{});
+  else
+    step_servos(std::integral_constant<int, kU>{});
 
   // Following-error supervision ("DIFF over").
   if (alarm_.code == AlarmCode::kNone) {

@@ -104,9 +104,10 @@ bool Machine::PlanThread(const Segment& s, const AxisVector& start, const AxisVe
     why = "a thread cannot turn the B index table";
     return false;
   }
-  // The lead is measured along the axis with the larger travel (Z on a tie; lathe X as a radius).
+  // The lead is measured along the axis with the larger travel (Z on a tie; lathe X as a radius; a
+  // U-head's taper thread, Z with U, along Z unless U travels further).
   int major = kZ;
-  for (int i : {kX, kY})
+  for (int i : {kX, kY, kU, kV, kW})
     if (present_[i] && std::abs(d[i]) > std::abs(d[major])) major = i;
   const double travel = std::abs(d[major]);
   if (travel < 1e-9) {

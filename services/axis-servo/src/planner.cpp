@@ -20,15 +20,37 @@ constexpr double kFilletShare = 0.4;
 constexpr double kFilterShare = 0.4;
 
 bool LinearOnly(const AxisVector& v) {
-  return v.tail<3>().squaredNorm() == 0.0;
+  return v.segment<3>(kA).squaredNorm() == 0.0;
+}
+
+// The linear axes X Y Z U V W of `v`: a corner's angle and a fillet's plane are measured in them.
+Eigen::Matrix<double, 6, 1> LinearPart(const AxisVector& v) {
+  Eigen::Matrix<double, 6, 1> l;
+  l.head<3>() = v.head<3>();
+  l.tail<3>() = v.tail<3>();
+  return l;
 }
 
 }  // namespace
 
 AxisVector PathElement::Position(double s) const {
-  if (!arc) return p0 + u * s;
+  AxisVector p = p0;
+  PositionInto<kNumAxes>(s, p);
+  return p;
+}
+
+// Every period: the first N axes of the position at s into `p` (N = 6 on a machine without U V W, whose
+// co-axes stand still; nine-wide arithmetic would cost such a machine 2 % more instructions per period).
+template <int N>
+void PathElement::PositionInto(double s, AxisVector& p) const {
+  if (!arc) {
+    p.head<N>() = p0.head<N>() + u.head<N>() * s;
+    return;
+  }
   const double phi = k * s;
-  return c + (r0 + dr * phi) * (std::cos(phi) * e1 + std::sin(phi) * e2) + w * phi;
+  // In two steps, the same arithmetic: each is small enough for Eigen and the compiler to inline.
+  p.head<N>() = std::cos(phi) * e1.head<N>() + std::sin(phi) * e2.head<N>();
+  p.head<N>() = c.head<N>() + (r0 + dr * phi) * p.head<N>() + w.head<N>() * phi;
 }
 
 AxisVector PathElement::Tangent(double s) const {
@@ -39,7 +61,12 @@ AxisVector PathElement::Tangent(double s) const {
 }
 
 Planner::Planner(const PlannerLimits& limits, std::size_t capacity)
-    : lim_(limits), elems_(std::max<std::size_t>(capacity, 8)), tracks_(elems_.size()) {
+    : lim_(limits),
+      co_axes_(limits.present[kU] || limits.present[kV] || limits.present[kW]),
+      elems_(std::max<std::size_t>(capacity, 8)),
+      tracks_(elems_.size()) {
+  for (int i = 0; i < kNumAxes; ++i)
+    if (lim_.present[i]) axes_[num_axes_++] = i;
   marks_.reserve(elems_.size() + 4);
 }
 
@@ -56,8 +83,7 @@ PathElement Planner::LineElement(const AxisVector& end, bool rapid, bool stop_en
   for (int i = 0; i < kNumAxes; ++i)
     if (!lim_.present[i]) d[i] = 0;
   e.p1 = tail_ + d;
-  double len = d.head<3>().norm();
-  if (len < 1e-9) len = d.tail<3>().norm();
+  const double len = PathLength(d);
   e.len = e.orig_len = e.seg_total = len;
   e.rapid = rapid;
   e.stop_end = e.wait_in_position = stop_end;
@@ -66,7 +92,8 @@ PathElement Planner::LineElement(const AxisVector& end, bool rapid, bool stop_en
   e.vgeom = kInf;
   e.at = kInf;
   const AxisVector& vlim = rapid ? lim_.rapid : lim_.max_velocity;
-  for (int i = 0; i < kNumAxes; ++i) {
+  for (int n = 0; n < num_axes_; ++n) {  // an absent axis has u 0
+    const int i = axes_[n];
     const double ui = std::abs(e.u[i]);
     if (ui < 1e-12) continue;
     e.vgeom = std::min(e.vgeom, vlim[i] / ui);
@@ -116,14 +143,26 @@ void Planner::AddThread(const AxisVector& end, double lead, double lead_change, 
 bool Planner::MakeArc(const AxisVector& start, const AxisVector& end, const std::array<double, 3>& center,
                       ArcPlane plane, ArcDirection dir, std::uint32_t turns, PathElement& e,
                       std::string& why) const {
-  // The centre is x y z: an arc turns in a plane of two of the linear axes, in the program's order.
+  // An arc turns in a plane of two of the linear axes, in the program's order. The centre is x y z, a
+  // co-axis's (U V W) in the slot of its parallel axis (a (Z, U) arc's U centre is center[kX]).
   const int i = plane.first, j = plane.second;
-  if (i > kZ || j > kZ || i == j) {
-    const auto name = [](int a) { return a < 9 ? std::string(1, "XYZABCUVW"[a]) : std::string("?"); };
-    why = fmt::format("arc plane {}{} is not two of the servo's linear axes X Y Z", name(i), name(j));
+  const auto linear = [](int a) { return a <= kZ || (a >= kU && a < kNumAxes); };
+  if (!linear(i) || !linear(j) || i == j) {
+    const auto name = [](int a) { return a < kNumAxes ? std::string(1, "XYZABCUVW"[a]) : std::string("?"); };
+    why =
+        fmt::format("arc plane {}{} is not two of the machine's linear axes (X Y Z U V W)", name(i), name(j));
     return false;
   }
-  const double ci = center[i], cj = center[j];
+  // A co-axis the machine lacks stands at 0 (the DDS receiver refuses moving it): an arc must not swing it.
+  for (int a : {i, j}) {
+    if (a >= kU && !lim_.present[a]) {
+      why = fmt::format("arc plane {}{}: the station has no {} axis", "XYZABCUVW"[i], "XYZABCUVW"[j],
+                        "XYZABCUVW"[a]);
+      return false;
+    }
+  }
+  const auto slot = [](int a) { return a >= kU ? a - kU : a; };
+  const double ci = center[slot(i)], cj = center[slot(j)];
   const double x0 = start[i] - ci, y0 = start[j] - cj, x1 = end[i] - ci, y1 = end[j] - cj;
   const double r0 = std::hypot(x0, y0), r1 = std::hypot(x1, y1);
   if (r0 < 1e-6 || r1 < 1e-6) {
@@ -180,8 +219,8 @@ void Planner::AddArc(PathElement e, Feed feed, bool exact_stop, std::uint64_t se
   const double r = e.r0 + 0.5 * e.dr * e.sweep;
   const double rk = std::max(e.r0, e.r0 + e.dr * e.sweep) * e.k;  // |dp_plane/ds| upper bound
   double v = kInf, aplane = kInf;
-  for (int a = 0; a < kNumAxes; ++a) {
-    if (!lim_.present[a]) continue;
+  for (int n = 0; n < num_axes_; ++n) {
+    const int a = axes_[n];
     const bool in_plane = e.e1[a] != 0.0 || e.e2[a] != 0.0;
     const double rate = in_plane ? rk : std::abs(e.w[a]) * e.k;
     if (rate > 1e-12) v = std::min(v, lim_.max_velocity[a] / rate);
@@ -195,8 +234,8 @@ void Planner::AddArc(PathElement e, Feed feed, bool exact_stop, std::uint64_t se
   e.vgeom = v;
   const double acent = v * v * r * e.k * e.k;
   double at = kInf;
-  for (int a = 0; a < kNumAxes; ++a) {
-    if (!lim_.present[a]) continue;
+  for (int n = 0; n < num_axes_; ++n) {
+    const int a = axes_[n];
     const bool in_plane = e.e1[a] != 0.0 || e.e2[a] != 0.0;
     if (in_plane)
       at = std::min(at, (lim_.max_acceleration[a] - acent) / rk);
@@ -232,7 +271,7 @@ bool Planner::Link(PathElement& a, PathElement& b, bool a_is_current) {
   // post-interpolation filters do). Otherwise v_corner bounds the speed through the corner.
   const double L = lim_.filter_time, eps = kFilterShare * lim_.path_tolerance;
   double v_corner = kInf, s2 = 0;
-  const Eigen::Vector3d la = ta.head<3>(), lb = tb.head<3>();
+  const Eigen::Matrix<double, 6, 1> la = LinearPart(ta), lb = LinearPart(tb);
   if (L > 0 && la.norm() > 1e-9 && lb.norm() > 1e-9) {
     const double c = std::clamp(la.normalized().dot(lb.normalized()), -1.0, 1.0);
     s2 = std::sin(0.5 * std::acos(c));
@@ -297,8 +336,9 @@ bool Planner::Link(PathElement& a, PathElement& b, bool a_is_current) {
         f.probe = false;
         f.stop_end = false;
         double v = kInf, am = kInf;
-        for (int i = 0; i < 3; ++i) {
-          if (std::abs(f.e1[i]) + std::abs(f.e2[i]) < 1e-12) continue;
+        for (int k = 0; k < num_axes_; ++k) {
+          const int i = axes_[k];
+          if (std::abs(f.e1[i]) + std::abs(f.e2[i]) < 1e-12) continue;  // the lines are linear only
           v = std::min(v, lim_.max_velocity[i]);
           am = std::min(am, lim_.max_acceleration[i]);
         }
@@ -327,8 +367,8 @@ bool Planner::Link(PathElement& a, PathElement& b, bool a_is_current) {
   // jerk filter's corner rounding (about v L sin(theta/2) / 4) within half the tolerance.
   const AxisVector dt = tb - ta;
   double v = std::min(a.vgeom, b.vgeom);
-  for (int i = 0; i < kNumAxes; ++i)
-    if (lim_.present[i] && std::abs(dt[i]) > 1e-12)
+  for (int n = 0; n < num_axes_; ++n)
+    if (const int i = axes_[n]; std::abs(dt[i]) > 1e-12)
       v = std::min(v, kKinkShare * lim_.max_acceleration[i] * lim_.period / std::abs(dt[i]));
   a.v_junction = std::min(v, v_corner);
   return false;
@@ -424,6 +464,13 @@ bool Planner::Current(std::uint64_t& seg, double& fraction) const {
   return true;
 }
 
+void Planner::PositionAt(const PathElement& e, double s) {
+  if (co_axes_)
+    e.PositionInto<kNumAxes>(s, pos_);
+  else
+    e.PositionInto<kU>(s, pos_);
+}
+
 const AxisVector& Planner::Tick() {
   marks_.clear();
   if (waiting_ || count_ == 0) return pos_;
@@ -451,7 +498,7 @@ const AxisVector& Planner::Tick() {
   while (true) {
     if (s_ + dist < e->len - 1e-9) {
       s_ += dist;
-      pos_ = e->Position(s_);
+      PositionAt(*e, s_);
       break;
     }
     dist -= std::max(e->len - s_, 0.0);
@@ -538,7 +585,7 @@ bool Planner::TickThread() {
     }
     if (st < e->len || !chained) {
       s_ = st;
-      pos_ = e->Position(s_);
+      PositionAt(*e, s_);
       v_ = th.lead_k * (th.lead + th.lead_change * local) * rps_ * drho;
       return true;
     }

@@ -53,33 +53,40 @@ void AxisServo::Step(double x_cmd, double v_cmd, double a_cmd) {
   state_ = phi_ * state_ + gamma_ * u;
 }
 
-void JerkFilter::Configure(int n) {
+void JerkFilter::Configure(int n, bool co_axes) {
   n_ = std::max(1, n);
-  ring_.assign(n_, AxisVector::Zero());
+  co_axes_ = co_axes;
   Reset(AxisVector::Zero());
 }
 
 void JerkFilter::Reset(const AxisVector& p) {
-  for (auto& r : ring_) r = p;
-  sum_ = p * n_;
-  out_ = last_in_ = p;
+  head_.Reset(p.head<kU>(), n_);
+  co_.Reset(co_axes_ ? Window<3>::V(p.tail<3>()) : Window<3>::V::Zero(), co_axes_ ? n_ : 0);
+  out_ = p;
   idx_ = 0;
   steady_ = n_;
   since_resum_ = 0;
 }
 
 const AxisVector& JerkFilter::Push(const AxisVector& p) {
-  steady_ = (p == last_in_) ? std::min(steady_ + 1, n_) : 0;
-  last_in_ = p;
-  sum_ += p - ring_[idx_];
-  ring_[idx_] = p;
+  const Window<kU>::V in = p.head<kU>();
+  const Window<3>::V in_co = p.tail<3>();
+  const bool same = in == head_.last && (!co_axes_ || in_co == co_.last);
+  steady_ = same ? std::min(steady_ + 1, n_) : 0;
+  head_.Push(in, idx_);
+  if (co_axes_) co_.Push(in_co, idx_);
   if (++idx_ == n_) idx_ = 0;
-  if (++since_resum_ >= 64L * n_) {  // bound the rounding drift of the running sum
+  if (++since_resum_ >= 64L * n_) {
     since_resum_ = 0;
-    sum_.setZero();
-    for (const auto& r : ring_) sum_ += r;
+    head_.Resum();
+    if (co_axes_) co_.Resum();
   }
-  out_ = steady_ >= n_ ? p : sum_ / n_;
+  if (steady_ >= n_) {
+    out_ = p;
+  } else {
+    out_.head<kU>() = head_.sum / n_;
+    if (co_axes_) out_.tail<3>() = co_.sum / n_;
+  }
   return out_;
 }
 

@@ -597,5 +597,111 @@ TEST(Config, PartModelsFromStationFile) {
   std::filesystem::remove_all(dir);
 }
 
+// ---- The U-head (KT-APL manual ch. 7, ln 7126-7433): a linear co-axis U beside X Y Z B.
+
+// KT01's machine with a U axis: rapid 9.843 in/min = 250 mm/min (ln 7132), a programmed feed of at most
+// 10 IPM (ln 7161; the servo clamps to the rapid rate, ln 7132: "in a circular move the velocity is limited
+// to the rapid rate"); the acceleration and jerk keep the jerk filter's length.
+MachineConfig UHead() {
+  MachineConfig c = DefaultMachineConfig("hmc");
+  AxisConfig& u = c.axes[kU];
+  u = c.axes[kZ];
+  u.min = -5;
+  u.max = 60;
+  u.max_velocity = 250;
+  u.rapid = 250;
+  return c;
+}
+
+Segment UMove(std::uint64_t id, SegmentKind kind, double z, double u, double feed = 0) {
+  Segment s;
+  s.id = id;
+  s.kind = kind;
+  s.end[kZ] = z;
+  s.end[kU] = u;
+  s.axes = 1u << kZ | 1u << kU;
+  s.feed = feed;
+  s.exact_stop = true;
+  return s;
+}
+
+TEST(Servo, AMachineWithUMovesXYZAsOneWithout) {
+  // The per-period arithmetic is six wide without U V W and nine wide with them: the same program moves
+  // X Y Z bit for bit alike on KT01 and on KT01 with a U-head that stands still.
+  Machine six(DefaultMachineConfig("hmc"), ClockKind::kVirtual), nine(UHead(), ClockKind::kVirtual);
+  for (Machine* m : {&six, &nine}) {
+    m->Push(Rapid(1, 100, 100, 100));
+    m->Push(Line(2, 150, 120, 100, 3000));
+    m->Push(testing::Arc(3, 170, 140, 110, 150, 140, true, 3000));
+    m->Push(Line(4, 120, 160, 90, 6000, true));
+  }
+  int ticks = 0;
+  while (true) {
+    const bool a = six.Step(), b = nine.Step();
+    ASSERT_EQ(a, b) << "tick " << ticks;
+    if (!a) break;
+    ++ticks;
+    for (int i : {kX, kY, kZ}) {
+      ASSERT_EQ(six.commanded()[i], nine.commanded()[i]) << "axis " << i << " tick " << ticks;
+      ASSERT_EQ(six.actual()[i], nine.actual()[i]) << "axis " << i << " tick " << ticks;
+    }
+    ASSERT_EQ(nine.commanded()[kU], 0.0);
+  }
+  EXPECT_GT(ticks, 1000);
+  EXPECT_EQ(nine.alarm().code, AlarmCode::kNone) << nine.alarm().text;
+}
+
+TEST(Servo, TheUHeadCutsATaperThreadAndArcsInTheZUPlane) {
+  Machine m(UHead(), ClockKind::kVirtual);
+  m.Push(UMove(1, SegmentKind::kRapid, 60, 5));
+  Segment sp;
+  sp.id = 2;
+  sp.kind = SegmentKind::kSpindle;
+  sp.spindle_rpm = 300;
+  sp.spindle_dir = SpindleDirection::kCW;
+  m.Push(sp);
+  m.RunUntilIdle();
+  ASSERT_EQ(m.alarm().code, AlarmCode::kNone) << m.alarm().text;
+  // G33 E2. Z50. U6. (ln 7247-7263): the lead along Z, the longer axis; U follows, 0.1 mm per mm of Z.
+  Segment th = UMove(3, SegmentKind::kThread, 50, 6);
+  th.thread_lead = 2;
+  m.Push(th);
+  m.Push(UMove(4, SegmentKind::kRapid, 60, 5));
+  // G18 G21 G03 (ln 7140): the quarter circle about Z55 U5 from Z60 U5 to Z55 U10, counter-clockwise with
+  // Z to the right and U up; U's centre in the slot of X.
+  Segment arc = UMove(5, SegmentKind::kArc, 55, 10, 200);
+  arc.center = {5, 0, 55};
+  arc.plane = {kZ, kU};
+  arc.direction = ArcDirection::kCCW;
+  m.Push(arc);
+  int on_thread = 0, on_arc = 0, middle = 0;
+  double max_u_rate = 0, prev_u = 5;
+  while (m.Step()) {
+    const AxisVector c = m.commanded();
+    max_u_rate = std::max(max_u_rate, std::abs(c[kU] - prev_u) / m.period() * 60);
+    prev_u = c[kU];
+    ASSERT_EQ(c[kX], 0.0);
+    if (c[kZ] > 51 && c[kZ] < 59 && c[kU] < 6.05) {
+      EXPECT_NEAR(c[kU], 5 + (60 - c[kZ]) / 10, 1e-3) << "Z " << c[kZ];
+      ++on_thread;
+    }
+    const double r = std::hypot(c[kZ] - 55, c[kU] - 5);
+    if (c[kU] > 6.05) {
+      EXPECT_NEAR(r, 5, 0.02) << "Z " << c[kZ] << " U " << c[kU];
+      EXPECT_GE(c[kZ], 55 - 0.02);
+      ++on_arc;
+      const double deg = std::atan2(c[kU] - 5, c[kZ] - 55) * 180 / M_PI;
+      if (deg > 20 && deg < 70) ++middle;
+    }
+  }
+  EXPECT_EQ(m.alarm().code, AlarmCode::kNone) << m.alarm().text;
+  EXPECT_GT(on_thread, 500);  // 5 revolutions at 300 rpm: 1 s, and the rapid back along the same line
+  EXPECT_GT(on_arc, 1000);    // 7.85 mm at 200 mm/min: 2.4 s
+  EXPECT_GT(middle, 500);
+  EXPECT_LE(max_u_rate, 250 * 1.01);
+  EXPECT_NEAR(m.actual()[kZ], 55, 1e-3);
+  EXPECT_NEAR(m.actual()[kU], 10, 1e-3);
+}
+
 }  // namespace
 }  // namespace cell::servo

@@ -246,12 +246,12 @@ TEST(Planner, ArcOutsideTheLinearAxesIsRefused) {
   AxisVector a = AxisVector::Zero(), b = AxisVector::Zero();
   a[kX] = 10;
   b[kB] = 10;
-  // Balt (DPI,B,Y) circles are refused by the dialect; a segment that names a rotary or co-axis plane is
-  // refused here too, never turned in some other plane.
+  // Balt (DPI,B,Y) circles are refused by the dialect; a segment that names a rotary plane, or a co-axis
+  // the station lacks (KT01 has no U-head), is refused here too, never turned in some other plane.
   EXPECT_FALSE(m.planner().MakeArc(a, b, {0, 0, 0}, {kB, kY}, ArcDirection::kCW, 0, e, why));
   EXPECT_NE(why.find("BY"), std::string::npos) << why;
-  EXPECT_FALSE(m.planner().MakeArc(a, b, {0, 0, 0}, {kZ, 6}, ArcDirection::kCW, 0, e, why));
-  EXPECT_NE(why.find("ZU"), std::string::npos) << why;
+  EXPECT_FALSE(m.planner().MakeArc(a, b, {0, 0, 0}, {kZ, kU}, ArcDirection::kCW, 0, e, why));
+  EXPECT_NE(why.find("arc plane ZU: the station has no U axis"), std::string::npos) << why;
 }
 
 TEST(Planner, FeedHoldStopsOnPathAndResumes) {

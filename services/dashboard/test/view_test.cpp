@@ -6,7 +6,9 @@
 #include <filesystem>
 #include <fstream>
 
+#include "cell/config/config.h"
 #include "cell/dashboard/cell_view.h"
+#include "cell/machine/machine_config.h"
 #include "test_stations.h"
 
 namespace cell::dashboard {
@@ -202,6 +204,20 @@ TEST(StationDefs, AxesComeFromTheStationFiles) {
   EXPECT_TRUE(by["OK01"].axes[0].diameter);
   EXPECT_TRUE(by["OK01"].axes[2].rotary);
   EXPECT_EQ(by["OK01"].kind, "lathe");
+}
+
+TEST(StationDefs, AConfiguredUHeadIsListedAsALinearAxis) {
+  // A KT station with the U-head ([axes.u], KT-APL manual ln 7128): U after X Y Z B, at its index 6.
+  cell::machine::MachineConfig m = cell::machine::DefaultMachineConfig("hmc");
+  m.axes[cell::machine::kU] = m.axes[cell::machine::kZ];
+  cell::config::StationConfig st;
+  st.id = "KT09";
+  const StationDef d = MakeStationDef(st, m);
+  std::string names;
+  for (auto& a : d.axes) names += a.name;
+  EXPECT_EQ(names, "XYZBU");
+  EXPECT_EQ(d.axes.back().index, cell::machine::kU);
+  EXPECT_FALSE(d.axes.back().rotary);
 }
 
 }  // namespace

@@ -42,7 +42,7 @@ class Station::RunEnvironment : public interp::Environment, public interp::Seria
   interp::ProbeResult Probe(const interp::ProbeMove& m) override {
     cell::MotionSegment seg;
     for (size_t i = 0; i < m.to.size(); ++i) seg.target()[i] = m.to[i];
-    seg.axis_mask(0x3f);
+    seg.axis_mask(0x1ff);
     seg.exact_stop(true);
     seg.feed(m.feed > 0 ? m.feed : probe_feed_);
     seg.probe_break(!m.make);

@@ -142,7 +142,7 @@ class Env : public interp::Environment {
     cell::MotionSegment seg;
     for (size_t i = 0; i < m.to.size(); ++i) seg.target()[i] = m.to[i];
     seg.kind(cell::SEGMENT_PROBE);
-    seg.axis_mask(0x3f);
+    seg.axis_mask(0x1ff);
     seg.exact_stop(true);
     seg.feed(m.feed > 0 ? m.feed : station::StationOptions{}.probe_feed);
     seg.probe_break(!m.make);

@@ -14,10 +14,14 @@
 
 namespace cell::machine {
 
-// The six axes every station file and motion segment index by.
-inline constexpr int kNumAxes = 6;
-enum Axis : int { kX = 0, kY = 1, kZ = 2, kA = 3, kB = 4, kC = 5 };
-inline constexpr std::array<char, kNumAxes> kAxisNames = {'x', 'y', 'z', 'a', 'b', 'c'};
+// The nine axes every station file and motion segment index by (the wire's order, idl/motion.idl): the
+// linear X Y Z, the rotary A B C, and the linear co-axes U V W parallel to X Y Z (a KT-APL U-head's U).
+inline constexpr int kNumAxes = 9;
+enum Axis : int { kX = 0, kY = 1, kZ = 2, kA = 3, kB = 4, kC = 5, kU = 6, kV = 7, kW = 8 };
+inline constexpr std::array<char, kNumAxes> kAxisNames = {'x', 'y', 'z', 'a', 'b', 'c', 'u', 'v', 'w'};
+inline constexpr bool IsRotary(int axis) {
+  return axis >= kA && axis <= kC;
+}
 
 enum class AxisType { kLinear, kRotary, kIndex };
 

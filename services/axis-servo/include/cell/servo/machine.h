@@ -202,6 +202,7 @@ class Machine {
   // The present axes' indices in axis order, for the per-tick loops (no branch per absent axis).
   std::array<int, kNumAxes> axes_{};
   int num_axes_ = 0;
+  bool co_axes_ = false;  // the machine has U, V or W: the per-period vector arithmetic is nine wide
 
   std::deque<Entry> queue_;
   std::size_t next_ = 0;  // first queue entry not yet planned

@@ -75,6 +75,8 @@ struct PathElement {
   std::uint64_t seg = 0;
   double seg_offset = 0, seg_total = 0;  // for progress fractions
   AxisVector Position(double s) const;
+  template <int N>
+  void PositionInto(double s, AxisVector& p) const;
   AxisVector Tangent(double s) const;  // dp/ds
 };
 
@@ -171,7 +173,14 @@ class Planner {
   PathElement LineElement(const AxisVector& end, bool rapid, bool exact_stop) const;
   bool TickThread();  // false: the thread left synchronisation, the ordinary interpolator takes over
 
+  // pos_ = the position at s on e, over the axes the machine can move (PathElement::PositionInto).
+  void PositionAt(const PathElement& e, double s);
+
   PlannerLimits lim_;
+  bool co_axes_ = true;  // the machine has U, V or W
+  // The present axes' indices in axis order, for the per-block loops over axes.
+  std::array<int, kNumAxes> axes_{};
+  int num_axes_ = 0;
   std::vector<PathElement> elems_;
   std::vector<ThreadTrack> tracks_;   // the same slots as elems_, used by thread elements
   std::size_t head_ = 0, count_ = 0;  // element 0 is the current one

@@ -4,6 +4,7 @@
 
 #include <Eigen/Core>
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <string>
 
@@ -12,12 +13,20 @@
 namespace cell::servo {
 
 // The axes are the station file's (cell::machine); the servo indexes by them everywhere.
+using machine::IsRotary;
 using machine::kAxisNames;
 using machine::kNumAxes;
 using enum machine::Axis;
 
-// Positions of the six axes: mm for X Y Z, degrees for A B C.
+// Positions of the nine axes: mm for X Y Z and U V W, degrees for A B C.
 using AxisVector = Eigen::Matrix<double, kNumAxes, 1>;
+
+// The length of a move `d`: along the linear axes (X Y Z U V W) when it moves one, else along the rotary
+// axes (degrees), which is what a feed of a move of rotary axes alone is measured along.
+inline double PathLength(const AxisVector& d) {
+  const double lin = d.head<3>().squaredNorm() + d.tail<3>().squaredNorm();
+  return lin >= 1e-18 ? std::sqrt(lin) : d.segment<3>(kA).norm();
+}
 
 enum class SegmentKind : std::uint8_t {
   kRapid,       // straight line at the machine's rapid rates, exact stop at its end
@@ -36,8 +45,8 @@ enum class SegmentKind : std::uint8_t {
 };
 
 // The plane of an arc: its first and second axis as the program selected them (indices of the station's
-// x y z a b c u v w; the servo moves x y z in a plane). Any pair and either order: Balt-System (DPI,X,Z) is
-// {kX, kZ}, G18 is {kZ, kX}.
+// x y z a b c u v w; the servo moves two linear axes, X Y Z or U V W, in a plane). Any pair and either order:
+// Balt-System (DPI,X,Z) is {kX, kZ}, G18 is {kZ, kX}.
 struct ArcPlane {
   std::uint8_t first = kX, second = kY;
 };
@@ -49,20 +58,26 @@ enum class FeedMode : std::uint8_t { kPerMinute, kPerRevolution, kInverseTime };
 enum class SpindleDirection : std::uint8_t { kStop, kCW, kCCW, kOrient, kAxis };
 enum class CoolantMode : std::uint8_t { kOff, kFlood, kMist, kThroughSpindle };
 
+// The small fields side by side, so that a segment in the machine's queue (Machine::Entry) fits two to a
+// 512-byte deque node: with nine axes and the fields in their old order it took one allocation per segment.
 struct Segment {
   std::uint64_t id = 0;
   SegmentKind kind = SegmentKind::kLinear;
+  // Axes given in `end` (bit i: axis i of x y z a b c u v w).
+  std::uint16_t axes = 0x1ff;
+  FeedMode feed_mode = FeedMode::kPerMinute;  // of `feed`
+  bool exact_stop = false;
+  SpindleDirection spindle_dir = SpindleDirection::kStop;  // kSpindle
+  bool live_tool = false;  // kSpindle: a lathe's live-tool (M-tool) spindle (stop, cw, ccw at spindle_rpm)
   // Absolute end position, after all offsets (mm / degrees). Lathes (x_diameter) give X as a DIAMETER;
   // the servo halves it. Axes whose bit is clear in `axes` keep their current position; axes the machine
-  // does not have are ignored.
+  // does not have are ignored (the DDS receiver refuses a segment that moves one).
   std::array<double, kNumAxes> end{};
-  std::uint8_t axes = 0x3f;
   // kLinear / kArc / kProbe: mm/min (per_rev: mm/rev of the spindle; inverse_time: 1/min).
   // kRapid ignores it and uses the machine's rapid rates.
   double feed = 0.0;
-  FeedMode feed_mode = FeedMode::kPerMinute;
-  bool exact_stop = false;
-  // kArc: centre (x y z; lathe x as a diameter), plane, direction, extra full turns for helices.
+  // kArc: centre (x y z; lathe x as a diameter; a co-axis U V W in the slot of its parallel X Y Z, as on the
+  // wire), plane, direction, extra full turns for helices.
   std::array<double, 3> center{};
   ArcPlane plane;
   ArcDirection direction = ArcDirection::kCCW;
@@ -74,8 +89,6 @@ struct Segment {
       0;  // kToolChange: the socket the control chose (an alternate tool); 0: the first holding it
   // kSpindle. Every spindle segment states the whole spindle command; nothing carries over from the last.
   double spindle_rpm = 0.0;  // rpm when css_surface_speed is 0
-  SpindleDirection spindle_dir = SpindleDirection::kStop;
-  bool live_tool = false;  // kSpindle: a lathe's live-tool (M-tool) spindle (stop, cw, ccw at spindle_rpm)
   // Constant surface speed in m/min (0: off): rpm = min(limit, max_rpm, 1000 v / (pi D)), D = X diameter.
   double css_surface_speed = 0.0;
   // The programmed spindle limit in rpm (Okuma G50 S, EMCO G92 S); 0: the machine's max_rpm.
@@ -88,12 +101,12 @@ struct Segment {
   double thread_lead = 0.0;
   double thread_lead_change = 0.0;
   double thread_start_angle = 0.0;
+  double probe_length = 0.0;  // kProbe: the probe's length compensation in Z (mm), to the ball's tip
+  int pallet = 0;             // kPalletChange
   CoolantMode coolant = CoolantMode::kOff;  // kCoolant
   bool probe_break = false;                 // kProbe: trip when contact is lost (G23), not made (G22)
-  double probe_length = 0.0;  // kProbe: the probe's length compensation in Z (mm), to the ball's tip
-  bool tool_check = false;    // kProbe: a G38 broken-tool check of the spindle tool, no motion; the result's
-                              // contact = every edge seen (the tool is whole)
-  int pallet = 0;             // kPalletChange
+  bool tool_check = false;  // kProbe: a G38 broken-tool check of the spindle tool, no motion; the result's
+                            // contact = every edge seen (the tool is whole)
 };
 
 // A probe move's result: the latched axis positions at the trip, or the end of travel without a trip.

@@ -47,7 +47,9 @@ class AxisServo {
 // output keeps |v| and |a| and has |jerk| <= 2A/(N*Ts); N = ceil(2A/(J*Ts)) over all axes.
 class JerkFilter {
  public:
-  void Configure(int n);
+  // `co_axes`: the machine has a U, V or W. Without one the filter averages X Y Z A B C alone (U V W stand
+  // still there): a six-axis machine's period costs what it did before the vector carried nine axes.
+  void Configure(int n, bool co_axes);
   void Reset(const AxisVector& p);
   const AxisVector& Push(const AxisVector& p);
   const AxisVector& Output() const { return out_; }
@@ -55,8 +57,33 @@ class JerkFilter {
   bool Settled() const { return steady_ >= n_; }
 
  private:
-  std::vector<AxisVector> ring_;
-  AxisVector sum_ = AxisVector::Zero(), out_ = AxisVector::Zero(), last_in_ = AxisVector::Zero();
+  // The window of M axes: X..C (M = 6) and U V W (M = 3) apart, each a vector Eigen keeps aligned and
+  // unrolls.
+  template <int M>
+  struct Window {
+    using V = Eigen::Matrix<double, M, 1>;
+    std::vector<V> ring;
+    V sum = V::Zero(), last = V::Zero();
+    void Reset(const V& p, int n) {
+      ring.assign(static_cast<std::size_t>(n), p);
+      sum = p * n;
+      last = p;
+    }
+    void Push(const V& p, int idx) {
+      last = p;
+      sum += p - ring[static_cast<std::size_t>(idx)];
+      ring[static_cast<std::size_t>(idx)] = p;
+    }
+    void Resum() {  // bound the rounding drift of the running sum
+      sum.setZero();
+      for (const auto& r : ring) sum += r;
+    }
+  };
+
+  Window<kU> head_;  // X Y Z A B C
+  Window<3> co_;     // U V W, when co_axes_
+  bool co_axes_ = true;
+  AxisVector out_ = AxisVector::Zero();
   int n_ = 1, idx_ = 0, steady_ = 0;
   long since_resum_ = 0;
 };

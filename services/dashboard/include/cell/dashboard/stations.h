@@ -16,8 +16,8 @@ struct MachineConfig;
 namespace cell::dashboard {
 
 struct AxisDef {
-  std::string name;       // "X", "Y", "Z", "A", "B", "C"
-  int index = 0;          // into AxisState arrays (x y z a b c ...)
+  std::string name;       // "X", "Y", "Z", "A", "B", "C", "U", "V", "W" (the configured ones)
+  int index = 0;          // into AxisState arrays (x y z a b c u v w)
   bool rotary = false;    // degrees; linear axes are mm
   bool diameter = false;  // lathe X: positions are diameters
 };
