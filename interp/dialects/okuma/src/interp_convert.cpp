@@ -750,6 +750,8 @@ void OkRun::SpindleAndM(const BlockWords& w, bool before_motion) {
   (void)before_motion;
   const auto* g96 = w.FindG(96);
   const auto* g97 = w.FindG(97);
+  // Without S, an extended address (SB=), an M code, G96 or G97 the block leaves both spindles as they are.
+  if (!w.Has('S') && w.ext_has == 0 && w.m.empty() && !g96 && !g97) return;
   const bool g50 = w.HasG(50);
   bool speed_change = false;
   if (w.Has('S')) {

@@ -5,6 +5,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 
 #include "interp_internal.h"
@@ -264,18 +265,19 @@ void OkRun::EmitMove(const AxisArray& target, uint32_t moved, bool rapid, double
                      const AxisArray& travel, uint32_t travel_mask, const CornerSpec* spec) {
   used_ |= moved;
   bool change = travel_mask != 0 || spec != nullptr;
-  for (int a = 0; a < kAxisCount && !change; ++a) {
-    if ((moved & (1u << a)) &&
-        std::fabs(target[static_cast<size_t>(a)] - pos_[static_cast<size_t>(a)]) > 1e-9) {
-      change = true;
-    }
+  const uint32_t axes = moved & ((1u << kAxisCount) - 1);
+  // Only the moved axes are visited (two of nine in a turning block), here and below.
+  for (uint32_t m = axes; m != 0 && !change; m &= m - 1) {
+    const auto a = static_cast<size_t>(std::countr_zero(m));
+    if (std::fabs(target[a] - pos_[a]) > 1e-9) change = true;
   }
   // A block that commands the current position does not move; under nose radius compensation it still counts
   // (a repeated point has a meaning there, ln 2601-2648).
   if (!change && !comp_.on()) return;
   const AxisArray from = pos_;
-  for (int a = 0; a < kAxisCount; ++a) {
-    if (moved & (1u << a)) pos_[static_cast<size_t>(a)] = target[static_cast<size_t>(a)];
+  for (uint32_t m = axes; m != 0; m &= m - 1) {
+    const auto a = static_cast<size_t>(std::countr_zero(m));
+    pos_[a] = target[a];
   }
   if (travel_mask & kCBit) c_net_ += travel[kC];
   if (spec) force_stage_ = true;
