@@ -234,9 +234,10 @@ int32_t ExprParser::Parse() {
   return Or();
 }
 
-// Most values are one operand or two joined by + - * / (V1+0.001, X=V2+100): built here into the nodes the
-// descent would build, without its seven levels each looking ahead. Anything else, a blank inside included,
-// goes back (-1, pos_ and the pool as they were) to the descent.
+// Most values are operands joined by + - * / with no * or / after a + or - (V1+0.001, X=V2+100, V1*2+1):
+// built here, left to right, into the nodes the descent would build, without its seven levels each looking
+// ahead. Anything else, a blank inside included, goes back (-1, pos_ and the pool as they were) to the
+// descent.
 int32_t ExprParser::Simple() {
   const size_t start = pos_;
   const size_t pool_size = pool_.size();
@@ -247,10 +248,24 @@ int32_t ExprParser::Simple() {
   };
   int32_t l = SimpleOperand();
   if (l < 0) return back();
-  if (pos_ < s_.size() && (s_[pos_] == '+' || s_[pos_] == '-' || s_[pos_] == '*' || s_[pos_] == '/')) {
-    static constexpr NodeOp kOp[] = {NodeOp::kAdd, NodeOp::kSub, NodeOp::kMul, NodeOp::kDiv};
+  bool sum = false;  // a + or - seen: a * or / after it binds first, which only the descent builds
+  while (pos_ < s_.size()) {
     const char c = s_[pos_];
-    const NodeOp op = kOp[c == '+' ? 0 : c == '-' ? 1 : c == '*' ? 2 : 3];
+    NodeOp op;
+    if (c == '+') {
+      op = NodeOp::kAdd;
+    } else if (c == '-') {
+      op = NodeOp::kSub;
+    } else if (c == '*') {
+      op = NodeOp::kMul;
+    } else if (c == '/') {
+      op = NodeOp::kDiv;
+    } else {
+      break;
+    }
+    const bool product = c == '*' || c == '/';
+    if (product && sum) return back();
+    sum = sum || !product;
     const int col = Col();
     ++pos_;
     const int32_t r = SimpleOperand();
