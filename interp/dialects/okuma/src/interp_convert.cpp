@@ -587,6 +587,9 @@ uint32_t OkRun::UsedAddresses(const NcGCodes& k, int* g) const {
 // A word the block's function does not read (a stray Q5 on a G01 block, K on a G00) is refused, not ignored
 // (judgement 51); the manual prints no alarm number for it.
 void OkRun::RefuseUnusedAddresses(const BlockWords& w, const NcGCodes& k) const {
+  // Every block but G04 and G85-G88 reads X, Z, F, S and T (UsedAddresses): a block of only those (most
+  // blocks) has nothing to refuse.
+  if (!k.dwell && !k.lap && w.ext_has == 0 && (w.has & ~LetterBits("XZFST")) == 0) return;
   int g = 0;
   const uint32_t unused = w.has & ~UsedAddresses(k, &g);
   if (unused == 0 && w.ext_has == 0) return;  // nearly every block: nothing to refuse
