@@ -203,17 +203,18 @@ void OkRun::ReadNcGCodes(const BlockWords& w, NcGCodes& k) {
                        g.code),
            "2224");
     }
-    if (!KnownG(g.code)) {
-      if (const char* what = UnsupportedG(g.code)) {
-        Fail(g.col, fmt::format("G{} ({}) is not supported by the cell's OSP-E100L dialect", g.code, what));
-      }
-      Fail(g.col, fmt::format("G{} is not an OSP-E100L G code", g.code));
-    }
+    // Motion codes (all known) first: most blocks' only G code needs no search of the known codes.
     if (IsMotionG(g.code)) {
       if (k.motion_g >= 0 && k.motion_g != g.code) Fail(g.col, "two motion G codes in one block");
       k.motion_g = g.code;
       k.motion_col = g.col;
       continue;
+    }
+    if (!KnownG(g.code)) {
+      if (const char* what = UnsupportedG(g.code)) {
+        Fail(g.col, fmt::format("G{} ({}) is not supported by the cell's OSP-E100L dialect", g.code, what));
+      }
+      Fail(g.col, fmt::format("G{} is not an OSP-E100L G code", g.code));
     }
     switch (g.code) {
       case 4:

@@ -21,6 +21,7 @@ constexpr uint32_t kCBit = 1u << kC;
 
 double OkRun::Offset(int axis) const {
   double o = zero_offset_[static_cast<size_t>(axis)] + zero_shift_[static_cast<size_t>(axis)];
+  if (offset_no_ <= 0) return o;  // no tool offset selected: no table lookup (this runs per axis and move)
   if (axis == kX) o += tools_.OffsetX(offset_no_);
   if (axis == kZ) o += tools_.OffsetZ(offset_no_);
   return o;
@@ -249,6 +250,7 @@ void OkRun::LineMotion(const BlockWords& w, const Block& b, bool rapid, int moti
 void OkRun::CheckLimits(AxisArray& target, int col) {
   // Variable soft limits (ln 739-743): beyond the positive limit the target is the limit; beyond the negative
   // limit there is no motion and an alarm.
+  if ((neg_limit_set_ | pos_limit_set_) == 0) return;  // no limit set (most programs)
   for (int a : {kX, kZ}) {
     const uint32_t bit = 1u << a;
     double& t = target[static_cast<size_t>(a)];
