@@ -230,7 +230,75 @@ bool ExprParser::AcceptWord(std::string_view w) {
 int32_t ExprParser::Parse() {
   SkipBlanks();
   if (pos_ >= s_.size() || s_[pos_] == '(') Error("expression expected");
+  if (const int32_t e = Simple(); e >= 0) return e;
   return Or();
+}
+
+// Most values are operands joined by + - * / with no * or / after a + or - (V1+0.001, X=V2+100, V1*2+1):
+// built here, left to right, into the nodes the descent would build, without its seven levels each looking
+// ahead. Anything else, a blank inside included, goes back (-1, pos_ and the pool as they were) to the
+// descent.
+int32_t ExprParser::Simple() {
+  const size_t start = pos_;
+  const size_t pool_size = pool_.size();
+  auto back = [&] {
+    pos_ = start;
+    pool_.resize(pool_size);
+    return -1;
+  };
+  int32_t l = SimpleOperand();
+  if (l < 0) return back();
+  bool sum = false;  // a + or - seen: a * or / after it binds first, which only the descent builds
+  while (pos_ < s_.size()) {
+    const char c = s_[pos_];
+    NodeOp op;
+    if (c == '+') {
+      op = NodeOp::kAdd;
+    } else if (c == '-') {
+      op = NodeOp::kSub;
+    } else if (c == '*') {
+      op = NodeOp::kMul;
+    } else if (c == '/') {
+      op = NodeOp::kDiv;
+    } else {
+      break;
+    }
+    const bool product = c == '*' || c == '/';
+    if (product && sum) return back();
+    sum = sum || !product;
+    const int col = Col();
+    ++pos_;
+    const int32_t r = SimpleOperand();
+    if (r < 0) return back();
+    l = Binary(op, l, r, col);
+  }
+  // The expression must end here: at the end of the text or at a blank the descent stops at too.
+  if (pos_ < s_.size() && ((s_[pos_] != ' ' && s_[pos_] != '\t') || AtOperatorAfterBlanks())) return back();
+  return l;
+}
+
+// An unsigned constant or a common variable V1-V200 (Primary's nodes for them), else -1.
+int32_t ExprParser::SimpleOperand() {
+  if (pos_ >= s_.size()) return -1;
+  const int col = Col();
+  const char c = s_[pos_];
+  if (IsDigit(c) || c == '.') return Number(col);
+  if (Up(c) != 'V') return -1;
+  size_t end = pos_ + 1;
+  while (end < s_.size() && IsAlnumC(s_[end])) ++end;
+  if (end - pos_ < 2 || end - pos_ > 4) return -1;
+  int v = 0;
+  for (size_t k = pos_ + 1; k < end; ++k) {
+    if (!IsDigit(s_[k])) return -1;
+    v = v * 10 + (s_[k] - '0');
+  }
+  if (v < 1 || v > 200) return -1;
+  pos_ = end;
+  Node n;
+  n.op = NodeOp::kCommon;
+  n.num = v;
+  n.col = col;
+  return Add(n);
 }
 
 int32_t ExprParser::Binary(NodeOp op, int32_t a, int32_t b, int col) {
@@ -347,6 +415,33 @@ int32_t ExprParser::Unary() {
   return Primary();
 }
 
+int32_t ExprParser::Number(int col) {
+  Node n;
+  n.col = col;
+  n.integer = true;
+  double v = 0, scale = 0.1;
+  int digits = 0;
+  bool point = false;
+  while (pos_ < s_.size() && (IsDigit(s_[pos_]) || s_[pos_] == '.')) {
+    if (s_[pos_] == '.') {
+      if (point) Error("two decimal points in a number");
+      point = true;
+      n.integer = false;
+    } else if (point) {
+      v += (s_[pos_] - '0') * scale;
+      scale /= 10;
+      ++digits;
+    } else {
+      v = v * 10 + (s_[pos_] - '0');
+      if (v > 0) ++digits;
+    }
+    ++pos_;
+  }
+  if (digits > 8) Fail(col, "a constant has at most 8 digits");
+  n.num = v;
+  return Add(n);
+}
+
 int32_t ExprParser::Primary() {
   SkipBlanks();
   if (pos_ >= s_.size()) Error("operand expected");
@@ -364,32 +459,7 @@ int32_t ExprParser::Primary() {
     return e;
   }
   if (c == '(') Error("'(' starts a comment: group expressions with [ ]");
-  if (IsDigit(c) || c == '.') {
-    Node n;
-    n.col = col;
-    n.integer = true;
-    double v = 0, scale = 0.1;
-    int digits = 0;
-    bool point = false;
-    while (pos_ < s_.size() && (IsDigit(s_[pos_]) || s_[pos_] == '.')) {
-      if (s_[pos_] == '.') {
-        if (point) Error("two decimal points in a number");
-        point = true;
-        n.integer = false;
-      } else if (point) {
-        v += (s_[pos_] - '0') * scale;
-        scale /= 10;
-        ++digits;
-      } else {
-        v = v * 10 + (s_[pos_] - '0');
-        if (v > 0) ++digits;
-      }
-      ++pos_;
-    }
-    if (digits > 8) Fail(col, "a constant has at most 8 digits");
-    n.num = v;
-    return Add(n);
-  }
+  if (IsDigit(c) || c == '.') return Number(col);
   if (c == '$') {
     ++pos_;
     size_t start = pos_;

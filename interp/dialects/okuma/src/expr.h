@@ -138,6 +138,9 @@ class ExprParser {
   int32_t LeftAssociative(char c1, NodeOp op1, char c2, NodeOp op2);
   int32_t Unary();
   int32_t Primary();
+  int32_t Number(int col);  // an unsigned constant at pos_ (its first character is a digit or '.')
+  int32_t Simple();
+  int32_t SimpleOperand();
   int32_t Add(Node n);
   void SkipBlanks();
   bool AtOperatorAfterBlanks();

@@ -131,5 +131,30 @@ TEST(OkumaExpr, WordOperatorAfterBlank) {
   }
 }
 
+// The fast path for operands joined by + - * / (ExprParser::Simple) builds the nodes the full descent builds:
+// inside [ ] only the descent runs (col0 0 keeps the columns those of the unbracketed text).
+TEST(OkumaExpr, SimplePathBuildsTheDescentsNodes) {
+  for (std::string e : {"V1+0.001", "V2+100", "V1*2+1", "V1-2-3", "V1/2*3", "V1+2*3", "1.5", "V200",
+                        ".5*V3-7", "12345678", "v12+3", "V1+2.", "V1*V2/V3+V4-5"}) {
+    std::vector<Node> fast, full;
+    ExprParser pf(e, 0, fast);
+    const int32_t rf = pf.Parse();
+    const std::string bracketed = "[" + e + "]";
+    ExprParser pd(bracketed, 0, full, 0);
+    const int32_t rd = pd.Parse();
+    EXPECT_EQ(pf.pos(), e.size()) << e;
+    EXPECT_EQ(rf, rd) << e;
+    ASSERT_EQ(fast.size(), full.size()) << e;
+    for (size_t i = 0; i < fast.size(); ++i) {
+      EXPECT_EQ(fast[i].op, full[i].op) << e << " node " << i;
+      EXPECT_EQ(fast[i].a, full[i].a) << e << " node " << i;
+      EXPECT_EQ(fast[i].b, full[i].b) << e << " node " << i;
+      EXPECT_EQ(fast[i].num, full[i].num) << e << " node " << i;
+      EXPECT_EQ(fast[i].integer, full[i].integer) << e << " node " << i;
+      EXPECT_EQ(fast[i].col, full[i].col) << e << " node " << i;
+    }
+  }
+}
+
 }  // namespace
 }  // namespace cell::interp::okuma

@@ -203,17 +203,18 @@ void OkRun::ReadNcGCodes(const BlockWords& w, NcGCodes& k) {
                        g.code),
            "2224");
     }
-    if (!KnownG(g.code)) {
-      if (const char* what = UnsupportedG(g.code)) {
-        Fail(g.col, fmt::format("G{} ({}) is not supported by the cell's OSP-E100L dialect", g.code, what));
-      }
-      Fail(g.col, fmt::format("G{} is not an OSP-E100L G code", g.code));
-    }
+    // Motion codes (all known) first: most blocks' only G code needs no search of the known codes.
     if (IsMotionG(g.code)) {
       if (k.motion_g >= 0 && k.motion_g != g.code) Fail(g.col, "two motion G codes in one block");
       k.motion_g = g.code;
       k.motion_col = g.col;
       continue;
+    }
+    if (!KnownG(g.code)) {
+      if (const char* what = UnsupportedG(g.code)) {
+        Fail(g.col, fmt::format("G{} ({}) is not supported by the cell's OSP-E100L dialect", g.code, what));
+      }
+      Fail(g.col, fmt::format("G{} is not an OSP-E100L G code", g.code));
     }
     switch (g.code) {
       case 4:
@@ -587,6 +588,9 @@ uint32_t OkRun::UsedAddresses(const NcGCodes& k, int* g) const {
 // A word the block's function does not read (a stray Q5 on a G01 block, K on a G00) is refused, not ignored
 // (judgement 51); the manual prints no alarm number for it.
 void OkRun::RefuseUnusedAddresses(const BlockWords& w, const NcGCodes& k) const {
+  // Every block but G04 and G85-G88 reads X, Z, F, S and T (UsedAddresses): a block of only those (most
+  // blocks) has nothing to refuse.
+  if (!k.dwell && !k.lap && w.ext_has == 0 && (w.has & ~LetterBits("XZFST")) == 0) return;
   int g = 0;
   const uint32_t unused = w.has & ~UsedAddresses(k, &g);
   if (unused == 0 && w.ext_has == 0) return;  // nearly every block: nothing to refuse
@@ -750,6 +754,8 @@ void OkRun::SpindleAndM(const BlockWords& w, bool before_motion) {
   (void)before_motion;
   const auto* g96 = w.FindG(96);
   const auto* g97 = w.FindG(97);
+  // Without S, an extended address (SB=), an M code, G96 or G97 the block leaves both spindles as they are.
+  if (!w.Has('S') && w.ext_has == 0 && w.m.empty() && !g96 && !g97) return;
   const bool g50 = w.HasG(50);
   bool speed_change = false;
   if (w.Has('S')) {

@@ -472,9 +472,12 @@ std::optional<ProgramRef> OkRun::ProgramIn(const std::shared_ptr<const ProgramTe
   while (p.pos < all.end && !found) {
     Line l = ReadLine(all, p);
     release.At(*text, p.pos);
-    std::string_view s = TrimBlanks(l.text);
-    if (s.empty() || (s[0] != 'O' && s[0] != 'o')) continue;
-    if (ProgramNameOf(s) == name) found = ProgramRef{text, p.pos, p.line, own};
+    // Only a line whose first non-blank is O can name a program: tested before trimming, as a program's
+    // first call scans the whole file.
+    size_t k = 0;
+    while (k < l.text.size() && (l.text[k] == ' ' || l.text[k] == '\t')) ++k;
+    if (k == l.text.size() || (l.text[k] != 'O' && l.text[k] != 'o')) continue;
+    if (ProgramNameOf(TrimBlanks(l.text)) == name) found = ProgramRef{text, p.pos, p.line, own};
   }
   release.Done(*text, p.pos);
   return found;

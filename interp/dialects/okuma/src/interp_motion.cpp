@@ -5,6 +5,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 
 #include "interp_internal.h"
@@ -20,6 +21,7 @@ constexpr uint32_t kCBit = 1u << kC;
 
 double OkRun::Offset(int axis) const {
   double o = zero_offset_[static_cast<size_t>(axis)] + zero_shift_[static_cast<size_t>(axis)];
+  if (offset_no_ <= 0) return o;  // no tool offset selected: no table lookup (this runs per axis and move)
   if (axis == kX) o += tools_.OffsetX(offset_no_);
   if (axis == kZ) o += tools_.OffsetZ(offset_no_);
   return o;
@@ -248,6 +250,7 @@ void OkRun::LineMotion(const BlockWords& w, const Block& b, bool rapid, int moti
 void OkRun::CheckLimits(AxisArray& target, int col) {
   // Variable soft limits (ln 739-743): beyond the positive limit the target is the limit; beyond the negative
   // limit there is no motion and an alarm.
+  if ((neg_limit_set_ | pos_limit_set_) == 0) return;  // no limit set (most programs)
   for (int a : {kX, kZ}) {
     const uint32_t bit = 1u << a;
     double& t = target[static_cast<size_t>(a)];
@@ -264,18 +267,19 @@ void OkRun::EmitMove(const AxisArray& target, uint32_t moved, bool rapid, double
                      const AxisArray& travel, uint32_t travel_mask, const CornerSpec* spec) {
   used_ |= moved;
   bool change = travel_mask != 0 || spec != nullptr;
-  for (int a = 0; a < kAxisCount && !change; ++a) {
-    if ((moved & (1u << a)) &&
-        std::fabs(target[static_cast<size_t>(a)] - pos_[static_cast<size_t>(a)]) > 1e-9) {
-      change = true;
-    }
+  const uint32_t axes = moved & ((1u << kAxisCount) - 1);
+  // Only the moved axes are visited (two of nine in a turning block), here and below.
+  for (uint32_t m = axes; m != 0 && !change; m &= m - 1) {
+    const auto a = static_cast<size_t>(std::countr_zero(m));
+    if (std::fabs(target[a] - pos_[a]) > 1e-9) change = true;
   }
   // A block that commands the current position does not move; under nose radius compensation it still counts
   // (a repeated point has a meaning there, ln 2601-2648).
   if (!change && !comp_.on()) return;
   const AxisArray from = pos_;
-  for (int a = 0; a < kAxisCount; ++a) {
-    if (moved & (1u << a)) pos_[static_cast<size_t>(a)] = target[static_cast<size_t>(a)];
+  for (uint32_t m = axes; m != 0; m &= m - 1) {
+    const auto a = static_cast<size_t>(std::countr_zero(m));
+    pos_[a] = target[a];
   }
   if (travel_mask & kCBit) c_net_ += travel[kC];
   if (spec) force_stage_ = true;

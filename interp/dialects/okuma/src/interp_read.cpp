@@ -260,6 +260,7 @@ class Lexer {
       GetPut();
       return true;
     }
+    if (c0 != 'P' && c0 != 'V' && c0 != 'E') return false;  // most blocks: no schedule keyword to try
     for (std::string_view kw : {"PSELECT", "VSET", "END"}) {
       if (c0 == kw[0] && Keyword(kw, kw != "END")) {
         b_.stmt = Stmt::kSchedule;

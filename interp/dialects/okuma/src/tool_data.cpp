@@ -14,7 +14,12 @@ namespace cell::interp::okuma {
 
 const tooltable::ToolEntry* ToolData::Entry(int n) const {
   if (n <= 0) return nullptr;
-  return table_.Find(std::to_string(n));
+  if (n != memo_n_) {
+    const auto* e = table_.Find(std::to_string(n));
+    memo_ = e ? std::optional<tooltable::ToolEntry>(*e) : std::nullopt;
+    memo_n_ = n;
+  }
+  return memo_ ? &*memo_ : nullptr;
 }
 
 double ToolData::OffsetX(int n) const {
@@ -46,6 +51,7 @@ int ToolData::Tip(int n) const {
 }
 
 const tooltable::ToolEntry& ToolData::Set(int n, char what, double v) {
+  memo_n_ = 0;
   std::string key = std::to_string(n);
   if (!table_.Find(key)) {
     tooltable::ToolEntry e;

@@ -11,6 +11,7 @@
 #pragma once
 
 #include <map>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -21,7 +22,10 @@ namespace cell::interp::okuma {
 
 class ToolData {
  public:
-  void Load(const tooltable::ToolTable& t) { table_ = t; }
+  void Load(const tooltable::ToolTable& t) {
+    table_ = t;
+    memo_n_ = 0;
+  }
   const tooltable::ToolTable& table() const { return table_; }
 
   double OffsetX(int n) const;  // diameter
@@ -39,6 +43,10 @@ class ToolData {
  private:
   const tooltable::ToolEntry* Entry(int n) const;
   tooltable::ToolTable table_;
+  // The offset in force is looked up for every axis conversion of every move: the last entry looked up is
+  // kept as a copy, not found included (Load and Set forget it).
+  mutable int memo_n_ = 0;
+  mutable std::optional<tooltable::ToolEntry> memo_;
   std::map<int, std::pair<double, double>> nose_xz_;  // VNSRX / VNSRZ as written in this run
 };
 
