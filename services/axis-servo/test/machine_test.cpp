@@ -25,6 +25,7 @@ using testing::LimitChecker;
 using testing::Line;
 using testing::Rapid;
 using testing::RunChecked;
+using testing::SpindleOn;
 
 Machine Kt(ClockKind clock = ClockKind::kVirtual) {
   return Machine(DefaultMachineConfig("hmc"), clock);
@@ -348,11 +349,7 @@ TEST(Devices, ToArrivalBringsTheMachineBackToItsPowerUpState) {
     t.id = id;
     t.kind = SegmentKind::kToolChange;
     t.tool = "1002";
-    Segment on;
-    on.id = id + 1;
-    on.kind = SegmentKind::kSpindle;
-    on.spindle_rpm = 2000;
-    on.spindle_dir = SpindleDirection::kCW;
+    Segment on = SpindleOn(id + 1, 2000);
     Segment cool;
     cool.id = id + 2;
     cool.kind = SegmentKind::kCoolant;
@@ -392,11 +389,7 @@ TEST(Devices, CuttingTimeCountsFeedMovesWithTheSpindleTurning) {
   t.kind = SegmentKind::kToolChange;
   t.tool = "1001";
   m.Push(t);
-  Segment on;
-  on.id = 2;
-  on.kind = SegmentKind::kSpindle;
-  on.spindle_rpm = 1000;
-  on.spindle_dir = SpindleDirection::kCW;
+  Segment on = SpindleOn(2, 1000);
   m.Push(on);
   m.Push(Rapid(3, 0, 0, 100));
   m.Push(Line(4, 100, 0, 100, 600, true));  // 100 mm at 600 mm/min: 10 s and the ramps
@@ -460,11 +453,7 @@ TEST(Devices, G38ToolCheckFindsTheBrokenToolsOfTheModel) {
 TEST(Devices, SpindleCoolantPalletTimes) {
   Machine m = Kt();
   m.SetPallets(3, 7);
-  Segment s;
-  s.id = 1;
-  s.kind = SegmentKind::kSpindle;
-  s.spindle_rpm = 2000;
-  s.spindle_dir = SpindleDirection::kCW;
+  Segment s = SpindleOn(1, 2000);
   m.Push(s);
   Segment c;
   c.id = 2;
@@ -654,11 +643,7 @@ TEST(Servo, AMachineWithUMovesXYZAsOneWithout) {
 TEST(Servo, TheUHeadCutsATaperThreadAndArcsInTheZUPlane) {
   Machine m(UHead(), ClockKind::kVirtual);
   m.Push(UMove(1, SegmentKind::kRapid, 60, 5));
-  Segment sp;
-  sp.id = 2;
-  sp.kind = SegmentKind::kSpindle;
-  sp.spindle_rpm = 300;
-  sp.spindle_dir = SpindleDirection::kCW;
+  Segment sp = SpindleOn(2, 300);
   m.Push(sp);
   m.RunUntilIdle();
   ASSERT_EQ(m.alarm().code, AlarmCode::kNone) << m.alarm().text;

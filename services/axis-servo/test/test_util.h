@@ -29,6 +29,16 @@ inline Segment Rapid(std::uint64_t id, double x, double y, double z) {
   return s;
 }
 
+// The spindle on, clockwise, at `rpm`.
+inline Segment SpindleOn(std::uint64_t id, double rpm) {
+  Segment s;
+  s.id = id;
+  s.kind = SegmentKind::kSpindle;
+  s.spindle_rpm = rpm;
+  s.spindle_dir = SpindleDirection::kCW;
+  return s;
+}
+
 inline Segment Arc(std::uint64_t id, double x, double y, double z, double cx, double cy, bool ccw,
                    double feed, std::uint32_t turns = 0) {
   Segment s = Line(id, x, y, z, feed);
