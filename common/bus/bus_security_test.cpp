@@ -83,17 +83,25 @@ cell::MotionSegment Segment(uint64_t seq) {
   return s;
 }
 
-class BusSecurity : public ::testing::TestWithParam<std::string> {
- public:
-  static void SetUpTestSuite() {
+// Both PKIs, made once for every suite of the run and removed when it ends (a peer process makes none).
+void EnsurePki() {
+  if (g_pki.empty()) {
     g_pki = MakePki("cell");
     g_foreign = MakePki("foreign");
   }
-  static void TearDownTestSuite() {
+}
+struct RemovePki : ::testing::Environment {
+  void TearDown() override {
     std::error_code ec;
-    fs::remove_all(g_pki.parent_path(), ec);
-    fs::remove_all(g_foreign.parent_path(), ec);
+    if (!g_pki.empty()) fs::remove_all(g_pki.parent_path(), ec);
+    if (!g_foreign.empty()) fs::remove_all(g_foreign.parent_path(), ec);
   }
+};
+[[maybe_unused]] const auto* const kRemovePki = ::testing::AddGlobalTestEnvironment(new RemovePki);
+
+class BusSecurity : public ::testing::TestWithParam<std::string> {
+ public:
+  static void SetUpTestSuite() { EnsurePki(); }
   void TearDown() override { unsetenv("CELL_SECURITY"); }
   const std::string& vendor() const { return GetParam(); }
 };
@@ -543,12 +551,7 @@ class Peer {
 
 class BusSecurityCyclone : public ::testing::Test {
  protected:
-  static void SetUpTestSuite() {
-    if (g_pki.empty()) {
-      g_pki = MakePki("cell");
-      g_foreign = MakePki("foreign");
-    }
-  }
+  static void SetUpTestSuite() { EnsurePki(); }
 };
 
 TEST_F(BusSecurityCyclone, OwnStationsSegmentsFlowAndNobodyElseSeesThem) {

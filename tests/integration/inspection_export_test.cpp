@@ -22,7 +22,7 @@ namespace {
 class InspectExport : public ::testing::Test {
  protected:
   void SetUp() override {
-    data_ = MakeTempDir("cell-inspect-export-");
+    data_ = tmp_.path();
     writer_ = std::make_unique<Process>(std::vector<std::string>{BinDir() + "/cell-inspection-writer"},
                                         std::map<std::string, std::string>{{"CELL_DATA_DIR", data_}},
                                         data_ + "/writer.out", data_ + "/writer.err");
@@ -43,6 +43,7 @@ class InspectExport : public ::testing::Test {
     auto rep = c.Call(r, cell::bus::Millis(15000));
     cell::bus::ThrowIfError(rep);
   }
+  ScopedTempDir tmp_{"cell-inspect-export-"};  // declared first: removed after the writer has stopped
   std::string data_;
   std::unique_ptr<Process> writer_;
 };

@@ -9,7 +9,8 @@
 using namespace cell::testing;
 
 TEST(Interop, FastDdsAndCycloneExchangeEveryTopicType) {
-  std::string dir = MakeTempDir("cell-interop-");
+  ScopedTempDir tmp("cell-interop-");
+  const std::string& dir = tmp.path();
   std::string peer = std::string(CELL_INTEROP_PEER);
   Process fast({peer, "fastdds"}, {}, dir + "/fast.out", dir + "/fast.err");
   Process cyc({peer, "cyclonedds"}, {}, dir + "/cyc.out", dir + "/cyc.err");

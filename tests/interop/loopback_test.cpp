@@ -22,7 +22,8 @@ TEST(Loopback, NoDdsPacketLeavesLoopbackByDefault) {
   VethNamespaces ns("lo", 1, true);  // veth end 0 in the namespace: addressed, multicast, a 224/4 route
   if (!ns.ok()) GTEST_SKIP() << "no private network namespace with a veth pair here: " << ns.why();
   std::string peer = CELL_INTEROP_PEER;
-  std::string dir = MakeTempDir("cell-lo-");
+  ScopedTempDir tmp("cell-lo-");
+  const std::string& dir = tmp.path();
   long before = ns.Counter(0, "tx_packets");
   ASSERT_GE(before, 0);
   Process fast(ns.In(0, {peer, "fastdds"}), {}, dir + "/f.out", dir + "/f.err");

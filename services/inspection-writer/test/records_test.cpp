@@ -3,6 +3,9 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <filesystem>
+#include <vector>
+
 #include <gtest/gtest.h>
 
 #include "cell/error/error.h"
@@ -11,9 +14,22 @@ namespace fs = std::filesystem;
 using cell::inspection::Records;
 
 namespace {
+// Each test's directory, removed when the run ends (a forked writer ends by SIGKILL and removes nothing).
+std::vector<fs::path>& Made() {
+  static std::vector<fs::path> made;
+  return made;
+}
+struct RemoveMade : ::testing::Environment {
+  void TearDown() override {
+    std::error_code ec;
+    for (auto& d : Made()) fs::remove_all(d, ec);
+  }
+};
+[[maybe_unused]] const auto* const kRemoveMade = ::testing::AddGlobalTestEnvironment(new RemoveMade);
+
 fs::path TempDir() {
   std::string t = "/tmp/cell-records-XXXXXX";
-  return mkdtemp(t.data());
+  return Made().emplace_back(mkdtemp(t.data()));
 }
 nlohmann::json RunRecord(long id) {
   return {{"station", "KT01"},

@@ -50,6 +50,18 @@ std::string ReadFile(const std::string& path);
 std::vector<std::string> ProcessArgv(int pid);
 std::map<std::string, std::string> ProcessEnvironment(int pid);
 std::string MakeTempDir(const std::string& prefix);
+// MakeTempDir's directory, removed with what is in it when the object goes: a passing run leaves nothing.
+class ScopedTempDir {
+ public:
+  explicit ScopedTempDir(const std::string& prefix) : path_(MakeTempDir(prefix)) {}
+  ~ScopedTempDir();
+  ScopedTempDir(const ScopedTempDir&) = delete;
+  ScopedTempDir& operator=(const ScopedTempDir&) = delete;
+  const std::string& path() const { return path_; }
+
+ private:
+  std::string path_;
+};
 std::string BinDir();     // CELL_BIN_DIR (set by CTest)
 std::string SourceDir();  // CELL_SOURCE_DIR
 
