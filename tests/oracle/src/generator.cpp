@@ -179,7 +179,7 @@ bool Gen::Arc(Block& b) {
 bool Gen::Cycle(Block& b) {
   const std::vector<int>& codes = cur.per_rev ? caps.cycles_per_rev : caps.cycles;
   if (codes.empty() || cur.inverse || cur.plane != 17 || cur.swapped || cur.incremental || need_abs ||
-      !rng.Chance(6))
+      !rng.Chance(12))
     return false;
   b.kind = MoveKind::kCycle;
   b.cycle = rng.Pick(codes);
@@ -188,6 +188,33 @@ bool Gen::Cycle(Block& b) {
   Vec3 deep = b.start;
   deep[2] = b.bottom;
   if (!Inside(deep)) return false;
+  b.feed = Feed();
+  if (const Caps::Peck* p = PeckOf(b, caps)) {
+    // rs274 prints four decimals of an inch: the pecks that go back stay on the unit's grid in inch
+    // (Balt-System's 1 mm re-approach is not on it; KT-APL's 0.1 in is), pecks reduced by K only in mm.
+    double c = p->clearance / Unit();
+    b.discharge = p->discharging && std::fabs(Snap(c) - c) < 1e-9 && (!p->feeding_on || rng.Chance(50));
+    if (!b.discharge && !p->feeding_on) return false;
+    // A peck longer than the re-approach, or the cycle never gets deeper (Balt-System FILMS4 13, call 4).
+    double least = b.discharge && p->from_clearance ? c + Snap(0.5 / Unit()) : Snap(0.5 / Unit());
+    b.peck = std::max(least, Snap(rng.Int(5, 100) / 10.0 / Unit()));
+    if (b.discharge && p->reduce && !cur.inch && rng.Chance(50)) {
+      b.peck_k = rng.Int(50, 95) / 100.0;
+      b.peck_j = std::min(b.peck, std::max(least, Snap(rng.Int(5, 60) / 10.0 / Unit())));
+    } else if (b.discharge && p->reduce) {
+      b.peck_k = 1;  // a constant peck: K1 without J (ln 3402)
+    }
+  }
+  if (b.cycle == 84) {
+    b.tap_pitch = caps.tap_pitch && !cur.per_rev && rng.Chance(50);
+    if (b.tap_pitch) {  // F = K x S (S1000): a pitch of the unit's grid
+      static const std::vector<double> mm{0.5, 0.7, 0.75, 0.8, 1, 1.25, 1.5, 1.75, 2};
+      static const std::vector<double> in{0.025, 0.04, 0.05, 0.0625, 0.1};
+      b.feed = (cur.inch ? rng.Pick(in) : rng.Pick(mm)) * 1000;
+    } else if (caps.tap_max_feed > 0 && !cur.per_rev) {
+      b.feed = std::min(b.feed, std::floor(caps.tap_max_feed / Unit() * 10) / 10);
+    }
+  }
   int n = rng.Int(1, 4);
   for (int i = 0; i < n; ++i) {
     Vec3 p = RandomPoint();
@@ -280,7 +307,7 @@ Block Gen::Next() {
     if (caps.lathe) b.end[1] = 0;
     need_abs = false;
   }
-  if (b.kind != MoveKind::kRapid) b.feed = Feed();
+  if (b.kind != MoveKind::kRapid && b.kind != MoveKind::kCycle) b.feed = Feed();
   if (caps.rotary_whole_feed && RotaryAlone(b) && b.kind != MoveKind::kRapid)
     b.feed = std::max(1.0, std::round(b.feed));  // F3.0 deg/min
   if (rng.Chance(40)) b.omit = static_cast<unsigned>(rng.Next() & 63);
@@ -303,6 +330,30 @@ std::array<int, 3> AxesOf(const Modes& m) {
   if (m.plane == 19) a = {1, 2, 0};
   if (m.swapped) std::swap(a[0], a[1]);
   return a;
+}
+
+const Caps::Peck* PeckOf(const Block& b, const Caps& caps) {
+  if (b.kind != MoveKind::kCycle) return nullptr;
+  for (const Caps::Peck& p : caps.pecks)
+    if (p.code == b.cycle) return &p;
+  return nullptr;
+}
+
+std::vector<double> PeckBottoms(const Block& b, const Caps::Peck& p) {
+  const double c = p.clearance / (b.m.inch ? kMm : 1.0);
+  const double tie = 1e-9;  // a peck that ends on the bottom is the last (the manuals' "<=")
+  std::vector<double> out;
+  double last = b.r_level, peck = b.peck;
+  while (out.size() < 100000) {
+    double next = last - peck;
+    if (b.discharge && p.from_clearance && !out.empty()) next += c;
+    if (next <= b.bottom + tie) break;
+    out.push_back(next);
+    last = next;
+    if (b.discharge && b.peck_k > 0) peck = std::max(peck * b.peck_k, b.peck_j);
+  }
+  out.push_back(b.bottom);
+  return out;
 }
 
 bool RotaryAlone(const Block& b) {
@@ -373,6 +424,30 @@ std::string NgcMove(const Block& b, const Caps& caps) {
       if (!(caps.lathe && i == 1)) word(letters[i], caps.lathe && i == 0 ? 2 * b.end[i] : b.end[i]);
     return s;
   }
+  if (const Caps::Peck* p = PeckOf(b, caps)) {
+    // The manual's pecks as moves (the dwells between them are not compared): to the hole at the present
+    // height, down to R, each peck (after a discharge: up to R, down to the clearance above the last bottom),
+    // back to R.
+    const double c = p->clearance / (b.m.inch ? kMm : 1.0);
+    const std::string f = " F" + Num(b.feed, d);
+    const std::vector<double> bottoms = PeckBottoms(b, *p);
+    for (const auto& h : b.holes) {
+      s += "G0 X" + Num(h[0], d) + " Y" + Num(h[1], d) + "\nG0 Z" + Num(b.r_level, d) + "\n";
+      for (std::size_t n = 0; n < bottoms.size(); ++n) {
+        if (n > 0 && b.discharge) {
+          s += "G0 Z" + Num(b.r_level, d) + "\n";
+          std::string to = " Z" + Num(bottoms[n - 1] + c, d);
+          s += p->approach_feed > 0
+                   ? "G1" + to + " F" + Num(p->approach_feed / (b.m.inch ? kMm : 1.0), d) + "\n"
+                   : "G0" + to + "\n";
+        }
+        s += "G1 Z" + Num(bottoms[n], d) + f + "\n";
+      }
+      s += "G0 Z" + Num(b.r_level, d) + "\n";
+    }
+    s.pop_back();
+    return s;
+  }
   if (b.kind == MoveKind::kCycle) {
     s = "G99 G" + std::to_string(b.cycle);
     for (std::size_t h = 0; h < b.holes.size(); ++h) {
@@ -380,13 +455,16 @@ std::string NgcMove(const Block& b, const Caps& caps) {
       if (h == 0) {
         s += " Z" + Num(b.bottom, d) + " R" + Num(b.r_level, d) + " F" + Num(b.feed, d);
         if (b.cycle == 82 || b.cycle == 86 || b.cycle == 89) s += " P1";  // rs274 asks P of G86 too
+        // G84: LinuxCNC feeds in, reverses the spindle and feeds out to R at F (the manuals' G84).
       }
       s += "\n";
     }
     return s + "G80";
   }
   for (int i = 0; i < 3; ++i) {
-    if (caps.lathe && i == 1) continue;
+    // A rotary move alone names no linear axis: after a G92 rs274's position may be 1e-15 off the word and
+    // would take F for a linear rate (in inch, 25.4 times the deg/min).
+    if ((caps.lathe && i == 1) || RotaryAlone(b)) continue;
     double v = b.m.incremental ? b.end[i] - b.start[i] : b.end[i];
     word(letters[i], caps.lathe && i == 0 ? 2 * v : v);
   }

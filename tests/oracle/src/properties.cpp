@@ -59,7 +59,8 @@ std::vector<Block> InchToMm(std::vector<Block> blocks, const Caps& caps, bool (*
   };
   for (std::size_t i = 0; i < blocks.size(); ++i) {
     Block& b = blocks[i];
-    if (!b.m.inch || !convert(i)) continue;
+    // A peck cycle stays in inch: its pecks rounded to the mm grid would add up to another hole.
+    if (!b.m.inch || !convert(i) || b.peck > 0) continue;
     b.m.inch = false;
     vec(b.start), vec(b.end), vec(b.center);
     b.radius = mm(b.radius), b.pitch = mm(b.pitch);

@@ -42,10 +42,16 @@ struct Block {
   int turns = 0;       // helix: extra full turns
   double pitch = 0;    // helix: travel of the third axis per turn (Balt K), 0 without turns
   double feed = 0;     // unit/min or unit/rev
-  int cycle = 0;       // kCycle: 81 82 85 86 89 at each of `holes` (x y), from the R plane to `bottom`
+  int cycle = 0;       // kCycle: 81-89 at each of `holes` (x y), from the R plane to `bottom`
   double r_level = 0;  // kCycle: the R plane; the tool returns there after each hole (G99)
   double bottom = 0;
   std::vector<std::array<double, 2>> holes;
+  // kCycle, a peck cycle (Caps::pecks): the peck (Balt-System I, KT-APL E), its reduction factor K (0: none)
+  // and least peck J (0: none), and whether the tool goes back to R between pecks (Balt-System with K, KT-APL
+  // G87) or feeds on (Balt-System I alone, KT-APL G83).
+  double peck = 0, peck_k = 0, peck_j = 0;
+  bool discharge = false;
+  bool tap_pitch = false;  // kCycle G84: the dialect states the pitch, F / S (Balt-System K, S1000), not F
   unsigned omit =
       0;  // words a module may leave out where they change nothing: bits 0-2 axis x y z, 3-5 centre
 };
@@ -78,7 +84,24 @@ struct Caps {
   bool rotary_vector_feed = false;
   std::vector<int> cycles;          // drilling cycles against LinuxCNC's G81-G89 (G17, G90, G99 retract)
   std::vector<int> cycles_per_rev;  // those allowed in feed per revolution
-  bool radius_form = true;          // arcs by R
+  // A peck drilling cycle whose re-approach no LinuxCNC cycle makes (its G83 comes back down by rapid to
+  // 0.254 mm above the last bottom, its G73 backs off 0.254 mm): the NGC twin states its moves as G0/G1
+  // (PeckBottoms).
+  struct Peck {
+    int code = 83;
+    bool feeding_on = false;   // the variant that feeds peck after peck (a dwell between, not compared)
+    bool discharging = false;  // the variant that goes back to R after each peck, then down to `clearance`
+    double clearance = 0;      // mm above the last bottom the re-approach ends
+    double approach_feed = 0;  // mm/min of the re-approach (0: a rapid)
+    // The peck after a re-approach feeds `peck` from there (Balt-System "R1 = R1 + I - 1": I - 1 of new
+    // depth); else it goes `peck` below the last bottom.
+    bool from_clearance = false;
+    bool reduce = false;  // K and J: the peck shrinks by K each time down to J
+  };
+  std::vector<Peck> pecks;
+  bool tap_pitch = false;                 // G84 may state the pitch instead of F (F = pitch x S)
+  double tap_max_feed = 0;                // mm/min: G84's highest feed (0: none)
+  bool radius_form = true;                // arcs by R
   bool radius_form_g17_absolute = false;  // R only in G90 G17 (KT-APL)
   bool helix = true;                      // the plane's third axis may move along an arc
   bool helix_turns = false;               // multi-turn helices (and how the dialect writes them)
@@ -140,6 +163,11 @@ bool OmitCentre(const Block& b, int axis);
 
 const Module* FindModule(const std::string& name);
 std::vector<std::string> ModuleNames();  // in priority order: balt ktapl emco okuma
+
+// A cycle block's peck rule (none: not a peck cycle), and the bottoms its pecks feed to at one hole, from
+// its R plane down to its bottom (program units): a peck that would reach the bottom or pass it ends there.
+const Caps::Peck* PeckOf(const Block& b, const Caps& caps);
+std::vector<double> PeckBottoms(const Block& b, const Caps::Peck& p);
 
 // The random block list for a dialect's capabilities (deterministic for a seed).
 std::vector<Block> Generate(const Caps& caps, std::uint64_t seed, int count);
