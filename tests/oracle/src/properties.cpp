@@ -59,12 +59,12 @@ std::vector<Block> InchToMm(std::vector<Block> blocks, const Caps& caps, bool (*
   };
   for (std::size_t i = 0; i < blocks.size(); ++i) {
     Block& b = blocks[i];
-    // A peck cycle stays in inch: its pecks rounded to the mm grid would add up to another hole.
-    if (!b.m.inch || !convert(i) || b.peck > 0) continue;
+    if (!b.m.inch || !convert(i)) continue;
     b.m.inch = false;
     vec(b.start), vec(b.end), vec(b.center);
     b.radius = mm(b.radius), b.pitch = mm(b.pitch);
     b.r_level = mm(b.r_level), b.bottom = mm(b.bottom);
+    b.peck = mm(b.peck), b.peck_j = mm(b.peck_j), b.backoff = mm(b.backoff);
     for (auto& h : b.holes) h = {mm(h[0]), mm(h[1])};
     // 0.5 in/min is 12.7 mm/min; 0.01 in/rev 0.254 mm/rev: exact on the mm feed grids (ConvertibleFeeds).
     // A rotary move alone is fed in deg/min in either unit (Balt-System judgement call 21).

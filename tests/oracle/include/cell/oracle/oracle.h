@@ -51,6 +51,7 @@ struct Block {
   // G87) or feeds on (Balt-System I alone, KT-APL G83).
   double peck = 0, peck_k = 0, peck_j = 0;
   bool discharge = false;
+  double backoff = 0;  // kCycle: the feeding-on variant's back-off between pecks (Caps::Peck), program units
   bool tap_pitch = false;  // kCycle G84: the dialect states the pitch, F / S (Balt-System K, S1000), not F
   unsigned omit =
       0;  // words a module may leave out where they change nothing: bits 0-2 axis x y z, 3-5 centre
@@ -82,7 +83,9 @@ struct Caps {
   // G94 F of a rotary+linear move is the rate along the vector of the travels in mm and degrees; the NGC
   // twin states the rate along X Y Z that follows from it (Balt-System ln 3961-3976).
   bool rotary_vector_feed = false;
-  std::vector<int> cycles;          // drilling cycles against LinuxCNC's G81-G89 (G17, G90, G99 retract)
+  // Drilling cycles against LinuxCNC's G81-G89 (G17, G90, G99 retract); on a lathe one hole on the spindle
+  // axis from where the tool is, after a rapid to X0 (LinuxCNC: G17 for the cycle, R there).
+  std::vector<int> cycles;
   std::vector<int> cycles_per_rev;  // those allowed in feed per revolution
   // A peck drilling cycle whose re-approach no LinuxCNC cycle makes (its G83 comes back down by rapid to
   // 0.254 mm above the last bottom, its G73 backs off 0.254 mm): the NGC twin states its moves as G0/G1
@@ -96,7 +99,15 @@ struct Caps {
     // The peck after a re-approach feeds `peck` from there (Balt-System "R1 = R1 + I - 1": I - 1 of new
     // depth); else it goes `peck` below the last bottom.
     bool from_clearance = false;
-    bool reduce = false;  // K and J: the peck shrinks by K each time down to J
+    bool reduce = false;      // K and J: the peck shrinks by K each time down to J
+    double clearance_in = 0;  // inch programs: the clearance in inch (0: `clearance` / 25.4)
+    // The feeding-on variant backs off by rapid between pecks (Block::backoff; LinuxCNC's G73 by 0.254 mm,
+    // 0.010 in): by this much (mm, inch; EMCO G87's S02) or by a word of the block (Okuma G74 DA=).
+    double backoff = 0, backoff_in = 0;
+    bool backoff_word = false;
+    // Pecks of equal depth, the fewest of at most `peck` (EMCO G87/G88 D3 without D5, ln 4724-4761).
+    bool equal = false;
+    int native = 0;  // the LinuxCNC cycle that makes the same moves where the back-off is its own (G73)
   };
   std::vector<Peck> pecks;
   bool tap_pitch = false;                 // G84 may state the pitch instead of F (F = pitch x S)
