@@ -219,7 +219,7 @@ bool Gen::Cycle(Block& b) {
   deep[2] = b.bottom;
   if (!Inside(deep)) return false;
   b.feed = Feed();
-  if (p && !p->equal) {
+  if (p && !p->equal && p->slow_end == 0) {
     b.peck = std::max(least, Snap(rng.Int(5, 100) / 10.0 / Unit()));
     if (b.discharge && p->reduce && !cur.inch && rng.Chance(50)) {
       b.peck_k = rng.Int(50, 95) / 100.0;
@@ -378,6 +378,7 @@ std::vector<double> PeckBottoms(const Block& b, const Caps::Peck& p) {
   const double c = Clearance(b, p);
   const double tie = 1e-9;  // a peck that ends on the bottom is the last (the manuals' "<=")
   std::vector<double> out;
+  if (p.slow_end > 0) return {b.bottom + (b.m.inch ? p.slow_end_in : p.slow_end), b.bottom};
   if (p.equal) {
     const double depth = b.r_level - b.bottom;
     const int n = static_cast<int>(std::ceil(depth / b.peck - tie));
@@ -491,7 +492,9 @@ std::string NgcMove(const Block& b, const Caps& caps) {
                    ? "G1" + to + " F" + Num(p->approach_feed / (b.m.inch ? kMm : 1.0), d) + "\n"
                    : "G0" + to + "\n";
         }
-        s += "G1 Z" + Num(bottoms[n], d) + f + "\n";
+        bool slow = p->slow_end > 0 && n + 1 == bottoms.size();
+        s += "G1 Z" + Num(bottoms[n], d) + (slow ? " F" + Num(p->slow_feed / (b.m.inch ? kMm : 1.0), d) : f) +
+             "\n";
       }
       s += "G0 Z" + Num(b.r_level, d) + "\n";
     }

@@ -20,19 +20,22 @@ class Ktapl final : public Module {
     c.radius_form_g17_absolute = true;
     c.full_circle = true;
     // App. D's G82 (ln 11596) feeds to 0.01 in (0.254 mm) above the bottom, then at F.5 (F12.7) with S100
-    // to it: not LinuxCNC's G82, so not compared.
-    c.cycles = {81, 83, 84, 85, 86, 87, 89};
+    // to it, dwells 2 s: not LinuxCNC's G82, stated as its moves.
+    c.cycles = {81, 82, 83, 84, 85, 86, 87, 89};
     // G83 (App. D, ln 1947-1996) feeds on by E, dwelling between (LinuxCNC's G73 backs off 0.254 mm); G87
     // (ln 2099-2150) goes back to R after each E, feeds at 100 in/min (2540 mm/min) to 0.1 in (2.54 mm) above
     // the last bottom and E below it (LinuxCNC's G83 rapids to 0.254 mm above). G84 (ln 1998-2051) is
     // LinuxCNC's, its feed at most 32 in/min (812.8 mm/min).
-    Caps::Peck g83, g87;
+    Caps::Peck g82, g83, g87;
+    g82.code = 82;
+    g82.feeding_on = true;
+    g82.slow_end = 0.254, g82.slow_end_in = 0.01, g82.slow_feed = 12.7;
     g83.feeding_on = true;
     g87.code = 87;
     g87.discharging = true;
     g87.clearance = 2.54;
     g87.approach_feed = 2540;
-    c.pecks = {g83, g87};
+    c.pecks = {g82, g83, g87};
     c.tap_max_feed = 812.8;
     c.per_rev = false;  // G93 inverse time and G94 only
     c.inverse_time = true;

@@ -108,6 +108,8 @@ struct Caps {
     // Pecks of equal depth, the fewest of at most `peck` (EMCO G87/G88 D3 without D5, ln 4724-4761).
     bool equal = false;
     int native = 0;  // the LinuxCNC cycle that makes the same moves where the back-off is its own (G73)
+    // No pecks: a feed to this far (mm, inch) above the bottom, the rest at `slow_feed` mm/min (KT-APL G82).
+    double slow_end = 0, slow_end_in = 0, slow_feed = 0;
   };
   std::vector<Peck> pecks;
   bool tap_pitch = false;                 // G84 may state the pitch instead of F (F = pitch x S)
