@@ -227,8 +227,8 @@ bool Gen::Cycle(Block& b) {
     } else if (b.discharge && p->reduce) {
       b.peck_k = 1;  // a constant peck: K1 without J (ln 3402)
     }
-    // LinuxCNC's G73 steps its depth by Q in floating point: on a bottom that is a whole number of pecks
-    // down it may peck once more, 1e-14 short of it. Such a hole is drilled a step deeper.
+    // LinuxCNC's G73 steps its depth by Q in floating point: at a bottom a whole number of pecks down it
+    // pecked once more (a back-off and a feed at the bottom). Such a hole is drilled a grid step deeper.
     double n = (b.r_level - b.bottom) / b.peck;
     if (p->native && std::fabs(n - std::round(n)) < 1e-6) b.bottom -= Grid();
   }
@@ -516,8 +516,8 @@ std::string NgcMove(const Block& b, const Caps& caps) {
     return s + (caps.lathe ? "G80\nG18" : "G80");
   }
   for (int i = 0; i < 3; ++i) {
-    // A rotary move alone names no linear axis: after a G92 rs274's position may be 1e-15 off the word and
-    // would take F for a linear rate (in inch, 25.4 times the deg/min).
+    // A rotary move alone names no linear axis: after a G92 rs274's position may be off the word (1e-15 mm,
+    // or its 1e-4 in rounding) and it would take F for a linear rate (in inch, 25.4 times the deg/min).
     if ((caps.lathe && i == 1) || RotaryAlone(b)) continue;
     double v = b.m.incremental ? b.end[i] - b.start[i] : b.end[i];
     word(letters[i], caps.lathe && i == 0 ? 2 * v : v);

@@ -42,7 +42,7 @@ struct Block {
   int turns = 0;       // helix: extra full turns
   double pitch = 0;    // helix: travel of the third axis per turn (Balt K), 0 without turns
   double feed = 0;     // unit/min or unit/rev
-  int cycle = 0;       // kCycle: 81-89 at each of `holes` (x y), from the R plane to `bottom`
+  int cycle = 0;       // kCycle: the dialect's code at each of `holes` (x y), from the R plane to `bottom`
   double r_level = 0;  // kCycle: the R plane; the tool returns there after each hole (G99)
   double bottom = 0;
   std::vector<std::array<double, 2>> holes;
@@ -87,9 +87,9 @@ struct Caps {
   // axis from where the tool is, after a rapid to X0 (LinuxCNC: G17 for the cycle, R there).
   std::vector<int> cycles;
   std::vector<int> cycles_per_rev;  // those allowed in feed per revolution
-  // A peck drilling cycle whose re-approach no LinuxCNC cycle makes (its G83 comes back down by rapid to
-  // 0.254 mm above the last bottom, its G73 backs off 0.254 mm): the NGC twin states its moves as G0/G1
-  // (PeckBottoms).
+  // A drilling cycle whose moves no LinuxCNC cycle makes from the same words, a peck cycle above all (its G83
+  // comes back down by rapid to 0.254 mm above the last bottom, its G73 backs off 0.254 mm): the NGC twin
+  // states its moves as G0/G1 (PeckBottoms), or `native` where that cycle makes them.
   struct Peck {
     int code = 83;
     bool feeding_on = false;   // the variant that feeds peck after peck (a dwell between, not compared)
