@@ -87,6 +87,14 @@ Case Units(const Module& mod, std::uint64_t seed, int count) {
     return c;
   }
   c.caps.inch = true, c.caps.inch_only = true, c.caps.inch_decimals = 2, c.caps.mm_decimals = 3;
+  // A peck cycle whose back-off or clearance is another length in inch (EMCO's S02 counts the unit: 0.5 mm,
+  // 0.05 in) makes other moves in the other unit: not drawn here.
+  for (const Caps::Peck& p : c.caps.pecks) {
+    auto other = [](double mm, double in) { return in > 0 && std::fabs(in * 25.4 - mm) > 1e-9; };
+    if (!other(p.backoff, p.backoff_in) && !other(p.clearance, p.clearance_in)) continue;
+    for (auto* codes : {&c.caps.cycles, &c.caps.cycles_per_rev})
+      codes->erase(std::remove(codes->begin(), codes->end(), p.code), codes->end());
+  }
   auto inch = ExactArcs(ConvertibleFeeds(Generate(c.caps, seed, count), c.caps), 2);
   auto mm = InchToMm(inch, c.caps, Every);
   for (const auto& f : plan.inch_forms) c.variants.push_back({"inch " + f, inch, f});

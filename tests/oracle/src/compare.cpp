@@ -172,9 +172,12 @@ std::vector<Move> ParseRs274(const std::string& canon, bool lathe, std::string* 
       if (a.size() >= 6) m.rot = {a[3], a[4], a[5]};
       for (int i = 0; i < 3; ++i) m.travel[i] = m.rot[i] - st.last_rot[i];
       st.last_rot = m.rot;
-      // Within 1e-6 mm: after a G92 the same point comes back through other offsets.
-      bool rotary_only = std::fabs(m.end[0] - st.last[0]) < 1e-6 && std::fabs(m.end[1] - st.last[1]) < 1e-6 &&
-                         std::fabs(m.end[2] - st.last[2]) < 1e-6;
+      // After a G92 the same point comes back through other offsets: within 1e-6 mm, in inch within 1.5e-4 in
+      // (rs274 prints the point and the offsets to 1e-4 in, so it may come back a step off; a generated
+      // linear step is 0.0039 in at least).
+      const double same = st.unit > 1 ? 1.5e-4 * st.unit : 1e-6;
+      bool rotary_only = std::fabs(m.end[0] - st.last[0]) < same && std::fabs(m.end[1] - st.last[1]) < same &&
+                         std::fabs(m.end[2] - st.last[2]) < same;
       st.last = m.end;
       m.feed = rotary_only ? st.feed_raw : st.feed, m.per_rev = st.per_rev;
       m.floor = 0.1 * st.unit;  // LinuxCNC raises an inverse-time rate to 0.1 unit/min at least

@@ -175,23 +175,76 @@ bool Gen::Arc(Block& b) {
   return false;
 }
 
-// A drilling cycle at one to four holes: R below the start (no preliminary move), the bottom below R.
+// A drilling cycle at one to four holes: R below the start (no preliminary move), the bottom below R. On a
+// lathe one hole on the centre line, R where the tool is.
 bool Gen::Cycle(Block& b) {
   const std::vector<int>& codes = cur.per_rev ? caps.cycles_per_rev : caps.cycles;
-  if (codes.empty() || cur.inverse || cur.plane != 17 || cur.swapped || cur.incremental || need_abs ||
-      !rng.Chance(6))
-    return false;
+  bool plane = caps.lathe || (cur.plane == 17 && !cur.swapped);
+  if (codes.empty() || cur.inverse || !plane || cur.incremental || need_abs || !rng.Chance(12)) return false;
   b.kind = MoveKind::kCycle;
   b.cycle = rng.Pick(codes);
-  b.r_level = b.start[2] - Snap(rng.Int(0, 50) / 10.0 / Unit());
-  b.bottom = b.r_level - Snap(rng.Int(10, 200) / 10.0 / Unit());
+  const Caps::Peck* p = PeckOf(b, caps);
+  // rs274 prints four decimals of an inch: the pecks that go back stay on the unit's grid in inch
+  // (Balt-System's 1 mm re-approach is not on it; KT-APL's 0.1 in is), pecks reduced by K only in mm.
+  const double c = p ? (cur.inch && p->clearance_in > 0 ? p->clearance_in : p->clearance / Unit()) : 0;
+  if (p) {
+    b.discharge = p->discharging && std::fabs(Snap(c) - c) < 1e-9 && (!p->feeding_on || rng.Chance(50));
+    if (!b.discharge && !p->feeding_on) return false;
+    b.backoff = cur.inch && p->backoff_in > 0 ? p->backoff_in : p->backoff / Unit();
+    if (p->backoff_word) {  // LinuxCNC's own (G73) where the unit's grid has it, else another
+      double own = cur.inch ? 0.01 : 0.254;
+      b.backoff =
+          std::fabs(Snap(own) - own) < 1e-9 && rng.Chance(70) ? own : Snap(rng.Int(1, 10) / 10.0 / Unit());
+    }
+  }
+  // A peck longer than the re-approach or back-off, or the cycle never gets deeper (Balt-System FILMS4 13,
+  // call 4; EMCO's and Okuma's would come back out of the hole).
+  const double least = std::max(b.discharge ? c : 0.0, b.discharge ? 0.0 : b.backoff) + Snap(0.5 / Unit());
+  if (caps.lathe) {
+    b.r_level = b.start[2];
+    b.holes = {{0, 0}};
+    if (p && p->equal) {  // n pecks of q: D3 a little over q (equal pecks below D3, judgement call 9)
+      int n = rng.Int(2, 5);
+      double q = std::max(least, Snap(rng.Int(10, 80) / 10.0 / Unit()));
+      b.bottom = b.r_level - Snap(n * q);
+      b.peck = std::max(Snap(q * (1 + 0.5 / (n - 1))), q + Grid());
+    } else {
+      b.bottom = b.r_level - Snap(rng.Int(10, 600) / 10.0 / Unit());
+    }
+  } else {
+    b.r_level = b.start[2] - Snap(rng.Int(0, 50) / 10.0 / Unit());
+    b.bottom = b.r_level - Snap(rng.Int(10, 200) / 10.0 / Unit());
+  }
   Vec3 deep = b.start;
   deep[2] = b.bottom;
   if (!Inside(deep)) return false;
-  int n = rng.Int(1, 4);
-  for (int i = 0; i < n; ++i) {
-    Vec3 p = RandomPoint();
-    b.holes.push_back({p[0], p[1]});
+  b.feed = Feed();
+  if (p && !p->equal && p->slow_end == 0) {
+    b.peck = std::max(least, Snap(rng.Int(5, 100) / 10.0 / Unit()));
+    if (b.discharge && p->reduce && !cur.inch && rng.Chance(50)) {
+      b.peck_k = rng.Int(50, 95) / 100.0;
+      b.peck_j = std::min(b.peck, std::max(least, Snap(rng.Int(5, 60) / 10.0 / Unit())));
+    } else if (b.discharge && p->reduce) {
+      b.peck_k = 1;  // a constant peck: K1 without J (ln 3402)
+    }
+    // LinuxCNC's G73 steps its depth by Q in floating point: at a bottom a whole number of pecks down it
+    // pecked once more (a back-off and a feed at the bottom). Such a hole is drilled a grid step deeper.
+    double n = (b.r_level - b.bottom) / b.peck;
+    if (p->native && std::fabs(n - std::round(n)) < 1e-6) b.bottom -= Grid();
+  }
+  if (b.cycle == 84) {
+    b.tap_pitch = caps.tap_pitch && !cur.per_rev && rng.Chance(50);
+    if (b.tap_pitch) {  // F = K x S (S1000): a pitch of the unit's grid
+      static const std::vector<double> mm{0.5, 0.7, 0.75, 0.8, 1, 1.25, 1.5, 1.75, 2};
+      static const std::vector<double> in{0.025, 0.04, 0.05, 0.1};  // exact in mm (the units property)
+      b.feed = (cur.inch ? rng.Pick(in) : rng.Pick(mm)) * 1000;
+    } else if (caps.tap_max_feed > 0 && !cur.per_rev) {
+      b.feed = std::min(b.feed, std::floor(caps.tap_max_feed / Unit() * 10) / 10);
+    }
+  }
+  for (int i = caps.lathe ? 0 : rng.Int(1, 4); i > 0; --i) {
+    Vec3 h = RandomPoint();
+    b.holes.push_back({h[0], h[1]});
   }
   b.end = {b.holes.back()[0], b.holes.back()[1], b.r_level};
   return true;
@@ -280,7 +333,7 @@ Block Gen::Next() {
     if (caps.lathe) b.end[1] = 0;
     need_abs = false;
   }
-  if (b.kind != MoveKind::kRapid) b.feed = Feed();
+  if (b.kind != MoveKind::kRapid && b.kind != MoveKind::kCycle) b.feed = Feed();
   if (caps.rotary_whole_feed && RotaryAlone(b) && b.kind != MoveKind::kRapid)
     b.feed = std::max(1.0, std::round(b.feed));  // F3.0 deg/min
   if (rng.Chance(40)) b.omit = static_cast<unsigned>(rng.Next() & 63);
@@ -303,6 +356,47 @@ std::array<int, 3> AxesOf(const Modes& m) {
   if (m.plane == 19) a = {1, 2, 0};
   if (m.swapped) std::swap(a[0], a[1]);
   return a;
+}
+
+const Caps::Peck* PeckOf(const Block& b, const Caps& caps) {
+  if (b.kind != MoveKind::kCycle) return nullptr;
+  for (const Caps::Peck& p : caps.pecks)
+    if (p.code == b.cycle) return &p;
+  return nullptr;
+}
+
+namespace {
+
+// The re-approach's clearance above the last bottom in the block's unit.
+double Clearance(const Block& b, const Caps::Peck& p) {
+  return b.m.inch && p.clearance_in > 0 ? p.clearance_in : p.clearance / (b.m.inch ? kMm : 1.0);
+}
+
+}  // namespace
+
+std::vector<double> PeckBottoms(const Block& b, const Caps::Peck& p) {
+  const double c = Clearance(b, p);
+  const double tie = 1e-9;  // a peck that ends on the bottom is the last (the manuals' "<=")
+  std::vector<double> out;
+  if (p.slow_end > 0) return {b.bottom + (b.m.inch ? p.slow_end_in : p.slow_end), b.bottom};
+  if (p.equal) {
+    const double depth = b.r_level - b.bottom;
+    const int n = static_cast<int>(std::ceil(depth / b.peck - tie));
+    for (int k = 1; k < n; ++k) out.push_back(b.r_level - depth * k / n);
+    out.push_back(b.bottom);
+    return out;
+  }
+  double last = b.r_level, peck = b.peck;
+  while (out.size() < 100000) {
+    double next = last - peck;
+    if (b.discharge && p.from_clearance && !out.empty()) next += c;
+    if (next <= b.bottom + tie) break;
+    out.push_back(next);
+    last = next;
+    if (b.discharge && b.peck_k > 0) peck = std::max(peck * b.peck_k, b.peck_j);
+  }
+  out.push_back(b.bottom);
+  return out;
 }
 
 bool RotaryAlone(const Block& b) {
@@ -373,20 +467,58 @@ std::string NgcMove(const Block& b, const Caps& caps) {
       if (!(caps.lathe && i == 1)) word(letters[i], caps.lathe && i == 0 ? 2 * b.end[i] : b.end[i]);
     return s;
   }
+  // A lathe drills on the centre line: to X0 at the present Z, the cycle in G17 (LinuxCNC drills along Z
+  // there).
+  const std::string lathe_to = caps.lathe ? "G0 X0\n" : "";
+  const Caps::Peck* p = PeckOf(b, caps);
+  const double own_backoff = b.m.inch ? 0.01 : 0.254;  // LinuxCNC's G73
+  if (p && !(p->native && std::fabs(b.backoff - own_backoff) < 1e-9)) {
+    // The manual's pecks as moves (the dwells between them are not compared): to the hole at the present
+    // height, down to R, each peck (after a discharge: up to R, down to the clearance above the last bottom;
+    // else the back-off, if any), back to R.
+    const double c = Clearance(b, *p);
+    const std::string f = " F" + Num(b.feed, d);
+    const std::vector<double> bottoms = PeckBottoms(b, *p);
+    s = lathe_to;
+    for (const auto& h : b.holes) {
+      if (!caps.lathe) s += "G0 X" + Num(h[0], d) + " Y" + Num(h[1], d) + "\n";
+      s += "G0 Z" + Num(b.r_level, d) + "\n";
+      for (std::size_t n = 0; n < bottoms.size(); ++n) {
+        if (n > 0 && !b.discharge && b.backoff > 0) s += "G0 Z" + Num(bottoms[n - 1] + b.backoff, d) + "\n";
+        if (n > 0 && b.discharge) {
+          s += "G0 Z" + Num(b.r_level, d) + "\n";
+          std::string to = " Z" + Num(bottoms[n - 1] + c, d);
+          s += p->approach_feed > 0
+                   ? "G1" + to + " F" + Num(p->approach_feed / (b.m.inch ? kMm : 1.0), d) + "\n"
+                   : "G0" + to + "\n";
+        }
+        bool slow = p->slow_end > 0 && n + 1 == bottoms.size();
+        s += "G1 Z" + Num(bottoms[n], d) + (slow ? " F" + Num(p->slow_feed / (b.m.inch ? kMm : 1.0), d) : f) +
+             "\n";
+      }
+      s += "G0 Z" + Num(b.r_level, d) + "\n";
+    }
+    s.pop_back();
+    return s;
+  }
   if (b.kind == MoveKind::kCycle) {
-    s = "G99 G" + std::to_string(b.cycle);
+    s = lathe_to + (caps.lathe ? "G17\n" : "") + "G99 G" + std::to_string(p ? p->native : b.cycle);
     for (std::size_t h = 0; h < b.holes.size(); ++h) {
       s += " X" + Num(b.holes[h][0], d) + " Y" + Num(b.holes[h][1], d);
       if (h == 0) {
         s += " Z" + Num(b.bottom, d) + " R" + Num(b.r_level, d) + " F" + Num(b.feed, d);
+        if (p) s += " Q" + Num(b.peck, d);
         if (b.cycle == 82 || b.cycle == 86 || b.cycle == 89) s += " P1";  // rs274 asks P of G86 too
+        // G84: LinuxCNC feeds in, reverses the spindle and feeds out to R at F (the manuals' G84).
       }
       s += "\n";
     }
-    return s + "G80";
+    return s + (caps.lathe ? "G80\nG18" : "G80");
   }
   for (int i = 0; i < 3; ++i) {
-    if (caps.lathe && i == 1) continue;
+    // A rotary move alone names no linear axis: after a G92 rs274's position may be off the word (1e-15 mm,
+    // or its 1e-4 in rounding) and it would take F for a linear rate (in inch, 25.4 times the deg/min).
+    if ((caps.lathe && i == 1) || RotaryAlone(b)) continue;
     double v = b.m.incremental ? b.end[i] - b.start[i] : b.end[i];
     word(letters[i], caps.lathe && i == 0 ? 2 * v : v);
   }

@@ -17,10 +17,19 @@ class Balt final : public Module {
     c.helix_turns = true;
     c.swapped_planes = true;  // (DPI,a,o), judgement call 39
     c.full_circle = true;     // ln 2732-2788
-    c.cycles = {81, 82, 85, 86, 89};
-    c.cycles_per_rev = {81, 82, 85};  // G86 G89 in G95: FILMS4 98
-    c.inverse_time = true;            // G93 (ln 3685-3725)
-    c.rotary = true;                  // A B C (ln 3909-4038)
+    c.cycles = {81, 82, 83, 84, 85, 86, 89};
+    c.cycles_per_rev = {81, 82, 83, 84, 85};  // G86 G89 in G95: FILMS4 98
+    // G83 (ln 3372-3414): with K (and J) each peck goes back to R1, rapids down to 1 mm short of the last
+    // bottom ("R1 = R1 + I - 1", judgement call 4) and feeds I from there; with I alone it feeds on by I,
+    // dwelling TMR between. LinuxCNC's G83 comes back to 0.254 mm and cuts Q of new depth; its G73 backs off.
+    Caps::Peck g83;
+    g83.feeding_on = g83.discharging = true;
+    g83.clearance = 1;
+    g83.from_clearance = g83.reduce = true;
+    c.pecks = {g83};
+    c.tap_pitch = true;     // G84 K with a transducer: F = K x rpm (ln 3484-3496), per minute (not in G95)
+    c.inverse_time = true;  // G93 (ln 3685-3725)
+    c.rotary = true;        // A B C (ln 3909-4038)
     // With X Y Z in one block, at most three axes (ln 2699); in G94 F is the rate along the vector of the
     // travels, degrees and program units alike (ln 3961-3976, judgement call 21).
     c.rotary_linear = true;
@@ -42,9 +51,13 @@ std::string Coord(const Block& b, double v) {
 
 // The motion words of one block.
 // G81-G89 (ln 3283-3313): the cycle block states R1 and the depth, each hole is an X Y block, G80 ends it.
+// G83 I [J] [K] (ln 3372-3384), G84 K the pitch in place of F (ln 3484-3496, S1000).
 std::string Cycle(const Block& b) {
-  std::string s = "G" + std::to_string(b.cycle) + " R" + Coord(b, b.r_level) + " Z" + Coord(b, b.bottom) +
-                  " F" + Num(b.feed, 4);
+  std::string s = "G" + std::to_string(b.cycle) + " R" + Coord(b, b.r_level) + " Z" + Coord(b, b.bottom);
+  if (b.peck > 0) s += " I" + Coord(b, b.peck);
+  if (b.peck_j > 0) s += " J" + Coord(b, b.peck_j);
+  if (b.peck_k > 0) s += " K" + Num(b.peck_k, 2);
+  s += b.tap_pitch ? " K" + Coord(b, b.feed / 1000) : " F" + Num(b.feed, 4);
   for (const auto& h : b.holes) s += "\nX" + Coord(b, h[0]) + " Y" + Coord(b, h[1]);
   return s + "\nG80";
 }

@@ -24,6 +24,19 @@ class Emco final : public Module {
     c.unit_switch = false;
     c.rapid_after_offset = true;
     c.feed_decimals = 0;
+    // G87/G88 on the centre line, Z only (ln 4616-4807; ALARM 260, 480): without D3 one feed to Z and a rapid
+    // back to the start, LinuxCNC's G81 (drawn as 81); with D3 (no D5) equal pecks of at most D3 (E74), G87
+    // backing off S02 (500: 0.5 mm, 0.05 in) by rapid between them (LinuxCNC's G73 backs off 0.254 mm), G88
+    // back to the start after each and by rapid to S02 above the depth reached (LinuxCNC's G83: 0.254 mm).
+    c.cycles = c.cycles_per_rev = {81, 87, 88};
+    Caps::Peck g87, g88;
+    g87.code = 87;
+    g87.feeding_on = g87.equal = true;
+    g87.backoff = 0.5, g87.backoff_in = 0.05;
+    g88.code = 88;
+    g88.discharging = g88.equal = true;
+    g88.clearance = 0.5, g88.clearance_in = 0.05;
+    c.pecks = {g87, g88};
     return c;
   }
   // G25 L<number><two digits of runs> calls a subroutine of the same file (from O80,
@@ -62,6 +75,12 @@ std::string Feed(const Block& b) {
 }
 
 std::string Motion(const Block& b, unsigned form, bool shift_changed) {
+  if (b.kind == MoveKind::kCycle) {  // from X0 at the present Z (ALARM 260): Z, D3 in um (1/10000 in)
+    std::string s = "G00 X0\nG" + std::string(b.cycle == 81 ? "87" : std::to_string(b.cycle)) + " Z" +
+                    Coord(b, b.bottom, form & 2);
+    if (b.peck > 0) s += " D3=" + Coord(b, b.peck, true);
+    return s + " F" + Feed(b);
+  }
   std::string s = b.kind == MoveKind::kRapid  ? "G00"
                   : b.kind == MoveKind::kLine ? "G01"
                   : b.cw                      ? "G02"

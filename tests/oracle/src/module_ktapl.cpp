@@ -20,8 +20,23 @@ class Ktapl final : public Module {
     c.radius_form_g17_absolute = true;
     c.full_circle = true;
     // App. D's G82 (ln 11596) feeds to 0.01 in (0.254 mm) above the bottom, then at F.5 (F12.7) with S100
-    // to it: not LinuxCNC's G82, so not compared.
-    c.cycles = {81, 85, 86, 89};
+    // to it, dwells 2 s: not LinuxCNC's G82, stated as its moves.
+    c.cycles = {81, 82, 83, 84, 85, 86, 87, 89};
+    // G83 (App. D, ln 1947-1996) feeds on by E, dwelling between (LinuxCNC's G73 backs off 0.254 mm); G87
+    // (ln 2099-2150) goes back to R after each E, feeds at 100 in/min (2540 mm/min) to 0.1 in (2.54 mm) above
+    // the last bottom and E below it (LinuxCNC's G83 rapids to 0.254 mm above). G84 (ln 1998-2051) is
+    // LinuxCNC's, its feed at most 32 in/min (812.8 mm/min).
+    Caps::Peck g82, g83, g87;
+    g82.code = 82;
+    g82.feeding_on = true;
+    g82.slow_end = 0.254, g82.slow_end_in = 0.01, g82.slow_feed = 12.7;
+    g83.feeding_on = true;
+    g87.code = 87;
+    g87.discharging = true;
+    g87.clearance = 2.54;
+    g87.approach_feed = 2540;
+    c.pecks = {g82, g83, g87};
+    c.tap_max_feed = 812.8;
     c.per_rev = false;  // G93 inverse time and G94 only
     c.inverse_time = true;
     c.position_set = "G92";  // regrid (ln 1579)
@@ -49,12 +64,16 @@ std::string Coord(const Block& b, double v) {
 }
 
 // G81-G89 (App. D, ln 1916-1922): the cycle block drills its own X Y, each later X Y block drills again,
-// G80 ends it.
+// G80 ends it; E the peck of G83 and G87 (ln 5175).
 std::string Cycle(const Block& b) {
   std::string s = "G" + std::to_string(b.cycle);
   for (std::size_t h = 0; h < b.holes.size(); ++h) {
     s += (h ? "\nX" : "X") + Coord(b, b.holes[h][0]) + "Y" + Coord(b, b.holes[h][1]);
-    if (h == 0) s += "Z" + Coord(b, b.bottom) + "R" + Coord(b, b.r_level) + "F" + Num(b.feed, 1, true);
+    if (h == 0) {
+      s += "Z" + Coord(b, b.bottom) + "R" + Coord(b, b.r_level);
+      if (b.peck > 0) s += "E" + Coord(b, b.peck);  // inch 4.4, metric 5.3 (ln 1029-1047)
+      s += "F" + Num(b.feed, 1, true);
+    }
   }
   return s + "\nG80";
 }

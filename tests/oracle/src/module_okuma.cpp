@@ -45,6 +45,16 @@ class Okuma final : public Module {
     c.position_set = "G50";  // G50 X Z: zero shift by the present position (ln 1663-1705)
     c.mm_decimals = u.decimals;
     c.inch_decimals = u.decimals;
+    // G74 on the centre line (ln 3954-4004, E-48): from the start, pecks of D each followed by a rapid back
+    // DA= (0.5 mm by default, PECK_RETRACT), to Z, back to the start: LinuxCNC's G73 with Q = D where DA= is
+    // its 0.254 mm (0.010 in; not on the 10 um grid), else its moves. No I K L (shift, approach, full
+    // retract).
+    c.cycles = c.cycles_per_rev = {74};
+    Caps::Peck g74;
+    g74.code = 74;
+    g74.feeding_on = g74.backoff_word = true;
+    g74.native = 73;
+    c.pecks = {g74};
     return c;
   }
   // CALL O name runs a subprogram of the same file up to its RTS (ln 7962-8229).
@@ -84,6 +94,9 @@ std::string Feed(const UnitSystem& u, const Block& b) {
 
 std::string Motion(const UnitSystem& u, const Block& b) {
   if (b.kind == MoveKind::kSet) return "G50 X" + Word(u, 2 * b.end[0]) + " Z" + Word(u, b.end[2]);
+  if (b.kind == MoveKind::kCycle)  // from X0 at the present Z
+    return "G00 X0\nG74 X0 Z" + Word(u, b.bottom) + " D" + Word(u, b.peck) + " DA=" + Word(u, b.backoff) +
+           " F" + Feed(u, b);
   std::string s = b.kind == MoveKind::kRapid  ? "G00"
                   : b.kind == MoveKind::kLine ? "G01"
                   : b.cw                      ? "G02"

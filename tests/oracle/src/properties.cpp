@@ -64,6 +64,7 @@ std::vector<Block> InchToMm(std::vector<Block> blocks, const Caps& caps, bool (*
     vec(b.start), vec(b.end), vec(b.center);
     b.radius = mm(b.radius), b.pitch = mm(b.pitch);
     b.r_level = mm(b.r_level), b.bottom = mm(b.bottom);
+    b.peck = mm(b.peck), b.peck_j = mm(b.peck_j), b.backoff = mm(b.backoff);
     for (auto& h : b.holes) h = {mm(h[0]), mm(h[1])};
     // 0.5 in/min is 12.7 mm/min; 0.01 in/rev 0.254 mm/rev: exact on the mm feed grids (ConvertibleFeeds).
     // A rotary move alone is fed in deg/min in either unit (Balt-System judgement call 21).

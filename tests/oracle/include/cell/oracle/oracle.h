@@ -42,10 +42,17 @@ struct Block {
   int turns = 0;       // helix: extra full turns
   double pitch = 0;    // helix: travel of the third axis per turn (Balt K), 0 without turns
   double feed = 0;     // unit/min or unit/rev
-  int cycle = 0;       // kCycle: 81 82 85 86 89 at each of `holes` (x y), from the R plane to `bottom`
+  int cycle = 0;       // kCycle: the dialect's code at each of `holes` (x y), from the R plane to `bottom`
   double r_level = 0;  // kCycle: the R plane; the tool returns there after each hole (G99)
   double bottom = 0;
   std::vector<std::array<double, 2>> holes;
+  // kCycle, a peck cycle (Caps::pecks): the peck (Balt-System I, KT-APL E), its reduction factor K (0: none)
+  // and least peck J (0: none), and whether the tool goes back to R between pecks (Balt-System with K, KT-APL
+  // G87) or feeds on (Balt-System I alone, KT-APL G83).
+  double peck = 0, peck_k = 0, peck_j = 0;
+  bool discharge = false;
+  double backoff = 0;  // kCycle: the feeding-on variant's back-off between pecks (Caps::Peck), program units
+  bool tap_pitch = false;  // kCycle G84: the dialect states the pitch, F / S (Balt-System K, S1000), not F
   unsigned omit =
       0;  // words a module may leave out where they change nothing: bits 0-2 axis x y z, 3-5 centre
 };
@@ -76,9 +83,38 @@ struct Caps {
   // G94 F of a rotary+linear move is the rate along the vector of the travels in mm and degrees; the NGC
   // twin states the rate along X Y Z that follows from it (Balt-System ln 3961-3976).
   bool rotary_vector_feed = false;
-  std::vector<int> cycles;          // drilling cycles against LinuxCNC's G81-G89 (G17, G90, G99 retract)
+  // Drilling cycles against LinuxCNC's G81-G89 (G17, G90, G99 retract); on a lathe one hole on the spindle
+  // axis from where the tool is, after a rapid to X0 (LinuxCNC: G17 for the cycle, R there).
+  std::vector<int> cycles;
   std::vector<int> cycles_per_rev;  // those allowed in feed per revolution
-  bool radius_form = true;          // arcs by R
+  // A drilling cycle whose moves no LinuxCNC cycle makes from the same words, a peck cycle above all (its G83
+  // comes back down by rapid to 0.254 mm above the last bottom, its G73 backs off 0.254 mm): the NGC twin
+  // states its moves as G0/G1 (PeckBottoms), or `native` where that cycle makes them.
+  struct Peck {
+    int code = 83;
+    bool feeding_on = false;   // the variant that feeds peck after peck (a dwell between, not compared)
+    bool discharging = false;  // the variant that goes back to R after each peck, then down to `clearance`
+    double clearance = 0;      // mm above the last bottom the re-approach ends
+    double approach_feed = 0;  // mm/min of the re-approach (0: a rapid)
+    // The peck after a re-approach feeds `peck` from there (Balt-System "R1 = R1 + I - 1": I - 1 of new
+    // depth); else it goes `peck` below the last bottom.
+    bool from_clearance = false;
+    bool reduce = false;      // K and J: the peck shrinks by K each time down to J
+    double clearance_in = 0;  // inch programs: the clearance in inch (0: `clearance` / 25.4)
+    // The feeding-on variant backs off by rapid between pecks (Block::backoff; LinuxCNC's G73 by 0.254 mm,
+    // 0.010 in): by this much (mm, inch; EMCO G87's S02) or by a word of the block (Okuma G74 DA=).
+    double backoff = 0, backoff_in = 0;
+    bool backoff_word = false;
+    // Pecks of equal depth, the fewest of at most `peck` (EMCO G87/G88 D3 without D5, ln 4724-4761).
+    bool equal = false;
+    int native = 0;  // the LinuxCNC cycle that makes the same moves where the back-off is its own (G73)
+    // No pecks: a feed to this far (mm, inch) above the bottom, the rest at `slow_feed` mm/min (KT-APL G82).
+    double slow_end = 0, slow_end_in = 0, slow_feed = 0;
+  };
+  std::vector<Peck> pecks;
+  bool tap_pitch = false;                 // G84 may state the pitch instead of F (F = pitch x S)
+  double tap_max_feed = 0;                // mm/min: G84's highest feed (0: none)
+  bool radius_form = true;                // arcs by R
   bool radius_form_g17_absolute = false;  // R only in G90 G17 (KT-APL)
   bool helix = true;                      // the plane's third axis may move along an arc
   bool helix_turns = false;               // multi-turn helices (and how the dialect writes them)
@@ -140,6 +176,11 @@ bool OmitCentre(const Block& b, int axis);
 
 const Module* FindModule(const std::string& name);
 std::vector<std::string> ModuleNames();  // in priority order: balt ktapl emco okuma
+
+// A cycle block's peck rule (none: not a peck cycle), and the bottoms its pecks feed to at one hole, from
+// its R plane down to its bottom (program units): a peck that would reach the bottom or pass it ends there.
+const Caps::Peck* PeckOf(const Block& b, const Caps& caps);
+std::vector<double> PeckBottoms(const Block& b, const Caps::Peck& p);
 
 // The random block list for a dialect's capabilities (deterministic for a seed).
 std::vector<Block> Generate(const Caps& caps, std::uint64_t seed, int count);
