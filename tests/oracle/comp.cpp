@@ -7,10 +7,12 @@
 // points, arc centres and senses, 1e-3 mm (2e-3 in inch), in order, anchored by geometry (the moves on
 // element 0's offset), not by index. Balt-System's outside corner is the intersection of the offsets (balt.md
 // judgement call 50): the LinuxCNC path is rewritten to it before the comparison (see Expected). The lathes,
-// EMCO and Okuma: the no-gouge property's turned profile under G42 with tip code 3 (LatheCase, nogouge.cpp)
-// and its NGC twin in G18 G7 with tool 1 of a lathe tool table (D the diameter, orientation 2: LatheNgc);
-// both state the imaginary tip, so both are compared as nose centres, in (Z, X as a radius), element 0 the
-// 2 mm lead and the last the 3 mm behind the last shoulder. Okuma's every corner is the offsets' intersection
+// EMCO and Okuma: the no-gouge property's turned profile (LatheCase, nogouge.cpp), outside under G42 and
+// every other one a bore under G41, with a tip code drawn for its side, every other pair in inch, and its NGC
+// twin in G18 G7 (mm) with tool 1 of a lathe tool table (D the diameter, the orientation LinuxCNC numbers
+// that tip code with: LatheNgc); both state the imaginary tip, so both are compared as nose centres
+// (NoseFromTip), in (Z, X as a radius), element 0 the 2 mm lead and the last the 3 mm behind the last
+// shoulder. Okuma's every corner is the offsets' intersection
 // (okuma.md judgement call 61; OkumaExpected), EMCO's outside corner LinuxCNC's fill-in arc (emco.md
 // judgement call 33). Debugging: COMP_ONLY=<program seed> runs that contour alone; COMP_DEBUG=1 prints both
 // move lists of a finding and LinuxCNC's as compared.
@@ -29,15 +31,16 @@ namespace fs = std::filesystem;
 namespace cell::oracle {
 namespace {
 
-// 1e-3 mm; 2e-3 mm in inch (rs274 prints four decimals of an inch, 1.27e-3 mm).
+// 1e-3 mm; 2e-3 mm in inch (rs274 prints four decimals of an inch, 1.27e-3 mm; a lathe's twin is in mm,
+// LatheNgc, so its inch contour keeps 1e-3).
 double Tol(const CompContour& k) {
-  return k.inch ? 2e-3 : 1e-3;
+  return k.inch && !k.open ? 2e-3 : 1e-3;
 }
 // Which offset element a move runs on: the contour's arc centres are on the 0.001 mm grid, so an arc's radii
 // at its two ends differ by up to 1.5e-3 mm; in inch its points are on the 0.0001 in grid (2.54e-3 mm) and
 // rs274 prints four decimals of an inch: 1e-2 mm.
 double OnTol(const CompContour& k) {
-  return k.inch ? 1e-2 : 5e-3;
+  return k.inch && !k.open ? 1e-2 : 5e-3;
 }
 
 // One feed move in the plane: a line, or an arc about c.
@@ -434,17 +437,21 @@ std::string Ngc(const CompContour& k) {
   return t + "G1 G40 " + xy({100, 0}) + "\nM2\n";
 }
 
-// The lathes' twin (EMCO, Okuma): G18 G7 (X a diameter, I a radius), tool 1 of the tool table under G42, the
-// profile's elements once, G40 with a move up. rs274 states the tool's controlled point, which for a lathe
-// tool with an orientation is the imaginary tip (found by experiment: with Q0 it states the nose centre, with
-// Q1-Q8 that centre moved by the radius in X and Z), and its orientation 2 is the dialects' tip code 3 (the
-// tip at -Z, -X of the centre; LinuxCNC's 3 is at -Z, +X). The tool table is read in inch by rs274 without an
-// ini (D1.6 was 40.6 mm): D is the diameter in inch, to 1e-9 in.
+// The lathes' twin (EMCO, Okuma): G18 G7 (X a diameter, I a radius), tool 1 of the tool table under G42 (a
+// bore: G41), the profile's elements once, G40 with a move up (a bore: down). rs274 states the tool's
+// controlled point, which for a lathe tool with an orientation is the imaginary tip (found by experiment:
+// with Q0 and Q9 it states the nose centre, with Q1-Q8 that centre moved by the radius in X, in Z or both).
+// LinuxCNC numbers its orientations its own way (found by experiment, a 10 mm shoulder outside under G42 and
+// inside under G41, nose R0.8, every Q; docs/testing.md): the dialects' tip code c is its Q kLinuxQ[c]. The
+// tool table is read in inch by rs274 without an ini (D1.6 was 40.6 mm): D is the diameter in inch, to 1e-9
+// in.
+constexpr int kLinuxQ[10] = {0, 4, 3, 2, 1, 5, 8, 7, 6, 9};
 std::string LatheNgc(const CompContour& k) {
   auto xz = [](const P2& q) { return "X" + Num(2 * q[1], 6) + " Z" + Num(q[0], 6); };
   const P2 &front = k.p.front(), &back = k.p.back();
-  std::string t = "G21 G18 G7 G90 G94 G40\nT1 M6 G43\nG0 " + xz({front[0] + 5, front[1] + 5}) + "\nG1 G42 " +
-                  xz(front) + " F200\n";
+  const double up = k.left ? -1 : 1;  // a bore's entry and exit are below the profile
+  std::string t = "G21 G18 G7 G90 G94 G40\nT1 M6 G43\nG0 " + xz({front[0] + 5, front[1] + 5 * up}) + "\nG1 " +
+                  (k.left ? "G41 " : "G42 ") + xz(front) + " F200\n";
   for (std::size_t i = 0; i < k.Elements(); ++i) {
     const P2 &a = k.p[i], &e = k.p[i + 1];
     if (k.sweep[i] == 0)
@@ -453,10 +460,10 @@ std::string LatheNgc(const CompContour& k) {
       t += std::string(k.sweep[i] > 0 ? "G3 " : "G2 ") + xz(e) + " I" + Num(k.centre[i][1] - a[1], 6) + " K" +
            Num(k.centre[i][0] - a[0], 6) + "\n";
   }
-  return t + "G40 G1 X" + Num(2 * back[1] + 6, 6) + "\nM2\n";
+  return t + "G40 G1 X" + Num(2 * (back[1] + 3 * up), 6) + "\nM2\n";
 }
 std::string LatheToolTable(const CompContour& k) {
-  return "T1 P1 D" + Num(2 * k.r / 25.4, 9) + " Q2\n";
+  return "T1 P1 D" + Num(2 * k.r / 25.4, 9) + " Q" + std::to_string(kLinuxQ[k.tip]) + "\n";
 }
 
 // A lathe's refusal that its manual names for the path, where LinuxCNC goes on (a documented difference,
@@ -492,8 +499,10 @@ CompTally CompCheck(const PropRun& o, const std::string& rs274, const std::strin
     CompContour k;
     ContourProgram w;
     if (lathe) {
-      // The no-gouge property's turned profile under G42 (nogouge.cpp), in (Z, X as a radius): G18's axes.
-      LatheContour l = LatheCase(dialect, seed);
+      // The no-gouge property's turned profile (nogouge.cpp), in (Z, X as a radius): G18's axes.
+      // Every other profile a bore under G41, every other such pair in inch: outside mm, bore mm, outside
+      // inch, bore inch.
+      LatheContour l = LatheCase(dialect, seed, i % 2 == 1, (i / 2) % 2 == 1);
       k = std::move(l.c);
       w = std::move(l.w);
       k.plane = 18;
@@ -513,8 +522,11 @@ CompTally CompCheck(const PropRun& o, const std::string& rs274, const std::strin
     Spit(prog, w.text);
     Spit(tools, w.tools);
     Spit(dir / "comp.ngc", ngc_text);
-    int rc = Shell(Quote(o.interp) + " --dialect " + dialect + " --tools " + Quote(tools) + " " +
-                   Quote(prog) + " >" + Quote(dir / "comp.out") + " 2>" + Quote(dir / "comp.err"));
+    fs::path params = dir / "comp.params";
+    Spit(params, w.params);
+    int rc = Shell(Quote(o.interp) + " --dialect " + dialect + " --tools " + Quote(tools) +
+                   (w.params.empty() ? "" : " --params " + Quote(params)) + " " + Quote(prog) + " >" +
+                   Quote(dir / "comp.out") + " 2>" + Quote(dir / "comp.err"));
     Spit(dir / "tool.tbl", lathe ? LatheToolTable(k) : "");
     Spit(dir / "rs274ngc.var", "");
     Shell("cd " + Quote(dir) + " && HOME=" + Quote(dir) + " " + Quote(rs274) +
@@ -522,9 +534,9 @@ CompTally CompCheck(const PropRun& o, const std::string& rs274, const std::strin
     std::string err, log = Slurp(dir / "comp.log");
     auto cm = ParseCellInterp(Slurp(dir / "comp.out"), lathe, &err);
     auto nm = ParseRs274(Slurp(dir / "comp.canon"), lathe, &err);
-    if (lathe)  // both sides state the imaginary tip of one quadrant: compared as nose centres
+    if (lathe)  // both sides state the imaginary tip of the tip code: compared as nose centres
       for (auto* moves : {&cm, &nm})
-        for (Move& m : *moves) m = NoseFromTip(m, k.r);
+        for (Move& m : *moves) m = NoseFromTip(m, k.r, k.tip);
     DropStill(cm);
     DropStill(nm);
     std::vector<Seg> cell = Segs(cm, k.plane), ngc = Segs(nm, k.plane);
@@ -587,13 +599,15 @@ CompTally CompCheck(const PropRun& o, const std::string& rs274, const std::strin
                     << (OnElement(s, k, k.Elements() - 1) ? " +" : "") << "\n";
       }
       std::cout << dialect << " comp: program seed " << seed << " (" << (k.left ? "G41" : "G42") << ", r "
-                << k.r << ", " << k.p.size() << " corners, G" << k.plane << (k.inch ? " inch" : " mm")
-                << "): " << kind << "\n  " << detail << "\n";
+                << k.r << (lathe ? ", tip " + std::to_string(k.tip) : "") << ", " << k.p.size()
+                << " corners, G" << k.plane << (k.inch ? " inch" : " mm") << "): " << kind << "\n  " << detail
+                << "\n";
       if (!o.keep.empty()) {
         fs::create_directories(o.keep);
         std::string stem = dialect + "-comp-" + std::to_string(seed);
         Spit(fs::path(o.keep) / (stem + "." + dialect), w.text);
         Spit(fs::path(o.keep) / (stem + ".tools"), w.tools);
+        if (!w.params.empty()) Spit(fs::path(o.keep) / (stem + ".params"), w.params);
         Spit(fs::path(o.keep) / (stem + ".ngc"), ngc_text);
         if (lathe) Spit(fs::path(o.keep) / (stem + ".tbl"), LatheToolTable(k));
         std::cout << "  kept as " << (fs::path(o.keep) / stem).string() << ".*\n";

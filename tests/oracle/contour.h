@@ -26,9 +26,10 @@ struct CompContour {
   bool open = false;  // a lathe's profile (nogouge.cpp): no element from the last point back to the first
   // The plane the contour is cut in (comp.cpp): 17 (x y) = (X, Y), 18 = (Z, X), 19 = (Y, Z), the first axis
   // to the right and the second up seen from the plane's normal, so a G41 stays on the left; and the unit
-  // (inch: p and centre lie on the 0.0001 in grid, still stated in mm).
+  // (inch: p and centre lie on the 0.0001 in grid, still stated in mm; a lathe's NGC twin stays in mm).
   int plane = 17;
   bool inch = false;
+  int tip = 3;  // a lathe's tip code (NoseFromTip)
   std::size_t Next(std::size_t i) const { return (i + 1) % p.size(); }
   std::size_t Elements() const { return open ? p.size() - 1 : p.size(); }
 };
@@ -40,23 +41,23 @@ CompContour RandomContour(std::uint64_t seed, bool arcs);
 // 0 .. n-1 and element 0 again, a G40 line back to X100 Y0. `first`/`last`: the lines of the first contour
 // block and of the block that ends the second time at the second corner.
 struct ContourProgram {
-  std::string text, tools;
+  std::string text, tools, params;  // params: cell-interp's --params file (Okuma's unit system), if any
   int first = 0, last = 0;
 };
 ContourProgram WriteContour(const std::string& dialect, const CompContour& c);
 // A lathe's finishing pass (nogouge.cpp): a random turned profile (profile.h) as an open contour in (Z, X as
-// a radius), cut under G42 with tip code 3 and a nose radius of 0.2-1.6 mm, and its EMCO or Okuma program.
-// The no-gouge property (nogouge.cpp) and the lathes' compensated differential (comp.cpp) cut the same
-// profiles.
+// a radius), outside under G42 or (`inside`) a bore under G41, with a tip code drawn for that side and a nose
+// radius of 0.2-1.6 mm, and its EMCO or Okuma program, in mm or (`inch`) inch. The no-gouge property
+// (nogouge.cpp) and the lathes' compensated differential (comp.cpp) cut the same profiles.
 struct LatheContour {
   CompContour c;
   ContourProgram w;
 };
-LatheContour LatheCase(const std::string& dialect, std::uint64_t seed);
-// The nose centre of a move whose points are the imaginary tip of tip code 3 (the tip one radius toward -Z
-// and one toward -X from the centre; nogouge.cpp cites the manuals): end and arc centre moved by +r in Z and
-// in X (a radius), machine coordinates.
-Move NoseFromTip(const Move& m, double r);
+LatheContour LatheCase(const std::string& dialect, std::uint64_t seed, bool inside, bool inch);
+// The nose centre of a move whose points are the imaginary tip of tip code `tip` (0-9; nogouge.cpp cites
+// the manuals): end and arc centre moved back from the tip to the centre by the code's direction times r, in
+// Z and in X (a radius), machine coordinates.
+Move NoseFromTip(const Move& m, double r, int tip);
 // The machine axes (x 0, y 1, z 2) of a plane's first, second and normal axis: G17 X Y Z, G18 Z X Y, G19 Y Z
 // X.
 std::array<int, 3> PlaneAxes(int plane);

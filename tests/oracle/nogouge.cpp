@@ -6,12 +6,13 @@
 //   absolute in G90.
 // - KT-APL (G40-G42, ln 1599-1671, 6437-6696): the tools file's (TLD,T1D..) the diameter (ln 6447), taken at
 //   the ramp-on (ktapl.md judgement call 45); arcs `G02/G03 X Y I J`, I J absolute in G90.
-// The lathes, EMCO and Okuma (LatheCase): a random turned profile (profile.h) finished under G42 with a nose
-// radius of 0.2-1.6 mm and tip code 3; both write the imaginary tip, so the checker takes the nose centre
-// back from it (NoseCentre). The tool centre of every move but the entry, the first and last contour blocks
-// and the exit (whose corners depend on the approach and the dialect's ramp rule) keeps at least the radius
-// less 2e-3 mm from every element of the contour, on the compensated side. A refusal makes no motion and
-// gouges nothing; it is counted.
+// The lathes, EMCO and Okuma (LatheCase): a random turned profile (profile.h) finished outside under G42 or,
+// every other one, a bore under G41, with a nose radius of 0.2-1.6 mm and a tip code drawn for the side; both
+// write the imaginary tip, so the checker takes the nose centre back from it by the code (NoseCentre). The
+// tool centre of every move but the entry, the first and last contour blocks and the exit (whose corners
+// depend on the approach and the dialect's ramp rule) keeps at least the radius less 2e-3 mm from every
+// element of the contour, on the compensated side. A refusal makes no motion and gouges nothing; it is
+// counted.
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -160,8 +161,8 @@ CompContour RandomContour(std::uint64_t seed, bool arcs) {
 
 namespace {
 
-// The contour as a polygon (arcs in pieces of at most 5 degrees), a lathe's profile closed down the axis: the
-// part's region, for the side a point is on.
+// The contour as a polygon (arcs in pieces of at most 5 degrees), a lathe's profile closed down the axis (the
+// part's region outside, the hole's in a bore), for the side a point is on.
 std::vector<P2> Outline(const CompContour& c) {
   std::vector<P2> poly;
   for (std::size_t k = 0; k < c.Elements(); ++k) {
@@ -183,8 +184,9 @@ bool Inside(const P2& q, const std::vector<P2>& poly) {
 
 // The least distance from the points of a move (from `from`) to the contour's elements, and to element `near`
 // (the move's own) and its neighbours; negative for a point on the side away from the compensation's (inside
-// the contour under G42, outside under G41: the mills' contours run counterclockwise, the lathes' profile
-// has the part under it), so the radius is kept "on the compensated side".
+// the contour under G42, outside under G41: the mills' contours run counterclockwise; a lathe's profile is
+// closed down to the axis, the part under an outside profile and the bore's air under a bore's, where the
+// G41 nose is), so the radius is kept "on the compensated side".
 struct Distance {
   double all = 1e9, own = 1e9;  // own: to `near` and its neighbours
 };
@@ -220,6 +222,7 @@ struct Tally {
   long moves = 0;    // compensated moves checked
   int reversed = 0;  // Okuma: too close on a step the nose runs back along (okuma.md judgement call 67)
   int contours = 0, with_arcs = 0, arcs = 0, refused = 0, refused_with_arcs = 0, before_refusal = 0, far = 0;
+  int bores = 0;  // a lathe's inside profiles (G41)
 };
 
 }  // namespace
@@ -293,44 +296,75 @@ ContourProgram WriteContour(const std::string& dialect, const CompContour& c) {
   return w;
 }
 
-// A lathe's finishing pass: a random turned profile (profile.h) with 3 mm more along -Z at
-// the start diameter behind its last shoulder (so that shoulder and its top corner are checked), cut under
-// G42 (the tool above the part moving toward -Z: EMCO E42 ln 2586-2755, Okuma E-22 ln 2337-2361) with tip
-// code 3 and a nose radius of 0.2-1.6 mm. X is a radius here (the program writes diameters).
-LatheContour LatheCase(const std::string& dialect, std::uint64_t seed) {
+// A lathe's finishing pass: a random turned profile (profile.h) with 3 mm more along -Z at the start diameter
+// behind its last shoulder (so that shoulder and its top corner are checked), cut outside under G42 (the tool
+// above the part moving toward -Z: EMCO E42 ln 2586-2755, Okuma E-22 ln 2337-2361) or, `inside`, a bore
+// under G41 (the tool below the bore's wall moving toward -Z, the part on its right: G41 is "the tool ...
+// left of the workpiece, when viewed in the direction of the relative tool movement", EMCO ln 2559-2566,
+// Okuma ln 2332), with a nose radius of 0.2-1.6 mm and a tip code drawn for the side. X is a radius here
+// (the program writes diameters). `inch`: the program in inch (EMCO G70 in its first block, ln 3141-3163;
+// Okuma's inch unit system, ln 1033-1093, in `w.params`), its points on the 0.0001 in grid; the tools files
+// stay mm (the cell's tool table).
+LatheContour LatheCase(const std::string& dialect, std::uint64_t seed, bool inside, bool inch) {
   Rng g(seed);
   LatheContour l;
   CompContour& c = l.c;
   c.r = Grid(g.Real(0.2, 1.6), 0.001);
-  c.left = false;
+  c.left = inside;
   c.open = true;
   bool emco = dialect == "emco";
   // A fillet (the tool inside the arc) larger than the nose radius: EMCO ALARM 570 (ln 3022-3040); at least
   // twice it on Okuma ("R >= 2 x R_N", ln 2718-2723); 0.2 mm more.
-  TurnedProfile t = RandomTurnedProfile(g, (emco ? 1 : 2) * c.r + 0.2);
+  const double least_fillet = (emco ? 1 : 2) * c.r + 0.2;
+  TurnedProfile t = inside ? RandomBoredProfile(g, least_fillet) : RandomTurnedProfile(g, least_fillet);
+  // The tip code from a stream of its own, so an outside profile of a seed is the one drawn before tip codes.
+  // The tip on the side of the nose that faces the wall (below the centre outside, above it in a bore) or
+  // level with it, and the centre codes: EMCO's L1-L9 ("nine positions", ln 2508-2553; L0 the centre as L9,
+  // emco.md), Okuma's patterns 0-9 (okuma.md judgement call 25).
+  static const int outside_tips[] = {3, 4, 8, 5, 7, 0, 9}, inside_tips[] = {2, 1, 6, 5, 7, 0, 9};
+  Rng tg(seed ^ 0x71Bu);
+  c.tip = (inside ? inside_tips : outside_tips)[tg.Int(0, 6)];
   for (const auto& q : t.contour) c.p.push_back({q[0], q[1]});
   c.p.push_back({c.p.back()[0] - 3, c.p.back()[1]});
+  if (inch) {  // each step rounded to the 0.0001 in grid, so a quarter arc stays one and a line stays level
+    const double u = 25.4e-4;
+    std::array<long long, 2> at{std::llround(c.p[0][0] / u), std::llround(c.p[0][1] / u)};
+    std::vector<P2> q{{static_cast<double>(at[0]) * u, static_cast<double>(at[1]) * u}};
+    for (std::size_t i = 1; i < c.p.size(); ++i) {
+      for (std::size_t a = 0; a < 2; ++a) at[a] += std::llround((c.p[i][a] - c.p[i - 1][a]) / u);
+      q.push_back({static_cast<double>(at[0]) * u, static_cast<double>(at[1]) * u});
+    }
+    c.p = q;
+    c.inch = true;
+  }
   c.sweep.assign(c.p.size(), 0);
   c.centre.assign(c.p.size(), P2{0, 0});
+  const double up = inside ? -1 : 1;  // +X outside, -X in a bore (profile.h)
   for (std::size_t i = 0; i + 1 < t.contour.size(); ++i) {
     int k = t.kind[i + 1];
     double rad = c.p[i][0] - c.p[i + 1][0];
-    if (k == 1) c.sweep[i] = -90, c.centre[i] = {c.p[i][0], c.p[i][1] + rad};  // G02, concave
-    if (k == 2) c.sweep[i] = 90, c.centre[i] = {c.p[i][0] - rad, c.p[i][1]};   // G03, convex
+    // A fillet is G02 outside, G03 in a bore; a rounded edge G03 outside, G02 in a bore (X up, Z right).
+    if (k == 1) c.sweep[i] = -90 * up, c.centre[i] = {c.p[i][0], c.p[i][1] + up * rad};
+    if (k == 2) c.sweep[i] = 90 * up, c.centre[i] = {c.p[i][0] - rad, c.p[i][1]};
   }
-  auto xz = [](const P2& q) { return "X" + Num(2 * q[1], 3, true) + " Z" + Num(q[0], 3, true); };
+  const double unit = inch ? 25.4 : 1;
+  const int decimals = inch ? 4 : 3;
+  auto num = [&](double v) { return Num(v / unit, decimals, true); };
+  auto xz = [&](const P2& q) { return "X" + num(2 * q[1]) + " Z" + num(q[0]); };
   const P2 &front = c.p.front(), &back = c.p.back();
+  const P2 entry{front[0] + 5, front[1] + 5 * up};
+  const std::string comp = inside ? "G41" : "G42", tip = std::to_string(c.tip);
   std::vector<std::string> lines;
   if (emco) {
-    lines = {"%", "G95 M03 S1000 F200", "T0101 G00 " + xz({front[0] + 5, front[1] + 5}),
-             "G42 G01 " + xz(front)};
-    l.w.tools = "T0101 X0 Z0 R" + Num(c.r, 3, true) + " L3\n";
+    lines = {"%", std::string(inch ? "G70 " : "") + "G95 M03 S1000 F200", "T0101 G00 " + xz(entry),
+             comp + " G01 " + xz(front)};
+    l.w.tools = "T0101 X0 Z0 R" + Num(c.r, 3, true) + " L" + tip + "\n";
   } else {
-    lines = {"(no-gouge property, tests/oracle)",
-             "G00 " + xz({front[0] + 5, front[1] + 5}) + " S1000 T010101 M3", "G95",
-             "G42 G01 " + xz(front) + " F0.2"};
+    lines = {"(no-gouge property, tests/oracle)", "G00 " + xz(entry) + " S1000 T010101 M3", "G95",
+             comp + " G01 " + xz(front) + " F0.2"};
     l.w.tools = "VTOFX[1]=0 VTOFZ[1]=0 VNSRX[1]=" + Num(c.r, 3, true) + " VNSRZ[1]=" + Num(c.r, 3, true) +
-                " VNSRP[1]=3\n";
+                " VNSRP[1]=" + tip + "\n";
+    if (inch) l.w.params = "UNIT_SYSTEM=INCH\n";
   }
   l.w.first = static_cast<int>(lines.size()) + 1;
   for (std::size_t i = 0; i + 1 < c.p.size(); ++i) {
@@ -338,12 +372,12 @@ LatheContour LatheCase(const std::string& dialect, std::uint64_t seed) {
     if (c.sweep[i] == 0) {
       lines.push_back("G01 " + xz(e));
     } else {  // I (a radius) and K incremental from the start (EMCO ln 909-911, Okuma ln 1204-1300)
-      lines.push_back((c.sweep[i] < 0 ? "G02 " : "G03 ") + xz(e) + " I" +
-                      Num(c.centre[i][1] - a[1], 3, true) + " K" + Num(c.centre[i][0] - a[0], 3, true));
+      lines.push_back((c.sweep[i] < 0 ? "G02 " : "G03 ") + xz(e) + " I" + num(c.centre[i][1] - a[1]) + " K" +
+                      num(c.centre[i][0] - a[0]));
     }
   }
   l.w.last = static_cast<int>(lines.size());
-  lines.push_back("G40 G01 X" + Num(2 * back[1] + 6, 3, true));
+  lines.push_back("G40 G01 X" + num(2 * (back[1] + 3 * up)));
   lines.push_back(emco ? "M30" : "M02");
   for (std::size_t i = 1; emco && i < lines.size(); ++i) {  // EMCO numbers its blocks (N0010, N0020, ...)
     char n[16];
@@ -354,15 +388,23 @@ LatheContour LatheCase(const std::string& dialect, std::uint64_t seed) {
   return l;
 }
 
-// Where the nose centre is for a written (theoretical tip) point: the tip is P = S + the tip direction times
-// the radius, code 3 (-Z, -X) for an outside tool turning toward the chuck: EMCO "cutter position L3" for a
-// left-hand side tool (ln 2510-2514; P against S, ln 2553) and E42's tip "0.8 below and behind" (ln
-// 2586-2755), Okuma pattern 3 (okuma.md judgement call 25; E-22's tip at the centre + [-0.8, -0.8], ln
-// 2337-2361).
-Move NoseFromTip(const Move& m, double r) {
+// Where the nose centre S is for a written (theoretical tip) point P: P = S + the tip direction of the code
+// times the radius, (Z, X) seen with X up and Z right:
+//        2   6   1
+//        7  0/9  5
+//        3   8   4
+// Code 3 (-Z, -X) is the outside tool turning toward the chuck: EMCO "cutter position L3" for a left-hand
+// side tool (ln 2510-2514; P against S, ln 2553) and E42's tip "0.8 below and behind" (ln 2586-2755), Okuma
+// pattern 3 (E-22's tip at the centre + [-0.8, -0.8], ln 2337-2361); code 2 (-Z, +X) EMCO's internal copying
+// tool (ln 2516-2518). The rest walk round the centre: EMCO's table of shapes (ln 2544-2551: L3 L8 L4 L5 L1
+// L6 L2 L7, the order of the positions round S) and Okuma's patterns (the manual has none: okuma.md judgement
+// call 25); 0 and 9 are the centre.
+Move NoseFromTip(const Move& m, double r, int tip) {
+  static const int dz[10] = {0, 1, -1, -1, 1, 1, 0, -1, 0, 0}, dx[10] = {0, 1, 1, -1, -1, 0, 1, 0, -1, 0};
+  const std::size_t t = tip >= 0 && tip <= 9 ? static_cast<std::size_t>(tip) : 0;
   Move c = m;
-  c.end[0] += r, c.end[2] += r;
-  c.center[0] += r, c.center[2] += r;
+  c.end[0] -= dx[t] * r, c.end[2] -= dz[t] * r;
+  c.center[0] -= dx[t] * r, c.center[2] -= dz[t] * r;
   return c;
 }
 
@@ -370,8 +412,8 @@ namespace {
 
 // The nose centre in the mills' plane: x = Z, y = X as a radius, X up and Z to the right, where G02 is
 // clockwise (EMCO ln 2116-2149).
-Move NoseCentre(const Move& m, double r) {
-  Move c = NoseFromTip(m, r);
+Move NoseCentre(const Move& m, double r, int tip) {
+  Move c = NoseFromTip(m, r, tip);
   c.end = {c.end[2], c.end[0], 0};
   c.center = {c.center[2], c.center[0], 0};
   return c;
@@ -386,7 +428,7 @@ bool Check(const PropRun& o, const std::string& dialect, std::uint64_t seed, boo
   CompContour c;
   ContourProgram w;
   if (lathe) {
-    LatheContour l = LatheCase(dialect, seed);
+    LatheContour l = LatheCase(dialect, seed, arcs, false);  // the odd ones a bore
     c = std::move(l.c);
     w = std::move(l.w);
   } else {
@@ -395,6 +437,7 @@ bool Check(const PropRun& o, const std::string& dialect, std::uint64_t seed, boo
   }
   int arc_count = static_cast<int>(std::count_if(c.sweep.begin(), c.sweep.end(), [](double s) { return s; }));
   ++tally->contours;
+  tally->bores += lathe && c.left;
   tally->arcs += arc_count;
   if (arc_count) ++tally->with_arcs;
   fs::path prog = dir / ("gouge." + dialect), tools = dir / "gouge.tools";
@@ -406,7 +449,7 @@ bool Check(const PropRun& o, const std::string& dialect, std::uint64_t seed, boo
   auto written = ParseCellInterp(Slurp(dir / "gouge.out"), lathe, &error);
   auto moves = written;  // the tool centre's moves
   if (lathe)
-    for (Move& m : moves) m = NoseCentre(m, c.r);
+    for (Move& m : moves) m = NoseCentre(m, c.r, c.tip);
   auto keep = [&] {  // --keep: the program of a failing or refused contour
     if (o.keep.empty()) return;
     fs::create_directories(o.keep);
@@ -477,7 +520,7 @@ bool Check(const PropRun& o, const std::string& dialect, std::uint64_t seed, boo
 int NoGouge(const PropRun& o, const std::string& dialect, const fs::path& dir) {
   int failing = 0;
   Tally t;
-  // One contour per ten blocks; the odd ones with arcs.
+  // One contour per ten blocks; the odd ones with arcs (a lathe's: a bore under G41).
   for (int done = 0, i = 0; done < o.blocks; done += 10, ++i)
     if (!Check(o, dialect, ProgramSeed(o.seed, dialect + "/nogouge", i), i % 2 == 1, dir, &t)) ++failing;
   bool lathe = dialect == "emco" || dialect == "okuma";
@@ -489,6 +532,7 @@ int NoGouge(const PropRun& o, const std::string& dialect, const fs::path& dir) {
       "too close on a step run back along)\n",
       dialect.c_str(), t.contours - failing, t.contours, lathe ? "profiles" : "contours", t.moves,
       t.with_arcs, t.arcs, t.refused, t.refused_with_arcs, t.before_refusal, t.far, t.reversed);
+  if (lathe) std::printf("%s nogouge: %d of the profiles bores (G41)\n", dialect.c_str(), t.bores);
   return failing;
 }
 
