@@ -256,8 +256,9 @@ bool Gen::Rotary(Block& b) {
   if (!(caps.rotary || caps.rotary_linear) || cur.per_rev || need_abs || !rng.Chance(8)) return false;
   bool linear = caps.rotary_linear && (!caps.rotary || cur.inverse || rng.Chance(50));
   if (!linear && cur.inverse) return false;  // rs274 times a rotary-only G93 move by its degrees
-  b.kind = rng.Chance(25) ? MoveKind::kRapid : MoveKind::kLine;
-  b.end = b.start;
+  b.kind = caps.index_b || rng.Chance(25) ? MoveKind::kRapid : MoveKind::kLine;
+  // An incremental positioning keeps the implicit offset; absolute (the absinc property) it would select one.
+  if (caps.implicit_offsets && cur.incremental && b.kind == MoveKind::kRapid) return false;
   std::vector<int> turn;
   for (int a = 0; a < 3; ++a)
     if ((caps.rotary_axes & (1u << a)) && rng.Chance(50)) turn.push_back(a);
@@ -271,7 +272,12 @@ bool Gen::Rotary(Block& b) {
   if (linear && static_cast<int>(turn.size()) >= room) turn.resize(static_cast<std::size_t>(room - 1));
   room -= static_cast<int>(turn.size());
   for (int a : turn) {
-    long v = rng.Int(-3600, 3600);  // tenths of a degree
+    long v = rng.Int(-3600, 3600);                            // tenths of a degree
+    if (caps.index_b && a == 1) v = (v / 10) * 10;            // an index table: whole degrees
+    if (caps.implicit_offsets && a == 1 && rng.Chance(35)) {  // often a position that selects an offset
+      v = std::lround(kOffsetB[static_cast<std::size_t>(rng.Int(0, kOffsets - 1))] * 10);
+      if (rng.Chance(50)) v = -v;
+    }
     if (caps.rotary_wrap && !cur.incremental) {
       // The word is the position mod 360 and its sign the sense (KT-APL ln 4481-4546): the travel to it.
       long from = ((std::lround(b.rot_start[a] * 10) % 3600) + 3600) % 3600, to = std::labs(v) % 3600;
@@ -281,6 +287,15 @@ bool Gen::Rotary(Block& b) {
       b.rot_end[a] = cur.incremental ? b.rot_start[a] + v / 10.0 : v / 10.0;
     }
   }
+  // Implicit offsets: an absolute positioning of B selects the offset listed for its position (none if no
+  // line lists it); the block's linear words are in the new offset (KT-APL rebases them, ktapl.md call 23).
+  if (caps.implicit_offsets && b.kind == MoveKind::kRapid && !cur.incremental &&
+      b.rot_end[1] != b.rot_start[1]) {
+    cur.offset = b.m.offset = OffsetAtB(b.rot_end[1]);
+    b.start = ToProgram(machine);
+    b.offset_by_b = true;
+  }
+  b.end = b.start;
   if (linear) {
     Vec3 p = RandomPoint();
     if (cur.incremental && rng.Chance(70)) {  // a short step, still inside
@@ -313,10 +328,14 @@ Block Gen::Next() {
     b.kind = MoveKind::kSet;
     Vec3 p = RandomPoint();
     if (caps.lathe) p[1] = 0;
-    b.end = p;
     Vec3 base = kOffsetTable[static_cast<std::size_t>(cur.offset)];
     if (caps.lathe) base[1] = 0;
+    // A machine-position set: the dialect's word (p plus the offset) is the one on the grid.
+    if (caps.position_set_machine)
+      for (int i = 0; i < 3; ++i) p[i] = Snap(p[i] + base[i] / Unit()) - base[i] / Unit();
+    b.end = p;
     for (int i = 0; i < 3; ++i) g92[i] = machine[i] - base[i] - p[i] * Unit();
+    need_abs = need_abs || caps.position_set_machine;  // p is off the inch grid then
     return b;
   }
   if (!arc && !cycle && !rotary) {
@@ -339,6 +358,8 @@ Block Gen::Next() {
   if (rng.Chance(40)) b.omit = static_cast<unsigned>(rng.Next() & 63);
   machine = ToMachine(b.end);
   rot = b.rot_end;
+  // After an implicit offset change the axes the block did not name are off the grid (inch).
+  if (b.offset_by_b) need_abs = true;
   return b;
 }
 
@@ -397,6 +418,13 @@ std::vector<double> PeckBottoms(const Block& b, const Caps::Peck& p) {
   }
   out.push_back(b.bottom);
   return out;
+}
+
+int OffsetAtB(double b) {
+  long at = ((std::lround(b * 1000) % 360000) + 360000) % 360000;
+  for (int k = 1; k < kOffsets; ++k)
+    if (at == std::lround(kOffsetB[static_cast<std::size_t>(k)] * 1000)) return k;
+  return 0;
 }
 
 bool RotaryAlone(const Block& b) {
@@ -515,10 +543,12 @@ std::string NgcMove(const Block& b, const Caps& caps) {
     }
     return s + (caps.lathe ? "G80\nG18" : "G80");
   }
+  // An index table turns with X and Y, Z follows (KT-APL ln 4493-4546): two moves.
+  const bool z_after = caps.index_b && b.rot_end[1] != b.rot_start[1] && b.end[2] != b.start[2];
   for (int i = 0; i < 3; ++i) {
     // A rotary move alone names no linear axis: after a G92 rs274's position may be off the word (1e-15 mm,
     // or its 1e-4 in rounding) and it would take F for a linear rate (in inch, 25.4 times the deg/min).
-    if ((caps.lathe && i == 1) || RotaryAlone(b)) continue;
+    if ((caps.lathe && i == 1) || RotaryAlone(b) || (z_after && i == 2)) continue;
     double v = b.m.incremental ? b.end[i] - b.start[i] : b.end[i];
     word(letters[i], caps.lathe && i == 0 ? 2 * v : v);
   }
@@ -536,6 +566,7 @@ std::string NgcMove(const Block& b, const Caps& caps) {
     if (b.rot_end[i] != b.rot_start[i])
       word(rotary[i], b.m.incremental ? b.rot_end[i] - b.rot_start[i] : b.rot_end[i]);
   if (b.kind != MoveKind::kRapid) word('F', caps.rotary_vector_feed ? LinearRate(b) : b.feed);
+  if (z_after) s += "\nG0 Z" + Num(b.m.incremental ? b.end[2] - b.start[2] : b.end[2], d);
   return s;
 }
 
