@@ -35,12 +35,22 @@ struct Gen {
   bool need_abs = true;
   bool offset_changed = false;
   Box box;
+  double calc_b = 0;  // degrees [0, 360): the B the offset in force is turned for (Caps::calculated_offsets)
 
   double Unit() const { return cur.inch ? kMm : 1.0; }
   double Grid() const { return std::pow(10.0, -(cur.inch ? caps.inch_decimals : caps.mm_decimals)); }
   double Snap(double v) const { return std::round(v / Grid()) * Grid(); }
+  Vec3 Fixture() const {  // the work offset in force, turned with B under calculated offsets
+    const auto k = static_cast<std::size_t>(cur.offset);
+    Vec3 o = kOffsetTable[k];
+    if (caps.calculated_offsets && k > 0) {
+      const double d = (calc_b - kOffsetB[k]) * M_PI / 180, c = std::cos(d), s = std::sin(d);
+      o = {o[0] * c - o[2] * s, o[1], o[0] * s + o[2] * c};
+    }
+    return o;
+  }
   Vec3 Offset() const {  // a lathe has no Y
-    Vec3 o = kOffsetTable[static_cast<std::size_t>(cur.offset)];
+    Vec3 o = Fixture();
     for (int i = 0; i < 3; ++i) o[i] += g92[i];
     if (caps.lathe) o[1] = 0;
     return o;
@@ -90,6 +100,7 @@ void Gen::ChangeModes() {
     offset_changed = o != cur.offset;
     need_abs = need_abs || offset_changed;
     cur.offset = o;
+    if (offset_changed) calc_b = std::fmod(std::fmod(rot[1], 360) + 360, 360);  // where B stands
   }
   if (caps.incremental && rng.Chance(10)) cur.incremental = !cur.incremental;
   if (caps.planes.size() > 1 && rng.Chance(8)) {
@@ -258,7 +269,9 @@ bool Gen::Rotary(Block& b) {
   if (!linear && cur.inverse) return false;  // rs274 times a rotary-only G93 move by its degrees
   b.kind = caps.index_b || rng.Chance(25) ? MoveKind::kRapid : MoveKind::kLine;
   // An incremental positioning keeps the implicit offset; absolute (the absinc property) it would select one.
-  if (caps.implicit_offsets && cur.incremental && b.kind == MoveKind::kRapid) return false;
+  // A calculated offset turns at either, and KT-APL counts the block's increments in the offset before it.
+  if ((caps.implicit_offsets || caps.calculated_offsets) && cur.incremental && b.kind == MoveKind::kRapid)
+    return false;
   std::vector<int> turn;
   for (int a = 0; a < 3; ++a)
     if ((caps.rotary_axes & (1u << a)) && rng.Chance(50)) turn.push_back(a);
@@ -289,11 +302,15 @@ bool Gen::Rotary(Block& b) {
   }
   // Implicit offsets: an absolute positioning of B selects the offset listed for its position (none if no
   // line lists it); the block's linear words are in the new offset (KT-APL rebases them, ktapl.md call 23).
-  if (caps.implicit_offsets && b.kind == MoveKind::kRapid && !cur.incremental &&
+  // Calculated offsets: the positioning turns the offset in force (a position no line lists keeps it).
+  if ((caps.implicit_offsets || caps.calculated_offsets) && b.kind == MoveKind::kRapid && !cur.incremental &&
       b.rot_end[1] != b.rot_start[1]) {
-    cur.offset = b.m.offset = OffsetAtB(b.rot_end[1]);
+    const int was = cur.offset;
+    const int k = OffsetAtB(b.rot_end[1]);
+    if (caps.implicit_offsets && (k != 0 || !caps.calculated_offsets)) cur.offset = b.m.offset = k;
+    if (caps.calculated_offsets) calc_b = std::fmod(std::fmod(b.rot_end[1], 360) + 360, 360);
     b.start = ToProgram(machine);
-    b.offset_by_b = true;
+    b.offset_by_b = cur.offset != was || (caps.calculated_offsets && cur.offset != 0);
   }
   b.end = b.start;
   if (linear) {
@@ -328,7 +345,7 @@ Block Gen::Next() {
     b.kind = MoveKind::kSet;
     Vec3 p = RandomPoint();
     if (caps.lathe) p[1] = 0;
-    Vec3 base = kOffsetTable[static_cast<std::size_t>(cur.offset)];
+    Vec3 base = Fixture();
     if (caps.lathe) base[1] = 0;
     // A machine-position set: the dialect's word (p plus the offset) is the one on the grid.
     if (caps.position_set_machine)
@@ -336,6 +353,7 @@ Block Gen::Next() {
     b.end = p;
     for (int i = 0; i < 3; ++i) g92[i] = machine[i] - base[i] - p[i] * Unit();
     need_abs = need_abs || caps.position_set_machine;  // p is off the inch grid then
+    b.offset_mm = Fixture();
     return b;
   }
   if (!arc && !cycle && !rotary) {
@@ -360,6 +378,7 @@ Block Gen::Next() {
   rot = b.rot_end;
   // After an implicit offset change the axes the block did not name are off the grid (inch).
   if (b.offset_by_b) need_abs = true;
+  b.offset_mm = Fixture();
   return b;
 }
 
@@ -451,7 +470,7 @@ std::string Num(double v, int decimals, bool point) {
 }
 
 std::vector<Block> Generate(const Caps& caps, std::uint64_t seed, int count) {
-  Gen g{caps, Rng{seed}, {}, {}, {}, {}, true, false, {}};
+  Gen g{caps, Rng{seed}, {}, {}, {}, {}, true, false, {}, 0};
   g.cur.plane = caps.planes.front();
   if (caps.inch && !caps.unit_switch) g.cur.inch = caps.inch_only || g.rng.Chance(30);
   if (caps.lathe)
@@ -585,6 +604,7 @@ NgcText WriteNgc(const std::vector<Block>& blocks, const Caps& caps) {
   t += "S1000 M3\n";
   Modes m;
   m.plane = caps.lathe ? 18 : 17;
+  std::array<Vec3, kOffsets> set = kOffsetTable;  // the offsets as G10 L2 set them last
   for (const Block& b : blocks) {
     std::string modes;
     if (b.m.inch != m.inch) modes += b.m.inch ? "G20 " : "G21 ";
@@ -597,6 +617,13 @@ NgcText WriteNgc(const std::vector<Block>& blocks, const Caps& caps) {
     // Modes on a line of their own: rs274 sets F before G20/G21 within a block (LinuxCNC's order of
     // execution).
     if (!modes.empty()) modes.back() = '\n';
+    const auto k = static_cast<std::size_t>(b.m.offset);
+    if (caps.calculated_offsets && k > 0 && b.offset_mm != set[k]) {  // the offset turned with B (G47)
+      const double u = b.m.inch ? kMm : 1.0;
+      modes += "G10 L2 P" + std::to_string(k + 1) + " X" + Num(b.offset_mm[0] / u, 6) + " Y" +
+               Num(b.offset_mm[1] / u, 6) + " Z" + Num(b.offset_mm[2] / u, 6) + "\n";
+      set[k] = b.offset_mm;
+    }
     std::string line = modes + NgcMove(b, caps);
     out.blocks.push_back(line);
     t += line + "\n";

@@ -21,6 +21,9 @@ bool IndexB(std::uint64_t seed) {
 bool Implicit(std::uint64_t seed) {
   return (seed / 2) % 2 == 1;
 }
+bool Calculated(std::uint64_t seed) {  // G47
+  return (seed / 4) % 2 == 1;
+}
 
 class Ktapl final : public Module {
  public:
@@ -54,7 +57,11 @@ class Ktapl final : public Module {
     c.position_set_machine = true;
     c.implicit_offsets = Implicit(seed);  // G49: the line whose I is where B goes (ln 7018-7026)
     c.offsets = !c.implicit_offsets;      // G48 H (ln 6935)
-    c.index_b = IndexB(seed);             // index moves: whole degrees at F0, Z after B (ln 4491-4546)
+    // G47 (ln 1678-1680, 6286-6308): the line's X/Z offset turns with B. Metric only: a turned offset is off
+    // the inch grid, and rs274 prints it and the points in it to four inch decimals.
+    c.calculated_offsets = Calculated(seed);
+    c.inch = !c.calculated_offsets;
+    c.index_b = IndexB(seed);  // index moves: whole degrees at F0, Z after B (ln 4491-4546)
     // B as a full rotary axis (B_AXIS=rotary) or index table, alone or with X Y Z in a G00/G01 block (ln
     // 5964-5983; not in an arc, ln 947). Alone F is whole deg/min (F3.0, ln 5976); with linear axes F is
     // theirs and B follows (ln 5983), LinuxCNC's rule. A G90 word is the position mod 360, its sign the sense
@@ -94,7 +101,7 @@ std::string Cycle(const Block& b) {
 
 std::string Motion(const Block& b) {
   if (b.kind == MoveKind::kSet) {  // the machine's absolute position: the program's plus the fixture offset
-    const Vec3& f = kOffsetTable[static_cast<std::size_t>(b.m.offset)];
+    const Vec3& f = b.offset_mm;
     const double unit = b.m.inch ? 25.4 : 1.0;
     return "G92X" + Coord(b, b.end[0] + f[0] / unit) + "Y" + Coord(b, b.end[1] + f[1] / unit) + "Z" +
            Coord(b, b.end[2] + f[2] / unit);
@@ -152,6 +159,7 @@ Program Ktapl::Write(const std::vector<Block>& blocks, std::uint64_t seed) const
                       ")\n";
   }
   p.dialect_text += Implicit(seed) ? "G49\n" : "G48\n";
+  if (Calculated(seed)) p.dialect_text += "G47\n";
   Modes m;
   for (const Block& b : blocks) {
     std::string pre;

@@ -55,7 +55,9 @@ struct Block {
   bool tap_pitch = false;  // kCycle G84: the dialect states the pitch, F / S (Balt-System K, S1000), not F
   unsigned omit =
       0;  // words a module may leave out where they change nothing: bits 0-2 axis x y z, 3-5 centre
-  bool offset_by_b = false;  // the block's B positioning selected its offset (Caps::implicit_offsets)
+  // The block's B positioning selected its offset (Caps::implicit_offsets) or turned it (calculated_offsets).
+  bool offset_by_b = false;
+  Vec3 offset_mm{};  // the work offset in force (mm; turned with B under Caps::calculated_offsets)
 };
 
 // The work offsets every program may select (mm; x a radius). Offset 0 is the machine zero. Whole thousandths
@@ -130,6 +132,10 @@ struct Caps {
   // The offset follows B (KT-APL G49, ln 1700, 7018-7026): an absolute positioning (rapid) of B to
   // kOffsetB[k] selects offset k, to any other position none; `offsets` (drawn by mode changes) is off then.
   bool implicit_offsets = false;
+  // The offset in force turns with B (KT-APL G47, ln 1678-1680, 6286-6308, ktapl.md call 77): X' = X cos d -
+  // Z sin d, Z' = X sin d + Z cos d, d the B of the last positioning of B (or where B stood when the offset
+  // was selected) less the offset's kOffsetB. The NGC twin sets the turned offset by G10 L2 before the block.
+  bool calculated_offsets = false;
   // B is an index table (KT-APL B_AXIS=index, ln 4491-4546): whole degrees, every B move a rapid (F0), the
   // block's X Y with B and then its Z (the NGC twin states the two moves).
   bool index_b = false;
