@@ -376,7 +376,7 @@ Block Gen::Next() {
   if (rng.Chance(40)) b.omit = static_cast<unsigned>(rng.Next() & 63);
   machine = ToMachine(b.end);
   rot = b.rot_end;
-  // After an implicit offset change the axes the block did not name are off the grid (inch).
+  // After an offset selected or turned by B the axes the block did not name are off the grid.
   if (b.offset_by_b) need_abs = true;
   b.offset_mm = Fixture();
   return b;
