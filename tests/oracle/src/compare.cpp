@@ -174,10 +174,11 @@ std::vector<Move> ParseRs274(const std::string& canon, bool lathe, std::string* 
       st.last_rot = m.rot;
       // After a G92 the same point comes back through other offsets: within 1e-6 mm, in inch within 1.5e-4 in
       // (rs274 prints the point and the offsets to 1e-4 in, so it may come back a step off; a generated
-      // linear step is 0.0039 in at least).
+      // linear step is 0.0039 in at least, but a peck cycle's last peck may be one grid step: a move that
+      // turns no rotary axis is linear).
       const double same = st.unit > 1 ? 1.5e-4 * st.unit : 1e-6;
       bool rotary_only = std::fabs(m.end[0] - st.last[0]) < same && std::fabs(m.end[1] - st.last[1]) < same &&
-                         std::fabs(m.end[2] - st.last[2]) < same;
+                         std::fabs(m.end[2] - st.last[2]) < same && m.travel != Vec3{};
       st.last = m.end;
       m.feed = rotary_only ? st.feed_raw : st.feed, m.per_rev = st.per_rev;
       m.floor = 0.1 * st.unit;  // LinuxCNC raises an inverse-time rate to 0.1 unit/min at least

@@ -35,12 +35,22 @@ struct Gen {
   bool need_abs = true;
   bool offset_changed = false;
   Box box;
+  double calc_b = 0;  // degrees [0, 360): the B the offset in force is turned for (Caps::calculated_offsets)
 
   double Unit() const { return cur.inch ? kMm : 1.0; }
   double Grid() const { return std::pow(10.0, -(cur.inch ? caps.inch_decimals : caps.mm_decimals)); }
   double Snap(double v) const { return std::round(v / Grid()) * Grid(); }
+  Vec3 Fixture() const {  // the work offset in force, turned with B under calculated offsets
+    const auto k = static_cast<std::size_t>(cur.offset);
+    Vec3 o = kOffsetTable[k];
+    if (caps.calculated_offsets && k > 0) {
+      const double d = (calc_b - kOffsetB[k]) * M_PI / 180, c = std::cos(d), s = std::sin(d);
+      o = {o[0] * c - o[2] * s, o[1], o[0] * s + o[2] * c};
+    }
+    return o;
+  }
   Vec3 Offset() const {  // a lathe has no Y
-    Vec3 o = kOffsetTable[static_cast<std::size_t>(cur.offset)];
+    Vec3 o = Fixture();
     for (int i = 0; i < 3; ++i) o[i] += g92[i];
     if (caps.lathe) o[1] = 0;
     return o;
@@ -90,6 +100,7 @@ void Gen::ChangeModes() {
     offset_changed = o != cur.offset;
     need_abs = need_abs || offset_changed;
     cur.offset = o;
+    if (offset_changed) calc_b = std::fmod(std::fmod(rot[1], 360) + 360, 360);  // where B stands
   }
   if (caps.incremental && rng.Chance(10)) cur.incremental = !cur.incremental;
   if (caps.planes.size() > 1 && rng.Chance(8)) {
@@ -256,8 +267,11 @@ bool Gen::Rotary(Block& b) {
   if (!(caps.rotary || caps.rotary_linear) || cur.per_rev || need_abs || !rng.Chance(8)) return false;
   bool linear = caps.rotary_linear && (!caps.rotary || cur.inverse || rng.Chance(50));
   if (!linear && cur.inverse) return false;  // rs274 times a rotary-only G93 move by its degrees
-  b.kind = rng.Chance(25) ? MoveKind::kRapid : MoveKind::kLine;
-  b.end = b.start;
+  b.kind = caps.index_b || rng.Chance(25) ? MoveKind::kRapid : MoveKind::kLine;
+  // An incremental positioning keeps the implicit offset; absolute (the absinc property) it would select one.
+  // A calculated offset turns at either, and KT-APL counts the block's increments in the offset before it.
+  if ((caps.implicit_offsets || caps.calculated_offsets) && cur.incremental && b.kind == MoveKind::kRapid)
+    return false;
   std::vector<int> turn;
   for (int a = 0; a < 3; ++a)
     if ((caps.rotary_axes & (1u << a)) && rng.Chance(50)) turn.push_back(a);
@@ -271,7 +285,12 @@ bool Gen::Rotary(Block& b) {
   if (linear && static_cast<int>(turn.size()) >= room) turn.resize(static_cast<std::size_t>(room - 1));
   room -= static_cast<int>(turn.size());
   for (int a : turn) {
-    long v = rng.Int(-3600, 3600);  // tenths of a degree
+    long v = rng.Int(-3600, 3600);                            // tenths of a degree
+    if (caps.index_b && a == 1) v = (v / 10) * 10;            // an index table: whole degrees
+    if (caps.implicit_offsets && a == 1 && rng.Chance(35)) {  // often a position that selects an offset
+      v = std::lround(kOffsetB[static_cast<std::size_t>(rng.Int(0, kOffsets - 1))] * 10);
+      if (rng.Chance(50)) v = -v;
+    }
     if (caps.rotary_wrap && !cur.incremental) {
       // The word is the position mod 360 and its sign the sense (KT-APL ln 4481-4546): the travel to it.
       long from = ((std::lround(b.rot_start[a] * 10) % 3600) + 3600) % 3600, to = std::labs(v) % 3600;
@@ -281,6 +300,19 @@ bool Gen::Rotary(Block& b) {
       b.rot_end[a] = cur.incremental ? b.rot_start[a] + v / 10.0 : v / 10.0;
     }
   }
+  // Implicit offsets: an absolute positioning of B selects the offset listed for its position (none if no
+  // line lists it); the block's linear words are in the new offset (KT-APL rebases them, ktapl.md call 23).
+  // Calculated offsets: the positioning turns the offset in force (a position no line lists keeps it).
+  if ((caps.implicit_offsets || caps.calculated_offsets) && b.kind == MoveKind::kRapid && !cur.incremental &&
+      b.rot_end[1] != b.rot_start[1]) {
+    const int was = cur.offset;
+    const int k = OffsetAtB(b.rot_end[1]);
+    if (caps.implicit_offsets && (k != 0 || !caps.calculated_offsets)) cur.offset = b.m.offset = k;
+    if (caps.calculated_offsets) calc_b = std::fmod(std::fmod(b.rot_end[1], 360) + 360, 360);
+    b.start = ToProgram(machine);
+    b.offset_by_b = cur.offset != was || (caps.calculated_offsets && cur.offset != 0);
+  }
+  b.end = b.start;
   if (linear) {
     Vec3 p = RandomPoint();
     if (cur.incremental && rng.Chance(70)) {  // a short step, still inside
@@ -313,10 +345,15 @@ Block Gen::Next() {
     b.kind = MoveKind::kSet;
     Vec3 p = RandomPoint();
     if (caps.lathe) p[1] = 0;
-    b.end = p;
-    Vec3 base = kOffsetTable[static_cast<std::size_t>(cur.offset)];
+    Vec3 base = Fixture();
     if (caps.lathe) base[1] = 0;
+    // A machine-position set: the dialect's word (p plus the offset) is the one on the grid.
+    if (caps.position_set_machine)
+      for (int i = 0; i < 3; ++i) p[i] = Snap(p[i] + base[i] / Unit()) - base[i] / Unit();
+    b.end = p;
     for (int i = 0; i < 3; ++i) g92[i] = machine[i] - base[i] - p[i] * Unit();
+    need_abs = need_abs || caps.position_set_machine;  // p is off the inch grid then
+    b.offset_mm = Fixture();
     return b;
   }
   if (!arc && !cycle && !rotary) {
@@ -339,6 +376,9 @@ Block Gen::Next() {
   if (rng.Chance(40)) b.omit = static_cast<unsigned>(rng.Next() & 63);
   machine = ToMachine(b.end);
   rot = b.rot_end;
+  // After an offset selected or turned by B the axes the block did not name are off the grid.
+  if (b.offset_by_b) need_abs = true;
+  b.offset_mm = Fixture();
   return b;
 }
 
@@ -399,6 +439,13 @@ std::vector<double> PeckBottoms(const Block& b, const Caps::Peck& p) {
   return out;
 }
 
+int OffsetAtB(double b) {
+  long at = ((std::lround(b * 1000) % 360000) + 360000) % 360000;
+  for (int k = 1; k < kOffsets; ++k)
+    if (at == std::lround(kOffsetB[static_cast<std::size_t>(k)] * 1000)) return k;
+  return 0;
+}
+
 bool RotaryAlone(const Block& b) {
   return b.rot_end != b.rot_start && b.end == b.start;
 }
@@ -423,7 +470,7 @@ std::string Num(double v, int decimals, bool point) {
 }
 
 std::vector<Block> Generate(const Caps& caps, std::uint64_t seed, int count) {
-  Gen g{caps, Rng{seed}, {}, {}, {}, {}, true, false, {}};
+  Gen g{caps, Rng{seed}, {}, {}, {}, {}, true, false, {}, 0};
   g.cur.plane = caps.planes.front();
   if (caps.inch && !caps.unit_switch) g.cur.inch = caps.inch_only || g.rng.Chance(30);
   if (caps.lathe)
@@ -515,10 +562,12 @@ std::string NgcMove(const Block& b, const Caps& caps) {
     }
     return s + (caps.lathe ? "G80\nG18" : "G80");
   }
+  // An index table turns with X and Y, Z follows (KT-APL ln 4493-4546): two moves.
+  const bool z_after = caps.index_b && b.rot_end[1] != b.rot_start[1] && b.end[2] != b.start[2];
   for (int i = 0; i < 3; ++i) {
     // A rotary move alone names no linear axis: after a G92 rs274's position may be off the word (1e-15 mm,
     // or its 1e-4 in rounding) and it would take F for a linear rate (in inch, 25.4 times the deg/min).
-    if ((caps.lathe && i == 1) || RotaryAlone(b)) continue;
+    if ((caps.lathe && i == 1) || RotaryAlone(b) || (z_after && i == 2)) continue;
     double v = b.m.incremental ? b.end[i] - b.start[i] : b.end[i];
     word(letters[i], caps.lathe && i == 0 ? 2 * v : v);
   }
@@ -536,6 +585,7 @@ std::string NgcMove(const Block& b, const Caps& caps) {
     if (b.rot_end[i] != b.rot_start[i])
       word(rotary[i], b.m.incremental ? b.rot_end[i] - b.rot_start[i] : b.rot_end[i]);
   if (b.kind != MoveKind::kRapid) word('F', caps.rotary_vector_feed ? LinearRate(b) : b.feed);
+  if (z_after) s += "\nG0 Z" + Num(b.m.incremental ? b.end[2] - b.start[2] : b.end[2], d);
   return s;
 }
 
@@ -554,6 +604,7 @@ NgcText WriteNgc(const std::vector<Block>& blocks, const Caps& caps) {
   t += "S1000 M3\n";
   Modes m;
   m.plane = caps.lathe ? 18 : 17;
+  std::array<Vec3, kOffsets> set = kOffsetTable;  // the offsets as G10 L2 set them last
   for (const Block& b : blocks) {
     std::string modes;
     if (b.m.inch != m.inch) modes += b.m.inch ? "G20 " : "G21 ";
@@ -566,6 +617,13 @@ NgcText WriteNgc(const std::vector<Block>& blocks, const Caps& caps) {
     // Modes on a line of their own: rs274 sets F before G20/G21 within a block (LinuxCNC's order of
     // execution).
     if (!modes.empty()) modes.back() = '\n';
+    const auto k = static_cast<std::size_t>(b.m.offset);
+    if (caps.calculated_offsets && k > 0 && b.offset_mm != set[k]) {  // the offset turned with B (G47)
+      const double u = b.m.inch ? kMm : 1.0;
+      modes += "G10 L2 P" + std::to_string(k + 1) + " X" + Num(b.offset_mm[0] / u, 6) + " Y" +
+               Num(b.offset_mm[1] / u, 6) + " Z" + Num(b.offset_mm[2] / u, 6) + "\n";
+      set[k] = b.offset_mm;
+    }
     std::string line = modes + NgcMove(b, caps);
     out.blocks.push_back(line);
     t += line + "\n";

@@ -2,7 +2,11 @@
 // by axis letter, absolute in G90 and incremental in G91, R only in G90 G17 (negative beyond 180 degrees),
 // helices by the normal axis's word, rapids as F0 (DESIGN §4), every number with its decimal point (implied
 // decimals otherwise, judgement call 64), feeds with one decimal (call 63), blocks under 80 characters (call
-// 2).
+// 2). Fixture offsets: the work offsets as fixture lines H1, H2 (I the B position, G49), set by FXC or by UFX
+// at the machine zero (ln 3476-3536, 4156-4211), selected by G48 H or by B positioning under G49 (ln 1682,
+// 1700, 7018-7026), turned with B under G47 or not (G39); B an index table (B_AXIS=index, the default) or a
+// full rotary axis: each of these per program, by its seed. G92 regrids the machine's absolute
+// position (ln 1579): its word is the NGC twin's plus the fixture offset in force (ktapl.md call 90).
 #include <cmath>
 
 #include "cell/oracle/oracle.h"
@@ -11,11 +15,25 @@
 namespace cell::oracle {
 namespace {
 
+// The program's fixture form by its seed: B an index table or rotary; the line selected by H or by B.
+bool IndexB(std::uint64_t seed) {
+  return seed % 2 == 0;
+}
+bool Implicit(std::uint64_t seed) {
+  return (seed / 2) % 2 == 1;
+}
+bool Calculated(std::uint64_t seed) {  // G47
+  return (seed / 4) % 2 == 1;
+}
+bool Ufx(std::uint64_t seed) {  // the lines by UFX: offset = where the axes are (0) - the word
+  return (seed / 8) % 2 == 1;
+}
+
 class Ktapl final : public Module {
  public:
   std::string Name() const override { return "ktapl"; }
   std::string Extension() const override { return "ktapl"; }
-  Caps Capabilities(std::uint64_t) const override {
+  Caps Capabilities(std::uint64_t seed) const override {
     Caps c;
     c.radius_form_g17_absolute = true;
     c.full_circle = true;
@@ -40,11 +58,18 @@ class Ktapl final : public Module {
     c.per_rev = false;  // G93 inverse time and G94 only
     c.inverse_time = true;
     c.position_set = "G92";  // regrid (ln 1579)
-    c.offsets = false;       // fixture offsets (FXC) not generated yet
-    // B as a full rotary axis (B_AXIS=rotary), alone or with X Y Z in a G00/G01 block (ln 5964-5983; not in
-    // an arc, ln 947). Alone F is whole deg/min (F3.0, ln 5976); with linear axes F is theirs and B follows
-    // (ln 5983), LinuxCNC's rule. A G90 word is the position mod 360, its sign the sense (ln 4481-4546).
-    // A and C (with B, F on B alone, ln 5978) are not generated.
+    c.position_set_machine = true;
+    c.implicit_offsets = Implicit(seed);  // G49: the line whose I is where B goes (ln 7018-7026)
+    c.offsets = !c.implicit_offsets;      // G48 H (ln 6935)
+    // G47 (ln 1678-1680, 6286-6308): the line's X/Z offset turns with B. Metric only: a turned offset is off
+    // the inch grid, and rs274 prints it and the points in it to four inch decimals.
+    c.calculated_offsets = Calculated(seed);
+    c.inch = !c.calculated_offsets;
+    c.index_b = IndexB(seed);  // index moves: whole degrees at F0, Z after B (ln 4491-4546)
+    // B as a full rotary axis (B_AXIS=rotary) or index table, alone or with X Y Z in a G00/G01 block (ln
+    // 5964-5983; not in an arc, ln 947). Alone F is whole deg/min (F3.0, ln 5976); with linear axes F is
+    // theirs and B follows (ln 5983), LinuxCNC's rule. A G90 word is the position mod 360, its sign the sense
+    // (ln 4481-4546). A and C (with B, F on B alone, ln 5978) are not generated.
     c.rotary = true;
     c.rotary_linear = true;
     c.rotary_axes = 2;
@@ -79,8 +104,12 @@ std::string Cycle(const Block& b) {
 }
 
 std::string Motion(const Block& b) {
-  if (b.kind == MoveKind::kSet)
-    return "G92X" + Coord(b, b.end[0]) + "Y" + Coord(b, b.end[1]) + "Z" + Coord(b, b.end[2]);
+  if (b.kind == MoveKind::kSet) {  // the machine's absolute position: the program's plus the fixture offset
+    const Vec3& f = b.offset_mm;
+    const double unit = b.m.inch ? 25.4 : 1.0;
+    return "G92X" + Coord(b, b.end[0] + f[0] / unit) + "Y" + Coord(b, b.end[1] + f[1] / unit) + "Z" +
+           Coord(b, b.end[2] + f[2] / unit);
+  }
   if (b.kind == MoveKind::kCycle) return Cycle(b);
   static const std::array<std::array<int, 3>, 3> axes{{{0, 1, 2}, {2, 0, 1}, {1, 2, 0}}};
   const auto& ax = axes[static_cast<std::size_t>(b.m.plane - 17)];
@@ -94,6 +123,8 @@ std::string Motion(const Block& b) {
     bool moves = b.end[i] != b.start[i];
     if (b.kind == MoveKind::kArc && i == ax[2] && !moves) continue;
     if (OmitAxis(b, i)) continue;
+    if (b.offset_by_b && !moves)
+      continue;  // off the inch grid in the new line: KT-APL keeps an axis not named
     s += std::string(1, letters[i]) + Coord(b, b.m.incremental ? b.end[i] - b.start[i] : b.end[i]);
   }
   for (int i = 0; i < 3; ++i) {
@@ -121,13 +152,25 @@ std::string Motion(const Block& b) {
   return s;
 }
 
-Program Ktapl::Write(const std::vector<Block>& blocks, std::uint64_t) const {
+Program Ktapl::Write(const std::vector<Block>& blocks, std::uint64_t seed) const {
   Program p;
-  p.params = "B_AXIS=rotary\n";
+  p.params = IndexB(seed) ? "B_AXIS=index\n" : "B_AXIS=rotary\n";
   p.dialect_text = "%\n! generated by cell-oracle-gen (tests/oracle)\nG71G90G94G17S1000M03\n";
+  for (int k = 1; k < kOffsets; ++k) {  // the work offsets as fixture lines, mm (G71)
+    const Vec3& o = kOffsetTable[static_cast<std::size_t>(k)];
+    const double sign = Ufx(seed) ? -1 : 1;  // UFX at the machine zero, before any move
+    p.dialect_text += (Ufx(seed) ? "(UFX,H" : "(FXC,H") + std::to_string(k) + "X" +
+                      Num(sign * o[0], 3, true) + "Y" + Num(sign * o[1], 3, true) + "Z" +
+                      Num(sign * o[2], 3, true) + "I" + Num(kOffsetB[static_cast<std::size_t>(k)], 3, true) +
+                      ")\n";
+  }
+  p.dialect_text += Implicit(seed) ? "G49\n" : "G48\n";
+  if (Calculated(seed)) p.dialect_text += "G47\n";
   Modes m;
   for (const Block& b : blocks) {
     std::string pre;
+    // G48: the line by H on its own block; G49: the block's B positioning selects it.
+    if (b.m.offset != m.offset && !b.offset_by_b) pre += "H" + std::to_string(b.m.offset);
     if (b.m.inch != m.inch) pre += b.m.inch ? "G70" : "G71";
     if (b.m.inverse != m.inverse) pre += b.m.inverse ? "G93" : "G94";
     if (b.m.incremental != m.incremental) pre += b.m.incremental ? "G91" : "G90";

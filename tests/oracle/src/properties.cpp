@@ -17,8 +17,12 @@ std::vector<Block> Incremental(std::vector<Block> blocks, const Caps& caps) {
   for (std::size_t i = 0; i < blocks.size(); ++i) {
     Block& b = blocks[i];
     // After a unit or offset change the start is off the grid: an increment from it would round.
-    bool on_grid = i > 0 && blocks[i - 1].m.inch == b.m.inch && blocks[i - 1].m.offset == b.m.offset;
-    bool writable = b.kind != MoveKind::kCycle && b.kind != MoveKind::kSet &&
+    // So after an implicit offset selection (the axes the block did not name) and a machine-position set.
+    bool on_grid = i > 0 && blocks[i - 1].m.inch == b.m.inch && blocks[i - 1].m.offset == b.m.offset &&
+                   !blocks[i - 1].offset_by_b &&
+                   !(caps.position_set_machine && blocks[i - 1].kind == MoveKind::kSet);
+    // An implicit offset is selected by an absolute positioning of B only.
+    bool writable = b.kind != MoveKind::kCycle && b.kind != MoveKind::kSet && !b.offset_by_b &&
                     !(caps.radius_form_g17_absolute && b.radius_form);
     b.m.incremental = on_grid && writable;
   }

@@ -55,12 +55,20 @@ struct Block {
   bool tap_pitch = false;  // kCycle G84: the dialect states the pitch, F / S (Balt-System K, S1000), not F
   unsigned omit =
       0;  // words a module may leave out where they change nothing: bits 0-2 axis x y z, 3-5 centre
+  // The block's B positioning selected its offset (Caps::implicit_offsets) or turned it (calculated_offsets).
+  bool offset_by_b = false;
+  Vec3 offset_mm{};  // the work offset in force (mm; turned with B under Caps::calculated_offsets)
 };
 
-// The work offsets every program may select (mm; x a radius). Offset 0 is the machine zero.
+// The work offsets every program may select (mm; x a radius). Offset 0 is the machine zero. Whole thousandths
+// of an inch (0.0254 mm): on both units' grids, so rs274's four inch decimals print them exactly.
 inline constexpr int kOffsets = 3;
 inline constexpr std::array<Vec3, kOffsets> kOffsetTable{
-    {{0, 0, 0}, {12.5, -20.25, 5}, {-35.125, 14.5, -7.75}}};
+    {{0, 0, 0}, {12.7, -20.32, 5.08}, {-35.052, 14.478, -7.747}}};
+// Caps::implicit_offsets: the B position (degrees) that selects each offset (KT-APL's FXC I); 0 none.
+inline constexpr std::array<double, kOffsets> kOffsetB{0, 90, 270};
+// The offset an absolute B positioning to `b` (degrees, any turn) selects under implicit offsets.
+int OffsetAtB(double b);
 
 // What a dialect has: the generator draws only from these.
 struct Caps {
@@ -121,6 +129,19 @@ struct Caps {
   bool per_rev = true;
   bool inverse_time = false;  // G93
   bool offsets = true;
+  // The offset follows B (KT-APL G49, ln 1700, 7018-7026): an absolute positioning (rapid) of B to
+  // kOffsetB[k] selects offset k, to any other position none; `offsets` (drawn by mode changes) is off then.
+  bool implicit_offsets = false;
+  // The offset in force turns with B (KT-APL G47, ln 1678-1680, 6286-6308, ktapl.md call 77): X' = X cos d -
+  // Z sin d, Z' = X sin d + Z cos d, d the B of the last positioning of B (or where B stood when the offset
+  // was selected) less the offset's kOffsetB. The NGC twin sets the turned offset by G10 L2 before the block.
+  bool calculated_offsets = false;
+  // B is an index table (KT-APL B_AXIS=index, ln 4491-4546): whole degrees, every B move a rapid (F0), the
+  // block's X Y with B and then its Z (the NGC twin states the two moves).
+  bool index_b = false;
+  // The position set names the machine's absolute position (KT-APL G92, ln 1579): the dialect's word is the
+  // NGC twin's G92 word plus the work offset in force (a module adds it).
+  bool position_set_machine = false;
   int mm_decimals = 3;  // the grid of a coordinate word
   int inch_decimals = 4;
   int feed_decimals = 1;  // per minute feeds
