@@ -30,6 +30,8 @@ struct CompContour {
   int plane = 17;
   bool inch = false;
   int tip = 3;  // a lathe's tip code (NoseFromTip)
+  // KT-APL's G46 in the G41/G42 block: fill-in blocks bypassed (ktapl.md judgement call 39).
+  bool bypass = false;
   std::size_t Next(std::size_t i) const { return (i + 1) % p.size(); }
   std::size_t Elements() const { return open ? p.size() - 1 : p.size(); }
 };

@@ -222,7 +222,8 @@ struct Tally {
   long moves = 0;    // compensated moves checked
   int reversed = 0;  // Okuma: too close on a step the nose runs back along (okuma.md judgement call 67)
   int contours = 0, with_arcs = 0, arcs = 0, refused = 0, refused_with_arcs = 0, before_refusal = 0, far = 0;
-  int bores = 0;  // a lathe's inside profiles (G41)
+  int bores = 0;     // a lathe's inside profiles (G41)
+  int bypassed = 0;  // KT-APL's contours under G46
 };
 
 }  // namespace
@@ -264,9 +265,10 @@ ContourProgram WriteContour(const std::string& dialect, const CompContour& c) {
   ContourProgram w;
   std::vector<std::string> lines;
   if (kt) {
-    lines = {"! no-gouge property (tests/oracle)", std::string(c.inch ? "G70" : "G71") + plane + " T1", "M06",
-             "G90 G0 " + start + " F0",
-             std::string("G1 ") + (c.left ? "G41 " : "G42 ") + xy(c.p[0]) + " F200."};
+    lines = {
+        "! no-gouge property (tests/oracle)", std::string(c.inch ? "G70" : "G71") + plane + " T1", "M06",
+        "G90 G0 " + start + " F0",
+        std::string("G1 ") + (c.left ? "G41 " : "G42 ") + (c.bypass ? "G46 " : "") + xy(c.p[0]) + " F200."};
     w.tools = "G71\n(TLD,T1D" + Num(2 * c.r, 3, true) + ")\n";
   } else {
     lines = {"; no-gouge property (tests/oracle)", "T1.1 M6", "S1000 M3"};
@@ -422,8 +424,8 @@ Move NoseCentre(const Move& m, double r, int tip) {
 // One contour: true when it keeps the property. A refused program's moves before the refusal are counted in
 // `before_refusal` when they come too close (the element too short for the radius is read after the corner
 // before it was cut: docs/testing.md), not failed.
-bool Check(const PropRun& o, const std::string& dialect, std::uint64_t seed, bool arcs, const fs::path& dir,
-           Tally* tally) {
+bool Check(const PropRun& o, const std::string& dialect, std::uint64_t seed, bool arcs, bool bypass,
+           const fs::path& dir, Tally* tally) {
   const bool lathe = dialect == "emco" || dialect == "okuma";
   CompContour c;
   ContourProgram w;
@@ -433,6 +435,8 @@ bool Check(const PropRun& o, const std::string& dialect, std::uint64_t seed, boo
     w = std::move(l.w);
   } else {
     c = RandomContour(seed, arcs);
+    c.bypass = bypass;
+    tally->bypassed += bypass;
     w = WriteContour(dialect, c);
   }
   int arc_count = static_cast<int>(std::count_if(c.sweep.begin(), c.sweep.end(), [](double s) { return s; }));
@@ -520,9 +524,12 @@ bool Check(const PropRun& o, const std::string& dialect, std::uint64_t seed, boo
 int NoGouge(const PropRun& o, const std::string& dialect, const fs::path& dir) {
   int failing = 0;
   Tally t;
-  // One contour per ten blocks; the odd ones with arcs (a lathe's: a bore under G41).
+  // One contour per ten blocks; the odd ones with arcs (a lathe's: a bore under G41); KT-APL's every other
+  // pair under G46 (its corners intersections, ktapl.md judgement call 39).
   for (int done = 0, i = 0; done < o.blocks; done += 10, ++i)
-    if (!Check(o, dialect, ProgramSeed(o.seed, dialect + "/nogouge", i), i % 2 == 1, dir, &t)) ++failing;
+    if (!Check(o, dialect, ProgramSeed(o.seed, dialect + "/nogouge", i), i % 2 == 1,
+               dialect == "ktapl" && (i / 2) % 2 == 1, dir, &t))
+      ++failing;
   bool lathe = dialect == "emco" || dialect == "okuma";
   std::printf(
       "%s nogouge: %d of %d %s keep the property (%ld compensated moves checked; %d with %d arcs; %d "
@@ -533,6 +540,7 @@ int NoGouge(const PropRun& o, const std::string& dialect, const fs::path& dir) {
       dialect.c_str(), t.contours - failing, t.contours, lathe ? "profiles" : "contours", t.moves,
       t.with_arcs, t.arcs, t.refused, t.refused_with_arcs, t.before_refusal, t.far, t.reversed);
   if (lathe) std::printf("%s nogouge: %d of the profiles bores (G41)\n", dialect.c_str(), t.bores);
+  if (dialect == "ktapl") std::printf("ktapl nogouge: %d of the contours under G46\n", t.bypassed);
   return failing;
 }
 

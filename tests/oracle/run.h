@@ -72,6 +72,7 @@ struct CompTally {
   int bent = 0;        // corners at a small turn whose point is not compared (comp.cpp)
   int cell_alarm = 0;  // the lathes: refused by cell-interp with the manual's alarm for that path (comp.cpp)
   long moves = 0;      // moves compared
+  int bypassed = 0;    // KT-APL's programs under G46 (comp.cpp)
 };
 CompTally CompCheck(const PropRun& o, const std::string& rs274, const std::string& dialect,
                     const std::filesystem::path& dir, int show);

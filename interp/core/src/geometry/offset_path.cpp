@@ -178,6 +178,26 @@ Corner ComputeCorner(const Path& a, const Path& b, double r, int side, bool bypa
   return k;
 }
 
+Corner TangentCorner(const Path& a, const Path& b, double r, int side, std::optional<Vec2>* via) {
+  Path ta, tb;  // the tangent lines, ending / starting at the corner (their length does not matter)
+  ta.end = a.end;
+  ta.start = a.end - EndTangent(a);
+  tb.start = b.start;
+  tb.end = b.start + StartTangent(b);
+  Corner k = ComputeCorner(ta, tb, r, side, true);
+  if (k.fill_in) return k;  // the same fill-in arc as ComputeCorner(a, b) without the intersection
+  *via = k.a_end;
+  if (a.arc) {
+    k.a_end = OffsetEnd(a, r, side);
+    k.a_trim = 0;
+  }
+  if (b.arc) {
+    k.b_start = OffsetStart(b, r, side);
+    k.b_trim = 0;
+  }
+  return k;
+}
+
 int CenterSlot(int axis) {
   if (axis == kX || axis == kU) return 0;
   if (axis == kY || axis == kV) return 1;

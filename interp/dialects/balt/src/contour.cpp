@@ -80,34 +80,6 @@ void CutStart(Path& p, Vec2 q) {
   p.start = q;
 }
 
-// An outside corner where an arc meets (balt.md judgement call 50): the line-line rule (ln 3082, 3150-3190)
-// applied to the elements' tangents at the corner. The offset elements themselves meet on an arc's offset
-// circle past its end, which can come back into the contour when they meet far from the corner
-// (docs/testing.md "What the properties found" 5). `via`: where the tangents' offsets meet, the tool going
-// there straight from an arc's offset end and from there straight to an arc's offset start; unset when the
-// line-line rule adds a fill-in arc instead (they do not meet ahead of both ends: a reversal).
-// Called only where the offset elements themselves meet ahead of both ends (the caller keeps the fill-in
-// arc elsewhere).
-geom::Corner TangentCorner(const Path& a, const Path& b, double r, int side, std::optional<Vec2>* via) {
-  Path ta, tb;  // the tangent lines, ending / starting at the corner (their length does not matter)
-  ta.end = a.end;
-  ta.start = a.end - EndTangent(a);
-  tb.start = b.start;
-  tb.end = b.start + StartTangent(b);
-  geom::Corner k = ComputeCorner(ta, tb, r, side, true);
-  if (k.fill_in) return k;  // the same fill-in arc as ComputeCorner(a, b) without the intersection
-  *via = k.a_end;
-  if (a.arc) {
-    k.a_end = OffsetEnd(a, r, side);
-    k.a_trim = 0;
-  }
-  if (b.arc) {
-    k.b_start = OffsetStart(b, r, side);
-    k.b_trim = 0;
-  }
-  return k;
-}
-
 }  // namespace
 
 void Contour::Sync(const AxisArray& pos) {

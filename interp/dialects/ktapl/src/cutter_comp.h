@@ -101,11 +101,13 @@ class Compensator {
   void Settle();
   void TakeOne(Canon&& c);
   Vec2 OwnEnd(const Pending& p) const;
-  // Writes the held block ending at `end` (arcs: cut back by `trim_end` degrees), then `fill` if any, then
-  // the ops held behind it.
-  void Release(Vec2 end, double trim_end, const Canon* fill);
+  // Writes the held block ending at `end` (arcs: cut back by `trim_end` degrees), then the moves made at the
+  // corner (`corner`: a fill-in arc, or G46's lines to and from the tangents' intersection), then the ops
+  // held behind it.
+  void Release(Vec2 end, double trim_end, std::vector<Canon> corner = {});
   void ReleaseHeld();
   Canon FillIn(const Corner& k, const Canon& next) const;
+  Canon CornerLine(Vec2 to, const Canon& next) const;
   void TakeOther(Canon&& c);
   void TakeRampOn(Canon&& c, const Path& p, bool in_plane);
   void TakeResidual(Canon&& c, const Path& p, bool in_plane);

@@ -8,6 +8,8 @@
 #include "cell/interp/canon.h"
 #include "cell/interp/geometry/vec2.h"
 
+#include <optional>
+
 namespace cell::interp::geom {
 
 // Below this (mm) two points are the same and a move has no extent in the plane.
@@ -73,6 +75,16 @@ struct Corner {
 // bypass_fill_in (G46): a turn away meets at the intersection of the extended offset paths instead of a
 // fill-in arc (a fill-in arc is still used when they do not meet ahead of both ends, e.g. a reversal).
 Corner ComputeCorner(const Path& a, const Path& b, double r, int side, bool bypass_fill_in);
+// A turn away where an arc meets and the offset paths are not joined by a fill-in arc (Balt-System's every
+// outside corner, balt.md judgement call 50; KT-APL's under G46, ktapl.md judgement call 39): the line-line
+// rule applied to the elements' tangents at the corner. The offset elements themselves meet on an arc's
+// offset circle past its end, which can come back into the contour when they meet far from the corner
+// (docs/testing.md "What the properties found" 5, and the KT-APL G46 finding). `via`: where the tangents'
+// offsets meet, the tool going there straight from an arc's offset end and from there straight to an arc's
+// offset start; unset when the line-line rule adds a fill-in arc instead (they do not meet ahead of both
+// ends: a reversal). Called only where the offset elements themselves meet ahead of both ends
+// (ComputeCorner(a, b, r, side, true) gives no fill-in arc); the caller keeps the fill-in arc elsewhere.
+Corner TangentCorner(const Path& a, const Path& b, double r, int side, std::optional<Vec2>* via);
 
 // Slot of a plane axis in ArcOp::center ([x, y, z]; U, V, W take the slot of their parallel axis).
 int CenterSlot(int axis);
