@@ -225,4 +225,19 @@ Canon FillInMove(const Corner& k, Target to, Vec2 corner, int p1, int p2, const 
   return f;
 }
 
+Canon StraightMove(Target to, Vec2 at, int p1, int p2, const Feed* feed, int line) {
+  to.pos[p1] = at.x;
+  to.pos[p2] = at.y;
+  Canon c;
+  c.line = line;
+  if (feed) {
+    LinearOp& l = c.Set<LinearOp>();
+    l.to = to;
+    l.feed = *feed;
+  } else {
+    c.Set<RapidOp>().to = to;
+  }
+  return c;
+}
+
 }  // namespace cell::interp::geom

@@ -177,17 +177,7 @@ void Contour::EmitHeld(Vec2 end, double trim_end) {
 }
 
 Canon Contour::StraightTo(int line, Target t, Vec2 to, const Feed* feed) const {
-  Canon c;
-  c.line = line;
-  SetPlaneOf(t.pos, to);
-  if (feed) {
-    LinearOp& l = c.Set<LinearOp>();
-    l.to = t;
-    l.feed = *feed;
-  } else {
-    c.Set<RapidOp>().to = t;
-  }
-  return c;
+  return StraightMove(t, to, p1_, p2_, feed, line);
 }
 
 Canon Contour::Straight(const Canon& like, Vec2 to) const {

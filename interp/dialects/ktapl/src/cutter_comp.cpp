@@ -141,20 +141,10 @@ Canon Compensator::FillIn(const Corner& k, const Canon& next) const {
 // fill-in arc: the held block's line and feed, rapid if both blocks are F0.
 Canon Compensator::CornerLine(Vec2 to, const Canon& next) const {
   const Canon& a = pend_.c;
-  Canon c;
-  c.line = a.line;
   Target t = *a.target();
   t.travel = {};
   t.travel_mask = 0;
-  SetPlane(t.pos, to);
-  if (const Feed* feed = a.feed() ? a.feed() : next.feed()) {
-    LinearOp& l = c.Set<LinearOp>();
-    l.to = t;
-    l.feed = *feed;
-  } else {
-    c.Set<RapidOp>().to = t;
-  }
-  return c;
+  return StraightMove(t, to, p1_, p2_, a.feed() ? a.feed() : next.feed(), a.line);
 }
 
 // Not a move: held behind the held block while compensation is on.

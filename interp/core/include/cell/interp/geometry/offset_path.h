@@ -92,5 +92,8 @@ int CenterSlot(int axis);
 // about the programmed corner `corner`, at `feed`; without a feed (both moves rapid) a rapid move on the
 // chord, a positioning move rather than a contour.
 Canon FillInMove(const Corner& k, Target to, Vec2 corner, int p1, int p2, const Feed* feed, int line);
+// A straight move made at a corner (block `line`): to `to` with its plane axes (p1, p2) set to `at`, at
+// `feed`; without a feed a rapid move.
+Canon StraightMove(Target to, Vec2 at, int p1, int p2, const Feed* feed, int line);
 
 }  // namespace cell::interp::geom
