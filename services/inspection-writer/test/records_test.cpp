@@ -4,33 +4,17 @@
 #include <unistd.h>
 
 #include <filesystem>
-#include <vector>
 
 #include <gtest/gtest.h>
 
 #include "cell/error/error.h"
+#include "cell/testing/process.h"
 
 namespace fs = std::filesystem;
 using cell::inspection::Records;
+using cell::testing::ScopedTempDir;
 
 namespace {
-// Each test's directory, removed when the run ends (a forked writer ends by SIGKILL and removes nothing).
-std::vector<fs::path>& Made() {
-  static std::vector<fs::path> made;
-  return made;
-}
-struct RemoveMade : ::testing::Environment {
-  void TearDown() override {
-    std::error_code ec;
-    for (auto& d : Made()) fs::remove_all(d, ec);
-  }
-};
-[[maybe_unused]] const auto* const kRemoveMade = ::testing::AddGlobalTestEnvironment(new RemoveMade);
-
-fs::path TempDir() {
-  std::string t = "/tmp/cell-records-XXXXXX";
-  return Made().emplace_back(mkdtemp(t.data()));
-}
 nlohmann::json RunRecord(long id) {
   return {{"station", "KT01"},
           {"dispatch_id", id},
@@ -43,7 +27,8 @@ nlohmann::json RunRecord(long id) {
 }  // namespace
 
 TEST(Records, StoresListsAndReadsRunRecords) {
-  Records r(TempDir());
+  ScopedTempDir dir("cell-records-");
+  Records r(dir.path());
   EXPECT_EQ(r.StoreRun(RunRecord(7)), "run-KT01-7.json");
   EXPECT_EQ(r.StoreRun(RunRecord(7)), "run-KT01-7.json");  // a retried store is harmless
   r.StoreRun(RunRecord(8));
@@ -60,7 +45,8 @@ TEST(Records, StoresListsAndReadsRunRecords) {
 // `inspect ls --after NAME` (DESIGN §6): by name in byte order, the cursor exclusive, sizes of what is shown;
 // after the last name and in an empty directory there is nothing.
 TEST(Records, ListPagesAfterACursorByName) {
-  Records r(TempDir());
+  ScopedTempDir dir("cell-records-");
+  Records r(dir.path());
   auto page = [&](const std::string& pattern, const std::string& after, std::size_t limit) {
     std::vector<std::string> out;
     r.List(pattern, after, [&](const cell::records::InspectionEntry& e) {
@@ -83,7 +69,8 @@ TEST(Records, ListPagesAfterACursorByName) {
 }
 
 TEST(Records, RejectsIncompleteRecordsAndBadNames) {
-  Records r(TempDir());
+  ScopedTempDir dir("cell-records-");
+  Records r(dir.path());
   EXPECT_THROW(r.StoreRun({{"station", "KT01"}}), cell::Error);
   auto bad = RunRecord(1);
   bad["station"] = "../x";
@@ -92,7 +79,8 @@ TEST(Records, RejectsIncompleteRecordsAndBadNames) {
 }
 
 TEST(Records, KilledWriterLeavesOldOrNewContentNeverTorn) {
-  fs::path dir = TempDir();
+  ScopedTempDir tmp("cell-records-");
+  const fs::path dir = tmp.path();
   Records r(dir);
   std::string big(4 << 20, 'a');
   r.StoreFile("KT01", "PART.INS", "old\n");
