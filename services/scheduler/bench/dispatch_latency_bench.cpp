@@ -19,10 +19,14 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <condition_variable>
 #include <cstdio>
 #include <cstdlib>
+#include <ctime>
+#include <filesystem>
+#include <fstream>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -137,6 +141,127 @@ class Segments {
   std::vector<std::unique_ptr<bus::Reader<cell::MotionSegment>>> readers_;
 };
 
+// Every job state change as it arrives here (steady clock), for the breakdown of the slowest samples.
+class JobTimes {
+ public:
+  explicit JobTimes(bus::Participant& p)
+      : reader_(p, bus::topics::kJobStatus, bus::QosKind::kEvent,
+                [this](const cell::JobStatus& s, const bus::SampleInfo& info) {
+                  std::lock_guard lk(mu_);
+                  auto& v = events_[s.job_id()];
+                  v.push_back({s.state(), info.received_ns, s.station().c_str()});
+                }) {}
+  struct Event {
+    cell::JobState state;
+    int64_t received_ns;
+    std::string station;
+  };
+  std::vector<Event> Of(int job) {
+    std::lock_guard lk(mu_);
+    auto it = events_.find(job);
+    return it == events_.end() ? std::vector<Event>{} : it->second;
+  }
+
+ private:
+  std::mutex mu_;
+  std::map<int, std::vector<Event>> events_;
+  bus::Reader<cell::JobStatus> reader_;
+};
+
+const char* StateName(cell::JobState s) {
+  switch (s) {
+    case cell::JOB_QUEUED:
+      return "QUEUED";
+    case cell::JOB_WAITING:
+      return "WAITING";
+    case cell::JOB_DISPATCHED:
+      return "DISPATCHED";
+    case cell::JOB_RUNNING:
+      return "RUNNING";
+    case cell::JOB_COMPLETED:
+      return "COMPLETED";
+    case cell::JOB_FAILED:
+      return "FAILED";
+    case cell::JOB_CANCELLED:
+      return "CANCELLED";
+  }
+  return "?";
+}
+
+// One OPERATE sample of the request variant, with what it needs for its breakdown.
+struct Sample {
+  int pallet = 0, job = 0;
+  int64_t sent_ns = 0, reply_ns = 0, first_ns = 0;  // steady clock
+  int64_t sent_wall_ms = 0;                         // system clock, to place the services' log lines
+  double ms() const { return static_cast<double>(first_ns - sent_ns) / 1e6; }
+};
+
+int64_t WallMs() {
+  return std::chrono::duration_cast<std::chrono::milliseconds>(
+             std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
+// The epoch milliseconds of a log line's "2026-12-01T08:51:46.178Z " prefix (docs/operations.md, Logs); -1 if
+// the line has none.
+int64_t LogLineMs(const std::string& line) {
+  std::tm tm{};
+  int ms = 0;
+  if (line.size() < 24 || line[23] != 'Z' ||
+      std::sscanf(line.c_str(), "%4d-%2d-%2dT%2d:%2d:%2d.%3d", &tm.tm_year, &tm.tm_mon, &tm.tm_mday,
+                  &tm.tm_hour, &tm.tm_min, &tm.tm_sec, &ms) != 7)
+    return -1;
+  tm.tm_year -= 1900;
+  tm.tm_mon -= 1;
+  return static_cast<int64_t>(timegm(&tm)) * 1000 + ms;
+}
+
+// Where the time of one sample went: the bus events this process saw (microseconds) and the services' own log
+// lines about the job (milliseconds), both after OPERATE was sent. The log lines are the services'
+// $CELL_DATA_DIR/logs/*.log, as `cellctl up` writes them.
+void Breakdown(const char* what, const Sample& s, JobTimes& times) {
+  auto rel = [&](int64_t ns) { return static_cast<double>(ns - s.sent_ns) / 1e6; };
+  std::vector<std::pair<double, std::string>> rows;
+  rows.push_back({rel(s.reply_ns), "reply from the scheduler (its decision and commit; bus)"});
+  std::string station;
+  for (auto& e : times.Of(s.job)) {
+    if (!e.station.empty()) station = e.station;
+    if (e.received_ns <= s.first_ns + 5'000'000'000LL)
+      rows.push_back({rel(e.received_ns), fmt::format("job {} {} (bus)", s.job, StateName(e.state))});
+  }
+  rows.push_back({rel(s.first_ns), "first segment at the servo (bus)"});
+  const char* data = std::getenv("CELL_DATA_DIR");
+  if (data) {
+    const std::string job = std::to_string(s.job), pallet = std::to_string(s.pallet);
+    auto mentions = [&](const std::string& line, const std::string& word, const std::string& n) {
+      for (size_t at = line.find(word + " " + n); at != std::string::npos;
+           at = line.find(word + " " + n, at + 1)) {
+        const size_t end = at + word.size() + 1 + n.size();
+        if (end >= line.size() || !std::isdigit(static_cast<unsigned char>(line[end]))) return true;
+      }
+      return false;
+    };
+    std::error_code ec;
+    for (auto& f : std::filesystem::directory_iterator(std::filesystem::path(data) / "logs", ec)) {
+      std::ifstream in(f.path());
+      for (std::string line; std::getline(in, line);) {
+        if (!mentions(line, "job", job) && !mentions(line, "dispatch", job) &&
+            !mentions(line, "pallet", pallet))
+          continue;
+        const int64_t ms = LogLineMs(line);
+        if (ms < 0 || ms < s.sent_wall_ms - 1 || ms > s.sent_wall_ms + 5000) continue;
+        rows.push_back({static_cast<double>(ms - s.sent_wall_ms), "log: " + line.substr(25, 150)});
+      }
+    }
+  }
+  std::stable_sort(rows.begin(), rows.end(), [](auto& a, auto& b) { return a.first < b.first; });
+  fmt::print(
+      "{}: pallet {}, job {}{}, {:.3f} ms; where the time went (ms after OPERATE was sent; log lines "
+      "to the millisecond):\n",
+      what, s.pallet, s.job, station.empty() ? "" : " on " + station, s.ms());
+  for (auto& [t, text] : rows) fmt::print("  {:8.3f}  {}\n", t, text);
+}
+
 // `cellctl route operate ROUTE --pallet P`; returns the job id it prints.
 int RunCellctl(const std::string& cellctl, const std::string& route, int pallet) {
   int fds[2];
@@ -248,14 +373,18 @@ int main(int argc, char** argv) {
     Segments segs(p, st);
     if (!segs.Matched(bus::Millis(10000))) throw std::runtime_error("no station's segment stream matched");
     bus::Reader<cell::JobStatus> jobs(p, bus::topics::kJobStatus, bus::QosKind::kEvent);
+    JobTimes times(p);
     bus::Client<cell::SchedulerRequest, cell::SchedulerReply> sched(p, bus::topics::kScheduler);
     if (!sched.WaitForServer(bus::Millis(10000))) throw std::runtime_error("no scheduler on the bus");
     std::vector<double> req_ms, ctl_ms;
+    std::vector<Sample> req_samples;
     int pallet = first_pallet;
     for (int i = 0; i < 2 * pallets; ++i, ++pallet) {
       const bool via_cellctl = i % 2 == 1;  // interleaved, so drift hits both variants alike
       auto known = segs.Known();
+      const int64_t wall0 = WallMs();
       int64_t t0 = NowNs();
+      int64_t replied = 0;
       int job = 0;
       if (via_cellctl) {
         job = RunCellctl(cellctl, route, pallet);
@@ -266,6 +395,7 @@ int main(int argc, char** argv) {
         r.pallet(pallet);
         r.hdr().idempotency_key(fmt::format("dispatch-latency-{}-{}-{}", getpid(), pallet, t0));
         auto rep = sched.Call(r, bus::Millis(10000));
+        replied = NowNs();
         bus::ThrowIfError(rep);
         job = rep.job_id();
       }
@@ -274,6 +404,7 @@ int main(int argc, char** argv) {
       if (!t1)
         throw std::runtime_error(fmt::format("pallet {} (job {}): no segment within 30 s", pallet, job));
       (via_cellctl ? ctl_ms : req_ms).push_back(static_cast<double>(*t1 - t0) / 1e6);
+      if (!via_cellctl) req_samples.push_back({pallet, job, t0, replied, *t1, wall0});
       auto done = jobs.WaitFor(
           [&](const cell::JobStatus& s) {
             return s.job_id() == job && (s.state() == cell::JOB_COMPLETED || s.state() == cell::JOB_FAILED ||
@@ -295,6 +426,12 @@ int main(int argc, char** argv) {
                ctl.median / base.median);
     fmt::print("ratio (p99) OPERATE request -> first segment / bus round trip p99: {:.1f}x\n",
                req.p99 / base.p99);
+    // Issue 38 item 3: the slowest sample, and every other one over 20 ms, with where its time went.
+    std::sort(req_samples.begin(), req_samples.end(), [](auto& a, auto& b) { return a.ms() > b.ms(); });
+    for (size_t i = 0; i < req_samples.size(); ++i) {
+      if (i > 0 && req_samples[i].ms() <= 20.0) break;
+      Breakdown(i == 0 ? "slowest OPERATE sample" : "OPERATE sample over 20 ms", req_samples[i], times);
+    }
     return 0;
   } catch (const std::exception& e) {
     fmt::print(stderr, "dispatch_latency_bench: {}\n", e.what());
