@@ -40,20 +40,22 @@ void KtRun::StPar(const Statement& st, BlockCtx&, bool) {
 }
 
 void KtRun::Par(const Statement& st) {
-  auto parts = SplitTopLevel(st.body, ',');
-  if (parts.size() > 12) Fail(st.col, "Error - exceeds 12 assignments in PAR");
-  for (const auto& raw : parts) {
-    std::string a = raw;
+  // Views into the body: a PAR runs in most loops, and copying each field cost more than evaluating it.
+  InlineVec<std::string_view, 13> parts;
+  bool over = false;
+  ForEachTopLevel(st.body, ',', false, [&](std::string_view f) { over = over || !parts.push_back(f); });
+  if (over || parts.size() > 12) Fail(st.col, "Error - exceeds 12 assignments in PAR");
+  for (std::string_view a : parts) {
     // Optional "description" after the expression.
     size_t q = a.find('"');
-    if (q != std::string::npos) {
+    if (q != std::string_view::npos) {
       size_t q2 = a.find('"', q + 1);
-      if (q2 == std::string::npos) Fail(st.col, "MISSING \" IN PARAMETER DESCRIPTION");
+      if (q2 == std::string_view::npos) Fail(st.col, "MISSING \" IN PARAMETER DESCRIPTION");
       if (q2 - q - 1 > 20) Fail(st.col, "PARAMETER DESCRIPTION EXCEEDS 20 CHARACTERS");
-      if (!Trim(a.substr(q2 + 1)).empty()) Fail(st.col, "TEXT AFTER PARAMETER DESCRIPTION");
+      if (!TrimView(a.substr(q2 + 1)).empty()) Fail(st.col, "TEXT AFTER PARAMETER DESCRIPTION");
       a = a.substr(0, q);
     }
-    size_t eq = std::string::npos;
+    size_t eq = std::string_view::npos;
     int depth = 0;
     for (size_t i = 0; i < a.size(); ++i) {
       if (a[i] == '(') ++depth;
@@ -63,8 +65,8 @@ void KtRun::Par(const Statement& st) {
         break;
       }
     }
-    if (eq == std::string::npos) Fail(st.col, "PAR ASSIGNMENT NEEDS Ln = expression");
-    int n = EvalParamRef(Trim(a.substr(0, eq)), st.col);
+    if (eq == std::string_view::npos) Fail(st.col, "PAR ASSIGNMENT NEEDS Ln = expression");
+    int n = EvalParamRef(TrimView(a.substr(0, eq)), st.col);
     if (n > 2999) Fail(st.col, "Error L numbers range from 0..2999");
     double v = Eval(a.substr(eq + 1), st.col);
     SetParam(n, v, st.col);
@@ -82,7 +84,7 @@ void KtRun::StIft(const Statement& st, BlockCtx& bc, bool in_ift) {
   if (!EvalCond(cond, st.col)) return;
   ParsedBlock ab;
   try {
-    ab = ParseBlock(action, true);
+    ParseBlock(action, true, ab);
   } catch (RunError& e) {
     e.col = st.col;
     throw;
@@ -130,14 +132,17 @@ void KtRun::StEnd(const Statement& st, BlockCtx& bc, bool) {
 
 void KtRun::StCls(const Statement& st, BlockCtx& bc, bool) {
   if (RunningCycle()) Fail(st.col, "A RUNNING DEFINED CYCLE CANNOT CALL A SUBROUTINE");
-  auto parts = SplitTopLevel(st.body, ',', true);
-  std::string name = Upper(ExpandName(Trim(parts[0]), st.col));
+  // Views into the body, as PAR's (a call in a loop).
+  InlineVec<std::string_view, 14> parts;
+  bool over = false;
+  ForEachTopLevel(st.body, ',', true, [&](std::string_view f) { over = over || !parts.push_back(f); });
+  std::string name = Upper(ExpandName(TrimView(parts[0]), st.col));
   if (name.empty()) Fail(st.col, "CLS NEEDS A SUBROUTINE NAME");
-  if (parts.size() - 1 > 12) Fail(st.col, "Error - exceeds 12 L's");
+  if (over || parts.size() - 1 > 12) Fail(st.col, "Error - exceeds 12 L's");
   std::map<int, double> locals;
   std::optional<double> literal_count;
   for (size_t i = 1; i < parts.size(); ++i) {
-    std::string f = Trim(parts[i]);
+    std::string_view f = TrimView(parts[i]);
     if (i == 1 && !f.empty() && (IsDigit(f[0]) || f[0] == '.')) {
       try {
         literal_count = Eval(f, st.col);
@@ -147,8 +152,8 @@ void KtRun::StCls(const Statement& st, BlockCtx& bc, bool) {
       continue;
     }
     size_t q = f.find('"');
-    if (q != std::string::npos) f = f.substr(0, q);
-    size_t eq = std::string::npos;
+    if (q != std::string_view::npos) f = f.substr(0, q);
+    size_t eq = std::string_view::npos;
     int depth = 0;
     for (size_t k = 0; k < f.size(); ++k) {
       if (f[k] == '(') ++depth;
@@ -158,8 +163,8 @@ void KtRun::StCls(const Statement& st, BlockCtx& bc, bool) {
         break;
       }
     }
-    if (eq == std::string::npos) Fail(st.col, "CLS PARAMETER NEEDS Ln = expression");
-    int n = EvalParamRef(Trim(f.substr(0, eq)), st.col);
+    if (eq == std::string_view::npos) Fail(st.col, "CLS PARAMETER NEEDS Ln = expression");
+    int n = EvalParamRef(TrimView(f.substr(0, eq)), st.col);
     double v = Eval(f.substr(eq + 1), st.col);  // evaluated at the caller's level
     if (n > 2999) Fail(st.col, "Error L numbers range from 0..2999");
     if (n <= 99) {
@@ -172,8 +177,8 @@ void KtRun::StCls(const Statement& st, BlockCtx& bc, bool) {
   auto d = FindDef(name);
   if (!d || d->is_cycle) Fail(st.col, "Error - Subroutine or Defined Cycle Not Found (" + name + ")");
   bc.call = true;
-  bc.call_def = *d;
-  bc.call_def.name = name;
+  bc.call_def = std::move(*d);
+  bc.call_def.name = std::move(name);
   bc.call_locals = std::move(locals);
   bc.call_col = st.col;
 }
@@ -265,7 +270,8 @@ void KtRun::StMir(const Statement& st, BlockCtx& bc, bool in_ift) {
 void KtRun::StU88(const Statement& st, BlockCtx&, bool) {
   std::string b = Upper(st.body);
   b.erase(std::remove(b.begin(), b.end(), ','), b.end());
-  ParsedBlock pb = ParseBlock(b, true);
+  ParsedBlock pb;
+  ParseBlock(b, true, pb);
   for (const auto& w : pb.words) {
     double v = w.kind == WordKind::kNumber
                    ? ScaleLiteral(w.letter, w.num, metric_, false, false)
