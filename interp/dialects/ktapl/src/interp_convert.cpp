@@ -642,6 +642,8 @@ void KtRun::ExecTypeI(BlockCtx& bc, const ParsedBlock* pb) {
   BlockCodes k;
   k.dwell = HasG(gs, 4);
   Words words;
+  uint32_t letters =
+      0;  // the letters of `words`, bit 0 A: the work for M, S, T, H, P only in blocks with them
   for (const auto& w : raw) {
     if (w.letter == 'G') continue;
     bool dropped;
@@ -650,7 +652,9 @@ void KtRun::ExecTypeI(BlockCtx& bc, const ParsedBlock* pb) {
     // Letters passed to a G800-series or probe cycle are parameters in the passing formats (ln 8945-8983).
     if (!pass800) CheckWordFormat(r, metric_);
     words.push_back(r);
+    letters |= 1u << (r.letter - 'A');
   }
+  auto has = [letters](char l) { return (letters & (1u << (l - 'A'))) != 0; };
   ConvertGCodes(gs, pass800, k);
 
   uint32_t axis_mask = KeepLetters(words);
@@ -667,8 +671,9 @@ void KtRun::ExecTypeI(BlockCtx& bc, const ParsedBlock* pb) {
   // Cycle parameter passing (manual ch. 8: letters A-Z -> L801-L826). M25 / M06 blocks move in machine
   // coordinates and never run a pending cycle.
   bool trigger = false;
-  const bool machine_block = std::any_of(
-      words.begin(), words.end(), [](const Word& w) { return w.letter == 'M' && (w.v == 25 || w.v == 6); });
+  const bool machine_block = has('M') && std::any_of(words.begin(), words.end(), [](const Word& w) {
+                               return w.letter == 'M' && (w.v == 25 || w.v == 6);
+                             });
   const bool passes_letters = mode_.cycle >= 801 && !running_cycle && !g77 && !machine_block;
   if (mode_.cycle != 0 && !running_cycle && !g77 && !machine_block) {
     trigger = PassCycleParameters(raw, k, pb, drop_undefined, axis_mask, words);
@@ -681,11 +686,12 @@ void KtRun::ExecTypeI(BlockCtx& bc, const ParsedBlock* pb) {
     }
   }
 
-  const BlockMCodes mc = ReadMCodes(words, trigger);
+  const BlockMCodes mc = has('M') ? ReadMCodes(words, trigger) : BlockMCodes{};
   if ((mc.after == 30 || mc.after == 60) && pb) CheckAloneInBlock(*pb, mc);
-  ToolAndSpeed(words, mc, k.g38_col != 0);  // ln 7082: "G38 S16", S the flutes of the cutter
+  // ln 7082: "G38 S16", S the flutes of the cutter.
+  if (has('T') || has('S') || has('M')) ToolAndSpeed(words, mc, k.g38_col != 0);
 
-  const Word* f = Find(words, 'F');
+  const Word* f = has('F') ? Find(words, 'F') : nullptr;
   if (k.g33_col || mode_.threading || block_d_) [[unlikely]]
     ThreadWords(words, k, f, axis_mask, trigger || passes_letters);
   const std::optional<double> block_feed = BlockFeed(f, k, mc);
@@ -697,9 +703,9 @@ void KtRun::ExecTypeI(BlockCtx& bc, const ParsedBlock* pb) {
     CallCycle(mode_.cycle);
     return;
   }
-  FixtureWord(words);
+  if (has('H')) FixtureWord(words);
   if (k.g38_col) CheckTool(Find(words, 'S'));  // where the block before left the tool (ln 7061-7090)
-  length_bypass_ = !passes_letters && LengthBypass(words, k.arc != 0);
+  length_bypass_ = !passes_letters && has('P') && LengthBypass(words, k.arc != 0);
   Motion(words, k, mc, axis_mask, motion_col, f, block_feed);
   length_bypass_ = false;
   thread_block_ = false;
