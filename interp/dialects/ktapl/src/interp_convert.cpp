@@ -642,8 +642,8 @@ void KtRun::ExecTypeI(BlockCtx& bc, const ParsedBlock* pb) {
   BlockCodes k;
   k.dwell = HasG(gs, 4);
   Words words;
-  uint32_t letters =
-      0;  // the letters of `words`, bit 0 A: the work for M, S, T, H, P only in blocks with them
+  // The letters of `words` (bit 0 A): the work for M, S, T, F, H, P only in blocks with them.
+  uint32_t letters = 0;
   for (const auto& w : raw) {
     if (w.letter == 'G') continue;
     bool dropped;

@@ -175,7 +175,7 @@ void KtRun::ExecBlock(std::string_view text, size_t start) {
   }
   const ParsedBlock& pb = *cached;
   if (pb.deleted && block_delete_) return;
-  block_comment_ = pb.comment;
+  if (!pb.comment.empty() || !block_comment_.empty()) block_comment_ = pb.comment;  // most have none
   for (const auto& st : pb.stmts) {
     if (st.mnemonic == "DFS" || st.mnemonic == "DFC") {
       Define(st, li);

@@ -297,7 +297,7 @@ class KtRun final : public RunBase, public ExprContext {
 
   // Statements (interp_statements.cpp, interp_files.cpp, interp_tools.cpp)
   using StatementFn = void (KtRun::*)(const Statement& st, BlockCtx& bc, bool in_ift);
-  static const std::map<std::string_view, StatementFn>& StatementTable();
+  static const std::vector<std::pair<uint32_t, StatementFn>>& StatementTable();
   void ExecStatement(const Statement& st, BlockCtx& bc, bool in_ift);
   void StPar(const Statement& st, BlockCtx& bc, bool in_ift);
   void StIft(const Statement& st, BlockCtx& bc, bool in_ift);

@@ -9,29 +9,53 @@
 
 namespace cell::interp::ktapl {
 
-const std::map<std::string_view, KtRun::StatementFn>& KtRun::StatementTable() {
-  static const std::map<std::string_view, StatementFn> kTable = {
-      {"PAR", &KtRun::StPar},       {"IFT", &KtRun::StIft},       {"GTO", &KtRun::StGto},
-      {"LBL", &KtRun::StLbl},       {"END", &KtRun::StEnd},       {"CLS", &KtRun::StCls},
-      {"DLP", &KtRun::StDlp},       {"NAM", &KtRun::StHeading},   {"UTL", &KtRun::StHeading},
-      {"UCY", &KtRun::StHeading},   {"ACP", &KtRun::StRefused},   {"SSA", &KtRun::StSsa},
-      {"MSG", &KtRun::StMsg},       {"OIF", &KtRun::StOif},       {"OPF", &KtRun::StOpf},
-      {"CLF", &KtRun::StClf},       {"FWR", &KtRun::StFwr},       {"DAT", &KtRun::StDat},
-      {"CPY", &KtRun::StFileOp},    {"DLF", &KtRun::StFileOp},    {"PRT", &KtRun::StFileOp},
-      {"RCP", &KtRun::StFileOp},    {"USF", &KtRun::StFileOp},    {"ULF", &KtRun::StFileOp},
-      {"CER", &KtRun::StErrorMode}, {"SER", &KtRun::StErrorMode}, {"SET", &KtRun::StSetWai},
-      {"WAI", &KtRun::StSetWai},    {"TLD", &KtRun::StTld},       {"FXC", &KtRun::StFxc},
-      {"UFX", &KtRun::StFxc},       {"ZTB", &KtRun::StZtb},       {"MIR", &KtRun::StMir},
-      {"U88", &KtRun::StU88},       {"UAT", &KtRun::StUat},       {"EVT", &KtRun::StEvt},
-  };
+namespace {
+
+// A mnemonic's three characters as one number: the table is searched by integer compares, not strings (a
+// statement runs in most loops). 0 for any other length (no statement's key).
+constexpr uint32_t StatementKey(std::string_view m) {
+  if (m.size() != 3) return 0;
+  return static_cast<uint32_t>(static_cast<unsigned char>(m[0])) << 16 |
+         static_cast<uint32_t>(static_cast<unsigned char>(m[1])) << 8 | static_cast<unsigned char>(m[2]);
+}
+
+}  // namespace
+
+const std::vector<std::pair<uint32_t, KtRun::StatementFn>>& KtRun::StatementTable() {
+  static const std::vector<std::pair<uint32_t, StatementFn>> kTable = [] {
+    std::vector<std::pair<uint32_t, StatementFn>> t = {
+        {StatementKey("PAR"), &KtRun::StPar},       {StatementKey("IFT"), &KtRun::StIft},
+        {StatementKey("GTO"), &KtRun::StGto},       {StatementKey("LBL"), &KtRun::StLbl},
+        {StatementKey("END"), &KtRun::StEnd},       {StatementKey("CLS"), &KtRun::StCls},
+        {StatementKey("DLP"), &KtRun::StDlp},       {StatementKey("NAM"), &KtRun::StHeading},
+        {StatementKey("UTL"), &KtRun::StHeading},   {StatementKey("UCY"), &KtRun::StHeading},
+        {StatementKey("ACP"), &KtRun::StRefused},   {StatementKey("SSA"), &KtRun::StSsa},
+        {StatementKey("MSG"), &KtRun::StMsg},       {StatementKey("OIF"), &KtRun::StOif},
+        {StatementKey("OPF"), &KtRun::StOpf},       {StatementKey("CLF"), &KtRun::StClf},
+        {StatementKey("FWR"), &KtRun::StFwr},       {StatementKey("DAT"), &KtRun::StDat},
+        {StatementKey("CPY"), &KtRun::StFileOp},    {StatementKey("DLF"), &KtRun::StFileOp},
+        {StatementKey("PRT"), &KtRun::StFileOp},    {StatementKey("RCP"), &KtRun::StFileOp},
+        {StatementKey("USF"), &KtRun::StFileOp},    {StatementKey("ULF"), &KtRun::StFileOp},
+        {StatementKey("CER"), &KtRun::StErrorMode}, {StatementKey("SER"), &KtRun::StErrorMode},
+        {StatementKey("SET"), &KtRun::StSetWai},    {StatementKey("WAI"), &KtRun::StSetWai},
+        {StatementKey("TLD"), &KtRun::StTld},       {StatementKey("FXC"), &KtRun::StFxc},
+        {StatementKey("UFX"), &KtRun::StFxc},       {StatementKey("ZTB"), &KtRun::StZtb},
+        {StatementKey("MIR"), &KtRun::StMir},       {StatementKey("U88"), &KtRun::StU88},
+        {StatementKey("UAT"), &KtRun::StUat},       {StatementKey("EVT"), &KtRun::StEvt},
+    };
+    std::sort(t.begin(), t.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+    return t;
+  }();
   return kTable;
 }
 
 void KtRun::ExecStatement(const Statement& st, BlockCtx& bc, bool in_ift) {
   if (st.body.size() > 73) Fail(st.col, "TYPE II STATEMENT EXCEEDS 73 CHARACTERS");
   const auto& table = StatementTable();
-  auto it = table.find(st.mnemonic);
-  if (it == table.end()) Fail(st.col, "TYPE II COMMAND SYNTAX ERROR");
+  const uint32_t key = StatementKey(st.mnemonic);
+  auto it = std::lower_bound(table.begin(), table.end(), key,
+                             [](const auto& e, uint32_t k) { return e.first < k; });
+  if (it == table.end() || it->first != key) Fail(st.col, "TYPE II COMMAND SYNTAX ERROR");
   (this->*(it->second))(st, bc, in_ift);
 }
 

@@ -6,6 +6,14 @@
 
 namespace cell::interp::ktapl {
 
+namespace {
+
+bool IsAsciiAlpha(char c) {
+  return (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z');
+}
+
+}  // namespace
+
 std::string Upper(std::string_view s) {
   std::string r(s);
   for (char& c : r) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
@@ -66,10 +74,12 @@ bool NextStatement(std::string_view line, size_t& from, Statement& st, std::stri
       size_t k = 0;
       while (k < inner.size() && inner[k] == ' ') ++k;
       size_t m = k;
-      while (m < inner.size() && m - k < 3 && std::isalnum(static_cast<unsigned char>(inner[m]))) ++m;
-      st.mnemonic.clear();
-      for (char ch : inner.substr(k, m - k))
-        st.mnemonic += static_cast<char>(std::toupper(static_cast<unsigned char>(ch)));
+      // ASCII letters and digits (what isalnum and toupper give in the C locale, without their lookups).
+      while (m < inner.size() && m - k < 3 &&
+             (IsAsciiAlpha(inner[m]) || (inner[m] >= '0' && inner[m] <= '9')))
+        ++m;
+      st.mnemonic.assign(inner.substr(k, m - k));
+      for (char& ch : st.mnemonic) ch = Up(ch);
       size_t rest = m;
       while (rest < inner.size() && inner[rest] == ' ') ++rest;
       st.has_body = rest < inner.size() && inner[rest] == ',';
