@@ -471,10 +471,6 @@ void KtRun::ImmediateMCodes(const Words& words, bool speed_changed, const Word* 
 
 namespace {
 
-bool HasG(const GWords& gs, int code) {
-  return std::any_of(gs.begin(), gs.end(), [code](GWord g) { return g.code == code; });
-}
-
 // Does the block run in G800-series passing mode? A probe cycle (G24-G27) takes the block's other G codes
 // as L807 and its letters as L801-L826, as the G800-series cycles do (App. E checks that there are none:
 // "NO OTHER M OR G CODES ALLOWED").
@@ -504,6 +500,11 @@ int MotionCol(const Words& words) {
 void KtRun::ReadGWords(const RawWords& raw, bool drop_undefined, GWords& gs) {
   for (const auto& w : raw) {
     if (w.letter != 'G') continue;
+    if (w.kind == WordKind::kNumber && !w.num.point && !w.num.neg && w.num.digits <= 2) {
+      // G0-G99 as written (most G words): what EvalWord and the format check give it, without them.
+      gs.push_back({static_cast<int>(w.num.as_written), w.col});
+      continue;
+    }
     bool dropped;
     Word g = EvalWord(w, false, false, drop_undefined, dropped);
     if (dropped) continue;
@@ -511,8 +512,11 @@ void KtRun::ReadGWords(const RawWords& raw, bool drop_undefined, GWords& gs) {
     if (g.v < 0 || g.v > 999) Fail(w.col, "ILLEGAL G CODE");
     gs.push_back({static_cast<int>(g.v), w.col});
   }
-  const bool has70 = HasG(gs, 70);
-  const bool has71 = HasG(gs, 71);
+  bool has70 = false, has71 = false;
+  for (const GWord& g : gs) {
+    has70 = has70 || g.code == 70;
+    has71 = has71 || g.code == 71;
+  }
   if (has70 && has71) Fail(gs.front().col, "G70 AND G71 CANNOT BE IN THE SAME BLOCK");
   if (has70) SetUnits(false);
   if (has71) SetUnits(true);
@@ -636,11 +640,15 @@ void KtRun::ExecTypeI(BlockCtx& bc, const ParsedBlock* pb) {
   GWords gs;  // fits: one per raw word
   ReadGWords(raw, drop_undefined, gs);
   const bool running_cycle = RunningCycle();
-  const bool g77 = HasG(gs, 77);
+  bool g77 = false, g04 = false;
+  for (const GWord& g : gs) {
+    g77 = g77 || g.code == 77;
+    g04 = g04 || g.code == 4;
+  }
   const bool pass800 = PassesLetters(gs, mode_.cycle, running_cycle, g77);
 
   BlockCodes k;
-  k.dwell = HasG(gs, 4);
+  k.dwell = g04;
   Words words;
   // The letters of `words` (bit 0 A): the work for M, S, T, F, H, P only in blocks with them.
   uint32_t letters = 0;

@@ -213,7 +213,7 @@ void KtRun::ExecBlock(std::string_view text, size_t start) {
     return;
   }
   if (bc.jump) DoJump(*bc.jump, bc.jump_col);
-  if (bc.call) DoCall(bc.call_def, std::move(bc.call_locals), false);
+  if (bc.call) DoCall(bc.call->def, std::move(bc.call->locals), false);
   if (bc.end) DoEnd(bc.end_col);
 }
 

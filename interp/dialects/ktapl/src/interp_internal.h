@@ -176,10 +176,12 @@ struct BlockCtx {
   int jump_col = 1;
   bool end = false;
   int end_col = 1;
-  bool call = false;
-  Def call_def;
-  std::map<int, double> call_locals;
-  int call_col = 1;
+  struct Call {
+    Def def;
+    std::map<int, double> locals;
+    int col = 1;
+  };
+  std::optional<Call> call;  // a CLS: made only then (most blocks call nothing)
   int gto_count = 0;
   int items = 0;
   int own_words = 0;          // Type I words of the block itself (not of its IFT actions)

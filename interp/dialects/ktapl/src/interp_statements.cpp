@@ -200,11 +200,11 @@ void KtRun::StCls(const Statement& st, BlockCtx& bc, bool) {
   if (literal_count) locals[0] = *literal_count;
   auto d = FindDef(name);
   if (!d || d->is_cycle) Fail(st.col, "Error - Subroutine or Defined Cycle Not Found (" + name + ")");
-  bc.call = true;
-  bc.call_def = std::move(*d);
-  bc.call_def.name = std::move(name);
-  bc.call_locals = std::move(locals);
-  bc.call_col = st.col;
+  BlockCtx::Call& call = bc.call.emplace();
+  call.def = std::move(*d);
+  call.def.name = std::move(name);
+  call.locals = std::move(locals);
+  call.col = st.col;
 }
 
 void KtRun::StDlp(const Statement& st, BlockCtx&, bool) {
