@@ -4,6 +4,7 @@
 
 #include <cctype>
 #include <cmath>
+#include <optional>
 
 namespace cell::interp::ktapl {
 
@@ -36,6 +37,114 @@ bool IsValueLetter(char c) {
       return true;
     default:
       return false;
+  }
+}
+
+// A number as written (digits, a point, digits) from `pos`, moved past it: the digits read (0: none). The
+// descent and the fast path both read numbers here, so they compute the same double.
+int ReadNumber(std::string_view s, size_t& pos, double& v) {
+  v = 0;
+  int digits = 0;
+  while (pos < s.size() && std::isdigit(static_cast<unsigned char>(s[pos]))) {
+    v = v * 10 + (s[pos] - '0');
+    ++pos;
+    ++digits;
+  }
+  if (pos < s.size() && s[pos] == '.') {
+    ++pos;
+    double scale = 0.1;
+    while (pos < s.size() && std::isdigit(static_cast<unsigned char>(s[pos]))) {
+      v += (s[pos] - '0') * scale;
+      scale /= 10;
+      ++pos;
+      ++digits;
+    }
+  }
+  return digits;
+}
+
+bool Blank(char c) {
+  return c == ' ' || c == '\t';
+}
+
+// The forms most expressions take, without the descent: operands (a number, L0-L2999, a value letter), each
+// with at most one sign, joined by + - * / with no * or / after a + or -, so that left to right is the
+// precedence (`-L5`, `L101+.001`, `L101*2.+1.`). The same operations in the same order as the descent, so the
+// same value. Anything else, and anything the descent reports (an undefined parameter, an overflow, a
+// division by zero), gives nullopt: the descent then evaluates the text from its start. System parameters
+// (L3000-L3999) are left to the descent, as the environment may answer some of them.
+std::optional<double> FastValue(std::string_view s, ExprContext& ctx) {
+  size_t i = 0;
+  double v = 0;
+  char op = 0;  // the operator before this operand; 0 for the first
+  bool additive = false;
+  auto skip = [&] {
+    while (i < s.size() && Blank(s[i])) ++i;
+  };
+  for (;;) {
+    skip();
+    bool neg = false;
+    if (i < s.size() && (s[i] == '-' || s[i] == '+')) {
+      neg = s[i] == '-';
+      ++i;
+      skip();
+    }
+    if (i >= s.size()) return std::nullopt;
+    const char c = Up(s[i]);
+    double x;
+    if (std::isdigit(static_cast<unsigned char>(c)) || c == '.') {
+      if (ReadNumber(s, i, x) == 0 || x > kMax) return std::nullopt;
+    } else if (c == 'L') {
+      const size_t start = ++i;
+      int n = 0;
+      while (i < s.size() && std::isdigit(static_cast<unsigned char>(s[i]))) {
+        n = n * 10 + (s[i] - '0');
+        if (n > 2999) return std::nullopt;
+        ++i;
+      }
+      if (i == start) return std::nullopt;  // L(expr)
+      try {
+        x = ctx.Param(n);
+      } catch (const ExprError&) {
+        return std::nullopt;
+      }
+    } else if (IsValueLetter(c) &&
+               !(i + 1 < s.size() && std::isalpha(static_cast<unsigned char>(s[i + 1])))) {
+      ++i;
+      x = ctx.Letter(c);
+    } else {
+      return std::nullopt;
+    }
+    if (neg) x = -x;
+    switch (op) {
+      case 0:
+        v = x;
+        break;
+      case '+':
+        v = v + x;
+        break;
+      case '-':
+        v = v - x;
+        break;
+      case '*':
+        v = v * x;
+        break;
+      default:
+        if (x == 0) return std::nullopt;
+        v = v / x;
+        break;
+    }
+    if (op != 0 && (!std::isfinite(v) || std::fabs(v) > kMax)) return std::nullopt;
+    skip();
+    if (i >= s.size()) return v;
+    op = s[i++];
+    if (op == '+' || op == '-') {
+      additive = true;
+    } else if (op != '*' && op != '/') {
+      return std::nullopt;
+    } else if (additive) {
+      return std::nullopt;
+    }
   }
 }
 
@@ -151,23 +260,8 @@ double ExprParser::Primary() {
   char c = Up(s_[pos_]);
   if (std::isdigit(static_cast<unsigned char>(c)) || c == '.') {
     size_t start = pos_;
-    double v = 0;
-    int digits = 0;
-    while (pos_ < s_.size() && std::isdigit(static_cast<unsigned char>(s_[pos_]))) {
-      v = v * 10 + (s_[pos_] - '0');
-      ++pos_;
-      ++digits;
-    }
-    if (pos_ < s_.size() && s_[pos_] == '.') {
-      ++pos_;
-      double scale = 0.1;
-      while (pos_ < s_.size() && std::isdigit(static_cast<unsigned char>(s_[pos_]))) {
-        v += (s_[pos_] - '0') * scale;
-        scale /= 10;
-        ++pos_;
-        ++digits;
-      }
-    }
+    double v;
+    const int digits = ReadNumber(s_, pos_, v);
     if (digits == 0) {
       pos_ = start;
       Fail("NUMBER EXPECTED");
@@ -383,6 +477,7 @@ bool ExprParser::Atom() {
 }
 
 double EvalValue(std::string_view text, ExprContext& ctx) {
+  if (const std::optional<double> v = FastValue(text, ctx)) return *v;
   ExprParser p(text, ctx);
   double v = p.Value();
   if (!p.AtEnd()) throw ExprError{"SYNTAX ERROR IN EXPRESSION", p.pos()};

@@ -1,7 +1,10 @@
 // Appendix A function values and the 8-significant-digit display format (manual ln 11169-11369).
 #include <gtest/gtest.h>
 
+#include <cstdio>
 #include <map>
+#include <string>
+#include <string_view>
 
 #include "cell/interp/ktapl.h"
 #include "expr.h"
@@ -102,6 +105,41 @@ TEST(Expressions, PrecedenceAndSin) {
   EXPECT_DOUBLE_EQ(EvalValue("6+2*5", c), 16.0);            // ln 8587
   EXPECT_NEAR(EvalValue("10.*SIN(45.)", c), 7.0711, 1e-4);  // ln 8643
   EXPECT_DOUBLE_EQ(EvalValue("X + .1", c), 2.6);
+}
+
+// EvalValue takes the common forms (operands joined by + - * / with no * or / after a + or -) without the
+// descent; whatever it answers must be the descent's own value to the bit, or the descent's own error.
+std::string Outcome(std::string_view expr, Ctx& c, bool descent_only) {
+  char buf[64];
+  try {
+    double v;
+    if (descent_only) {
+      ExprParser p(expr, c);
+      v = p.Value();
+      if (!p.AtEnd()) return "SYNTAX ERROR IN EXPRESSION @" + std::to_string(p.pos());
+    } else {
+      v = EvalValue(expr, c);
+    }
+    std::snprintf(buf, sizeof buf, "%a", v);
+    return buf;
+  } catch (const ExprError& e) {
+    return e.text + " @" + std::to_string(e.offset);
+  }
+}
+
+TEST(Expressions, FastPathGivesTheDescentsValueOrError) {
+  Ctx c;
+  c.p = {{0, 0.0}, {1, 1.5}, {2, -2.25}, {3, 0.1}, {5, 2.0}, {101, 0.003}, {102, 999999998.0}};
+  for (const char* e :
+       {"-L5",      "L101+.001", "L101*2.+1.", "2.",        "3",           ".5",          "L1-L2-L3",
+        "L1/L2*L3", "L1*L2+L3",  "L1+L2*L3",   "L1-L2/L3",  " L1 + 2 ",    "\tL1\t*\t3.", "-0",
+        "+L1",      "2*-L1",     "L1/-L3",     "l101+.001", "L1/0",        "L1/L0",       "L99+1",
+        "L3070",    "L3070*2",   "L102+10.",   "L102*L102", "1000000000.", "999999999.",  "X+1",
+        "x*2",      "SQRT(4.)",  "LN(2.)",     "L(1)+1",    "--L1",        "L1 2",        "",
+        " ",        "L",         ".",          "1..2",      "XY",          "L4000",       "L1+",
+        "*L1",      "L1+(2)",    "L 1+1",      "0.1+0.2",   "1./3.*3.",    "L3/L3/L3",    "7-L1-L2*2"}) {
+    EXPECT_EQ(Outcome(e, c, false), Outcome(e, c, true)) << e;
+  }
 }
 
 TEST(Conditions, ManualForms) {

@@ -471,10 +471,6 @@ void KtRun::ImmediateMCodes(const Words& words, bool speed_changed, const Word* 
 
 namespace {
 
-bool HasG(const GWords& gs, int code) {
-  return std::any_of(gs.begin(), gs.end(), [code](GWord g) { return g.code == code; });
-}
-
 // Does the block run in G800-series passing mode? A probe cycle (G24-G27) takes the block's other G codes
 // as L807 and its letters as L801-L826, as the G800-series cycles do (App. E checks that there are none:
 // "NO OTHER M OR G CODES ALLOWED").
@@ -504,6 +500,11 @@ int MotionCol(const Words& words) {
 void KtRun::ReadGWords(const RawWords& raw, bool drop_undefined, GWords& gs) {
   for (const auto& w : raw) {
     if (w.letter != 'G') continue;
+    if (w.kind == WordKind::kNumber && !w.num.point && !w.num.neg && w.num.digits <= 2) {
+      // G0-G99 as written (most G words): what EvalWord and the format check give it, without them.
+      gs.push_back({static_cast<int>(w.num.as_written), w.col});
+      continue;
+    }
     bool dropped;
     Word g = EvalWord(w, false, false, drop_undefined, dropped);
     if (dropped) continue;
@@ -511,8 +512,11 @@ void KtRun::ReadGWords(const RawWords& raw, bool drop_undefined, GWords& gs) {
     if (g.v < 0 || g.v > 999) Fail(w.col, "ILLEGAL G CODE");
     gs.push_back({static_cast<int>(g.v), w.col});
   }
-  const bool has70 = HasG(gs, 70);
-  const bool has71 = HasG(gs, 71);
+  bool has70 = false, has71 = false;
+  for (const GWord& g : gs) {
+    has70 = has70 || g.code == 70;
+    has71 = has71 || g.code == 71;
+  }
   if (has70 && has71) Fail(gs.front().col, "G70 AND G71 CANNOT BE IN THE SAME BLOCK");
   if (has70) SetUnits(false);
   if (has71) SetUnits(true);
@@ -636,12 +640,18 @@ void KtRun::ExecTypeI(BlockCtx& bc, const ParsedBlock* pb) {
   GWords gs;  // fits: one per raw word
   ReadGWords(raw, drop_undefined, gs);
   const bool running_cycle = RunningCycle();
-  const bool g77 = HasG(gs, 77);
+  bool g77 = false, g04 = false;
+  for (const GWord& g : gs) {
+    g77 = g77 || g.code == 77;
+    g04 = g04 || g.code == 4;
+  }
   const bool pass800 = PassesLetters(gs, mode_.cycle, running_cycle, g77);
 
   BlockCodes k;
-  k.dwell = HasG(gs, 4);
+  k.dwell = g04;
   Words words;
+  // The letters of `words` (bit 0 A): the work for M, S, T, F, H, P only in blocks with them.
+  uint32_t letters = 0;
   for (const auto& w : raw) {
     if (w.letter == 'G') continue;
     bool dropped;
@@ -650,7 +660,9 @@ void KtRun::ExecTypeI(BlockCtx& bc, const ParsedBlock* pb) {
     // Letters passed to a G800-series or probe cycle are parameters in the passing formats (ln 8945-8983).
     if (!pass800) CheckWordFormat(r, metric_);
     words.push_back(r);
+    letters |= 1u << (r.letter - 'A');
   }
+  auto has = [letters](char l) { return (letters & (1u << (l - 'A'))) != 0; };
   ConvertGCodes(gs, pass800, k);
 
   uint32_t axis_mask = KeepLetters(words);
@@ -667,8 +679,9 @@ void KtRun::ExecTypeI(BlockCtx& bc, const ParsedBlock* pb) {
   // Cycle parameter passing (manual ch. 8: letters A-Z -> L801-L826). M25 / M06 blocks move in machine
   // coordinates and never run a pending cycle.
   bool trigger = false;
-  const bool machine_block = std::any_of(
-      words.begin(), words.end(), [](const Word& w) { return w.letter == 'M' && (w.v == 25 || w.v == 6); });
+  const bool machine_block = has('M') && std::any_of(words.begin(), words.end(), [](const Word& w) {
+                               return w.letter == 'M' && (w.v == 25 || w.v == 6);
+                             });
   const bool passes_letters = mode_.cycle >= 801 && !running_cycle && !g77 && !machine_block;
   if (mode_.cycle != 0 && !running_cycle && !g77 && !machine_block) {
     trigger = PassCycleParameters(raw, k, pb, drop_undefined, axis_mask, words);
@@ -681,11 +694,12 @@ void KtRun::ExecTypeI(BlockCtx& bc, const ParsedBlock* pb) {
     }
   }
 
-  const BlockMCodes mc = ReadMCodes(words, trigger);
+  const BlockMCodes mc = has('M') ? ReadMCodes(words, trigger) : BlockMCodes{};
   if ((mc.after == 30 || mc.after == 60) && pb) CheckAloneInBlock(*pb, mc);
-  ToolAndSpeed(words, mc, k.g38_col != 0);  // ln 7082: "G38 S16", S the flutes of the cutter
+  // ln 7082: "G38 S16", S the flutes of the cutter.
+  if (has('T') || has('S') || has('M')) ToolAndSpeed(words, mc, k.g38_col != 0);
 
-  const Word* f = Find(words, 'F');
+  const Word* f = has('F') ? Find(words, 'F') : nullptr;
   if (k.g33_col || mode_.threading || block_d_) [[unlikely]]
     ThreadWords(words, k, f, axis_mask, trigger || passes_letters);
   const std::optional<double> block_feed = BlockFeed(f, k, mc);
@@ -697,9 +711,9 @@ void KtRun::ExecTypeI(BlockCtx& bc, const ParsedBlock* pb) {
     CallCycle(mode_.cycle);
     return;
   }
-  FixtureWord(words);
+  if (has('H')) FixtureWord(words);
   if (k.g38_col) CheckTool(Find(words, 'S'));  // where the block before left the tool (ln 7061-7090)
-  length_bypass_ = !passes_letters && LengthBypass(words, k.arc != 0);
+  length_bypass_ = !passes_letters && has('P') && LengthBypass(words, k.arc != 0);
   Motion(words, k, mc, axis_mask, motion_col, f, block_feed);
   length_bypass_ = false;
   thread_block_ = false;

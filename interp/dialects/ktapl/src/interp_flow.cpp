@@ -166,17 +166,16 @@ void KtRun::ExecBlock(std::string_view text, size_t start) {
   if (t.empty() || t == "%") return;
   size_t li = frames_->depth() - 1;
   auto& f = frames_->top();
-  ParsedBlock fresh;
   const ParsedBlock* cached = nullptr;
   bool repeats = li > 0 || f.jumped;
   if (repeats) cached = cache_.Find(f.span.text.get(), start);
   if (!cached) {
-    fresh = ParseBlock(text, false);
-    if (repeats) cached = &cache_.Put(f.span.text, start, std::move(fresh));
+    ParseBlock(text, false, fresh_);
+    cached = repeats ? &cache_.Put(f.span.text, start, std::move(fresh_)) : &fresh_;
   }
-  const ParsedBlock& pb = cached ? *cached : fresh;
+  const ParsedBlock& pb = *cached;
   if (pb.deleted && block_delete_) return;
-  block_comment_ = pb.comment;
+  if (!pb.comment.empty() || !block_comment_.empty()) block_comment_ = pb.comment;  // most have none
   for (const auto& st : pb.stmts) {
     if (st.mnemonic == "DFS" || st.mnemonic == "DFC") {
       Define(st, li);
@@ -214,7 +213,7 @@ void KtRun::ExecBlock(std::string_view text, size_t start) {
     return;
   }
   if (bc.jump) DoJump(*bc.jump, bc.jump_col);
-  if (bc.call) DoCall(bc.call_def, bc.call_locals, false);
+  if (bc.call) DoCall(bc.call->def, std::move(bc.call->locals), false);
   if (bc.end) DoEnd(bc.end_col);
 }
 

@@ -103,6 +103,13 @@ struct ParsedBlock {
   RawWords words;
   std::vector<Statement> stmts;
   std::string comment;
+  void Clear() {
+    deleted = has_n = false;
+    n = {};
+    words.clear();
+    stmts.clear();
+    comment.clear();
+  }
 };
 
 // Implied decimals of a letter written without a point (metric / inch, dwell F, cycle parameter passing).
@@ -122,8 +129,9 @@ void CheckFeedFormat(const Word& f, FeedFormat fmt, bool metric);
 // G02/G03 radius limits (ln 5501), in mm: .001 in / .01 mm up to 1690.9320 in / 42949.672 mm.
 double MinArcRadiusMm(bool metric);
 double MaxArcRadiusMm(bool metric);
-// Parses one block (or an IFT action fragment) into words and statements. Expression words view `s`.
-ParsedBlock ParseBlock(std::string_view s, bool fragment);
+// Parses one block (or an IFT action fragment) into words and statements, into `pb` (cleared first: a reused
+// block keeps its storage). Expression words view `s`.
+void ParseBlock(std::string_view s, bool fragment, ParsedBlock& pb);
 
 // ---------------------------------------------------------------------------------------------------------
 // Definitions and the call stack (interp_flow.cpp)
@@ -168,10 +176,12 @@ struct BlockCtx {
   int jump_col = 1;
   bool end = false;
   int end_col = 1;
-  bool call = false;
-  Def call_def;
-  std::map<int, double> call_locals;
-  int call_col = 1;
+  struct Call {
+    Def def;
+    std::map<int, double> locals;
+    int col = 1;
+  };
+  std::optional<Call> call;  // a CLS: made only then (most blocks call nothing)
   int gto_count = 0;
   int items = 0;
   int own_words = 0;          // Type I words of the block itself (not of its IFT actions)
@@ -280,16 +290,16 @@ class KtRun final : public RunBase, public ExprContext {
   void SetParam(int n, double v, int col);
   void DeleteParam(int n);
   void SetFlag(int n);
-  int EvalParamRef(const std::string& text, int col);
+  int EvalParamRef(std::string_view text, int col);
   double Eval(std::string_view text, int col);
   // 1-based column in the current block of `offset` within `text`, or `col` when `text` is not found.
   int ExprCol(std::string_view text, size_t offset, int col) const;
   bool EvalCond(const std::string& text, int col);
-  std::string ExpandName(const std::string& name, int col);
+  std::string ExpandName(std::string_view name, int col);
 
   // Statements (interp_statements.cpp, interp_files.cpp, interp_tools.cpp)
   using StatementFn = void (KtRun::*)(const Statement& st, BlockCtx& bc, bool in_ift);
-  static const std::map<std::string_view, StatementFn>& StatementTable();
+  static const std::vector<std::pair<uint32_t, StatementFn>>& StatementTable();
   void ExecStatement(const Statement& st, BlockCtx& bc, bool in_ift);
   void StPar(const Statement& st, BlockCtx& bc, bool in_ift);
   void StIft(const Statement& st, BlockCtx& bc, bool in_ift);
@@ -461,6 +471,7 @@ class KtRun final : public RunBase, public ExprContext {
   std::map<std::string, Def> defs_;
   std::map<std::string, Def> lib_cache_;
   ParseCache<ParsedBlock> cache_;
+  ParsedBlock fresh_;          // the block being run when it is not cached (its storage reused)
   std::string_view block_;     // the block being executed (diagnostic columns)
   std::string block_comment_;  // its comment (the operator's message of an M99 M00 in cycle code)
   int local_defs_ = 0;

@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 
 #include "interp_internal.h"
@@ -85,13 +86,17 @@ void KtRun::ResetAtEnd() {
 void KtRun::EmitMove(const AxisArray& target, uint32_t moved, bool rapid, double feed, FeedMode fm,
                      bool exact, const AxisArray& travel, uint32_t travel_mask) {
   used_ |= moved;
+  // Only the moved axes (two or three of nine in most blocks), lowest first.
+  moved &= (1u << kAxisCount) - 1;
   bool change = travel_mask != 0;
-  for (int a = 0; a < kAxisCount && !change; ++a) {
-    if ((moved & (1u << a)) && std::fabs(target[a] - pos_[a]) > 1e-9) change = true;
+  for (uint32_t m = moved; m != 0 && !change; m &= m - 1) {
+    const int a = std::countr_zero(m);
+    if (std::fabs(target[a] - pos_[a]) > 1e-9) change = true;
   }
   if (!change) return;  // ln 2264: a block that commands the current position does not move
-  for (int a = 0; a < kAxisCount; ++a) {
-    if (moved & (1u << a)) pos_[a] = target[a];
+  for (uint32_t m = moved; m != 0; m &= m - 1) {
+    const int a = std::countr_zero(m);
+    pos_[a] = target[a];
   }
   Target* to;
   if (rapid) {
@@ -240,9 +245,10 @@ void KtRun::LinearMotion(const Words& words, const BlockCodes& k, const BlockMCo
       mc.m25 || !mode_.contouring || (eff && *eff == 0) || (b_index_ && (axis_mask & (1u << kB)));
   RebaseFixtures(words, mc, axis_mask, positioning, target);
   bool linear_moves = false;
-  for (int a = 0; a < kAxisCount; ++a) {
-    if (!IsRotaryAxis(a) && (axis_mask & (1u << a)) && std::fabs(target[a] - pos_[a]) > 1e-9)
-      linear_moves = true;
+  for (uint32_t m = axis_mask & ~rotary_mask & ((1u << kAxisCount) - 1); m != 0 && !linear_moves;
+       m &= m - 1) {
+    const int a = std::countr_zero(m);
+    if (std::fabs(target[a] - pos_[a]) > 1e-9) linear_moves = true;
   }
   // ln 5976-5978: rotary departures only (one or two rotary axes): F is degrees per minute in F3.0, so a
   // number without a point is whole degrees (F17 = 17 DPM, where a linear block reads 1.7 IPM). An index

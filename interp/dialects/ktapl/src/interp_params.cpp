@@ -275,7 +275,7 @@ bool KtRun::EvalCond(const std::string& text, int col) {
   }
 }
 
-int KtRun::EvalParamRef(const std::string& text, int col) {
+int KtRun::EvalParamRef(std::string_view text, int col) {
   try {
     ExprParser p(text, *this);
     int n = p.ParamRef();
@@ -288,7 +288,8 @@ int KtRun::EvalParamRef(const std::string& text, int col) {
 
 // <Ln>, <LnI> (truncated), <LnR> (rounded) in names. Blanks next to a substitution are not part of the
 // name: `(OPF, TEST < L25I > < L27I >)` names TEST1231 (ln 3826-3830); blanks elsewhere are (`CYL BORES1`).
-std::string KtRun::ExpandName(const std::string& name, int col) {
+std::string KtRun::ExpandName(std::string_view name, int col) {
+  if (name.find('<') == std::string_view::npos) return std::string(name);
   std::string out;
   for (size_t i = 0; i < name.size(); ++i) {
     if (name[i] != '<') {

@@ -149,9 +149,8 @@ void AddWord(RawWords& words, const RawWord& w) {
   if (!words.push_back(w)) Fail(w.col, "TOO MANY WORDS IN THE BLOCK");
 }
 
-// Parses one block (or an IFT action fragment) into words and statements. Expression words view `s`.
-ParsedBlock ParseBlock(std::string_view s, bool fragment) {
-  ParsedBlock pb;
+void ParseBlock(std::string_view s, bool fragment, ParsedBlock& pb) {
+  pb.Clear();
   size_t i = 0;
   auto skip = [&] {
     while (i < s.size() && (s[i] == ' ' || s[i] == '\t')) ++i;
@@ -201,13 +200,14 @@ ParsedBlock ParseBlock(std::string_view s, bool fragment) {
     }
     if (c == '(' || (c == '%' && i + 1 < s.size() && IsAlpha(s[i + 1]))) {
       std::string err;
-      auto sts = FindStatements(s.substr(i), &err);
-      if (sts.empty()) Fail(static_cast<int>(i) + 1, err.empty() ? "TYPE II COMMAND SYNTAX ERROR" : err);
-      Statement st = sts[0];
+      Statement& st = pb.stmts.emplace_back();
+      size_t at = 0;
+      if (!NextStatement(s.substr(i), at, st, &err)) {
+        Fail(static_cast<int>(i) + 1, err.empty() ? "TYPE II COMMAND SYNTAX ERROR" : err);
+      }
       st.col += static_cast<int>(i);
       if (st.mnemonic.size() != 3) Fail(st.col, "TYPE II COMMAND SYNTAX ERROR");
       i += st.end;
-      pb.stmts.push_back(std::move(st));
       continue;
     }
     if (c == '%') {  // stray rewind stop / EIA framing character
@@ -294,7 +294,6 @@ ParsedBlock ParseBlock(std::string_view s, bool fragment) {
     w.num = num;
     AddWord(pb.words, w);
   }
-  return pb;
 }
 
 }  // namespace cell::interp::ktapl

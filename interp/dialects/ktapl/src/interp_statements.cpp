@@ -9,29 +9,53 @@
 
 namespace cell::interp::ktapl {
 
-const std::map<std::string_view, KtRun::StatementFn>& KtRun::StatementTable() {
-  static const std::map<std::string_view, StatementFn> kTable = {
-      {"PAR", &KtRun::StPar},       {"IFT", &KtRun::StIft},       {"GTO", &KtRun::StGto},
-      {"LBL", &KtRun::StLbl},       {"END", &KtRun::StEnd},       {"CLS", &KtRun::StCls},
-      {"DLP", &KtRun::StDlp},       {"NAM", &KtRun::StHeading},   {"UTL", &KtRun::StHeading},
-      {"UCY", &KtRun::StHeading},   {"ACP", &KtRun::StRefused},   {"SSA", &KtRun::StSsa},
-      {"MSG", &KtRun::StMsg},       {"OIF", &KtRun::StOif},       {"OPF", &KtRun::StOpf},
-      {"CLF", &KtRun::StClf},       {"FWR", &KtRun::StFwr},       {"DAT", &KtRun::StDat},
-      {"CPY", &KtRun::StFileOp},    {"DLF", &KtRun::StFileOp},    {"PRT", &KtRun::StFileOp},
-      {"RCP", &KtRun::StFileOp},    {"USF", &KtRun::StFileOp},    {"ULF", &KtRun::StFileOp},
-      {"CER", &KtRun::StErrorMode}, {"SER", &KtRun::StErrorMode}, {"SET", &KtRun::StSetWai},
-      {"WAI", &KtRun::StSetWai},    {"TLD", &KtRun::StTld},       {"FXC", &KtRun::StFxc},
-      {"UFX", &KtRun::StFxc},       {"ZTB", &KtRun::StZtb},       {"MIR", &KtRun::StMir},
-      {"U88", &KtRun::StU88},       {"UAT", &KtRun::StUat},       {"EVT", &KtRun::StEvt},
-  };
+namespace {
+
+// A mnemonic's three characters as one number: the table is searched by integer compares, not strings (a
+// statement runs in most loops). 0 for any other length (no statement's key).
+constexpr uint32_t StatementKey(std::string_view m) {
+  if (m.size() != 3) return 0;
+  return static_cast<uint32_t>(static_cast<unsigned char>(m[0])) << 16 |
+         static_cast<uint32_t>(static_cast<unsigned char>(m[1])) << 8 | static_cast<unsigned char>(m[2]);
+}
+
+}  // namespace
+
+const std::vector<std::pair<uint32_t, KtRun::StatementFn>>& KtRun::StatementTable() {
+  static const std::vector<std::pair<uint32_t, StatementFn>> kTable = [] {
+    std::vector<std::pair<uint32_t, StatementFn>> t = {
+        {StatementKey("PAR"), &KtRun::StPar},       {StatementKey("IFT"), &KtRun::StIft},
+        {StatementKey("GTO"), &KtRun::StGto},       {StatementKey("LBL"), &KtRun::StLbl},
+        {StatementKey("END"), &KtRun::StEnd},       {StatementKey("CLS"), &KtRun::StCls},
+        {StatementKey("DLP"), &KtRun::StDlp},       {StatementKey("NAM"), &KtRun::StHeading},
+        {StatementKey("UTL"), &KtRun::StHeading},   {StatementKey("UCY"), &KtRun::StHeading},
+        {StatementKey("ACP"), &KtRun::StRefused},   {StatementKey("SSA"), &KtRun::StSsa},
+        {StatementKey("MSG"), &KtRun::StMsg},       {StatementKey("OIF"), &KtRun::StOif},
+        {StatementKey("OPF"), &KtRun::StOpf},       {StatementKey("CLF"), &KtRun::StClf},
+        {StatementKey("FWR"), &KtRun::StFwr},       {StatementKey("DAT"), &KtRun::StDat},
+        {StatementKey("CPY"), &KtRun::StFileOp},    {StatementKey("DLF"), &KtRun::StFileOp},
+        {StatementKey("PRT"), &KtRun::StFileOp},    {StatementKey("RCP"), &KtRun::StFileOp},
+        {StatementKey("USF"), &KtRun::StFileOp},    {StatementKey("ULF"), &KtRun::StFileOp},
+        {StatementKey("CER"), &KtRun::StErrorMode}, {StatementKey("SER"), &KtRun::StErrorMode},
+        {StatementKey("SET"), &KtRun::StSetWai},    {StatementKey("WAI"), &KtRun::StSetWai},
+        {StatementKey("TLD"), &KtRun::StTld},       {StatementKey("FXC"), &KtRun::StFxc},
+        {StatementKey("UFX"), &KtRun::StFxc},       {StatementKey("ZTB"), &KtRun::StZtb},
+        {StatementKey("MIR"), &KtRun::StMir},       {StatementKey("U88"), &KtRun::StU88},
+        {StatementKey("UAT"), &KtRun::StUat},       {StatementKey("EVT"), &KtRun::StEvt},
+    };
+    std::sort(t.begin(), t.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+    return t;
+  }();
   return kTable;
 }
 
 void KtRun::ExecStatement(const Statement& st, BlockCtx& bc, bool in_ift) {
   if (st.body.size() > 73) Fail(st.col, "TYPE II STATEMENT EXCEEDS 73 CHARACTERS");
   const auto& table = StatementTable();
-  auto it = table.find(st.mnemonic);
-  if (it == table.end()) Fail(st.col, "TYPE II COMMAND SYNTAX ERROR");
+  const uint32_t key = StatementKey(st.mnemonic);
+  auto it = std::lower_bound(table.begin(), table.end(), key,
+                             [](const auto& e, uint32_t k) { return e.first < k; });
+  if (it == table.end() || it->first != key) Fail(st.col, "TYPE II COMMAND SYNTAX ERROR");
   (this->*(it->second))(st, bc, in_ift);
 }
 
@@ -40,20 +64,22 @@ void KtRun::StPar(const Statement& st, BlockCtx&, bool) {
 }
 
 void KtRun::Par(const Statement& st) {
-  auto parts = SplitTopLevel(st.body, ',');
-  if (parts.size() > 12) Fail(st.col, "Error - exceeds 12 assignments in PAR");
-  for (const auto& raw : parts) {
-    std::string a = raw;
+  // Views into the body: a PAR runs in most loops, and copying each field cost more than evaluating it.
+  InlineVec<std::string_view, 13> parts;
+  bool over = false;
+  ForEachTopLevel(st.body, ',', false, [&](std::string_view f) { over = over || !parts.push_back(f); });
+  if (over || parts.size() > 12) Fail(st.col, "Error - exceeds 12 assignments in PAR");
+  for (std::string_view a : parts) {
     // Optional "description" after the expression.
     size_t q = a.find('"');
-    if (q != std::string::npos) {
+    if (q != std::string_view::npos) {
       size_t q2 = a.find('"', q + 1);
-      if (q2 == std::string::npos) Fail(st.col, "MISSING \" IN PARAMETER DESCRIPTION");
+      if (q2 == std::string_view::npos) Fail(st.col, "MISSING \" IN PARAMETER DESCRIPTION");
       if (q2 - q - 1 > 20) Fail(st.col, "PARAMETER DESCRIPTION EXCEEDS 20 CHARACTERS");
-      if (!Trim(a.substr(q2 + 1)).empty()) Fail(st.col, "TEXT AFTER PARAMETER DESCRIPTION");
+      if (!TrimView(a.substr(q2 + 1)).empty()) Fail(st.col, "TEXT AFTER PARAMETER DESCRIPTION");
       a = a.substr(0, q);
     }
-    size_t eq = std::string::npos;
+    size_t eq = std::string_view::npos;
     int depth = 0;
     for (size_t i = 0; i < a.size(); ++i) {
       if (a[i] == '(') ++depth;
@@ -63,8 +89,8 @@ void KtRun::Par(const Statement& st) {
         break;
       }
     }
-    if (eq == std::string::npos) Fail(st.col, "PAR ASSIGNMENT NEEDS Ln = expression");
-    int n = EvalParamRef(Trim(a.substr(0, eq)), st.col);
+    if (eq == std::string_view::npos) Fail(st.col, "PAR ASSIGNMENT NEEDS Ln = expression");
+    int n = EvalParamRef(TrimView(a.substr(0, eq)), st.col);
     if (n > 2999) Fail(st.col, "Error L numbers range from 0..2999");
     double v = Eval(a.substr(eq + 1), st.col);
     SetParam(n, v, st.col);
@@ -82,7 +108,7 @@ void KtRun::StIft(const Statement& st, BlockCtx& bc, bool in_ift) {
   if (!EvalCond(cond, st.col)) return;
   ParsedBlock ab;
   try {
-    ab = ParseBlock(action, true);
+    ParseBlock(action, true, ab);
   } catch (RunError& e) {
     e.col = st.col;
     throw;
@@ -130,14 +156,17 @@ void KtRun::StEnd(const Statement& st, BlockCtx& bc, bool) {
 
 void KtRun::StCls(const Statement& st, BlockCtx& bc, bool) {
   if (RunningCycle()) Fail(st.col, "A RUNNING DEFINED CYCLE CANNOT CALL A SUBROUTINE");
-  auto parts = SplitTopLevel(st.body, ',', true);
-  std::string name = Upper(ExpandName(Trim(parts[0]), st.col));
+  // Views into the body, as PAR's (a call in a loop).
+  InlineVec<std::string_view, 14> parts;
+  bool over = false;
+  ForEachTopLevel(st.body, ',', true, [&](std::string_view f) { over = over || !parts.push_back(f); });
+  std::string name = Upper(ExpandName(TrimView(parts[0]), st.col));
   if (name.empty()) Fail(st.col, "CLS NEEDS A SUBROUTINE NAME");
-  if (parts.size() - 1 > 12) Fail(st.col, "Error - exceeds 12 L's");
+  if (over || parts.size() - 1 > 12) Fail(st.col, "Error - exceeds 12 L's");
   std::map<int, double> locals;
   std::optional<double> literal_count;
   for (size_t i = 1; i < parts.size(); ++i) {
-    std::string f = Trim(parts[i]);
+    std::string_view f = TrimView(parts[i]);
     if (i == 1 && !f.empty() && (IsDigit(f[0]) || f[0] == '.')) {
       try {
         literal_count = Eval(f, st.col);
@@ -147,8 +176,8 @@ void KtRun::StCls(const Statement& st, BlockCtx& bc, bool) {
       continue;
     }
     size_t q = f.find('"');
-    if (q != std::string::npos) f = f.substr(0, q);
-    size_t eq = std::string::npos;
+    if (q != std::string_view::npos) f = f.substr(0, q);
+    size_t eq = std::string_view::npos;
     int depth = 0;
     for (size_t k = 0; k < f.size(); ++k) {
       if (f[k] == '(') ++depth;
@@ -158,8 +187,8 @@ void KtRun::StCls(const Statement& st, BlockCtx& bc, bool) {
         break;
       }
     }
-    if (eq == std::string::npos) Fail(st.col, "CLS PARAMETER NEEDS Ln = expression");
-    int n = EvalParamRef(Trim(f.substr(0, eq)), st.col);
+    if (eq == std::string_view::npos) Fail(st.col, "CLS PARAMETER NEEDS Ln = expression");
+    int n = EvalParamRef(TrimView(f.substr(0, eq)), st.col);
     double v = Eval(f.substr(eq + 1), st.col);  // evaluated at the caller's level
     if (n > 2999) Fail(st.col, "Error L numbers range from 0..2999");
     if (n <= 99) {
@@ -171,11 +200,11 @@ void KtRun::StCls(const Statement& st, BlockCtx& bc, bool) {
   if (literal_count) locals[0] = *literal_count;
   auto d = FindDef(name);
   if (!d || d->is_cycle) Fail(st.col, "Error - Subroutine or Defined Cycle Not Found (" + name + ")");
-  bc.call = true;
-  bc.call_def = *d;
-  bc.call_def.name = name;
-  bc.call_locals = std::move(locals);
-  bc.call_col = st.col;
+  BlockCtx::Call& call = bc.call.emplace();
+  call.def = std::move(*d);
+  call.def.name = std::move(name);
+  call.locals = std::move(locals);
+  call.col = st.col;
 }
 
 void KtRun::StDlp(const Statement& st, BlockCtx&, bool) {
@@ -265,7 +294,8 @@ void KtRun::StMir(const Statement& st, BlockCtx& bc, bool in_ift) {
 void KtRun::StU88(const Statement& st, BlockCtx&, bool) {
   std::string b = Upper(st.body);
   b.erase(std::remove(b.begin(), b.end(), ','), b.end());
-  ParsedBlock pb = ParseBlock(b, true);
+  ParsedBlock pb;
+  ParseBlock(b, true, pb);
   for (const auto& w : pb.words) {
     double v = w.kind == WordKind::kNumber
                    ? ScaleLiteral(w.letter, w.num, metric_, false, false)

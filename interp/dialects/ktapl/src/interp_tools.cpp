@@ -171,7 +171,7 @@ void KtRun::StFxc(const Statement& st, BlockCtx&, bool) {
   b.erase(std::remove(b.begin(), b.end(), ','), b.end());
   ParsedBlock pb;
   try {
-    pb = ParseBlock(b, true);
+    ParseBlock(b, true, pb);
   } catch (RunError& e) {
     e.col = st.col;
     throw;

@@ -6,6 +6,14 @@
 
 namespace cell::interp::ktapl {
 
+namespace {
+
+bool IsAsciiAlpha(char c) {
+  return (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z');
+}
+
+}  // namespace
+
 std::string Upper(std::string_view s) {
   std::string r(s);
   for (char& c : r) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
@@ -25,33 +33,12 @@ std::string Trim(std::string_view s) {
 
 std::vector<std::string> SplitTopLevel(std::string_view body, char sep, bool angle) {
   std::vector<std::string> out;
-  int depth = 0;
-  bool quote = false;
-  size_t start = 0;
-  for (size_t i = 0; i < body.size(); ++i) {
-    char c = body[i];
-    if (quote) {
-      if (c == '"') quote = false;
-      continue;
-    }
-    if (c == '"') {
-      quote = true;
-    } else if (c == '(' || (angle && c == '<')) {
-      ++depth;
-    } else if ((c == ')' || (angle && c == '>')) && depth > 0) {
-      --depth;
-    } else if (c == sep && depth == 0) {
-      out.emplace_back(body.substr(start, i - start));
-      start = i + 1;
-    }
-  }
-  out.emplace_back(body.substr(start));
+  ForEachTopLevel(body, sep, angle, [&out](std::string_view field) { out.emplace_back(field); });
   return out;
 }
 
-std::vector<Statement> FindStatements(std::string_view line, std::string* error, size_t* error_at) {
-  std::vector<Statement> out;
-  size_t i = 0;
+bool NextStatement(std::string_view line, size_t& from, Statement& st, std::string* error, size_t* error_at) {
+  size_t i = from;
   while (i < line.size()) {
     char c = line[i];
     if (c == '!') break;
@@ -79,32 +66,39 @@ std::vector<Statement> FindStatements(std::string_view line, std::string* error,
       if (j >= line.size()) {
         if (error) *error = "MISSING CONTROL-IN CHARACTER";
         if (error_at) *error_at = i;
-        return out;
+        from = line.size();
+        return false;
       }
-      Statement st;
       st.col = static_cast<int>(i) + 1;
       std::string_view inner = line.substr(i + 1, j - i - 1);
       size_t k = 0;
       while (k < inner.size() && inner[k] == ' ') ++k;
       size_t m = k;
-      while (m < inner.size() && m - k < 3 && std::isalnum(static_cast<unsigned char>(inner[m]))) ++m;
-      st.mnemonic = Upper(inner.substr(k, m - k));
+      // ASCII letters and digits (what isalnum and toupper give in the C locale, without their lookups).
+      while (m < inner.size() && m - k < 3 &&
+             (IsAsciiAlpha(inner[m]) || (inner[m] >= '0' && inner[m] <= '9')))
+        ++m;
+      st.mnemonic.assign(inner.substr(k, m - k));
+      for (char& ch : st.mnemonic) ch = Up(ch);
       size_t rest = m;
       while (rest < inner.size() && inner[rest] == ' ') ++rest;
-      if (rest < inner.size() && inner[rest] == ',') {
-        st.has_body = true;
-        st.body = std::string(inner.substr(rest + 1));
-      } else {
-        st.has_body = false;
-        st.body = std::string(inner.substr(rest));
-      }
+      st.has_body = rest < inner.size() && inner[rest] == ',';
+      st.body.assign(inner.substr(st.has_body ? rest + 1 : rest));
       st.end = j + 1;
-      out.push_back(std::move(st));
-      i = j + 1;
-      continue;
+      from = j + 1;
+      return true;
     }
     ++i;
   }
+  from = line.size();
+  return false;
+}
+
+std::vector<Statement> FindStatements(std::string_view line, std::string* error, size_t* error_at) {
+  std::vector<Statement> out;
+  size_t i = 0;
+  Statement st;
+  while (NextStatement(line, i, st, error, error_at)) out.push_back(std::move(st));
   return out;
 }
 
