@@ -27,25 +27,6 @@ sizes=(${CELL_BENCH_SCALE_SIZES:-2 8 16 32})
 stacks=(${CELL_BENCH_SCALE_STACKS:-fastdds cyclonedds})
 idle=${CELL_BENCH_SCALE_IDLE:-10}
 
-# make_config N DIR [TEMPLATE...]: deploy/'s configuration with N stations, copies of the templates in turn
-# (default KT01 OK01 EM01 BS01: KT01, OK01, EM01, BS01, KT02, ...), each under a new id of its template's
-# prefix, with the template's tools file if it has one.
-make_config() {
-  local n=$1 dir=$2 i k id
-  shift 2
-  local tpl=("$@")
-  [ ${#tpl[@]} -gt 0 ] || tpl=(KT01 OK01 EM01 BS01)
-  rm -rf "$dir"
-  mkdir -p "$dir/stations"
-  cp -r "$ROOT/deploy/systemd" "$ROOT/deploy/dds" "$dir/"
-  for ((i = 0; i < n; i++)); do
-    k=$((i % ${#tpl[@]}))
-    id=${tpl[$k]:0:2}$(printf '%02d' $((i / ${#tpl[@]} + 1)))
-    sed "s/^id = \"${tpl[$k]}\"/id = \"$id\"/" "$ROOT/deploy/stations/${tpl[$k]}.toml" >"$dir/stations/$id.toml"
-    [ ! -f "$ROOT/deploy/stations/${tpl[$k]}.tools" ] || cp "$ROOT/deploy/stations/${tpl[$k]}.tools" "$dir/stations/$id.tools"
-  done
-}
-
 # decisions_per_s N: pallets ended per second on an N-station KT-APL cell kept busy ("-" if it failed).
 decisions_per_s() {
   local n=$1 list pallets out

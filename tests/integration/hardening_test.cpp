@@ -666,6 +666,29 @@ TEST_F(Hardening, LocalCellProcesses) {
   }
   EXPECT_EQ(Ctl({"program", "ls"}).code, 0);
 
+  // `up --only stations` (a station host of a cell across hosts, deploy/hosts) starts the stations' processes
+  // and no host service, recorded in its own data directory, and is ready once they announce themselves: the
+  // running cell's scheduler sees the new station.
+  const std::string station_host = cell_.data_dir() + "/station-host";
+  auto part = Ctl({"up", "--only", "stations", "--stations", "KT03"}, {{"CELL_DATA_DIR", station_host}});
+  ASSERT_EQ(part.code, 0) << part.out << part.err;
+  std::set<std::string> started;
+  for (auto& p : json::parse(ReadFile(station_host + "/cell-up.json"))) started.insert(p["service"]);
+  EXPECT_EQ(started, (std::set<std::string>{"cell-interpreter/KT03", "cell-axis-servo/KT03"}));
+  auto kt03_online = [&] {
+    for (auto& row : cell_.Json({"station", "ls", "--json"}))
+      if (row["id"] == "KT03") return row["online"] == true;
+    return false;
+  };
+  bool kt03 = kt03_online();
+  for (int i = 0; !kt03 && i < 20; ++i) {
+    std::this_thread::sleep_for(500ms);
+    kt03 = kt03_online();
+  }
+  EXPECT_TRUE(kt03);
+  EXPECT_EQ(Ctl({"down"}, {{"CELL_DATA_DIR", station_host}}).code, 0);
+  EXPECT_EQ(Ctl({"up", "--only", "router"}).code, 2);
+
   // `down` stops only the processes it started: a recorded PID that now belongs to another process (here a
   // sleep of the test's, put in the record as if the PID had been reused) is left alone.
   Process bystander({"/bin/sleep", "60"});

@@ -1,10 +1,11 @@
 #!/usr/bin/env python3
-"""What an idle local cell costs (deploy/bench.d/96-scale.sh): cell_usage.py SECONDS DATA_DIR.
+"""What an idle local cell costs (deploy/bench.d/96-scale.sh, deploy/hosts): cell_usage.py SECONDS DATA_DIR...
 
-Reads the processes of `cellctl up` ($DATA_DIR/cell-up.json) and prints one line of key=value figures over
+Reads the processes of `cellctl up` ($DATA_DIR/cell-up.json; of every DATA_DIR given, one per host of a cell
+across hosts) and prints one line of key=value figures over
 SECONDS: cores (utime + stime of the cell's processes / wall), rss_mb (sum of VmRSS), threads, and udp_in_per_s
 (the host's UDP datagrams received per second, /proc/net/snmp: the cell's discovery and heartbeat traffic, as
-long as nothing else on the host talks UDP).
+long as nothing else on the host talks UDP; only this network namespace's).
 """
 import json
 import os
@@ -28,9 +29,10 @@ def udp_in():
 
 
 def main():
-    seconds, data = float(sys.argv[1]), sys.argv[2]
-    with open(os.path.join(data, "cell-up.json")) as f:
-        pids = [p["pid"] for p in json.load(f)]
+    seconds, pids = float(sys.argv[1]), []
+    for data in sys.argv[2:]:
+        with open(os.path.join(data, "cell-up.json")) as f:
+            pids += [p["pid"] for p in json.load(f)]
     t0 = {p: cpu_ticks(p) for p in pids}
     u0, w0 = udp_in(), time.monotonic()
     time.sleep(seconds)

@@ -84,8 +84,12 @@ void CheckStation(const std::string& station) {
   }
 }
 
-// The cell's processes as this invocation would start them.
-std::vector<CellProcess> Planned(const std::vector<std::string>& stations, const std::string& clock) {
+// The cell's processes as this invocation would start them. `only` "host": the plain units (the cell host's
+// services: program store, scheduler, inspection writer, dashboard); "stations": the stations' template units
+// (interpreter, axis servo, DNC); empty: both. A cell across hosts starts each part on its own host
+// (docs/operations.md §9.2, deploy/hosts).
+std::vector<CellProcess> Planned(const std::vector<std::string>& stations, const std::string& clock,
+                                 const std::string& only = "") {
   fs::path bin = fs::read_symlink("/proc/self/exe").parent_path();
   fs::path logs = cell::config::DataDir() / "logs";
   std::vector<std::string> env = CurrentEnvironment();
@@ -95,6 +99,8 @@ std::vector<CellProcess> Planned(const std::vector<std::string>& stations, const
   std::vector<CellProcess> out;
   for (auto& c : cell::config::CellCommands(cell::config::SourceTreeDir() / "deploy/systemd", stations, bin,
                                             HasTable)) {
+    const bool station_unit = c.unit.find('@') != std::string::npos;
+    if ((only == "host" && station_unit) || (only == "stations" && !station_unit)) continue;
     CellProcess p;
     p.unit = c.unit;
     p.service = ServiceId(c.argv);
@@ -229,6 +235,7 @@ std::vector<std::string> Unheard(const nlohmann::json& snap, const std::vector<s
 struct Opts {
   std::string stations = "KT01,KT02";
   std::string clock = "real";
+  std::string only;
   std::string service;
   int count = 0;
   bool secure = false;
@@ -244,6 +251,10 @@ void AddCellUp(CLI::App& app, Context& ctx, const OptsPtr& o) {
       "comma-separated station ids, or all (every station file of the configuration; default KT01,KT02)");
   auto* clock_opt = up->add_option("--clock", o->clock, "real or virtual machine clock")
                         ->check(CLI::IsMember({"real", "virtual"}));
+  up->add_option("--only", o->only,
+                 "start only the cell host's services (host) or only the stations' (stations): one part of a "
+                 "cell across hosts")
+      ->check(CLI::IsMember({"host", "stations"}));
   up->add_flag("--secure", o->secure,
                "DDS Security: a PKI in $CELL_DATA_DIR/security (made if missing), every process with "
                "CELL_SECURITY=on (docs/security.md)");
@@ -265,7 +276,7 @@ void AddCellUp(CLI::App& app, Context& ctx, const OptsPtr& o) {
         std::set<std::string> units;
         for (auto& p : recorded) units.insert(p.unit);
         std::set<std::string> wanted;
-        for (auto& p : Planned(stations, o->clock)) wanted.insert(p.unit);
+        for (auto& p : Planned(stations, o->clock, o->only)) wanted.insert(p.unit);
         if ((stations_opt->count() > 0 &&
              !std::includes(units.begin(), units.end(), wanted.begin(), wanted.end())) ||
             (clock_opt->count() > 0 && Env(recorded.front(), "CELL_CLOCK") != o->clock))
@@ -274,7 +285,7 @@ void AddCellUp(CLI::App& app, Context& ctx, const OptsPtr& o) {
         // A secured cell is watched through a secured participant (its PKI is in the data directory).
         if (Env(recorded.front(), "CELL_SECURITY") == "on") setenv("CELL_SECURITY", "on", 1);
       } else {
-        procs = Planned(stations, o->clock);
+        procs = Planned(stations, o->clock, o->only);
       }
       fs::create_directories(cell::config::DataDir() / "logs");
       for (auto& p : procs) {
@@ -303,7 +314,8 @@ void AddCellUp(CLI::App& app, Context& ctx, const OptsPtr& o) {
     const auto station_count = std::count_if(procs.begin(), procs.end(), [](const CellProcess& p) {
       return !InterpreterStation(p.service).empty();
     });
-    if (RunsScheduler(procs)) std::cout << ", " << station_count << " stations online to the scheduler";
+    if (RunsScheduler(procs) && station_count > 0)
+      std::cout << ", " << station_count << " stations online to the scheduler";
     if (started.size() != procs.size()) std::cout << ", " << started.size() << " of them started now";
     std::cout << " (" << Env(procs.front(), "CELL_CLOCK") << " clock), logs in "
               << (cell::config::DataDir() / "logs").string() << "\n";
