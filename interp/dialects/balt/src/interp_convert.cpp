@@ -244,6 +244,7 @@ bool MotionStart(int m) {
 
 BlockG BaltRun::ReadGCodes(const ParsedBlock& pb) {
   BlockG g;
+  if (!(pb.letters & LetterBit('G'))) return g;
   InlineVec<GCode, 16> codes;
   for (const Word& w : pb.words) {
     if (w.letter != 'G') continue;

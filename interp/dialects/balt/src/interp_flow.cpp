@@ -260,11 +260,13 @@ void BaltRun::ExecBlock(const ParsedBlock& pb) {
       break;
     case BlockKind::kIso: {
       for (const Command& c : pb.commands) {
-        if (!IsFlowCommand(c.mnemonic)) ExecCommand(c);
+        const CommandEntry* e = FindCommand(c.mnemonic);
+        if (!e || !e->flow) ExecCommand(c, e);
       }
       ExecIso(pb);
       for (const Command& c : pb.commands) {
-        if (IsFlowCommand(c.mnemonic)) ExecCommand(c);
+        const CommandEntry* e = FindCommand(c.mnemonic);
+        if (e && e->flow) ExecCommand(c, e);
       }
       break;
     }
@@ -531,6 +533,25 @@ void BaltRun::Epp(std::string_view from, std::string_view to, int col) {
 bool BaltRun::NextIsCornerWord() {
   const auto& f = frames_->top();
   TextPos p = f.at;
+  // Most next lines start with their first word: that character decides, without reading the line.
+  if (p.pos < f.span.end) {
+    const char c0 = f.span.text->view()[p.pos];
+    switch (c0) {
+      case ' ':
+      case '\t':
+      case '\r':
+      case '\n':
+      case ';':
+      case '/':
+      case '"':
+      case 'N':
+      case '#':
+      case '&':
+        break;
+      default:
+        return c0 == 'r' || c0 == 'b';
+    }
+  }
   for (int k = 0; k < 4 && p.pos < f.span.end; ++k) {
     Line l = ReadLine(f.span, p);
     std::string_view t = TrimBlanks(l.text);

@@ -105,12 +105,13 @@ void BaltRun::RotaryTargets(const Targets& t, AxisArray& mach, AxisArray& travel
 double BaltRun::BlockFeed(const ParsedBlock& pb, double length_mm, bool rotary_only, FeedMode* mode, int col,
                           double turned) {
   const Word* t = nullptr;
-  for (const Word& w : pb.words) {
-    if (w.letter == 't') t = &w;
+  if (pb.letters & LetterBit('t')) {
+    for (const Word& w : pb.words) {
+      if (w.letter == 't') t = &w;
+    }
   }
   if (mode_.feed == FeedCode::kG93) {
-    bool given = false;
-    for (const Word& w : pb.words) given = given || w.letter == 'F';
+    const bool given = (pb.letters & LetterBit('F')) != 0;
     *mode = FeedMode::kInverseTime;
     if (t) {
       double secs = ValueOf(t->v, t->col);
@@ -167,15 +168,17 @@ void BaltRun::LinearMove(const ParsedBlock& pb, const BlockG& g, const Targets& 
   }
   AxisArray travel{};
   std::uint32_t travel_mask = 0;
-  RotaryTargets(t, mach, travel, travel_mask, g.g79);
+  // Indexing axes turn before the other axes of the block (ln 3918).
+  std::uint32_t index_mask = 0;
+  if (t.mask & kRotaryAxes) [[unlikely]] {
+    RotaryTargets(t, mach, travel, travel_mask, g.g79);
+    for (int a : {kA, kB, kC}) {
+      if ((t.mask & (1u << a)) && index_step_[a] > 0) index_mask |= 1u << a;
+    }
+  }
   std::uint32_t moved = t.mask;
   if (!identity_ && (t.mask & ((1u << mode_.p1) | (1u << mode_.p2))))
     moved |= (1u << mode_.p1) | (1u << mode_.p2);
-  // Indexing axes turn before the other axes of the block (ln 3918).
-  std::uint32_t index_mask = 0;
-  for (int a : {kA, kB, kC}) {
-    if ((t.mask & (1u << a)) && index_step_[a] > 0) index_mask |= 1u << a;
-  }
   geom::Path path;
   path.start = {pos_[mode_.p1], pos_[mode_.p2]};
   path.end = {mach[mode_.p1], mach[mode_.p2]};
@@ -191,9 +194,11 @@ void BaltRun::LinearMove(const ParsedBlock& pb, const BlockG& g, const Targets& 
   Feed feed;
   if (!rapid) {
     double rot = 0, turned = 0;  // turned: the continuous rotary axes (an index table turns first)
-    for (int a : {kA, kB, kC}) {
-      rot += travel[a] * travel[a];
-      if (!(index_mask & (1u << a))) turned += travel[a] * travel[a];
+    if (travel_mask) {
+      for (int a : {kA, kB, kC}) {
+        rot += travel[a] * travel[a];
+        if (!(index_mask & (1u << a))) turned += travel[a] * travel[a];
+      }
     }
     feed.rate = BlockFeed(pb, linear_moves ? len : std::sqrt(rot), !linear_moves && travel_mask != 0,
                           &feed.mode, col, linear_moves ? std::sqrt(turned) : 0);
@@ -201,8 +206,8 @@ void BaltRun::LinearMove(const ParsedBlock& pb, const BlockG& g, const Targets& 
     // the default ERF=0 (ln 4317) and, as the canon carries no form error, with any ERF (balt.md).
     feed.exact_stop = mode_.dynamic != Dynamic::kG28 || g.decel;
   }
-  if (!g.g79) CheckLimits(pos_, mach, nullptr, col);
-  CheckAreas(pos_, mach, nullptr, col);
+  if (!g.g79 && lim_mask_) CheckLimits(pos_, mach, nullptr, col);
+  if (AreasActive()) CheckAreas(pos_, mach, nullptr, col);
   if (index_mask && (t.mask & ~index_mask)) {
     AxisArray first = pos_;
     AxisArray first_travel{};
@@ -347,8 +352,7 @@ void BaltRun::EmitMotion(Op op, const AxisArray& mach_in, std::uint32_t moved, c
   EmitUnitsOnce();
   idle_ = 0;
   AxisArray out = mach;
-  constexpr std::uint32_t kRotary = (1u << kA) | (1u << kB) | (1u << kC);
-  if (used_ & kRotary) [[unlikely]] {
+  if (used_ & kRotaryAxes) [[unlikely]] {
     for (int a : {kA, kB, kC}) {
       double v = std::fmod(out[a], 360.0);
       if (v < 0) v += 360.0;
