@@ -229,18 +229,18 @@ void BaltRun::ExecLine(const Line& line) {
   if (t[0] == ';') return;  // comment block
   f.data.started = true;
   const std::size_t li = frames_->depth() - 1;
-  ParsedBlock fresh;
-  const ParsedBlock* cached = nullptr;
   // Blocks that may run again: in subroutines and EPP ranges, inside an open repeat, after a branch.
   const bool repeats = li > 0 || f.jumped || !f.data.repeats.empty();
-  if (repeats) cached = cache_.Find(f.span.text.get(), line.start);
-  if (!cached) {
-    fresh = ParseBlock(text);
-    if (repeats) cached = &cache_.Put(f.span.text, line.start, std::move(fresh));
+  if (!repeats) {
+    const ParsedBlock pb = ParseBlock(text);         // made in place: no empty block made first and assigned
+    if (pb.slash && !block_delete_enabled_) return;  // USB=0: a slashed block is a comment (ln 2333)
+    ExecBlock(pb);
+    return;
   }
-  const ParsedBlock& pb = cached ? *cached : fresh;
-  if (pb.slash && !block_delete_enabled_) return;  // USB=0: a slashed block is a comment (ln 2333)
-  ExecBlock(pb);
+  const ParsedBlock* pb = cache_.Find(f.span.text.get(), line.start);
+  if (!pb) pb = &cache_.Put(f.span.text, line.start, ParseBlock(text));
+  if (pb->slash && !block_delete_enabled_) return;
+  ExecBlock(*pb);
 }
 
 void BaltRun::ExecBlock(const ParsedBlock& pb) {

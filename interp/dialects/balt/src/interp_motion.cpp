@@ -145,7 +145,13 @@ double BaltRun::BlockFeed(const ParsedBlock& pb, double length_mm, bool rotary_o
 }
 
 void BaltRun::LinearMove(const ParsedBlock& pb, const BlockG& g, const Targets& t_in, bool rapid) {
-  Targets t = t_in;
+  // A copy of the targets only for paraxial words to change (most blocks have none; G79 takes none).
+  std::optional<Targets> para;
+  if (!g.g79 && (pb.letters & (LetterBit('u') | LetterBit('v') | LetterBit('w')))) [[unlikely]] {
+    para.emplace(t_in);
+    Paraxial(pb, *para);
+  }
+  const Targets& t = para ? *para : t_in;
   AxisArray mach;
   int col = pb.words.empty() ? 1 : pb.words[0].col;
   for (const Word& w : pb.words) {
@@ -163,7 +169,6 @@ void BaltRun::LinearMove(const ParsedBlock& pb, const BlockG& g, const Targets& 
       mach[a] = t.raw[a] + (a == len_axis_ ? tool_len_ : 0);
     }
   } else {
-    Paraxial(pb, t);
     mach = ToMachine(t.prog);
   }
   AxisArray travel{};
@@ -184,8 +189,7 @@ void BaltRun::LinearMove(const ParsedBlock& pb, const BlockG& g, const Targets& 
   path.end = {mach[mode_.p1], mach[mode_.p2]};
   double len = 0;
   bool linear_moves = false;
-  for (int a = 0; a < kAxisCount; ++a) {
-    if (IsRotaryAxis(a)) continue;
+  for (int a : {kX, kY, kZ, kU, kV, kW}) {  // the linear axes, in index order
     double d = mach[a] - pos_[a];
     len += d * d;
     if (std::fabs(d) > 1e-9) linear_moves = true;
