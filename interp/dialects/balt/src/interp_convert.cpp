@@ -578,7 +578,7 @@ void BaltRun::ExecIso(const ParsedBlock& pb) {
         break;
     }
   }
-  ApplyModal(g, pb);
+  if (g.count) ApplyModal(g, pb);  // without G codes it changes nothing
   if (g.comp || contour_.on() || g.gtl || gtl_profile_) CompCodes(g, pb);
   if (f) {
     double v = ValueOf(f->v, f->col);

@@ -271,7 +271,8 @@ void BaltRun::ExecBlock(const ParsedBlock& pb) {
       break;
     }
   }
-  CommitStage();
+  if (staged_) [[unlikely]]
+    CommitStage();
   if (contour_.engaged()) [[unlikely]] {
     try {
       contour_.EndBlock();

@@ -343,30 +343,37 @@ void BaltRun::EmitDwell(double seconds) {
 void BaltRun::EmitMotion(Op op, const AxisArray& mach_in, std::uint32_t moved, const Feed& feed,
                          const geom::Path& path, const AxisArray& travel, std::uint32_t travel_mask,
                          double helix_turns) {
-  AxisArray mach = mach_in;
   bool change = travel_mask != 0 || op == Op::kArc;
   for (int a = 0; a < kAxisCount && !change; ++a) {
-    if (std::fabs(mach[a] - pos_[a]) > 1e-9) change = true;
+    if (std::fabs(mach_in[a] - pos_[a]) > 1e-9) change = true;
   }
   used_ |= moved;
   if (!change) {
-    pos_ = mach;
+    pos_ = mach_in;
     return;  // a block that commands the current position does not move
   }
   EmitUnitsOnce();
   idle_ = 0;
-  AxisArray out = mach;
+  // The written position: the rotary axes at 0-360 once one has been used (only then a copy).
+  const AxisArray* out = &mach_in;
+  AxisArray wrapped;
   if (used_ & kRotaryAxes) [[unlikely]] {
+    wrapped = mach_in;
     for (int a : {kA, kB, kC}) {
-      double v = std::fmod(out[a], 360.0);
+      double v = std::fmod(wrapped[a], 360.0);
       if (v < 0) v += 360.0;
       if (v >= 360.0 - 1e-9) v = 0;
-      out[a] = v;
+      wrapped[a] = v;
     }
+    out = &wrapped;
   }
   Target* to = nullptr;
   std::optional<Canon> routed;  // made only when routed (a Canon is zeroed when made: every move)
-  const bool in_plane = op == Op::kArc || geom::Norm(path.end - path.start) >= geom::kTiny;
+  // Moves in the plane: one coordinate alone of at least kTiny settles it without std::hypot (a length is
+  // never below its larger coordinate).
+  const geom::Vec2 step = path.end - path.start;
+  const bool in_plane = op == Op::kArc || std::fabs(step.x) >= geom::kTiny ||
+                        std::fabs(step.y) >= geom::kTiny || geom::Norm(step) >= geom::kTiny;
   // A corner word in the next block keeps this move open (ln 3160-3200).
   if (in_plane && !gtl_profile_ && !contour_.on() && op != Op::kRapid) hold_next_ = NextIsCornerWord();
   const bool route = Routed();
@@ -402,7 +409,7 @@ void BaltRun::EmitMotion(Op op, const AxisArray& mach_in, std::uint32_t moved, c
       break;
     }
   }
-  to->pos = out;
+  to->pos = *out;
   to->used = used_;
   to->travel = travel;
   to->travel_mask = travel_mask;
@@ -417,10 +424,13 @@ void BaltRun::EmitMotion(Op op, const AxisArray& mach_in, std::uint32_t moved, c
     }
     ContourDrain();
   }
-  for (int a : {kA, kB, kC}) {
-    if (rollover_mask_ & (1u << a)) mach[a] = out[a];
+  const AxisArray& written = *out;  // `wrapped` or mach_in: both outlive the routed command
+  pos_ = mach_in;
+  if (rollover_mask_) [[unlikely]] {
+    for (int a : {kA, kB, kC}) {
+      if (rollover_mask_ & (1u << a)) pos_[a] = written[a];
+    }
   }
-  pos_ = mach;
 }
 
 }  // namespace cell::interp::balt
