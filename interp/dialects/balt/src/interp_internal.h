@@ -263,7 +263,11 @@ class BaltRun final : public RunBase {
 
   // Expression evaluation (interp_params.cpp), used by the expression parser.
   double Eval(std::string_view text, int col);
-  double ValueOf(const Val& v, int col);
+  double ValueOf(const Val& v, int col) {
+    if (v.kind == Val::kNum) return v.neg ? -v.num : v.num;  // a number as written (most words): no call
+    return ValueOfVariable(v, col);
+  }
+  double ValueOfVariable(const Val& v, int col);  // E parameters, E(En), and no value (0)
   double Param(int n, int col);
   void SetParam(int n, double v, int col);
   double Global(std::string_view name, bool has_index, int index, std::string_view fmt, int col);

@@ -368,7 +368,9 @@ void BaltRun::EmitMotion(Op op, const AxisArray& mach_in, std::uint32_t moved, c
     out = &wrapped;
   }
   Target* to = nullptr;
-  std::optional<Canon> routed;  // made only when routed (a Canon is zeroed when made: every move)
+  // A routed move is made in stage_, free once CommitStage has handed on what it held (an optional Canon here
+  // cost every move its set-up and clean-up); the queue's slot otherwise.
+  Canon* routed = nullptr;
   // Moves in the plane: one coordinate alone of at least kTiny settles it without std::hypot (a length is
   // never below its larger coordinate).
   const geom::Vec2 step = path.end - path.start;
@@ -379,7 +381,7 @@ void BaltRun::EmitMotion(Op op, const AxisArray& mach_in, std::uint32_t moved, c
   const bool route = Routed();
   if (route) {
     CommitStage();
-    routed.emplace();
+    routed = &stage_;
     routed->line = cur_line_;
   }
   switch (op) {
