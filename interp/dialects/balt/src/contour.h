@@ -42,6 +42,8 @@ class Contour {
   // arrives (FILMS4 77) used to leave the corner before it already written, up to a millimetre inside the
   // contour (issue 33's no-gouge property). The control reads that block ahead before it moves.
   std::vector<Canon> TakeChecked();
+  // Whether TakeChecked has anything to hand out (most blocks, without compensation: no).
+  bool HasReady() const { return !ready_.empty(); }
   // Anything to do: compensation on or planned, a held move, a corner word, a residual offset.
   bool engaged() const { return on_ || residual_ || held_ || plan_ != kNoPlan || corner_; }
   bool on() const { return on_; }  // G41/G42 in effect

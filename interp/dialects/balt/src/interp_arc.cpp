@@ -122,8 +122,8 @@ void BaltRun::ArcMove(const ParsedBlock& pb, const BlockG& g, const Targets& t_i
   // G28 blends (no corner deceleration, ln 2969); G29 stops; G27 decelerates to 0 at each block end with
   // the default ERF=0 (ln 4317) and, as the canon carries no form error, with any ERF (balt.md).
   feed.exact_stop = mode_.dynamic != Dynamic::kG28 || g.decel;
-  CheckLimits(pos_, mach, &path, col);
-  CheckAreas(pos_, mach, &path, col);
+  if (lim_mask_) CheckLimits(pos_, mach, &path, col);
+  if (AreasActive()) CheckAreas(pos_, mach, &path, col);
   std::uint32_t moved = t.mask | (1u << p1) | (1u << p2);
   mach[p1] = end.x;
   mach[p2] = end.y;

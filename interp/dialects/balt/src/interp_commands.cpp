@@ -5,46 +5,95 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstdint>
 
 #include "interp_internal.h"
 
 namespace cell::interp::balt {
 
-const std::map<std::string_view, BaltRun::CommandFn>& BaltRun::CommandTable() {
-  static const std::map<std::string_view, CommandFn> kTable = {
-      {"BNC", &BaltRun::CmdBranch},      {"BGT", &BaltRun::CmdBranch},      {"BLT", &BaltRun::CmdBranch},
-      {"BEQ", &BaltRun::CmdBranch},      {"BNE", &BaltRun::CmdBranch},      {"BGE", &BaltRun::CmdBranch},
-      {"BLE", &BaltRun::CmdBranch},      {"RPT", &BaltRun::CmdRpt},         {"ERP", &BaltRun::CmdErp},
-      {"CLS", &BaltRun::CmdCls},         {"EPP", &BaltRun::CmdEpp},         {"DIS", &BaltRun::CmdDis},
-      {"DLY", &BaltRun::CmdDly},         {"DPI", &BaltRun::CmdDpi},         {"DTL", &BaltRun::CmdDtl},
-      {"DLO", &BaltRun::CmdDlo},         {"DSA", &BaltRun::CmdDsa},         {"ASC", &BaltRun::CmdAreaSwitch},
-      {"DSC", &BaltRun::CmdAreaSwitch},  {"CTL", &BaltRun::CmdCtl},         {"UCG", &BaltRun::CmdUnsupported},
-      {"CLG", &BaltRun::CmdUnsupported}, {"DCG", &BaltRun::CmdUnsupported}, {"INP", &BaltRun::CmdUnsupported},
-      {"WAI", &BaltRun::CmdUnsupported}, {"SND", &BaltRun::CmdUnsupported}, {"EXE", &BaltRun::CmdUnsupported},
-      {"UAV", &BaltRun::CmdUnsupported}, {"SCR", &BaltRun::CmdUnsupported}, {"DEF", &BaltRun::CmdUnsupported},
-      {"OUT", &BaltRun::CmdUnsupported}, {"OPN", &BaltRun::CmdUnsupported}, {"DER", &BaltRun::CmdUnsupported},
-      {"RED", &BaltRun::CmdUnsupported}, {"WRT", &BaltRun::CmdUnsupported}, {"CLO", &BaltRun::CmdUnsupported},
-      {"CRE", &BaltRun::CmdUnsupported}, {"CAN", &BaltRun::CmdUnsupported}, {"UAO", &BaltRun::CmdUao},
-      {"UOT", &BaltRun::CmdUot},         {"UIO", &BaltRun::CmdUio},         {"MIR", &BaltRun::CmdMir},
-      {"URT", &BaltRun::CmdUrt},         {"SCF", &BaltRun::CmdScf},         {"RQO", &BaltRun::CmdRqo},
-      {"RQU", &BaltRun::CmdRqu},         {"RQP", &BaltRun::CmdRqu},         {"TOF", &BaltRun::CmdTof},
-      {"DPT", &BaltRun::CmdDpt},
+namespace {
+
+// A mnemonic of three capitals as a number below 26^3; -1 for anything else.
+constexpr int MnemonicKey(std::string_view m) {
+  auto upper = [](char c) { return c >= 'A' && c <= 'Z'; };
+  if (m.size() != 3 || !upper(m[0]) || !upper(m[1]) || !upper(m[2])) return -1;
+  return ((m[0] - 'A') * 26 + (m[1] - 'A')) * 26 + (m[2] - 'A');
+}
+
+}  // namespace
+
+// The commands of this control; `flow` marks those that run after the block's other words (branches,
+// repeats, calls, EPP). Found through an index by the three letters (one load per command of a block; a
+// map of names compared them with memcmp).
+const BaltRun::CommandEntry* BaltRun::FindCommand(std::string_view m) {
+  static constexpr CommandEntry kTable[] = {
+      {MnemonicKey("BNC"), &BaltRun::CmdBranch, true},
+      {MnemonicKey("BGT"), &BaltRun::CmdBranch, true},
+      {MnemonicKey("BLT"), &BaltRun::CmdBranch, true},
+      {MnemonicKey("BEQ"), &BaltRun::CmdBranch, true},
+      {MnemonicKey("BNE"), &BaltRun::CmdBranch, true},
+      {MnemonicKey("BGE"), &BaltRun::CmdBranch, true},
+      {MnemonicKey("BLE"), &BaltRun::CmdBranch, true},
+      {MnemonicKey("RPT"), &BaltRun::CmdRpt, true},
+      {MnemonicKey("ERP"), &BaltRun::CmdErp, true},
+      {MnemonicKey("CLS"), &BaltRun::CmdCls, true},
+      {MnemonicKey("EPP"), &BaltRun::CmdEpp, true},
+      {MnemonicKey("DIS"), &BaltRun::CmdDis, false},
+      {MnemonicKey("DLY"), &BaltRun::CmdDly, false},
+      {MnemonicKey("DPI"), &BaltRun::CmdDpi, false},
+      {MnemonicKey("DTL"), &BaltRun::CmdDtl, false},
+      {MnemonicKey("DLO"), &BaltRun::CmdDlo, false},
+      {MnemonicKey("DSA"), &BaltRun::CmdDsa, false},
+      {MnemonicKey("ASC"), &BaltRun::CmdAreaSwitch, false},
+      {MnemonicKey("DSC"), &BaltRun::CmdAreaSwitch, false},
+      {MnemonicKey("CTL"), &BaltRun::CmdCtl, false},
+      {MnemonicKey("UCG"), &BaltRun::CmdUnsupported, false},
+      {MnemonicKey("CLG"), &BaltRun::CmdUnsupported, false},
+      {MnemonicKey("DCG"), &BaltRun::CmdUnsupported, false},
+      {MnemonicKey("INP"), &BaltRun::CmdUnsupported, false},
+      {MnemonicKey("WAI"), &BaltRun::CmdUnsupported, false},
+      {MnemonicKey("SND"), &BaltRun::CmdUnsupported, false},
+      {MnemonicKey("EXE"), &BaltRun::CmdUnsupported, false},
+      {MnemonicKey("UAV"), &BaltRun::CmdUnsupported, false},
+      {MnemonicKey("SCR"), &BaltRun::CmdUnsupported, false},
+      {MnemonicKey("DEF"), &BaltRun::CmdUnsupported, false},
+      {MnemonicKey("OUT"), &BaltRun::CmdUnsupported, false},
+      {MnemonicKey("OPN"), &BaltRun::CmdUnsupported, false},
+      {MnemonicKey("DER"), &BaltRun::CmdUnsupported, false},
+      {MnemonicKey("RED"), &BaltRun::CmdUnsupported, false},
+      {MnemonicKey("WRT"), &BaltRun::CmdUnsupported, false},
+      {MnemonicKey("CLO"), &BaltRun::CmdUnsupported, false},
+      {MnemonicKey("CRE"), &BaltRun::CmdUnsupported, false},
+      {MnemonicKey("CAN"), &BaltRun::CmdUnsupported, false},
+      {MnemonicKey("UAO"), &BaltRun::CmdUao, false},
+      {MnemonicKey("UOT"), &BaltRun::CmdUot, false},
+      {MnemonicKey("UIO"), &BaltRun::CmdUio, false},
+      {MnemonicKey("MIR"), &BaltRun::CmdMir, false},
+      {MnemonicKey("URT"), &BaltRun::CmdUrt, false},
+      {MnemonicKey("SCF"), &BaltRun::CmdScf, false},
+      {MnemonicKey("RQO"), &BaltRun::CmdRqo, false},
+      {MnemonicKey("RQU"), &BaltRun::CmdRqu, false},
+      {MnemonicKey("RQP"), &BaltRun::CmdRqu, false},
+      {MnemonicKey("TOF"), &BaltRun::CmdTof, false},
+      {MnemonicKey("DPT"), &BaltRun::CmdDpt, false},
   };
-  return kTable;
+  static const auto kIndex = [] {
+    std::array<std::uint8_t, 26 * 26 * 26> index{};  // 0: none; else the entry + 1
+    for (std::size_t i = 0; i < std::size(kTable); ++i)
+      index[static_cast<std::size_t>(kTable[i].key)] = static_cast<std::uint8_t>(i + 1);
+    return index;
+  }();
+  const int key = MnemonicKey(m);
+  if (key < 0) return nullptr;
+  const std::uint8_t i = kIndex[static_cast<std::size_t>(key)];
+  return i == 0 ? nullptr : &kTable[i - 1];
 }
 
-bool BaltRun::IsFlowCommand(std::string_view m) {
-  return m == "BNC" || m == "BGT" || m == "BLT" || m == "BEQ" || m == "BNE" || m == "BGE" || m == "BLE" ||
-         m == "RPT" || m == "ERP" || m == "CLS" || m == "EPP";
-}
-
-void BaltRun::ExecCommand(const Command& c) {
-  const auto& table = CommandTable();
-  auto it = table.find(c.mnemonic);
-  if (it == table.end())
-    Fail(c.col, 17, fmt::format("({},...) is not a command of this control", c.mnemonic));
-  (this->*(it->second))(c);
+void BaltRun::ExecCommand(const Command& c, const CommandEntry* e) {
+  if (!e) Fail(c.col, 17, fmt::format("({},...) is not a command of this control", c.mnemonic));
+  (this->*(e->fn))(c);
 }
 
 void BaltRun::CheckOperands(const Command& c, std::size_t lo, std::size_t hi) {

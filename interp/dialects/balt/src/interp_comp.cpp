@@ -53,6 +53,7 @@ void BaltRun::CompCodes(const BlockG& g, const ParsedBlock& pb) {
 // u v w (ln 3800-3907): the end point moves by factor x the tool radius along axis 1, 2, 3 (X, Y, Z); only
 // in its block, only with the coordinate it belongs to, never with G41/G42 or GTL.
 void BaltRun::Paraxial(const ParsedBlock& pb, Targets& t) {
+  if (!(pb.letters & (LetterBit('u') | LetterBit('v') | LetterBit('w')))) return;
   for (const Word& w : pb.words) {
     int axis = w.letter == 'u' ? kX : w.letter == 'v' ? kY : w.letter == 'w' ? kZ : -1;
     if (axis < 0) continue;
@@ -82,6 +83,7 @@ void BaltRun::CommitStage() {
 }
 
 void BaltRun::ContourDrain() {
+  if (!contour_.HasReady()) return;  // every block calls it: no empty vector made and dropped
   for (auto& c : contour_.TakeChecked()) out_.push_back(std::move(c));
 }
 

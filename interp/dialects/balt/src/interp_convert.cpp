@@ -244,12 +244,16 @@ bool MotionStart(int m) {
 
 BlockG BaltRun::ReadGCodes(const ParsedBlock& pb) {
   BlockG g;
+  if (!(pb.letters & LetterBit('G'))) return g;
   InlineVec<GCode, 16> codes;
   for (const Word& w : pb.words) {
     if (w.letter != 'G') continue;
     double v = ValueOf(w.v, w.col);
-    if (v != std::floor(v) || v < 0) Fail(w.col, 13, fmt::format("G{:g}", v));
-    if (v > 99) Fail(w.col, 18, fmt::format("G{:g} (G codes are G00-G99)", v));
+    // A whole code 0-99 (every valid one) passes without std::floor, a libm call.
+    if (!(v >= 0 && v <= 99 && v == static_cast<double>(static_cast<int>(v)))) [[unlikely]] {
+      if (v != std::floor(v) || v < 0) Fail(w.col, 13, fmt::format("G{:g}", v));
+      if (v > 99) Fail(w.col, 18, fmt::format("G{:g} (G codes are G00-G99)", v));
+    }
     int code = static_cast<int>(v);
     if (!Exists(code)) Fail(w.col, 17, fmt::format("G{:02} does not exist on this control", code));
     if (codes.size() >= 8) Fail(w.col, 21, "more than 8 G functions in the block");
@@ -574,7 +578,7 @@ void BaltRun::ExecIso(const ParsedBlock& pb) {
         break;
     }
   }
-  ApplyModal(g, pb);
+  if (g.count) ApplyModal(g, pb);  // without G codes it changes nothing
   if (g.comp || contour_.on() || g.gtl || gtl_profile_) CompCodes(g, pb);
   if (f) {
     double v = ValueOf(f->v, f->col);

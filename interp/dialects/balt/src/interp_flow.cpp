@@ -229,18 +229,18 @@ void BaltRun::ExecLine(const Line& line) {
   if (t[0] == ';') return;  // comment block
   f.data.started = true;
   const std::size_t li = frames_->depth() - 1;
-  ParsedBlock fresh;
-  const ParsedBlock* cached = nullptr;
   // Blocks that may run again: in subroutines and EPP ranges, inside an open repeat, after a branch.
   const bool repeats = li > 0 || f.jumped || !f.data.repeats.empty();
-  if (repeats) cached = cache_.Find(f.span.text.get(), line.start);
-  if (!cached) {
-    fresh = ParseBlock(text);
-    if (repeats) cached = &cache_.Put(f.span.text, line.start, std::move(fresh));
+  if (!repeats) {
+    const ParsedBlock pb = ParseBlock(text);         // made in place: no empty block made first and assigned
+    if (pb.slash && !block_delete_enabled_) return;  // USB=0: a slashed block is a comment (ln 2333)
+    ExecBlock(pb);
+    return;
   }
-  const ParsedBlock& pb = cached ? *cached : fresh;
-  if (pb.slash && !block_delete_enabled_) return;  // USB=0: a slashed block is a comment (ln 2333)
-  ExecBlock(pb);
+  const ParsedBlock* pb = cache_.Find(f.span.text.get(), line.start);
+  if (!pb) pb = &cache_.Put(f.span.text, line.start, ParseBlock(text));
+  if (pb->slash && !block_delete_enabled_) return;
+  ExecBlock(*pb);
 }
 
 void BaltRun::ExecBlock(const ParsedBlock& pb) {
@@ -260,16 +260,19 @@ void BaltRun::ExecBlock(const ParsedBlock& pb) {
       break;
     case BlockKind::kIso: {
       for (const Command& c : pb.commands) {
-        if (!IsFlowCommand(c.mnemonic)) ExecCommand(c);
+        const CommandEntry* e = FindCommand(c.mnemonic);
+        if (!e || !e->flow) ExecCommand(c, e);
       }
       ExecIso(pb);
       for (const Command& c : pb.commands) {
-        if (IsFlowCommand(c.mnemonic)) ExecCommand(c);
+        const CommandEntry* e = FindCommand(c.mnemonic);
+        if (e && e->flow) ExecCommand(c, e);
       }
       break;
     }
   }
-  CommitStage();
+  if (staged_) [[unlikely]]
+    CommitStage();
   if (contour_.engaged()) [[unlikely]] {
     try {
       contour_.EndBlock();
@@ -531,6 +534,25 @@ void BaltRun::Epp(std::string_view from, std::string_view to, int col) {
 bool BaltRun::NextIsCornerWord() {
   const auto& f = frames_->top();
   TextPos p = f.at;
+  // Most next lines start with their first word: that character decides, without reading the line.
+  if (p.pos < f.span.end) {
+    const char c0 = f.span.text->view()[p.pos];
+    switch (c0) {
+      case ' ':
+      case '\t':
+      case '\r':
+      case '\n':
+      case ';':
+      case '/':
+      case '"':
+      case 'N':
+      case '#':
+      case '&':
+        break;
+      default:
+        return c0 == 'r' || c0 == 'b';
+    }
+  }
   for (int k = 0; k < 4 && p.pos < f.span.end; ++k) {
     Line l = ReadLine(f.span, p);
     std::string_view t = TrimBlanks(l.text);

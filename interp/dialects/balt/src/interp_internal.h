@@ -50,6 +50,7 @@ constexpr double kDeg = kPi / 180.0;
 constexpr std::size_t kMaxBlockChars = 127;  // "a block must be less than 128 characters" (ln 2326)
 constexpr int kMaxCallLevels = 3;            // main program + two subroutine levels (ln 5944)
 constexpr int kMaxRepeatLevels = 3;          // ln 5930
+constexpr std::uint32_t kRotaryAxes = (1u << kA) | (1u << kB) | (1u << kC);
 
 // ---------------------------------------------------------------------------------------------------------
 // Errors: the machining messages FILMS4 nn (Table 8.6, ln 9794-9914).
@@ -89,6 +90,10 @@ struct Word {
 };
 // A block has fewer than 128 characters, so at most 64 words.
 using Words = InlineVec<Word, 64>;
+// A word letter's bit in ParsedBlock::letters: A-Z bits 0-25, a-z bits 32-57.
+constexpr std::uint64_t LetterBit(char c) {
+  return c >= 'a' ? std::uint64_t{1} << (c - 'a' + 32) : std::uint64_t{1} << (c - 'A');
+}
 
 // A GTL element named in an ISO block (pn, ln, cn, -ln, -cn).
 struct ElemRef {
@@ -133,6 +138,8 @@ struct ParsedBlock {
   char sync = 0;  // '#', '&' or 0
   BlockKind kind = BlockKind::kEmpty;
   Words words;
+  // The letters of `words` (LetterBit): a look for a letter the block does not have skips the word loop.
+  std::uint64_t letters = 0;
   ElemRef elem;
   bool s2 = false;
   int s2_col = 1;
@@ -256,7 +263,11 @@ class BaltRun final : public RunBase {
 
   // Expression evaluation (interp_params.cpp), used by the expression parser.
   double Eval(std::string_view text, int col);
-  double ValueOf(const Val& v, int col);
+  double ValueOf(const Val& v, int col) {
+    if (v.kind == Val::kNum) return v.neg ? -v.num : v.num;  // a number as written (most words): no call
+    return ValueOfVariable(v, col);
+  }
+  double ValueOfVariable(const Val& v, int col);  // E parameters, E(En), and no value (0)
   double Param(int n, int col);
   void SetParam(int n, double v, int col);
   double Global(std::string_view name, bool has_index, int index, std::string_view fmt, int col);
@@ -295,9 +306,14 @@ class BaltRun final : public RunBase {
 
   // Three-letter commands (interp_commands.cpp, interp_transforms.cpp, interp_tools.cpp, interp_probe.cpp)
   using CommandFn = void (BaltRun::*)(const Command& c);
-  static const std::map<std::string_view, CommandFn>& CommandTable();
-  static bool IsFlowCommand(std::string_view mnemonic);
-  void ExecCommand(const Command& c);
+  struct CommandEntry {
+    int key = 0;  // the three letters (interp_commands.cpp)
+    CommandFn fn = nullptr;
+    bool flow = false;  // runs after the block's other words (branches, RPT/ERP, CLS, EPP)
+  };
+  // The command of a mnemonic; nullptr when the control has none.
+  static const CommandEntry* FindCommand(std::string_view mnemonic);
+  void ExecCommand(const Command& c, const CommandEntry* e);  // FILMS4 17 when e is nullptr
   void CheckOperands(const Command& c, std::size_t lo, std::size_t hi);
   double OperandNumber(const Operand& o);
   int OperandInt(const Operand& o, int lo, int hi);
@@ -362,6 +378,7 @@ class BaltRun final : public RunBase {
                    double turned = 0);
   void CheckLimits(const AxisArray& from, const AxisArray& to, const geom::Path* arc, int col);
   void CheckAreas(const AxisArray& from, const AxisArray& to, const geom::Path* arc, int col);
+  bool AreasActive() const { return areas_[1].active || areas_[2].active || areas_[3].active; }
   void RotaryTargets(const Targets& t, AxisArray& mach, AxisArray& travel, std::uint32_t& travel_mask,
                      bool g79);
   // Emits a rapid, linear or arc op for the programmed move from pos_ to `mach`; `path` is its trace in

@@ -105,12 +105,13 @@ void BaltRun::RotaryTargets(const Targets& t, AxisArray& mach, AxisArray& travel
 double BaltRun::BlockFeed(const ParsedBlock& pb, double length_mm, bool rotary_only, FeedMode* mode, int col,
                           double turned) {
   const Word* t = nullptr;
-  for (const Word& w : pb.words) {
-    if (w.letter == 't') t = &w;
+  if (pb.letters & LetterBit('t')) {
+    for (const Word& w : pb.words) {
+      if (w.letter == 't') t = &w;
+    }
   }
   if (mode_.feed == FeedCode::kG93) {
-    bool given = false;
-    for (const Word& w : pb.words) given = given || w.letter == 'F';
+    const bool given = (pb.letters & LetterBit('F')) != 0;
     *mode = FeedMode::kInverseTime;
     if (t) {
       double secs = ValueOf(t->v, t->col);
@@ -144,7 +145,13 @@ double BaltRun::BlockFeed(const ParsedBlock& pb, double length_mm, bool rotary_o
 }
 
 void BaltRun::LinearMove(const ParsedBlock& pb, const BlockG& g, const Targets& t_in, bool rapid) {
-  Targets t = t_in;
+  // A copy of the targets only for paraxial words to change (most blocks have none; G79 takes none).
+  std::optional<Targets> para;
+  if (!g.g79 && (pb.letters & (LetterBit('u') | LetterBit('v') | LetterBit('w')))) [[unlikely]] {
+    para.emplace(t_in);
+    Paraxial(pb, *para);
+  }
+  const Targets& t = para ? *para : t_in;
   AxisArray mach;
   int col = pb.words.empty() ? 1 : pb.words[0].col;
   for (const Word& w : pb.words) {
@@ -162,27 +169,27 @@ void BaltRun::LinearMove(const ParsedBlock& pb, const BlockG& g, const Targets& 
       mach[a] = t.raw[a] + (a == len_axis_ ? tool_len_ : 0);
     }
   } else {
-    Paraxial(pb, t);
     mach = ToMachine(t.prog);
   }
   AxisArray travel{};
   std::uint32_t travel_mask = 0;
-  RotaryTargets(t, mach, travel, travel_mask, g.g79);
+  // Indexing axes turn before the other axes of the block (ln 3918).
+  std::uint32_t index_mask = 0;
+  if (t.mask & kRotaryAxes) [[unlikely]] {
+    RotaryTargets(t, mach, travel, travel_mask, g.g79);
+    for (int a : {kA, kB, kC}) {
+      if ((t.mask & (1u << a)) && index_step_[a] > 0) index_mask |= 1u << a;
+    }
+  }
   std::uint32_t moved = t.mask;
   if (!identity_ && (t.mask & ((1u << mode_.p1) | (1u << mode_.p2))))
     moved |= (1u << mode_.p1) | (1u << mode_.p2);
-  // Indexing axes turn before the other axes of the block (ln 3918).
-  std::uint32_t index_mask = 0;
-  for (int a : {kA, kB, kC}) {
-    if ((t.mask & (1u << a)) && index_step_[a] > 0) index_mask |= 1u << a;
-  }
   geom::Path path;
   path.start = {pos_[mode_.p1], pos_[mode_.p2]};
   path.end = {mach[mode_.p1], mach[mode_.p2]};
   double len = 0;
   bool linear_moves = false;
-  for (int a = 0; a < kAxisCount; ++a) {
-    if (IsRotaryAxis(a)) continue;
+  for (int a : {kX, kY, kZ, kU, kV, kW}) {  // the linear axes, in index order
     double d = mach[a] - pos_[a];
     len += d * d;
     if (std::fabs(d) > 1e-9) linear_moves = true;
@@ -191,9 +198,11 @@ void BaltRun::LinearMove(const ParsedBlock& pb, const BlockG& g, const Targets& 
   Feed feed;
   if (!rapid) {
     double rot = 0, turned = 0;  // turned: the continuous rotary axes (an index table turns first)
-    for (int a : {kA, kB, kC}) {
-      rot += travel[a] * travel[a];
-      if (!(index_mask & (1u << a))) turned += travel[a] * travel[a];
+    if (travel_mask) {
+      for (int a : {kA, kB, kC}) {
+        rot += travel[a] * travel[a];
+        if (!(index_mask & (1u << a))) turned += travel[a] * travel[a];
+      }
     }
     feed.rate = BlockFeed(pb, linear_moves ? len : std::sqrt(rot), !linear_moves && travel_mask != 0,
                           &feed.mode, col, linear_moves ? std::sqrt(turned) : 0);
@@ -201,8 +210,8 @@ void BaltRun::LinearMove(const ParsedBlock& pb, const BlockG& g, const Targets& 
     // the default ERF=0 (ln 4317) and, as the canon carries no form error, with any ERF (balt.md).
     feed.exact_stop = mode_.dynamic != Dynamic::kG28 || g.decel;
   }
-  if (!g.g79) CheckLimits(pos_, mach, nullptr, col);
-  CheckAreas(pos_, mach, nullptr, col);
+  if (!g.g79 && lim_mask_) CheckLimits(pos_, mach, nullptr, col);
+  if (AreasActive()) CheckAreas(pos_, mach, nullptr, col);
   if (index_mask && (t.mask & ~index_mask)) {
     AxisArray first = pos_;
     AxisArray first_travel{};
@@ -334,37 +343,45 @@ void BaltRun::EmitDwell(double seconds) {
 void BaltRun::EmitMotion(Op op, const AxisArray& mach_in, std::uint32_t moved, const Feed& feed,
                          const geom::Path& path, const AxisArray& travel, std::uint32_t travel_mask,
                          double helix_turns) {
-  AxisArray mach = mach_in;
   bool change = travel_mask != 0 || op == Op::kArc;
   for (int a = 0; a < kAxisCount && !change; ++a) {
-    if (std::fabs(mach[a] - pos_[a]) > 1e-9) change = true;
+    if (std::fabs(mach_in[a] - pos_[a]) > 1e-9) change = true;
   }
   used_ |= moved;
   if (!change) {
-    pos_ = mach;
+    pos_ = mach_in;
     return;  // a block that commands the current position does not move
   }
   EmitUnitsOnce();
   idle_ = 0;
-  AxisArray out = mach;
-  constexpr std::uint32_t kRotary = (1u << kA) | (1u << kB) | (1u << kC);
-  if (used_ & kRotary) [[unlikely]] {
+  // The written position: the rotary axes at 0-360 once one has been used (only then a copy).
+  const AxisArray* out = &mach_in;
+  AxisArray wrapped;
+  if (used_ & kRotaryAxes) [[unlikely]] {
+    wrapped = mach_in;
     for (int a : {kA, kB, kC}) {
-      double v = std::fmod(out[a], 360.0);
+      double v = std::fmod(wrapped[a], 360.0);
       if (v < 0) v += 360.0;
       if (v >= 360.0 - 1e-9) v = 0;
-      out[a] = v;
+      wrapped[a] = v;
     }
+    out = &wrapped;
   }
   Target* to = nullptr;
-  std::optional<Canon> routed;  // made only when routed (a Canon is zeroed when made: every move)
-  const bool in_plane = op == Op::kArc || geom::Norm(path.end - path.start) >= geom::kTiny;
+  // A routed move is made in stage_, free once CommitStage has handed on what it held (an optional Canon here
+  // cost every move its set-up and clean-up); the queue's slot otherwise.
+  Canon* routed = nullptr;
+  // Moves in the plane: one coordinate alone of at least kTiny settles it without std::hypot (a length is
+  // never below its larger coordinate).
+  const geom::Vec2 step = path.end - path.start;
+  const bool in_plane = op == Op::kArc || std::fabs(step.x) >= geom::kTiny ||
+                        std::fabs(step.y) >= geom::kTiny || geom::Norm(step) >= geom::kTiny;
   // A corner word in the next block keeps this move open (ln 3160-3200).
   if (in_plane && !gtl_profile_ && !contour_.on() && op != Op::kRapid) hold_next_ = NextIsCornerWord();
   const bool route = Routed();
   if (route) {
     CommitStage();
-    routed.emplace();
+    routed = &stage_;
     routed->line = cur_line_;
   }
   switch (op) {
@@ -394,7 +411,7 @@ void BaltRun::EmitMotion(Op op, const AxisArray& mach_in, std::uint32_t moved, c
       break;
     }
   }
-  to->pos = out;
+  to->pos = *out;
   to->used = used_;
   to->travel = travel;
   to->travel_mask = travel_mask;
@@ -409,10 +426,13 @@ void BaltRun::EmitMotion(Op op, const AxisArray& mach_in, std::uint32_t moved, c
     }
     ContourDrain();
   }
-  for (int a : {kA, kB, kC}) {
-    if (rollover_mask_ & (1u << a)) mach[a] = out[a];
+  const AxisArray& written = *out;  // `wrapped` or mach_in: both outlive the routed command
+  pos_ = mach_in;
+  if (rollover_mask_) [[unlikely]] {
+    for (int a : {kA, kB, kC}) {
+      if (rollover_mask_ & (1u << a)) pos_[a] = written[a];
+    }
   }
-  pos_ = mach;
 }
 
 }  // namespace cell::interp::balt

@@ -248,7 +248,7 @@ double BaltRun::Eval(std::string_view text, int col) {
   return v;
 }
 
-double BaltRun::ValueOf(const Val& v, int col) {
+double BaltRun::ValueOfVariable(const Val& v, int col) {
   double r = 0;
   switch (v.kind) {
     case Val::kNone:
