@@ -96,15 +96,6 @@ int ExtIndex(Addr a) {
   return -1;
 }
 
-bool BlockWords::HasG(int code) const {
-  return FindG(code) != nullptr;
-}
-const BlockWords::Code* BlockWords::FindG(int code) const {
-  for (const auto& c : g) {
-    if (c.code == code) return &c;
-  }
-  return nullptr;
-}
 bool BlockWords::HasM(int code) const {
   return std::any_of(m.begin(), m.end(), [code](const Code& c) { return c.code == code; });
 }
@@ -174,10 +165,13 @@ void OkRun::CollectWords(const Block& b, BlockWords& w) {
     }
     if (a == 'G' || a == 'M') {
       const int hi = a == 'G' ? 999 : 511;
-      if (v != std::floor(v) || v < 0 || v > hi) Fail(wd.col, fmt::format("{}{}: not a {} code", a, v, a));
+      // A literal written without a point is a whole number already (no floor call for most codes).
+      const bool whole = (!wd.expr && !wd.point) || v == std::floor(v);
+      if (!whole || v < 0 || v > hi) Fail(wd.col, fmt::format("{}{}: not a {} code", a, v, a));
       auto& list = a == 'G' ? w.g : w.m;
       if (a == 'M' && w.m.size() >= 8) Fail(wd.col, "more than 8 M codes in one block");
       list.push_back({static_cast<int>(v), wd.col});
+      if (a == 'G' && !IsMotionG(static_cast<int>(v))) w.other_g = true;
       continue;
     }
     if (w.Has(a)) Fail(wd.col, fmt::format("address {} given twice in one block", a));
@@ -1000,6 +994,7 @@ void OkRun::StopAndEnd(const BlockWords& w) {
 void OkRun::CompCodes(const BlockWords& w, int motion_col, bool has_xz) {
   (void)motion_col;
   (void)has_xz;
+  if (!w.other_g) return;  // G40-G42 are no motion codes
   int code = 0, col = 1;
   for (const auto& g : w.g) {
     if (g.code >= 40 && g.code <= 42) {

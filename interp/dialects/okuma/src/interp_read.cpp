@@ -511,24 +511,21 @@ class Lexer {
     }
     // A sign and a bracket: E-67's X-[200-V1]*SIN[35].
     if (i_ < s_.size() && s_[i_] == '[' && i_ > start) return expression_from(start);
+    // The whole digits, then those after the point, each in a loop of its own (every word's number).
     double v = 0, scale = 0.1;
     int digits = 0, written = 0;
-    while (i_ < s_.size() && (IsDigit(s_[i_]) || s_[i_] == '.')) {
-      if (s_[i_] == '.') {
-        if (w.point) Error("two decimal points in a number");
-        w.point = true;
-      } else {
-        ++written;
-        if (w.point) {
-          v += (s_[i_] - '0') * scale;
-          scale /= 10;
-          ++digits;
-        } else {
-          v = v * 10 + (s_[i_] - '0');
-          if (v > 0) ++digits;
-        }
+    const size_t n = s_.size();
+    for (; i_ < n && IsDigit(s_[i_]); ++i_, ++written) {
+      v = v * 10 + (s_[i_] - '0');
+      if (v > 0) ++digits;  // leading zeros are no digits of the 8-digit rule
+    }
+    if (i_ < n && s_[i_] == '.') {
+      w.point = true;
+      for (++i_; i_ < n && IsDigit(s_[i_]); ++i_, ++written, ++digits) {
+        v += (s_[i_] - '0') * scale;
+        scale /= 10;
       }
-      ++i_;
+      if (i_ < n && s_[i_] == '.') Error("two decimal points in a number");
     }
     if (written == 0) {
       Fail(w.col, fmt::format("number expected after {}", AddrName(w.addr)));
