@@ -360,7 +360,9 @@ class Lexer {
   // The left side of an assignment or a GET/PUT variable: V1-V200, a system variable with its [suffix], or a
   // local variable.
   void Variable(const std::string& name, size_t at) {
-    Assign a;
+    // Built in place (an Assign holds a string: no temporary moved in). A refused name leaves it half made,
+    // with the block that is refused.
+    Assign& a = b_.assigns.emplace_back();
     a.col = static_cast<int>(at) + 1;
     if (name[0] == 'V' && name.size() > 1 && std::all_of(name.begin() + 1, name.end(), IsDigit)) {
       int n = 0;  // V and at most three digits, else out of range
@@ -395,7 +397,6 @@ class Lexer {
       a.kind = VarKind::kLocal;
       a.name = PackName(name);
     }
-    b_.assigns.push_back(std::move(a));
     b_.items.push_back({true, static_cast<uint16_t>(b_.assigns.size() - 1)});
   }
 
