@@ -512,31 +512,11 @@ class Lexer {
     }
     // A sign and a bracket: E-67's X-[200-V1]*SIN[35].
     if (i_ < s_.size() && s_[i_] == '[' && i_ > start) return expression_from(start);
-    // The whole digits, then those after the point, each in a loop of its own (every word's number). The
-    // whole part is summed as an integer: up to 15 digits (beyond that the 8-digit rule refuses the word)
-    // every partial sum is exact in a double too, so the value is the one summing in doubles would give.
-    double v = 0, scale = 0.1;
-    int written = 0;
-    const size_t n = s_.size();
-    for (; i_ < n && s_[i_] == '0'; ++i_) ++written;  // leading zeros are no digits of the 8-digit rule
-    const size_t first = i_;
-    uint64_t whole = 0;
-    for (; i_ < n && IsDigit(s_[i_]); ++i_) whole = whole * 10 + static_cast<uint64_t>(s_[i_] - '0');
-    int digits = static_cast<int>(i_ - first);
-    written += digits;
-    if (digits <= 15) {
-      v = static_cast<double>(whole);
-    } else {
-      for (size_t k = first; k < i_; ++k) v = v * 10 + (s_[k] - '0');
-    }
-    if (i_ < n && s_[i_] == '.') {
-      w.point = true;
-      for (++i_; i_ < n && IsDigit(s_[i_]); ++i_, ++written, ++digits) {
-        v += (s_[i_] - '0') * scale;
-        scale /= 10;
-      }
-      if (i_ < n && s_[i_] == '.') Error("two decimal points in a number");
-    }
+    const Decimal d = ReadDecimal(s_, i_);
+    if (d.point && i_ < s_.size() && s_[i_] == '.') Error("two decimal points in a number");
+    w.point = d.point;
+    const double v = d.v;
+    const int digits = d.digits, written = d.written;
     if (written == 0) {
       Fail(w.col, fmt::format("number expected after {}", AddrName(w.addr)));
     }
