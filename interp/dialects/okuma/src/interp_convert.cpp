@@ -385,7 +385,10 @@ void OkRun::ExecNc(const Block& b) {
     EndBlockStages(false);
     return;
   }
-  if (MToolMode(w, k)) {
+  // The M-tool cycle mode's side: nothing to do without G180, a cycle code or mode, or an M code (most
+  // blocks).
+  const bool mtool = k.g180 || k.cycle != 0 || mc_.g != 0 || mc_.after_cancel || !w.m.empty();
+  if (mtool && MToolMode(w, k)) {
     EndBlockStages(false);
     return;
   }
@@ -439,7 +442,7 @@ void OkRun::ExecNc(const Block& b) {
   }
   const bool motion_block = xz && IsMotionG(modal_.motion) && !k.dwell && !k.g50 && !k.lap && k.cycle == 0;
   EndBlockStages(xz);
-  StopAndEnd(w);
+  if (!w.m.empty()) StopAndEnd(w);  // M00/M01/M02/M30
   if (!ended_ && motion_block) TriggerModin();
 }
 
@@ -675,7 +678,7 @@ void OkRun::RefuseUnsupported(const BlockWords& w) {
     Fail(w.Col('P'),
          "P (two-turret synchronisation, ln 6960-6990) is not supported: one program, one saddle");
   }
-  RefuseTorqueAndTurretB(w);
+  if (w.other_g || w.ext_has != 0) RefuseTorqueAndTurretB(w);  // G29, G111, PZ=, PW=
   for (const auto& m : w.m) {
     if (const char* what = RefusedControlM(m.code)) {
       Fail(m.col, fmt::format("M{} ({}) is not supported by the cell's OSP-E100L dialect", m.code, what));
