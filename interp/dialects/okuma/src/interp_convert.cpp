@@ -417,7 +417,8 @@ void OkRun::ExecNc(const Block& b) {
   // T, then S and the M codes that act before the axes.
   // T: in G73/G74 the offset number of the last groove (read by the cycle), else the turret and offsets.
   if (w.Has('T') && k.cycle != 73 && k.cycle != 74) ToolWord(w);
-  SpindleAndM(w, true);
+  // S, SB=, M codes, G96/G97 (G codes other than motion codes): most blocks have none.
+  if (w.Has('S') || w.ext_has != 0 || !w.m.empty() || w.other_g) SpindleAndM(w, true);
   if (w.Has('F') && !k.dwell) {
     double f = Scale('F', w.Get('F'), modal_.per_rev);
     if (f < 0) Fail(w.Col('F'), "F must not be negative");
@@ -443,7 +444,7 @@ void OkRun::ExecNc(const Block& b) {
   const bool motion_block = xz && IsMotionG(modal_.motion) && !k.dwell && !k.g50 && !k.lap && k.cycle == 0;
   EndBlockStages(xz);
   if (!w.m.empty()) StopAndEnd(w);  // M00/M01/M02/M30
-  if (!ended_ && motion_block) TriggerModin();
+  if (!ended_ && motion_block && !modins_.empty()) TriggerModin();
 }
 
 // The M-tool cycle mode's side of a block (ln 4073-4130, 4521-4528): G180 alone ends it (true: the block is
