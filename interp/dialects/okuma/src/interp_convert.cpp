@@ -381,7 +381,7 @@ void OkRun::ExecNc(const Block& b) {
   if (k.g90 && k.g91) Fail(w.FindG(91)->col, "G90 and G91 in one block");
   if (k.g90) modal_.incremental = false;
   if (k.g91) modal_.incremental = true;
-  if (CoordConversion(w, k)) {
+  if ((k.g137 || conv_.on) && CoordConversion(w, k)) {  // G137 and its mode (G136 ends it)
     EndBlockStages(false);
     return;
   }
@@ -431,7 +431,7 @@ void OkRun::ExecNc(const Block& b) {
   }
 
   // Nose radius compensation codes act on this block's move.
-  CompCodes(w, k.motion_col, xz);
+  if (w.other_g) CompCodes(w, k.motion_col, xz);  // G40-G42
 
   NcAction(w, b, k, xz);
   if (k.g80) {
@@ -998,7 +998,6 @@ void OkRun::StopAndEnd(const BlockWords& w) {
 void OkRun::CompCodes(const BlockWords& w, int motion_col, bool has_xz) {
   (void)motion_col;
   (void)has_xz;
-  if (!w.other_g) return;  // G40-G42 are no motion codes
   int code = 0, col = 1;
   for (const auto& g : w.g) {
     if (g.code >= 40 && g.code <= 42) {
