@@ -376,7 +376,7 @@ void OkRun::ExecNc(const Block& b) {
   }
 
   NcGCodes k;
-  ReadNcGCodes(w, k);
+  if (!w.g.empty()) ReadNcGCodes(w, k);
   RefuseUnsupported(w);
   if (k.g90 && k.g91) Fail(w.FindG(91)->col, "G90 and G91 in one block");
   if (k.g90) modal_.incremental = false;

@@ -286,7 +286,7 @@ void OkRun::StepOnce() {
     ReportError(e, first_line);
   }
   // The barrier check sees every move before it goes out, those queued before an error too (ln 9081).
-  if (CheckBarriers()) BarrierOffAfterBlock();
+  if (CheckBarriers() && barrier_off_ != 0) BarrierOffAfterBlock();  // M20/M24 of the block
   cur_block_ = nullptr;
 }
 
