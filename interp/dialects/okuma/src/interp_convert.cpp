@@ -377,7 +377,8 @@ void OkRun::ExecNc(const Block& b) {
 
   NcGCodes k;
   if (!w.g.empty()) ReadNcGCodes(w, k);
-  RefuseUnsupported(w);
+  // P, G29/G111 (G codes other than motion codes), PZ=/PW=, M codes: what RefuseUnsupported looks at.
+  if (w.Has('P') || w.other_g || w.ext_has != 0 || !w.m.empty()) RefuseUnsupported(w);
   if (k.g90 && k.g91) Fail(w.FindG(91)->col, "G90 and G91 in one block");
   if (k.g90) modal_.incremental = false;
   if (k.g91) modal_.incremental = true;
