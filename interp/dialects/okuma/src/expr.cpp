@@ -86,8 +86,8 @@ Value Int(double v) {
   return {v, true};
 }
 
-// A name of up to 7 characters and its length in one integer: the reserved-name test is a run of integer
-// compares (it runs for every local variable name a block reads).
+// A name of up to 7 characters and its length in one integer: the reserved-name test is a binary search of
+// integers (it runs for every local variable name a block reads).
 constexpr uint64_t NameKey(std::string_view name) {
   uint64_t out = static_cast<uint64_t>(name.size()) << 56;
   for (size_t i = 0; i < name.size() && i < 7; ++i)
@@ -99,6 +99,7 @@ constexpr auto kReservedKeys = [] {
   size_t n = 0;
   for (std::string_view r : kReserved) keys[n++] = NameKey(r);
   for (const FnName& f : kFunctions) keys[n++] = NameKey(f.name);
+  std::sort(keys.begin(), keys.end());  // searched by halves
   return keys;
 }();
 static_assert(std::all_of(kReserved.begin(), kReserved.end(),
@@ -131,7 +132,7 @@ bool IsSystemVariable(std::string_view name) {
 bool IsReservedName(std::string_view name) {
   if (name.size() > 7) return false;  // longer than any reserved name
   const uint64_t key = NameKey(name);
-  return std::find(kReservedKeys.begin(), kReservedKeys.end(), key) != kReservedKeys.end();
+  return std::binary_search(kReservedKeys.begin(), kReservedKeys.end(), key);
 }
 
 bool IsLocalName(std::string_view name) {
@@ -418,27 +419,11 @@ int32_t ExprParser::Unary() {
 int32_t ExprParser::Number(int col) {
   Node n;
   n.col = col;
-  n.integer = true;
-  double v = 0, scale = 0.1;
-  int digits = 0;
-  bool point = false;
-  while (pos_ < s_.size() && (IsDigit(s_[pos_]) || s_[pos_] == '.')) {
-    if (s_[pos_] == '.') {
-      if (point) Error("two decimal points in a number");
-      point = true;
-      n.integer = false;
-    } else if (point) {
-      v += (s_[pos_] - '0') * scale;
-      scale /= 10;
-      ++digits;
-    } else {
-      v = v * 10 + (s_[pos_] - '0');
-      if (v > 0) ++digits;
-    }
-    ++pos_;
-  }
-  if (digits > 8) Fail(col, "a constant has at most 8 digits");
-  n.num = v;
+  const Decimal d = ReadDecimal(s_, pos_);
+  if (d.point && pos_ < s_.size() && s_[pos_] == '.') Error("two decimal points in a number");
+  n.integer = !d.point;
+  if (d.digits > 8) Fail(col, "a constant has at most 8 digits");
+  n.num = d.v;
   return Add(n);
 }
 

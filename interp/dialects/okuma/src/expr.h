@@ -30,6 +30,50 @@ inline char Up(char c) {
   return (c >= 'a' && c <= 'z') ? static_cast<char>(c - 'a' + 'A') : c;
 }
 
+// An unsigned decimal constant at s[i] (digits and at most one point), as a word and an expression read it:
+// its value, its digits as the 8-digit rule counts them (not the whole part's leading zeros, ln 1095-1100),
+// the digits written, whether it has a point. `i` is left after it, on a second point when there is one (a
+// number the caller refuses). The whole part is summed as an integer: up to 15 digits every partial sum is
+// exact in a double too, so the value is the one summing in doubles gives (a longer one is summed so).
+struct Decimal {
+  double v = 0;
+  int digits = 0;
+  int written = 0;
+  bool point = false;
+};
+inline Decimal ReadDecimal(std::string_view s, size_t& at) {
+  // Locals throughout, `at` and the result written once: this runs for every number of every block.
+  const char* p = s.data();
+  const size_t n = s.size();
+  size_t i = at;
+  while (i < n && p[i] == '0') ++i;
+  const size_t first = i;
+  uint64_t whole = 0;
+  for (; i < n && IsDigit(p[i]); ++i) whole = whole * 10 + static_cast<uint64_t>(p[i] - '0');
+  int digits = static_cast<int>(i - first);
+  int written = static_cast<int>(i - at);
+  double v = 0;
+  if (digits <= 15) {
+    v = static_cast<double>(whole);
+  } else {
+    for (size_t k = first; k < i; ++k) v = v * 10 + (p[k] - '0');
+  }
+  bool point = false;
+  if (i < n && p[i] == '.') {
+    point = true;
+    double scale = 0.1;
+    const size_t frac = ++i;
+    for (; i < n && IsDigit(p[i]); ++i) {
+      v += (p[i] - '0') * scale;
+      scale /= 10;
+    }
+    digits += static_cast<int>(i - frac);
+    written += static_cast<int>(i - frac);
+  }
+  at = i;
+  return {v, digits, written, point};
+}
+
 // Names (variables, system variables) packed into one integer: up to 8 upper-case characters.
 uint64_t PackName(std::string_view name);
 std::string UnpackName(uint64_t packed);

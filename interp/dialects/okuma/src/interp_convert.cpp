@@ -96,15 +96,6 @@ int ExtIndex(Addr a) {
   return -1;
 }
 
-bool BlockWords::HasG(int code) const {
-  return FindG(code) != nullptr;
-}
-const BlockWords::Code* BlockWords::FindG(int code) const {
-  for (const auto& c : g) {
-    if (c.code == code) return &c;
-  }
-  return nullptr;
-}
 bool BlockWords::HasM(int code) const {
   return std::any_of(m.begin(), m.end(), [code](const Code& c) { return c.code == code; });
 }
@@ -174,10 +165,13 @@ void OkRun::CollectWords(const Block& b, BlockWords& w) {
     }
     if (a == 'G' || a == 'M') {
       const int hi = a == 'G' ? 999 : 511;
-      if (v != std::floor(v) || v < 0 || v > hi) Fail(wd.col, fmt::format("{}{}: not a {} code", a, v, a));
+      // A literal written without a point is a whole number already (no floor call for most codes).
+      const bool whole = (!wd.expr && !wd.point) || v == std::floor(v);
+      if (!whole || v < 0 || v > hi) Fail(wd.col, fmt::format("{}{}: not a {} code", a, v, a));
       auto& list = a == 'G' ? w.g : w.m;
       if (a == 'M' && w.m.size() >= 8) Fail(wd.col, "more than 8 M codes in one block");
       list.push_back({static_cast<int>(v), wd.col});
+      if (a == 'G' && !IsMotionG(static_cast<int>(v))) w.other_g = true;
       continue;
     }
     if (w.Has(a)) Fail(wd.col, fmt::format("address {} given twice in one block", a));
@@ -382,16 +376,20 @@ void OkRun::ExecNc(const Block& b) {
   }
 
   NcGCodes k;
-  ReadNcGCodes(w, k);
-  RefuseUnsupported(w);
+  if (!w.g.empty()) ReadNcGCodes(w, k);
+  // P, G29/G111 (G codes other than motion codes), PZ=/PW=, M codes: what RefuseUnsupported looks at.
+  if (w.Has('P') || w.other_g || w.ext_has != 0 || !w.m.empty()) RefuseUnsupported(w);
   if (k.g90 && k.g91) Fail(w.FindG(91)->col, "G90 and G91 in one block");
   if (k.g90) modal_.incremental = false;
   if (k.g91) modal_.incremental = true;
-  if (CoordConversion(w, k)) {
+  if ((k.g137 || conv_.on) && CoordConversion(w, k)) {  // G137 and its mode (G136 ends it)
     EndBlockStages(false);
     return;
   }
-  if (MToolMode(w, k)) {
+  // The M-tool cycle mode's side: nothing to do without G180, a cycle code or mode, or an M code (most
+  // blocks).
+  const bool mtool = k.g180 || k.cycle != 0 || mc_.g != 0 || mc_.after_cancel || !w.m.empty();
+  if (mtool && MToolMode(w, k)) {
     EndBlockStages(false);
     return;
   }
@@ -420,7 +418,8 @@ void OkRun::ExecNc(const Block& b) {
   // T, then S and the M codes that act before the axes.
   // T: in G73/G74 the offset number of the last groove (read by the cycle), else the turret and offsets.
   if (w.Has('T') && k.cycle != 73 && k.cycle != 74) ToolWord(w);
-  SpindleAndM(w, true);
+  // S, SB=, M codes, G96/G97 (G codes other than motion codes): most blocks have none.
+  if (w.Has('S') || w.ext_has != 0 || !w.m.empty() || w.other_g) SpindleAndM(w, true);
   if (w.Has('F') && !k.dwell) {
     double f = Scale('F', w.Get('F'), modal_.per_rev);
     if (f < 0) Fail(w.Col('F'), "F must not be negative");
@@ -433,7 +432,7 @@ void OkRun::ExecNc(const Block& b) {
   }
 
   // Nose radius compensation codes act on this block's move.
-  CompCodes(w, k.motion_col, xz);
+  if (w.other_g) CompCodes(w, k.motion_col, xz);  // G40-G42
 
   NcAction(w, b, k, xz);
   if (k.g80) {
@@ -445,8 +444,8 @@ void OkRun::ExecNc(const Block& b) {
   }
   const bool motion_block = xz && IsMotionG(modal_.motion) && !k.dwell && !k.g50 && !k.lap && k.cycle == 0;
   EndBlockStages(xz);
-  StopAndEnd(w);
-  if (!ended_ && motion_block) TriggerModin();
+  if (!w.m.empty()) StopAndEnd(w);  // M00/M01/M02/M30
+  if (!ended_ && motion_block && !modins_.empty()) TriggerModin();
 }
 
 // The M-tool cycle mode's side of a block (ln 4073-4130, 4521-4528): G180 alone ends it (true: the block is
@@ -681,7 +680,7 @@ void OkRun::RefuseUnsupported(const BlockWords& w) {
     Fail(w.Col('P'),
          "P (two-turret synchronisation, ln 6960-6990) is not supported: one program, one saddle");
   }
-  RefuseTorqueAndTurretB(w);
+  if (w.other_g || w.ext_has != 0) RefuseTorqueAndTurretB(w);  // G29, G111, PZ=, PW=
   for (const auto& m : w.m) {
     if (const char* what = RefusedControlM(m.code)) {
       Fail(m.col, fmt::format("M{} ({}) is not supported by the cell's OSP-E100L dialect", m.code, what));

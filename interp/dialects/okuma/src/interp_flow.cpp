@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 
 #include "cell/interp/scan.h"
 #include "interp_internal.h"
@@ -285,7 +286,7 @@ void OkRun::StepOnce() {
     ReportError(e, first_line);
   }
   // The barrier check sees every move before it goes out, those queued before an error too (ln 9081).
-  if (CheckBarriers()) BarrierOffAfterBlock();
+  if (CheckBarriers() && barrier_off_ != 0) BarrierOffAfterBlock();  // M20/M24 of the block
   cur_block_ = nullptr;
 }
 
@@ -465,21 +466,45 @@ void OkRun::ExecStatement(const Block& b) {
 
 std::optional<ProgramRef> OkRun::ProgramIn(const std::shared_ptr<const ProgramText>& text,
                                            const std::string& name, bool own) {
-  TextSpan all{text, 0, text->view().size(), 1, true};
-  TextPos p{0, 1};
+  // A program's first call scans the whole file: its lines are split as ReadLine splits them (a '\n', a lone
+  // '\r' or "\r\n" ends one), with one memchr per line for the '\n'; where the next '\r' is, is kept from one
+  // search of up to 4 KB ahead (a file has none, or one per line), not looked for in every line. Not further
+  // ahead: a long main program's pages go back as the scan passes them.
+  const std::string_view v = text->view();
+  const char* d = v.data();
+  const size_t end = v.size();
+  constexpr size_t kNoCr = std::string_view::npos;
+  size_t cr_lim = 0, cr_pos = kNoCr;  // searched up to cr_lim: its first '\r' at cr_pos (kNoCr: none)
+  auto line_end = [&](size_t from) {  // the first '\n' or '\r' at or after from, or end
+    const void* n = std::memchr(d + from, '\n', end - from);
+    const size_t nl = n ? static_cast<size_t>(static_cast<const char*>(n) - d) : end;
+    const bool known = cr_pos != kNoCr ? cr_pos >= from : cr_lim >= nl;
+    if (!known) {
+      cr_lim = std::min(end, std::max(nl, from + 4096));
+      const void* r = std::memchr(d + from, '\r', cr_lim - from);
+      cr_pos = r ? static_cast<size_t>(static_cast<const char*>(r) - d) : kNoCr;
+    }
+    return cr_pos != kNoCr && cr_pos < nl ? cr_pos : nl;
+  };
+  size_t pos = 0;
+  int line = 1;
   std::optional<ProgramRef> found;
-  ReleaseBehind release;  // a long main program's pages go back as the scan passes them
-  while (p.pos < all.end && !found) {
-    Line l = ReadLine(all, p);
-    release.At(*text, p.pos);
-    // Only a line whose first non-blank is O can name a program: tested before trimming, as a program's
-    // first call scans the whole file.
+  ReleaseBehind release;
+  while (pos < end && !found) {
+    const size_t eol = line_end(pos);
+    const size_t next =
+        eol >= end ? end : eol + (d[eol] == '\r' && eol + 1 < end && d[eol + 1] == '\n' ? 2 : 1);
+    const std::string_view l = v.substr(pos, eol - pos);
+    pos = next;
+    ++line;
+    release.At(*text, pos);
+    // Only a line whose first non-blank is O can name a program: tested before trimming.
     size_t k = 0;
-    while (k < l.text.size() && (l.text[k] == ' ' || l.text[k] == '\t')) ++k;
-    if (k == l.text.size() || (l.text[k] != 'O' && l.text[k] != 'o')) continue;
-    if (ProgramNameOf(TrimBlanks(l.text)) == name) found = ProgramRef{text, p.pos, p.line, own};
+    while (k < l.size() && (l[k] == ' ' || l[k] == '\t')) ++k;
+    if (k == l.size() || (l[k] != 'O' && l[k] != 'o')) continue;
+    if (ProgramNameOf(TrimBlanks(l)) == name) found = ProgramRef{text, pos, line, own};
   }
-  release.Done(*text, p.pos);
+  release.Done(*text, pos);
   return found;
 }
 

@@ -93,6 +93,9 @@ struct BlockWords {
     int col = 1;
   };
   std::vector<Code> g, m;
+  // A G code other than a motion code (G00-G03, G31-G35, G101-G103, G132/G133): most blocks have none, and
+  // then FindG/HasG, which look only for such codes, answer without a search.
+  bool other_g = false;
   int t_digits = 0;       // digits written in the T word (4 or 6)
   bool absolute = false;  // X, Z, C are absolute whatever G90/G91 (G137 converted them)
 
@@ -100,14 +103,22 @@ struct BlockWords {
   double Get(char a) const { return v[static_cast<size_t>(a - 'A')]; }
   int Col(char a) const { return col[static_cast<size_t>(a - 'A')]; }
   bool HasExt(int i) const { return (ext_has >> i) & 1u; }
-  bool HasG(int code) const;
-  const Code* FindG(int code) const;
+  // For codes other than the motion codes (those are read by ReadNcGCodes).
+  bool HasG(int code) const { return FindG(code) != nullptr; }
+  const Code* FindG(int code) const {
+    if (!other_g) return nullptr;
+    for (const auto& c : g) {
+      if (c.code == code) return &c;
+    }
+    return nullptr;
+  }
   bool HasM(int code) const;
   void Clear() {
     has = 0;
     ext_has = 0;
     g.clear();
     m.clear();
+    other_g = false;
     t_digits = 0;
     absolute = false;
   }

@@ -360,7 +360,9 @@ class Lexer {
   // The left side of an assignment or a GET/PUT variable: V1-V200, a system variable with its [suffix], or a
   // local variable.
   void Variable(const std::string& name, size_t at) {
-    Assign a;
+    // Built in place (an Assign holds a string: no temporary moved in). A refused name leaves it half made,
+    // with the block that is refused.
+    Assign& a = b_.assigns.emplace_back();
     a.col = static_cast<int>(at) + 1;
     if (name[0] == 'V' && name.size() > 1 && std::all_of(name.begin() + 1, name.end(), IsDigit)) {
       int n = 0;  // V and at most three digits, else out of range
@@ -395,7 +397,6 @@ class Lexer {
       a.kind = VarKind::kLocal;
       a.name = PackName(name);
     }
-    b_.assigns.push_back(std::move(a));
     b_.items.push_back({true, static_cast<uint16_t>(b_.assigns.size() - 1)});
   }
 
@@ -511,25 +512,11 @@ class Lexer {
     }
     // A sign and a bracket: E-67's X-[200-V1]*SIN[35].
     if (i_ < s_.size() && s_[i_] == '[' && i_ > start) return expression_from(start);
-    double v = 0, scale = 0.1;
-    int digits = 0, written = 0;
-    while (i_ < s_.size() && (IsDigit(s_[i_]) || s_[i_] == '.')) {
-      if (s_[i_] == '.') {
-        if (w.point) Error("two decimal points in a number");
-        w.point = true;
-      } else {
-        ++written;
-        if (w.point) {
-          v += (s_[i_] - '0') * scale;
-          scale /= 10;
-          ++digits;
-        } else {
-          v = v * 10 + (s_[i_] - '0');
-          if (v > 0) ++digits;
-        }
-      }
-      ++i_;
-    }
+    const Decimal d = ReadDecimal(s_, i_);
+    if (d.point && i_ < s_.size() && s_[i_] == '.') Error("two decimal points in a number");
+    w.point = d.point;
+    const double v = d.v;
+    const int digits = d.digits, written = d.written;
     if (written == 0) {
       Fail(w.col, fmt::format("number expected after {}", AddrName(w.addr)));
     }
