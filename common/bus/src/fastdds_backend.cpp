@@ -56,22 +56,8 @@ namespace frtps = eprosima::fastdds::rtps;
 // process waited for the running one's next periodic announcement, up to 1 s (cellctl: 0.5-1 s a verb). The
 // gate holds what arrives until the backend opens it, once create_participant has returned, and hands it on
 // then, in order (docs/architecture.md, "Discovery latency").
-//
-// The same gate closes the send side when the participant is deleted, so its "participant leaves" message
-// (SPDP dispose) never goes out. Fast DDS 2.9.1 removes a participant that says it leaves on the receive
-// thread (PDPListener -> PDP::remove_remote_participant), while that participant's lease timer may fire on
-// the event thread: the timer's callback, already running and waiting for the PDP mutex, then finds the proxy
-// cleared and returned to the pool, and `assert(GUID_t::unknown() != remote_participant->m_guid)` in
-// PDP::check_remote_participant_liveliness (PDP.cpp:1140; Debian builds it with assertions on) aborts the
-// process that was only watching (`should_check_lease_duration` survives `clear()`). Without the dispose
-// every peer removes a departed participant when its 3 s lease runs out, on the event thread itself, where no
-// lease timer of it can run beside the removal. Its endpoints still say they leave (delete_contained_entities
-// runs before the gate closes), so readers and writers unmatch at once as before; only the participant's
-// discovery record lingers up to 3 s, as a killed process's does (docs/architecture.md, "Leaving").
 class ReceiveGate {
  public:
-  void CloseSends() { sends_closed_.store(true, std::memory_order_release); }
-  bool SendsClosed() const { return sends_closed_.load(std::memory_order_acquire); }
   // True when held: Open() delivers it.
   bool Hold(frtps::TransportReceiverInterface* next, const rtps::octet* data, uint32_t size,
             const rtps::Locator_t& local, const rtps::Locator_t& remote) {
@@ -98,7 +84,6 @@ class ReceiveGate {
   std::mutex mu_;
   bool open_ = false;
   std::vector<Held> held_;
-  std::atomic<bool> sends_closed_{false};
 };
 
 class GatedTransport : public frtps::ChainingTransport {
@@ -110,7 +95,6 @@ class GatedTransport : public frtps::ChainingTransport {
   }
   bool send(rtps::SenderResource* low, const rtps::octet* buf, uint32_t size, rtps::LocatorsIterator* begin,
             rtps::LocatorsIterator* end, const std::chrono::steady_clock::time_point& timeout) override {
-    if (gate_->SendsClosed()) return true;  // the participant is being deleted: nothing more leaves it
     return low->send(buf, size, begin, end, timeout);
   }
   void receive(frtps::TransportReceiverInterface* next, const rtps::octet* buf, uint32_t size,
@@ -320,11 +304,6 @@ class FastReader : public RawReader, public dds::DataReaderListener {
 };
 
 constexpr uint32_t kReceiveBuffer = 4u << 20;
-// A participant of this process that ended left its discovery record with its peers until its 3 s lease ran
-// out (ReceiveGate: it does not say it leaves). A new participant of the same process on the same slot, thus
-// the same ports, while that record lives was never matched by a peer in the same process (bus_test
-// RejoinKeepsEveryEndpointWorking, FastToFast); so this process takes another slot until the lease is over.
-constexpr auto kSlotRest = std::chrono::milliseconds(4000);
 
 class FastBackend : public Backend {
  public:
@@ -353,15 +332,15 @@ class FastBackend : public Backend {
     identity_ = o.security.identity;
     const int range = LoopbackRange(qos);  // before the gate wraps the transports
     // Every UDP transport (built-in loopback profile and the shipped LAN profiles) behind the gate.
-    gate_ = std::make_shared<ReceiveGate>();
+    auto gate = std::make_shared<ReceiveGate>();
     for (auto& t : qos.transport().user_transports)
       if (std::dynamic_pointer_cast<frtps::UDPTransportDescriptor>(t))
-        t = std::make_shared<GatedDescriptor>(t, gate_);
+        t = std::make_shared<GatedDescriptor>(t, gate);
     {
       // One participant at a time per process, from choosing its slot until it has bound the slot's ports.
       SlotTable& slots = Slots();
       std::lock_guard lk(slots.mu);
-      slot_ = ChooseSlot(o.domain, range, qos, slots);
+      slot_ = ChooseSlot(o.domain, range, qos, slots.held);
       // The listener hears discovery only (no status: data goes to each reader's own listener).
       p_ = factory->create_participant(o.domain, qos, &writers_, dds::StatusMask::none());
       // Taken by p_, or, when it could not be made, kept by Fast DDS for the life of the process.
@@ -374,7 +353,7 @@ class FastBackend : public Backend {
               (identity_.empty() ? ""
                                  : " as security identity '" + identity_ + "' (Fast DDS's log says why)"));
     writers_.SetOwnPrefix(p_->guid().guidPrefix);
-    gate_->Open();  // create_participant has started reception: hand on what came before
+    gate->Open();  // create_participant has started reception: hand on what came before
     // docs/security.md, "Partitions": write in the identity's own partition, read every partition.
     dds::PublisherQos pq = dds::PUBLISHER_QOS_DEFAULT;
     pq.partition().push_back(partition_.c_str());
@@ -390,14 +369,12 @@ class FastBackend : public Backend {
   }
 
   ~FastBackend() override {
-    p_->delete_contained_entities();  // the endpoints say they leave: peers unmatch them at once
-    gate_->CloseSends();              // the participant does not (ReceiveGate: the lease-timer abort)
+    p_->delete_contained_entities();
     dds::DomainParticipantFactory::get_instance()->delete_participant(p_);  // releases its id and ports
     if (slot_ >= 0) {
       SlotTable& slots = Slots();
       std::lock_guard lk(slots.mu);
       slots.held.erase(slot_);
-      slots.released[slot_] = std::chrono::steady_clock::now();
     }
   }
 
@@ -497,15 +474,10 @@ class FastBackend : public Backend {
   // identity: RTPSDomainImpl::createParticipant returns before releasing it) and refuses it ever after
   // ("RTPSParticipant with the same ID already exists"). Hence `held`, the slots this process gave Fast DDS
   // and not yet got back. Returns the slot, -1 when all are taken (Fast DDS then numbers it).
-  struct SlotTable;
-  static int ChooseSlot(int domain, int range, dds::DomainParticipantQos& qos, const SlotTable& slots) {
-    const auto now = std::chrono::steady_clock::now();
+  static int ChooseSlot(int domain, int range, dds::DomainParticipantQos& qos, const std::set<int>& held) {
     for (int slot = 0; slot < range; ++slot) {
       const int port = 7400 + 250 * domain + 10 + 2 * slot;  // metatraffic unicast; user unicast is port + 1
-      if (slots.held.count(slot)) continue;
-      if (auto r = slots.released.find(slot); r != slots.released.end() && now - r->second < kSlotRest)
-        continue;
-      if (!PortFree(port) || !PortFree(port + 1)) continue;
+      if (held.count(slot) || !PortFree(port) || !PortFree(port + 1)) continue;
       qos.wire_protocol().participant_id = slot;
       std::random_device rd;
       auto& prefix = qos.wire_protocol().prefix;
@@ -519,7 +491,6 @@ class FastBackend : public Backend {
   struct SlotTable {
     std::mutex mu;
     std::set<int> held;
-    std::map<int, std::chrono::steady_clock::time_point> released;  // when this process gave a slot back
   };
   static SlotTable& Slots() {
     static SlotTable table;  // every domain: Fast DDS numbers the participants of a process, not of a domain
@@ -606,9 +577,8 @@ class FastBackend : public Backend {
   std::string partition_;
   WriterPartitions writers_;  // declared before p_: the participant (deleted in ~FastBackend) uses it
   dds::DomainParticipant* p_ = nullptr;
-  std::shared_ptr<ReceiveGate> gate_;  // reception held until the participant is up; sends closed at its end
-  int slot_ = -1;                      // participant id, -1: Fast DDS chose it
-  std::string identity_;               // DDS Security identity; empty: unsecured
+  int slot_ = -1;         // participant id, -1: Fast DDS chose it
+  std::string identity_;  // DDS Security identity; empty: unsecured
   dds::Publisher* pub_ = nullptr;
   dds::Subscriber* sub_ = nullptr;
   std::map<std::string, dds::Topic*> topics_;
