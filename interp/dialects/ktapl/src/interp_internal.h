@@ -169,6 +169,14 @@ struct FixtureField {
 std::string FixtureKey(int h, int axis);
 std::optional<FixtureField> ParseFixtureKey(std::string_view key);
 
+// A CLS the block makes (its definition, L0-L99 and column). Outside BlockCtx: clang cannot construct a
+// nested class with default member initializers in an optional until the enclosing class is complete.
+struct BlockCall {
+  Def def;
+  std::map<int, double> locals;
+  int col = 1;
+};
+
 // What a block's statements leave for the end of the block.
 struct BlockCtx {
   RawWords words;
@@ -176,11 +184,7 @@ struct BlockCtx {
   int jump_col = 1;
   bool end = false;
   int end_col = 1;
-  struct Call {
-    Def def;
-    std::map<int, double> locals;
-    int col = 1;
-  };
+  using Call = BlockCall;
   std::optional<Call> call;  // a CLS: made only then (most blocks call nothing)
   int gto_count = 0;
   int items = 0;
