@@ -22,7 +22,7 @@ void StationState::SetTools(const tooltable::ToolTable& table, ToolIndex& index)
 }
 
 void Allocate(const std::vector<int>& listed, const std::vector<int>& tools,
-              const std::vector<StationState>& stations, AllocationRec& out) {
+              const std::vector<StationState>& stations, AllocationRec& out, std::int64_t job) {
   out.winner = -1;
   out.tied = 0;
   out.candidates.resize(listed.size());
@@ -36,6 +36,7 @@ void Allocate(const std::vector<int>& listed, const std::vector<int>& tools,
     c.backlog_s = st.backlog_s;
     c.online = st.online;
     c.fault = st.fault;
+    c.schedule_job = st.schedule_job == job ? 0 : st.schedule_job;
     c.missing_begin = static_cast<std::uint32_t>(out.missing.size());
     for (int t : tools) {
       if (!st.Holds(t)) out.missing.push_back(t);

@@ -73,7 +73,7 @@ std::vector<PlanRow> Scheduler::Plan() {
         states[s].backlog_s = std::max<std::int64_t>(0, (free[s] - r.at_ms + 999) / 1000);
       alloc = AllocationRec{};
       if (op.blocked.empty())
-        Allocate(m.ListedFor(op.stations, j.pallet, scratch), op.tool_ids, states, alloc);
+        Allocate(m.ListedFor(op.stations, j.pallet, scratch), op.tool_ids, states, alloc, j.id);
       if (alloc.winner < 0) {
         rows.push_back({j.id, j.pallet, j.route, r.op, "", std::nullopt, std::nullopt,
                         op.blocked.empty() ? m.Describe(alloc) : op.blocked});

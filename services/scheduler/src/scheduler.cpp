@@ -121,6 +121,8 @@ std::string State::Describe(const AllocationRec& a) const {
     } else if (c.fault) {
       part(st.id, " in fault");
       if (!st.alarm_code.empty()) out += " (alarm " + st.alarm_code + ")";
+    } else if (c.schedule_job != 0) {
+      part(st.id, fmt::format(" runs schedule job {}", c.schedule_job));
     }
     if (c.missing_count != 0) {
       part(st.id, " missing tools ");
@@ -378,7 +380,7 @@ void Scheduler::Impl::Evaluate(JobRec& j, std::string_view trigger) {
   alloc.candidates.reserve(op.stations.size());
   alloc.missing.reserve(op.stations.size() * 2);
   std::vector<int> scratch;
-  Allocate(ListedFor(op.stations, j.pallet, scratch), op.tool_ids, states, alloc);
+  Allocate(ListedFor(op.stations, j.pallet, scratch), op.tool_ids, states, alloc, j.id);
   if (alloc.winner < 0) {
     SetWaiting(j, Describe(alloc), trigger, &alloc);
     return;
@@ -451,6 +453,18 @@ DispatchAction Scheduler::Impl::Action(const DispatchRec& d, bool resent) const 
 }
 
 void Scheduler::Impl::StepSchedule(JobRec& j, int station, std::string_view trigger) {
+  // One schedule at a time on a station: a second one waits, not stepped (its first VSET would write the
+  // counters the running one loops on), until the first ends (ReleaseSchedule).
+  StationState& ss = states[static_cast<std::size_t>(station)];
+  if (ss.schedule_job != 0 && ss.schedule_job != j.id) {
+    dirty_jobs.insert(j.id);
+    SetWaiting(j,
+               fmt::format("{} runs schedule job {}: this schedule starts when that one ends",
+                           stations[static_cast<std::size_t>(station)].id, ss.schedule_job),
+               trigger, nullptr);
+    return;
+  }
+  ss.schedule_job = j.id;
   StationVars vars(*this, station);
   schedule::Runner runner(j.sched, j.sched_pos);
   const schedule::Step step = runner.Next(vars);
@@ -506,6 +520,29 @@ void Scheduler::Impl::FinishJob(JobRec& j, JobState state, std::string reason) {
   waiting.erase(j.id);
   if (j.pallet != 0) busy_pallets.erase(j.pallet);
   JobChanged(j);
+  if (j.kind == "schedule") ReleaseSchedule(j);
+}
+
+void Scheduler::Impl::ReleaseSchedule(const JobRec& j) {
+  if (j.sched_station < 0) return;
+  const int s = j.sched_station;
+  StationState& ss = states[static_cast<std::size_t>(s)];
+  if (ss.schedule_job != j.id) return;
+  ss.schedule_job = 0;
+  const std::string trigger =
+      fmt::format("schedule job {} ended on {}", j.id, stations[static_cast<std::size_t>(s)].id);
+  // The oldest schedule waiting for this station starts; then the pallets held off it are evaluated again
+  // (they wait on, for that schedule, or go).
+  for (std::int64_t id : waiting) {
+    JobRec& next = jobs.at(id);
+    if (next.kind == "schedule" && next.ops->empty() && next.sched_station == s) {
+      waiting.erase(id);
+      next.state = JobState::kQueued;
+      StepSchedule(next, s, trigger);
+      break;
+    }
+  }
+  ReevaluateWaiting(s, trigger);
 }
 
 void Scheduler::Impl::ReevaluateWaiting(int station, std::string_view trigger) {
@@ -513,6 +550,7 @@ void Scheduler::Impl::ReevaluateWaiting(int station, std::string_view trigger) {
   for (std::int64_t id : ids) {
     JobRec& j = jobs.at(id);
     if (j.state != JobState::kWaiting) continue;
+    if (j.ops->empty()) continue;  // a schedule not started: it starts when its station's schedule ends
     const Op& op = (*j.ops)[static_cast<std::size_t>(j.op)];
     if (station >= 0 && std::find(op.stations.begin(), op.stations.end(), station) == op.stations.end()) {
       continue;
@@ -833,6 +871,7 @@ JobResult Scheduler::RunSchedule(std::string_view key, std::string_view name, st
     JobRec j;
     j.id = m.next_job++;
     j.kind = "schedule";
+    j.sched_station = s;
     j.sched_name = std::string(name);
     j.sched_text = std::string(text);
     j.sched = program;

@@ -84,6 +84,9 @@ struct Scheduler::Impl : State {
   // Removes a live dispatch from its station (queue or hand) and releases its backlog.
   void Detach(DispatchRec& d, DState end);
   void FinishJob(JobRec& j, JobState state, std::string reason);
+  // A schedule job that ended gives its station back: the next schedule waiting for it starts, or the pallets
+  // held off it are evaluated again.
+  void ReleaseSchedule(const JobRec& j);
   // Re-evaluates waiting jobs whose current operation lists `station` (-1: all).
   void ReevaluateWaiting(int station, std::string_view trigger);
   // A station that vanished or faulted gives up its pallets.

@@ -224,6 +224,15 @@ void LoadJobs(store::Database& db, State& state, std::size_t kept_ended) {
       j.sched_pos.done = js.at("done");
       j.sched_pos.count = js.at("count");
       j.sched_pos.finished = js.at("finished");
+      // Stored since the one-schedule-a-station rule; before it, the station of its run (if any).
+      if (auto it = js.find("station"); it != js.end() && it->is_string()) {
+        j.sched_station = state.StationIndex(it->get<std::string>(), true);
+      } else if (!j.ops->empty() && !(*j.ops)[0].stations.empty()) {
+        j.sched_station = (*j.ops)[0].stations[0];
+      }
+      // A schedule that has stepped has its station to itself (StationState::schedule_job).
+      if (!IsTerminal(j.state) && !j.ops->empty() && j.sched_station >= 0)
+        state.states[static_cast<std::size_t>(j.sched_station)].schedule_job = j.id;
       if (const auto& r = js.at("run"); !r.is_null()) {
         j.sched_run = schedule::Run{r.at("main_file"), r.at("program"), r.at("sub_file"),
                                     r.at("index"),     r.at("count"),   r.at("line")};
@@ -460,6 +469,9 @@ void FlushJobs(store::Database& db, const State& state) {
                  {"done", j.sched_pos.done},
                  {"count", j.sched_pos.count},
                  {"finished", j.sched_pos.finished},
+                 {"station", j.sched_station >= 0
+                                 ? json(state.stations[static_cast<std::size_t>(j.sched_station)].id)
+                                 : json(nullptr)},
                  {"run", nullptr}};
       if (j.sched_run) {
         const auto& r = *j.sched_run;

@@ -70,7 +70,7 @@ struct DecisionRec {
 
 struct JobRec {
   std::int64_t id = 0;
-  std::string kind;  // "route" | "pallet"
+  std::string kind;  // "route" | "pallet" | "schedule"
   std::string route;
   int pallet = 0;
   Ops ops;
@@ -88,6 +88,7 @@ struct JobRec {
   std::shared_ptr<const schedule::Program> sched;
   schedule::RunnerPosition sched_pos;
   std::optional<schedule::Run> sched_run;
+  int sched_station = -1;  // the station it runs on (`schedule run --station`)
 };
 
 // A program's prediction and learned estimate on one station, for one revision of the program and of what

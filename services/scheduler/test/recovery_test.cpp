@@ -224,6 +224,28 @@ TEST(Recovery, ScheduleResumesWhereItStopped) {
   EXPECT_EQ(c.sched->StationCommonVariables("OK01").at(1), 6);
 }
 
+// The station a running schedule has to itself stays its own across a restart: the waiting schedule starts
+// only when the first ends (Schedules.OneScheduleAtATimeHasItsStationToItself).
+TEST(Recovery, AScheduleKeepsItsStationAcrossARestart) {
+  TempDir tmp;
+  FakeCell c(tmp.db());
+  c.Take(c.sched->StationOnline("OK01", "okuma"));
+  JobResult first = c.sched->RunSchedule("a", "S1.SDF", "PSELECT A.MIN,O1,,Q=2\nEND", "OK01");
+  c.Take(first.effects);
+  JobResult second = c.sched->RunSchedule("b", "S2.SDF", "PSELECT B.MIN,O2\nEND", "OK01");
+  c.Take(second.effects);
+  c.Complete(c.InHand("OK01").dispatch_id);
+  c.Restart();
+  c.Take(c.sched->Recover());
+  EXPECT_EQ(c.State(second.job_id), JobState::kWaiting);
+  const DispatchAction d = c.InHand("OK01");
+  EXPECT_EQ(d.job_id, first.job_id);
+  EXPECT_EQ(d.schedule_run->index, 2);
+  c.Complete(d.dispatch_id);
+  EXPECT_EQ(c.State(first.job_id), JobState::kCompleted);
+  EXPECT_EQ(c.InHand("OK01").job_id, second.job_id);
+}
+
 // A kill -9 after the commit of a VSET write but before it was sent: the restarted scheduler sends it again
 // ahead of the dispatch, and the station's publication from before the write (V1 still 5) does not roll the
 // count back, so the loop runs Q times and not once more (okuma_cell_test kills the real process).

@@ -839,6 +839,44 @@ TEST(Schedules, PselectRunsOneAfterAnotherWithStationVariables) {
   EXPECT_EQ(v.schedule, "SHAFT-1.SDF");
 }
 
+// A schedule program runs on the control from its first block to END with nothing between its PSELECTs, and
+// its loops count in the station's common variables (Okuma seed lines 8767-8790, 8866-8924): a second
+// schedule on the station waits unstepped (its VSET V1=100 would break the first's loop) and a pallet waits,
+// until the running schedule ends; then the second schedule starts, and after it the pallet. The simulated
+// week (chaos_test Chaos.Week) found two schedules on one station taking turns: four runs for one, two for
+// the other.
+TEST(Schedules, OneScheduleAtATimeHasItsStationToItself) {
+  FakeCell c;
+  c.Take(c.sched->StationOnline("OK01", "okuma"));
+  c.programs.Put("P.MIN", "O1\nG00 X10\nM02\n", "okuma");
+  c.Route("R", {"OK01:P.MIN"});
+  JobResult first = c.sched->RunSchedule(
+      "a", "S1.SDF", "N1 VSET V1=0\nN2 PSELECT A.MIN,O1\nVSET V1=V1+1\nIF [V1 LT 2] N2\nEND", "OK01");
+  c.Take(first.effects);
+  JobResult second = c.sched->RunSchedule("b", "S2.SDF", "VSET V1=100\nPSELECT B.MIN,O2\nEND", "OK01");
+  c.Take(second.effects);
+  EXPECT_TRUE(second.effects.variables.empty());
+  EXPECT_EQ(c.State(second.job_id), JobState::kWaiting);
+  EXPECT_EQ(c.Reason(second.job_id), "OK01 runs schedule job " + std::to_string(first.job_id) +
+                                         ": this schedule starts when that one ends");
+  const auto pallet = c.Operate("R", 1);
+  EXPECT_EQ(c.Reason(pallet), "no eligible station: OK01 runs schedule job " + std::to_string(first.job_id));
+  for (int run = 1; run <= 2; ++run) {
+    const DispatchAction d = c.InHand("OK01");
+    EXPECT_EQ(d.job_id, first.job_id) << "run " << run;
+    c.Complete(d.dispatch_id);
+  }
+  EXPECT_EQ(c.State(first.job_id), JobState::kCompleted);
+  EXPECT_EQ(c.sched->StationCommonVariables("OK01").at(1), 100);  // the second's VSET, sent as it started
+  const DispatchAction b = c.InHand("OK01");
+  EXPECT_EQ(b.job_id, second.job_id);
+  EXPECT_EQ(b.programs, std::vector<std::string>{"B.MIN"});
+  EXPECT_EQ(c.Reason(pallet), "no eligible station: OK01 runs schedule job " + std::to_string(second.job_id));
+  c.Complete(b.dispatch_id);
+  EXPECT_EQ(c.State(second.job_id), JobState::kCompleted);
+  EXPECT_EQ(c.InHand("OK01").job_id, pallet);
+}
+
 TEST(Schedules, AlarmsFailTheJobAndBadProgramsAreRefused) {
   FakeCell c;
   c.Take(c.sched->StationOnline("OK01", "okuma"));

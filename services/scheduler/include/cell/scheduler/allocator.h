@@ -32,6 +32,10 @@ struct StationState {
   bool fault = false;
   std::int64_t backlog_s = 0;
   std::vector<std::uint64_t> held;  // bit per interned tool id: a usable (not broken) data set is loaded
+  // A schedule job that has the station to itself from its first step to its end (0: none): on the control a
+  // schedule program runs its PSELECTs one after another with nothing between, and its VSET/IF counters are
+  // the station's common variables (docs/scheduler.md §9).
+  std::int64_t schedule_job = 0;
 
   bool Holds(int tool) const {
     const auto word = static_cast<std::size_t>(tool) / 64;
@@ -48,7 +52,8 @@ struct CandidateRec {
   std::uint32_t missing_begin =
       0;  // this candidate's tools not held: AllocationRec::missing[begin, begin+count)
   std::uint32_t missing_count = 0;
-  bool eligible() const { return online && !fault && missing_count == 0; }
+  std::int64_t schedule_job = 0;  // another job's schedule has the station (StationState::schedule_job)
+  bool eligible() const { return online && !fault && missing_count == 0 && schedule_job == 0; }
 };
 
 struct AllocationRec {
@@ -63,8 +68,9 @@ struct AllocationRec {
   }
 };
 
-// Decides one operation. `listed`: station indexes in the operation's order; `tools`: interned UTL ids.
+// Decides one operation of job `job`. `listed`: station indexes in the operation's order; `tools`: interned
+// UTL ids.
 void Allocate(const std::vector<int>& listed, const std::vector<int>& tools,
-              const std::vector<StationState>& stations, AllocationRec& out);
+              const std::vector<StationState>& stations, AllocationRec& out, std::int64_t job = 0);
 
 }  // namespace cell::scheduler
