@@ -239,6 +239,7 @@ struct Opts {
   std::string service;
   int count = 0;
   bool secure = false;
+  double ready_s = 30;  // up: how long to wait for every process and station to be ready
 };
 using OptsPtr = std::shared_ptr<Opts>;
 
@@ -255,6 +256,10 @@ void AddCellUp(CLI::App& app, Context& ctx, const OptsPtr& o) {
                  "start only the cell host's services (host) or only the stations' (stations): one part of a "
                  "cell across hosts")
       ->check(CLI::IsMember({"host", "stations"}));
+  up->add_option("--timeout", o->ready_s,
+                 "seconds to wait for every process to announce itself and every station to be online to the "
+                 "scheduler (default 30; a cell across hosts starting at once may want its settle time)")
+      ->check(CLI::Range(1.0, 3600.0));
   up->add_flag("--secure", o->secure,
                "DDS Security: a PKI in $CELL_DATA_DIR/security (made if missing), every process with "
                "CELL_SECURITY=on (docs/security.md)");
@@ -296,8 +301,8 @@ void AddCellUp(CLI::App& app, Context& ctx, const OptsPtr& o) {
       SaveRecord(procs);
     }
     // Ready = every process announced itself READY on the bus and every station online in the scheduler's
-    // view (WaitReady), within 30 s.
-    auto missing = WaitReady(ctx, procs, started, bus::Millis(30000));
+    // view (WaitReady), within --timeout (30 s).
+    auto missing = WaitReady(ctx, procs, started, bus::Millis(static_cast<std::int64_t>(o->ready_s * 1000)));
     if (!missing.empty()) {
       std::vector<CellProcess> ours;
       for (auto& p : procs)
