@@ -385,7 +385,9 @@ void Chaos::Run(const Plan& plan) {
   };
 
   if (!plan.config_dir.empty()) cell_.SetEnv("CELL_CONFIG_DIR", plan.config_dir);
-  auto up = cell_.Up(Joined(plan.stations), "virtual");
+  // A large cell's `up` gets longer than the 30 s it must meet (issue 43 item 1 measures that, not this).
+  auto up = cell_.Up(Joined(plan.stations), "virtual",
+                     {"--timeout", std::to_string(std::max<std::size_t>(30, 4 * plan.stations.size()))});
   ASSERT_EQ(up.code, 0) << up.out << up.err;
   std::printf("%s (%.1f s)\n", FirstLine(up.out).c_str(), since_start());
 
@@ -511,7 +513,11 @@ void Chaos::Run(const Plan& plan) {
         std::lock_guard lk(mu_);
         operated_.push_back(op);
       }
-      std::this_thread::sleep_for(300ms);
+      // Each look is a `cellctl` process, a participant that discovers the whole cell: at 32 stations (68
+      // processes) one look every 300 ms kept the 2 cores busy with discovery alone (load 86, 27 pallets in
+      // 5 minutes). A look every 75 ms a station: 300 ms at 4 stations, 2.4 s at 32.
+      std::this_thread::sleep_for(
+          std::max<std::chrono::milliseconds>(300ms, 75ms * static_cast<int>(plan.stations.size())));
     }
   });
   struct Joiner {  // an ASSERT below returns early: the threads stop and are joined either way

@@ -38,7 +38,8 @@ RunResult LocalCell::Up(const std::string& stations, const std::string& clock,
                         const std::vector<std::string>& more) {
   std::vector<std::string> args{"up", "--stations", stations, "--clock", clock};
   args.insert(args.end(), more.begin(), more.end());
-  RunResult r = Ctl(args);
+  // `up` bounds its own wait (30 s, or its --timeout); this bound only catches a hang.
+  RunResult r = Ctl(args, std::chrono::seconds(600));
   up_ = r.code == 0;
   if (!up_) {
     // What each service said before `up` gave up on it: a cell that did not come up under load in a full run
