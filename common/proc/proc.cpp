@@ -1,5 +1,7 @@
 #include "cell/proc/proc.h"
 
+#include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
@@ -25,6 +27,27 @@ std::optional<std::uint64_t> StartTime(pid_t pid) {
   } catch (const std::exception&) {
     return std::nullopt;
   }
+}
+
+std::optional<long> ResidentKb(pid_t pid) {
+  if (pid <= 0) return std::nullopt;
+  std::ifstream in("/proc/" + std::to_string(pid) + "/status");
+  for (std::string line; std::getline(in, line);)
+    if (line.rfind("VmRSS:", 0) == 0) return std::strtol(line.c_str() + 6, nullptr, 10);
+  return std::nullopt;  // gone, or a zombie (no VmRSS line)
+}
+
+std::optional<long> OpenDescriptors(pid_t pid) {
+  if (pid <= 0) return std::nullopt;
+  std::error_code ec;
+  std::filesystem::directory_iterator it("/proc/" + std::to_string(pid) + "/fd", ec);
+  if (ec) return std::nullopt;
+  long n = 0;
+  for (; it != std::filesystem::directory_iterator(); it.increment(ec)) {
+    if (ec) return std::nullopt;
+    ++n;
+  }
+  return n;
 }
 
 }  // namespace cell::proc

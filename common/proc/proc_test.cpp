@@ -23,4 +23,19 @@ TEST(StartTime, OfALiveProcessAndNotOfAZombieOrNobody) {
   EXPECT_FALSE(cell::proc::StartTime(-1).has_value());
 }
 
+TEST(Usage, OfALiveProcessAndOfNobody) {
+  const auto rss = cell::proc::ResidentKb(getpid());
+  ASSERT_TRUE(rss.has_value());
+  EXPECT_GT(*rss, 0);
+  const auto before = cell::proc::OpenDescriptors(getpid());
+  ASSERT_TRUE(before.has_value());
+  const int fd = dup(0);
+  ASSERT_GE(fd, 0);
+  EXPECT_EQ(cell::proc::OpenDescriptors(getpid()), *before + 1);
+  close(fd);
+  EXPECT_EQ(cell::proc::OpenDescriptors(getpid()), before);
+  EXPECT_FALSE(cell::proc::ResidentKb(-1).has_value());
+  EXPECT_FALSE(cell::proc::OpenDescriptors(0).has_value());
+}
+
 }  // namespace

@@ -38,6 +38,7 @@
 #include "cell/idl/inspection.h"
 #include "cell/idl/program_store.h"
 #include "cell/idl/scheduler.h"
+#include "cell/proc/proc.h"
 
 extern char** environ;
 
@@ -70,19 +71,11 @@ std::map<std::string, int> Services() {
   return out;
 }
 
-// VmRSS of a process in kB; -1 when it is gone.
-long RssKb(int pid) {
-  std::ifstream in(fmt::format("/proc/{}/status", pid));
-  for (std::string line; std::getline(in, line);)
-    if (line.rfind("VmRSS:", 0) == 0) return std::strtol(line.c_str() + 6, nullptr, 10);
-  return -1;
-}
-
 using Sample = std::map<std::string, long>;  // service -> kB
 
 Sample Measure(const std::map<std::string, int>& services) {
   Sample s;
-  for (auto& [name, pid] : services) s[name] = RssKb(pid);
+  for (auto& [name, pid] : services) s[name] = cell::proc::ResidentKb(pid).value_or(-1);  // -1: gone
   return s;
 }
 
