@@ -457,7 +457,6 @@ void Scheduler::Impl::StepSchedule(JobRec& j, int station, std::string_view trig
   // counters the running one loops on), until the first ends (ReleaseSchedule).
   StationState& ss = states[static_cast<std::size_t>(station)];
   if (ss.schedule_job != 0 && ss.schedule_job != j.id) {
-    dirty_jobs.insert(j.id);
     SetWaiting(j,
                fmt::format("{} runs schedule job {}: this schedule starts when that one ends",
                            stations[static_cast<std::size_t>(station)].id, ss.schedule_job),
