@@ -54,6 +54,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "cell/proc/proc.h"
 #include "cell/store/sqlite.h"
 #include "cell/testing/local_cell.h"
 
@@ -217,28 +218,20 @@ constexpr const char* kOkumaSchedule =
     "N001 VSET V1=0\nN010 PSELECT A.MIN,O100\nN011 VSET V1=V1+1\nN012 IF [V1 LT 3] N010\nEND\n";
 constexpr int kScheduleRuns = 3;
 
-// N stations of the four dialects in turn (KT01, OK01, EM01, BS01, KT02, ...), each a copy of its dialect's
-// deploy/ station file under a new id with that file's tools, in a configuration directory of its own (as
-// deploy/bench.d/lib/cell.sh's make_config).
+// N stations of the four dialects in turn (KT01, OK01, EM01, BS01, KT02, ...) in a configuration directory of
+// their own, made by deploy/bench.d/lib/cell.sh's make_config: the one rule for a grown cell, which `./cell
+// bench scale` and `./cell hosts` use too. Returns the station ids (sorted), or none after a failure it
+// reports.
 std::vector<std::string> MakeConfig(int n, const fs::path& dir) {
-  const fs::path deploy = fs::path(SourceDir()) / "deploy";
-  fs::remove_all(dir);
-  fs::create_directories(dir / "stations");
-  fs::copy(deploy / "systemd", dir / "systemd", fs::copy_options::recursive);
-  fs::copy(deploy / "dds", dir / "dds", fs::copy_options::recursive);
-  const std::vector<std::string> templates = {"KT01", "OK01", "EM01", "BS01"};
+  auto r = RunCommand({"bash", "-c",
+                       "ROOT=$1; source \"$ROOT/deploy/bench.d/lib/cell.sh\"; make_config \"$2\" \"$3\"",
+                       "make_config", SourceDir(), std::to_string(n), dir.string()});
+  EXPECT_EQ(r.code, 0) << "make_config: " << r.err;
   std::vector<std::string> ids;
-  for (int i = 0; i < n; ++i) {
-    const std::string& t = templates[static_cast<size_t>(i) % templates.size()];
-    const std::string id = fmt::format("{}{:02}", t.substr(0, 2), i / static_cast<int>(templates.size()) + 1);
-    std::string text = ReadFile((deploy / "stations" / (t + ".toml")).string());
-    const std::string from = "\nid = \"" + t + "\"", to = "\nid = \"" + id + "\"";
-    text.replace(text.find(from), from.size(), to);
-    std::ofstream(dir / "stations" / (id + ".toml")) << text;
-    if (fs::exists(deploy / "stations" / (t + ".tools")))
-      fs::copy_file(deploy / "stations" / (t + ".tools"), dir / "stations" / (id + ".tools"));
-    ids.push_back(id);
-  }
+  std::error_code ec;
+  for (auto& e : fs::directory_iterator(dir / "stations", ec))
+    if (e.path().extension() == ".toml") ids.push_back(e.path().stem().string());
+  std::sort(ids.begin(), ids.end());
   return ids;
 }
 
@@ -259,20 +252,11 @@ struct Usage {
 Usage Measure(const std::vector<RecordedProcess>& record, double t_s) {
   Usage u{t_s};
   for (auto& p : record) {
-    std::ifstream status("/proc/" + std::to_string(p.pid) + "/status");
-    bool alive = false;
-    for (std::string line; std::getline(status, line);) {
-      if (line.rfind("VmRSS:", 0) == 0) {
-        u.rss_kb += std::atol(line.c_str() + 6);
-        alive = true;
-      }
-    }
-    if (!alive) continue;
+    const auto rss = cell::proc::ResidentKb(p.pid);
+    if (!rss) continue;  // gone (killed, not restarted yet)
+    u.rss_kb += *rss;
+    u.fds += cell::proc::OpenDescriptors(p.pid).value_or(0);
     ++u.procs;
-    std::error_code ec;
-    for (auto it = fs::directory_iterator("/proc/" + std::to_string(p.pid) + "/fd", ec);
-         !ec && it != fs::directory_iterator(); it.increment(ec))
-      ++u.fds;
   }
   return u;
 }
@@ -852,6 +836,7 @@ TEST_F(Chaos, Week) {
   Plan plan;
   plan.config_dir = cell_.data_dir() + "/config";
   plan.stations = MakeConfig(n, plan.config_dir);
+  ASSERT_EQ(plan.stations.size(), static_cast<std::size_t>(n));
   plan.live_jobs = n + 2;
   plan.reuse_pallets = true;
   // The gate's short version: 60 s of chaos, within its 3 minutes with the start and the checks (under the
