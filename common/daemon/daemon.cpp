@@ -1,7 +1,10 @@
 #include "cell/daemon/daemon.h"
 
+#include <execinfo.h>
 #include <fcntl.h>
+#include <fmt/format.h>
 #include <poll.h>
+#include <pthread.h>
 #include <signal.h>
 #include <spdlog/spdlog.h>
 #include <systemd/sd-daemon.h>
@@ -21,6 +24,19 @@ namespace {
 int g_pipe[2] = {-1, -1};
 std::atomic<bool> g_live{false};
 constexpr unsigned char kQuit = 0;  // sent by ~Daemon to end the watcher
+
+// A start-up step that lasts kSlowStep: the main thread, interrupted by SIGUSR2, writes its own stack to
+// stderr (the service's log), so that a start that hangs shows the call that never returned.
+extern "C" void OnStackRequest(int) {
+  int saved = errno;
+  void* frames[48];
+  const int n = backtrace(frames, 48);
+  static const char kHead[] = "the start-up's stack (main thread):\n";
+  ssize_t w = write(2, kHead, sizeof kHead - 1);
+  (void)w;
+  backtrace_symbols_fd(frames, n, 2);
+  errno = saved;
+}
 
 extern "C" void OnSignal(int sig) {
   int saved = errno;
@@ -56,6 +72,14 @@ Daemon::Daemon() {
     g_live = false;
     throw Error(Errc::kInternal, std::string("cell::daemon::Daemon: pipe2: ") + std::strerror(errno));
   }
+  main_ = pthread_self();
+  void* warm[1];
+  backtrace(warm, 1);  // loads the unwinder now: the handler must not allocate
+  struct sigaction st {};
+  st.sa_handler = OnStackRequest;
+  sigemptyset(&st.sa_mask);
+  st.sa_flags = SA_RESTART;
+  sigaction(SIGUSR2, &st, nullptr);
   watcher_ = std::thread([this] { Watch(); });
   struct sigaction sa {};
   sa.sa_handler = OnSignal;
@@ -73,6 +97,7 @@ Daemon::Daemon() {
 Daemon::~Daemon() {
   signal(SIGTERM, SIG_DFL);
   signal(SIGINT, SIG_DFL);
+  signal(SIGUSR2, SIG_DFL);
   unsigned char b = kQuit;
   ssize_t n = write(g_pipe[1], &b, 1);
   (void)n;
@@ -83,8 +108,39 @@ Daemon::~Daemon() {
   g_live = false;
 }
 
+void Daemon::Starting(std::string_view step) {
+  std::lock_guard lock(start_mu_);
+  step_ = step;
+  step_since_ = std::chrono::steady_clock::now();
+  step_warned_ = false;
+}
+
+std::string Daemon::StartupState(bool slow) {
+  std::lock_guard lock(start_mu_);
+  if (ready_) return {};
+  const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - step_since_).count();
+  if (slow) {
+    if (!step_warned_ && s >= std::chrono::duration<double>(kSlowStep).count()) {
+      step_warned_ = true;
+      spdlog::warn("still {} after {:.0f} s: not ready (its stack follows on stderr)", step_, s);
+      spdlog::default_logger()->flush();
+      pthread_kill(main_, SIGUSR2);
+    }
+    return {};
+  }
+  return fmt::format(" while {} ({:.1f} s, not ready)", step_, s);
+}
+
 void Daemon::Watch() {
   while (true) {
+    // Wakes every second until ready, to say which start-up step is slow.
+    pollfd pfd{g_pipe[0], POLLIN, 0};
+    const int polled = poll(&pfd, 1, ready_ ? -1 : 1000);
+    if (polled == 0) {
+      StartupState(true);
+      continue;
+    }
+    if (polled < 0 && errno == EINTR) continue;
     unsigned char b = 0;
     ssize_t n = read(g_pipe[0], &b, 1);
     if (n < 0 && errno == EINTR) continue;
@@ -96,7 +152,8 @@ void Daemon::Watch() {
       spdlog::default_logger()->flush();
       _exit(128 + sig);
     }
-    spdlog::info("SIG{} received: stopping", sigabbrev_np(sig) ? sigabbrev_np(sig) : "?");
+    spdlog::info("SIG{} received{}: stopping", sigabbrev_np(sig) ? sigabbrev_np(sig) : "?",
+                 StartupState(false));
     int expected = 0;
     stop_signal_.compare_exchange_strong(expected, sig);
     RequestStop();
@@ -123,6 +180,7 @@ void Daemon::WaitForStop() {
 }
 
 bool Daemon::NotifyReady(std::string_view status) {
+  ready_ = true;
   return Notify("READY=1\nSTATUS=" + std::string(status));
 }
 

@@ -3,8 +3,16 @@
 #include <gtest/gtest.h>
 #include <signal.h>
 
+#include <cstdio>
+
 #include <atomic>
 #include <chrono>
+#include <memory>
+#include <string>
+#include <thread>
+
+#include <spdlog/sinks/ringbuffer_sink.h>
+#include <spdlog/spdlog.h>
 
 #include "cell/daemon/notify_listener.h"
 #include "cell/error/error.h"
@@ -65,6 +73,65 @@ TEST(DaemonInProcess, RequestStopFromCode) {
   t.join();
   EXPECT_TRUE(d.StopRequested());
   EXPECT_EQ(d.StopSignal(), 0);
+}
+
+// A start that hangs says where (the CI's "cell did not come up" of an interpreter that logged nothing).
+TEST(DaemonInProcess, AStopBeforeReadyNamesTheStartupStep) {
+  auto sink = std::make_shared<spdlog::sinks::ringbuffer_sink_mt>(16);
+  auto before = spdlog::default_logger();
+  spdlog::set_default_logger(std::make_shared<spdlog::logger>("daemon-test", sink));
+  std::string said;
+  {
+    cell::daemon::Daemon d;
+    d.Starting("joining the bus");
+    raise(SIGTERM);
+    ASSERT_TRUE(d.WaitForStop(5s));
+    for (int i = 0; i < 100 && said.empty(); ++i) {  // the watcher logs, then requests the stop
+      for (auto& line : sink->last_formatted()) said += line;
+      if (said.empty()) std::this_thread::sleep_for(10ms);
+    }
+  }
+  spdlog::set_default_logger(before);
+  EXPECT_NE(said.find("SIGTERM received while joining the bus ("), std::string::npos) << said;
+  EXPECT_NE(said.find(" s, not ready): stopping"), std::string::npos) << said;
+}
+
+TEST(DaemonInProcess, AStopAfterReadySaysOnlyStopping) {
+  auto sink = std::make_shared<spdlog::sinks::ringbuffer_sink_mt>(16);
+  auto before = spdlog::default_logger();
+  spdlog::set_default_logger(std::make_shared<spdlog::logger>("daemon-test", sink));
+  std::string said;
+  {
+    cell::daemon::Daemon d;
+    d.Starting("joining the bus");
+    d.NotifyReady("ready");
+    raise(SIGTERM);
+    ASSERT_TRUE(d.WaitForStop(5s));
+    for (int i = 0; i < 100 && said.empty(); ++i) {
+      for (auto& line : sink->last_formatted()) said += line;
+      if (said.empty()) std::this_thread::sleep_for(10ms);
+    }
+  }
+  spdlog::set_default_logger(before);
+  EXPECT_NE(said.find("SIGTERM received: stopping"), std::string::npos) << said;
+}
+
+// A step that lasts kSlowStep is named in a warning, and the main thread's stack shows where it waits
+// (the probe sleeps in its start-up).
+TEST(DaemonProbe, ASlowStartupStepShowsItsStack) {
+  const std::string cmd = std::string("timeout -s TERM 12 ") + CELL_DAEMON_PROBE + " --startup-ms 10300 2>&1";
+  FILE* f = popen(cmd.c_str(), "r");
+  ASSERT_NE(f, nullptr);
+  std::string out;
+  char buf[4096];
+  for (size_t n; (n = fread(buf, 1, sizeof buf, f)) > 0;) out.append(buf, n);
+  pclose(f);
+  EXPECT_NE(out.find("still starting after 10 s: not ready"), std::string::npos) << out;
+  const auto stack = out.find("the start-up's stack (main thread):");
+  ASSERT_NE(stack, std::string::npos) << out;
+  EXPECT_NE(out.find("nanosleep", stack), std::string::npos) << out;
+  EXPECT_LT(stack, out.find("ready; watchdog")) << out;  // before ready, once
+  EXPECT_EQ(out.find("the start-up's stack", stack + 1), std::string::npos) << out;
 }
 
 TEST(DaemonProbe, ReadyWatchdogStopping) {

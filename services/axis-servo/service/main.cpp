@@ -27,14 +27,18 @@ int main(int argc, char** argv) {
   try {
     if (clock != "real" && clock != "virtual")
       throw cell::Error(cell::Errc::kInvalidArgument, "CELL_CLOCK=" + clock + ": expected real or virtual");
-    cell::daemon::Daemon daemon;
+    cell::daemon::Daemon daemon;  // its steps name where a start that never ends is stuck
+    daemon.Starting("loading the station file");
     auto cfg = cell::config::LoadStation(station);  // validates the [station] table
     auto machine = cell::machine::LoadMachineConfig(cfg.file);
     const auto dds = cell::config::DdsVendor(cfg.dds);  // the station file's dds, else CELL_DDS
+    daemon.Starting("joining the bus (" + dds.vendor + ")");
     cell::bus::Participant bus(cell::bus::Named("cell-axis-servo/" + station, dds.vendor));
     cell::health::Announcer health(bus, "cell-axis-servo", station);
+    daemon.Starting("claiming the station");
     cell::identity::Claim claim(bus, health);
     claim.Confirm();  // one machine per station: before it takes a segment
+    daemon.Starting("starting the machine");
     cell::servo::Service svc(
         bus, machine, clock == "virtual" ? cell::servo::ClockKind::kVirtual : cell::servo::ClockKind::kReal);
     svc.Start();

@@ -18,14 +18,19 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
   cell::log::Init("cell-interpreter", station);
   try {
-    cell::daemon::Daemon daemon;
+    cell::daemon::Daemon daemon;  // its steps name where a start that never ends is stuck
+    daemon.Starting("loading the station file");
     auto cfg = cell::interp::LoadStation(station);      // the registry checks its dialect and tools
     const auto dds = cell::config::DdsVendor(cfg.dds);  // the station file's dds, else CELL_DDS
+    daemon.Starting("joining the bus (" + dds.vendor + ")");
     cell::bus::Participant bus(cell::bus::Named("cell-interpreter/" + station, dds.vendor));
     cell::health::Announcer health(bus, "cell-interpreter", station);
+    daemon.Starting("claiming the station");
     cell::identity::Claim claim(bus, health);
     claim.Confirm();  // one process per station: before the station serves anything
+    daemon.Starting("opening the station's topics and database");
     cell::station::Service st(bus, cfg, cell::config::DataDir());
+    daemon.Starting("starting the station");
     st.Start();
     health.Set(cell::SERVICE_READY, cfg.dialect);
     daemon.NotifyReady("station " + station + " ready");

@@ -22,12 +22,15 @@
 // Without NOTIFY_SOCKET (a shell, a test) every Notify* call is a no-op.
 #pragma once
 
+#include <pthread.h>
+
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
 #include <functional>
 #include <mutex>
 #include <stop_token>
+#include <string>
 #include <string_view>
 #include <thread>
 
@@ -56,8 +59,17 @@ class Daemon {
   // The signal that requested the stop (SIGTERM, SIGINT), 0 if none.
   int StopSignal() const noexcept { return stop_signal_.load(); }
 
+  // --- start-up ---
+  // The step the start-up is in (e.g. "joining the bus"), until NotifyReady. A start that hangs says where:
+  // once a step has lasted kSlowStep the watcher logs a warning and the main thread writes its stack to
+  // stderr (SIGUSR2; the Daemon must be made on the main thread); a stop signal before ready names the step
+  // and how long it has lasted. A cell that "did not come up" then shows the call that never returned.
+  void Starting(std::string_view step);
+  static constexpr std::chrono::seconds kSlowStep{10};
+
   // --- sd_notify ---
-  // READY=1 and STATUS=<status>. Returns false when there is no NOTIFY_SOCKET or sending failed.
+  // READY=1 and STATUS=<status>; the start-up is over. Returns false when there is no NOTIFY_SOCKET or
+  // sending failed.
   bool NotifyReady(std::string_view status);
   // STATUS=<status> (shown by systemctl status).
   bool NotifyStatus(std::string_view status);
@@ -82,6 +94,9 @@ class Daemon {
 
  private:
   void Watch();  // signal watcher thread body
+  // "while <step> (N s, not ready)" before NotifyReady, else empty; warns (once per step) when `slow` and
+  // the step has lasted kSlowStep.
+  std::string StartupState(bool slow);
 
   std::stop_source stop_;
   std::atomic<int> stop_signal_{0};
@@ -90,6 +105,12 @@ class Daemon {
   std::chrono::microseconds watchdog_{0};
   std::chrono::steady_clock::time_point last_tick_{};
   std::thread watcher_;
+  pthread_t main_{};  // the thread that made the Daemon: the one whose start-up steps these are
+  std::atomic<bool> ready_{false};
+  std::mutex start_mu_;  // guards the three below
+  std::string step_ = "starting";
+  std::chrono::steady_clock::time_point step_since_ = std::chrono::steady_clock::now();
+  bool step_warned_ = false;
 };
 
 }  // namespace cell::daemon
