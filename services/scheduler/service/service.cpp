@@ -106,13 +106,15 @@ void Service::Start() {
   {
     std::lock_guard lk(mu_);
     sched_.SetPredictor(&predictor_, [this](const PredictionRequest& r) { predictions_->Ask(r); });
+    std::vector<Scheduler::StationSetup> setup;
     for (auto& id : config::ListStations()) {
       auto cfg = interp::LoadStation(id);
       dialect_[id] = cfg.dialect;
       online_[id] = false;
-      sched_.ConfigureStation(id, cfg.dialect, cfg.coded_pallets);
+      setup.push_back({id, cfg.dialect, cfg.coded_pallets});
       predictor_.Basis(id);  // the station file's fingerprint read now, not at the first allocation
     }
+    sched_.ConfigureStations(setup);
     Effects e = sched_.Recover();
     if (!e.dispatches.empty())
       spdlog::info("recovery: re-sending {} unacknowledged dispatch(es)", e.dispatches.size());

@@ -716,13 +716,19 @@ Effects Scheduler::Recover() {
 }
 
 void Scheduler::ConfigureStation(std::string_view id, std::string_view dialect, bool coded_pallets) {
+  ConfigureStations({StationSetup{std::string(id), std::string(dialect), coded_pallets}});
+}
+
+void Scheduler::ConfigureStations(const std::vector<StationSetup>& stations) {
   Impl& m = *impl_;
   m.Call([&] {
-    const int s = m.StationIndex(id, true);
-    m.stations[static_cast<std::size_t>(s)].coded_pallets = coded_pallets;
-    if (!dialect.empty() && m.stations[static_cast<std::size_t>(s)].dialect != dialect) {
-      m.stations[static_cast<std::size_t>(s)].dialect = std::string(dialect);
-      m.dirty_stations.insert(s);
+    for (const auto& c : stations) {
+      const int s = m.StationIndex(c.id, true);
+      m.stations[static_cast<std::size_t>(s)].coded_pallets = c.coded_pallets;
+      if (!c.dialect.empty() && m.stations[static_cast<std::size_t>(s)].dialect != c.dialect) {
+        m.stations[static_cast<std::size_t>(s)].dialect = c.dialect;
+        m.dirty_stations.insert(s);
+      }
     }
   });
 }

@@ -101,6 +101,23 @@ TEST(Recovery, EverythingSurvivesARestart) {
 // Issue 39 item 1: the scheduler kept every job, dispatch and idempotency key in memory (1.2 kB a pallet,
 // +49 % from pallet 1,000 to 10,000). With a database, ended jobs past the newest kept_ended leave memory and
 // every view reads them back as they were; keys past four times as many are read back when used again.
+// The service registers its configuration's stations in one call (one commit at start, not one per
+// station): every one is there, offline, with its dialect, and stays after a restart.
+TEST(Recovery, StationsConfiguredTogetherAreKeptTogether) {
+  TempDir tmp;
+  FakeCell c(tmp.db());
+  c.sched->ConfigureStations({{"BS01", "balt", false}, {"EM01", "emco", false}, {"KT01", "ktapl", true}});
+  c.Restart();
+  const auto st = c.sched->Stations();
+  ASSERT_EQ(st.size(), 3u);
+  EXPECT_EQ(st[0].id, "BS01");
+  EXPECT_EQ(st[0].dialect, "balt");
+  EXPECT_EQ(st[1].dialect, "emco");
+  EXPECT_EQ(st[2].id, "KT01");
+  EXPECT_EQ(st[2].dialect, "ktapl");
+  for (const auto& s : st) EXPECT_FALSE(s.online) << s.id;
+}
+
 TEST(Recovery, EndedJobsLeaveMemoryAndAreReadBackAsTheyWere) {
   TempDir tmp;
   FakeCell c(tmp.db());

@@ -179,10 +179,11 @@ struct Migration {
 int SchemaVersion(Database& db);
 
 // Brings the database up to the last migration's version. `migrations` must be numbered 1, 2, 3, ... in
-// order (the list of every step since the first schema). Each pending step n-1 -> n runs in its own
-// BEGIN IMMEDIATE transaction together with its `schema_version` row, so a crash leaves the database at
-// n-1 or n, never between. Throws cell::Error (kFailedPrecondition) if the file's version is newer than
-// the newest migration (a downgrade), kInvalidArgument for a badly numbered list. Returns the version.
+// order (the list of every step since the first schema). Every pending step, each with its
+// `schema_version` row, runs in one BEGIN IMMEDIATE transaction (one commit: a new database costs one fsync,
+// not one per step), so a crash or a failing step leaves the database at the version it had, never between.
+// Throws cell::Error (kFailedPrecondition) if the file's version is newer than the newest migration (a
+// downgrade), kInvalidArgument for a badly numbered list. Returns the version.
 int Migrate(Database& db, const std::vector<Migration>& migrations);
 
 }  // namespace cell::store

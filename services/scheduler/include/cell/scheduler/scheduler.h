@@ -218,6 +218,14 @@ class Scheduler {
   // (KT-APL seed lines 4081-4083): it is no candidate for pallets 128-255, and an operation listing only such
   // modules refuses them at OPERATE / `pallet run`.
   void ConfigureStation(std::string_view id, std::string_view dialect, bool coded_pallets = false);
+  // Every station of the configuration at once: one commit, where a commit each made a new 32-station
+  // cell's scheduler wait on 32 fsyncs while every other process of the cell started (docs/operations.md
+  // §9.4).
+  struct StationSetup {
+    std::string id, dialect;
+    bool coded_pallets = false;
+  };
+  void ConfigureStations(const std::vector<StationSetup>& stations);
   void SetPalletMap(std::string_view key, int pallet, const std::vector<std::string>& programs);
   // DEFINE ROUTE: opens each program, extracts UTL and UCY. Throws cell::Error: kNotFound for a missing
   // program, kFailedPrecondition for a program without UCY, kInvalidArgument for a malformed spec.
