@@ -75,8 +75,8 @@ TEST(DaemonInProcess, RequestStopFromCode) {
   EXPECT_EQ(d.StopSignal(), 0);
 }
 
-// A start that hangs says where (the CI's "cell did not come up" of an interpreter that logged nothing).
-TEST(DaemonInProcess, AStopBeforeReadyNamesTheStartupStep) {
+// What the Daemon logs on a SIGTERM during the start-up step "joining the bus", after NotifyReady if `ready`.
+std::string SaidOnSigterm(bool ready) {
   auto sink = std::make_shared<spdlog::sinks::ringbuffer_sink_mt>(16);
   auto before = spdlog::default_logger();
   spdlog::set_default_logger(std::make_shared<spdlog::logger>("daemon-test", sink));
@@ -84,35 +84,24 @@ TEST(DaemonInProcess, AStopBeforeReadyNamesTheStartupStep) {
   {
     cell::daemon::Daemon d;
     d.Starting("joining the bus");
+    if (ready) d.NotifyReady("ready");
     raise(SIGTERM);
-    ASSERT_TRUE(d.WaitForStop(5s));
-    for (int i = 0; i < 100 && said.empty(); ++i) {  // the watcher logs, then requests the stop
-      for (auto& line : sink->last_formatted()) said += line;
-      if (said.empty()) std::this_thread::sleep_for(10ms);
-    }
+    EXPECT_TRUE(d.WaitForStop(5s));
+    for (auto& line : sink->last_formatted()) said += line;  // the watcher logs, then requests the stop
   }
   spdlog::set_default_logger(before);
+  return said;
+}
+
+// A start that hangs says where (the CI's "cell did not come up" of an interpreter that logged nothing).
+TEST(DaemonInProcess, AStopBeforeReadyNamesTheStartupStep) {
+  const std::string said = SaidOnSigterm(false);
   EXPECT_NE(said.find("SIGTERM received while joining the bus ("), std::string::npos) << said;
   EXPECT_NE(said.find(" s, not ready): stopping"), std::string::npos) << said;
 }
 
 TEST(DaemonInProcess, AStopAfterReadySaysOnlyStopping) {
-  auto sink = std::make_shared<spdlog::sinks::ringbuffer_sink_mt>(16);
-  auto before = spdlog::default_logger();
-  spdlog::set_default_logger(std::make_shared<spdlog::logger>("daemon-test", sink));
-  std::string said;
-  {
-    cell::daemon::Daemon d;
-    d.Starting("joining the bus");
-    d.NotifyReady("ready");
-    raise(SIGTERM);
-    ASSERT_TRUE(d.WaitForStop(5s));
-    for (int i = 0; i < 100 && said.empty(); ++i) {
-      for (auto& line : sink->last_formatted()) said += line;
-      if (said.empty()) std::this_thread::sleep_for(10ms);
-    }
-  }
-  spdlog::set_default_logger(before);
+  const std::string said = SaidOnSigterm(true);
   EXPECT_NE(said.find("SIGTERM received: stopping"), std::string::npos) << said;
 }
 
