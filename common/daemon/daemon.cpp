@@ -133,9 +133,9 @@ std::string Daemon::StartupState(bool slow) {
 
 void Daemon::Watch() {
   while (true) {
-    // Wakes every second until ready, to say which start-up step is slow.
+    // Wakes four times a second until ready, to say which start-up step is slow.
     pollfd pfd{g_pipe[0], POLLIN, 0};
-    const int polled = poll(&pfd, 1, ready_ ? -1 : 1000);
+    const int polled = poll(&pfd, 1, ready_ ? -1 : 250);
     if (polled == 0) {
       StartupState(true);
       continue;

@@ -108,7 +108,8 @@ TEST(DaemonInProcess, AStopAfterReadySaysOnlyStopping) {
 // A step that lasts kSlowStep is named in a warning, and the main thread's stack shows where it waits
 // (the probe sleeps in its start-up).
 TEST(DaemonProbe, ASlowStartupStepShowsItsStack) {
-  const std::string cmd = std::string("timeout -s TERM 12 ") + CELL_DAEMON_PROBE + " --startup-ms 10300 2>&1";
+  // Ready 1.5 s after the step reaches kSlowStep: the watcher wakes every 250 ms, a sanitizer build is slow.
+  const std::string cmd = std::string("timeout -s TERM 14 ") + CELL_DAEMON_PROBE + " --startup-ms 11500 2>&1";
   FILE* f = popen(cmd.c_str(), "r");
   ASSERT_NE(f, nullptr);
   std::string out;
