@@ -115,19 +115,20 @@ void Daemon::Starting(std::string_view step) {
   step_warned_ = false;
 }
 
-std::string Daemon::StartupState(bool slow) {
+void Daemon::WarnIfSlow() {
+  std::lock_guard lock(start_mu_);
+  if (ready_ || step_warned_ || std::chrono::steady_clock::now() - step_since_ < kSlowStep) return;
+  step_warned_ = true;
+  const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - step_since_).count();
+  spdlog::warn("still {} after {:.0f} s: not ready (its stack follows on stderr)", step_, s);
+  spdlog::default_logger()->flush();
+  pthread_kill(main_, SIGUSR2);
+}
+
+std::string Daemon::StartupNote() {
   std::lock_guard lock(start_mu_);
   if (ready_) return {};
   const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - step_since_).count();
-  if (slow) {
-    if (!step_warned_ && s >= std::chrono::duration<double>(kSlowStep).count()) {
-      step_warned_ = true;
-      spdlog::warn("still {} after {:.0f} s: not ready (its stack follows on stderr)", step_, s);
-      spdlog::default_logger()->flush();
-      pthread_kill(main_, SIGUSR2);
-    }
-    return {};
-  }
   return fmt::format(" while {} ({:.1f} s, not ready)", step_, s);
 }
 
@@ -137,7 +138,7 @@ void Daemon::Watch() {
     pollfd pfd{g_pipe[0], POLLIN, 0};
     const int polled = poll(&pfd, 1, ready_ ? -1 : 250);
     if (polled == 0) {
-      StartupState(true);
+      WarnIfSlow();
       continue;
     }
     if (polled < 0 && errno == EINTR) continue;
@@ -152,8 +153,7 @@ void Daemon::Watch() {
       spdlog::default_logger()->flush();
       _exit(128 + sig);
     }
-    spdlog::info("SIG{} received{}: stopping", sigabbrev_np(sig) ? sigabbrev_np(sig) : "?",
-                 StartupState(false));
+    spdlog::info("SIG{} received{}: stopping", sigabbrev_np(sig) ? sigabbrev_np(sig) : "?", StartupNote());
     int expected = 0;
     stop_signal_.compare_exchange_strong(expected, sig);
     RequestStop();

@@ -94,9 +94,10 @@ class Daemon {
 
  private:
   void Watch();  // signal watcher thread body
-  // "while <step> (N s, not ready)" before NotifyReady, else empty; warns (once per step) when `slow` and
-  // the step has lasted kSlowStep.
-  std::string StartupState(bool slow);
+  // Once per step that has lasted kSlowStep before ready: a warning, and the main thread's stack (SIGUSR2).
+  void WarnIfSlow();
+  // " while <step> (N s, not ready)" before NotifyReady, else empty: said with a stop signal.
+  std::string StartupNote();
 
   std::stop_source stop_;
   std::atomic<int> stop_signal_{0};
