@@ -92,11 +92,17 @@ std::string LoopbackXml(int participants) {
 // program store's replies to every client failed while a killed client still counted as matched. Fast DDS
 // queues instead (asynchronous publishing); 64 MB gives Cyclone the same behaviour for what a cell writes in
 // a lease. Sockets ask for 16 MB receive buffers, as Fast DDS's do (the kernel caps the request at
-// net.core.rmem_max): with the default a 32-station `cellctl up` dropped 50,000-290,000 datagrams.
+// net.core.rmem_max): with the default a 32-station `cellctl up` dropped 50,000-290,000 datagrams. Writers
+// heartbeat every 250 ms, not 100 ms, while a reader has not acknowledged: a 32-station `up` is CPU-bound
+// on discovery (2 cores saturated), and at 100 ms heartbeats and the acknowledgements they ask for were about
+// two thirds of its 2-4 million datagrams; at 250 ms an `up` received 1.0-1.6 million and took 10-17 s, not
+// 14-47 s (docs/operations.md §9.4). Data still goes out at once; only the repair of a lost last sample
+// waits.
 constexpr const char* kCellXml =
     "<CycloneDDS><Domain Id=\"any\"><Internal><Watermarks><WhcHighInit>64 MB</WhcHighInit>"
     "<WhcHigh>64 MB</WhcHigh><WhcAdaptive>false</WhcAdaptive></Watermarks>"
-    "<SocketReceiveBufferSize max=\"16MB\"/></Internal></Domain></CycloneDDS>";
+    "<SocketReceiveBufferSize max=\"16MB\"/><HeartbeatInterval>250 ms</HeartbeatInterval>"
+    "</Internal></Domain></CycloneDDS>";
 
 // Cyclone has one domain (one configuration, one set of sockets) per id per process; the participants of a
 // process share it (two Participants in one test, a rejoin making the backend again while another lives).
