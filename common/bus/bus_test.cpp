@@ -315,6 +315,41 @@ TEST(Bus, CallWithoutServerIsUnavailable) {
   EXPECT_GE(std::chrono::steady_clock::now() - t0, Millis(300));
 }
 
+// A newcomer to a 32-station cell (68 other participants) heard its server only after seconds; the wait for
+// one grows with the participants heard, within the call's own timeout.
+TEST(Bus, TheWaitForAServerGrowsWithTheParticipantsHeard) {
+  EXPECT_EQ(ServerWait(Millis(5000), 0, Millis(30000)), Millis(5000));
+  EXPECT_EQ(ServerWait(Millis(5000), -1, Millis(30000)), Millis(5000));  // the backend cannot tell
+  EXPECT_EQ(ServerWait(Millis(5000), 10, Millis(30000)), Millis(5000));
+  EXPECT_EQ(ServerWait(Millis(5000), 68, Millis(30000)), Millis(10200));
+  EXPECT_EQ(ServerWait(Millis(5000), 68, Millis(8000)), Millis(8000));
+  EXPECT_EQ(ServerWait(Millis(15000), 68, Millis(30000)), Millis(15000));  // secured: its own 15 s
+  EXPECT_EQ(ServerWait(Millis(5000), 400, Millis(30000)), Millis(30000));
+}
+
+// The deadlock seen in a 68-process cell's scheduler (Fast DDS 2.9.1, participant.cpp): one receive call that
+// never returned. The watch thread ends the process once the same call has run 30 s of on-time ticks.
+TEST(Bus, OneReceiveCallRunningThroughThirtySecondsIsStuck) {
+  constexpr Millis kTick(250);
+  StuckReceive w(Millis(30000));
+  EXPECT_FALSE(w.Observe(1000, kTick, true));  // first seen
+  for (int i = 1; i < 120; ++i) EXPECT_FALSE(w.Observe(1000, kTick, true)) << i;
+  EXPECT_TRUE(w.Observe(1000, kTick, true));  // 120 ticks of 250 ms
+  EXPECT_EQ(w.stuck_for(), Millis(30000));
+}
+
+TEST(Bus, ReceiveCallsThatEndAreNotStuck) {
+  constexpr Millis kTick(250);
+  StuckReceive w(Millis(30000));
+  // Busy but moving: a new call each tick, or none running.
+  for (int i = 0; i < 400; ++i) EXPECT_FALSE(w.Observe(i % 3 == 0 ? 0 : 1000 + i, kTick, true)) << i;
+  // A call frozen by SIGSTOP: the tick after the stop is late, and the count starts again from there.
+  for (int i = 0; i < 100; ++i) EXPECT_FALSE(w.Observe(5000, kTick, true));
+  EXPECT_FALSE(w.Observe(5000, Millis(60000), false));
+  EXPECT_EQ(w.stuck_for(), Millis(0));
+  EXPECT_FALSE(w.Observe(0, kTick, true));  // it returned once the process ran again
+}
+
 TEST_P(BusTest, SlowServerTimesOutAndResendIsNotRunTwice) {
   Participant a(A("bus-test-server")), b(B("bus-test-client"));
   std::atomic<int> calls{0};

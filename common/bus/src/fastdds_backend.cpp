@@ -4,7 +4,9 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <array>
 #include <atomic>
+#include <chrono>
 #include <cstring>
 #include <map>
 #include <memory>
@@ -66,6 +68,31 @@ class ReceiveGate {
     held_.push_back({next, std::vector<rtps::octet>(data, data + size), local, remote});
     return true;
   }
+  // A receive call in progress on this thread, from Enter to Leave: its start in the thread's slot (one slot
+  // a receive thread; a participant has a handful). OldestNs is what Participant::Watch reads.
+  int Enter() {
+    thread_local const ReceiveGate* owner = nullptr;
+    thread_local int slot = -1;
+    if (owner != this) {
+      owner = this;
+      slot = next_slot_.fetch_add(1);
+      if (slot >= kSlots) slot = -1;  // more threads than slots: this one is not watched
+    }
+    if (slot >= 0) busy_[slot].store(NowNs(), std::memory_order_relaxed);
+    return slot;
+  }
+  void Leave(int slot) {
+    if (slot >= 0) busy_[slot].store(0, std::memory_order_relaxed);
+  }
+  int64_t OldestNs() const {
+    int64_t oldest = 0;
+    for (auto& b : busy_) {
+      const int64_t t = b.load(std::memory_order_relaxed);
+      if (t != 0 && (oldest == 0 || t < oldest)) oldest = t;
+    }
+    return oldest;
+  }
+
   // Only while the participant lives: the receivers held here are its own.
   void Open() {
     std::lock_guard lk(mu_);  // a datagram arriving meanwhile waits behind the held ones
@@ -81,9 +108,17 @@ class ReceiveGate {
     std::vector<rtps::octet> data;
     rtps::Locator_t local, remote;
   };
+  static int64_t NowNs() {
+    return std::chrono::duration_cast<std::chrono::nanoseconds>(
+               std::chrono::steady_clock::now().time_since_epoch())
+        .count();
+  }
+  static constexpr int kSlots = 32;
   std::mutex mu_;
   bool open_ = false;
   std::vector<Held> held_;
+  std::array<std::atomic<int64_t>, kSlots> busy_{};
+  std::atomic<int> next_slot_{0};
 };
 
 class GatedTransport : public frtps::ChainingTransport {
@@ -99,7 +134,10 @@ class GatedTransport : public frtps::ChainingTransport {
   }
   void receive(frtps::TransportReceiverInterface* next, const rtps::octet* buf, uint32_t size,
                const rtps::Locator_t& local, const rtps::Locator_t& remote) override {
-    if (!gate_->Hold(next, buf, size, local, remote)) next->OnDataReceived(buf, size, local, remote);
+    if (gate_->Hold(next, buf, size, local, remote)) return;
+    const int slot = gate_->Enter();
+    next->OnDataReceived(buf, size, local, remote);
+    gate_->Leave(slot);
   }
 
  private:
@@ -332,7 +370,8 @@ class FastBackend : public Backend {
     identity_ = o.security.identity;
     const int range = LoopbackRange(qos);  // before the gate wraps the transports
     // Every UDP transport (built-in loopback profile and the shipped LAN profiles) behind the gate.
-    auto gate = std::make_shared<ReceiveGate>();
+    gate_ = std::make_shared<ReceiveGate>();
+    const auto& gate = gate_;
     for (auto& t : qos.transport().user_transports)
       if (std::dynamic_pointer_cast<frtps::UDPTransportDescriptor>(t))
         t = std::make_shared<GatedDescriptor>(t, gate);
@@ -380,6 +419,7 @@ class FastBackend : public Backend {
 
   std::string Name() const override { return "fastdds"; }
   int RemoteParticipants() const override { return writers_.Participants(); }
+  int64_t OldestReceiveStartNs() const override { return gate_ ? gate_->OldestNs() : 0; }
 
   std::unique_ptr<RawWriter> CreateWriter(const std::string& topic, const TypeSupport& type,
                                           QosKind q) override {
@@ -576,6 +616,7 @@ class FastBackend : public Backend {
 
   std::mutex mu_;
   std::string partition_;
+  std::shared_ptr<ReceiveGate> gate_;  // shared with the transports Fast DDS made from it
   WriterPartitions writers_;  // declared before p_: the participant (deleted in ~FastBackend) uses it
   dds::DomainParticipant* p_ = nullptr;
   int slot_ = -1;         // participant id, -1: Fast DDS chose it

@@ -225,13 +225,35 @@ bool Participant::Rejoin() {
 
 // Sleeps 250 ms at a time; a sleep that took over 2.5 s means the process stood still (stopped or starved)
 // long enough for peers to let its 3 s lease run out.
+//
+// It also watches the stack's receive threads: Fast DDS 2.9.1 can deadlock one against its timer thread (a
+// peer's endpoint removed on the receive thread under the discovery lock, waiting for the timer thread, which
+// waits for that lock in a participant's lease check: seen in a scheduler of a 68-process cell, which then
+// heard nothing and answered nobody). A receive call that runs 30 s is that: the process ends (abort), as
+// when it cannot rejoin, so that systemd starts it again instead of leaving a deaf service.
 void Participant::Watch() {
   constexpr auto kTick = Millis(250);
   constexpr auto kStoodStill = Millis(2500);
+  constexpr auto kStuck = Millis(30000);
+  StuckReceive stuck(kStuck);
   std::unique_lock lk(watch_mu_);
   auto last = std::chrono::steady_clock::now();
   while (!watch_cv_.wait_for(lk, kTick, [&] { return watch_stop_; })) {
     const auto now = std::chrono::steady_clock::now();
+    int64_t oldest = 0;
+    {
+      std::shared_lock el(ep_mu_);
+      if (backend_) oldest = backend_->OldestReceiveStartNs();
+    }
+    if (stuck.Observe(oldest, std::chrono::duration_cast<Millis>(now - last), now - last <= kStoodStill)) {
+      spdlog::critical(
+          "{}: a {} receive thread has been stuck in one call for {:.0f} s, so this process hears nothing "
+          "(Fast DDS 2.9.1 deadlocks a receive thread against its timer thread; docs/operations.md §11): "
+          "ending it so that it is started again",
+          id_, vendor_, std::chrono::duration<double>(stuck.stuck_for()).count());
+      spdlog::default_logger()->flush();
+      std::abort();
+    }
     if (now - last > kStoodStill) {  // (only started when the backend can be made again)
       spdlog::warn(
           "{}: this process stood still for {:.1f} s (longer than the DDS lease): joining the bus anew", id_,

@@ -78,6 +78,10 @@ class Backend {
   // tell. Zero shortly after joining means nothing else is on the domain: a client says "no cell" at once
   // instead of waiting out the discovery bound (issue 39 item 6).
   virtual int RemoteParticipants() const { return -1; }
+  // When the stack's oldest receive call still running began (steady clock, ns since its epoch), or 0 when
+  // none runs or the backend cannot tell. The same value for many seconds means a receive thread is stuck
+  // (Participant::Watch): Fast DDS 2.9.1 deadlocks a receive thread against its timer thread.
+  virtual int64_t OldestReceiveStartNs() const { return 0; }
 };
 
 // DDS Security (the builtin PKI-DH, Access-Permissions and AES-GCM-GMAC plugins): the identity's files as

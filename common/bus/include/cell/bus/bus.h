@@ -63,6 +63,30 @@ class Rejoinable {
   virtual void Recreate(Backend& b) = 0;  // the same endpoint on a new backend
 };
 
+// The watch thread's test for a stuck receive thread (Backend::OldestReceiveStartNs): stuck once the same
+// receive call has been running through `limit` of ticks that came on time. A tick after the process stood
+// still starts the count again (a call a SIGSTOP froze is not stuck).
+class StuckReceive {
+ public:
+  explicit StuckReceive(Millis limit) : limit_(limit) {}
+  // `oldest`: the backend's oldest running receive (0: none); `tick`: the time since the last call.
+  bool Observe(int64_t oldest, Millis tick, bool on_time) {
+    if (!on_time || oldest == 0 || oldest != last_) {
+      last_ = oldest;
+      stuck_ = Millis(0);
+      return false;
+    }
+    stuck_ += tick;
+    return stuck_ >= limit_;
+  }
+  Millis stuck_for() const { return stuck_; }
+
+ private:
+  Millis limit_;
+  Millis stuck_{0};
+  int64_t last_ = 0;
+};
+
 // One DDS participant per process plus one dispatch thread that runs every user callback in
 // arrival order, so callbacks never run on (or block) the DDS receive threads.
 //
@@ -134,6 +158,13 @@ class Participant {
 
 // Polls a condition until it holds or the deadline passes (matching is asynchronous in DDS).
 bool WaitUntil(const std::function<bool()>& cond, Millis timeout, Millis period = Millis(2));
+
+// How long a Client waits for a server it has not matched yet (Client::Call): `base`, or 150 ms for each of
+// the `heard` participants when that is longer (-1: the backend cannot tell), never past the call's
+// `timeout`.
+inline Millis ServerWait(Millis base, int heard, Millis timeout) {
+  return std::min(timeout, std::max(base, Millis(150) * std::max(heard, 0)));
+}
 
 struct SampleInfo {
   int64_t received_ns = 0;  // steady clock, when the bus got it
@@ -454,8 +485,18 @@ class Client : public Rejoinable {
         throw Error(Errc::kUnavailable, none + " (nothing else runs on the domain: is the cell up?)");
       // A secured participant must also pass each peer's authentication handshake (signatures, key
       // exchange): in a sanitized build on a loaded host that took over 5 s (issue 44), so it gets 15 s.
-      const Millis down_after(p_.identity().empty() ? 5000 : 15000);
-      if (!WaitForServer(std::min(timeout, down_after) - lone)) throw Error(Errc::kUnavailable, none);
+      // A newcomer to a large cell hears its peers' endpoints over seconds (a 32-station cell, 68 other
+      // participants: `cellctl job ls` took 0.6-3.3 s on Fast DDS, and across four hosts a verb found no
+      // scheduler in 5 s), so the wait grows with the participants heard so far: 150 ms each, counted
+      // again whenever the wait runs out.
+      const Millis base(p_.identity().empty() ? 5000 : 15000);
+      const auto start = deadline - timeout;
+      while (true) {
+        const Millis limit = ServerWait(base, p_.RemoteParticipants(), timeout);
+        const auto left = std::chrono::ceil<Millis>(start + limit - std::chrono::steady_clock::now());
+        if (left <= Millis(0)) throw Error(Errc::kUnavailable, none);
+        if (WaitForServer(left)) break;
+      }
     }
     uint64_t id = NextRequestId();
     req.hdr().client(p_.id());
