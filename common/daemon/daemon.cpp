@@ -117,10 +117,11 @@ void Daemon::Starting(std::string_view step) {
 
 void Daemon::WarnIfSlow() {
   std::lock_guard lock(start_mu_);
-  if (ready_ || step_warned_ || std::chrono::steady_clock::now() - step_since_ < kSlowStep) return;
+  const auto lasted = std::chrono::steady_clock::now() - step_since_;
+  if (ready_ || step_warned_ || lasted < kSlowStep) return;
   step_warned_ = true;
-  const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - step_since_).count();
-  spdlog::warn("still {} after {:.0f} s: not ready (its stack follows on stderr)", step_, s);
+  spdlog::warn("still {} after {:.0f} s: not ready (its stack follows on stderr)", step_,
+               std::chrono::duration<double>(lasted).count());
   spdlog::default_logger()->flush();
   pthread_kill(main_, SIGUSR2);
 }

@@ -371,10 +371,9 @@ class FastBackend : public Backend {
     const int range = LoopbackRange(qos);  // before the gate wraps the transports
     // Every UDP transport (built-in loopback profile and the shipped LAN profiles) behind the gate.
     gate_ = std::make_shared<ReceiveGate>();
-    const auto& gate = gate_;
     for (auto& t : qos.transport().user_transports)
       if (std::dynamic_pointer_cast<frtps::UDPTransportDescriptor>(t))
-        t = std::make_shared<GatedDescriptor>(t, gate);
+        t = std::make_shared<GatedDescriptor>(t, gate_);
     {
       // One participant at a time per process, from choosing its slot until it has bound the slot's ports.
       SlotTable& slots = Slots();
@@ -392,7 +391,7 @@ class FastBackend : public Backend {
               (identity_.empty() ? ""
                                  : " as security identity '" + identity_ + "' (Fast DDS's log says why)"));
     writers_.SetOwnPrefix(p_->guid().guidPrefix);
-    gate->Open();  // create_participant has started reception: hand on what came before
+    gate_->Open();  // create_participant has started reception: hand on what came before
     // docs/security.md, "Partitions": write in the identity's own partition, read every partition.
     dds::PublisherQos pq = dds::PUBLISHER_QOS_DEFAULT;
     pq.partition().push_back(partition_.c_str());

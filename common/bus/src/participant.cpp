@@ -240,12 +240,13 @@ void Participant::Watch() {
   auto last = std::chrono::steady_clock::now();
   while (!watch_cv_.wait_for(lk, kTick, [&] { return watch_stop_; })) {
     const auto now = std::chrono::steady_clock::now();
+    const bool on_time = now - last <= kStoodStill;
     int64_t oldest = 0;
     {
       std::shared_lock el(ep_mu_);
       if (backend_) oldest = backend_->OldestReceiveStartNs();
     }
-    if (stuck.Observe(oldest, std::chrono::duration_cast<Millis>(now - last), now - last <= kStoodStill)) {
+    if (stuck.Observe(oldest, std::chrono::duration_cast<Millis>(now - last), on_time)) {
       spdlog::critical(
           "{}: a {} receive thread has been stuck in one call for {:.0f} s, so this process hears nothing "
           "(Fast DDS 2.9.1 deadlocks a receive thread against its timer thread; docs/operations.md §11): "
@@ -254,7 +255,7 @@ void Participant::Watch() {
       spdlog::default_logger()->flush();
       std::abort();
     }
-    if (now - last > kStoodStill) {  // (only started when the backend can be made again)
+    if (!on_time) {  // (only started when the backend can be made again)
       spdlog::warn(
           "{}: this process stood still for {:.1f} s (longer than the DDS lease): joining the bus anew", id_,
           std::chrono::duration<double>(now - last).count());
