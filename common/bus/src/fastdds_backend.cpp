@@ -22,6 +22,7 @@
 #include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
 #include <fastrtps/utils/IPLocator.h>
 #include <fastrtps/utils/md5.h>
+#include <spdlog/spdlog.h>
 #include <fastdds/dds/core/policy/QosPolicies.hpp>
 #include <fastdds/dds/domain/DomainParticipant.hpp>
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
@@ -41,6 +42,7 @@
 
 #include "cell/bus/backend.h"
 #include "cell/error/error.h"
+#include "fastdds_lease_check.h"
 #include "refused.h"
 
 namespace cell::bus {
@@ -640,6 +642,13 @@ bool DdsLogSilenced() {
 }
 
 std::unique_ptr<Backend> MakeFastDdsBackend(const BackendOptions& opts) {
+  static std::once_flag checked;
+  std::call_once(checked, [] {
+    if (!FastDdsLeaseCheckMended())
+      spdlog::warn(
+          "Fast DDS runs its own lease check, not the bus's (a Fast DDS other than 2.9, or not exported): "
+          "a peer's leaving can abort or deadlock this process (docs/architecture.md, \"Leaving\")");
+  });
   return std::make_unique<FastBackend>(opts);
 }
 
