@@ -25,10 +25,9 @@
 // sets it to 20 (docs/operations.md, "kill -9 campaign").
 // CELL_CHAOS_SEED fixes the random choices (the seed is printed either way).
 // The test is the cell's child subreaper, so it learns how every service process ended: one that ends without
-// the test killing it fails the test with its wait status and the tail of its log, except for the one known
-// crash of Fast DDS 2.9.1 (a lease-timer race in its participant discovery that aborts on an assertion,
-// docs/architecture.md "Leaving"): the test restarts such a service as systemd's Restart=on-failure would,
-// and the cell's invariants must hold across that crash too.
+// the test killing it fails the test with its wait status and the tail of its log. That includes Fast DDS
+// 2.9.1's lease-timer abort, which the test used to restart around: the bus now runs its own lease check in
+// its place (docs/architecture.md, "Leaving").
 #include <signal.h>
 #include <sys/prctl.h>
 #include <sys/wait.h>
@@ -119,17 +118,6 @@ class Reaper {
     std::lock_guard lk(mu_);
     return unexpected_;
   }
-  // Services that died of the known Fast DDS abort since the last call (to be restarted), and how many in
-  // all.
-  std::vector<std::string> TakeVendorCrashes() {
-    Poll();
-    std::lock_guard lk(mu_);
-    return std::exchange(vendor_crashed_, {});
-  }
-  int vendor_crashes() {
-    std::lock_guard lk(mu_);
-    return vendor_crashes_;
-  }
 
  private:
   void Poll() {
@@ -148,33 +136,15 @@ class Reaper {
                 : fmt::format("ended by signal {} ({})", info.si_status, strsignal(info.si_status));
         std::string tail = ReadFile(it->second.log);
         if (tail.size() > 1500) tail = "..." + tail.substr(tail.size() - 1500);
-        if (info.si_code != CLD_EXITED && info.si_status == SIGABRT && IsFastDdsLeaseRace(tail)) {
-          std::printf("%s (pid %d): Fast DDS 2.9.1's lease-timer assertion (restarted as systemd would)\n",
-                      it->second.service.c_str(), it->first);
-          vendor_crashed_.push_back(it->second.service);
-          ++vendor_crashes_;
-          it = known_.erase(it);
-          continue;
-        }
         unexpected_.push_back(fmt::format("{} (pid {}) {} without this test killing it; its log ends:\n{}",
                                           it->second.service, it->first, how, tail));
       }
       it = known_.erase(it);
     }
   }
-  // PDP::check_remote_participant_liveliness asserts that the participant it checks is still known; a remote
-  // participant removed by another thread while its lease timer fired is not (Fast DDS 2.9.1, built with
-  // assertions on in Debian).
-  static bool IsFastDdsLeaseRace(const std::string& log) {
-    return log.find("check_remote_participant_liveliness") != std::string::npos &&
-           log.find("GUID_t::unknown() != remote_participant->m_guid") != std::string::npos;
-  }
-
   const LocalCell& cell_;
   std::mutex mu_;
   std::map<int, RecordedProcess> known_;  // not reaped yet
-  std::vector<std::string> vendor_crashed_;
-  int vendor_crashes_ = 0;
   std::set<int> killed_;
   std::vector<std::string> unexpected_;
   std::atomic<bool> stop_{false};
@@ -330,14 +300,6 @@ class Chaos : public ::testing::Test {
     for (auto& s : j)
       if (s["id"] == station) return s["online"].get<bool>();
     return std::nullopt;
-  }
-
-  // What systemd's Restart=on-failure does for a service that died of the known Fast DDS abort.
-  void RestartVendorCrashes() {
-    for (auto& svc : reaper_.TakeVendorCrashes()) {
-      auto r = cell_.Ctl({"restart", svc});
-      ASSERT_EQ(r.code, 0) << "cellctl restart " << svc << ": " << r.err;
-    }
   }
 
   void Run(const Plan& plan);
@@ -541,7 +503,6 @@ void Chaos::Run(const Plan& plan) {
   while (more_chaos()) {
     std::this_thread::sleep_for(std::chrono::milliseconds(
         std::uniform_int_distribution<int>(plan.gap_ms.first, plan.gap_ms.second)(rng)));
-    RestartVendorCrashes();
     // A graceful restart second and a cut third (each once at least, however short the run), then at random.
     ++events;
     const int what = !plan.restarts_and_cuts ? 0
@@ -577,7 +538,6 @@ void Chaos::Run(const Plan& plan) {
       const auto restored_at = std::chrono::steady_clock::now();
       bool back = false;
       for (int i = 0; i < 240 && !back; ++i) {
-        RestartVendorCrashes();
         back = Online(station) == std::optional<bool>(true);
         if (!back) std::this_thread::sleep_for(250ms);
       }
@@ -602,15 +562,10 @@ void Chaos::Run(const Plan& plan) {
       std::string v = pool[std::uniform_int_distribution<size_t>(0, pool.size() - 1)(rng)];
       if (std::find(victims.begin(), victims.end(), v) == victims.end()) victims.push_back(v);
     }
-    RestartVendorCrashes();
     const auto pids = cell_.Pids();
     for (auto& v : victims) {
       reaper_.Killing(pids.at(v));
-      if (kill(pids.at(v), SIGKILL) != 0) {  // it ended since the record was read: only the known abort may
-        auto crashed = reaper_.TakeVendorCrashes();
-        ASSERT_NE(std::find(crashed.begin(), crashed.end(), v), crashed.end())
-            << v << ": " << Lines(reaper_.Unexpected());
-      }
+      ASSERT_EQ(kill(pids.at(v), SIGKILL), 0) << v << " had ended by itself: " << Lines(reaper_.Unexpected());
       ++kills;
       ++kills_by_kind[kind_of(v)];
       if (running_seen_) ++kills_running;
@@ -634,7 +589,6 @@ void Chaos::Run(const Plan& plan) {
   }
   stop_operating = true;
   operator_thread.join();
-  RestartVendorCrashes();
   for (auto& e : reaper_.Unexpected()) ADD_FAILURE() << e;
   const auto t_chaos = std::chrono::steady_clock::now();
 
@@ -643,7 +597,6 @@ void Chaos::Run(const Plan& plan) {
   const auto deadline = std::chrono::steady_clock::now() + 240s +
                         10s * std::max<int>(0, static_cast<int>(plan.stations.size()) - 4);
   while (true) {
-    RestartVendorCrashes();
     jobs = Jobs();
     bool all_ended = true;
     for (auto& j : jobs) {
@@ -735,7 +688,6 @@ void Chaos::Run(const Plan& plan) {
   }
 
   // The cell still works: one more pallet on each route, all at once.
-  RestartVendorCrashes();
   int pallet = 121;
   std::vector<std::pair<std::string, std::string>> after;  // route, job
   for (auto& route : routes) {
@@ -776,7 +728,7 @@ void Chaos::Run(const Plan& plan) {
   std::printf(
       "chaos: %zu stations; %d kills (%d while a job was running;%s), %d graceful restarts, %d link cuts "
       "(offline "
-      "after %.1f s, back after %.1f s on average), %d Fast DDS aborts restarted; %zu operations (%zu "
+      "after %.1f s, back after %.1f s on average); %zu operations (%zu "
       "schedules): %d "
       "completed, %d failed, %.0f s of machine time (%.1f h a station); %d programs put during the chaos; "
       "%zu "
@@ -786,11 +738,10 @@ void Chaos::Run(const Plan& plan) {
       "s in "
       "all\n",
       plan.stations.size(), kills, kills_running, by_kind.c_str(), restarts, cuts,
-      cuts ? cut_offline_s / cuts : 0.0, cuts ? cut_back_s / cuts : 0.0, reaper_.vendor_crashes(),
-      operated_.size(), schedules.size(), completed, failed, machine_s,
-      machine_s / 3600.0 / static_cast<double>(plan.stations.size()), puts, programs_.size(), program_bytes,
-      largest, databases, static_cast<double>(first.rss_kb) / 1024, static_cast<double>(last.rss_kb) / 1024,
-      first.fds, last.fds, first.procs, last.procs, during.size(),
+      cuts ? cut_offline_s / cuts : 0.0, cuts ? cut_back_s / cuts : 0.0, operated_.size(), schedules.size(),
+      completed, failed, machine_s, machine_s / 3600.0 / static_cast<double>(plan.stations.size()), puts,
+      programs_.size(), program_bytes, largest, databases, static_cast<double>(first.rss_kb) / 1024,
+      static_cast<double>(last.rss_kb) / 1024, first.fds, last.fds, first.procs, last.procs, during.size(),
       static_cast<long long>(secs(t_chaos - t_start)),
       static_cast<long long>(secs(std::chrono::steady_clock::now() - t_start)));
   for (auto& e : reaper_.Unexpected()) ADD_FAILURE() << e;
