@@ -66,6 +66,14 @@ TEST(Records, ListPagesAfterACursorByName) {
   EXPECT_EQ(page("*", "run-KT01-10.json", 2), (V{"run-KT01-11.json", "run-KT01-9.json"}));
   EXPECT_EQ(page("run-*", "a", 1), (V{"run-KT01-10.json"}));
   EXPECT_TRUE(page("*", "run-KT01-9.json", 10).empty());
+  // Names are relative to the directory however it was written (a trailing separator, `.` and `//` in it).
+  for (const std::string& spelled :
+       {fs::path(dir.path()).string() + "/",
+        (fs::path(dir.path()).parent_path() / "." / "" / fs::path(dir.path()).filename()).string()}) {
+    auto rows = Records(spelled).List("*");
+    ASSERT_EQ(rows.size(), 4u) << spelled;
+    EXPECT_EQ(rows[0]["name"], "KT01/PUMP341") << spelled;
+  }
 }
 
 TEST(Records, RejectsIncompleteRecordsAndBadNames) {
