@@ -3,6 +3,7 @@
 
 #include "cell/bus/backend.h"
 #include "cell/bus/exit.h"
+#include "cell/log/log.h"
 #include "context.h"
 
 namespace {
@@ -44,6 +45,11 @@ int Run(int argc, char** argv) {
 
 int main(int argc, char** argv) {
   cell::bus::SilenceDdsLog();  // stdout is the command's output, stderr its one-line reason
+  // So the bus's own lines go to stderr, warnings only (spdlog's default logger writes every level to stdout:
+  // a peer lost during `station ls --json` once broke its JSON).
+  cell::log::Options log;
+  log.level = spdlog::level::warn;
+  cell::log::Init("cellctl", {}, log);
   // Run's participant has said goodbye; the DDS library's exit-time teardown has nothing left to do.
   cell::bus::ExitProcess(Run(argc, argv));
 }

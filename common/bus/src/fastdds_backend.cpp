@@ -285,6 +285,11 @@ class WriterPartitions : public dds::DomainParticipantListener {
       participants_.insert(info.info.m_guid.guidPrefix);
     } else if (info.status == S::REMOVED_PARTICIPANT || info.status == S::DROPPED_PARTICIPANT) {
       participants_.erase(info.info.m_guid.guidPrefix);
+      // A peer gone quiet, not one that said goodbye: killed, cut off, or too starved of CPU to announce
+      // itself (docs/operations.md §11).
+      if (info.status == S::DROPPED_PARTICIPANT)
+        spdlog::info("DDS: lost participant '{}': nothing heard from it within its lease",
+                     info.info.m_participantName.to_string());
     }
   }
   int Participants() const {
@@ -647,7 +652,8 @@ std::unique_ptr<Backend> MakeFastDdsBackend(const BackendOptions& opts) {
     if (!FastDdsLeaseCheckMended())
       spdlog::warn(
           "Fast DDS runs its own lease check, not the bus's (a Fast DDS other than 2.9, or not exported): "
-          "a peer's leaving can abort or deadlock this process (docs/architecture.md, \"Leaving\")");
+          "a peer's leaving can abort or deadlock this process (docs/architecture.md, \"The bus's lease "
+          "check\")");
   });
   return std::make_unique<FastBackend>(opts);
 }

@@ -88,9 +88,8 @@ namespace cell::bus {
 
 bool FastDdsLeaseCheckMended() {
 #if CELL_MEND_FAST_LEASE_CHECK
-  void* resolved = dlsym(RTLD_DEFAULT,
-                         "_ZN8eprosima8fastrtps4rtps3PDP35check_remote_participant_livelinessEPNS1_"
-                         "20ParticipantProxyDataE");
+  // The name common/bus/CMakeLists.txt exports.
+  void* resolved = dlsym(RTLD_DEFAULT, CELL_FASTDDS_LEASE_CHECK_SYMBOL);
   Dl_info theirs{};
   Dl_info ours{};
   if (resolved == nullptr || dladdr(resolved, &theirs) == 0 ||

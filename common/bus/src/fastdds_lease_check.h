@@ -1,4 +1,4 @@
-// The bus's replacement of Fast DDS 2.9's lease check (docs/architecture.md, "Leaving").
+// The bus's replacement of Fast DDS 2.9's lease check (docs/architecture.md, "The bus's lease check").
 #pragma once
 
 namespace cell::bus {
