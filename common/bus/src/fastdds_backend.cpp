@@ -286,10 +286,11 @@ class WriterPartitions : public dds::DomainParticipantListener {
     } else if (info.status == S::REMOVED_PARTICIPANT || info.status == S::DROPPED_PARTICIPANT) {
       participants_.erase(info.info.m_guid.guidPrefix);
       // A peer gone quiet, not one that said goodbye: killed, cut off, or too starved of CPU to announce
-      // itself (docs/operations.md §11).
+      // itself (docs/operations.md §11). Debug: every process of a cell says it of every kill, and a tool
+      // that never set up its log would write it into its output (spdlog's default logger writes to stdout).
       if (info.status == S::DROPPED_PARTICIPANT)
-        spdlog::info("DDS: lost participant '{}': nothing heard from it within its lease",
-                     info.info.m_participantName.to_string());
+        spdlog::debug("DDS: lost participant '{}': nothing heard from it within its lease",
+                      info.info.m_participantName.to_string());
     }
   }
   int Participants() const {
