@@ -469,6 +469,35 @@ TEST_P(BusTest, LateJoinerGetsEveryRecentEvent) {
 
 // The shipped LAN profiles (deploy/dds/lan.<stack>.xml, CELL_DDS_PROFILE=lan) load on both stacks and
 // interoperate; here on 127.0.0.1 as the "LAN" address (tests/interop/two_host_test runs them across a veth).
+// docs/operations.md §9.4, "A client of the host services": a client that calls the host services only
+// announces itself to their reserved slots from a slot nobody else announces to, so it hears the scheduler
+// and never a station (which never hears of it). The scheduler and the station are Fast DDS here: two
+// Cyclone participants of one process share one slot (one Cyclone domain per process).
+TEST_P(BusTest, AHostServicesClientHearsTheServicesAndNoStation) {
+  if (std::string(GetParam().a) != "fastdds") GTEST_SKIP() << "the services' side is Fast DDS (above)";
+  Participant sched(A("cell-scheduler")), station(A("bus-test-station"));
+  ParticipantOptions o = B("bus-test-client");
+  o.host_services_only = true;
+  Participant client(o);
+  Writer<cell::StationStatus> ws(sched, "test/narrow/scheduler", QosKind::kState);
+  Writer<cell::StationStatus> wst(station, "test/narrow/station", QosKind::kState);
+  Reader<cell::StationStatus> rs(client, "test/narrow/scheduler", QosKind::kState);
+  Reader<cell::StationStatus> rst(client, "test/narrow/station", QosKind::kState);
+  // The station itself hears the scheduler (it announces to every slot): the cell is whole.
+  Reader<cell::StationStatus> seen_by_station(station, "test/narrow/scheduler", QosKind::kState);
+  ws.Write(Status("SCHED", 1));
+  wst.Write(Status("KT01", 2));
+  auto s = rs.Take(kMatch);
+  ASSERT_TRUE(s);
+  EXPECT_EQ(s->station(), "SCHED");
+  ASSERT_TRUE(seen_by_station.Take(kMatch));
+  // Three announcement periods (1 s) after the client heard the scheduler, it has still not met the station.
+  EXPECT_FALSE(rst.Take(Millis(3000)));
+  EXPECT_EQ(rst.Matched(), 0);
+  EXPECT_EQ(client.RemoteParticipants(), 1);
+  EXPECT_EQ(station.RemoteParticipants(), 1);  // the scheduler, not the client
+}
+
 TEST(Bus, ShippedLanProfilesInteroperate) {
   std::vector<std::pair<std::string, std::optional<std::string>>> saved;
   for (const char* v : {"CELL_CONFIG_DIR", "CELL_DDS_PROFILE", "CELL_LAN_ADDRESS", "CELL_LAN_PEER"}) {

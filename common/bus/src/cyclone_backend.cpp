@@ -7,18 +7,22 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <mutex>
+#include <optional>
 #include <string>
 
 #include <dds/dds.h>
 #include <dds/ddsi/ddsi_serdata.h>
 #include <dds/ddsi/ddsi_sertype.h>
+#include <spdlog/spdlog.h>
 
 #include "cell/bus/backend.h"
 #include "cell/error/error.h"
 #include "cell_cyclone_registry.h"
 #include "refused.h"
+#include "slots.h"
 
 namespace cell::bus {
 namespace {
@@ -75,14 +79,23 @@ CarrierType& Carriers() {
 
 // DESIGN §3: loopback, unicast discovery with peer 127.0.0.1, no multicast, as many participant indices as
 // the cell has participants (config::DdsParticipants: the ports Fast DDS probes with the same
-// maxInitialPeersRange), no shared memory (Cyclone uses iceoryx only when configured).
-std::string LoopbackXml(int participants) {
+// maxInitialPeersRange), no shared memory (Cyclone uses iceoryx only when configured). The index is the slot
+// the backend chose (slots.h: above the host services', or a host service's own), not Cyclone's "auto",
+// which would take the host services' slots. A client of the host services only announces itself to their
+// ports (a port on the peer: Cyclone sends there alone instead of to every index's port).
+std::string LoopbackXml(int domain, int participants, int slot, bool host_services_only) {
+  std::string peers;
+  if (host_services_only) {
+    for (int s = 0; s < kHostServiceSlots; ++s)
+      peers += "<Peer address=\"127.0.0.1:" + std::to_string(slots::DiscoveryPort(domain, s)) + "\"/>";
+  } else {
+    peers = "<Peer address=\"127.0.0.1\"/>";
+  }
   return "<CycloneDDS><Domain Id=\"any\"><General><Interfaces><NetworkInterface address=\"127.0.0.1\"/>"
-         "</Interfaces><AllowMulticast>false</AllowMulticast></General><Discovery>"
-         "<ParticipantIndex>auto</ParticipantIndex><MaxAutoParticipantIndex>" +
-         std::to_string(participants) +
-         "</MaxAutoParticipantIndex><Peers><Peer address=\"127.0.0.1\"/></Peers></Discovery></Domain>"
-         "</CycloneDDS>";
+         "</Interfaces><AllowMulticast>false</AllowMulticast></General><Discovery><ParticipantIndex>" +
+         (slot < 0 ? std::string("auto") : std::to_string(slot)) +
+         "</ParticipantIndex><MaxAutoParticipantIndex>" + std::to_string(participants) +
+         "</MaxAutoParticipantIndex><Peers>" + peers + "</Peers></Discovery></Domain></CycloneDDS>";
 }
 
 // Appended to every configuration, the built-in one or a profile (Cyclone merges consecutive <CycloneDDS>
@@ -109,18 +122,39 @@ constexpr const char* kCellXml =
 class Domains {
  public:
   static dds_entity_t Acquire(int id, const std::string& config, const std::string& what) {
+    return Acquire(
+        id, [&](int) { return std::optional<std::string>(config); }, what);
+  }
+  // `config(attempt)` gives the configuration to try (attempt 0, 1, ...), nullopt when there is no other: a
+  // loopback slot chosen from free ports can be taken by another process before Cyclone binds it. A domain
+  // this process already has is shared whatever its slot (one set of sockets per domain and process).
+  static dds_entity_t Acquire(int id, const std::function<std::optional<std::string>(int)>& config,
+                              const std::string& what) {
     std::lock_guard lk(Mu());
     auto& d = Map()[id];
     if (d.refs == 0) {
-      dds_entity_t e = dds_create_domain(static_cast<dds_domainid_t>(id), config.c_str());
+      dds_entity_t e = -1;
+      std::string tried;
+      // An attempt that loses the race for its ports logs an error to stderr, then the next one succeeds:
+      // the attempts are quiet, and when every one failed the last is made again aloud to log why.
+      const uint32_t mask = dds_get_log_mask();
+      dds_set_log_mask(0);
+      for (int attempt = 0; e < 0; ++attempt) {
+        auto c = config(attempt);
+        if (!c) break;
+        tried = *c;
+        e = dds_create_domain(static_cast<dds_domainid_t>(id), c->c_str());
+      }
+      dds_set_log_mask(mask);
+      if (e < 0 && !tried.empty()) e = dds_create_domain(static_cast<dds_domainid_t>(id), tried.c_str());
       if (e < 0) {
         Map().erase(id);
         throw Error(Errc::kInvalidArgument, what + ": Cyclone DDS rejected the configuration (" +
                                                 dds_strretcode(e) + "; its log names the element)");
       }
       d.entity = e;
-      d.config = config;
-    } else if (d.config != config) {
+      d.config = tried;
+    } else if (auto c = config(0); !c || WithoutIndex(d.config) != WithoutIndex(*c)) {
       throw Error(Errc::kInvalidArgument, what + ": a process uses one Cyclone configuration per domain");
     }
     ++d.refs;
@@ -135,6 +169,13 @@ class Domains {
   }
 
  private:
+  // The configuration without its participant index: two participants of a process share one slot.
+  static std::string WithoutIndex(std::string c) {
+    const auto b = c.find("<ParticipantIndex>");
+    const auto e = c.find("</ParticipantIndex>");
+    if (b != std::string::npos && e != std::string::npos && e > b) c.erase(b, e - b);
+    return c;
+  }
   struct Entry {
     dds_entity_t entity = 0;
     std::string config;
@@ -330,8 +371,26 @@ class CycloneBackend : public Backend {
     // Always an explicit configuration: neither CYCLONEDDS_URI nor a file elsewhere can widen the default.
     const std::string what =
         o.profile_xml.empty() ? "the built-in loopback profile" : "DDS profile " + o.profile_path;
-    Domains::Acquire(domain_,
-                     (o.profile_xml.empty() ? LoopbackXml(o.participants) : o.profile_xml) + kCellXml, what);
+    if (o.profile_xml.empty()) {
+      Domains::Acquire(
+          domain_,
+          [&](int attempt) -> std::optional<std::string> {
+            if (attempt > 8) return std::nullopt;  // ports taken as fast as they are found: give up
+            const int slot = o.host_services_only
+                                 ? slots::ClientSlot(domain_, o.participants, {})
+                                 : slots::FreeSlot(domain_, o.participants, o.preferred_slot, {});
+            if (slot < 0) return std::nullopt;
+            if (attempt == 0 && o.preferred_slot >= 0 && slot != o.preferred_slot)
+              spdlog::warn(
+                  "{}: the host service's slot {} (UDP port {}) is taken; clients that call the "
+                  "host services only will not find this one",
+                  o.participant_name, o.preferred_slot, slots::DiscoveryPort(domain_, o.preferred_slot));
+            return LoopbackXml(domain_, o.participants, slot, o.host_services_only) + kCellXml;
+          },
+          what);
+    } else {
+      Domains::Acquire(domain_, o.profile_xml + kCellXml, what);
+    }
     // A vanished process is noticed in ~3 s, as with Fast DDS (the participant lease; Cyclone's default is 10
     // s and it announces itself at 4/5 of the lease).
     dds_qos_t* qos = dds_create_qos();

@@ -1,7 +1,5 @@
 // Fast DDS 2.9 glue: one generic TopicDataType that carries XCDR1 bytes under the real type
 // name, so Fast DDS matches, keys and hashes exactly as its generated PubSubTypes would.
-#include <netinet/in.h>
-#include <sys/socket.h>
 #include <unistd.h>
 
 #include <array>
@@ -44,6 +42,7 @@
 #include "cell/error/error.h"
 #include "fastdds_lease_check.h"
 #include "refused.h"
+#include "slots.h"
 
 namespace cell::bus {
 namespace {
@@ -361,7 +360,7 @@ class FastBackend : public Backend {
     if (!o.profile_xml.empty())
       FromProfile(o, qos);
     else
-      LoopbackOnly(qos, o.participants);
+      LoopbackOnly(qos, o.domain, o.participants, o.host_services_only);
     qos.name(o.participant_name.empty() ? "cell" : o.participant_name);
     // A vanished process is noticed in ~3 s, not the 20 s default (station health, DESIGN §5).
     qos.wire_protocol().builtin.discovery_config.leaseDuration = eprosima::fastrtps::Duration_t(3, 0);
@@ -386,7 +385,12 @@ class FastBackend : public Backend {
       // One participant at a time per process, from choosing its slot until it has bound the slot's ports.
       SlotTable& slots = Slots();
       std::lock_guard lk(slots.mu);
-      slot_ = ChooseSlot(o.domain, range, qos, slots.held);
+      slot_ = ChooseSlot(o, range, qos, slots.held);
+      if (o.preferred_slot >= 0 && slot_ != o.preferred_slot)
+        spdlog::warn(
+            "{}: the host service's slot {} (UDP port {}) is taken; clients that call the host "
+            "services only will not find this one",
+            o.participant_name, o.preferred_slot, slots::DiscoveryPort(o.domain, o.preferred_slot));
       // The listener hears discovery only (no status: data goes to each reader's own listener).
       p_ = factory->create_participant(o.domain, qos, &writers_, dds::StatusMask::none());
       // Taken by p_, or, when it could not be made, kept by Fast DDS for the life of the process.
@@ -515,25 +519,27 @@ class FastBackend : public Backend {
   // times (a VM paused again and again)
   // would get ports no peer probes, and two such processes would never find each other; 4x as many
   // participants in bus_test showed it. So the backend takes the lowest slot whose ports no process (of
-  // either stack: Cyclone uses the same formula) has bound, and a fresh random GUID prefix, because Fast DDS
+  // either stack: Cyclone uses the same formula) has bound, above the host services' (a host service takes
+  // its own, slots.h), and a fresh random GUID prefix, because Fast DDS
   // derives the prefix from the number and a rejoin must look like a stranger to every peer.
   // Free ports are not enough: Fast DDS keeps the number of a participant it failed to make (a refused
   // identity: RTPSDomainImpl::createParticipant returns before releasing it) and refuses it ever after
   // ("RTPSParticipant with the same ID already exists"). Hence `held`, the slots this process gave Fast DDS
   // and not yet got back. Returns the slot, -1 when all are taken (Fast DDS then numbers it).
-  static int ChooseSlot(int domain, int range, dds::DomainParticipantQos& qos, const std::set<int>& held) {
-    for (int slot = 0; slot < range; ++slot) {
-      const int port = 7400 + 250 * domain + 10 + 2 * slot;  // metatraffic unicast; user unicast is port + 1
-      if (held.count(slot) || !PortFree(port) || !PortFree(port + 1)) continue;
-      qos.wire_protocol().participant_id = slot;
-      std::random_device rd;
-      auto& prefix = qos.wire_protocol().prefix;
-      prefix.value[0] = 0x01;  // eProsima's vendor id, as Fast DDS writes it
-      prefix.value[1] = 0x0f;
-      for (size_t i = 2; i < prefix.size; ++i) prefix.value[i] = static_cast<rtps::octet>(rd());
-      return slot;
-    }
-    return -1;
+  static int ChooseSlot(const BackendOptions& o, int range, dds::DomainParticipantQos& qos,
+                        const std::set<int>& held) {
+    const std::vector<int> taken(held.begin(), held.end());
+    const int slot = o.host_services_only && o.profile_xml.empty()
+                         ? slots::ClientSlot(o.domain, range, taken)
+                         : slots::FreeSlot(o.domain, range, o.preferred_slot, taken);
+    if (slot < 0) return -1;
+    qos.wire_protocol().participant_id = slot;
+    std::random_device rd;
+    auto& prefix = qos.wire_protocol().prefix;
+    prefix.value[0] = 0x01;  // eProsima's vendor id, as Fast DDS writes it
+    prefix.value[1] = 0x0f;
+    for (size_t i = 2; i < prefix.size; ++i) prefix.value[i] = static_cast<rtps::octet>(rd());
+    return slot;
   }
   struct SlotTable {
     std::mutex mu;
@@ -543,18 +549,6 @@ class FastBackend : public Backend {
     static SlotTable table;  // every domain: Fast DDS numbers the participants of a process, not of a domain
     return table;
   }
-  static bool PortFree(int port) {
-    int fd = socket(AF_INET, SOCK_DGRAM, 0);
-    if (fd < 0) return false;
-    sockaddr_in a{};
-    a.sin_family = AF_INET;
-    a.sin_port = htons(static_cast<uint16_t>(port));
-    a.sin_addr.s_addr = htonl(INADDR_ANY);  // conflicts with a bind on any address of this port
-    bool free = bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) == 0;
-    close(fd);
-    return free;
-  }
-
   // DDS Security 1.1 builtin plugins (docs/security.md); the governance and permissions are the signed .p7s.
   static void Secure(const SecurityFiles& f, dds::DomainParticipantQos& qos) {
     auto& props = qos.properties().properties();
@@ -581,7 +575,8 @@ class FastBackend : public Backend {
     return range;
   }
 
-  static void LoopbackOnly(dds::DomainParticipantQos& qos, int participants) {
+  static void LoopbackOnly(dds::DomainParticipantQos& qos, int domain, int participants,
+                           bool host_services_only) {
     // DESIGN §3: loopback, unicast discovery, no multicast, no shared memory, peers sized to the cell.
     auto udp = std::make_shared<eprosima::fastdds::rtps::UDPv4TransportDescriptor>();
     udp->interfaceWhiteList.emplace_back("127.0.0.1");
@@ -597,7 +592,16 @@ class FastBackend : public Backend {
     lo.kind = LOCATOR_KIND_UDPv4;
     eprosima::fastrtps::rtps::IPLocator::setIPv4(lo, 127, 0, 0, 1);
     qos.wire_protocol().builtin.metatrafficUnicastLocatorList.push_back(lo);
-    qos.wire_protocol().builtin.initialPeersList.push_back(lo);
+    if (host_services_only) {
+      // A port on the locator: Fast DDS announces to it alone instead of to every port of the range.
+      for (int slot = 0; slot < kHostServiceSlots; ++slot) {
+        rtps::Locator_t peer = lo;
+        peer.port = static_cast<uint32_t>(slots::DiscoveryPort(domain, slot));
+        qos.wire_protocol().builtin.initialPeersList.push_back(peer);
+      }
+    } else {
+      qos.wire_protocol().builtin.initialPeersList.push_back(lo);
+    }
     qos.wire_protocol().default_unicast_locator_list.push_back(lo);
   }
 

@@ -23,6 +23,14 @@ std::string DefaultIdentity(const std::string& name) {
   return id;
 }
 
+int HostServiceSlot(const std::string& participant_name) {
+  // One of each per cell (the identity claim refuses a second), so each can own a slot.
+  if (participant_name == "cell-scheduler") return 0;
+  if (participant_name == "cell-program-store") return 1;
+  if (participant_name == "cell-inspection-writer") return 2;
+  return -1;
+}
+
 std::string IdentityOfPartition(const std::string& partition) {
   return cell::security::IdentityOfPartition(partition);
 }
@@ -128,6 +136,8 @@ Participant::Participant(const ParticipantOptions& opts) {
                     {},      SecurityFor(opts), cell::security::WritePartition(ClaimedIdentity(opts))};
   identity_ = bo.security.identity;
   bo.participants = cell::config::DdsParticipants();
+  bo.preferred_slot = HostServiceSlot(opts.name);
+  bo.host_services_only = opts.host_services_only;
   if (!profile.empty()) bo.profile_xml = cell::config::LoadDdsProfile(profile);  // ${VAR}s expanded once
   if (vendor_ == "fastdds")
     make_backend_ = [bo] { return MakeFastDdsBackend(bo); };

@@ -30,9 +30,14 @@ bus::Participant& Context::Bus() {
     // discovery, however slow, is waited out.
     local_service_ = LocalServiceOn(cell::config::Domain());
     o.lone_means_down = !local_service_;
+    o.host_services_only = host_services_only;
     bus_ = std::make_unique<bus::Participant>(o);
   }
   return *bus_;
+}
+
+void ServicesOnly(CLI::App* noun, Context& ctx) {
+  noun->preparse_callback([&ctx](std::size_t) { ctx.host_services_only = true; });
 }
 
 std::string Context::Explain(const cell::Error& e) {

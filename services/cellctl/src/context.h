@@ -32,6 +32,10 @@ struct Exit {
 class Context {
  public:
   bool json = false;
+  // The verb calls the host services only (scheduler, program store, inspection writer): the bus announces
+  // itself to them alone, not to every station (bus::ParticipantOptions::host_services_only). Set by
+  // ServicesOnly before the verb runs.
+  bool host_services_only = false;
   bus::Participant& Bus();
   cell::program_store::Client& Programs();
   // One client per service for the whole command: the service replays a reply to the same client and
@@ -84,6 +88,11 @@ void AddPaging(CLI::App* verb, Paging& paging, bool numeric_cursor);
 void Print(const Context& ctx, const nlohmann::json& j, const std::vector<std::string>& columns);
 // The store's warnings of a put reply ("warnings": [...]), one "warning: " line each on stderr.
 void PrintWarnings(const nlohmann::json& reply);
+
+// Marks `noun` (and every verb under it) as calling the host services only (Context::host_services_only):
+// on a large Fast DDS cell a `cellctl` that announces itself to every station costs the whole cell seconds
+// of CPU (docs/operations.md §9.4). A verb that reads what stations publish must not be marked.
+void ServicesOnly(CLI::App* noun, Context& ctx);
 
 // Verb registration, one file per noun.
 void AddProgramVerbs(CLI::App& app, Context& ctx);

@@ -49,6 +49,7 @@ using OptsPtr = std::shared_ptr<Opts>;
 
 void AddPalletVerbs(CLI::App& app, Context& ctx, const OptsPtr& o) {
   auto* pallet = app.add_subcommand("pallet", "pallet maps")->require_subcommand(1);
+  ServicesOnly(pallet, ctx);
   auto* pset = pallet->add_subcommand("set", "map pallet P to an ordered list of 1-75 programs");
   pset->add_option("P", o->pallet)->required()->transform(Decimal());
   pset->add_option("PROG", o->programs)->required();
@@ -87,6 +88,7 @@ void AddPalletVerbs(CLI::App& app, Context& ctx, const OptsPtr& o) {
 
 void AddRouteVerbs(CLI::App& app, Context& ctx, const OptsPtr& o) {
   auto* route = app.add_subcommand("route", "FMS routes")->require_subcommand(1);
+  ServicesOnly(route, ctx);
   auto* rdef = route->add_subcommand("define", "define NAME from --op \"ST1,ST2:PROG1,PROG2\" (or --file)");
   rdef->add_option("NAME", o->name)->required();
   rdef->add_option("--op", o->ops, "an operation: eligible stations, then the programs it runs (USING)");
@@ -139,6 +141,7 @@ void AddRouteVerbs(CLI::App& app, Context& ctx, const OptsPtr& o) {
 
 void AddScheduleVerbs(CLI::App& app, Context& ctx, const OptsPtr& o) {
   auto* sched = app.add_subcommand("schedule", "Okuma schedule programs")->require_subcommand(1);
+  ServicesOnly(sched, ctx);
   auto* srun = sched->add_subcommand("run", "run FILE (a local file, or a stored name) on a station");
   srun->add_option("FILE", o->file)->required();
   srun->add_option("--station", o->station)->required();

@@ -37,6 +37,7 @@ void AddJobVerbs(CLI::App& app, Context& ctx) {
   auto o = std::make_shared<Opts>();
   auto* job =
       app.add_subcommand("job", "jobs: pallets on routes, pallet runs, schedule runs")->require_subcommand(1);
+  ServicesOnly(job, ctx);
 
   auto* ls = job->add_subcommand("ls", "jobs by id");
   auto page = std::make_shared<Paging>();
@@ -125,6 +126,7 @@ void AddJobVerbs(CLI::App& app, Context& ctx) {
   // DESIGN §6b: the projected schedule (docs/scheduler.md §15).
   auto* plan = app.add_subcommand("plan", "when each pallet is projected to start and end, on which station");
   plan->add_flag("--json", ctx.json);
+  ServicesOnly(plan, ctx);
   plan->callback([&ctx] {
     cell::SchedulerRequest r;
     r.op(cell::SCHED_PLAN);
@@ -136,6 +138,7 @@ void AddJobVerbs(CLI::App& app, Context& ctx) {
 void AddInspectVerbs(CLI::App& app, Context& ctx) {
   auto name = std::make_shared<std::string>("*");
   auto* ins = app.add_subcommand("inspect", "run records and inspection files")->require_subcommand(1);
+  ServicesOnly(ins, ctx);
   // A listing's station filter rides in the request's file record, which LIST leaves unused otherwise.
   auto ask = [&ctx](cell::InspectionOp op, const std::string& n, const cell::PageRequest& page,
                     const std::string& station = {}) {

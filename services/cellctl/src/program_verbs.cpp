@@ -277,6 +277,9 @@ void AddProgramPlot(CLI::App& prog, Context& ctx, const OptsPtr& o) {
       plot->add_option("--node", o->node, "namespace (default HOST; with --station: its own, then HOST)");
   plot->add_option("--station", o->station, "as this station runs it: its dialect, machine, tools, settings");
   plot->add_option("-o,--output", o->out, "the SVG file to write")->required();
+  // It reads the station's published tools and variables: the whole cell (the noun marked it services-only
+  // first; this verb's own callback runs after).
+  plot->preparse_callback([&ctx](std::size_t) { ctx.host_services_only = false; });
   plot->callback([o, &ctx, node] {
     CheckAddress(o->node, o->name);
     if (!o->station.empty()) cell::names::CheckStation(o->station);
@@ -460,6 +463,7 @@ void AddProgramExport(CLI::App& prog, Context& ctx, const OptsPtr& o) {
 
 void AddProgramVerbs(CLI::App& app, Context& ctx) {
   auto* prog = app.add_subcommand("program", "the program store")->require_subcommand(1);
+  ServicesOnly(prog, ctx);  // but `program plot` (below)
   auto o = std::make_shared<Opts>();
   AddProgramPut(*prog, ctx, o);
   AddProgramGet(*prog, ctx, o);

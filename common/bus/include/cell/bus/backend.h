@@ -107,7 +107,23 @@ struct BackendOptions {
   // The participants one host's loopback discovery is sized for (config::DdsParticipants): the ports a
   // participant probes and the slots it may take. The LAN profiles set their own.
   int participants = 32;
+  // The slot this participant asks for first (a host service's, HostServiceSlot), -1: the lowest free one
+  // above the host services'.
+  int preferred_slot = -1;
+  // With the built-in loopback profile: announce this participant to the host services' slots only, not to
+  // every slot of the cell, from a slot above the range the others announce themselves to. It then
+  // discovers the host services and nothing else, and the stations never hear of it: on Fast DDS 2.9 a
+  // newcomer costs every participant it meets (docs/operations.md §9.4, "What a newcomer costs"). Ignored
+  // with a profile (a LAN cell announces as its profile says).
+  bool host_services_only = false;
 };
+
+// Slots 0..kHostServiceSlots-1 of a host's loopback range are kept for the host services, so that a client
+// knows where to find them without hearing the whole cell; every other participant takes a slot above them.
+inline constexpr int kHostServiceSlots = 4;
+// The reserved slot of the host service a participant is named for ("cell-scheduler" 0, "cell-program-store"
+// 1, "cell-inspection-writer" 2), -1 for any other name.
+int HostServiceSlot(const std::string& participant_name);
 
 // The identity a partition names ("" for a partition of another form). docs/security.md, "Partitions".
 std::string IdentityOfPartition(const std::string& partition);

@@ -41,6 +41,10 @@ struct ParticipantOptions {
   // its service absent at once (cellctl: a cell that is down is said so in under a second). Services leave
   // it off: at a cell's start a process may be alone for a while and waits out discovery.
   bool lone_means_down = false;
+  // A client that calls only the host services (scheduler, program store, inspection writer): it announces
+  // itself to their reserved slots only (BackendOptions::host_services_only) and hears no station. cellctl's
+  // verbs that talk to one service set it; those that watch stations do not.
+  bool host_services_only = false;
 };
 
 // Options naming the participant (and its vendor), everything else by default. (GCC 12 warns about the

@@ -1,0 +1,34 @@
+// Participant slots on one host's loopback: which discovery ports a participant binds and which it announces
+// itself to. Both stacks number ports the same way (RTPS 9.6.1.1: 7400 + 250·domain + 10 + 2·slot for the
+// unicast discovery port, + 1 for user data), so a Fast DDS and a Cyclone process agree on every slot.
+#pragma once
+
+#include <string_view>
+#include <vector>
+
+namespace cell::bus::slots {
+
+// The unicast discovery port of `slot` on `domain` (user data: this + 1).
+int DiscoveryPort(int domain, int slot);
+
+// True when no process on this host has bound `port` (UDP, any address).
+bool PortFree(int port);
+
+// The first slot a participant takes: the host services' (HostServiceSlot) are below it, reserved for them
+// when the range is wide enough (the built-in loopback profile's always is: config::DdsParticipants >= 32).
+int FirstSlot(int range);
+
+// The slots a domain's ports leave room for (250 ports a domain, from 7410 + 250·domain two a slot; the
+// cap of config::DdsParticipants).
+inline constexpr int kSlotsPerDomain = 120;
+
+// The lowest slot in [first, range) whose two ports are free and that `held` does not name, or -1. A host
+// service asks for its reserved slot first (`preferred`), then falls back to the others.
+int FreeSlot(int domain, int range, int preferred, const std::vector<int>& held);
+
+// A slot for a client of the host services only: above the range every participant announces itself to
+// (the highest free one), so that no station sends it an announcement and it is heard only by the services
+// it announces itself to; the lowest free slot in the range when the range leaves none above it.
+int ClientSlot(int domain, int range, const std::vector<int>& held);
+
+}  // namespace cell::bus::slots
