@@ -123,7 +123,8 @@ class Domains {
  public:
   static dds_entity_t Acquire(int id, const std::string& config, const std::string& what) {
     return Acquire(
-        id, [&](int) { return std::optional<std::string>(config); }, what);
+        id, [&](int attempt) { return attempt == 0 ? std::optional<std::string>(config) : std::nullopt; },
+        what);
   }
   // `config(attempt)` gives the configuration to try (attempt 0, 1, ...), nullopt when there is no other: a
   // loopback slot chosen from free ports can be taken by another process before Cyclone binds it. A domain
