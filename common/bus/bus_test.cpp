@@ -473,10 +473,9 @@ TEST_P(BusTest, LateJoinerGetsEveryRecentEvent) {
 // announces itself to their reserved slots from a slot nobody else announces to, so it hears the scheduler
 // and never a station (which never hears of it). The scheduler and the station are Fast DDS here: two
 // Cyclone participants of one process share one slot (one Cyclone domain per process).
-TEST_P(BusTest, AHostServicesClientHearsTheServicesAndNoStation) {
-  if (std::string(GetParam().a) != "fastdds") GTEST_SKIP() << "the services' side is Fast DDS (above)";
-  Participant sched(A("cell-scheduler")), station(A("bus-test-station"));
-  ParticipantOptions o = B("bus-test-client");
+void ExpectHostServicesClientHearsNoStation(const std::string& client_stack) {
+  Participant sched(Named("cell-scheduler", "fastdds")), station(Named("bus-test-station", "fastdds"));
+  ParticipantOptions o = Named("bus-test-client", client_stack);
   o.host_services_only = true;
   Participant client(o);
   Writer<cell::StationStatus> ws(sched, "test/narrow/scheduler", QosKind::kState);
@@ -496,6 +495,13 @@ TEST_P(BusTest, AHostServicesClientHearsTheServicesAndNoStation) {
   EXPECT_EQ(rst.Matched(), 0);
   EXPECT_EQ(client.RemoteParticipants(), 1);
   EXPECT_EQ(station.RemoteParticipants(), 1);  // the scheduler, not the client
+}
+
+TEST(Bus, AHostServicesClientHearsTheServicesAndNoStation) {
+  for (const char* stack : {"fastdds", "cyclonedds"}) {
+    SCOPED_TRACE(stack);
+    ExpectHostServicesClientHearsNoStation(stack);
+  }
 }
 
 TEST(Bus, ShippedLanProfilesInteroperate) {
@@ -530,6 +536,11 @@ TEST(Bus, ShippedLanProfilesInteroperate) {
     auto b = rf.Take(kMatch);
     EXPECT_TRUE(a && a->station() == "KT01");
     EXPECT_TRUE(b && b->station() == "KT02");
+  }
+  // The LAN profile's peers (this host, the cell host) narrowed to the host services' slots.
+  for (const char* stack : {"fastdds", "cyclonedds"}) {
+    SCOPED_TRACE(std::string("LAN profile, client on ") + stack);
+    ExpectHostServicesClientHearsNoStation(stack);
   }
   for (auto& [k, v] : saved) {
     if (v)

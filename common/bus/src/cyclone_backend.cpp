@@ -11,6 +11,7 @@
 #include <map>
 #include <mutex>
 #include <optional>
+#include <regex>
 #include <string>
 
 #include <dds/dds.h>
@@ -79,23 +80,34 @@ CarrierType& Carriers() {
 
 // DESIGN §3: loopback, unicast discovery with peer 127.0.0.1, no multicast, as many participant indices as
 // the cell has participants (config::DdsParticipants: the ports Fast DDS probes with the same
-// maxInitialPeersRange), no shared memory (Cyclone uses iceoryx only when configured). The index is the slot
-// the backend chose (slots.h: above the host services', or a host service's own), not Cyclone's "auto",
-// which would take the host services' slots. A client of the host services only announces itself to their
-// ports (a port on the peer: Cyclone sends there alone instead of to every index's port).
-std::string LoopbackXml(int domain, int participants, int slot, bool host_services_only) {
-  std::string peers;
-  if (host_services_only) {
-    for (int s = 0; s < kHostServiceSlots; ++s)
-      peers += "<Peer address=\"127.0.0.1:" + std::to_string(slots::DiscoveryPort(domain, s)) + "\"/>";
-  } else {
-    peers = "<Peer address=\"127.0.0.1\"/>";
-  }
+// maxInitialPeersRange), no shared memory (Cyclone uses iceoryx only when configured). Its "auto" index is
+// replaced by the slot the backend chose (slots.h) before Cyclone reads it, as a LAN profile's is.
+std::string LoopbackXml(int participants) {
   return "<CycloneDDS><Domain Id=\"any\"><General><Interfaces><NetworkInterface address=\"127.0.0.1\"/>"
-         "</Interfaces><AllowMulticast>false</AllowMulticast></General><Discovery><ParticipantIndex>" +
-         (slot < 0 ? std::string("auto") : std::to_string(slot)) +
-         "</ParticipantIndex><MaxAutoParticipantIndex>" + std::to_string(participants) +
-         "</MaxAutoParticipantIndex><Peers>" + peers + "</Peers></Discovery></Domain></CycloneDDS>";
+         "</Interfaces><AllowMulticast>false</AllowMulticast></General><Discovery>"
+         "<ParticipantIndex>auto</ParticipantIndex><MaxAutoParticipantIndex>" +
+         std::to_string(participants) +
+         "</MaxAutoParticipantIndex><Peers><Peer address=\"127.0.0.1\"/></Peers></Discovery></Domain>"
+         "</CycloneDDS>";
+}
+
+constexpr const char* kAutoIndex = "<ParticipantIndex>auto</ParticipantIndex>";
+
+// BackendOptions::host_services_only: every peer without a port (a host's range of slots) becomes that
+// host's host-service slots, each with its port (Cyclone then sends there alone).
+std::string ToHostServicesOnly(const std::string& xml, int domain) {
+  static const std::regex peer(R"re(<Peer\s+address="([^":]+)"\s*/>)re");
+  std::string out;
+  auto begin = xml.cbegin();
+  for (std::sregex_iterator it(xml.begin(), xml.end(), peer), end; it != end; ++it) {
+    out.append(begin, xml.cbegin() + it->position());
+    for (int s = 0; s < kHostServiceSlots; ++s)
+      out += "<Peer address=\"" + (*it)[1].str() + ":" + std::to_string(slots::DiscoveryPort(domain, s)) +
+             "\"/>";
+    begin = xml.cbegin() + it->position() + it->length();
+  }
+  out.append(begin, xml.cend());
+  return out;
 }
 
 // Appended to every configuration, the built-in one or a profile (Cyclone merges consecutive <CycloneDDS>
@@ -372,11 +384,16 @@ class CycloneBackend : public Backend {
     // Always an explicit configuration: neither CYCLONEDDS_URI nor a file elsewhere can widen the default.
     const std::string what =
         o.profile_xml.empty() ? "the built-in loopback profile" : "DDS profile " + o.profile_path;
-    if (o.profile_xml.empty()) {
+    const std::string base = o.profile_xml.empty() ? LoopbackXml(o.participants) : o.profile_xml;
+    if (base.find(kAutoIndex) == std::string::npos) {
+      Domains::Acquire(domain_, base + kCellXml, what);  // a profile that fixes its own index
+    } else {
+      // The built-in profile and the shipped LAN profiles: the slot chosen as Fast DDS's backend does (not
+      // Cyclone's auto, which would take the host services' slots), retried while other processes take it.
       Domains::Acquire(
           domain_,
           [&](int attempt) -> std::optional<std::string> {
-            if (attempt > 8) return std::nullopt;  // ports taken as fast as they are found: give up
+            if (attempt > 8) return std::nullopt;
             const int slot = o.host_services_only
                                  ? slots::ClientSlot(domain_, o.participants, {})
                                  : slots::FreeSlot(domain_, o.participants, o.preferred_slot, {});
@@ -386,11 +403,12 @@ class CycloneBackend : public Backend {
                   "{}: the host service's slot {} (UDP port {}) is taken; clients that call the "
                   "host services only will not find this one",
                   o.participant_name, o.preferred_slot, slots::DiscoveryPort(domain_, o.preferred_slot));
-            return LoopbackXml(domain_, o.participants, slot, o.host_services_only) + kCellXml;
+            std::string xml = base;
+            xml.replace(xml.find(kAutoIndex), std::strlen(kAutoIndex),
+                        "<ParticipantIndex>" + std::to_string(slot) + "</ParticipantIndex>");
+            return (o.host_services_only ? ToHostServicesOnly(xml, domain_) : xml) + kCellXml;
           },
           what);
-    } else {
-      Domains::Acquire(domain_, o.profile_xml + kCellXml, what);
     }
     // A vanished process is noticed in ~3 s, as with Fast DDS (the participant lease; Cyclone's default is 10
     // s and it announces itself at 4/5 of the lease).

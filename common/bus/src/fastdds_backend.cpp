@@ -360,7 +360,8 @@ class FastBackend : public Backend {
     if (!o.profile_xml.empty())
       FromProfile(o, qos);
     else
-      LoopbackOnly(qos, o.domain, o.participants, o.host_services_only);
+      LoopbackOnly(qos, o.participants);
+    if (o.host_services_only) ToHostServicesOnly(qos, o.domain);
     qos.name(o.participant_name.empty() ? "cell" : o.participant_name);
     // A vanished process is noticed in ~3 s, not the 20 s default (station health, DESIGN §5).
     qos.wire_protocol().builtin.discovery_config.leaseDuration = eprosima::fastrtps::Duration_t(3, 0);
@@ -529,9 +530,8 @@ class FastBackend : public Backend {
   static int ChooseSlot(const BackendOptions& o, int range, dds::DomainParticipantQos& qos,
                         const std::set<int>& held) {
     const std::vector<int> taken(held.begin(), held.end());
-    const int slot = o.host_services_only && o.profile_xml.empty()
-                         ? slots::ClientSlot(o.domain, range, taken)
-                         : slots::FreeSlot(o.domain, range, o.preferred_slot, taken);
+    const int slot = o.host_services_only ? slots::ClientSlot(o.domain, range, taken)
+                                          : slots::FreeSlot(o.domain, range, o.preferred_slot, taken);
     if (slot < 0) return -1;
     qos.wire_protocol().participant_id = slot;
     std::random_device rd;
@@ -575,8 +575,7 @@ class FastBackend : public Backend {
     return range;
   }
 
-  static void LoopbackOnly(dds::DomainParticipantQos& qos, int domain, int participants,
-                           bool host_services_only) {
+  static void LoopbackOnly(dds::DomainParticipantQos& qos, int participants) {
     // DESIGN §3: loopback, unicast discovery, no multicast, no shared memory, peers sized to the cell.
     auto udp = std::make_shared<eprosima::fastdds::rtps::UDPv4TransportDescriptor>();
     udp->interfaceWhiteList.emplace_back("127.0.0.1");
@@ -592,17 +591,27 @@ class FastBackend : public Backend {
     lo.kind = LOCATOR_KIND_UDPv4;
     eprosima::fastrtps::rtps::IPLocator::setIPv4(lo, 127, 0, 0, 1);
     qos.wire_protocol().builtin.metatrafficUnicastLocatorList.push_back(lo);
-    if (host_services_only) {
-      // A port on the locator: Fast DDS announces to it alone instead of to every port of the range.
-      for (int slot = 0; slot < kHostServiceSlots; ++slot) {
-        rtps::Locator_t peer = lo;
-        peer.port = static_cast<uint32_t>(slots::DiscoveryPort(domain, slot));
-        qos.wire_protocol().builtin.initialPeersList.push_back(peer);
-      }
-    } else {
-      qos.wire_protocol().builtin.initialPeersList.push_back(lo);
-    }
+    qos.wire_protocol().builtin.initialPeersList.push_back(lo);
     qos.wire_protocol().default_unicast_locator_list.push_back(lo);
+  }
+
+  // BackendOptions::host_services_only: every initial peer that stands for a host's range of slots (no port)
+  // becomes that host's host-service slots, each with its port (Fast DDS announces to a locator with a port
+  // alone). The loopback profile's peer is this host; a LAN profile's are this host and the cell host.
+  static void ToHostServicesOnly(dds::DomainParticipantQos& qos, int domain) {
+    rtps::LocatorList_t peers;
+    for (const auto& l : qos.wire_protocol().builtin.initialPeersList) {
+      if (l.port != 0) {
+        peers.push_back(l);
+        continue;
+      }
+      for (int slot = 0; slot < kHostServiceSlots; ++slot) {
+        rtps::Locator_t peer = l;
+        peer.port = static_cast<uint32_t>(slots::DiscoveryPort(domain, slot));
+        peers.push_back(peer);
+      }
+    }
+    qos.wire_protocol().builtin.initialPeersList = peers;
   }
 
   dds::Topic* TopicFor(const std::string& name, const TypeSupport& type) {
