@@ -11,8 +11,8 @@
 #include <map>
 #include <mutex>
 #include <optional>
-#include <regex>
 #include <string>
+#include <string_view>
 
 #include <dds/dds.h>
 #include <dds/ddsi/ddsi_serdata.h>
@@ -96,17 +96,29 @@ constexpr const char* kAutoIndex = "<ParticipantIndex>auto</ParticipantIndex>";
 // BackendOptions::host_services_only: every peer without a port (a host's range of slots) becomes that
 // host's host-service slots, each with its port (Cyclone then sends there alone).
 std::string ToHostServicesOnly(const std::string& xml, int domain) {
-  static const std::regex peer(R"re(<Peer\s+address="([^":]+)"\s*/>)re");
+  // <Peer address="A"/> with A holding no ':' (no port); anything else is kept as written. (Not std::regex:
+  // GCC 12 with the sanitizers warns inside <regex>, and warnings are errors.)
+  static constexpr std::string_view kOpen = "<Peer address=\"";
   std::string out;
-  auto begin = xml.cbegin();
-  for (std::sregex_iterator it(xml.begin(), xml.end(), peer), end; it != end; ++it) {
-    out.append(begin, xml.cbegin() + it->position());
-    for (int s = 0; s < kHostServiceSlots; ++s)
-      out += "<Peer address=\"" + (*it)[1].str() + ":" + std::to_string(slots::DiscoveryPort(domain, s)) +
-             "\"/>";
-    begin = xml.cbegin() + it->position() + it->length();
+  size_t from = 0;
+  for (size_t at = xml.find(kOpen); at != std::string::npos; at = xml.find(kOpen, from)) {
+    const size_t addr = at + kOpen.size();
+    const size_t quote = xml.find('"', addr);
+    const size_t close = quote == std::string::npos ? quote : xml.find("/>", quote);
+    if (close == std::string::npos) break;
+    const std::string address = xml.substr(addr, quote - addr);
+    const bool bare =
+        address.find(':') == std::string::npos && xml.find_first_not_of(" \t\r\n", quote + 1) == close;
+    out.append(xml, from, at - from);
+    if (bare) {
+      for (int s = 0; s < kHostServiceSlots; ++s)
+        out += "<Peer address=\"" + address + ":" + std::to_string(slots::DiscoveryPort(domain, s)) + "\"/>";
+    } else {
+      out.append(xml, at, close + 2 - at);
+    }
+    from = close + 2;
   }
-  out.append(begin, xml.cend());
+  out.append(xml, from, std::string::npos);
   return out;
 }
 
