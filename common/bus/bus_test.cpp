@@ -467,8 +467,6 @@ TEST_P(BusTest, LateJoinerGetsEveryRecentEvent) {
   EXPECT_EQ(got, (std::vector<int>{1, 2, 3, 4, 5}));
 }
 
-// The shipped LAN profiles (deploy/dds/lan.<stack>.xml, CELL_DDS_PROFILE=lan) load on both stacks and
-// interoperate; here on 127.0.0.1 as the "LAN" address (tests/interop/two_host_test runs them across a veth).
 // docs/operations.md §9.4, "A client of the host services": a client that calls the host services only
 // announces itself to their reserved slots from a slot nobody else announces to, so it hears the scheduler
 // and never a station (which never hears of it). The scheduler and the station are Fast DDS here: two
@@ -504,6 +502,8 @@ TEST(Bus, AHostServicesClientHearsTheServicesAndNoStation) {
   }
 }
 
+// The shipped LAN profiles (deploy/dds/lan.<stack>.xml, CELL_DDS_PROFILE=lan) load on both stacks and
+// interoperate; here on 127.0.0.1 as the "LAN" address (tests/interop/two_host_test runs them across a veth).
 TEST(Bus, ShippedLanProfilesInteroperate) {
   std::vector<std::pair<std::string, std::optional<std::string>>> saved;
   for (const char* v : {"CELL_CONFIG_DIR", "CELL_DDS_PROFILE", "CELL_LAN_ADDRESS", "CELL_LAN_PEER"}) {

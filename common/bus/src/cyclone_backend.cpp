@@ -17,7 +17,6 @@
 #include <dds/dds.h>
 #include <dds/ddsi/ddsi_serdata.h>
 #include <dds/ddsi/ddsi_sertype.h>
-#include <spdlog/spdlog.h>
 
 #include "cell/bus/backend.h"
 #include "cell/error/error.h"
@@ -406,15 +405,8 @@ class CycloneBackend : public Backend {
           domain_,
           [&](int attempt) -> std::optional<std::string> {
             if (attempt > 8) return std::nullopt;
-            const int slot = o.host_services_only
-                                 ? slots::ClientSlot(domain_, o.participants, {})
-                                 : slots::FreeSlot(domain_, o.participants, o.preferred_slot, {});
+            const int slot = slots::Choose(o, o.participants, {}, attempt == 0);
             if (slot < 0) return std::nullopt;
-            if (attempt == 0 && o.preferred_slot >= 0 && slot != o.preferred_slot)
-              spdlog::warn(
-                  "{}: the host service's slot {} (UDP port {}) is taken; clients that call the "
-                  "host services only will not find this one",
-                  o.participant_name, o.preferred_slot, slots::DiscoveryPort(domain_, o.preferred_slot));
             std::string xml = base;
             xml.replace(xml.find(kAutoIndex), std::strlen(kAutoIndex),
                         "<ParticipantIndex>" + std::to_string(slot) + "</ParticipantIndex>");

@@ -387,11 +387,6 @@ class FastBackend : public Backend {
       SlotTable& slots = Slots();
       std::lock_guard lk(slots.mu);
       slot_ = ChooseSlot(o, range, qos, slots.held);
-      if (o.preferred_slot >= 0 && slot_ != o.preferred_slot)
-        spdlog::warn(
-            "{}: the host service's slot {} (UDP port {}) is taken; clients that call the host "
-            "services only will not find this one",
-            o.participant_name, o.preferred_slot, slots::DiscoveryPort(o.domain, o.preferred_slot));
       // The listener hears discovery only (no status: data goes to each reader's own listener).
       p_ = factory->create_participant(o.domain, qos, &writers_, dds::StatusMask::none());
       // Taken by p_, or, when it could not be made, kept by Fast DDS for the life of the process.
@@ -529,9 +524,7 @@ class FastBackend : public Backend {
   // and not yet got back. Returns the slot, -1 when all are taken (Fast DDS then numbers it).
   static int ChooseSlot(const BackendOptions& o, int range, dds::DomainParticipantQos& qos,
                         const std::set<int>& held) {
-    const std::vector<int> taken(held.begin(), held.end());
-    const int slot = o.host_services_only ? slots::ClientSlot(o.domain, range, taken)
-                                          : slots::FreeSlot(o.domain, range, o.preferred_slot, taken);
+    const int slot = slots::Choose(o, range, std::vector<int>(held.begin(), held.end()), true);
     if (slot < 0) return -1;
     qos.wire_protocol().participant_id = slot;
     std::random_device rd;

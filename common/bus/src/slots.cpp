@@ -7,6 +7,8 @@
 #include <algorithm>
 #include <random>
 
+#include <spdlog/spdlog.h>
+
 #include "cell/bus/backend.h"
 
 namespace cell::bus::slots {
@@ -60,6 +62,17 @@ int ClientSlot(int domain, int range, const std::vector<int>& held) {
     }
   }
   return FreeSlot(domain, range, -1, held);
+}
+
+int Choose(const BackendOptions& o, int range, const std::vector<int>& held, bool warn) {
+  const int slot = o.host_services_only ? ClientSlot(o.domain, range, held)
+                                        : FreeSlot(o.domain, range, o.preferred_slot, held);
+  if (warn && o.preferred_slot >= 0 && slot != o.preferred_slot)
+    spdlog::warn(
+        "{}: the host service's slot {} (UDP port {}) is taken; clients that call the host services only "
+        "will not find this one",
+        o.participant_name, o.preferred_slot, DiscoveryPort(o.domain, o.preferred_slot));
+  return slot;
 }
 
 }  // namespace cell::bus::slots

@@ -6,6 +6,10 @@
 #include <string_view>
 #include <vector>
 
+namespace cell::bus {
+struct BackendOptions;
+}
+
 namespace cell::bus::slots {
 
 // The unicast discovery port of `slot` on `domain` (user data: this + 1).
@@ -27,8 +31,13 @@ inline constexpr int kSlotsPerDomain = 120;
 int FreeSlot(int domain, int range, int preferred, const std::vector<int>& held);
 
 // A slot for a client of the host services only: above the range every participant announces itself to
-// (the highest free one), so that no station sends it an announcement and it is heard only by the services
+// (a random free one), so that no station sends it an announcement and it is heard only by the services
 // it announces itself to; the lowest free slot in the range when the range leaves none above it.
 int ClientSlot(int domain, int range, const std::vector<int>& held);
+
+// The slot a participant of `o` takes on either stack: ClientSlot for a client of the host services only,
+// else FreeSlot from its own (o.preferred_slot). A host service that does not get its own logs a warning
+// when `warn` (clients of the host services only will not find it). -1 when every slot is taken.
+int Choose(const BackendOptions& o, int range, const std::vector<int>& held, bool warn);
 
 }  // namespace cell::bus::slots

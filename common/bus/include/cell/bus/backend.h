@@ -110,11 +110,11 @@ struct BackendOptions {
   // The slot this participant asks for first (a host service's, HostServiceSlot), -1: the lowest free one
   // above the host services'.
   int preferred_slot = -1;
-  // With the built-in loopback profile: announce this participant to the host services' slots only, not to
-  // every slot of the cell, from a slot above the range the others announce themselves to. It then
+  // Announce this participant to the host services' slots only (of each peer host the profile names), not
+  // to every slot of the cell, from a slot above the range the others announce themselves to. It then
   // discovers the host services and nothing else, and the stations never hear of it: on Fast DDS 2.9 a
-  // newcomer costs every participant it meets (docs/operations.md §9.4, "What a newcomer costs"). Ignored
-  // with a profile (a LAN cell announces as its profile says).
+  // newcomer costs every participant it meets (docs/operations.md §9.4, "What a newcomer costs"). A
+  // multicast profile still announces it to every host.
   bool host_services_only = false;
 };
 
