@@ -18,6 +18,7 @@
 #include "cell/idl/run.h"
 #include "cell/idl/station.h"
 #include "src/fastdds_lease_check.h"
+#include "src/slots.h"
 
 namespace cell::bus {
 namespace {
@@ -502,13 +503,70 @@ TEST(Bus, AHostServicesClientHearsTheServicesAndNoStation) {
   }
 }
 
+// docs/operations.md §9.5, "Who meets whom": a station's processes sit above the shared slots (services and
+// whole-cell clients) and announce themselves to another host's shared slots only, to every slot of their
+// own host; a client of the host services announces itself to the services' slots everywhere.
+TEST(Bus, AStationsProcessesSitAboveTheSharedSlotsAndSkipAnotherHostsStations) {
+  EXPECT_TRUE(IsStationProcess("cell-interpreter/KT01"));
+  EXPECT_TRUE(IsStationProcess("cell-axis-servo/OK07"));
+  EXPECT_FALSE(IsStationProcess("cell-scheduler"));
+  EXPECT_FALSE(IsStationProcess("cellctl"));
+  EXPECT_FALSE(IsStationProcess("cell-dashboard"));
+  EXPECT_EQ(slots::FirstSlot(32), kHostServiceSlots);
+  EXPECT_EQ(slots::FirstSlot(32, true), kSharedSlots);
+  EXPECT_EQ(slots::FirstSlot(24, true), kHostServiceSlots);  // no room for a zone of their own
+  EXPECT_FALSE(slots::IsAnotherHost("127.0.0.1"));
+  EXPECT_FALSE(slots::IsAnotherHost("127.0.1.1"));
+  EXPECT_FALSE(slots::IsAnotherHost("localhost"));  // a name: never narrowed
+  EXPECT_TRUE(slots::IsAnotherHost("192.0.2.1"));
+  BackendOptions o;
+  EXPECT_EQ(slots::AnnouncedSlots(o, true), 0);
+  EXPECT_EQ(slots::AnnouncedSlots(o, false), 0);
+  o.station_process = true;
+  EXPECT_EQ(slots::AnnouncedSlots(o, true), kSharedSlots);
+  EXPECT_EQ(slots::AnnouncedSlots(o, false), 0);
+  // A Cyclone LAN profile's peers, this host and the cell host on another address (domain 105: slot 0's
+  // discovery port is 7400 + 250 * 105 + 10 = 33660, RTPS 9.6.1.1): the other host's shrinks to its 16 shared
+  // slots, this host's stays every slot, a peer with a port stays as written.
+  o.domain = 105;
+  const std::string peers =
+      "<Peers><Peer address=\"127.0.0.1\"/><Peer address=\"192.0.2.1\"/>"
+      "<Peer address=\"192.0.2.7:7400\"/></Peers>";
+  std::string want = "<Peers><Peer address=\"127.0.0.1\"/>";
+  for (int s = 0; s < kSharedSlots; ++s)
+    want += "<Peer address=\"192.0.2.1:" + std::to_string(33660 + 2 * s) + "\"/>";
+  want += "<Peer address=\"192.0.2.7:7400\"/></Peers>";
+  EXPECT_EQ(slots::NarrowCyclonePeers(peers, o), want);
+  o.station_process = false;
+  EXPECT_EQ(slots::NarrowCyclonePeers(peers, o), peers);
+  o = BackendOptions{};
+  o.host_services_only = true;
+  EXPECT_EQ(slots::AnnouncedSlots(o, true), kHostServiceSlots);
+  EXPECT_EQ(slots::AnnouncedSlots(o, false), kHostServiceSlots);
+  o.domain = 105;
+  EXPECT_EQ(slots::NarrowCyclonePeers("<Peer address=\"127.0.0.1\"/>", o),
+            "<Peer address=\"127.0.0.1:33660\"/><Peer address=\"127.0.0.1:33662\"/>"
+            "<Peer address=\"127.0.0.1:33664\"/><Peer address=\"127.0.0.1:33666\"/>");
+}
+
 // The shipped LAN profiles (deploy/dds/lan.<stack>.xml, CELL_DDS_PROFILE=lan) load on both stacks and
 // interoperate; here on 127.0.0.1 as the "LAN" address (tests/interop/two_host_test runs them across a veth).
 TEST(Bus, ShippedLanProfilesInteroperate) {
-  std::vector<std::pair<std::string, std::optional<std::string>>> saved;
+  // The environment as it was, whatever fails below (the other tests use the built-in profile).
+  struct Saved {
+    std::vector<std::pair<std::string, std::optional<std::string>>> vars;
+    ~Saved() {
+      for (auto& [k, v] : vars) {
+        if (v)
+          setenv(k.c_str(), v->c_str(), 1);
+        else
+          unsetenv(k.c_str());
+      }
+    }
+  } saved;
   for (const char* v : {"CELL_CONFIG_DIR", "CELL_DDS_PROFILE", "CELL_LAN_ADDRESS", "CELL_LAN_PEER"}) {
     const char* old = std::getenv(v);
-    saved.emplace_back(v, old ? std::optional<std::string>(old) : std::nullopt);
+    saved.vars.emplace_back(v, old ? std::optional<std::string>(old) : std::nullopt);
   }
   const char* src = std::getenv("CELL_SOURCE_DIR");
   ASSERT_NE(src, nullptr) << "CELL_SOURCE_DIR is set by CTest";
@@ -542,11 +600,19 @@ TEST(Bus, ShippedLanProfilesInteroperate) {
     SCOPED_TRACE(std::string("LAN profile, client on ") + stack);
     ExpectHostServicesClientHearsNoStation(stack);
   }
-  for (auto& [k, v] : saved) {
-    if (v)
-      setenv(k.c_str(), v->c_str(), 1);
-    else
-      unsetenv(k.c_str());
+  // A station's processes, one with the cell host on another address (192.0.2.1, RFC 5737's TEST-NET-1: never
+  // a host's own; Cyclone logs that it cannot send there): that peer is narrowed to its shared slots, this
+  // host's is not, so the interpreter and the servo of a station still meet each other here. (The Fast DDS
+  // one keeps the profile it loaded above: a process loads one Fast DDS profile.)
+  {
+    Participant interp(Named("cell-interpreter/BT01", "fastdds"));
+    setenv("CELL_LAN_PEER", "192.0.2.1", 1);
+    Participant servo(Named("cell-axis-servo/BT01", "cyclonedds"));
+    Writer<cell::StationStatus> wi(interp, "test/lan/partner", QosKind::kState);
+    Reader<cell::StationStatus> rs(servo, "test/lan/partner", QosKind::kState);
+    wi.Write(Status("BT01", 3));
+    auto got = rs.Take(kMatch);
+    EXPECT_TRUE(got && got->station() == "BT01");
   }
 }
 

@@ -92,35 +92,6 @@ std::string LoopbackXml(int participants) {
 
 constexpr const char* kAutoIndex = "<ParticipantIndex>auto</ParticipantIndex>";
 
-// BackendOptions::host_services_only: every peer without a port (a host's range of slots) becomes that
-// host's host-service slots, each with its port (Cyclone then sends there alone).
-std::string ToHostServicesOnly(const std::string& xml, int domain) {
-  // <Peer address="A"/> with A holding no ':' (no port); anything else is kept as written. (Not std::regex:
-  // GCC 12 with the sanitizers warns inside <regex>, and warnings are errors.)
-  static constexpr std::string_view kOpen = "<Peer address=\"";
-  std::string out;
-  size_t from = 0;
-  for (size_t at = xml.find(kOpen); at != std::string::npos; at = xml.find(kOpen, from)) {
-    const size_t addr = at + kOpen.size();
-    const size_t quote = xml.find('"', addr);
-    const size_t close = quote == std::string::npos ? quote : xml.find("/>", quote);
-    if (close == std::string::npos) break;
-    const std::string address = xml.substr(addr, quote - addr);
-    const bool bare =
-        address.find(':') == std::string::npos && xml.find_first_not_of(" \t\r\n", quote + 1) == close;
-    out.append(xml, from, at - from);
-    if (bare) {
-      for (int s = 0; s < kHostServiceSlots; ++s)
-        out += "<Peer address=\"" + address + ":" + std::to_string(slots::DiscoveryPort(domain, s)) + "\"/>";
-    } else {
-      out.append(xml, at, close + 2 - at);
-    }
-    from = close + 2;
-  }
-  out.append(xml, from, std::string::npos);
-  return out;
-}
-
 // Appended to every configuration, the built-in one or a profile (Cyclone merges consecutive <CycloneDDS>
 // documents, later ones winning): how much unacknowledged data a writer may hold before dds_write blocks.
 // Cyclone's default (30 kB, growing towards 500 kB) made a writer block, then fail, as soon as one matched
@@ -410,7 +381,7 @@ class CycloneBackend : public Backend {
             std::string xml = base;
             xml.replace(xml.find(kAutoIndex), std::strlen(kAutoIndex),
                         "<ParticipantIndex>" + std::to_string(slot) + "</ParticipantIndex>");
-            return (o.host_services_only ? ToHostServicesOnly(xml, domain_) : xml) + kCellXml;
+            return slots::NarrowCyclonePeers(xml, o) + kCellXml;
           },
           what);
     }

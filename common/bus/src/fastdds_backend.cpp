@@ -361,7 +361,7 @@ class FastBackend : public Backend {
       FromProfile(o, qos);
     else
       LoopbackOnly(qos, o.participants);
-    if (o.host_services_only) ToHostServicesOnly(qos, o.domain);
+    NarrowPeers(qos, o);
     qos.name(o.participant_name.empty() ? "cell" : o.participant_name);
     // A vanished process is noticed in ~3 s, not the 20 s default (station health, DESIGN §5).
     qos.wire_protocol().builtin.discovery_config.leaseDuration = eprosima::fastrtps::Duration_t(3, 0);
@@ -588,19 +588,21 @@ class FastBackend : public Backend {
     qos.wire_protocol().default_unicast_locator_list.push_back(lo);
   }
 
-  // BackendOptions::host_services_only: every initial peer that stands for a host's range of slots (no port)
-  // becomes that host's host-service slots, each with its port (Fast DDS announces to a locator with a port
-  // alone). The loopback profile's peer is this host; a LAN profile's are this host and the cell host.
-  static void ToHostServicesOnly(dds::DomainParticipantQos& qos, int domain) {
+  // An initial peer without a port stands for every slot of that host (maxInitialPeersRange);
+  // slots::AnnouncedSlots says when a participant announces itself to that host's first few slots only (a
+  // client of the host services, a station's process and another host): the peer becomes those slots.
+  static void NarrowPeers(dds::DomainParticipantQos& qos, const BackendOptions& o) {
     rtps::LocatorList_t peers;
     for (const auto& l : qos.wire_protocol().builtin.initialPeersList) {
-      if (l.port != 0) {
+      const int announced =
+          l.port == 0 ? slots::AnnouncedSlots(o, slots::IsAnotherHost(rtps::IPLocator::ip_to_string(l))) : 0;
+      if (announced == 0) {
         peers.push_back(l);
         continue;
       }
-      for (int slot = 0; slot < kHostServiceSlots; ++slot) {
+      for (int slot = 0; slot < announced; ++slot) {
         rtps::Locator_t peer = l;
-        peer.port = static_cast<uint32_t>(slots::DiscoveryPort(domain, slot));
+        peer.port = static_cast<uint32_t>(slots::DiscoveryPort(o.domain, slot));
         peers.push_back(peer);
       }
     }

@@ -31,6 +31,11 @@ int HostServiceSlot(const std::string& participant_name) {
   return -1;
 }
 
+bool IsStationProcess(const std::string& participant_name) {
+  return participant_name.rfind("cell-interpreter/", 0) == 0 ||
+         participant_name.rfind("cell-axis-servo/", 0) == 0;
+}
+
 std::string IdentityOfPartition(const std::string& partition) {
   return cell::security::IdentityOfPartition(partition);
 }
@@ -138,6 +143,7 @@ Participant::Participant(const ParticipantOptions& opts) {
   bo.participants = cell::config::DdsParticipants();
   bo.preferred_slot = HostServiceSlot(opts.name);
   bo.host_services_only = opts.host_services_only;
+  bo.station_process = IsStationProcess(opts.name);
   if (!profile.empty()) bo.profile_xml = cell::config::LoadDdsProfile(profile);  // ${VAR}s expanded once
   if (vendor_ == "fastdds")
     make_backend_ = [bo] { return MakeFastDdsBackend(bo); };

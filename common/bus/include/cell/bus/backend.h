@@ -116,11 +116,23 @@ struct BackendOptions {
   // newcomer costs every participant it meets (docs/operations.md §9.4, "What a newcomer costs"). A
   // multicast profile still announces it to every host.
   bool host_services_only = false;
+  // A station's own process (the interpreter, the axis servo: IsStationProcess): it takes a slot from
+  // kSharedSlots up, and announces itself to another host's shared slots only (that host's services and
+  // whole-cell clients), not to the stations there. Stations never talk to each other; meeting them was
+  // what made a cell across hosts quadratic (docs/operations.md §9.5, "Who meets whom").
+  bool station_process = false;
 };
 
 // Slots 0..kHostServiceSlots-1 of a host's loopback range are kept for the host services, so that a client
 // knows where to find them without hearing the whole cell; every other participant takes a slot above them.
 inline constexpr int kHostServiceSlots = 4;
+// Slots 0..kSharedSlots-1 of a host are the host services' and the whole cell's clients' (cellctl, the
+// dashboard); a station's processes take slots from kSharedSlots up when the range leaves room for them (the
+// built-in profile's always does), so that another host's stations can announce themselves to this host's
+// shared slots alone.
+inline constexpr int kSharedSlots = 16;
+// True for a station's own processes, named "cell-interpreter/<ID>" and "cell-axis-servo/<ID>".
+bool IsStationProcess(const std::string& participant_name);
 // The reserved slot of the host service a participant is named for ("cell-scheduler" 0, "cell-program-store"
 // 1, "cell-inspection-writer" 2), -1 for any other name.
 int HostServiceSlot(const std::string& participant_name);
