@@ -108,9 +108,16 @@ class Fms : public ::testing::Test {
     pid_t pid = Pid(service);
     ASSERT_GT(pid, 0);
     ASSERT_EQ(kill(pid, SIGSTOP), 0);
+    frozen_at_ = std::chrono::steady_clock::now();
     stopped_.push_back(pid);
   }
-  void Thaw(const std::string& service) { kill(Pid(service), SIGCONT); }
+  // Continued no sooner than 3 s after Freeze: a process finds it stood still (and rejoins) after 2.5 s
+  // (bus::Participant::Watch), and its peers' view of its lease can run out sooner than that when a loaded
+  // machine had already delayed its last announcement before the stop (seen once under the sanitizers).
+  void Thaw(const std::string& service) {
+    std::this_thread::sleep_until(frozen_at_ + std::chrono::seconds(3));
+    kill(Pid(service), SIGCONT);
+  }
   void Hold(const std::string& station) {
     auto r = Ctl({"station", "hold", station});
     ASSERT_EQ(r.code, 0) << r.err;
@@ -144,6 +151,7 @@ class Fms : public ::testing::Test {
   LocalCell cell_{"cell-fms-"};
   const std::string& data_ = cell_.data_dir();
   std::vector<pid_t> stopped_;
+  std::chrono::steady_clock::time_point frozen_at_;
   std::unique_ptr<Process> restarted_;
 };
 

@@ -69,7 +69,12 @@ bool Usable(int domain, int slot, const std::vector<int>& held) {
 
 int FreeSlot(int domain, int range, int preferred, const std::vector<int>& held, bool station_process) {
   if (preferred >= 0 && preferred < range && Usable(domain, preferred, held)) return preferred;
-  for (int slot = FirstSlot(range, station_process); slot < range; ++slot)
+  const int first = FirstSlot(range, station_process);
+  for (int slot = first; slot < range; ++slot)
+    if (Usable(domain, slot, held)) return slot;
+  // Clients beyond the shared slots may have filled the stations' ones: a station's process then takes a
+  // shared slot rather than none (it is met by other hosts' stations, as before the zones).
+  for (int slot = FirstSlot(range); slot < first; ++slot)
     if (Usable(domain, slot, held)) return slot;
   return -1;
 }

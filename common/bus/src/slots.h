@@ -30,8 +30,8 @@ int FirstSlot(int range, bool station_process = false);
 inline constexpr int kSlotsPerDomain = 120;
 
 // The lowest slot in [FirstSlot(range, station_process), range) whose two ports are free and that `held` does
-// not name, or -1. A host service asks for its reserved slot first (`preferred`), then falls back to the
-// others.
+// not name, then (a station's process) the lowest such shared one, or -1. A host service asks for its
+// reserved slot first (`preferred`), then falls back to the others.
 int FreeSlot(int domain, int range, int preferred, const std::vector<int>& held,
              bool station_process = false);
 
