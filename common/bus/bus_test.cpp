@@ -4,6 +4,8 @@
 // must give the same semantics, and across vendors.
 #include "cell/bus/bus.h"
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <cstdlib>
 #include <filesystem>
@@ -520,11 +522,11 @@ TEST(Bus, AStationsProcessesSitAboveTheSharedSlotsAndSkipAnotherHostsStations) {
   EXPECT_FALSE(slots::IsAnotherHost("localhost"));  // a name: never narrowed
   EXPECT_TRUE(slots::IsAnotherHost("192.0.2.1"));
   BackendOptions o;
-  EXPECT_EQ(slots::AnnouncedSlots(o, true), 0);
-  EXPECT_EQ(slots::AnnouncedSlots(o, false), 0);
+  EXPECT_TRUE(slots::AnnouncedSlots(o, true).empty());
+  EXPECT_TRUE(slots::AnnouncedSlots(o, false).empty());
   o.station_process = true;
-  EXPECT_EQ(slots::AnnouncedSlots(o, true), kSharedSlots);
-  EXPECT_EQ(slots::AnnouncedSlots(o, false), 0);
+  EXPECT_EQ(slots::AnnouncedSlots(o, true).size(), static_cast<size_t>(kSharedSlots));
+  EXPECT_TRUE(slots::AnnouncedSlots(o, false).empty());
   // A Cyclone LAN profile's peers, this host and the cell host on another address (domain 105: slot 0's
   // discovery port is 7400 + 250 * 105 + 10 = 33660, RTPS 9.6.1.1): the other host's shrinks to its 16 shared
   // slots, this host's stays every slot, a peer with a port stays as written.
@@ -541,12 +543,75 @@ TEST(Bus, AStationsProcessesSitAboveTheSharedSlotsAndSkipAnotherHostsStations) {
   EXPECT_EQ(slots::NarrowCyclonePeers(peers, o), peers);
   o = BackendOptions{};
   o.host_services_only = true;
-  EXPECT_EQ(slots::AnnouncedSlots(o, true), kHostServiceSlots);
-  EXPECT_EQ(slots::AnnouncedSlots(o, false), kHostServiceSlots);
+  EXPECT_EQ(slots::AnnouncedSlots(o, true).size(), static_cast<size_t>(kHostServiceSlots));
+  EXPECT_EQ(slots::AnnouncedSlots(o, false).size(), static_cast<size_t>(kHostServiceSlots));
   o.domain = 105;
   EXPECT_EQ(slots::NarrowCyclonePeers("<Peer address=\"127.0.0.1\"/>", o),
             "<Peer address=\"127.0.0.1:33660\"/><Peer address=\"127.0.0.1:33662\"/>"
             "<Peer address=\"127.0.0.1:33664\"/><Peer address=\"127.0.0.1:33666\"/>");
+}
+
+// docs/operations.md §9.5, "A station's partner": a slot is held by one process only; a station's two
+// processes find each other through the marks they hold (abstract Unix sockets, listed in /proc/net/unix); of
+// two started together at least one finds the other; a process of the same name is found too (the identity
+// claim must reach it); another station's, another domain's and a released mark are not.
+TEST(Bus, AStationsProcessesFindTheirPartnersSlotAndNoOtherStation) {
+  const int domain = 200 + static_cast<int>(getpid() % 30);  // reservations and marks only: no port is bound
+  BackendOptions interp, servo;
+  interp.participant_name = "cell-interpreter/PT01";
+  servo.participant_name = "cell-axis-servo/PT01";
+  for (BackendOptions* o : {&interp, &servo}) {
+    o->station_process = true;
+    o->domain = domain;
+  }
+  auto first = slots::Slot::Take(interp, 21);
+  ASSERT_EQ(first.number(), 21);
+  ASSERT_TRUE(first.marked());
+  EXPECT_TRUE(first.found().empty());                    // first: no partner yet
+  EXPECT_EQ(slots::Slot::Take(servo, 21).number(), -1);  // reserved: no other process takes it
+  {
+    auto second = slots::Slot::Take(servo, 30);
+    EXPECT_EQ(second.found(), std::vector<int>{21});
+    // Its own host: the shared slots and the partner's; another host: the shared slots.
+    std::vector<int> want;
+    for (int s = 0; s < kSharedSlots; ++s) want.push_back(s);
+    EXPECT_EQ(slots::AnnouncedSlots(servo, true, second), want);
+    want.push_back(21);
+    EXPECT_EQ(slots::AnnouncedSlots(servo, false, second), want);
+    // A second interpreter of PT01 finds the first (and the servo): the identity claim reaches it.
+    auto rival = slots::Slot::Take(interp, 22);
+    auto found = rival.found();
+    std::sort(found.begin(), found.end());
+    EXPECT_EQ(found, (std::vector<int>{21, 30}));
+    // Another station's process, or the same on another domain, finds none of these.
+    BackendOptions other = servo;
+    other.participant_name = "cell-axis-servo/PT02";
+    EXPECT_TRUE(slots::Slot::Take(other, 40).found().empty());
+    other = servo;
+    other.domain = domain + 1;
+    EXPECT_TRUE(slots::Slot::Take(other, 40).found().empty());
+  }
+  // The servo has gone (its mark with it): a restarted servo finds the interpreter, even in the slot the old
+  // one held; a process that is no station's is reserved, not marked; one without a slot announces itself to
+  // every slot of its host.
+  EXPECT_EQ(slots::Slot::Take(servo, 30).found(), std::vector<int>{21});
+  BackendOptions client = servo;
+  client.station_process = false;
+  const auto unmarked = slots::Slot::Take(client, 50);
+  EXPECT_EQ(unmarked.number(), 50);
+  EXPECT_FALSE(unmarked.marked());
+  EXPECT_TRUE(slots::AnnouncedSlots(servo, false, slots::Slot{}).empty());
+  // The listing's format (a line of /proc/net/unix ends in the path; '@' for an abstract socket's NUL).
+  const std::string text =
+      "Num       RefCount Protocol Flags    Type St Inode Path\n"
+      "0000000000000000: 00000002 00000000 00000000 0002 01 1 @cell-name/7/cell-axis-servo/A1/17\n"
+      "0000000000000000: 00000002 00000000 00000000 0002 01 2 @cell-name/7/cell-axis-servo/A1/x\n"
+      "0000000000000000: 00000002 00000000 00000000 0002 01 3 @cell-name/70/cell-axis-servo/A1/18\n"
+      "0000000000000000: 00000002 00000000 00000000 0002 01 4 /run/cell-name/7/cell-axis-servo/A1/19\n"
+      "0000000000000000: 00000002 00000000 00000000 0002 01 5 @cell-name/7/cell-axis-servo/A1/20";
+  EXPECT_EQ(slots::FindMarks(text, 7, {"cell-axis-servo/A1"}, -1), (std::vector<int>{17, 20}));
+  EXPECT_EQ(slots::FindMarks(text, 7, {"cell-axis-servo/A1"}, 20), std::vector<int>{17});
+  EXPECT_TRUE(slots::FindMarks(text, 7, {"cell-axis-servo/A"}, -1).empty());
 }
 
 // The shipped LAN profiles (deploy/dds/lan.<stack>.xml, CELL_DDS_PROFILE=lan) load on both stacks and

@@ -115,21 +115,32 @@ constexpr const char* kCellXml =
 // process share it (two Participants in one test, a rejoin making the backend again while another lives).
 class Domains {
  public:
+  // A configuration to try, and the slot it gives this process (none when the configuration fixes its own
+  // index).
+  struct Rendered {
+    std::string xml;
+    slots::Slot slot;
+  };
   static dds_entity_t Acquire(int id, const std::string& config, const std::string& what) {
     return Acquire(
-        id, [&](int attempt) { return attempt == 0 ? std::optional<std::string>(config) : std::nullopt; },
+        id, config,
+        [&](int attempt) {
+          return attempt == 0 ? std::optional<Rendered>(Rendered{config, {}}) : std::nullopt;
+        },
         what);
   }
   // `config(attempt)` gives the configuration to try (attempt 0, 1, ...), nullopt when there is no other: a
   // loopback slot chosen from free ports can be taken by another process before Cyclone binds it. A domain
-  // this process already has is shared whatever its slot (one set of sockets per domain and process).
-  static dds_entity_t Acquire(int id, const std::function<std::optional<std::string>(int)>& config,
+  // this process already has is shared whatever its slot (one set of sockets per domain and process), when
+  // it was made from the same `profile` (the configuration before its slot was chosen).
+  static dds_entity_t Acquire(int id, const std::string& profile,
+                              const std::function<std::optional<Rendered>(int)>& config,
                               const std::string& what) {
     std::lock_guard lk(Mu());
     auto& d = Map()[id];
     if (d.refs == 0) {
       dds_entity_t e = -1;
-      std::string tried;
+      std::optional<Rendered> tried;
       // An attempt that loses the race for its ports logs an error to stderr, then the next one succeeds:
       // the attempts are quiet, and when every one failed the last is made again aloud to log why.
       const uint32_t mask = dds_get_log_mask();
@@ -137,19 +148,20 @@ class Domains {
       for (int attempt = 0; e < 0; ++attempt) {
         auto c = config(attempt);
         if (!c) break;
-        tried = *c;
-        e = dds_create_domain(static_cast<dds_domainid_t>(id), c->c_str());
+        tried = std::move(c);
+        e = dds_create_domain(static_cast<dds_domainid_t>(id), tried->xml.c_str());
       }
       dds_set_log_mask(mask);
-      if (e < 0 && !tried.empty()) e = dds_create_domain(static_cast<dds_domainid_t>(id), tried.c_str());
+      if (e < 0 && tried) e = dds_create_domain(static_cast<dds_domainid_t>(id), tried->xml.c_str());
       if (e < 0) {
         Map().erase(id);
         throw Error(Errc::kInvalidArgument, what + ": Cyclone DDS rejected the configuration (" +
                                                 dds_strretcode(e) + "; its log names the element)");
       }
       d.entity = e;
-      d.config = tried;
-    } else if (auto c = config(0); !c || WithoutIndex(d.config) != WithoutIndex(*c)) {
+      d.profile = profile;
+      d.slot = std::move(tried->slot);
+    } else if (d.profile != profile) {
       throw Error(Errc::kInvalidArgument, what + ": a process uses one Cyclone configuration per domain");
     }
     ++d.refs;
@@ -164,16 +176,10 @@ class Domains {
   }
 
  private:
-  // The configuration without its participant index: two participants of a process share one slot.
-  static std::string WithoutIndex(std::string c) {
-    const auto b = c.find("<ParticipantIndex>");
-    const auto e = c.find("</ParticipantIndex>");
-    if (b != std::string::npos && e != std::string::npos && e > b) c.erase(b, e - b);
-    return c;
-  }
   struct Entry {
     dds_entity_t entity = 0;
-    std::string config;
+    std::string profile;
+    slots::Slot slot;  // held as long as the domain
     int refs = 0;
   };
   static std::mutex& Mu() {
@@ -373,15 +379,16 @@ class CycloneBackend : public Backend {
       // The built-in profile and the shipped LAN profiles: the slot chosen as Fast DDS's backend does (not
       // Cyclone's auto, which would take the host services' slots), retried while other processes take it.
       Domains::Acquire(
-          domain_,
-          [&](int attempt) -> std::optional<std::string> {
+          domain_, base + kCellXml,
+          [&](int attempt) -> std::optional<Domains::Rendered> {
             if (attempt > 8) return std::nullopt;
-            const int slot = slots::Choose(o, o.participants, {}, attempt == 0);
-            if (slot < 0) return std::nullopt;
+            slots::Slot slot = slots::Choose(o, o.participants, {}, attempt == 0);
+            if (slot.number() < 0) return std::nullopt;
             std::string xml = base;
             xml.replace(xml.find(kAutoIndex), std::strlen(kAutoIndex),
-                        "<ParticipantIndex>" + std::to_string(slot) + "</ParticipantIndex>");
-            return slots::NarrowCyclonePeers(xml, o) + kCellXml;
+                        "<ParticipantIndex>" + std::to_string(slot.number()) + "</ParticipantIndex>");
+            xml = slots::NarrowCyclonePeers(xml, o, slot) + kCellXml;
+            return Domains::Rendered{std::move(xml), std::move(slot)};
           },
           what);
     }

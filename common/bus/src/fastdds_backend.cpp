@@ -361,7 +361,6 @@ class FastBackend : public Backend {
       FromProfile(o, qos);
     else
       LoopbackOnly(qos, o.participants);
-    NarrowPeers(qos, o);
     qos.name(o.participant_name.empty() ? "cell" : o.participant_name);
     // A vanished process is noticed in ~3 s, not the 20 s default (station health, DESIGN §5).
     qos.wire_protocol().builtin.discovery_config.leaseDuration = eprosima::fastrtps::Duration_t(3, 0);
@@ -387,10 +386,11 @@ class FastBackend : public Backend {
       SlotTable& slots = Slots();
       std::lock_guard lk(slots.mu);
       slot_ = ChooseSlot(o, range, qos, slots.held);
+      NarrowPeers(qos, o, slot_);
       // The listener hears discovery only (no status: data goes to each reader's own listener).
       p_ = factory->create_participant(o.domain, qos, &writers_, dds::StatusMask::none());
       // Taken by p_, or, when it could not be made, kept by Fast DDS for the life of the process.
-      if (slot_ >= 0) slots.held.insert(slot_);
+      if (slot_.number() >= 0) slots.held.insert(slot_.number());
     }
     if (!p_)
       throw Error(
@@ -417,10 +417,11 @@ class FastBackend : public Backend {
   ~FastBackend() override {
     p_->delete_contained_entities();
     dds::DomainParticipantFactory::get_instance()->delete_participant(p_);  // releases its id and ports
-    if (slot_ >= 0) {
+    if (slot_.number() >= 0) {
       SlotTable& slots = Slots();
       std::lock_guard lk(slots.mu);
-      slots.held.erase(slot_);
+      slots.held.erase(slot_.number());
+      slot_ = slots::Slot{};
     }
   }
 
@@ -522,11 +523,11 @@ class FastBackend : public Backend {
   // identity: RTPSDomainImpl::createParticipant returns before releasing it) and refuses it ever after
   // ("RTPSParticipant with the same ID already exists"). Hence `held`, the slots this process gave Fast DDS
   // and not yet got back. Returns the slot, -1 when all are taken (Fast DDS then numbers it).
-  static int ChooseSlot(const BackendOptions& o, int range, dds::DomainParticipantQos& qos,
-                        const std::set<int>& held) {
-    const int slot = slots::Choose(o, range, std::vector<int>(held.begin(), held.end()), true);
-    if (slot < 0) return -1;
-    qos.wire_protocol().participant_id = slot;
+  static slots::Slot ChooseSlot(const BackendOptions& o, int range, dds::DomainParticipantQos& qos,
+                                const std::set<int>& held) {
+    slots::Slot slot = slots::Choose(o, range, std::vector<int>(held.begin(), held.end()), true);
+    if (slot.number() < 0) return slot;
+    qos.wire_protocol().participant_id = slot.number();
     std::random_device rd;
     auto& prefix = qos.wire_protocol().prefix;
     prefix.value[0] = 0x01;  // eProsima's vendor id, as Fast DDS writes it
@@ -591,16 +592,17 @@ class FastBackend : public Backend {
   // An initial peer without a port stands for every slot of that host (maxInitialPeersRange);
   // slots::AnnouncedSlots says when a participant announces itself to that host's first few slots only (a
   // client of the host services, a station's process and another host): the peer becomes those slots.
-  static void NarrowPeers(dds::DomainParticipantQos& qos, const BackendOptions& o) {
+  static void NarrowPeers(dds::DomainParticipantQos& qos, const BackendOptions& o, const slots::Slot& slot) {
     rtps::LocatorList_t peers;
     for (const auto& l : qos.wire_protocol().builtin.initialPeersList) {
-      const int announced =
-          l.port == 0 ? slots::AnnouncedSlots(o, slots::IsAnotherHost(rtps::IPLocator::ip_to_string(l))) : 0;
-      if (announced == 0) {
+      const auto announced =
+          l.port == 0 ? slots::AnnouncedSlots(o, slots::IsAnotherHost(rtps::IPLocator::ip_to_string(l)), slot)
+                      : std::vector<int>{};
+      if (announced.empty()) {
         peers.push_back(l);
         continue;
       }
-      for (int slot = 0; slot < announced; ++slot) {
+      for (int slot : announced) {
         rtps::Locator_t peer = l;
         peer.port = static_cast<uint32_t>(slots::DiscoveryPort(o.domain, slot));
         peers.push_back(peer);
@@ -634,7 +636,7 @@ class FastBackend : public Backend {
   std::shared_ptr<ReceiveGate> gate_;  // shared with the transports Fast DDS made from it
   WriterPartitions writers_;  // declared before p_: the participant (deleted in ~FastBackend) uses it
   dds::DomainParticipant* p_ = nullptr;
-  int slot_ = -1;         // participant id, -1: Fast DDS chose it
+  slots::Slot slot_;      // the participant id, held; none: Fast DDS chose it
   std::string identity_;  // DDS Security identity; empty: unsecured
   dds::Publisher* pub_ = nullptr;
   dds::Subscriber* sub_ = nullptr;

@@ -117,9 +117,10 @@ struct BackendOptions {
   // multicast profile still announces it to every host.
   bool host_services_only = false;
   // A station's own process (the interpreter, the axis servo: IsStationProcess): it takes a slot from
-  // kSharedSlots up, and announces itself to another host's shared slots only (that host's services and
-  // whole-cell clients), not to the stations there. Stations never talk to each other; meeting them was
-  // what made a cell across hosts quadratic (docs/operations.md §9.5, "Who meets whom").
+  // kSharedSlots up and announces itself to the shared slots of each host (the host services and whole-cell
+  // clients) and, on its own host, to its partner's slot (the station's other process, found by its
+  // slots::Mark), never to another station's. Stations never talk to each other; meeting them was what made a
+  // cell quadratic in its stations (docs/operations.md §9.5, "Who meets whom").
   bool station_process = false;
 };
 
