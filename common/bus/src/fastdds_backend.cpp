@@ -421,7 +421,6 @@ class FastBackend : public Backend {
       SlotTable& slots = Slots();
       std::lock_guard lk(slots.mu);
       slots.held.erase(slot_.number());
-      slot_ = slots::Slot{};
     }
   }
 
@@ -522,7 +521,7 @@ class FastBackend : public Backend {
   // Free ports are not enough: Fast DDS keeps the number of a participant it failed to make (a refused
   // identity: RTPSDomainImpl::createParticipant returns before releasing it) and refuses it ever after
   // ("RTPSParticipant with the same ID already exists"). Hence `held`, the slots this process gave Fast DDS
-  // and not yet got back. Returns the slot, -1 when all are taken (Fast DDS then numbers it).
+  // and not yet got back. Returns the slot, held; none when all are taken (Fast DDS then numbers it).
   static slots::Slot ChooseSlot(const BackendOptions& o, int range, dds::DomainParticipantQos& qos,
                                 const std::set<int>& held) {
     slots::Slot slot = slots::Choose(o, range, std::vector<int>(held.begin(), held.end()), true);

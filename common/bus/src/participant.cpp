@@ -31,9 +31,16 @@ int HostServiceSlot(const std::string& participant_name) {
   return -1;
 }
 
+std::string StationPartner(const std::string& participant_name) {
+  static const std::string kInterpreter = "cell-interpreter/", kServo = "cell-axis-servo/";
+  if (participant_name.rfind(kInterpreter, 0) == 0)
+    return kServo + participant_name.substr(kInterpreter.size());
+  if (participant_name.rfind(kServo, 0) == 0) return kInterpreter + participant_name.substr(kServo.size());
+  return {};
+}
+
 bool IsStationProcess(const std::string& participant_name) {
-  return participant_name.rfind("cell-interpreter/", 0) == 0 ||
-         participant_name.rfind("cell-axis-servo/", 0) == 0;
+  return !StationPartner(participant_name).empty();
 }
 
 std::string IdentityOfPartition(const std::string& partition) {

@@ -58,16 +58,16 @@ bool IsAnotherHost(const std::string& address) {
   return !local;
 }
 
-std::vector<int> AnnouncedSlots(const BackendOptions& o, bool another_host, const Slot& mark) {
+std::vector<int> AnnouncedSlots(const BackendOptions& o, bool another_host, const Slot& slot) {
   int shared = 0;  // none: every slot
   if (o.host_services_only)
     shared = kHostServiceSlots;
-  else if (o.station_process && (another_host || mark.marked()))
+  else if (o.station_process && (another_host || slot.marked()))
     shared = kSharedSlots;
   std::vector<int> out;
   for (int s = 0; s < shared; ++s) out.push_back(s);
-  if (o.station_process && !another_host && mark.marked())
-    for (int s : mark.found())
+  if (o.station_process && !another_host && slot.marked())
+    for (int s : slot.found())
       if (s >= kSharedSlots && std::find(out.begin(), out.end(), s) == out.end()) out.push_back(s);
   return out;
 }
@@ -90,14 +90,6 @@ int BindAbstract(const std::string& name) {
     return -1;
   }
   return fd;
-}
-
-// A station's other process: cell-interpreter/ID <-> cell-axis-servo/ID.
-std::string PartnerOf(const std::string& name) {
-  static const std::string kI = "cell-interpreter/", kS = "cell-axis-servo/";
-  if (name.rfind(kI, 0) == 0) return kS + name.substr(kI.size());
-  if (name.rfind(kS, 0) == 0) return kI + name.substr(kS.size());
-  return {};
 }
 }  // namespace
 
@@ -129,7 +121,7 @@ Slot Slot::Take(const BackendOptions& o, int number) {
       BindAbstract(std::string(kReservationPrefix) + std::to_string(o.domain) + "/" + std::to_string(number));
   if (s.reservation_ < 0) return s;
   s.number_ = number;
-  const std::string partner = PartnerOf(o.participant_name);
+  const std::string partner = StationPartner(o.participant_name);
   if (!o.station_process || partner.empty()) return s;
   s.mark_ = BindAbstract(std::string(kMarkPrefix) + std::to_string(o.domain) + "/" + o.participant_name +
                          "/" + std::to_string(number));
@@ -204,7 +196,7 @@ std::vector<int> Candidates(const BackendOptions& o, int range) {
 
 }  // namespace
 
-std::string NarrowCyclonePeers(const std::string& xml, const BackendOptions& o, const Slot& mark) {
+std::string NarrowCyclonePeers(const std::string& xml, const BackendOptions& o, const Slot& slot) {
   // <Peer address="A"/> with A holding no ':' (no port); anything else is kept as written. (Not std::regex:
   // GCC 12 with the sanitizers warns inside <regex>, and warnings are errors.)
   static constexpr std::string_view kOpen = "<Peer address=\"";
@@ -219,7 +211,7 @@ std::string NarrowCyclonePeers(const std::string& xml, const BackendOptions& o, 
     const bool bare =
         address.find(':') == std::string::npos && xml.find_first_not_of(" \t\r\n", quote + 1) == close;
     out.append(xml, from, at - from);
-    const auto announced = bare ? AnnouncedSlots(o, IsAnotherHost(address), mark) : std::vector<int>{};
+    const auto announced = bare ? AnnouncedSlots(o, IsAnotherHost(address), slot) : std::vector<int>{};
     if (!announced.empty()) {
       for (int s : announced)
         out += "<Peer address=\"" + address + ":" + std::to_string(DiscoveryPort(o.domain, s)) + "\"/>";

@@ -118,8 +118,8 @@ struct BackendOptions {
   bool host_services_only = false;
   // A station's own process (the interpreter, the axis servo: IsStationProcess): it takes a slot from
   // kSharedSlots up and announces itself to the shared slots of each host (the host services and whole-cell
-  // clients) and, on its own host, to its partner's slot (the station's other process, found by its
-  // slots::Mark), never to another station's. Stations never talk to each other; meeting them was what made a
+  // clients) and, on its own host, to its partner's slot (StationPartner, found by the mark of its
+  // slots::Slot), never to another station's. Stations never talk to each other; meeting them was what made a
   // cell quadratic in its stations (docs/operations.md §9.5, "Who meets whom").
   bool station_process = false;
 };
@@ -134,6 +134,9 @@ inline constexpr int kHostServiceSlots = 4;
 inline constexpr int kSharedSlots = 16;
 // True for a station's own processes, named "cell-interpreter/<ID>" and "cell-axis-servo/<ID>".
 bool IsStationProcess(const std::string& participant_name);
+// The name of a station's other process (cell-interpreter/<ID> <-> cell-axis-servo/<ID>), empty for a name
+// that is no station's process.
+std::string StationPartner(const std::string& participant_name);
 // The reserved slot of the host service a participant is named for ("cell-scheduler" 0, "cell-program-store"
 // 1, "cell-inspection-writer" 2), -1 for any other name.
 int HostServiceSlot(const std::string& participant_name);
