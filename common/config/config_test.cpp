@@ -542,7 +542,8 @@ TEST(ShippedStations, Ok01ChuckAndTailstock) {
 }  // namespace
 
 // Discovery sized to the cell (DESIGN §3, issue 43): two participants per station plus 16, at least 32, in
-// steps of 8, at most the 120 a domain's port range holds; CELL_DDS_PARTICIPANTS overrides, checked.
+// steps of 8, at most the 120 a domain's port range holds less 8 for clients; CELL_DDS_PARTICIPANTS (up to
+// 120) overrides, checked.
 TEST_F(ConfigTest, DdsParticipantsFollowTheConfiguredStations) {
   using cell::config::DdsParticipants;
   auto Id = [](int i) { return std::string(i < 10 ? "KT0" : "KT") + std::to_string(i); };
@@ -554,13 +555,15 @@ TEST_F(ConfigTest, DdsParticipantsFollowTheConfiguredStations) {
   for (int i = 33; i <= 45; ++i) Write(Id(i), "");
   EXPECT_EQ(DdsParticipants(), 112);  // 2 * 45 + 16 = 106, rounded up to 112
   for (int i = 46; i <= 60; ++i) Write(Id(i), "");
-  EXPECT_EQ(DdsParticipants(), 120);  // capped: (250 - 10) / 2 ports per participant in a domain
+  // Capped below the (250 - 10) / 2 = 120 slots of a domain's ports, leaving kClientSlots for the clients
+  // of the host services (docs/operations.md §9.4).
+  EXPECT_EQ(DdsParticipants(), 112);
   setenv("CELL_DDS_PARTICIPANTS", "48", 1);
   EXPECT_EQ(DdsParticipants(), 48);
   for (const char* bad : {"7", "121", "4x", "", " 40"}) {
     setenv("CELL_DDS_PARTICIPANTS", bad, 1);
     if (std::string(bad).empty()) {
-      EXPECT_EQ(DdsParticipants(), 120) << "empty is unset";
+      EXPECT_EQ(DdsParticipants(), 112) << "empty is unset";
       continue;
     }
     try {

@@ -169,8 +169,9 @@ int DdsParticipants() {
     stations = ListStations().size();
   } catch (const Error&) {  // no station directory: a tool or test outside a cell
   }
-  const int wanted = static_cast<int>(std::min<size_t>(2 * stations + 16, kMaxDdsParticipants));
-  return std::min(kMaxDdsParticipants, std::max(32, (wanted + 7) / 8 * 8));
+  constexpr int kMax = kMaxDdsParticipants - kClientSlots;
+  const int wanted = static_cast<int>(std::min<size_t>(2 * stations + 16, kMax));
+  return std::min(kMax, std::max(32, (wanted + 7) / 8 * 8));
 }
 
 }  // namespace cell::config

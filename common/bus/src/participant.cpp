@@ -150,6 +150,7 @@ Participant::Participant(const ParticipantOptions& opts) {
   bo.participants = cell::config::DdsParticipants();
   bo.preferred_slot = HostServiceSlot(opts.name);
   bo.host_services_only = opts.host_services_only;
+  if (opts.host_services_only) cell_participants_ = bo.participants;
   bo.station_process = IsStationProcess(opts.name);
   if (!profile.empty()) bo.profile_xml = cell::config::LoadDdsProfile(profile);  // ${VAR}s expanded once
   if (vendor_ == "fastdds")

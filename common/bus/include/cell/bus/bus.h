@@ -3,6 +3,7 @@
 // this header only; no DDS header or type reaches them.
 #pragma once
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
@@ -116,6 +117,10 @@ class Participant {
   const std::string& identity() const { return identity_; }
   int domain() const { return domain_; }
   bool lone_means_down() const { return lone_means_down_; }
+  // The participants a client of the host services only should reckon with while it waits for a server
+  // (ServerWait): the configured cell's (config::DdsParticipants), whom the services it calls answer too,
+  // though it hears only those services; 0 for any other participant, which counts the peers it hears.
+  int cell_participants() const { return cell_participants_; }
   const std::string& vendor() const { return vendor_; }  // "fastdds" or "cyclonedds"
   Backend& backend() { return *backend_; }
   void Post(std::function<void()> fn);
@@ -142,6 +147,7 @@ class Participant {
   std::string identity_;
   int domain_;
   bool lone_means_down_ = false;
+  int cell_participants_ = 0;
   std::string vendor_;
   std::function<std::unique_ptr<Backend>()> make_backend_;  // empty for an injected backend
   std::unique_ptr<Backend> backend_;
@@ -492,11 +498,13 @@ class Client : public Rejoinable {
       // A newcomer to a large cell hears its peers' endpoints over seconds (a 32-station cell, 68 other
       // participants: `cellctl job ls` took 0.6-3.3 s on Fast DDS, and across four hosts a verb found no
       // scheduler in 5 s), so the wait grows with the participants heard so far: 150 ms each, counted
-      // again whenever the wait runs out.
+      // again whenever the wait runs out. A client of the host services only hears just those services,
+      // which answer it amid the whole cell: it counts the configured cell's participants.
       const Millis base(p_.identity().empty() ? 5000 : 15000);
       const auto start = deadline - timeout;
       while (true) {
-        const Millis limit = ServerWait(base, p_.RemoteParticipants(), timeout);
+        const Millis limit =
+            ServerWait(base, std::max(p_.RemoteParticipants(), p_.cell_participants()), timeout);
         const auto left = std::chrono::ceil<Millis>(start + limit - std::chrono::steady_clock::now());
         if (left <= Millis(0)) throw Error(Errc::kUnavailable, none);
         if (WaitForServer(left)) break;

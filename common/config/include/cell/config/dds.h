@@ -43,10 +43,15 @@ std::string ExpandEnvironment(std::string_view text, std::string_view what);
 // the unicast ports every participant probes on loopback (Fast DDS maxInitialPeersRange, Cyclone
 // MaxAutoParticipantIndex) and the participant slots a process may take. CELL_DDS_PARTICIPANTS (8..kMaxDds-
 // Participants) when set; else two per configured station (interpreter and servo) plus 16 (host services,
-// the dashboard, cellctl and tools), at least 32, rounded up to a multiple of 8, at most kMaxDdsParticipants.
-// Every process of a cell reads the same configuration, so every one probes the same ports. Throws
-// cell::Error(kInvalidArgument) for a malformed CELL_DDS_PARTICIPANTS.
+// the dashboard, cellctl and tools), at least 32, rounded up to a multiple of 8, at most kMaxDdsParticipants
+// less kClientSlots. Every process of a cell reads the same configuration, so every one probes the same
+// ports. Throws cell::Error(kInvalidArgument) for a malformed CELL_DDS_PARTICIPANTS.
 inline constexpr int kMaxDdsParticipants = 120;  // (250 ports per domain - 10) / 2 ports per participant
+// Slots above the largest computed range, which no participant announces itself to: a client of the host
+// services only takes one of these, so only the services it calls ever hear of it (on Fast DDS 2.9 each
+// participant that discovers a newcomer heartbeats every peer it knows once for each endpoint it sends the
+// newcomer: the dashboard of a 64-station cell did so for every `cellctl job ls`; docs/operations.md §9.4).
+inline constexpr int kClientSlots = 8;
 int DdsParticipants();
 
 // Reads a profile file and expands it (above). Throws cell::Error(kIo) when it cannot be read.
