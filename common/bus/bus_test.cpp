@@ -496,6 +496,11 @@ void ExpectHostServicesClientHearsNoStation(const std::string& client_stack) {
   EXPECT_EQ(rst.Matched(), 0);
   EXPECT_EQ(client.RemoteParticipants(), 1);
   EXPECT_EQ(station.RemoteParticipants(), 1);  // the scheduler, not the client
+  // It waits for a server as one of the configured cell (config::DdsParticipants, at least 32), whom the
+  // services answer too, though it hears only them; any other participant counts whom it hears.
+  EXPECT_GE(client.cell_participants(), 32);
+  EXPECT_EQ(station.cell_participants(), 0);
+  EXPECT_EQ(sched.cell_participants(), 0);
 }
 
 TEST(Bus, AHostServicesClientHearsTheServicesAndNoStation) {
