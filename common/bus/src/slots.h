@@ -7,6 +7,8 @@
 #include <string_view>
 #include <vector>
 
+#include "cell/config/dds.h"
+
 namespace cell::bus {
 struct BackendOptions;
 }
@@ -25,9 +27,9 @@ bool PortFree(int port);
 // the range leaves as many again for stations.
 int FirstSlot(int range, bool station_process = false);
 
-// The slots a domain's ports leave room for (250 ports a domain, from 7410 + 250·domain two a slot; the
-// cap of config::DdsParticipants).
-inline constexpr int kSlotsPerDomain = 120;
+// The slots a domain's ports leave room for (250 ports a domain, from 7410 + 250·domain two a slot): the
+// cap of CELL_DDS_PARTICIPANTS; a computed range leaves the top config::kClientSlots of them free.
+inline constexpr int kSlotsPerDomain = config::kMaxDdsParticipants;
 
 // True when `address` is an IPv4 address (dotted quad) that is neither loopback nor one of this host's
 // interfaces': a peer there is another host. A host name counts as this host (its peers are never narrowed:
