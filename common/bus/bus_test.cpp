@@ -7,10 +7,12 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cstdlib>
 #include <filesystem>
 #include <mutex>
 #include <optional>
+#include <thread>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -225,6 +227,56 @@ TEST_P(BusTest, TwoClientsOfOneServiceGetTheirOwnReplies) {
   Client<Req, Rep> second(b, "test/two");
   req.station("KT02");
   EXPECT_EQ(second.Call(req, kMatch).station(), "KT02");
+}
+
+// topics::kStationRun: one service every station serves. A station's server takes only the requests that
+// name it (Server's accept), and the client drops a station identity's reply to a request for another
+// station, error replies too (docs/security.md, "Partitions"; the identities are claimed here, the
+// permissions make them authenticated). KT02 here answers everything at once; KT01 answers its own late.
+TEST_P(BusTest, AServiceEveryStationServesIsAnsweredByTheStationNamedOnly) {
+  ParticipantOptions o1 = A("bus-test-kt01"), o2 = A("bus-test-kt02"), os = B("bus-test-sched");
+  o1.identity = "interpreter-KT01";
+  o2.identity = "interpreter-KT02";
+  os.identity = "scheduler";
+  Participant kt01(o1), kt02(o2), sched(os);
+  std::atomic<int> kt01_handled{0};
+  Server<cell::RunRequest, cell::RunReply> own(
+      kt01, "test/every_station",
+      [&](const cell::RunRequest& r) {
+        ++kt01_handled;
+        std::this_thread::sleep_for(std::chrono::milliseconds(300));
+        cell::RunReply rep;
+        rep.station(r.station());
+        rep.dispatch_id(1);
+        return rep;
+      },
+      nullptr, [](const cell::RunRequest& r) { return r.station() == "KT01"; });
+  Server<cell::RunRequest, cell::RunReply> forger(kt02, "test/every_station", [](const cell::RunRequest& r) {
+    if (r.dispatch_id() == 3) throw Error(Errc::kInvalidArgument, "refused");
+    cell::RunReply rep;
+    rep.station(r.station());
+    rep.dispatch_id(2);
+    return rep;
+  });
+  Client<cell::RunRequest, cell::RunReply> client(sched, "test/every_station");
+  ASSERT_TRUE(client.WaitForServer(kMatch));
+  ASSERT_TRUE(WaitUntil([&] { return own.Matched() == 1 && forger.Matched() == 1; }, kMatch));
+  cell::RunRequest req;
+  req.station("KT01");
+  req.dispatch_id(1);
+  auto rep = client.Call(req, kMatch);
+  EXPECT_EQ(rep.dispatch_id(), 1) << "KT02's answer about KT01 was taken";
+  EXPECT_EQ(rep.hdr().code(), 0);
+  req.dispatch_id(3);  // KT02 answers with an error at once: dropped as well
+  rep = client.Call(req, kMatch);
+  EXPECT_EQ(rep.hdr().code(), 0) << rep.hdr().error();
+  EXPECT_EQ(rep.dispatch_id(), 1);
+  req.station("KT03");  // nobody's: KT01 leaves it, KT02's answer is dropped
+  EXPECT_THROW(client.Call(req, Millis(1500)), Error);
+  req.station("KT02");  // KT02's own: taken
+  req.dispatch_id(1);
+  EXPECT_EQ(client.Call(req, kMatch).dispatch_id(), 2);
+  EXPECT_EQ(kt01_handled.load(), 2);
 }
 
 // Issue 39 item 1: the reply cache keeps what a re-sent request needs, bounded in bytes as well as entries

@@ -49,7 +49,7 @@ TEST(Table, CoversExactlyTheBusTopics) {
       topics::ServoTools(st),    topics::kStationProgram, topics::kDncStatus};
   for (const std::string& svc :
        {std::string(topics::kProgramStore), std::string(topics::kScheduler), std::string(topics::kInspection),
-        topics::StationRun(st), topics::StationCommand(st), topics::StationDnc(st)}) {
+        std::string(topics::kStationRun), topics::StationCommand(st), topics::StationDnc(st)}) {
     bus_topics.insert(bus::RequestTopic(svc));
     bus_topics.insert(bus::ReplyTopic(svc));
   }
@@ -73,12 +73,18 @@ TEST(Table, RendersOneMarkdownRowPerTopic) {
 }
 
 TEST(Grants, OnlyTheSchedulerDispatchesToStations) {
-  EXPECT_TRUE(MayPublish("scheduler", "cell/station/KT01/run/request"));
-  EXPECT_TRUE(MayPublish("scheduler", "cell/station/KT02/run/request"));
+  // One dispatch service for every station (topics::kStationRun): the scheduler writes it, every station's
+  // interpreter reads it and answers; nobody else writes a request or reads an answer.
+  EXPECT_TRUE(MayPublish("scheduler", "cell/station/run/request"));
+  EXPECT_TRUE(MaySubscribe("scheduler", "cell/station/run/reply"));
+  EXPECT_TRUE(MaySubscribe("interpreter-KT01", "cell/station/run/request"));
+  EXPECT_TRUE(MayPublish("interpreter-KT02", "cell/station/run/reply"));
   for (const auto& n : AllIdentityNames())
     if (n != "scheduler") {
-      EXPECT_FALSE(MayPublish(n, "cell/station/KT01/run/request")) << n;
+      EXPECT_FALSE(MayPublish(n, "cell/station/run/request")) << n;
+      EXPECT_FALSE(MaySubscribe(n, "cell/station/run/reply")) << n;
     }
+  EXPECT_FALSE(MayPublish("axis-servo-KT01", "cell/station/run/reply"));
 }
 
 TEST(Grants, AStationWritesOnlyItsOwnSegmentsAndProbeResults) {
@@ -123,7 +129,6 @@ TEST(Grants, AStationAnswersOnlyItsOwnCommands) {
   EXPECT_TRUE(MayPublish("interpreter-KT01", "cell/station/KT01/command/reply"));
   EXPECT_FALSE(MaySubscribe("interpreter-KT01", "cell/station/KT02/command/request"));
   EXPECT_FALSE(MayPublish("interpreter-KT01", "cell/station/KT02/command/reply"));
-  EXPECT_FALSE(MayPublish("interpreter-KT01", "cell/station/KT02/run/reply"));
 }
 
 TEST(Grants, OnlyOperatorsCommandTheCell) {

@@ -24,7 +24,7 @@
 #include "cell/bus/bus.h"
 #include "cell/bus/topics.h"
 #include "cell/idl/motion.h"
-#include "cell/idl/run.h"
+#include "cell/idl/station.h"
 #include "cell/testing/local_cell.h"
 
 using namespace cell::testing;
@@ -335,14 +335,15 @@ TEST_F(Fms, ServoStoppedPastItsLeaseRejoinsAndFinishesTheRun) {
 
 // (e) The same for a station's interpreter stopped past its lease in the middle of a run: while it is stopped
 // the scheduler takes the station for vanished and waits for its word on the pallet it holds (docs/
-// scheduler.md §5), and the lease runs out (watched through a writer on the station's run request topic).
+// scheduler.md §5), and the lease runs out (watched through a writer on the station's command topic).
 // When it continues it rejoins the bus, the scheduler asks it about the pallet, and the run it never stopped
 // completes: once, one record. Before stop 55 the pallet was failed at once ("needs an operator") although
 // the station went on to finish it.
 TEST_F(Fms, InterpreterStoppedPastItsLeaseRejoinsAndTheStationGoesOn) {
   cell::bus::Participant observer("fms-test/observer");
-  cell::bus::Writer<cell::RunRequest> watch(
-      observer, cell::bus::RequestTopic(cell::bus::topics::StationRun("KT01")), cell::bus::QosKind::kCommand);
+  cell::bus::Writer<cell::StationRequest> watch(
+      observer, cell::bus::RequestTopic(cell::bus::topics::StationCommand("KT01")),
+      cell::bus::QosKind::kCommand);
   ASSERT_TRUE(watch.WaitForMatched(1, std::chrono::seconds(10)));
   const std::string job = HeldMidRun("STOP1", 20, 13);
   Freeze("cell-interpreter/KT01");

@@ -82,8 +82,8 @@ void Service::Start() {
   station_.Start();
   const std::string id = station_.Status().station().to_string();
   run_srv_ = std::make_unique<bus::Server<cell::RunRequest, cell::RunReply>>(
-      bus_, bus::topics::StationRun(id), [this](const cell::RunRequest& r) { return station_.OnRun(r); },
-      DescribeRun);
+      bus_, bus::topics::kStationRun, [this](const cell::RunRequest& r) { return station_.OnRun(r); },
+      DescribeRun, [id](const cell::RunRequest& r) { return r.station() == id; });
   cmd_srv_ = std::make_unique<bus::Server<cell::StationRequest, cell::StationReply>>(
       bus_, bus::topics::StationCommand(id),
       [this](const cell::StationRequest& r) {

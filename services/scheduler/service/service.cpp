@@ -495,10 +495,10 @@ void Service::Sender(std::stop_token st) {
         continue;
       }
     }
-    auto& client = station_clients_[o.d.station];
-    if (!client)
-      client = std::make_unique<bus::Client<cell::RunRequest, cell::RunReply>>(
-          bus_, bus::topics::StationRun(o.d.station));
+    if (!run_client_)  // one for every station (topics::kStationRun)
+      run_client_ =
+          std::make_unique<bus::Client<cell::RunRequest, cell::RunReply>>(bus_, bus::topics::kStationRun);
+    auto& client = run_client_;
     cell::RunRequest req;
     req.station(o.d.station);
     req.dispatch_id(static_cast<int32_t>(o.d.dispatch_id));

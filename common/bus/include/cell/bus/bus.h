@@ -441,7 +441,8 @@ class Client : public Rejoinable {
     std::string me = p.id();
     // Replies are matched on the receive path, not the dispatch thread, so a caller blocked in
     // Call() from a dispatch-thread callback cannot deadlock.
-    raw_cb_ = [weak, me](const RawSample& s, const RawInfo& info) {
+    const std::string topic = ReplyTopic(service);
+    raw_cb_ = [weak, me, topic](const RawSample& s, const RawInfo& info) {
       auto st = weak.lock();
       if (!st || !info.valid) return;
       Rep r;
@@ -450,6 +451,12 @@ class Client : public Rejoinable {
       std::lock_guard lk(st->mu);
       auto it = st->pending.find(r.hdr().request_id());
       if (it == st->pending.end() || it->second) return;
+      // A service every station serves (topics::kStationRun): only the station the request named answers
+      // it, so a station identity's reply to a request for another station is dropped (docs/security.md).
+      if (auto a = st->addressee.find(it->first); a != st->addressee.end()) {
+        const std::string writer = IdentityOfPartition(info.writer_partition);
+        if (!writer.empty() && ForeignStation(writer, a->second, topic)) return;
+      }
       it->second = std::move(r);
       st->cv.notify_all();
     };
@@ -516,6 +523,7 @@ class Client : public Rejoinable {
     {
       std::lock_guard lk(state_->mu);
       state_->pending[id] = std::nullopt;
+      if constexpr (requires { req.station().c_str(); }) state_->addressee[id] = req.station().c_str();
     }
     std::unique_lock lk(state_->mu);
     while (true) {
@@ -526,6 +534,7 @@ class Client : public Rejoinable {
         if (e.code() == Errc::kInvalidArgument) {
           std::lock_guard g(state_->mu);
           state_->pending.erase(id);
+          state_->addressee.erase(id);
           throw;
         }
       }
@@ -534,10 +543,12 @@ class Client : public Rejoinable {
       if (state_->cv.wait_until(lk, next, [&] { return state_->pending[id].has_value(); })) {
         Rep r = std::move(*state_->pending[id]);
         state_->pending.erase(id);
+        state_->addressee.erase(id);
         return r;
       }
       if (std::chrono::steady_clock::now() >= deadline) {
         state_->pending.erase(id);
+        state_->addressee.erase(id);
         throw Error(Errc::kTimeout,
                     service_ + " did not answer within " + std::to_string(timeout.count()) + " ms");
       }
@@ -547,6 +558,7 @@ class Client : public Rejoinable {
         lk.lock();
         if (!why.empty() && !state_->pending[id]) {
           state_->pending.erase(id);
+          state_->addressee.erase(id);
           throw Error(Errc::kUnavailable, why);
         }
       }
@@ -559,6 +571,7 @@ class Client : public Rejoinable {
     std::recursive_mutex call_mu;  // held while the callback runs
     std::condition_variable cv;
     std::map<uint64_t, std::optional<Rep>> pending;
+    std::map<uint64_t, std::string> addressee;  // the station a pending request names (Req.station)
   };
   Participant& p_;
   std::string service_;
@@ -576,11 +589,17 @@ class Server {
   // query, which is not logged. An accepted request it names is logged with its sender's identity.
   using Describe = std::function<std::string(const Req&)>;
 
-  Server(Participant& p, const std::string& service, Handler h, Describe describe = nullptr)
+  // Which requests are this server's: on a service every station serves (topics::kStationRun) a station
+  // answers only those naming it, and leaves the others to their station (no reply, nothing cached).
+  using Accept = std::function<bool(const Req&)>;
+
+  Server(Participant& p, const std::string& service, Handler h, Describe describe = nullptr,
+         Accept accept = nullptr)
       : p_(p),
         service_(service),
         handler_(std::move(h)),
         describe_(std::move(describe)),
+        accept_(std::move(accept)),
         rep_(p, ReplyTopic(service), QosKind::kCommand),
         req_(p, RequestTopic(service), QosKind::kCommand,
              [this](const Req& r, const SampleInfo& si) { Handle(r, si); }) {}
@@ -626,6 +645,7 @@ class Server {
   }
 
   void Handle(const Req& r, const SampleInfo& si) {
+    if (accept_ && !accept_(r)) return;
     auto key = std::make_pair(std::string(r.hdr().client()), r.hdr().request_id());
     if (std::optional<RawSample> cached = Cached(key)) {  // a re-sent request: answer again, do not run again
       rep_.WriteRaw(*cached);
@@ -678,6 +698,7 @@ class Server {
   std::string service_;
   Handler handler_;
   Describe describe_;
+  Accept accept_;
   mutable std::mutex cache_mu_;                                  // CacheUse() reads from another thread
   std::map<std::pair<std::string, uint64_t>, RawSample> cache_;  // the reply as sent
   std::deque<std::pair<std::string, uint64_t>> order_;

@@ -57,9 +57,14 @@ inline std::string ServoTools(const std::string& station) {
 inline constexpr const char* kProgramStore = "cell/program_store";  // ProgramRequest / ProgramReply
 inline constexpr const char* kScheduler = "cell/scheduler";         // SchedulerRequest / SchedulerReply
 inline constexpr const char* kInspection = "cell/inspection";       // InspectionRequest / InspectionReply
-inline std::string StationRun(const std::string& station) {
-  return "cell/station/" + station + "/run";
-}
+// Dispatches (RunRequest / RunReply): one service for every station. The scheduler is its only client; each
+// interpreter answers the requests that name its station (bus::Server's `accept`), and the scheduler drops a
+// reply a station writes about another (bus::Client). Per-station topics gave the scheduler two endpoints per
+// station it had dispatched to, and Fast DDS 2.9 heartbeats every endpoint of a participant's discovery
+// history to every matched participant whenever one more joins it: at 64 stations across four hosts that made
+// each `cellctl` call cost the cell about ten times more than the same call before the first dispatch
+// (docs/operations.md §9.5, "One dispatch topic").
+inline constexpr const char* kStationRun = "cell/station/run";
 inline std::string StationCommand(const std::string& station) {
   return "cell/station/" + station + "/command";
 }

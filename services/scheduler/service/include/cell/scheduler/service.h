@@ -78,7 +78,7 @@ class Service {
   std::mutex out_mu_;
   std::condition_variable out_cv_;
   std::deque<Outgoing> outgoing_;
-  std::map<std::string, std::unique_ptr<bus::Client<cell::RunRequest, cell::RunReply>>> station_clients_;
+  std::unique_ptr<bus::Client<cell::RunRequest, cell::RunReply>> run_client_;
   std::map<std::string, std::unique_ptr<bus::Client<cell::StationRequest, cell::StationReply>>>
       command_clients_;
   std::atomic<bool> sender_alive_{false};
