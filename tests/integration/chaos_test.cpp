@@ -39,6 +39,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <map>
 #include <mutex>
 #include <optional>
@@ -169,20 +170,43 @@ struct Plan {
   std::pair<int, int> cut_s{0, 0};        // how long a cut lasts
   std::chrono::seconds sample_every{5};   // memory and descriptors of the cell's processes
   int kt_moves = 1200;  // the KT-APL programs' moves (and 100 more each): how long a visit runs
+  struct {              // the other dialects' parts: their cutting repeated (OkumaPart, EmcoPart, BaltPart)
+    int okuma = 1, emco = 1, balt = 1;
+  } passes;
+  // The week's operator: each dialect's routes kept at its stations + 1 live jobs (true), or plan.live_jobs
+  // over all routes in turn (false: most work goes to KT-APL, which has three routes).
+  bool balance = false;
+  double target_hours = 0;  // > 0: the chaos ends once the jobs' machine time is this many hours a station
+  int submitters = 1;       // the operator's `cellctl` calls at a time
 };
 
-// The parts of the other dialects (week): each a short real program of its control, stored in HOST.
+// The parts of the other dialects (week): each a short real program of its control, stored in HOST; `passes`
+// repeats its cutting (1: the part as written; more: a part of shop length, the same moves again).
 // Okuma: face and turn a shaft end, M02 (manual ln 8926-8962's A.MIN O100 shape, as okuma_cell_test).
-constexpr const char* kOkumaPart =
-    "%\nO100\nN100 G00 X50 Z5 S800 M03\nG01 X40 F0.3\nZ-20\nG00 X50\nZ5 M05\nN150 M02\n%\n";
+std::string OkumaPart(int passes) {
+  std::string s = "%\nO100\nN100 G00 X50 Z5 S800 M03\n";
+  for (int i = 1; i <= passes; ++i)
+    s += std::string("G01 X40 F0.3\nZ-20\nG00 X50\nZ5") + (i == passes ? " M05\n" : "\n");
+  return s + "N150 M02\n%\n";
+}
 // EMCO: the groove of E69/E70 (manual ln 4497-4536) with a 1.0 s dwell, as emco_station_test.
-constexpr const char* kEmcoPart =
-    "%\nN0010 T0303 G00 X50. Z10.\nN0020 G97 S800 M03 G95\nN0030 G00 X42. Z-24.\n"
-    "N0040 G86 X26. Z-32. D3=1500 D4=10 D5=3000 F60\nN0050 G00 X50. Z10.\nN0060 M30\n";
+std::string EmcoPart(int passes) {
+  std::string s = "%\nN0010 T0303 G00 X50. Z10.\nN0020 G97 S800 M03 G95\n";
+  int n = 30;
+  for (int i = 0; i < passes; ++i, n += 30)
+    s += fmt::format(
+        "N{:04} G00 X42. Z-24.\nN{:04} G86 X26. Z-32. D3=1500 D4=10 D5=3000 F60\nN{:04} G00 X50. Z10.\n", n,
+        n + 10, n + 20);
+  return s + fmt::format("N{:04} M30\n", n);
+}
 // Balt-System: T1.1 (BS01.toml), a pocket's outline at F200, up (manual ln 2478-2482 for T, G1 and F).
-constexpr const char* kBaltPart =
-    "N1 T1.1 M6 S2000 M3\nN2 G0 X-30 Y25 Z5\nN3 G1 Z-2 F200\nN4 X90\nN5 Y60\nN6 X-30\nN7 Y25\nN8 G0 Z50\nN9 "
-    "M30\n";
+std::string BaltPart(int passes) {
+  std::string s = "N1 T1.1 M6 S2000 M3\nN2 G0 X-30 Y25 Z5\nN3 G1 Z-2 F200\n";
+  int n = 4;
+  for (int i = 0; i < passes; ++i, n += 4)
+    s += fmt::format("N{} X90\nN{} Y60\nN{} X-30\nN{} Y25\n", n, n + 1, n + 2, n + 3);
+  return s + fmt::format("N{} G0 Z50\nN{} M30\n", n, n + 1);
+}
 // An Okuma schedule (manual ln 8926-8962's VSET/PSELECT/IF form): three runs of A.MIN's O100.
 constexpr const char* kOkumaSchedule =
     "N001 VSET V1=0\nN010 PSELECT A.MIN,O100\nN011 VSET V1=V1+1\nN012 IF [V1 LT 3] N010\nEND\n";
@@ -360,10 +384,10 @@ void Chaos::Run(const Plan& plan) {
   } else if (kt.size() == 1) {
     routes = {{"ANY", {kt[0] + ":CHAOS4,CHAOS1"}}};
   }
-  const std::vector<std::tuple<std::string, std::string, std::string, const char*>> others = {
-      {"OK", "okuma", "A.MIN", kOkumaPart},
-      {"EM", "emco", "GROOVE", kEmcoPart},
-      {"BS", "balt", "POCKET", kBaltPart}};
+  const std::vector<std::tuple<std::string, std::string, std::string, std::string>> others = {
+      {"OK", "okuma", "A.MIN", OkumaPart(plan.passes.okuma)},
+      {"EM", "emco", "GROOVE", EmcoPart(plan.passes.emco)},
+      {"BS", "balt", "POCKET", BaltPart(plan.passes.balt)}};
   for (auto& [prefix, dialect, name, text] : others) {
     if (by_dialect[prefix].empty()) continue;
     const std::string path = cell_.data_dir() + "/" + name;
@@ -374,6 +398,16 @@ void Chaos::Run(const Plan& plan) {
         0);
     programs_[name] = text;
     routes.push_back({"R-" + prefix, {Joined(by_dialect[prefix]) + ":" + name}});
+  }
+  // The week by machine time (balance): besides those, a route of each station's own (S-<ID>), so that the
+  // operator can keep every station busy; the shared routes above still get every eighth job.
+  std::map<std::string, std::vector<std::string>> routes_of;  // dialect group -> its shared routes
+  for (auto& r : routes)
+    routes_of[r.name.rfind("R-", 0) == 0 ? r.name.substr(2) : std::string("KT")].push_back(r.name);
+  if (plan.balance) {
+    const std::map<std::string, std::string> part = {
+        {"KT", "CHAOS4,CHAOS1,CHAOS2"}, {"OK", "A.MIN"}, {"EM", "GROOVE"}, {"BS", "POCKET"}};
+    for (auto& st : plan.stations) routes.push_back({"S-" + st, {st + ":" + part.at(st.substr(0, 2))}});
   }
   const std::vector<std::string>& okuma = by_dialect["OK"];
   const std::string sdf = cell_.data_dir() + "/WEEK.SDF";
@@ -407,14 +441,21 @@ void Chaos::Run(const Plan& plan) {
   // eighth is a schedule of kScheduleRuns runs instead.
   std::atomic<bool> stop_operating{false};
   std::atomic<int> operations{0};
+  std::atomic<double> machine_h{0};  // the ended jobs' machine time, hours a station (the operator's count)
   std::thread operator_thread([&] {
     int next_pallet = 1;
-    long listed_after = 0;  // ids only grow: every live job is past the oldest live one of the last listing
+    long listed_after = 0;   // ids only grow: every live job is past the oldest live one of the last listing
+    std::set<long> counted;  // ended jobs whose machine time is in machine_h
+    double machine_s = 0;
+    std::map<std::string, int> turn;   // group -> its shared routes' next turn (balance)
+    std::map<std::string, int> given;  // station -> jobs the operator gave it (balance)
+    int schedule_no = 0;
     while (!stop_operating && (plan.reuse_pallets || next_pallet <= 120)) {
       json jobs = Jobs(listed_after);
       int live = 0;
       bool running = false;
       std::set<int> busy;
+      std::map<std::string, int> live_at;  // station -> live jobs on it or on its own route (balance)
       long oldest_live = 0, newest = listed_after;
       for (auto& j : jobs) {
         std::string st = j["state"];
@@ -424,22 +465,59 @@ void Chaos::Run(const Plan& plan) {
           ++live;
           if (j["pallet"].is_number()) busy.insert(j["pallet"].get<int>());
           if (oldest_live == 0 || id < oldest_live) oldest_live = id;
+          if (j["station"].is_string())
+            ++live_at[j["station"].get<std::string>()];
+          else if (j["route"].is_string() && j["route"].get<std::string>().rfind("S-", 0) == 0)
+            ++live_at[j["route"].get<std::string>().substr(2)];
+        } else if (counted.insert(id).second && j["cycle_s"].is_number()) {
+          machine_s += j["cycle_s"].get<double>();
         }
         running = running || st == "RUNNING";
       }
+      machine_h = machine_s / 3600.0 / static_cast<double>(plan.stations.size());
       listed_after = oldest_live > 0 ? oldest_live - 1 : newest;
       running_seen_ = running;
+      std::vector<std::function<void()>> calls;  // this look's `cellctl` calls
       for (; live < plan.live_jobs && !stop_operating && (plan.reuse_pallets || next_pallet <= 120); ++live) {
+        // What comes next: in turn over all routes with every eighth a schedule (an Okuma station's), or, to
+        // balance, a job for the station with the fewest live ones (below 2: one running, one queued): its
+        // own route, every fourth of an Okuma station's a schedule on it, every eighth of a station's a
+        // shared route of its dialect (the scheduler chooses among its stations; every eighth pick of a look
+        // instead gave one station of each dialect, the last, shared routes only: they went to the first).
+        std::string route, schedule_at;
+        if (plan.balance) {
+          std::string station;
+          for (auto& st : plan.stations)
+            if (station.empty() ||
+                std::pair{live_at[st], given[st]} < std::pair{live_at[station], given[station]})
+              station = st;
+          if (live_at[station] >= 2) break;
+          ++live_at[station];
+          const std::string group = station.substr(0, 2);
+          if (given[station] % 8 == 7) {
+            const auto& shared = routes_of[group];
+            route = shared[static_cast<size_t>(turn[group]++) % shared.size()];
+          } else if (group == "OK" && given[station] % 4 == 3) {
+            schedule_at = station;
+          } else {
+            route = "S-" + station;
+          }
+          ++given[station];
+        }
         const int n = ++operations;
-        RunResult r;
         Operated op;
-        if (!okuma.empty() && n % 8 == 0) {  // a schedule is a job without a pallet
-          const std::string& station = okuma[static_cast<size_t>(n / 8) % okuma.size()];
-          r = Retry({"schedule", "run", sdf, "--station", station}, fmt::format("schedule-{}", n));
-          EXPECT_EQ(r.code, 0) << "schedule on " << station << ": " << r.err;
-          op.job = FirstLine(r.out);
-          std::lock_guard lk(mu_);
-          operated_.push_back(op);
+        if (plan.balance ? !schedule_at.empty()
+                         : !okuma.empty() && n % 8 == 0) {  // a schedule: a job without a pallet
+          const std::string station =
+              plan.balance ? schedule_at : okuma[static_cast<size_t>(++schedule_no) % okuma.size()];
+          calls.push_back([&, station, n, op]() mutable {
+            RunResult r =
+                Retry({"schedule", "run", sdf, "--station", station}, fmt::format("schedule-{}", n));
+            EXPECT_EQ(r.code, 0) << "schedule on " << station << ": " << r.err;
+            op.job = FirstLine(r.out);
+            std::lock_guard lk(mu_);
+            operated_.push_back(op);
+          });
           continue;
         }
         if (plan.reuse_pallets) {  // the next free number of 1..127
@@ -451,14 +529,24 @@ void Chaos::Run(const Plan& plan) {
         next_pallet = plan.reuse_pallets ? next_pallet % 127 + 1 : next_pallet + 1;
         busy.insert(pallet);
         op.pallet = pallet;
-        op.route = routes[static_cast<size_t>(n) % routes.size()].name;
-        r = Retry({"route", "operate", op.route, "--pallet", std::to_string(pallet)},
-                  fmt::format("operate-{}", n));
-        EXPECT_EQ(r.code, 0) << "pallet " << pallet << ": " << r.err;
-        op.job = FirstLine(r.out);
-        std::lock_guard lk(mu_);
-        operated_.push_back(op);
+        op.route = plan.balance ? route : routes[static_cast<size_t>(n) % routes.size()].name;
+        calls.push_back([&, n, op]() mutable {
+          RunResult r = Retry({"route", "operate", op.route, "--pallet", std::to_string(op.pallet)},
+                              fmt::format("operate-{}", n));
+          EXPECT_EQ(r.code, 0) << "pallet " << op.pallet << ": " << r.err;
+          op.job = FirstLine(r.out);
+          std::lock_guard lk(mu_);
+          operated_.push_back(op);
+        });
       }
+      // The look's calls, by plan.submitters `cellctl`s at a time (one: in the order made).
+      std::atomic<std::size_t> next_call{0};
+      std::vector<std::thread> submitters;
+      for (int i = 0; i < plan.submitters; ++i)
+        submitters.emplace_back([&] {
+          for (std::size_t c; (c = next_call++) < calls.size();) calls[c]();
+        });
+      for (auto& t : submitters) t.join();
       // Each look is a `cellctl` process, a participant that discovers the whole cell: at 32 stations (68
       // processes) one look every 300 ms kept the 2 cores busy with discovery alone (load 86, 27 pallets in
       // 5 minutes). A look every 75 ms a station: 300 ms at 4 stations, 2.4 s at 32.
@@ -496,6 +584,8 @@ void Chaos::Run(const Plan& plan) {
   };
   const auto chaos_end = t_start + plan.duration;
   const auto more_chaos = [&] {
+    if (plan.target_hours > 0 && std::chrono::steady_clock::now() < chaos_end)
+      return machine_h < plan.target_hours || !all_kinds_covered();
     if (plan.duration.count() > 0)
       return std::chrono::steady_clock::now() < chaos_end || !all_kinds_covered();
     return kills < kMinKills || !all_kinds_covered();
@@ -641,6 +731,7 @@ void Chaos::Run(const Plan& plan) {
   std::map<long, std::vector<json>> records;           // job id -> completed run records
   std::map<long, std::map<std::string, int>> started;  // job id -> operation's programs -> runs started
   std::set<long> schedules;
+  std::map<std::string, double> station_machine_s;  // station -> its runs' machine time
   for (auto& j : jobs)
     if (j["kind"] == "schedule") schedules.insert(j["id"].get<long>());
   for (auto& e : fs::directory_iterator(cell_.data_dir() + "/records")) {
@@ -652,6 +743,8 @@ void Chaos::Run(const Plan& plan) {
       ADD_FAILURE() << "job " << job << " started " << r["programs"] << " twice (" << e.path().filename()
                     << ")";
     if (r["completed"].get<bool>()) records[job].push_back(r);
+    if (r["machine_s"].is_number())
+      station_machine_s[r["station"].get<std::string>()] += r["machine_s"].get<double>();
   }
   for (auto& j : jobs) {
     const long id = j["id"].get<long>();
@@ -687,8 +780,9 @@ void Chaos::Run(const Plan& plan) {
                                << ")";
   }
 
-  // The cell still works: one more pallet on each route, all at once.
-  int pallet = 121;
+  // The cell still works: one more pallet on each route, all at once (numbers from 121, or, where numbers are
+  // used again, from 1: every job has ended, and KT04 takes pallets 1-127 only).
+  int pallet = plan.reuse_pallets ? 1 : 121;
   std::vector<std::pair<std::string, std::string>> after;  // route, job
   for (auto& route : routes) {
     auto r = Retry({"route", "operate", route.name, "--pallet", std::to_string(pallet)},
@@ -744,8 +838,22 @@ void Chaos::Run(const Plan& plan) {
       static_cast<double>(last.rss_kb) / 1024, first.fds, last.fds, first.procs, last.procs, during.size(),
       static_cast<long long>(secs(t_chaos - t_start)),
       static_cast<long long>(secs(std::chrono::steady_clock::now() - t_start)));
+  // Each dialect's stations: the fewest and most machine hours one of them ran (the run records').
+  std::map<std::string, std::pair<double, double>> hours_of;  // dialect group -> least, most
+  for (auto& st : plan.stations) {
+    const double h = station_machine_s[st] / 3600.0;
+    auto [it, fresh] = hours_of.try_emplace(st.substr(0, 2), h, h);
+    it->second = {std::min(it->second.first, h), std::max(it->second.second, h)};
+  }
+  std::string by_dialect_h;
+  for (auto& [g, mm] : hours_of) by_dialect_h += fmt::format(" {} {:.1f}-{:.1f}", g, mm.first, mm.second);
+  std::printf("chaos: machine hours a station, by dialect (least-most):%s\n", by_dialect_h.c_str());
   for (auto& e : reaper_.Unexpected()) ADD_FAILURE() << e;
   EXPECT_GT(completed, 0);
+  if (plan.target_hours > 0) {
+    EXPECT_GE(machine_s / 3600.0 / static_cast<double>(plan.stations.size()), plan.target_hours)
+        << "the run's length in minutes (the cap) ended it first";
+  }
   if (plan.duration.count() == 0) {
     EXPECT_GE(kills, kMinKills);
     EXPECT_GE(kills_running, kMinKills / 2);
@@ -778,10 +886,14 @@ TEST_F(Chaos, KillNineAtRandomMomentsWhileRoutesOperate) {
 // the four dialects (CELL_CHAOS_STATIONS, default 4: one of each), routes and Okuma schedules on the virtual
 // clock for CELL_CHAOS_MINUTES (unset: 60 s, the gate's short version), with kill -9s, graceful restarts and
 // station link cuts at random moments; pallet numbers are used again once free, so the run makes as many
-// pallets as its length allows.
+// pallets as its length allows. CELL_CHAOS_HOURS (`./cell week --hours H`): the chaos ends once the jobs
+// have run H machine hours a station (168: a week), CELL_CHAOS_MINUTES being its cap, with parts of shop
+// length on every dialect and each dialect's stations kept busy alike.
 TEST_F(Chaos, Week) {
   const int n = EnvInt("CELL_CHAOS_STATIONS", 4);
   const int minutes = EnvInt("CELL_CHAOS_MINUTES", 0);
+  const char* hours_env = std::getenv("CELL_CHAOS_HOURS");
+  const double hours = hours_env && *hours_env ? std::stod(hours_env) : 0.0;
   ASSERT_GE(n, 1);
   ASSERT_GE(minutes, 0);
   Plan plan;
@@ -798,6 +910,19 @@ TEST_F(Chaos, Week) {
   plan.kt_moves = 300;  // visits of minutes of machine time, not half hours: more pallets, more decisions
   plan.cut_s = minutes <= 5 ? std::pair{5, 10} : std::pair{20, 60};
   plan.sample_every = minutes <= 5 ? 2s : 10s;
+  if (hours > 0) {
+    // A week's parts: about an hour of machine time a visit on every dialect (the run records' machine_s,
+    // one pass: Okuma 9.5 s, EMCO 49.6 s, Balt-System 101.7 s; 250, 40 and 20 passes took 34, 31 and 31
+    // min; a station's own KT-APL route runs CHAOS4, CHAOS1 and CHAOS2, 1,600 moves), so that a week of 32
+    // stations is about five thousand visits, not tens of thousands of `cellctl` calls.
+    plan.target_hours = hours;
+    plan.balance = true;
+    plan.passes = {.okuma = 500, .emco = 80, .balt = 40};
+    plan.live_jobs = 2 * n;  // one running and one queued on each station
+    // One `cellctl` at a time made about 3 jobs a second whatever the cell's size, fewer than 32 stations
+    // at a few hundred times real time finish: most stood idle.
+    plan.submitters = 4;
+  }
   Run(plan);
 }
 

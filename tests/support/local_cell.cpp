@@ -31,6 +31,17 @@ LocalCell::~LocalCell() {
     std::fprintf(stderr, "CELL_TEST_KEEP: kept %s\n", data_.c_str());
     return;
   }
+  if (::testing::Test::HasFailure()) {
+    // A failure under load may not come again: its logs and databases stay, and the scheduler's log's end
+    // (where most of a cell's failures show) goes into the test's output, which is all a CI run keeps.
+    std::fprintf(stderr, "the test failed: kept %s\n", data_.c_str());
+    std::string log = ReadFile(data_ + "/logs/cell-scheduler.service.log");
+    std::size_t at = log.size();
+    for (int lines = 0; at > 0 && lines < 80; --at)
+      if (log[at - 1] == '\n') ++lines;
+    if (!log.empty()) std::fprintf(stderr, "cell-scheduler's log ends:\n%s\n", log.substr(at).c_str());
+    return;
+  }
   std::error_code ec;
   std::filesystem::remove_all(data_, ec);
 }
