@@ -173,8 +173,8 @@ struct Plan {
   struct {              // the other dialects' parts: their cutting repeated (OkumaPart, EmcoPart, BaltPart)
     int okuma = 1, emco = 1, balt = 1;
   } passes;
-  // The week's operator: each dialect's routes kept at its stations + 1 live jobs (true), or plan.live_jobs
-  // over all routes in turn (false: most work goes to KT-APL, which has three routes).
+  // The week's operator: every station kept at two live jobs, mostly on a route of its own (true), or
+  // plan.live_jobs over all routes in turn (false: most work goes to KT-APL, which has three routes).
   bool balance = false;
   double target_hours = 0;  // > 0: the chaos ends once the jobs' machine time is this many hours a station
   int submitters = 1;       // the operator's `cellctl` calls at a time
@@ -888,7 +888,7 @@ TEST_F(Chaos, KillNineAtRandomMomentsWhileRoutesOperate) {
 // station link cuts at random moments; pallet numbers are used again once free, so the run makes as many
 // pallets as its length allows. CELL_CHAOS_HOURS (`./cell week --hours H`): the chaos ends once the jobs
 // have run H machine hours a station (168: a week), CELL_CHAOS_MINUTES being its cap, with parts of shop
-// length on every dialect and each dialect's stations kept busy alike.
+// length on every dialect and every station kept busy.
 TEST_F(Chaos, Week) {
   const int n = EnvInt("CELL_CHAOS_STATIONS", 4);
   const int minutes = EnvInt("CELL_CHAOS_MINUTES", 0);
