@@ -136,13 +136,16 @@ cell::RunReply Station::OnRun(const cell::RunRequest& r) {
       PublishRecorded(d.dispatch_id);
     }
     rep.state(state ? ToWire(*state) : cell::RUN_CANCELLED);
+    if (auto run = Recorded(r.dispatch_id())) rep.run(*run);
     return rep;
   }
   if (state) {  // a re-sent dispatch (scheduler restart, station back online): de-duplicated on the id
     // An ended run is said again: its end may have been published by a process that died before anyone read
     // it, and the scheduler asks because it is still waiting for it.
+    // The reply says it too: an event lost on the way would otherwise leave the scheduler waiting.
     if (*state != RunState::kQueued && *state != RunState::kActive) PublishRecorded(r.dispatch_id());
     rep.state(ToWire(*state));
+    if (auto run = Recorded(r.dispatch_id())) rep.run(*run);
     return rep;
   }
   if (r.programs().empty() || r.programs().size() > 75)
@@ -258,9 +261,9 @@ void Station::OnProbe(const cell::ProbeResult& r) {
   stream_.OnProbe(r);
 }
 
-void Station::PublishRecorded(std::int32_t dispatch_id) {
+std::optional<cell::RunStatus> Station::Recorded(std::int32_t dispatch_id) {
   const auto v = db_.View(dispatch_id);
-  if (!v) return;
+  if (!v) return std::nullopt;
   cell::RunStatus s;
   s.dispatch_id(dispatch_id);
   s.station(cfg_.id);
@@ -272,7 +275,11 @@ void Station::PublishRecorded(std::int32_t dispatch_id) {
   s.started_ns(v->started_ns);
   s.finished_ns(v->finished_ns);
   s.reason(v->reason.substr(0, 255));
-  io_.PublishRun(s);
+  return s;
+}
+
+void Station::PublishRecorded(std::int32_t dispatch_id) {
+  if (auto s = Recorded(dispatch_id)) io_.PublishRun(*s);
 }
 
 void Station::Recover() {

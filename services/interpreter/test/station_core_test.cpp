@@ -171,7 +171,14 @@ TEST_F(StationCore, AskedAgainTheStationSaysWhatBecameOfADispatch) {
   Dispatch(1, {"P"});
   ASSERT_EQ(RunOne(1).state(), cell::RUN_COMPLETED);
   io_.runs.clear();
-  EXPECT_EQ(Dispatch(1, {"P"}).state(), cell::RUN_COMPLETED);
+  const auto again = Dispatch(1, {"P"});
+  EXPECT_EQ(again.state(), cell::RUN_COMPLETED);
+  // The reply carries the run as recorded too: the scheduler settles the dispatch from it even when the
+  // event is lost (issue 43).
+  EXPECT_EQ(again.run().dispatch_id(), 1);
+  EXPECT_EQ(again.run().state(), cell::RUN_COMPLETED);
+  EXPECT_EQ(again.run().programs_done(), 1);
+  EXPECT_GT(again.run().machine_s(), 0.0);
   ASSERT_EQ(io_.runs.size(), 1u);
   EXPECT_EQ(io_.runs[0].state(), cell::RUN_COMPLETED);
   EXPECT_EQ(io_.runs[0].programs_done(), 1);
@@ -186,7 +193,10 @@ TEST_F(StationCore, AskedAgainTheStationSaysWhatBecameOfADispatch) {
   // Cancelled from the queue: said as a run that never started.
   Dispatch(2, {"P"});
   io_.runs.clear();
-  EXPECT_EQ(Cancel(2).state(), cell::RUN_QUEUED);
+  const auto dropped = Cancel(2);
+  EXPECT_EQ(dropped.state(), cell::RUN_QUEUED);
+  EXPECT_EQ(dropped.run().state(), cell::RUN_CANCELLED);  // as it is now
+  EXPECT_EQ(dropped.run().started_ns(), 0);
   ASSERT_EQ(io_.runs.size(), 1u);
   EXPECT_EQ(io_.runs[0].state(), cell::RUN_CANCELLED);
   EXPECT_EQ(io_.runs[0].started_ns(), 0);

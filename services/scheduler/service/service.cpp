@@ -190,6 +190,12 @@ void Service::Tick() {
       spdlog::info("station {} {}", id, now ? "online" : "offline");
       Apply(now ? sched_.StationOnline(id, dialect_[id]) : sched_.StationOffline(id));
     }
+    // A run's end travels as an event; should one be lost, the held dispatch would wait for good: a station
+    // silent on it for 30 s is asked again, and its reply says how the run stands (issue 43).
+    if (const auto t = std::chrono::steady_clock::now(); t - asked_ >= std::chrono::seconds(5)) {
+      asked_ = t;
+      Apply(sched_.AskSilent(std::chrono::seconds(30)));
+    }
   }
   CheckDuplicates();
   PublishBacklog();
@@ -439,10 +445,8 @@ void Service::PublishJob(std::int64_t id) {
   }
 }
 
-void Service::OnRun(const cell::RunStatus& s) {
-  // Every sample, re-delivered ones included: the core applies only the steps not yet taken. A station's own
-  // runs (Balt-System SPG and START, ids below 1) are none of the scheduler's.
-  if (s.dispatch_id() <= 0) return;
+namespace {
+RunReport ToReport(const cell::RunStatus& s) {
   RunReport r;
   r.dispatch_id = s.dispatch_id();
   r.programs_done = s.programs_done();
@@ -464,8 +468,16 @@ void Service::OnRun(const cell::RunStatus& s) {
       r.started = s.started_ns() != 0;
       break;
   }
+  return r;
+}
+}  // namespace
+
+void Service::OnRun(const cell::RunStatus& s) {
+  // Every sample, re-delivered ones included: the core applies only the steps not yet taken. A station's own
+  // runs (Balt-System SPG and START, ids below 1) are none of the scheduler's.
+  if (s.dispatch_id() <= 0) return;
   std::lock_guard lk(mu_);
-  Apply(sched_.ReportRun(r));
+  Apply(sched_.ReportRun(ToReport(s)));
 }
 
 void Service::Sender(std::stop_token st) {
@@ -516,7 +528,12 @@ void Service::Sender(std::stop_token st) {
     try {
       auto rep = client->Call(req, std::chrono::seconds(5));
       bus::ThrowIfError(rep);
-      if (!cancel) {
+      if (rep.run().dispatch_id() == o.d.dispatch_id) {
+        // Asked again (or cancelled): the station's record settles it here, whatever became of its events
+        // (a lost end left a pallet RUNNING for good, issue 43).
+        std::lock_guard lk(mu_);
+        Apply(sched_.ReportRun(ToReport(rep.run())));
+      } else if (!cancel) {
         std::lock_guard lk(mu_);
         Apply(sched_.DispatchAcknowledged(o.d.dispatch_id));
       }

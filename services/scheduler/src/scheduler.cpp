@@ -437,6 +437,7 @@ void Scheduler::Impl::TrySend(int s) {
   st.queue.pop_front();
   st.inflight = d.id;
   d.state = DState::kSent;
+  d.heard_ms = NowMs();
   dirty_dispatches.insert(d.id);
   dirty_stations.insert(s);
   fx.dispatches.push_back(Action(d, false));
@@ -601,8 +602,10 @@ std::string Scheduler::Impl::Holding(const DispatchRec& d) {
 void Scheduler::Impl::AskAgain(int s) {
   const StationRec& st = stations[static_cast<std::size_t>(s)];
   if (st.inflight == 0 || states[static_cast<std::size_t>(s)].fault) return;
-  const DispatchRec& d = dispatches.at(st.inflight);
-  if (!d.interrupted.empty()) fx.dispatches.push_back(Action(d, true));
+  DispatchRec& d = dispatches.at(st.inflight);
+  if (d.interrupted.empty()) return;
+  d.heard_ms = NowMs();
+  fx.dispatches.push_back(Action(d, true));
 }
 
 void Scheduler::Impl::GiveBack(DispatchRec& d) {

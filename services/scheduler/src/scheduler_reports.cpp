@@ -76,6 +76,8 @@ Effects Scheduler::StationCondition(std::string_view id, bool fault, std::string
     if (fault) {
       m.Interrupt(s, fmt::format("station {} raised fault{}{}", id, code.empty() ? "" : " ", code), true);
     } else {
+      // A station that came back while in fault was not asked about the dispatch it holds: it is now.
+      if (ss.online) m.AskAgain(s);
       m.ReevaluateWaiting(s, fmt::format("station {} fault cleared", id));
       m.TrySend(s);
     }
@@ -129,9 +131,28 @@ DispatchRec* ForReport(Scheduler::Impl& m, std::int64_t id, std::string_view wha
                                      kDStateNames[static_cast<int>(it->second.state)]));
     return nullptr;
   }
+  it->second.heard_ms = m.NowMs();
   return &it->second;
 }
 }  // namespace
+
+Effects Scheduler::AskSilent(std::chrono::milliseconds quiet) {
+  Impl& m = *impl_;
+  m.Call([&] {
+    const std::int64_t now = m.NowMs();
+    for (std::size_t s = 0; s < m.stations.size(); ++s) {
+      const auto& ss = m.states[s];
+      const std::int64_t id = m.stations[s].inflight;
+      if (id == 0 || !ss.online || ss.fault) continue;
+      DispatchRec& d = m.dispatches.at(id);
+      // A dispatch still being delivered is the sender's (it retries until answered).
+      if (d.state == DState::kSent || now - d.heard_ms < quiet.count()) continue;
+      d.heard_ms = now;
+      m.fx.dispatches.push_back(m.Action(d, true));
+    }
+  });
+  return m.TakeEffects();
+}
 
 Effects Scheduler::DispatchAcknowledged(std::int64_t dispatch_id) {
   Impl& m = *impl_;

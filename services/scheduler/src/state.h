@@ -114,6 +114,9 @@ struct DispatchRec {
   // Why the scheduler lost sight of the station while this dispatch was in its hands ("station KT01 went
   // offline"); empty otherwise. Only the station's own report settles such a dispatch (docs/scheduler.md §5).
   std::string interrupted;
+  // When the scheduler last sent it or heard of it (ms, the scheduler's clock; memory only, 0 after a load):
+  // a handed-out dispatch silent for long is asked about again (AskSilent).
+  std::int64_t heard_ms = 0;
   std::int64_t Remaining() const {
     std::int64_t r = 0;
     for (std::size_t i = static_cast<std::size_t>(done); i < ucy.size(); ++i) r += ucy[i];

@@ -380,6 +380,69 @@ TEST(Health, APalletFinishedWhileItsStationWasAwayCompletes) {
   EXPECT_EQ(c.sched->Job(j)->cycle_s.value_or(0), 130.0);
 }
 
+// A station back online while in fault (a restarted process seen twice for a moment: DUPLICATE) is not
+// asked about the pallet it holds until the fault clears; then it is, and its word settles the pallet (a
+// pallet once stayed RUNNING for good, "waiting for its report": issue 43's week).
+TEST(Health, AStationBackInFaultIsAskedWhenTheFaultClears) {
+  FakeCell c;
+  c.Program("A", {}, 100);
+  c.Online("KT01");
+  c.Route("R", {"KT01:A"});
+  const auto j = c.Operate("R", 1);
+  const auto held = c.InHand("KT01").dispatch_id;
+  c.Take(c.sched->RunStarted(held));
+  c.Take(c.sched->StationOffline("KT01"));
+  c.Take(c.sched->StationCondition("KT01", true, "DUPLICATE", "cell-interpreter/KT01 runs in 2 processes"));
+  const auto before = c.received["KT01"].size();
+  c.Online("KT01");
+  EXPECT_EQ(c.received["KT01"].size(), before);  // in fault: not asked yet
+  c.Take(c.sched->StationCondition("KT01", false));
+  ASSERT_EQ(c.received["KT01"].size(), before + 1);
+  EXPECT_EQ(c.received["KT01"].back().dispatch_id, held);
+  EXPECT_TRUE(c.received["KT01"].back().resent);
+  c.Take(c.sched->ReportRun({held, RunStatus::kCompleted, 1, 90.0, ""}));
+  EXPECT_EQ(c.State(j), JobState::kCompleted);
+  EXPECT_EQ(c.Reason(j), "");
+}
+
+// A run's end is an event; one lost (its station replaced its participant as it ended) would leave the pallet
+// RUNNING for good. A dispatch nothing was heard of for the quiet time is asked about again, and the
+// station's answer (the run as recorded) settles it. Not while it is being delivered, nor on a station away
+// or in fault.
+TEST(Health, ADispatchSilentForLongIsAskedAgain) {
+  using std::chrono::seconds;
+  FakeCell c;
+  c.Program("A", {}, 100);
+  c.Online("KT01");
+  c.Online("KT02");
+  c.Route("R1", {"KT01:A"});
+  c.Route("R2", {"KT02:A"});
+  const auto j = c.Operate("R1", 1);
+  const auto k = c.Operate("R2", 2);
+  const auto held = c.InHand("KT01").dispatch_id;
+  const auto other = c.InHand("KT02").dispatch_id;
+  c.now_ms += 60'000;
+  const auto before = c.all.size();
+  c.Take(c.sched->AskSilent(seconds(30)));
+  EXPECT_EQ(c.all.size(), before);  // sent, not answered yet: the sender's to deliver
+  c.Take(c.sched->DispatchAcknowledged(held));
+  c.Take(c.sched->RunStarted(other));
+  c.Take(c.sched->StationCondition("KT02", true, "1234", "SPINDLE OVERLOAD"));
+  c.now_ms += 29'000;
+  c.Take(c.sched->AskSilent(seconds(30)));
+  EXPECT_EQ(c.all.size(), before);  // heard of 29 s ago
+  c.now_ms += 1'000;
+  c.Take(c.sched->AskSilent(seconds(30)));
+  ASSERT_EQ(c.all.size(), before + 1);  // KT01's; KT02 is in fault
+  EXPECT_EQ(c.all.back().dispatch_id, held);
+  EXPECT_TRUE(c.all.back().resent);
+  c.Take(c.sched->AskSilent(seconds(30)));
+  EXPECT_EQ(c.all.size(), before + 1);  // asked: quiet again for 30 s
+  c.Take(c.sched->ReportRun({held, RunStatus::kCompleted, 1, 80.0, ""}));
+  EXPECT_EQ(c.State(j), JobState::kCompleted);
+  EXPECT_EQ(c.State(k), JobState::kRunning);
+}
+
 // A handed-out pallet whose station vanished stays with it: the station may hold it in its queue. If the
 // station only stalled, its report clears the interruption; if it says it never started it, the pallet is
 // free again (a new dispatch id).

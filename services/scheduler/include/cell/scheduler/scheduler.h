@@ -264,6 +264,10 @@ class Scheduler {
   // Applies a station's run report: acknowledgement, start, program ends up to programs_done, then the end or
   // the failure, each step only if it has not happened yet (a repeated or older report changes nothing).
   Effects ReportRun(const RunReport& report);
+  // The dispatches held by online stations (no fault) that nothing was heard of for `quiet` are sent again
+  // (the same id): the station answers with the run as recorded, so an end whose event was lost still
+  // settles it (issue 43). The service calls it every few seconds.
+  Effects AskSilent(std::chrono::milliseconds quiet);
   // A program changed (or vanished) in the store: routes using it are re-validated.
   Effects ProgramChanged(std::string_view name);
 

@@ -89,6 +89,7 @@ class Service {
   bus::Writer<cell::JobInfo> jobinfo_w_;
   bus::Writer<cell::Alarm> alarm_w_;
   std::chrono::steady_clock::time_point started_;
+  std::chrono::steady_clock::time_point asked_;  // the last AskSilent
   // Created by Start(), after the stations are configured and recovery has run.
   std::optional<bus::Reader<cell::StationStatus>> status_r_;
   std::optional<bus::Reader<cell::ToolTable>> tools_r_;
