@@ -5,7 +5,8 @@ Reads the processes of `cellctl up` ($DATA_DIR/cell-up.json; of every DATA_DIR g
 across hosts) and prints one line of key=value figures over
 SECONDS: cores (utime + stime of the cell's processes / wall), rss_mb (sum of VmRSS), threads, and udp_in_per_s
 (the host's UDP datagrams received per second, /proc/net/snmp: the cell's discovery and heartbeat traffic, as
-long as nothing else on the host talks UDP; only this network namespace's).
+long as nothing else on the host talks UDP; only this network namespace's), and spent_cpu_s: the CPU-seconds the
+processes had used when the window began (since they started: what coming up cost).
 """
 import json
 import os
@@ -50,8 +51,10 @@ def main():
                         threads += int(line.split()[1])
         except OSError:
             pass
+    spent = sum(t for t in t0.values() if t is not None) / os.sysconf('SC_CLK_TCK')
     print(f"processes={len(pids)} cores={ticks / os.sysconf('SC_CLK_TCK') / wall:.3f} "
-          f"rss_mb={rss_kb / 1024:.0f} threads={threads} udp_in_per_s={(u1 - u0) / wall:.0f}")
+          f"rss_mb={rss_kb / 1024:.0f} threads={threads} udp_in_per_s={(u1 - u0) / wall:.0f} "
+          f"spent_cpu_s={spent:.1f}")
 
 
 if __name__ == "__main__":
