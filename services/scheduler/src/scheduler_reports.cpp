@@ -137,21 +137,21 @@ DispatchRec* ForReport(Scheduler::Impl& m, std::int64_t id, std::string_view wha
 }  // namespace
 
 Effects Scheduler::AskSilent(std::chrono::milliseconds quiet) {
+  // Changes nothing the database keeps (heard_ms is memory only): no transaction, every few seconds.
   Impl& m = *impl_;
-  m.Call([&] {
-    const std::int64_t now = m.NowMs();
-    for (std::size_t s = 0; s < m.stations.size(); ++s) {
-      const auto& ss = m.states[s];
-      const std::int64_t id = m.stations[s].inflight;
-      if (id == 0 || !ss.online || ss.fault) continue;
-      DispatchRec& d = m.dispatches.at(id);
-      // A dispatch still being delivered is the sender's (it retries until answered).
-      if (d.state == DState::kSent || now - d.heard_ms < quiet.count()) continue;
-      d.heard_ms = now;
-      m.fx.dispatches.push_back(m.Action(d, true));
-    }
-  });
-  return m.TakeEffects();
+  Effects fx;
+  const std::int64_t now = m.NowMs();
+  for (std::size_t s = 0; s < m.stations.size(); ++s) {
+    const auto& ss = m.states[s];
+    const std::int64_t id = m.stations[s].inflight;
+    if (id == 0 || !ss.online || ss.fault) continue;
+    DispatchRec& d = m.dispatches.at(id);
+    // A dispatch still being delivered is the sender's (it retries until answered).
+    if (d.state == DState::kSent || now - d.heard_ms < quiet.count()) continue;
+    d.heard_ms = now;
+    fx.dispatches.push_back(m.Action(d, true));
+  }
+  return fx;
 }
 
 Effects Scheduler::DispatchAcknowledged(std::int64_t dispatch_id) {
