@@ -108,6 +108,7 @@ cell::RunReply Station::OnRun(const cell::RunRequest& r) {
   const std::optional<RunState> state = db_.FindRun(r.dispatch_id());
   if (r.cancel()) {
     std::optional<RunState> now = state;
+    bool say = false;  // on the run topic as well as in the reply
     if (now == RunState::kQueued) {
       if (db_.CancelQueued(r.dispatch_id(), "cancelled by the scheduler", clock_.WallNs())) {
         board_.Queued(db_.Count(RunState::kQueued));
@@ -121,7 +122,7 @@ cell::RunReply Station::OnRun(const cell::RunRequest& r) {
       panel_.AbortRun(r.dispatch_id());  // the machine stops too, not only the sending
       stream_.Wake();
     } else if (now) {
-      PublishRecorded(r.dispatch_id());  // cancelled now, or ended before the cancel came: said (again)
+      say = true;  // cancelled now, or ended before the cancel came: said (again)
     } else {
       // Never received: kept as cancelled, so that the request itself, arriving late, cannot start it, and
       // said on the run topic, since the scheduler may be waiting for this station's word on it
@@ -133,19 +134,24 @@ cell::RunReply Station::OnRun(const cell::RunRequest& r) {
       d.node = cfg_.id;
       for (const auto& p : r.programs()) d.programs.push_back(p.to_string());
       db_.EnqueueCancelled(d, "cancelled by the scheduler before the station received it", clock_.WallNs());
-      PublishRecorded(d.dispatch_id);
+      say = true;
     }
     rep.state(state ? ToWire(*state) : cell::RUN_CANCELLED);
-    if (auto run = Recorded(r.dispatch_id())) rep.run(*run);
+    if (const auto run = Recorded(r.dispatch_id())) {
+      if (say) io_.PublishRun(*run);
+      rep.run(*run);
+    }
     return rep;
   }
   if (state) {  // a re-sent dispatch (scheduler restart, station back online): de-duplicated on the id
     // An ended run is said again: its end may have been published by a process that died before anyone read
     // it, and the scheduler asks because it is still waiting for it.
     // The reply says it too: an event lost on the way would otherwise leave the scheduler waiting.
-    if (*state != RunState::kQueued && *state != RunState::kActive) PublishRecorded(r.dispatch_id());
     rep.state(ToWire(*state));
-    if (auto run = Recorded(r.dispatch_id())) rep.run(*run);
+    if (const auto run = Recorded(r.dispatch_id())) {
+      if (*state != RunState::kQueued && *state != RunState::kActive) io_.PublishRun(*run);
+      rep.run(*run);
+    }
     return rep;
   }
   if (r.programs().empty() || r.programs().size() > 75)

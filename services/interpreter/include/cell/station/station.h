@@ -157,8 +157,9 @@ class Station {
   void ExecuteIo(const std::string& program, const interp::Canon& c, AuxIo& aux);
   void Checkpoint(std::int32_t run_id) const;  // throws when the run was cancelled or the station stops
   void PublishRun(const ActiveRun& run, cell::RunState state, const std::string& reason = "");
-  // The dispatch's status as the database has it, published again (a scheduler waiting for its end).
-  std::optional<cell::RunStatus> Recorded(std::int32_t dispatch_id);  // the run as the database has it
+  // The dispatch's status as the database has it (none for an unknown id); PublishRecorded says it again on
+  // the run topic (a scheduler waiting for its end).
+  std::optional<cell::RunStatus> Recorded(std::int32_t dispatch_id);
   void PublishRecorded(std::int32_t dispatch_id);
   void PublishMemory(const MemorySnapshot& now, bool tools, bool variables);
 
