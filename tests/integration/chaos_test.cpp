@@ -178,6 +178,7 @@ struct Plan {
   bool balance = false;
   double target_hours = 0;  // > 0: the chaos ends once the jobs' machine time is this many hours a station
   int submitters = 1;       // the operator's `cellctl` calls at a time
+  std::string restart_s = "30";  // `cellctl restart --timeout`: how long it may take to hear the new process
 };
 
 // The parts of the other dialects (week): each a short real program of its control, stored in HOST; `passes`
@@ -602,7 +603,7 @@ void Chaos::Run(const Plan& plan) {
     if (what == 8) {  // a graceful restart
       const std::string& v = services[std::uniform_int_distribution<size_t>(0, services.size() - 1)(rng)];
       reaper_.Killing(cell_.Pids().at(v));
-      auto r = cell_.Ctl({"restart", v});
+      auto r = cell_.Ctl({"restart", v, "--timeout", plan.restart_s});
       ASSERT_EQ(r.code, 0) << "cellctl restart " << v << ": " << r.err;
       ++restarts;
       continue;
@@ -662,7 +663,7 @@ void Chaos::Run(const Plan& plan) {
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(std::uniform_int_distribution<int>(0, 800)(rng)));
     for (auto& v : victims) {
-      auto r = cell_.Ctl({"restart", v});
+      auto r = cell_.Ctl({"restart", v, "--timeout", plan.restart_s});
       ASSERT_EQ(r.code, 0) << "cellctl restart " << v << ": " << r.err;
     }
     // The librarian: now and then a new program, put under its key and retried across the kills.
@@ -922,6 +923,10 @@ TEST_F(Chaos, Week) {
     // One `cellctl` at a time made about 3 jobs a second whatever the cell's size, fewer than 32 stations
     // at a few hundred times real time finish: most stood idle.
     plan.submitters = 4;
+    // Fast DDS at 32 stations on 2 cores (load 55 under the simulation): a killed interpreter was back and
+    // online to the scheduler in 15 s, but the `cellctl restart` that started it, a newcomer to 68
+    // participants, had not heard it after 30 s (2026-12-04, docs/operations.md §9.6).
+    plan.restart_s = "120";
   }
   Run(plan);
 }

@@ -239,7 +239,7 @@ struct Opts {
   std::string service;
   int count = 0;
   bool secure = false;
-  double ready_s = 30;  // up: how long to wait for every process and station to be ready
+  double ready_s = 30;  // up, restart: how long to wait for every process and station to be ready
 };
 using OptsPtr = std::shared_ptr<Opts>;
 
@@ -335,6 +335,11 @@ void AddCellUp(CLI::App& app, Context& ctx, const OptsPtr& o) {
 void AddCellRestart(CLI::App& app, Context& ctx, const OptsPtr& o) {
   auto* restart = app.add_subcommand("restart", "restart one service of the local cell: SERVICE[/ID]");
   restart->add_option("SERVICE", o->service, "e.g. cell-scheduler, cell-interpreter/KT01")->required();
+  restart
+      ->add_option("--timeout", o->ready_s,
+                   "seconds to wait for the new process to announce itself to this cellctl (default 30; a "
+                   "newcomer to a large cell on a loaded host hears it later than the cell does)")
+      ->check(CLI::Range(1.0, 3600.0));
   restart->callback([o, &ctx] {
     umask(077);
     std::vector<CellProcess> procs;
@@ -366,7 +371,8 @@ void AddCellRestart(CLI::App& app, Context& ctx, const OptsPtr& o) {
     // A host service restarted is heard on its own slot: the stations need not meet this cellctl (the week
     // restarts the scheduler under load; docs/operations.md §9.4, "A client of the host services").
     ctx.host_services_only = bus::HostServiceSlot(target.service) >= 0;
-    auto missing = WaitReady(ctx, {target}, {target.service}, bus::Millis(30000));
+    auto missing =
+        WaitReady(ctx, {target}, {target.service}, bus::Millis(static_cast<std::int64_t>(o->ready_s * 1000)));
     if (!missing.empty()) throw Exit{1, target.service + " did not come up: " + Join(missing, "; ")};
     std::cout << target.service << " restarted: pid " << target.pid << "\n";
   });
