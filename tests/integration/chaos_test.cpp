@@ -178,7 +178,7 @@ struct Plan {
   bool balance = false;
   double target_hours = 0;  // > 0: the chaos ends once the jobs' machine time is this many hours a station
   int submitters = 1;       // the operator's `cellctl` calls at a time
-  std::string restart_s = "30";  // `cellctl restart --timeout`: how long it may take to hear the new process
+  int restart_s = 30;       // `cellctl restart --timeout`: how long it may take to hear the new process
 };
 
 // The parts of the other dialects (week): each a short real program of its control, stored in HOST; `passes`
@@ -603,7 +603,8 @@ void Chaos::Run(const Plan& plan) {
     if (what == 8) {  // a graceful restart
       const std::string& v = services[std::uniform_int_distribution<size_t>(0, services.size() - 1)(rng)];
       reaper_.Killing(cell_.Pids().at(v));
-      auto r = cell_.Ctl({"restart", v, "--timeout", plan.restart_s});
+      auto r = cell_.Ctl({"restart", v, "--timeout", std::to_string(plan.restart_s)},
+                         std::chrono::seconds(plan.restart_s + 30));
       ASSERT_EQ(r.code, 0) << "cellctl restart " << v << ": " << r.err;
       ++restarts;
       continue;
@@ -663,7 +664,8 @@ void Chaos::Run(const Plan& plan) {
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(std::uniform_int_distribution<int>(0, 800)(rng)));
     for (auto& v : victims) {
-      auto r = cell_.Ctl({"restart", v, "--timeout", plan.restart_s});
+      auto r = cell_.Ctl({"restart", v, "--timeout", std::to_string(plan.restart_s)},
+                         std::chrono::seconds(plan.restart_s + 30));
       ASSERT_EQ(r.code, 0) << "cellctl restart " << v << ": " << r.err;
     }
     // The librarian: now and then a new program, put under its key and retried across the kills.
@@ -926,7 +928,7 @@ TEST_F(Chaos, Week) {
     // Fast DDS at 32 stations on 2 cores (load 55 under the simulation): a killed interpreter was back and
     // online to the scheduler in 15 s, but the `cellctl restart` that started it, a newcomer to 68
     // participants, had not heard it after 30 s (2026-12-04, docs/operations.md §9.6).
-    plan.restart_s = "120";
+    plan.restart_s = 120;
   }
   Run(plan);
 }
