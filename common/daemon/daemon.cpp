@@ -11,6 +11,7 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <cstdlib>
 #include <cstring>
 #include <string>
 
@@ -50,7 +51,12 @@ extern "C" void OnSignal(int sig) {
 // the first failure is a warning, later ones are debug lines.
 std::atomic<bool> g_notify_warned{false};
 
+// CELL_NOTIFY=ready: the NOTIFY_SOCKET is a `cellctl restart` waiting for READY=1 alone, gone once it has
+// it; later messages (STATUS, STOPPING) would only fail into the log.
+std::atomic<bool> g_notify_done{false};
+
 bool Notify(const std::string& msg) {
+  if (g_notify_done) return false;
   int r = sd_notify(0, msg.c_str());
   if (r < 0) {
     if (!g_notify_warned.exchange(true)) {
@@ -182,7 +188,9 @@ void Daemon::WaitForStop() {
 
 bool Daemon::NotifyReady(std::string_view status) {
   ready_ = true;
-  return Notify("READY=1\nSTATUS=" + std::string(status));
+  const bool sent = Notify("READY=1\nSTATUS=" + std::string(status));
+  if (const char* n = std::getenv("CELL_NOTIFY"); n && std::string_view(n) == "ready") g_notify_done = true;
+  return sent;
 }
 
 bool Daemon::NotifyStatus(std::string_view status) {

@@ -647,8 +647,15 @@ TEST_F(Hardening, LocalCellProcesses) {
   EXPECT_NE(sched2, sched);
   EXPECT_EQ(ProcessArgv(sched2), argv);
   EXPECT_EQ(ProcessEnvironment(sched2), env);
-  // A restart of a running service replaces it.
+  // A restart of a running service replaces it. A station's service is waited for by its READY=1 on the
+  // restart's own notify socket (docs/operations.md §7), which it uses for that alone: stopped by the next
+  // restart, long after the first cellctl has gone, it logs no failed sd_notify.
   ASSERT_EQ(Ctl({"restart", "cell-axis-servo/KT02"}).code, 0);
+  const auto servo_env = ProcessEnvironment(Pid("cell-axis-servo/KT02"));
+  EXPECT_EQ(servo_env.count("CELL_NOTIFY") ? servo_env.at("CELL_NOTIFY") : "", "ready");
+  ASSERT_EQ(Ctl({"restart", "cell-axis-servo/KT02"}).code, 0);
+  EXPECT_EQ(ReadFile(cell_.data_dir() + "/logs/cell-axis-servo@KT02.service.log").find("sd_notify failed"),
+            std::string::npos);
   EXPECT_EQ(Ctl({"restart", "cell-nothing"}).code, 2);
 
   // `up` of a partly-down cell starts only what is missing.

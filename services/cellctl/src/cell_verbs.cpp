@@ -133,6 +133,52 @@ void Secure(const std::vector<std::string>& stations) {
   setenv("CELL_SECURITY", "on", 1);
 }
 
+// Our child that has ended: how, with its last log line (a signal leaves no line of its own).
+std::string HowItEnded(const CellProcess& p) {
+  int status = 0;
+  std::string how = "exited";
+  if (waitpid(p.pid, &status, WNOHANG) == p.pid) {
+    if (WIFEXITED(status)) how = "exited with status " + std::to_string(WEXITSTATUS(status));
+    if (WIFSIGNALED(status)) how = std::string("was killed by signal ") + strsignal(WTERMSIG(status));
+  }
+  return p.unit + " " + how + ": " + LastLine(p.log);
+}
+
+// A restarted station service (interpreter, axis servo, DNC line) is up once it has sent READY=1 to
+// `listener` (after it joined the bus, claimed its station and started serving), and an interpreter of a cell
+// with a scheduler once the scheduler sees its station online, read through a client of the host services:
+// this cellctl meets no station (a newcomer to the whole cell is what took over a minute, §9.6 of
+// docs/operations.md). Returns what is missing.
+std::vector<std::string> WaitRestarted(Context& ctx, const std::vector<CellProcess>& procs,
+                                       const CellProcess& target, ReadyListener& listener,
+                                       std::chrono::steady_clock::time_point deadline) {
+  if (!listener.Wait(target, deadline)) {
+    if (!StartTime(target.pid)) return {HowItEnded(target)};
+    return {target.unit + " (no READY=1 from pid " + std::to_string(target.pid) + ")"};
+  }
+  const std::string station = InterpreterStation(target.service);
+  if (station.empty() || !RunsScheduler(procs)) return {};
+  ctx.host_services_only = true;
+  std::mutex mu;
+  bool online = false;
+  bus::Reader<cell::SchedulerState> sched(ctx.Bus(), bus::topics::kSchedulerState, bus::QosKind::kState,
+                                          [&](const cell::SchedulerState& st, const bus::SampleInfo&) {
+                                            std::lock_guard lk(mu);
+                                            online = false;
+                                            for (auto& b : st.backlog())
+                                              if (b.station().to_string() == station) online = b.online();
+                                          });
+  const auto left = std::chrono::duration_cast<bus::Millis>(deadline - std::chrono::steady_clock::now());
+  const bool seen = bus::WaitUntil(
+      [&] {
+        std::lock_guard lk(mu);
+        return online;
+      },
+      std::max(left, bus::Millis(0)), bus::Millis(25));
+  if (seen) return {};
+  return {target.unit + " (ready, but the scheduler does not see station " + station + ")"};
+}
+
 // Waits until every process in `procs` has announced itself READY on the bus (its own pid, so an older
 // process's last heartbeat does not count) and, in a cell with a scheduler, until the scheduler sees every
 // station online (a station it does not see is not dispatchable: in a cell too large for its discovery,
@@ -160,15 +206,7 @@ std::vector<std::string> WaitReady(Context& ctx, const std::vector<CellProcess>&
         auto seen = live.Snapshot();
         for (auto& p : procs) {
           if (started.count(p.service) && !StartTime(p.pid)) {
-            // Our child: how it ended, with its last log line (a signal leaves no line of its own).
-            int status = 0;
-            std::string how = "exited";
-            if (waitpid(p.pid, &status, WNOHANG) == p.pid) {
-              if (WIFEXITED(status)) how = "exited with status " + std::to_string(WEXITSTATUS(status));
-              if (WIFSIGNALED(status))
-                how = std::string("was killed by signal ") + strsignal(WTERMSIG(status));
-            }
-            missing.assign(1, p.unit + " " + how + ": " + LastLine(p.log));
+            missing.assign(1, HowItEnded(p));
             return true;  // no point waiting
           }
           if (p.service == "cell-dashboard" && Env(p, "CELL_SECURITY") == "on") {
@@ -337,13 +375,16 @@ void AddCellRestart(CLI::App& app, Context& ctx, const OptsPtr& o) {
   restart->add_option("SERVICE", o->service, "e.g. cell-scheduler, cell-interpreter/KT01")->required();
   restart
       ->add_option("--timeout", o->ready_s,
-                   "seconds to wait for the new process to announce itself to this cellctl (default 30; a "
-                   "newcomer to a large cell on a loaded host hears it later than the cell does)")
+                   "seconds to wait for the new process to be ready (default 30): a host service heard on "
+                   "the bus, a station's service by its READY=1 and, for an interpreter, online to the "
+                   "scheduler")
       ->check(CLI::Range(1.0, 3600.0));
   restart->callback([o, &ctx] {
     umask(077);
     std::vector<CellProcess> procs;
     CellProcess target;
+    bool host_service = false;
+    std::optional<ReadyListener> listener;  // a station's service: its READY=1 comes here
     {
       RecordLock lock;
       procs = LoadRecord();
@@ -360,19 +401,24 @@ void AddCellRestart(CLI::App& app, Context& ctx, const OptsPtr& o) {
       }
       if (it->argv.empty())
         throw Exit{1, it->unit + " was recorded without its command line (cellctl down; up)"};
+      host_service = bus::HostServiceSlot(it->service) >= 0;
+      if (!host_service) listener.emplace();
       // A process that is still the one started is stopped first; a PID that now belongs to another process
       // is left alone.
       Stop({*it}, std::chrono::seconds(10));
       if (Env(*it, "CELL_SECURITY") == "on") setenv("CELL_SECURITY", "on", 1);
-      Launch(*it);
+      Launch(*it, host_service ? std::vector<std::string>{} : listener->Env());
       target = *it;
       SaveRecord(procs);
     }
+    const auto timeout = bus::Millis(static_cast<std::int64_t>(o->ready_s * 1000));
     // A host service restarted is heard on its own slot: the stations need not meet this cellctl (the week
-    // restarts the scheduler under load; docs/operations.md §9.4, "A client of the host services").
-    ctx.host_services_only = bus::HostServiceSlot(target.service) >= 0;
-    auto missing =
-        WaitReady(ctx, {target}, {target.service}, bus::Millis(static_cast<std::int64_t>(o->ready_s * 1000)));
+    // restarts the scheduler under load; docs/operations.md §9.4, "A client of the host services"). A
+    // station's service says READY=1 to this cellctl (WaitRestarted).
+    ctx.host_services_only = host_service;
+    auto missing = host_service ? WaitReady(ctx, {target}, {target.service}, timeout)
+                                : WaitRestarted(ctx, procs, target, *listener,
+                                                std::chrono::steady_clock::now() + timeout);
     if (!missing.empty()) throw Exit{1, target.service + " did not come up: " + Join(missing, "; ")};
     std::cout << target.service << " restarted: pid " << target.pid << "\n";
   });

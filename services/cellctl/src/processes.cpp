@@ -1,16 +1,20 @@
 #include "processes.h"
 
 #include <fcntl.h>
+#include <poll.h>
 #include <signal.h>
 #include <sys/file.h>
+#include <sys/socket.h>
 #include <sys/stat.h>
 #include <sys/syscall.h>
+#include <sys/un.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
 #include <climits>
+#include <cstddef>
 #include <cstring>
 #include <fstream>
 #include <iterator>
@@ -195,7 +199,7 @@ std::vector<std::string> CurrentEnvironment() {
   return env;
 }
 
-void Launch(CellProcess& p) {
+void Launch(CellProcess& p, const std::vector<std::string>& extra_env) {
   std::error_code ec;
   p.exe = fs::canonical(p.argv.at(0), ec).string();
   if (ec) throw Exit{1, "cannot start " + p.unit + ": " + p.argv[0] + ": " + ec.message()};
@@ -204,6 +208,7 @@ void Launch(CellProcess& p) {
   for (auto& a : p.argv) args.push_back(const_cast<char*>(a.c_str()));
   args.push_back(nullptr);
   for (auto& e : p.env) envp.push_back(const_cast<char*>(e.c_str()));
+  for (auto& e : extra_env) envp.push_back(const_cast<char*>(e.c_str()));
   envp.push_back(nullptr);
   const std::string log = p.log;
   pid_t pid = fork();
@@ -226,6 +231,63 @@ void Launch(CellProcess& p) {
   }
   p.pid = pid;
   p.start_time = StartTime(pid).value_or(0);
+}
+
+ReadyListener::ReadyListener()
+    : name_("cellctl-ready/" + std::to_string(getpid()) + "/" +
+            std::to_string(std::chrono::steady_clock::now().time_since_epoch().count())) {
+  fd_ = socket(AF_UNIX, SOCK_DGRAM | SOCK_CLOEXEC, 0);
+  if (fd_ < 0) throw Exit{1, std::string("cannot make a notify socket: ") + std::strerror(errno)};
+  const int on = 1;
+  sockaddr_un a{};
+  a.sun_family = AF_UNIX;
+  std::memcpy(a.sun_path + 1, name_.data(), name_.size());  // sun_path[0] = 0: the abstract namespace
+  const auto len = static_cast<socklen_t>(offsetof(sockaddr_un, sun_path) + 1 + name_.size());
+  if (setsockopt(fd_, SOL_SOCKET, SO_PASSCRED, &on, sizeof on) != 0 ||
+      bind(fd_, reinterpret_cast<const sockaddr*>(&a), len) != 0) {
+    const std::string why = std::strerror(errno);
+    close(fd_);
+    throw Exit{1, "cannot make a notify socket: " + why};
+  }
+}
+
+ReadyListener::~ReadyListener() {
+  if (fd_ >= 0) close(fd_);
+}
+
+std::vector<std::string> ReadyListener::Env() const {
+  return {"NOTIFY_SOCKET=@" + name_, "CELL_NOTIFY=ready"};
+}
+
+bool ReadyListener::Wait(const CellProcess& p, std::chrono::steady_clock::time_point deadline) {
+  // Alive (not a zombie) by its PID: IsRunning's executable check would fail between fork and exec.
+  while (std::chrono::steady_clock::now() < deadline && StartTime(p.pid)) {
+    pollfd pfd{fd_, POLLIN, 0};
+    if (poll(&pfd, 1, 100) <= 0) continue;
+    char buf[4096];
+    alignas(cmsghdr) char control[CMSG_SPACE(sizeof(ucred))];
+    iovec iov{buf, sizeof buf - 1};
+    msghdr m{};
+    m.msg_iov = &iov;
+    m.msg_iovlen = 1;
+    m.msg_control = control;
+    m.msg_controllen = sizeof control;
+    const ssize_t n = recvmsg(fd_, &m, MSG_DONTWAIT);
+    if (n <= 0) continue;
+    buf[n] = '\0';
+    pid_t from = 0;
+    for (cmsghdr* c = CMSG_FIRSTHDR(&m); c; c = CMSG_NXTHDR(&m, c))
+      if (c->cmsg_level == SOL_SOCKET && c->cmsg_type == SCM_CREDENTIALS) {
+        ucred cred{};
+        std::memcpy(&cred, CMSG_DATA(c), sizeof cred);
+        from = cred.pid;
+      }
+    if (from != p.pid) continue;  // a message of another process that found the name
+    std::istringstream lines(buf);
+    for (std::string line; std::getline(lines, line);)
+      if (line == "READY=1") return true;
+  }
+  return false;
 }
 
 std::vector<std::string> Stop(const std::vector<CellProcess>& procs, std::chrono::seconds grace) {

@@ -69,10 +69,32 @@ std::optional<std::string> LocalServiceOn(int domain);
 // The environment of this process as "NAME=value" strings.
 std::vector<std::string> CurrentEnvironment();
 
-// Forks and execs p.argv with p.env, stdout and stderr appended to p.log, stdin /dev/null, its own session,
-// umask 077, and no descriptor of ours beyond 0-2 (cellctl must hold no DDS participant when it calls this).
-// Sets p.pid, p.exe and p.start_time.
-void Launch(CellProcess& p);
+// Forks and execs p.argv with p.env (and `extra_env`, which the record does not keep), stdout and stderr
+// appended to p.log, stdin /dev/null, its own session, umask 077, and no descriptor of ours beyond 0-2
+// (cellctl must hold no DDS participant when it calls this). Sets p.pid, p.exe and p.start_time.
+void Launch(CellProcess& p, const std::vector<std::string>& extra_env = {});
+
+// The supervisor's end of sd_notify for a process this cellctl starts (`restart` of a station's service): its
+// READY=1 (every service sends it once it serves, docs/operations.md §6.3) says it is up without this cellctl
+// meeting the whole cell on the bus, which on Fast DDS at 32 stations on a loaded host took over a minute
+// (§9.6). An abstract unix socket: nothing in the file system, gone with this process.
+class ReadyListener {
+ public:
+  ReadyListener();  // Exit{1} when the socket cannot be made
+  ~ReadyListener();
+  ReadyListener(const ReadyListener&) = delete;
+  ReadyListener& operator=(const ReadyListener&) = delete;
+  // What the child's environment gains: NOTIFY_SOCKET=@<this socket>, and CELL_NOTIFY=ready (the service
+  // sends READY=1 there and nothing after: no one listens once this cellctl has exited).
+  std::vector<std::string> Env() const;
+  // True once `p` (by its PID, from the kernel's credentials) has sent READY=1; false at `deadline` or once
+  // it has ended.
+  bool Wait(const CellProcess& p, std::chrono::steady_clock::time_point deadline);
+
+ private:
+  int fd_ = -1;
+  std::string name_;  // the abstract address, without its leading NUL
+};
 
 // SIGTERM to every process that is still ours, SIGKILL after `grace` to those still running. Returns one line
 // per recorded PID that was not ours any more (left alone).
