@@ -927,7 +927,9 @@ TEST_F(Chaos, Week) {
     plan.submitters = 4;
     // Fast DDS at 32 stations on 2 cores (load 55 under the simulation): a killed interpreter was back and
     // online to the scheduler in 15 s, but the `cellctl restart` that started it, a newcomer to 68
-    // participants, had not heard it after 30 s (2026-12-04, docs/operations.md §9.6).
+    // participants, had not heard it after 30 s (2026-12-04, docs/operations.md §9.6). A station's restart
+    // now waits for READY=1 instead; a host service's (the scheduler's start under that load: 17 s) still
+    // waits to hear it on the bus.
     plan.restart_s = 120;
   }
   Run(plan);

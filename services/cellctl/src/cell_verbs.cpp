@@ -133,6 +133,29 @@ void Secure(const std::vector<std::string>& stations) {
   setenv("CELL_SECURITY", "on", 1);
 }
 
+// The scheduler's latest view of which stations are online (its state topic): a station it does not see is
+// not dispatchable, whatever this cellctl hears.
+class SchedulerView {
+ public:
+  explicit SchedulerView(bus::Participant& bus)
+      : reader_(bus, bus::topics::kSchedulerState, bus::QosKind::kState,
+                [this](const cell::SchedulerState& st, const bus::SampleInfo&) {
+                  std::lock_guard lk(mu_);
+                  online_.clear();
+                  for (auto& b : st.backlog()) online_[b.station().to_string()] = b.online();
+                }) {}
+  bool Online(const std::string& station) const {
+    std::lock_guard lk(mu_);
+    auto it = online_.find(station);
+    return it != online_.end() && it->second;
+  }
+
+ private:
+  mutable std::mutex mu_;
+  std::map<std::string, bool> online_;
+  bus::Reader<cell::SchedulerState> reader_;  // last: its callback uses the members above
+};
+
 // Our child that has ended: how, with its last log line (a signal leaves no line of its own).
 std::string HowItEnded(const CellProcess& p) {
   int status = 0;
@@ -146,8 +169,8 @@ std::string HowItEnded(const CellProcess& p) {
 
 // A restarted station service (interpreter, axis servo, DNC line) is up once it has sent READY=1 to
 // `listener` (after it joined the bus, claimed its station and started serving), and an interpreter of a cell
-// with a scheduler once the scheduler sees its station online, read through a client of the host services:
-// this cellctl meets no station (a newcomer to the whole cell is what took over a minute, §9.6 of
+// with a scheduler once the scheduler sees its station online, read by `ctx` as a client of the host
+// services: this cellctl meets no station (a newcomer to the whole cell is what took over a minute, §9.6 of
 // docs/operations.md). Returns what is missing.
 std::vector<std::string> WaitRestarted(Context& ctx, const std::vector<CellProcess>& procs,
                                        const CellProcess& target, ReadyListener& listener,
@@ -158,24 +181,10 @@ std::vector<std::string> WaitRestarted(Context& ctx, const std::vector<CellProce
   }
   const std::string station = InterpreterStation(target.service);
   if (station.empty() || !RunsScheduler(procs)) return {};
-  ctx.host_services_only = true;
-  std::mutex mu;
-  bool online = false;
-  bus::Reader<cell::SchedulerState> sched(ctx.Bus(), bus::topics::kSchedulerState, bus::QosKind::kState,
-                                          [&](const cell::SchedulerState& st, const bus::SampleInfo&) {
-                                            std::lock_guard lk(mu);
-                                            online = false;
-                                            for (auto& b : st.backlog())
-                                              if (b.station().to_string() == station) online = b.online();
-                                          });
+  SchedulerView sched(ctx.Bus());  // ctx.host_services_only: the caller's
   const auto left = std::chrono::duration_cast<bus::Millis>(deadline - std::chrono::steady_clock::now());
-  const bool seen = bus::WaitUntil(
-      [&] {
-        std::lock_guard lk(mu);
-        return online;
-      },
-      std::max(left, bus::Millis(0)), bus::Millis(25));
-  if (seen) return {};
+  if (bus::WaitUntil([&] { return sched.Online(station); }, std::max(left, bus::Millis(0)), bus::Millis(25)))
+    return {};
   return {target.unit + " (ready, but the scheduler does not see station " + station + ")"};
 }
 
@@ -188,17 +197,8 @@ std::vector<std::string> WaitReady(Context& ctx, const std::vector<CellProcess>&
                                    const std::set<std::string>& started, bus::Millis timeout) {
   // The bus is joined only now, after every fork: no DDS socket or thread of cellctl's reaches a service.
   cell::health::Liveness live(ctx.Bus());
-  const bool scheduled = RunsScheduler(procs);
-  std::mutex sched_mu;
-  std::map<std::string, bool> sched_online;  // station -> online in the scheduler's latest state
-  std::optional<bus::Reader<cell::SchedulerState>> sched;
-  if (scheduled)
-    sched.emplace(ctx.Bus(), bus::topics::kSchedulerState, bus::QosKind::kState,
-                  [&](const cell::SchedulerState& st, const bus::SampleInfo&) {
-                    std::lock_guard lk(sched_mu);
-                    sched_online.clear();
-                    for (auto& b : st.backlog()) sched_online[b.station().to_string()] = b.online();
-                  });
+  std::optional<SchedulerView> sched;
+  if (RunsScheduler(procs)) sched.emplace(ctx.Bus());
   std::vector<std::string> missing;
   bus::WaitUntil(
       [&] {
@@ -218,11 +218,8 @@ std::vector<std::string> WaitReady(Context& ctx, const std::vector<CellProcess>&
           if (!live.Online(p.service) || it == seen.end() || it->second.pid() != p.pid) {
             missing.push_back(p.unit);
           } else if (const std::string station = InterpreterStation(p.service);
-                     scheduled && !station.empty()) {
-            std::lock_guard lk(sched_mu);
-            auto on = sched_online.find(station);
-            if (on == sched_online.end() || !on->second)
-              missing.push_back(p.unit + " (ready, but the scheduler does not see station " + station + ")");
+                     sched && !station.empty() && !sched->Online(station)) {
+            missing.push_back(p.unit + " (ready, but the scheduler does not see station " + station + ")");
           }
         }
         return missing.empty();
@@ -412,10 +409,11 @@ void AddCellRestart(CLI::App& app, Context& ctx, const OptsPtr& o) {
       SaveRecord(procs);
     }
     const auto timeout = bus::Millis(static_cast<std::int64_t>(o->ready_s * 1000));
-    // A host service restarted is heard on its own slot: the stations need not meet this cellctl (the week
-    // restarts the scheduler under load; docs/operations.md §9.4, "A client of the host services"). A
-    // station's service says READY=1 to this cellctl (WaitRestarted).
-    ctx.host_services_only = host_service;
+    // Either way this cellctl is a client of the host services alone: a host service restarted is heard on
+    // its own slot (the week restarts the scheduler under load; docs/operations.md §9.4, "A client of the
+    // host services"), a station's service says READY=1 to this cellctl and the scheduler says whether it
+    // sees the station (WaitRestarted). No station need meet this cellctl.
+    ctx.host_services_only = true;
     auto missing = host_service ? WaitReady(ctx, {target}, {target.service}, timeout)
                                 : WaitRestarted(ctx, procs, target, *listener,
                                                 std::chrono::steady_clock::now() + timeout);
