@@ -274,6 +274,15 @@ TEST_F(Fms, SchedulerKilledMidRunRestartsAndJobCompletesExactlyOnce) {
     std::ofstream(data_ + "/cell-up.json") << rest.dump(2);
   }
 
+  // A `job wait` with a timeout while the scheduler is down waits for it to the end, then says so: exit 3
+  // (DESIGN: 3 on timeout), not a failed command.
+  {
+    auto w = Ctl({"job", "wait", job, "--timeout", "2"});
+    EXPECT_EQ(w.code, 3) << w.out << w.err;
+    EXPECT_NE(w.err.find("still unknown (no answer from the scheduler yet) after 2"), std::string::npos)
+        << w.err;
+  }
+
   // While the scheduler is down the station finishes the run and stores its record.
   Resume("KT01");
   auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);

@@ -1,6 +1,10 @@
 // cellctl job ls|show|cancel|wait, inspect ls|cat|export
+#include <algorithm>
 #include <chrono>
 #include <fstream>
+#include <iostream>
+#include <optional>
+#include <thread>
 
 #include "cell/bus/topics.h"
 #include "cell/idl/inspection.h"
@@ -14,12 +18,12 @@ namespace cellctl {
 
 namespace {
 
-nlohmann::json JobInfo(Context& ctx, int id) {
+nlohmann::json JobInfo(Context& ctx, int id, bus::Millis timeout = bus::Millis(30000)) {
   cell::SchedulerRequest r;
   r.op(cell::SCHED_JOB_SHOW);
   r.job_id(id);
   try {
-    return nlohmann::json::parse(ctx.Scheduler(r).info().to_string());
+    return nlohmann::json::parse(ctx.Scheduler(r, timeout).info().to_string());
   } catch (const cell::Error& e) {
     if (e.code() == cell::Errc::kNotFound) throw Exit{2, e.what()};
     throw;
@@ -103,23 +107,48 @@ void AddJobVerbs(CLI::App& app, Context& ctx) {
     };
     // Follow the job's events; re-read `job show` now and then, so a missed event cannot hang us.
     bus::Reader<cell::JobStatus> events(ctx.Bus(), bus::topics::kJobStatus, bus::QosKind::kEvent);
-    auto j = JobInfo(ctx, o->id);
+    // With --timeout, a scheduler that is not there or does not answer (restarting: systemd brings it back in
+    // seconds, and a newcomer on a loaded host can take longer than a call's 5 s to hear it) is asked again
+    // until the timeout, which then ends the wait as any other (exit 3). A cell that is down is still said so
+    // at once, and without --timeout the first failure ends the wait.
+    std::string last_state = "unknown (no answer from the scheduler yet)";
+    auto show = [&]() -> std::optional<nlohmann::json> {
+      while (true) {
+        try {
+          return JobInfo(ctx, o->id, o->timeout < 0 ? bus::Millis(30000) : std::max(left(), bus::Millis(1)));
+        } catch (const cell::Error& e) {
+          const bool absent = e.code() == cell::Errc::kUnavailable || e.code() == cell::Errc::kTimeout;
+          const bool cell_down = ctx.Bus().lone_means_down() && ctx.Bus().RemoteParticipants() == 0;
+          if (!absent || cell_down || o->timeout < 0) throw;
+          if (left().count() == 0) return std::nullopt;
+          std::cerr << "cellctl: job wait: " << e.what() << ": asking again\n";
+          std::this_thread::sleep_for(std::min(left(), bus::Millis(500)));
+        }
+      }
+    };
+    auto timed_out = [&] {
+      std::cout << last_state << "\n";
+      return Exit{3, "job " + std::to_string(o->id) + " still " + last_state + " after " +
+                         std::to_string(o->timeout) + " s"};
+    };
+    auto shown = show();
+    if (!shown) throw timed_out();
+    auto j = *shown;
     while (true) {
       std::string state = j["state"].get<std::string>();
+      last_state = state;
       if (cell::records::IsTerminalJobState(state)) {
         std::cout << state << "\n";
         if (state == "COMPLETED") return;
         throw Exit{1, "job " + std::to_string(o->id) + " " + state + ": " +
                           j.value("reason", nlohmann::json()).dump()};
       }
-      if (o->timeout >= 0 && left().count() == 0) {
-        std::cout << state << "\n";
-        throw Exit{3, "job " + std::to_string(o->id) + " still " + state + " after " +
-                          std::to_string(o->timeout) + " s"};
-      }
+      if (o->timeout >= 0 && left().count() == 0) throw timed_out();
       events.WaitFor([&](const cell::JobStatus& s) { return s.job_id() == o->id; },
                      std::min(left(), bus::Millis(1000)));
-      j = JobInfo(ctx, o->id);
+      shown = show();
+      if (!shown) throw timed_out();
+      j = *shown;
     }
   });
 

@@ -77,6 +77,15 @@ class FakeServo final : public ServoLink {
   std::size_t Matched() override { return matched; }
   std::uint64_t TotalMatched() override { return total_matched; }
   bool WaitForServo(Clock::Duration) override { return matched > 0; }
+  // A rejoin heals a one-way deafness (deaf_until_rejoin) and is a new match.
+  void Rejoin() override {
+    ++rejoins;
+    if (deaf_until_rejoin) {
+      drop_writes = 0;
+      silent = false;
+    }
+    ++total_matched;
+  }
   void WritePart(const cell::PartModel& part) override {
     parts.push_back(part);
     if (takes_parts) part_run_ = part.run_id();
@@ -169,9 +178,11 @@ class FakeServo final : public ServoLink {
   std::size_t matched = 1;
   std::uint64_t total_matched = 1;
   int per_wait = 2;
-  int drop_writes = 0;  // the next n writes are lost (an unmatched reader)
-  bool silent = false;  // reports nothing
-  bool hold = false;    // the operator's feed hold in effect: nothing completes
+  int drop_writes = 0;             // the next n writes are lost (an unmatched reader)
+  bool silent = false;             // reports nothing
+  bool deaf_until_rejoin = false;  // drop_writes and silent end at the interpreter's rejoin
+  int rejoins = 0;
+  bool hold = false;  // the operator's feed hold in effect: nothing completes
   bool probe_contact = true;
   double probe_contact_z = 0;
   bool takes_parts = true;  // acknowledges a part model (false: a servo that cannot read it)

@@ -134,6 +134,34 @@ TEST_F(SegmentStreamTest, AServoThatVanishedFailsTheRunAfterTenSeconds) {
   EXPECT_LE(clock_.Now() - gone, SegmentStream::kServoGone + std::chrono::seconds(1));
 }
 
+// A servo held for long says nothing; stopped past its lease then, it is unmatched for a moment and back.
+// Vanished counts from the lost match, not from the last progress (which was 15 s before): the run goes on.
+TEST_F(SegmentStreamTest, AMatchLostLateInALongHoldIsNotAVanishedServo) {
+  Put("P", Moves(10));
+  servo_.per_wait = 1;
+  std::optional<Clock::TimePoint> held, lost;
+  script_ = [&] {
+    if (servo_.ran.size() == 3 && !held) {
+      held = clock_.Now();
+      servo_.hold = true;
+    }
+    if (held && !lost && clock_.Now() - *held > std::chrono::seconds(15)) {
+      lost = clock_.Now();
+      servo_.matched = 0;
+    }
+    if (lost && servo_.matched == 0 && clock_.Now() - *lost > std::chrono::seconds(3)) {
+      servo_.matched = 1;
+      ++servo_.total_matched;
+      servo_.hold = false;
+    }
+  };
+  Dispatch(1, {"P"});
+  auto end = RunOne(1);
+  EXPECT_EQ(end.state(), cell::RUN_COMPLETED) << end.reason();
+  EXPECT_TRUE(lost.has_value());
+  EXPECT_EQ(RanSeqs(servo_, 1), OneTo(servo_.ran.size()));
+}
+
 TEST_F(SegmentStreamTest, AServoThatTakesNothingFailsTheRun) {
   Put("P", Moves(10));
   servo_.per_wait = 1;
@@ -147,6 +175,33 @@ TEST_F(SegmentStreamTest, AServoThatTakesNothingFailsTheRun) {
   auto end = RunOne(1);
   EXPECT_EQ(end.state(), cell::RUN_FAILED);
   EXPECT_EQ(end.reason(), "axis servo of KT01 has taken no segment for 10 s");
+  EXPECT_EQ(servo_.rejoins, 1);  // once a run: still deaf after it, the run fails
+}
+
+// A one-way broken discovery (Fast DDS 2.9's one-sided lease expiry: a chaos run's BS01 failed every run so
+// until restarted) heals by the interpreter joining the bus anew: the run re-sends what the servo missed,
+// in order, and completes.
+TEST_F(SegmentStreamTest, ADeafServoIsHealedByARejoinAndTheRunCompletes) {
+  Put("P", Moves(10));
+  servo_.per_wait = 1;
+  Clock::TimePoint deaf_at{};
+  script_ = [&] {
+    if (servo_.ran.size() == 3 && !servo_.deaf_until_rejoin) {
+      servo_.silent = true;
+      servo_.drop_writes = 1000;  // matched, deaf
+      servo_.deaf_until_rejoin = true;
+      deaf_at = clock_.Now();
+    }
+  };
+  Dispatch(1, {"P"});
+  auto end = RunOne(1);
+  EXPECT_EQ(end.state(), cell::RUN_COMPLETED) << end.reason();
+  EXPECT_EQ(servo_.rejoins, 1);
+  std::vector<std::uint64_t> seqs;
+  for (const auto& seg : servo_.ran)
+    if (seg.run_id() == 1) seqs.push_back(seg.seq());
+  for (std::size_t i = 0; i < seqs.size(); ++i) EXPECT_EQ(seqs[i], i + 1) << "each seq once, in order";
+  EXPECT_GE(clock_.Now() - deaf_at, SegmentStream::kServoGone);
 }
 
 // A run that waited longer than kServoGone (here a WAI on an input, KT-APL ln 4357) with everything taken

@@ -586,6 +586,9 @@ TEST_F(StationCore, AServoThatDoesNotTakeThePartModelFailsTheRun) {
   EXPECT_NE(s.reason().to_string().find("did not take part model PLATE7"), std::string::npos)
       << s.reason().to_string();
   EXPECT_TRUE(servo_.written.empty());
+  // Before failing, the run joined the bus anew once and wrote the part model again on the new participant.
+  EXPECT_EQ(servo_.rejoins, 1);
+  EXPECT_EQ(servo_.parts.size(), 2u);
 }
 
 // M00 (KT-APL ln 2485-2506): the motion before it finishes, then the run waits in PROGRAM_STOPPED, saying why

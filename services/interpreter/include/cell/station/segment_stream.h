@@ -37,6 +37,9 @@ class ServoLink {
   virtual bool WaitForServo(Clock::Duration timeout) = 0;
   // The run's part model (cell/station/<ID>/part, a state topic).
   virtual void WritePart(const cell::PartModel& part) = 0;
+  // Joins the bus anew (a new DDS participant, a stranger to every peer): discovery with the servo starts
+  // clean, both ways. Never called under the stream's lock.
+  virtual void Rejoin() = 0;
 };
 
 class SegmentStream {
@@ -87,6 +90,7 @@ class SegmentStream {
  private:
   void WaitCredit(std::unique_lock<std::mutex>& lk, std::uint64_t seq);
   void Check(std::unique_lock<std::mutex>& lk);
+  bool RejoinOnce(std::unique_lock<std::mutex>& lk, const char* why);
   void ResendMissing(std::unique_lock<std::mutex>& lk);
 
   const std::string station_;
@@ -101,12 +105,14 @@ class SegmentStream {
   double run_machine_s_ = 0;
   bool alarm_ = false;
   std::string alarm_code_, alarm_text_;
-  std::int32_t servo_part_run_ = 0;          // the run whose part model the servo reports holding
-  std::uint64_t run_boot_ = 0;               // the servo process this run started on
-  bool servo_restarted_ = false;             // progress came from another servo process mid-run
-  bool servo_held_ = false;                  // the servo reports the operator's feed hold in effect
-  std::deque<cell::MotionSegment> unacked_;  // written, not yet completed
-  std::uint64_t matches_ = 0;                // link_.TotalMatched() at the last check
+  std::int32_t servo_part_run_ = 0;                  // the run whose part model the servo reports holding
+  std::uint64_t run_boot_ = 0;                       // the servo process this run started on
+  bool servo_restarted_ = false;                     // progress came from another servo process mid-run
+  bool servo_held_ = false;                          // the servo reports the operator's feed hold in effect
+  bool rejoined_ = false;                            // this run has joined the bus anew for a deaf servo
+  std::optional<Clock::TimePoint> unmatched_since_;  // the segment writer matches no servo since then
+  std::deque<cell::MotionSegment> unacked_;          // written, not yet completed
+  std::uint64_t matches_ = 0;                        // link_.TotalMatched() at the last check
   Clock::TimePoint last_progress_{}, last_report_{}, last_resend_{};
   std::map<std::uint64_t, cell::ProbeResult> probes_;  // results of this run by seq
   struct Cut {

@@ -75,6 +75,7 @@ class Service final : public StationIo, public ServoLink {
   std::uint64_t TotalMatched() override { return seg_w_.TotalMatched(); }
   bool WaitForServo(Clock::Duration timeout) override;
   void WritePart(const cell::PartModel& part) override { part_w_.Write(part); }
+  void Rejoin() override { bus_.Rejoin(); }
 
  private:
   bus::Participant& bus_;
