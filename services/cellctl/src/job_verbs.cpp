@@ -115,7 +115,7 @@ void AddJobVerbs(CLI::App& app, Context& ctx) {
     auto show = [&]() -> std::optional<nlohmann::json> {
       while (true) {
         try {
-          return JobInfo(ctx, o->id, o->timeout < 0 ? bus::Millis(30000) : std::max(left(), bus::Millis(1)));
+          return o->timeout < 0 ? JobInfo(ctx, o->id) : JobInfo(ctx, o->id, std::max(left(), bus::Millis(1)));
         } catch (const cell::Error& e) {
           const bool absent = e.code() == cell::Errc::kUnavailable || e.code() == cell::Errc::kTimeout;
           const bool cell_down = ctx.Bus().lone_means_down() && ctx.Bus().RemoteParticipants() == 0;
@@ -131,24 +131,20 @@ void AddJobVerbs(CLI::App& app, Context& ctx) {
       return Exit{3, "job " + std::to_string(o->id) + " still " + last_state + " after " +
                          std::to_string(o->timeout) + " s"};
     };
-    auto shown = show();
-    if (!shown) throw timed_out();
-    auto j = *shown;
     while (true) {
-      std::string state = j["state"].get<std::string>();
+      const auto j = show();
+      if (!j) throw timed_out();
+      std::string state = (*j)["state"].get<std::string>();
       last_state = state;
       if (cell::records::IsTerminalJobState(state)) {
         std::cout << state << "\n";
         if (state == "COMPLETED") return;
         throw Exit{1, "job " + std::to_string(o->id) + " " + state + ": " +
-                          j.value("reason", nlohmann::json()).dump()};
+                          j->value("reason", nlohmann::json()).dump()};
       }
       if (o->timeout >= 0 && left().count() == 0) throw timed_out();
       events.WaitFor([&](const cell::JobStatus& s) { return s.job_id() == o->id; },
                      std::min(left(), bus::Millis(1000)));
-      shown = show();
-      if (!shown) throw timed_out();
-      j = *shown;
     }
   });
 

@@ -197,10 +197,7 @@ TEST_F(SegmentStreamTest, ADeafServoIsHealedByARejoinAndTheRunCompletes) {
   auto end = RunOne(1);
   EXPECT_EQ(end.state(), cell::RUN_COMPLETED) << end.reason();
   EXPECT_EQ(servo_.rejoins, 1);
-  std::vector<std::uint64_t> seqs;
-  for (const auto& seg : servo_.ran)
-    if (seg.run_id() == 1) seqs.push_back(seg.seq());
-  for (std::size_t i = 0; i < seqs.size(); ++i) EXPECT_EQ(seqs[i], i + 1) << "each seq once, in order";
+  EXPECT_EQ(RanSeqs(servo_, 1), OneTo(servo_.ran.size()));  // each seq once, in order
   EXPECT_GE(clock_.Now() - deaf_at, SegmentStream::kServoGone);
 }
 
