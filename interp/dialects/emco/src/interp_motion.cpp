@@ -86,7 +86,6 @@ void EmRun::MotionBlock(const BlockWords& bw, Motion motion) {
   if (bw.x.set) used_ |= 1u << kX;
   if (bw.z.set) used_ |= 1u << kZ;
   Vec2 to = Target(bw);
-  idle_ = 0;
   switch (motion) {
     case Motion::kRapid:
     case Motion::kLinear: {
@@ -241,6 +240,7 @@ void EmRun::Write(Item&& it) {
     return;
   }
   EmitUnits();
+  idle_ = 0;
   out_.push_back(std::move(it.c));
 }
 
@@ -265,6 +265,9 @@ void EmRun::WriteMove(const Move& m) {
   bool same = out_known_ && std::fabs(x - out_x_) < 1e-9 && std::fabs(z - out_z_) < 1e-9;
   if (same && m.kind != Move::kArc) return;  // a block that commands the current position does not move
   CheckLimits(x, z, m.line, m.col);
+  // Only a move that reaches the output counts as motion: a G27 loop of blocks to the current position is
+  // still an endless loop without motion.
+  idle_ = 0;
   EmitUnits();
   out_x_ = x;
   out_z_ = z;

@@ -211,6 +211,19 @@ TEST(EmcoRun, TenNestedSubroutinesAndNoMore) {
   EXPECT_EQ(r.diag, "t.emco:2:1: error: [300] MORE THAN 10 SUBROUTINES NESTED (in O0109)");
 }
 
+// G27 jumps back unconditionally (ln 2286-2298): a loop whose moves go to where the slide already is never
+// moves, so the run must end at the idle-block bound, not run for ever (a fuzz input found this).
+TEST(EmcoRun, ALoopOfMovesToTheCurrentPositionIsAnEndlessLoopWithoutMotion) {
+  Result r = RunText("N0000 G00 X40. Z2.\nN0010 G00 X40. Z2.\nN0020 G27 L10\nN0030 M30\n",
+                     {{"MAX_IDLE_BLOCKS", "100"}});
+  ASSERT_EQ(r.end, Step::kError);
+  EXPECT_NE(r.diag.find("PROGRAM RAN 100 BLOCKS WITHOUT MOTION"), std::string::npos) << r.diag;
+  // One rapid (the first block) and the units before it: the looping blocks add nothing.
+  int rapids = 0;
+  for (const Canon& c : r.ops) rapids += c.If<RapidOp>() != nullptr ? 1 : 0;
+  EXPECT_EQ(rapids, 1);
+}
+
 TEST(EmcoRun, CompensationThresholdsMoveNothing) {
   // ln 2928-2968 with a 0.4 mm nose radius, tip code 3 (an outside turning tool): selecting G42 with a
   // 0.4 mm Z step, and deselecting with the tip already at Z-40.4, produce no motion.
