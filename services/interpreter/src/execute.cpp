@@ -324,11 +324,11 @@ void Station::RunProgram(ActiveRun& run, const std::string& entry) {
       }
       if (const auto* stop = c.If<interp::StopOp>()) ProgramStop(name, c.line, *stop);
       if (clock_.Now() - last_status > options_.status_period) {
-        board_.Publish();
+        board_.PublishChanged();
         last_status = clock_.Now();
       }
     }
-    board_.Publish();
+    board_.PublishChanged();  // the program's last line, unless the last sample showed it
     stream_.WaitDrained();
     panel_.FixOverrides(false);  // the program's end resets its modes, M49 with them
   } catch (...) {

@@ -93,12 +93,23 @@ void StatusBoard::ServoHeld(bool held) {
   held_ = held;
   Show();
   status_.updated_ns(clock_.WallNs());
+  sent_ = status_;
   publish_(status_);
 }
 
 void StatusBoard::Publish() {
   std::lock_guard lk(mu_);
   status_.updated_ns(clock_.WallNs());
+  sent_ = status_;
+  publish_(status_);
+}
+
+void StatusBoard::PublishChanged() {
+  std::lock_guard lk(mu_);
+  sent_.updated_ns(status_.updated_ns());
+  if (sent_ == status_) return;
+  status_.updated_ns(clock_.WallNs());
+  sent_ = status_;
   publish_(status_);
 }
 

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <set>
 
 #include "cell/store/sqlite.h"
 #include "harness.h"
@@ -69,6 +70,27 @@ TEST_F(StationCore, RunsEveryProgramOfTheMapRepeatAndReportsProgress) {
   ASSERT_EQ(io_.records.size(), 1u);  // the run record went to the inspection writer
   EXPECT_TRUE(io_.records[0].run().completed());
   EXPECT_EQ(io_.records[0].run().dispatch_id(), 5);
+}
+
+// While a run goes on the status is sampled every status period, but published only when it changed: a
+// block of two commands (here the move and its M08) or a long move is one sample, not one per period.
+TEST_F(StationCore, TheRunsPeriodicStatusIsPublishedOnlyWhenItChanged) {
+  options_.status_period = Clock::Duration(-1);  // a sample at every command
+  Make();
+  Put("A", "G71 G90\nG01 X0 Y0 Z100. F0\nS1000 M03\nX1. F1000. M08\nX2.\nM30\n");
+  ASSERT_EQ(station_->OnRun(Request(5, {"A"})).state(), cell::RUN_QUEUED);
+  const std::size_t before = io_.status.size();
+  EXPECT_EQ(RunOne(5).state(), cell::RUN_COMPLETED);
+  std::set<int> lines;
+  for (std::size_t i = before; i < io_.status.size(); ++i) {
+    lines.insert(io_.status[i].line());
+    if (i == before) continue;
+    cell::StationStatus a = io_.status[i - 1], b = io_.status[i];
+    a.updated_ns(0);
+    b.updated_ns(0);
+    EXPECT_NE(a, b) << "sample " << i << " repeats the one before it (line " << b.line() << ")";
+  }
+  for (int line : {2, 3, 4, 5}) EXPECT_TRUE(lines.count(line)) << "line " << line << " never shown";
 }
 
 // The text of each program a run starts goes out for the toolpath view (topics::kStationProgram), whole up to

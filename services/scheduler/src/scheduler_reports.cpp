@@ -21,10 +21,13 @@ Effects Scheduler::StationVariables(std::string_view id, const std::map<int, dou
       if (auto p = st.pending_vars.find(n); p != st.pending_vars.end()) {
         if (p->second != v) continue;  // from before our write: the write wins until the station shows it
         st.pending_vars.erase(p);
+        m.dirty_stations.insert(s);
       }
-      st.vars[n] = v;
+      auto [it, added] = st.vars.try_emplace(n, v);
+      if (!added && it->second == v) continue;
+      it->second = v;
+      m.dirty_stations.insert(s);
     }
-    m.dirty_stations.insert(s);
   });
   return m.TakeEffects();
 }
@@ -68,6 +71,9 @@ Effects Scheduler::StationCondition(std::string_view id, bool fault, std::string
     const int s = m.StationIndex(id, true);
     auto& st = m.stations[static_cast<std::size_t>(s)];
     auto& ss = m.states[static_cast<std::size_t>(s)];
+    // A station's status comes several times a second while it runs; only a change is a write (each was a
+    // transaction with the station's whole row, tool table included, issue 43).
+    if (ss.fault == fault && st.alarm_code == code && st.alarm_text == text) return;
     st.alarm_code = std::string(code);
     st.alarm_text = std::string(text);
     m.dirty_stations.insert(s);

@@ -322,6 +322,30 @@ TEST(Recovery, AFailedCommitLeavesNoTrace) {
   EXPECT_EQ(c.Backlog("KT01"), 100);
 }
 
+// A running station reports its status several times a second and its variables after every run: a report
+// that changes nothing is no write (each was a transaction with the station's whole row, issue 43). A trigger
+// refuses every write of a station row, so an unchanged report passes and a changed one fails.
+TEST(Recovery, AReportThatChangesNothingWritesNothing) {
+  TempDir tmp;
+  FakeCell c(tmp.db());
+  c.Online("KT01");
+  c.Take(c.sched->StationCondition("KT01", false, "", ""));
+  c.Take(c.sched->StationVariables("KT01", {{1, 2.5}}));
+  {
+    auto db = store::Database::Open(tmp.db());
+    db.Exec(
+        "CREATE TRIGGER no_station_writes BEFORE INSERT ON stations BEGIN SELECT RAISE(ABORT, 'written'); "
+        "END");
+  }
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_NO_THROW(c.Take(c.sched->StationCondition("KT01", false, "", "")));
+    EXPECT_NO_THROW(c.Take(c.sched->StationVariables("KT01", {{1, 2.5}})));
+  }
+  EXPECT_THROW(c.Take(c.sched->StationCondition("KT01", false, "W1", "a warning")), Error);
+  EXPECT_THROW(c.Take(c.sched->StationVariables("KT01", {{1, 3.0}})), Error);
+  EXPECT_THROW(c.Take(c.sched->StationVariables("KT01", {{2, 2.5}})), Error);
+}
+
 // --- kill -9 --------------------------------------------------------------------------------------------
 // The script: stations online, one route over both, kPallets pallets operated one by one; the cell acts on
 // every dispatch at once (accept, start, finish). The child runs the script and writes every dispatch it is
