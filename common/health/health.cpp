@@ -70,37 +70,44 @@ void Announcer::Publish() {
   }
 }
 
-Liveness::Liveness(bus::Participant& p)
-    : r_(p, bus::topics::kHealth, bus::QosKind::kState,
-         [this](const cell::ServiceHealth& h, const bus::SampleInfo&) {
-           const auto now = std::chrono::steady_clock::now();
-           std::lock_guard lk(mu_);
-           auto& boots = seen_[h.service_id().to_string()];
-           auto [it, fresh] = boots.try_emplace(h.boot_id(), Seen{h, now, now});
-           it->second.last = h;
-           it->second.at = now;
-           // Forget processes not heard for a long while (each restart is a new boot id).
-           for (auto b = boots.begin(); b != boots.end();)
-             b = now - b->second.at > std::chrono::minutes(1) ? boots.erase(b) : std::next(b);
-         }) {}
-
 namespace {
 constexpr auto kOffline = std::chrono::milliseconds(bus::topics::kOfflineAfterMs);
 }
 
-bool Liveness::Online(const std::string& service_id) const {
-  std::lock_guard lk(mu_);
+void Heartbeats::Heard(const cell::ServiceHealth& h, Clock::time_point at) {
+  auto& boots = seen_[h.service_id().to_string()];
+  auto [it, fresh] = boots.try_emplace(h.boot_id(), Seen{h, at, at});
+  it->second.last = h;
+  it->second.at = std::max(it->second.at, at);
+  // Forget processes not heard for a long while (each restart is a new boot id).
+  for (auto b = boots.begin(); b != boots.end();)
+    b = at - b->second.at > std::chrono::minutes(1) ? boots.erase(b) : std::next(b);
+}
+
+bool Heartbeats::Online(const std::string& service_id, Clock::time_point now) const {
   auto it = seen_.find(service_id);
   if (it == seen_.end() || it->second.empty()) return false;
   // The process heard last speaks for the service.
   auto last = std::max_element(it->second.begin(), it->second.end(),
                                [](auto& a, auto& b) { return a.second.at < b.second.at; });
-  auto age = std::chrono::steady_clock::now() - last->second.at;
-  return last->second.last.state() == cell::SERVICE_READY && age < kOffline;
+  if (last->second.last.state() != cell::SERVICE_READY) return false;
+  const auto age = now - last->second.at;
+  if (age < kOffline) return true;
+  return age < kOfflineWhenDeaf && Deaf(now);
 }
 
-std::map<std::string, cell::ServiceHealth> Liveness::Snapshot() const {
-  std::lock_guard lk(mu_);
+bool Heartbeats::Deaf(Clock::time_point now) const {
+  int heard = 0, silent = 0;
+  for (auto& [id, boots] : seen_)
+    for (auto& [boot, s] : boots) {
+      if (static_cast<int>(s.last.pid()) == own_pid_ || now - s.at > std::chrono::minutes(1)) continue;
+      if (s.last.state() == cell::SERVICE_STOPPING) continue;  // said goodbye: its silence is no news
+      ++(now - s.at < kOffline ? heard : silent);
+    }
+  return silent > heard;
+}
+
+std::map<std::string, cell::ServiceHealth> Heartbeats::Snapshot() const {
   std::map<std::string, cell::ServiceHealth> out;
   for (auto& [k, boots] : seen_) {
     if (boots.empty()) continue;
@@ -111,9 +118,7 @@ std::map<std::string, cell::ServiceHealth> Liveness::Snapshot() const {
   return out;
 }
 
-std::vector<Conflict> Liveness::Conflicts() const {
-  const auto now = std::chrono::steady_clock::now();
-  std::lock_guard lk(mu_);
+std::vector<Conflict> Heartbeats::Conflicts(Clock::time_point now) const {
   std::vector<Conflict> out;
   for (auto& [id, boots] : seen_) {
     std::vector<const Seen*> live;
@@ -133,6 +138,31 @@ std::vector<Conflict> Liveness::Conflicts() const {
     out.push_back(std::move(c));
   }
   return out;
+}
+
+Liveness::Liveness(bus::Participant& p)
+    : table_(static_cast<int>(::getpid())),
+      r_(p, bus::topics::kHealth, bus::QosKind::kState,
+         [this](const cell::ServiceHealth& h, const bus::SampleInfo& si) {
+           // When the bus took it in, not when this callback got its turn on the dispatch thread.
+           const Heartbeats::Clock::time_point at{std::chrono::nanoseconds(si.received_ns)};
+           std::lock_guard lk(mu_);
+           table_.Heard(h, si.received_ns != 0 ? at : Heartbeats::Clock::now());
+         }) {}
+
+bool Liveness::Online(const std::string& service_id) const {
+  std::lock_guard lk(mu_);
+  return table_.Online(service_id, Heartbeats::Clock::now());
+}
+
+std::map<std::string, cell::ServiceHealth> Liveness::Snapshot() const {
+  std::lock_guard lk(mu_);
+  return table_.Snapshot();
+}
+
+std::vector<Conflict> Liveness::Conflicts() const {
+  std::lock_guard lk(mu_);
+  return table_.Conflicts(Heartbeats::Clock::now());
 }
 
 std::string Conflict::Describe() const {

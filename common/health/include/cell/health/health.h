@@ -47,11 +47,43 @@ struct Conflict {
       const;  // "cell-interpreter/KT01 runs in 2 processes: pid 12 (boot 3f..), pid 40 (...)"
 };
 
-// Tracks every service's last heartbeat, per process (boot id).
+// Every service's last heartbeat, per process (boot id), as heard at given times: the rules of "online"
+// without the bus (Liveness feeds it; tests drive it with their own times).
+//
+// A process whose receive is starved cannot tell its peers are gone from its own deafness: a scheduler on a
+// loaded host took its heartbeats in late and in bursts, with datagrams dropped by the hundred thousand, and
+// saw twenty stations go offline within 20 ms and come back a second later, each time re-sending what every
+// station held, which loaded the bus further (issue 43). So a heartbeat older than topics::kOfflineAfterMs
+// means offline only while most processes are still heard; when more than half of those heard in the last
+// minute (other than this one) are silent at once, the last word stands for up to kOfflineWhenDeaf.
+class Heartbeats {
+ public:
+  using Clock = std::chrono::steady_clock;
+  static constexpr auto kOfflineWhenDeaf = std::chrono::milliseconds(3 * bus::topics::kOfflineAfterMs);
+
+  // own_pid: this process's announcements (delivered locally, never late) say nothing of hearing others.
+  explicit Heartbeats(int own_pid) : own_pid_(own_pid) {}
+  void Heard(const cell::ServiceHealth& h, Clock::time_point at);
+  // Online: announced READY and heard from within topics::kOfflineAfterMs (see above while deaf).
+  bool Online(const std::string& service_id, Clock::time_point now) const;
+  std::map<std::string, cell::ServiceHealth> Snapshot() const;
+  std::vector<Conflict> Conflicts(Clock::time_point now) const;
+
+ private:
+  struct Seen {
+    cell::ServiceHealth last;
+    Clock::time_point first, at;
+  };
+  bool Deaf(Clock::time_point now) const;  // more than half of the others silent at once
+  int own_pid_;
+  std::map<std::string, std::map<uint64_t, Seen>> seen_;  // service id -> boot id -> what was heard
+};
+
+// Tracks every service's last heartbeat on the bus (Heartbeats, at the time the bus received each).
 class Liveness {
  public:
   explicit Liveness(bus::Participant& p);
-  // Online: announced READY and heard from within topics::kOfflineAfterMs.
+  // Online: announced READY and heard from within topics::kOfflineAfterMs (Heartbeats says when not).
   bool Online(const std::string& service_id) const;
   bool StationOnline(const std::string& station) const { return Online("cell-interpreter/" + station); }
   // The last announcement heard for each service id (of whichever process spoke last).
@@ -62,12 +94,8 @@ class Liveness {
   std::vector<Conflict> Conflicts() const;
 
  private:
-  struct Seen {
-    cell::ServiceHealth last;
-    std::chrono::steady_clock::time_point first, at;
-  };
   mutable std::mutex mu_;
-  std::map<std::string, std::map<uint64_t, Seen>> seen_;  // service id -> boot id -> what was heard
+  Heartbeats table_;
   bus::Reader<cell::ServiceHealth> r_;
 };
 
