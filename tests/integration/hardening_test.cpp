@@ -640,7 +640,13 @@ TEST_F(Hardening, LocalCellProcesses) {
   const int sched = Pid("cell-scheduler");
   const auto argv = ProcessArgv(sched);
   const auto env = ProcessEnvironment(sched);
+  // The scheduler and a station's interpreter killed together, the station restarted first: it is up at its
+  // READY=1, with no scheduler to wait for (the gate's chaos test, 2026-12-04, failed here: "ready, but the
+  // scheduler does not see station KT01", the scheduler being dead).
+  ASSERT_EQ(kill(Pid("cell-interpreter/KT01"), SIGKILL), 0);
   ASSERT_EQ(kill(sched, SIGKILL), 0);
+  auto ri = Ctl({"restart", "cell-interpreter/KT01"});
+  ASSERT_EQ(ri.code, 0) << ri.err;
   auto r = Ctl({"restart", "cell-scheduler"}, {{"CELL_LOG_LEVEL", "debug"}});
   ASSERT_EQ(r.code, 0) << r.err;
   const int sched2 = Pid("cell-scheduler");

@@ -180,10 +180,16 @@ std::vector<std::string> WaitRestarted(Context& ctx, const std::vector<CellProce
     return {target.unit + " (no READY=1 from pid " + std::to_string(target.pid) + ")"};
   }
   const std::string station = InterpreterStation(target.service);
-  if (station.empty() || !RunsScheduler(procs)) return {};
+  // The recorded scheduler, while it runs: one that is down (killed with this station, not restarted yet)
+  // sees nothing; its own restart waits for what it must see.
+  auto scheduler = std::find_if(procs.begin(), procs.end(),
+                                [](const CellProcess& p) { return p.service == "cell-scheduler"; });
+  const auto down = [&] { return scheduler == procs.end() || !IsRunning(*scheduler); };
+  if (station.empty() || down()) return {};
   SchedulerView sched(ctx.Bus());  // ctx.host_services_only: the caller's
   const auto left = std::chrono::duration_cast<bus::Millis>(deadline - std::chrono::steady_clock::now());
-  if (bus::WaitUntil([&] { return sched.Online(station); }, std::max(left, bus::Millis(0)), bus::Millis(25)))
+  if (bus::WaitUntil([&] { return sched.Online(station) || down(); }, std::max(left, bus::Millis(0)),
+                     bus::Millis(25)))
     return {};
   return {target.unit + " (ready, but the scheduler does not see station " + station + ")"};
 }
