@@ -62,9 +62,15 @@ std::string InterpreterStation(const std::string& service) {
   return service.rfind(prefix, 0) == 0 ? service.substr(prefix.size()) : std::string();
 }
 
+// The cell's scheduler as recorded; nullptr in a cell without one.
+const CellProcess* RecordedScheduler(const std::vector<CellProcess>& procs) {
+  auto it = std::find_if(procs.begin(), procs.end(),
+                         [](const CellProcess& p) { return p.service == "cell-scheduler"; });
+  return it == procs.end() ? nullptr : &*it;
+}
+
 bool RunsScheduler(const std::vector<CellProcess>& procs) {
-  return std::any_of(procs.begin(), procs.end(),
-                     [](const CellProcess& p) { return p.service == "cell-scheduler"; });
+  return RecordedScheduler(procs) != nullptr;
 }
 
 // A station's table that a unit asks for (X-CellStationTable): [serial] makes cell-dnc@ID run.
@@ -182,9 +188,8 @@ std::vector<std::string> WaitRestarted(Context& ctx, const std::vector<CellProce
   const std::string station = InterpreterStation(target.service);
   // The recorded scheduler, while it runs: one that is down (killed with this station, not restarted yet)
   // sees nothing; its own restart waits for what it must see.
-  auto scheduler = std::find_if(procs.begin(), procs.end(),
-                                [](const CellProcess& p) { return p.service == "cell-scheduler"; });
-  const auto down = [&] { return scheduler == procs.end() || !IsRunning(*scheduler); };
+  const CellProcess* scheduler = RecordedScheduler(procs);
+  const auto down = [&] { return scheduler == nullptr || !IsRunning(*scheduler); };
   if (station.empty() || down()) return {};
   SchedulerView sched(ctx.Bus());  // ctx.host_services_only: the caller's
   const auto left = std::chrono::duration_cast<bus::Millis>(deadline - std::chrono::steady_clock::now());

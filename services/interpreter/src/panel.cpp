@@ -92,22 +92,21 @@ void StatusBoard::ServoHeld(bool held) {
   if (held == held_) return;
   held_ = held;
   Show();
-  status_.updated_ns(clock_.WallNs());
-  sent_ = status_;
-  publish_(status_);
+  Send();
 }
 
 void StatusBoard::Publish() {
   std::lock_guard lk(mu_);
-  status_.updated_ns(clock_.WallNs());
-  sent_ = status_;
-  publish_(status_);
+  Send();
 }
 
 void StatusBoard::PublishChanged() {
   std::lock_guard lk(mu_);
   sent_.updated_ns(status_.updated_ns());
-  if (sent_ == status_) return;
+  if (sent_ != status_) Send();
+}
+
+void StatusBoard::Send() {
   status_.updated_ns(clock_.WallNs());
   sent_ = status_;
   publish_(status_);

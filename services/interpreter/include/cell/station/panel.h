@@ -53,6 +53,7 @@ class StatusBoard {
 
  private:
   void Show();  // the displayed execution (caller holds mu_)
+  void Send();  // stamps, keeps and publishes status_ (caller holds mu_)
 
   Clock& clock_;
   std::function<void(const cell::StationStatus&)> publish_;
