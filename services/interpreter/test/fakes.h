@@ -80,6 +80,7 @@ class FakeServo final : public ServoLink {
   // A rejoin heals a one-way deafness (deaf_until_rejoin) and is a new match.
   void Rejoin() override {
     ++rejoins;
+    if (unmatched_until_rejoin) matched = 1;
     if (deaf_until_rejoin) {
       drop_writes = 0;
       silent = false;
@@ -178,9 +179,10 @@ class FakeServo final : public ServoLink {
   std::size_t matched = 1;
   std::uint64_t total_matched = 1;
   int per_wait = 2;
-  int drop_writes = 0;             // the next n writes are lost (an unmatched reader)
-  bool silent = false;             // reports nothing
-  bool deaf_until_rejoin = false;  // drop_writes and silent end at the interpreter's rejoin
+  int drop_writes = 0;                  // the next n writes are lost (an unmatched reader)
+  bool silent = false;                  // reports nothing
+  bool deaf_until_rejoin = false;       // drop_writes and silent end at the interpreter's rejoin
+  bool unmatched_until_rejoin = false;  // matched = 0 ends at the interpreter's rejoin
   int rejoins = 0;
   bool hold = false;  // the operator's feed hold in effect: nothing completes
   bool probe_contact = true;

@@ -220,7 +220,7 @@ TEST_F(SegmentStreamTest, ALongWaitWithNothingOwedIsNotSilence) {
   EXPECT_EQ(servo_.Ran(1, cell::SEGMENT_END).size(), 1u);
 }
 
-TEST_F(SegmentStreamTest, NoServoOnTheBusFailsTheRunAtOnce) {
+TEST_F(SegmentStreamTest, NoServoOnTheBusFailsTheRunBeforeItsFirstSegment) {
   Put("P", Moves(1));
   servo_.matched = 0;
   Dispatch(1, {"P"});
@@ -228,6 +228,20 @@ TEST_F(SegmentStreamTest, NoServoOnTheBusFailsTheRunAtOnce) {
   EXPECT_EQ(end.state(), cell::RUN_FAILED);
   EXPECT_EQ(end.reason(), "no axis servo for station KT01 on the bus");
   EXPECT_TRUE(servo_.written.empty());
+  EXPECT_EQ(servo_.rejoins, 1);  // it joined the bus anew once before it failed
+}
+
+// A servo unmatched because discovery broke one way (a restarted servo its interpreter never matched, in a
+// 32-station Fast DDS week) is matched after the interpreter joins the bus anew: the run goes on.
+TEST_F(SegmentStreamTest, AServoUnmatchedAtTheStartIsFoundByARejoinAndTheRunCompletes) {
+  Put("P", Moves(3));
+  servo_.matched = 0;
+  servo_.unmatched_until_rejoin = true;
+  Dispatch(1, {"P"});
+  auto end = RunOne(1);
+  EXPECT_EQ(end.state(), cell::RUN_COMPLETED) << end.reason();
+  EXPECT_EQ(servo_.rejoins, 1);
+  EXPECT_EQ(RanSeqs(servo_, 1), OneTo(servo_.ran.size()));
 }
 
 // Where the run waits for the machine (M00's drain here), the servo is told: the last segment sent is written

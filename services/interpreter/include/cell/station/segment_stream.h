@@ -55,8 +55,9 @@ class SegmentStream {
   // A new run: counting restarts. `checkpoint` runs in every wait of the run and throws to end it (a
   // cancel, the station stopping).
   void Begin(std::int32_t run_id, std::function<void()> checkpoint);
-  // True when a servo is on the bus (both directions) within `timeout`.
-  bool WaitForServo(Clock::Duration timeout) { return link_.WaitForServo(timeout); }
+  // True when a servo is on the bus (both directions) within `timeout`, or within `timeout` more after this
+  // process joined the bus anew.
+  bool WaitForServo(Clock::Duration timeout);
   // Sends the next segment of the run (station, run id and seq are filled in), waiting for a credit.
   // Throws cell::Error when the run cannot go on.
   void Send(cell::MotionSegment segment);
