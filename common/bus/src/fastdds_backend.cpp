@@ -280,7 +280,7 @@ class FastWriter : public RawWriter {
 
   dds::Publisher* pub_;
   dds::DataWriter* w_;
-  const bool sweep_;  // keep-all and volatile: commands and streams
+  const bool sweep_;  // keep-all and volatile (commands and streams)
   std::mutex mu_;     // the sweep's "all acknowledged" still true at its write
   std::chrono::steady_clock::time_point swept_{};
 };
@@ -475,7 +475,10 @@ class FastBackend : public Backend {
     if (!w && !identity_.empty())  // access control: the only reason a valid QoS is refused here
       throw Refused(identity_, "publish", topic);
     if (!w) throw Error(Errc::kInternal, "cannot create a DDS writer for " + topic);
-    return std::make_unique<FastWriter>(pub_, w, q == QosKind::kCommand || q == QosKind::kStream);
+    // The sweep is for the QoS the leftover changes come with, read from the QoS itself.
+    const bool keep_all_volatile = wq.history().kind == dds::KEEP_ALL_HISTORY_QOS &&
+                                   wq.durability().kind == dds::VOLATILE_DURABILITY_QOS;
+    return std::make_unique<FastWriter>(pub_, w, keep_all_volatile);
   }
 
   std::unique_ptr<RawReader> CreateReader(const std::string& topic, const TypeSupport& type, QosKind q,
