@@ -12,6 +12,7 @@
 #include "cell/config/dds.h"
 #include "cell/security/permissions.h"
 #include "cell/security/pki.h"
+#include "thread_stacks.h"
 
 namespace cell::bus {
 
@@ -254,12 +255,15 @@ bool Participant::Rejoin() {
 // peer's endpoint removed on the receive thread under the discovery lock, waiting for the timer thread, which
 // waits for that lock in a participant's lease check: seen in a scheduler of a 68-process cell, which then
 // heard nothing and answered nobody). A receive call that runs 30 s is that: the process ends (abort), as
-// when it cannot rejoin, so that systemd starts it again instead of leaving a deaf service.
+// when it cannot rejoin, so that systemd starts it again instead of leaving a deaf service. Before it ends,
+// it writes every thread's stack to the log: the stuck call and the thread it waits for, which nobody could
+// attach gdb to in time (a scheduler of a 32-station week, 2026-12-04, with the bus's own lease check).
 void Participant::Watch() {
   constexpr auto kTick = Millis(250);
   constexpr auto kStoodStill = Millis(2500);
   constexpr auto kStuck = Millis(30000);
   StuckReceive stuck(kStuck);
+  PrepareThreadStacks();
   std::unique_lock lk(watch_mu_);
   auto last = std::chrono::steady_clock::now();
   while (!watch_cv_.wait_for(lk, kTick, [&] { return watch_stop_; })) {
@@ -277,6 +281,7 @@ void Participant::Watch() {
           "ending it so that it is started again",
           id_, vendor_, std::chrono::duration<double>(stuck.stuck_for()).count());
       spdlog::default_logger()->flush();
+      WriteThreadStacks(2);
       std::abort();
     }
     if (!on_time) {  // (only started when the backend can be made again)
