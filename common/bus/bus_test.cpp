@@ -4,16 +4,12 @@
 // must give the same semantics, and across vendors.
 #include "cell/bus/bus.h"
 
-#include <fcntl.h>
-#include <pthread.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <atomic>
 #include <cstdlib>
 #include <filesystem>
-#include <fstream>
-#include <iterator>
 #include <mutex>
 #include <optional>
 #include <thread>
@@ -27,7 +23,6 @@
 #include "cell/idl/station.h"
 #include "src/fastdds_lease_check.h"
 #include "src/slots.h"
-#include "src/thread_stacks.h"
 
 namespace cell::bus {
 namespace {
@@ -409,50 +404,6 @@ TEST(Bus, ReceiveCallsThatEndAreNotStuck) {
   EXPECT_FALSE(w.Observe(5000, Millis(60000), false));
   EXPECT_EQ(w.stuck_for(), Millis(0));
   EXPECT_FALSE(w.Observe(0, kTick, true));  // it returned once the process ran again
-}
-
-// What the watch thread writes before it ends a process with a stuck receive thread: every other thread's
-// stack, each under its id and name, so that the log shows the call that never returned.
-TEST(Bus, AStuckProcessWritesEveryOtherThreadsStack) {
-  int wake[2];
-  ASSERT_EQ(pipe(wake), 0);
-  std::atomic<long> probe_tid{0};
-  std::thread probe([&] {
-    pthread_setname_np(pthread_self(), "stack-probe");
-    probe_tid = static_cast<long>(gettid());
-    char c;
-    ssize_t n = read(wake[0], &c, 1);  // blocked here while its stack is taken
-    (void)n;
-  });
-  while (probe_tid == 0) std::this_thread::sleep_for(Millis(1));
-  std::this_thread::sleep_for(Millis(50));  // into the read
-  const std::filesystem::path out =
-      std::filesystem::temp_directory_path() / ("stacks-" + std::to_string(getpid()));
-  const int fd = open(out.c_str(), O_CREAT | O_TRUNC | O_WRONLY | O_CLOEXEC, 0600);
-  ASSERT_GE(fd, 0);
-  const int answered = WriteThreadStacks(fd);
-  close(fd);
-  ASSERT_EQ(write(wake[1], "x", 1), 1);
-  probe.join();
-  close(wake[0]);
-  close(wake[1]);
-  std::ifstream in(out);
-  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  std::filesystem::remove(out);
-  EXPECT_GE(answered, 1);
-  EXPECT_EQ(text.find("thread " + std::to_string(gettid()) + " "), std::string::npos)
-      << "the caller writes no stack of its own";
-  const std::string head = "thread " + std::to_string(probe_tid.load()) + " (stack-probe):\n";
-  const auto at = text.find(head);
-  ASSERT_NE(at, std::string::npos) << text;
-  const auto end = text.find("\nthread ", at + head.size());
-  const std::string section =
-      text.substr(at + head.size(), end == std::string::npos ? end : end - at - head.size());
-  EXPECT_EQ(section.find("(no answer)"), std::string::npos) << section;
-  // Its frames: the blocking read (libc's, or a sanitizer's interceptor of it) among them.
-  EXPECT_TRUE(section.find("(read+") != std::string::npos || section.find("_read+") != std::string::npos)
-      << section;
-  EXPECT_GE(std::count(section.begin(), section.end(), '\n'), 4) << section;  // and the frames below it
 }
 
 // Fast DDS 2.9.1's lease check aborts on a peer whose leaving a receive thread is handling, and deadlocks

@@ -1,10 +1,8 @@
 #include "cell/daemon/daemon.h"
 
-#include <execinfo.h>
 #include <fcntl.h>
 #include <fmt/format.h>
 #include <poll.h>
-#include <pthread.h>
 #include <signal.h>
 #include <spdlog/spdlog.h>
 #include <systemd/sd-daemon.h>
@@ -16,6 +14,7 @@
 #include <string>
 
 #include "cell/error/error.h"
+#include "cell/stacks/stacks.h"
 
 namespace cell::daemon {
 namespace {
@@ -25,19 +24,6 @@ namespace {
 int g_pipe[2] = {-1, -1};
 std::atomic<bool> g_live{false};
 constexpr unsigned char kQuit = 0;  // sent by ~Daemon to end the watcher
-
-// A start-up step that lasts kSlowStep: the main thread, interrupted by SIGUSR2, writes its own stack to
-// stderr (the service's log), so that a start that hangs shows the call that never returned.
-extern "C" void OnStackRequest(int) {
-  int saved = errno;
-  void* frames[48];
-  const int n = backtrace(frames, 48);
-  static const char kHead[] = "the start-up's stack (main thread):\n";
-  ssize_t w = write(2, kHead, sizeof kHead - 1);
-  (void)w;
-  backtrace_symbols_fd(frames, n, 2);
-  errno = saved;
-}
 
 extern "C" void OnSignal(int sig) {
   int saved = errno;
@@ -78,14 +64,8 @@ Daemon::Daemon() {
     g_live = false;
     throw Error(Errc::kInternal, std::string("cell::daemon::Daemon: pipe2: ") + std::strerror(errno));
   }
-  main_ = pthread_self();
-  void* warm[1];
-  backtrace(warm, 1);  // loads the unwinder now: the handler must not allocate
-  struct sigaction st {};
-  st.sa_handler = OnStackRequest;
-  sigemptyset(&st.sa_mask);
-  st.sa_flags = SA_RESTART;
-  sigaction(SIGUSR2, &st, nullptr);
+  main_ = stacks::ThisThread();
+  stacks::Prepare();  // the unwinder loaded now, not in a signal handler
   watcher_ = std::thread([this] { Watch(); });
   struct sigaction sa {};
   sa.sa_handler = OnSignal;
@@ -103,7 +83,6 @@ Daemon::Daemon() {
 Daemon::~Daemon() {
   signal(SIGTERM, SIG_DFL);
   signal(SIGINT, SIG_DFL);
-  signal(SIGUSR2, SIG_DFL);
   unsigned char b = kQuit;
   ssize_t n = write(g_pipe[1], &b, 1);
   (void)n;
@@ -122,14 +101,19 @@ void Daemon::Starting(std::string_view step) {
 }
 
 void Daemon::WarnIfSlow() {
-  std::lock_guard lock(start_mu_);
-  const auto lasted = std::chrono::steady_clock::now() - step_since_;
-  if (ready_ || step_warned_ || lasted < kSlowStep) return;
-  step_warned_ = true;
-  spdlog::warn("still {} after {:.0f} s: not ready (its stack follows on stderr)", step_,
-               std::chrono::duration<double>(lasted).count());
+  {
+    std::lock_guard lock(start_mu_);
+    const auto lasted = std::chrono::steady_clock::now() - step_since_;
+    if (ready_ || step_warned_ || lasted < kSlowStep) return;
+    step_warned_ = true;
+    spdlog::warn("still {} after {:.0f} s: not ready (its stack follows on stderr)", step_,
+                 std::chrono::duration<double>(lasted).count());
+  }
   spdlog::default_logger()->flush();
-  pthread_kill(main_, SIGUSR2);
+  static const char kHead[] = "the start-up's stack (main thread):\n";
+  ssize_t w = write(2, kHead, sizeof kHead - 1);
+  (void)w;
+  stacks::WriteThreadStack(2, main_);
 }
 
 std::string Daemon::StartupNote() {

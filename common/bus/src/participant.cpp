@@ -12,7 +12,7 @@
 #include "cell/config/dds.h"
 #include "cell/security/permissions.h"
 #include "cell/security/pki.h"
-#include "thread_stacks.h"
+#include "cell/stacks/stacks.h"
 
 namespace cell::bus {
 
@@ -263,7 +263,7 @@ void Participant::Watch() {
   constexpr auto kStoodStill = Millis(2500);
   constexpr auto kStuck = Millis(30000);
   StuckReceive stuck(kStuck);
-  PrepareThreadStacks();
+  stacks::Prepare();
   std::unique_lock lk(watch_mu_);
   auto last = std::chrono::steady_clock::now();
   while (!watch_cv_.wait_for(lk, kTick, [&] { return watch_stop_; })) {
@@ -281,7 +281,7 @@ void Participant::Watch() {
           "ending it so that it is started again",
           id_, vendor_, std::chrono::duration<double>(stuck.stuck_for()).count());
       spdlog::default_logger()->flush();
-      WriteThreadStacks(2);
+      stacks::WriteThreadStacks(2);
       std::abort();
     }
     if (!on_time) {  // (only started when the backend can be made again)

@@ -22,8 +22,6 @@
 // Without NOTIFY_SOCKET (a shell, a test) every Notify* call is a no-op.
 #pragma once
 
-#include <pthread.h>
-
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
@@ -61,8 +59,8 @@ class Daemon {
 
   // --- start-up ---
   // The step the start-up is in (e.g. "joining the bus"), until NotifyReady. A start that hangs says where:
-  // once a step has lasted kSlowStep the watcher logs a warning and the main thread writes its stack to
-  // stderr (SIGUSR2; the Daemon must be made on the main thread); a stop signal before ready names the step
+  // once a step has lasted kSlowStep the watcher logs a warning and the main thread's stack to stderr
+  // (cell_stacks; the Daemon must be made on the main thread); a stop signal before ready names the step
   // and how long it has lasted. A cell that "did not come up" then shows the call that never returned.
   void Starting(std::string_view step);
   static constexpr std::chrono::seconds kSlowStep{10};
@@ -94,7 +92,7 @@ class Daemon {
 
  private:
   void Watch();  // signal watcher thread body
-  // Once per step that has lasted kSlowStep before ready: a warning, and the main thread's stack (SIGUSR2).
+  // Once per step that has lasted kSlowStep before ready: a warning, and the main thread's stack.
   void WarnIfSlow();
   // " while <step> (N s, not ready)" before NotifyReady, else empty: said with a stop signal.
   std::string StartupNote();
@@ -106,7 +104,7 @@ class Daemon {
   std::chrono::microseconds watchdog_{0};
   std::chrono::steady_clock::time_point last_tick_{};
   std::thread watcher_;
-  pthread_t main_{};  // the thread that made the Daemon: the one whose start-up steps these are
+  long main_ = 0;  // the kernel id of the thread that made the Daemon: the one whose start-up steps these are
   std::atomic<bool> ready_{false};
   std::mutex start_mu_;  // guards the three below
   std::string step_ = "starting";

@@ -1,4 +1,4 @@
-#include "thread_stacks.h"
+#include "cell/stacks/stacks.h"
 
 #include <dirent.h>
 #include <execinfo.h>
@@ -15,12 +15,12 @@
 #include <thread>
 #include <vector>
 
-namespace cell::bus {
+namespace cell::stacks {
 namespace {
 
 // Only async-signal-safe work in the handler: backtrace (its unwinder loaded beforehand), write, and a
-// lock-free atomic for the caller, which sends one signal at a time and waits for it.
-std::atomic<int> g_fd{-1};  // -1: not asked (a late answer after the caller gave up writes nothing)
+// lock-free atomic for the writer, which sends one signal at a time and waits for it.
+std::atomic<int> g_fd{-1};  // -1: not asked (a late answer after the writer gave up writes nothing)
 std::atomic<bool> g_done{false};
 static_assert(std::atomic<bool>::is_always_lock_free && std::atomic<int>::is_always_lock_free);
 
@@ -71,13 +71,17 @@ std::vector<long> Threads() {
 
 }  // namespace
 
-void PrepareThreadStacks() {
+void Prepare() {
   void* warm[1];
   backtrace(warm, 1);
 }
 
-int WriteThreadStacks(int fd) {
-  PrepareThreadStacks();
+long ThisThread() {
+  return syscall(SYS_gettid);
+}
+
+bool WriteThreadStack(int fd, long tid) {
+  Prepare();
   const int sig = SIGRTMIN + 5;
   // The handler stays installed afterwards (not asked, it does nothing): a thread that answers late must
   // not meet the signal's default action, which ends the process.
@@ -86,26 +90,28 @@ int WriteThreadStacks(int fd) {
   sigemptyset(&sa.sa_mask);
   sa.sa_flags = SA_RESTART;
   sigaction(sig, &sa, nullptr);
-  const long self = syscall(SYS_gettid);
-  const pid_t pid = getpid();
-  int answered = 0;
-  for (long tid : Threads()) {
-    if (tid == self) continue;
-    WriteAll(fd, "thread " + std::to_string(tid) + " (" + ThreadName(tid) + "):\n");
-    g_done.store(false);
-    g_fd.store(fd);
-    if (syscall(SYS_tgkill, pid, tid, sig) != 0) continue;  // ended meanwhile
+  WriteAll(fd, "thread " + std::to_string(tid) + " (" + ThreadName(tid) + "):\n");
+  g_done.store(false);
+  g_fd.store(fd);
+  bool answered = false;
+  if (syscall(SYS_tgkill, getpid(), tid, sig) == 0) {
     const auto until = std::chrono::steady_clock::now() + std::chrono::milliseconds(500);
     while (!g_done.load() && std::chrono::steady_clock::now() < until)
       std::this_thread::sleep_for(std::chrono::milliseconds(1));
-    g_fd.store(-1);
-    if (g_done.load()) {
-      ++answered;
-    } else {
-      WriteAll(fd, "  (no answer)\n");
-    }
+    answered = g_done.load();
+  }
+  g_fd.store(-1);
+  if (!answered) WriteAll(fd, "  (no answer)\n");
+  return answered;
+}
+
+int WriteThreadStacks(int fd) {
+  const long self = ThisThread();
+  int answered = 0;
+  for (long tid : Threads()) {
+    if (tid != self && WriteThreadStack(fd, tid)) ++answered;
   }
   return answered;
 }
 
-}  // namespace cell::bus
+}  // namespace cell::stacks
