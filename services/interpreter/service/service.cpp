@@ -111,7 +111,8 @@ void Service::Stop() {
 }
 
 // The memories MP1 (the station's namespace), MP0, MP2..MP6 (docs/dialects/balt.md, "Memories"), each
-// listed for the file SPG flagged; a memory the store has never held is skipped.
+// listed for the file SPG flagged; a memory the store has never held is skipped. Asked from a command's
+// handler (START), so never through silent_: a rejoin there would remake the server it is running in.
 std::optional<std::string> Service::SelectedProgram(const std::string& station) {
   for (const char* memory : {"", "/MP0", "/MP2", "/MP3", "/MP4", "/MP5", "/MP6"}) {
     const std::string node = station + memory;
@@ -129,14 +130,14 @@ std::optional<std::string> Service::SelectedProgram(const std::string& station) 
 }
 
 std::optional<std::string> Service::PartModel(const std::string& node, const std::string& name) {
-  auto f = programs_.FetchWithFallback(node, name);
+  auto f = silent_.Call(station_id_, [&] { return programs_.FetchWithFallback(node, name); });
   if (!f || !f->info.is_object() || f->info.value("type", std::string()) != "part_model") return std::nullopt;
   return std::move(f->content);
 }
 
 bool Service::DeleteFile(const std::string& node, const std::string& name, const std::string& key) {
   try {
-    programs_.Delete(node, name, key);
+    silent_.Call(station_id_, [&] { programs_.Delete(node, name, key); });
     return true;
   } catch (const Error& e) {
     if (e.code() == Errc::kNotFound) return false;
@@ -146,7 +147,8 @@ bool Service::DeleteFile(const std::string& node, const std::string& name, const
 
 bool Service::StoreRecord(const cell::InspectionRequest& request) {
   if (!inspection_.WaitForServer(bus::Millis(0))) return false;
-  bus::ThrowIfError(inspection_.Call(request, std::chrono::seconds(5)));
+  bus::ThrowIfError(
+      silent_.Call(station_id_, [&] { return inspection_.Call(request, std::chrono::seconds(5)); }));
   return true;
 }
 

@@ -19,6 +19,7 @@
 #include "cell/idl/run.h"
 #include "cell/idl/station.h"
 #include "cell/program_store/client.h"
+#include "cell/station/silent_service.h"
 #include "cell/station/station.h"
 
 namespace cell::station {
@@ -48,11 +49,11 @@ class Service final : public StationIo, public ServoLink {
     return programs_.WaitForServer(std::chrono::duration_cast<bus::Millis>(timeout));
   }
   std::optional<std::string> Program(const std::string& node, const std::string& name) override {
-    return programs_.GetWithFallback(node, name);
+    return silent_.Call(station_id_, [&] { return programs_.GetWithFallback(node, name); });
   }
   std::optional<std::string> SelectedProgram(const std::string& station) override;
   std::optional<std::string> ProgramIn(const std::string& node, const std::string& name) override {
-    return programs_.Get(node, name);
+    return silent_.Call(station_id_, [&] { return programs_.Get(node, name); });
   }
   std::optional<std::string> PartModel(const std::string& node, const std::string& name) override;
   bool DeleteFile(const std::string& node, const std::string& name, const std::string& key) override;
@@ -64,7 +65,7 @@ class Service final : public StationIo, public ServoLink {
     o.dialect = as.dialect;
     o.file_type = as.file_type;
     o.idempotency_key = as.idempotency_key;
-    programs_.Put(name, text, o);
+    silent_.Call(station_id_, [&] { programs_.Put(name, text, o); });
   }
   bool StoreRecord(const cell::InspectionRequest& request) override;
   std::optional<std::string> LineRead(const std::string& holder) override;
@@ -80,6 +81,8 @@ class Service final : public StationIo, public ServoLink {
  private:
   bus::Participant& bus_;
   SystemClock clock_;
+  // Around the worker thread's calls to a host service (never a command handler's: SelectedProgram).
+  SilentServiceRejoin silent_{clock_, [this] { bus_.Rejoin(); }};
   bus::Writer<cell::StationStatus> status_w_;
   bus::Writer<cell::ToolTable> tools_w_;
   bus::Writer<cell::StationVariables> vars_w_;
