@@ -4,14 +4,19 @@
 // must give the same semantics, and across vendors.
 #include "cell/bus/bus.h"
 
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <atomic>
 #include <cstdlib>
 #include <filesystem>
+#include <map>
 #include <mutex>
 #include <optional>
+#include <string_view>
 #include <thread>
 #include <vector>
 
@@ -345,6 +350,98 @@ TEST_P(BusTest, RejoinKeepsEveryEndpointWorking) {
   EXPECT_EQ(peer_client.Call(req, kMatch).station(), "KT03");  // the rejoined side serves
   EXPECT_EQ(client.Call(req, kMatch).revision(), 2u);          // and calls
 }
+
+// A state writer that rejoins writes each key's last sample again (Writer::Recreate): a reader that joins
+// after the rejoin gets the state, though nothing was written since. A station's status goes out only when
+// it changes: in a two-station Fast DDS cell a station that had rejoined stayed UNAVAILABLE to `cellctl
+// station ls` and to a scheduler started afresh (docs/operations.md §9.6).
+TEST_P(BusTest, AReaderThatJoinsAfterARejoinGetsTheLastStateOfEveryKey) {
+  Participant a(A("bus-test-rejoin-state")), b(B("bus-test-late"));
+  Writer<cell::StationStatus> w(a, "test/rejoin/late", QosKind::kState);
+  w.Write(Status("KT01", 1));
+  w.Write(Status("KT01", 2));
+  w.Write(Status("KT02", 7));
+  ASSERT_TRUE(a.Rejoin());
+  Reader<cell::StationStatus> r(b, "test/rejoin/late", QosKind::kState);
+  std::map<std::string, int> last;
+  while (last.size() < 2) {
+    auto s = r.Take(kMatch);
+    ASSERT_TRUE(s) << "after the rejoin a late joiner got only " << last.size() << " keys";
+    last[s->station().to_string()] = s->line();
+  }
+  EXPECT_EQ(last, (std::map<std::string, int>{{"KT01", 2}, {"KT02", 7}}));
+}
+
+// The writer of StateWriterThatStoodStillIsHeardAgain, in a process of its own (run by it with
+// CELL_BUS_TEST_CHILD=<stack>; bus_test's own entry leaves it out): 50 samples, then, once it has
+// rejoined the bus after standing still, line 1000.
+TEST(BusChild, AStateWriterThatStandsStill) {
+  const char* stack = std::getenv("CELL_BUS_TEST_CHILD");
+  if (stack == nullptr) GTEST_SKIP() << "the writer of StateWriterThatStoodStillIsHeardAgain";
+  Participant p(Named("bus-test-stood-still", stack));
+  Writer<cell::StationStatus> w(p, "test/stood_still", QosKind::kState);
+  for (int i = 1; i <= 50; ++i) w.Write(Status("KT01", i));
+  ASSERT_TRUE(WaitUntil([&] { return p.rejoins() > 0; }, Millis(60000), Millis(20)));
+  w.Write(Status("KT01", 1000));
+  WaitUntil([] { return false; }, Millis(60000), Millis(100));  // until the test ends it
+}
+
+// A process that stood still past the lease (SIGSTOP) is dropped by its peers "by lease" and rejoins with
+// the same writers on the same slot. Fast DDS 2.9 readers keep the last sequence number of a writer lost by
+// lease under its persistence GUID, which it derived from the process and the slot, so the same again:
+// the new writer's samples up to that number were dropped as duplicates. In a Fast DDS week the scheduler
+// heard nothing of a station for the rest of the run (docs/operations.md §9.6). The backend now gives each
+// writer a persistence GUID of its own.
+class StoodStillTest : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(StoodStillTest, StateWriterThatStoodStillIsHeardAgain) {
+  Participant me(Named("bus-test-reader", GetParam()));
+  std::mutex mu;
+  std::vector<int> lines;
+  Reader<cell::StationStatus> r(me, "test/stood_still", QosKind::kState,
+                                [&](const cell::StationStatus& s, const SampleInfo&) {
+                                  std::lock_guard lk(mu);
+                                  lines.push_back(s.line());
+                                });
+  auto got = [&](int line) {
+    std::lock_guard lk(mu);
+    return std::find(lines.begin(), lines.end(), line) != lines.end();
+  };
+  const std::string env = std::string("CELL_BUS_TEST_CHILD=") + GetParam();
+  std::vector<std::string> envs{env};
+  for (char** e = environ; *e != nullptr; ++e)
+    if (std::string_view(*e).rfind("CELL_BUS_TEST_CHILD=", 0) != 0) envs.emplace_back(*e);
+  std::vector<char*> envp;
+  for (auto& e : envs) envp.push_back(e.data());
+  envp.push_back(nullptr);
+  std::string self = std::filesystem::read_symlink("/proc/self/exe").string();
+  std::string filter = "--gtest_filter=BusChild.AStateWriterThatStandsStill";
+  char* argv[] = {self.data(), filter.data(), nullptr};
+  pid_t child = 0;
+  ASSERT_EQ(posix_spawn(&child, self.c_str(), nullptr, nullptr, argv, envp.data()), 0);
+  struct Reap {
+    pid_t pid;
+    ~Reap() {
+      kill(pid, SIGCONT);
+      kill(pid, SIGKILL);
+      waitpid(pid, nullptr, 0);
+    }
+  } reap{child};
+
+  ASSERT_TRUE(WaitUntil([&] { return got(50); }, Millis(20000))) << "the writer's 50th sample";
+  ASSERT_EQ(kill(child, SIGSTOP), 0);
+  // Dropped by lease (3 s), not by a goodbye: the reader keeps its record of the writer.
+  const bool lost = WaitUntil([&] { return r.Matched() == 0; }, Millis(15000));
+  ASSERT_EQ(kill(child, SIGCONT), 0);
+  ASSERT_TRUE(lost) << "the reader never lost the stopped writer";
+  EXPECT_TRUE(WaitUntil([&] { return got(1000); }, Millis(20000)))
+      << "the writer's first sample after its rejoin never arrived (its samples 1..50 taken for the old ones)";
+}
+
+INSTANTIATE_TEST_SUITE_P(Stacks, StoodStillTest, ::testing::Values("fastdds", "cyclonedds"),
+                         [](const ::testing::TestParamInfo<const char*>& info) {
+                           return std::string(info.param) == "fastdds" ? "Fast" : "Cyclone";
+                         });
 
 TEST(Bus, AStationOwnsItsNamespaceAndItsMemoriesOnly) {
   EXPECT_TRUE(StationOwns("BS01", "BS01"));

@@ -18,6 +18,7 @@
 #include <string>
 #include <thread>
 #include <utility>
+#include <vector>
 
 #include "cell/bus/backend.h"
 #include "cell/bus/cdr.h"
@@ -242,6 +243,14 @@ class Writer : public Rejoinable {
   }
   void WriteRaw(const RawSample& s) {
     std::shared_lock lk(p_.endpoints_mu());
+    if (qos_ != QosKind::kState) {
+      w_->Write(s);
+      return;
+    }
+    std::lock_guard last(last_mu_);  // what last_ keeps is what went out last
+    RawSample& kept = last_[s.key];
+    kept.cdr.assign(s.cdr.begin(), s.cdr.end());
+    kept.key = s.key;
     w_->Write(s);
   }
   int Matched() const {
@@ -266,7 +275,14 @@ class Writer : public Rejoinable {
     base_matches_ += w_->TotalMatched() + 1;  // +1: the rejoin itself is a lost match
     w_.reset();
   }
-  void Recreate(Backend& b) override { w_ = b.CreateWriter(topic_, TypeSupportFor<T>(), qos_); }
+  // A state writer made anew has an empty history, and a state often goes out only when it changes (a
+  // station's status): it writes each key's last sample again, so that a reader that joins after the rejoin
+  // gets the state too. Events (kEvent) are not written again: a reader that had them would get them twice.
+  void Recreate(Backend& b) override {
+    w_ = b.CreateWriter(topic_, TypeSupportFor<T>(), qos_);
+    std::lock_guard last(last_mu_);
+    for (const auto& [key, sample] : last_) w_->Write(sample);
+  }
 
  private:
   Participant& p_;
@@ -274,6 +290,8 @@ class Writer : public Rejoinable {
   QosKind qos_;
   uint64_t base_matches_ = 0;
   std::unique_ptr<RawWriter> w_;
+  std::mutex last_mu_;
+  std::map<std::vector<uint8_t>, RawSample> last_;  // kState: the last sample written of each key
 };
 
 // With a callback, samples are delivered on the participant's dispatch thread. Without one,
