@@ -435,7 +435,8 @@ TEST_P(StoodStillTest, StateWriterThatStoodStillIsHeardAgain) {
   ASSERT_EQ(kill(child, SIGCONT), 0);
   ASSERT_TRUE(lost) << "the reader never lost the stopped writer";
   EXPECT_TRUE(WaitUntil([&] { return got(1000); }, Millis(20000)))
-      << "the writer's first sample after its rejoin never arrived (its samples 1..50 taken for the old ones)";
+      << "the writer's first sample after its rejoin never arrived (its samples 1..50 taken for the old "
+         "ones)";
 }
 
 INSTANTIATE_TEST_SUITE_P(Stacks, StoodStillTest, ::testing::Values("fastdds", "cyclonedds"),
