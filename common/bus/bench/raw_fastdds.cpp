@@ -1,6 +1,6 @@
 // The ping-pong written directly on Fast DDS 2.9's DDS API: the baseline the bus is measured against. It
 // uses what the bus's Fast DDS glue configures (UDPv4 on 127.0.0.1 only, unicast discovery, no shared memory,
-// 3 s lease, reliable/volatile/keep-all, asynchronous publishing, 100 ms heartbeats) and the type support a
+// 3 s lease, reliable/volatile/keep-all, synchronous publishing, 100 ms heartbeats) and the type support a
 // code generator would write: Fast CDR straight into the payload, sample taken into a reused object.
 #include <fastcdr/Cdr.h>
 #include <fastcdr/FastBuffer.h>
@@ -99,7 +99,7 @@ class RawFast : public PingPong, public dds::DataReaderListener {
     wq.durability().kind = dds::VOLATILE_DURABILITY_QOS;
     wq.history().kind = dds::KEEP_ALL_HISTORY_QOS;
     wq.endpoint().history_memory_policy = rtps::DYNAMIC_REUSABLE_MEMORY_MODE;
-    wq.publish_mode().kind = dds::ASYNCHRONOUS_PUBLISH_MODE;
+    wq.publish_mode().kind = dds::SYNCHRONOUS_PUBLISH_MODE;
     wq.reliable_writer_qos().times.heartbeatPeriod = eprosima::fastrtps::Duration_t(0, 100000000);
     w_ = pub_->create_datawriter(out, wq);
     dds::DataReaderQos rq = dds::DATAREADER_QOS_DEFAULT;

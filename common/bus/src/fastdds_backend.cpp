@@ -464,8 +464,12 @@ class FastBackend : public Backend {
     dds::DataWriterQos wq = dds::DATAWRITER_QOS_DEFAULT;
     ApplyQos(q, wq.reliability(), wq.durability(), wq.history());
     wq.endpoint().history_memory_policy = rtps::DYNAMIC_REUSABLE_MEMORY_MODE;
-    // Large samples (program chunks) are fragmented; asynchronous publishing keeps write() short.
-    wq.publish_mode().kind = dds::ASYNCHRONOUS_PUBLISH_MODE;
+    // Synchronous: write() sends on the caller's thread (fragments too); only repairs go through Fast DDS's
+    // sending thread. With asynchronous publishing every sample waited there, and Fast DDS 2.9.1 deadlocks
+    // that thread against a receive thread removing a reader of a volatile writer with a sample still
+    // queued (eProsima #22339, fixed upstream in Dec 2024; docs/architecture.md, "A third Fast DDS 2.9.1
+    // fault").
+    wq.publish_mode().kind = dds::SYNCHRONOUS_PUBLISH_MODE;
     wq.reliable_writer_qos().times.heartbeatPeriod = eprosima::fastrtps::Duration_t(0, 100000000);
     if (q == QosKind::kState || q == QosKind::kEvent) {
       wq.resource_limits().max_instances = 4096;
